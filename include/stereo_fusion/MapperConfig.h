@@ -1,0 +1,65 @@
+#pragma once
+#include <string>
+#include <vector>
+
+#include "stereo_fusion/map/ResolutionLevel.h"
+
+namespace stereo_fusion {
+
+/// How a measurement's weight is computed (thesis eq. 3.10 and beyond).
+enum class WeightMode {
+  kConstant,       ///< w = 1 wherever the voxel is inside the truncation band.
+  kSteinbruecker,  ///< w = 1 in front of δ, linear fall-off to 0 at Φ behind the surface (eq. 3.10).
+  kDepthAware,     ///< Steinbrücker fall-off × (z_ref / z)², the inverse of the z² stereo error growth (eq. 3.1).
+};
+
+enum class LookupMode {
+  kNaive,        ///< Algorithm 1: one octree search per valid pixel (and band block).
+  kAccelerated,  ///< Algorithm 2: one search per distinct block per image region.
+};
+
+/// Every parameter of the mapping core. Defaults here are the single source of truth:
+/// config/default.yaml and the README table are checked against them by the tests.
+struct MapperConfig {
+  double voxel_size_m = 0.02;          ///< Edge of a finest-level voxel; a block is 8 voxels wide.
+  double truncation_vox = 4.0;         ///< Φ in voxels of the measurement's level (Φ = truncation_vox · s · voxel_size_m).
+  double min_depth_m = 0.1;            ///< Disparities giving a nearer depth are ignored.
+  double max_depth_m = 8.0;            ///< Disparities giving a farther depth are ignored.
+  LevelThresholds levels;              ///< eq. 3.2 switch depths.
+  WeightMode weight_mode = WeightMode::kSteinbruecker;
+  double weight_falloff_start_vox = 1.0;  ///< δ of eq. 3.10, in voxels of the measurement's level.
+  double depth_weight_reference_m = 1.0;  ///< z_ref of the depth-aware weight (w = 1 at this depth).
+  double max_weight = 100.0;           ///< Cap on the cumulative weight W so the map can still change.
+  LookupMode lookup_mode = LookupMode::kAccelerated;
+  int lookup_region_px = 16;           ///< Edge of the square image regions of Algorithm 2.
+  int histogram_min_points = 4;        ///< Blocks hit by fewer points in a region are dropped; 0 = off.
+  int num_threads = 0;                 ///< Worker threads including the caller; 0 = all cores.
+  bool use_color = true;               ///< Fuse the colour image into per-voxel colour.
+
+  /// Block edge length in metres.
+  double blockSizeM() const { return 8.0 * voxel_size_m; }
+};
+
+/// Description of one parameter, for validation, --set, YAML loading and the README table.
+struct ParameterSpec {
+  std::string name;
+  std::string type;         ///< "double", "int", "bool" or "enum"
+  std::string unit;         ///< "m", "px", "vox", "" ...
+  std::string range;        ///< human-readable range, e.g. "[0.002, 1]" or "naive | accelerated"
+  std::string description;
+};
+
+/// All parameters of MapperConfig, in the order of config/default.yaml.
+const std::vector<ParameterSpec>& mapperParameterSpecs();
+
+/// Sets parameter `name` from its textual value. Returns false with a message naming the
+/// parameter when the name is unknown, the value does not parse, or it is out of range.
+bool setMapperParameter(MapperConfig* config, const std::string& name, const std::string& value,
+                        std::string* error);
+/// Textual value of parameter `name` (as setMapperParameter accepts it); empty if unknown.
+std::string getMapperParameter(const MapperConfig& config, const std::string& name);
+
+/// Checks ranges and cross-parameter rules. Returns one message per violation (empty = valid).
+std::vector<std::string> validateMapperConfig(const MapperConfig& config);
+
+}  // namespace stereo_fusion

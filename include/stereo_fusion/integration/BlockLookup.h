@@ -1,0 +1,65 @@
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "stereo_fusion/MapperConfig.h"
+#include "stereo_fusion/integration/StereoFrame.h"
+#include "stereo_fusion/map/BlockOctree.h"
+#include "stereo_fusion/util/ThreadPool.h"
+
+namespace stereo_fusion {
+
+/// Counts of one lookup pass.
+struct LookupStats {
+  uint64_t valid_points = 0;      ///< pixels with a usable disparity
+  uint64_t octree_searches = 0;   ///< find/findOrAllocate calls made by the lookup
+  uint64_t blocks_queued = 0;     ///< distinct blocks in the update queue
+  uint64_t blocks_allocated = 0;  ///< of those, newly created this frame
+  uint64_t blocks_filtered = 0;   ///< (region, block) pairs dropped by the histogram filter
+};
+
+/// Stage 1 of the pipeline (thesis §3.4): turns a disparity map into the queue of voxel blocks
+/// to update, allocating missing blocks. Each valid pixel contributes the blocks that
+/// intersect the cube of ±Φ around its 3D point (Φ of the pixel's level), so the whole
+/// truncation band is covered. The histogram filter, when on, drops per image region the
+/// blocks reached by fewer than `histogram_min_points` points.
+///
+/// Naive (Algorithm 1) searches the octree for every (pixel, band block) pair; accelerated
+/// (Algorithm 2) first gathers the distinct blocks of a region and searches each once.
+/// Both produce the same queue. Regions run in parallel on the pool.
+class BlockLookup {
+ public:
+  BlockLookup(const MapperConfig& config, ThreadPool* pool);
+
+  /// Fills `queue` with the distinct blocks to update, sorted by key (deterministic).
+  /// The frame must have passed validateFrame().
+  LookupStats run(const StereoFrame& frame, BlockOctree* octree, std::vector<VoxelBlock*>* queue);
+
+ private:
+  struct BandBox {
+    BlockKey lo, hi;  // inclusive key range of the blocks a point's band touches
+    bool operator==(const BandBox& o) const { return lo == o.lo && hi == o.hi; }
+  };
+  struct RegionScratch {
+    std::vector<std::pair<BandBox, int>> boxes;      // distinct band boxes and their point counts
+    std::vector<std::pair<BlockKey, int>> key_counts;  // histogram: points per block
+    std::vector<VoxelBlock*> found;
+    LookupStats stats;
+  };
+
+  bool bandBoxOfPixel(const StereoFrame& frame, int u, int v, const BlockOctree& octree,
+                      BandBox* box) const;
+  void gatherHistogram(const StereoFrame& frame, const cv::Rect& region, const BlockOctree& octree,
+                       RegionScratch* s) const;
+  bool passesFilter(const RegionScratch& s, const BlockKey& key) const;
+  void runRegionAccelerated(const StereoFrame& frame, const cv::Rect& region, BlockOctree* octree,
+                            RegionScratch* s) const;
+  void runRegionNaive(const StereoFrame& frame, const cv::Rect& region, BlockOctree* octree,
+                      RegionScratch* s) const;
+
+  MapperConfig config_;
+  ThreadPool* pool_;
+  std::vector<RegionScratch> scratch_;  // one per region, reused across frames
+};
+
+}  // namespace stereo_fusion

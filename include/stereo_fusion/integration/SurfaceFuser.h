@@ -1,0 +1,47 @@
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "stereo_fusion/MapperConfig.h"
+#include "stereo_fusion/integration/StereoFrame.h"
+#include "stereo_fusion/map/BlockOctree.h"
+#include "stereo_fusion/util/ThreadPool.h"
+
+namespace stereo_fusion {
+
+struct FusionStats {
+  uint64_t voxels_updated = 0;  ///< voxel updates over all levels
+  uint64_t blocks_updated = 0;  ///< queued blocks in which at least one voxel changed
+};
+
+/// Stage 2 of the pipeline (thesis §3.5): for every voxel of every queued block, at every
+/// level, project the voxel centre into the disparity image (eq. 3.11–3.14), take the surface
+/// depth seen by that pixel, and fuse the truncated signed distance (eq. 3.15) with its weight
+/// (eq. 3.10) into the running average (eq. 3.8–3.9).
+///
+/// The level of a measurement follows the surface depth z (eq. 3.2): it updates its own level
+/// and every coarser one (see VoxelBlock), with Φ = truncation_vox · s · voxel_size_m.
+/// Behind the surface, voxels farther than Φ are left untouched (unobserved); in front, the
+/// distance is clamped to −Φ (observed free space).
+///
+/// Blocks are independent, so they run in parallel and the result does not depend on the
+/// number of threads.
+class SurfaceFuser {
+ public:
+  SurfaceFuser(const MapperConfig& config, ThreadPool* pool);
+
+  /// Fuses `frame` into `blocks` (from BlockLookup). `frame_index` (> 0) is written to
+  /// VoxelBlock::last_update_frame of every block that changed; `updated` receives them.
+  FusionStats fuse(const StereoFrame& frame, const BlockOctree& octree,
+                   const std::vector<VoxelBlock*>& blocks, uint64_t frame_index,
+                   std::vector<VoxelBlock*>* updated);
+
+ private:
+  uint64_t fuseBlock(const StereoFrame& frame, const BlockOctree& octree, VoxelBlock* block) const;
+
+  MapperConfig config_;
+  ThreadPool* pool_;
+  std::vector<uint64_t> per_block_updates_;  // reused across frames
+};
+
+}  // namespace stereo_fusion

@@ -1,0 +1,97 @@
+#pragma once
+#include <Eigen/Core>
+#include <array>
+#include <atomic>
+#include <cstddef>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+#include "stereo_fusion/map/BlockKey.h"
+#include "stereo_fusion/map/VoxelBlock.h"
+
+namespace stereo_fusion {
+
+/// Sparse octree whose leaves are voxel blocks at a fixed depth (thesis §3.3).
+///
+/// A node of height h covers 2^h × 2^h × 2^h blocks starting at its integer `origin`;
+/// its children split that cube into octants chosen by eq. 2.7–2.10
+/// (octantIndex()). Leaves (height 0) are VoxelBlocks. When a key falls outside the root,
+/// the tree grows a new root around the old one towards the key, so the map is unbounded
+/// in every direction, negative coordinates included.
+///
+/// Concurrency: find() is lock-free and may run in parallel with findOrAllocate();
+/// findOrAllocate() serialises only the allocation itself (a node or block is built
+/// completely before it is published with a release store). Everything else
+/// (iteration, clear) must not overlap with allocation.
+class BlockOctree {
+ public:
+  /// Keys beyond ±kMaxKey are refused (2.7e8 blocks, > 20 000 km at 8 cm blocks: far beyond
+  /// any real map, and far from int32 overflow while the root grows).
+  static constexpr int32_t kMaxKey = 1 << 28;
+
+  explicit BlockOctree(double block_size_m);
+  ~BlockOctree();
+  BlockOctree(const BlockOctree&) = delete;
+  BlockOctree& operator=(const BlockOctree&) = delete;
+
+  double blockSize() const { return block_size_m_; }
+
+  /// Key of the block containing `p_world` (floor(p / block edge)).
+  BlockKey keyForPoint(const Eigen::Vector3d& p_world) const;
+  /// World coordinates of the block's minimum corner.
+  Eigen::Vector3d blockOrigin(const BlockKey& key) const;
+  static bool keyInRange(const BlockKey& key);
+
+  /// Octant of `key` inside a node whose centre lies between blocks centre-1 and centre:
+  /// I = 4·[x ≥ cx] + 2·[y ≥ cy] + [z ≥ cz] (eq. 2.7–2.10 on block centres: the centre of
+  /// block x is x + 0.5, and x + 0.5 > cx ⇔ x ≥ cx for integer x, cx).
+  static int octantIndex(const BlockKey& key, const BlockKey& centre);
+
+  /// Block at `key`, or nullptr. O(log N). Counts one search.
+  VoxelBlock* find(const BlockKey& key) const;
+  /// Block at `key`, allocated (zero weight everywhere) if missing. nullptr only when the key
+  /// is out of range. Thread-safe. `allocated` (optional) tells whether it was created now.
+  VoxelBlock* findOrAllocate(const BlockKey& key, bool* allocated = nullptr);
+  /// Neighbour at offset (dx, dy, dz) ∈ {-1,0,1}³ (faces, edges, corners), or nullptr.
+  VoxelBlock* neighbour(const BlockKey& key, int dx, int dy, int dz) const {
+    return find(key.offset(dx, dy, dz));
+  }
+
+  size_t blockCount() const { return blocks_.size(); }
+  size_t nodeCount() const { return nodes_.size(); }
+  /// Height of the root above the leaves (a tree with one root holding 8 blocks has height 1).
+  int height() const;
+  /// Bytes held by blocks, inner nodes and the bookkeeping arrays.
+  size_t memoryBytes() const;
+  /// memoryBytes() / blockCount(): the per-block cost including octree overhead.
+  double bytesPerBlock() const;
+
+  /// All blocks, in allocation order. Not safe while another thread allocates.
+  const std::vector<VoxelBlock*>& blocks() const { return blocks_; }
+  /// All blocks sorted by key: a deterministic order independent of thread scheduling.
+  std::vector<VoxelBlock*> blocksSortedByKey() const;
+
+  /// Total octree searches (find + findOrAllocate calls) since construction or resetCounters().
+  uint64_t searchCount() const { return searches_.load(std::memory_order_relaxed); }
+  void resetSearchCount() { searches_.store(0, std::memory_order_relaxed); }
+
+  /// Removes every block and node; the block size stays.
+  void clear();
+
+ private:
+  struct Node;
+  Node* newNode(const BlockKey& origin, int height);
+  void growToContain(const BlockKey& key);  // caller holds alloc_mutex_
+  static bool contains(const Node* node, const BlockKey& key);
+
+  double block_size_m_;
+  std::atomic<Node*> root_{nullptr};
+  mutable std::atomic<uint64_t> searches_{0};
+  std::mutex alloc_mutex_;
+  std::vector<std::unique_ptr<Node>> nodes_;
+  std::vector<VoxelBlock*> blocks_;
+  std::vector<std::unique_ptr<VoxelBlock>> block_storage_;
+};
+
+}  // namespace stereo_fusion

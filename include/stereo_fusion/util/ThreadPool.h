@@ -1,0 +1,49 @@
+#pragma once
+#include <atomic>
+#include <condition_variable>
+#include <cstddef>
+#include <functional>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace stereo_fusion {
+
+/// Persistent worker pool for the parallel stages (regions in lookup, blocks in fusion and
+/// meshing). Idle workers sleep on a condition variable instead of spinning, so a busy
+/// neighbour process (a SLAM stack) is not starved and does not starve us.
+class ThreadPool {
+ public:
+  /// `num_threads` counts the calling thread too; 0 means std::thread::hardware_concurrency().
+  explicit ThreadPool(int num_threads = 0);
+  ~ThreadPool();
+  ThreadPool(const ThreadPool&) = delete;
+  ThreadPool& operator=(const ThreadPool&) = delete;
+
+  int size() const { return static_cast<int>(workers_.size()) + 1; }
+
+  /// Calls fn(begin, end) over [0, n) in chunks of `grain` items, on all threads, and returns
+  /// when every chunk is done. Chunks are claimed dynamically (balanced), so `fn` must only
+  /// write to per-item state for the result to be independent of the thread count.
+  /// Not re-entrant: do not call parallelFor from inside `fn`.
+  void parallelFor(size_t n, size_t grain, const std::function<void(size_t, size_t)>& fn);
+
+ private:
+  void workerLoop();
+  void runChunks();
+
+  std::vector<std::thread> workers_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::condition_variable done_;
+  // Current job (valid while active_workers_ > 0 or the caller is running chunks).
+  const std::function<void(size_t, size_t)>* job_ = nullptr;
+  size_t job_size_ = 0;
+  size_t job_grain_ = 1;
+  std::atomic<size_t> next_index_{0};
+  uint64_t generation_ = 0;
+  int busy_workers_ = 0;
+  bool stopping_ = false;
+};
+
+}  // namespace stereo_fusion

@@ -1,0 +1,52 @@
+#!/usr/bin/env bash
+# Installs the Debian packages stereo_fusion needs (only the missing ones) and builds the
+# package into .build/. Idempotent; safe to run on a fresh Debian bookworm machine.
+#   scripts/setup.sh [--no-build]
+# Environment: BUILD_TYPE (default Release), BUILD_DIR (default <repo>/.build).
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+BUILD_DIR="${BUILD_DIR:-$ROOT/.build}"
+
+PACKAGES=(
+  # toolchain
+  g++ make cmake pkg-config
+  # core library
+  libeigen3-dev libopencv-dev libyaml-cpp-dev
+  # ROS 1 from Debian (catkin, messages, nodelet, tf2, synchronisation, images, bags)
+  catkin ros-message-generation ros-message-runtime libroscpp-dev libnodeletlib-dev
+  libmessage-filters-dev libtf2-ros-dev libtf2-eigen-dev libstd-msgs-dev libgeometry-msgs-dev
+  libsensor-msgs-dev libstereo-msgs-dev libvisualization-msgs-dev ros-std-msgs
+  ros-geometry-msgs ros-sensor-msgs ros-stereo-msgs ros-visualization-msgs libcv-bridge-dev
+  libpcl-dev librosbag-dev libdiagnostic-updater-dev
+  # tests
+  libgtest-dev librostest-dev python3-rostest libnodeletlib-tools
+)
+
+missing=()
+for pkg in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$pkg")
+  fi
+done
+if ((${#missing[@]} > 0)); then
+  echo "[setup] installing ${#missing[@]} missing Debian packages: ${missing[*]}"
+  SUDO=""
+  if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" \
+    >/tmp/stereo_fusion_apt.log 2>&1 || { tail -n 30 /tmp/stereo_fusion_apt.log; exit 1; }
+else
+  echo "[setup] all ${#PACKAGES[@]} Debian packages present"
+fi
+
+if [ "${1:-}" = "--no-build" ]; then exit 0; fi
+
+# ROS tooling must run on Debian's Python, not the python3 first on PATH (ros-on-debian.md #1).
+export PYENV_VERSION=system
+echo "[setup] configuring and building in ${BUILD_DIR} (${BUILD_TYPE:-Release})"
+cmake -S "$ROOT" -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE="${BUILD_TYPE:-Release}" \
+  -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 \
+  -DCATKIN_ENABLE_TESTING=ON >"$BUILD_DIR.configure.log" 2>&1 \
+  || { cat "$BUILD_DIR.configure.log"; exit 1; }
+cmake --build "$BUILD_DIR" -j"$(nproc)"
+echo "[setup] build done"

@@ -1,0 +1,53 @@
+#include "stereo_fusion/Mapper.h"
+
+#include <stdexcept>
+
+#include "stereo_fusion/util/Timer.h"
+
+namespace stereo_fusion {
+
+namespace {
+const MapperConfig& checked(const MapperConfig& config) {
+  const std::vector<std::string> errors = validateMapperConfig(config);
+  if (!errors.empty()) {
+    std::string message = "invalid stereo_fusion configuration:";
+    for (const std::string& e : errors) message += "\n  - " + e;
+    throw std::invalid_argument(message);
+  }
+  return config;
+}
+}  // namespace
+
+Mapper::Mapper(const MapperConfig& config)
+    : config_(checked(config)),
+      pool_(config_.num_threads),
+      octree_(config_.blockSizeM()),
+      lookup_(config_, &pool_),
+      fuser_(config_, &pool_) {}
+
+IntegrationResult Mapper::integrate(const StereoFrame& frame) {
+  IntegrationResult result;
+  result.error = validateFrame(frame, config_.blockSizeM());
+  if (!result.error.empty()) return result;
+  result.accepted = true;
+  ++frames_integrated_;
+
+  Timer lookup_timer;
+  result.lookup = lookup_.run(frame, &octree_, &queue_);
+  result.lookup_ms = lookup_timer.elapsedMs();
+
+  Timer fusion_timer;
+  result.fusion = fuser_.fuse(frame, octree_, queue_, frames_integrated_, &updated_);
+  result.fusion_ms = fusion_timer.elapsedMs();
+
+  result.updated_blocks.reserve(updated_.size());
+  for (const VoxelBlock* block : updated_) result.updated_blocks.push_back(block->key);
+  return result;
+}
+
+void Mapper::reset() {
+  octree_.clear();
+  frames_integrated_ = 0;
+}
+
+}  // namespace stereo_fusion

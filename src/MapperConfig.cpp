@@ -1,0 +1,269 @@
+#include "stereo_fusion/MapperConfig.h"
+
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <sstream>
+
+namespace stereo_fusion {
+
+namespace {
+
+template <typename T>
+using Field = std::function<T&(MapperConfig&)>;
+
+template <typename T>
+Field<T> member(T MapperConfig::*m) {
+  return [m](MapperConfig& c) -> T& { return c.*m; };
+}
+
+template <typename T>
+const T& read(const Field<T>& field, const MapperConfig& c) {
+  return field(const_cast<MapperConfig&>(c));  // the field lambdas only select, never write
+}
+
+struct Accessor {
+  ParameterSpec spec;
+  std::function<bool(MapperConfig*, const std::string&, std::string*)> set;
+  std::function<std::string(const MapperConfig&)> get;
+};
+
+std::string formatDouble(double v) {
+  std::ostringstream os;
+  os.precision(std::numeric_limits<double>::max_digits10);
+  os << v;
+  // Print 0.02 rather than 0.020000000000000000416 when the short form round-trips.
+  std::ostringstream shortest;
+  shortest << v;
+  return std::stod(shortest.str()) == v ? shortest.str() : os.str();
+}
+
+bool parseDouble(const std::string& text, double* out) {
+  try {
+    size_t used = 0;
+    const double v = std::stod(text, &used);
+    if (used != text.size()) return false;
+    *out = v;
+    return true;
+  } catch (...) {
+    return false;
+  }
+}
+
+bool parseInt(const std::string& text, int* out) {
+  try {
+    size_t used = 0;
+    const long v = std::stol(text, &used);
+    if (used != text.size() || v < std::numeric_limits<int>::min() ||
+        v > std::numeric_limits<int>::max())
+      return false;
+    *out = static_cast<int>(v);
+    return true;
+  } catch (...) {
+    return false;
+  }
+}
+
+/// A double parameter with an inclusive or exclusive lower bound and an inclusive upper bound.
+Accessor doubleParam(std::string name, std::string unit, double lo, bool lo_inclusive, double hi,
+                     std::string description, Field<double> field) {
+  Accessor a;
+  const std::string range =
+      (lo_inclusive ? "[" : "(") + formatDouble(lo) + ", " + formatDouble(hi) + "]";
+  a.spec = {name, "double", unit, range, std::move(description)};
+  a.set = [=](MapperConfig* c, const std::string& text, std::string* error) {
+    double v = 0;
+    if (!parseDouble(text, &v) || !std::isfinite(v)) {
+      *error = "parameter '" + name + "': '" + text + "' is not a finite number";
+      return false;
+    }
+    if ((lo_inclusive ? v < lo : v <= lo) || v > hi) {
+      *error = "parameter '" + name + "' = " + text + " is out of range " + range;
+      return false;
+    }
+    field(*c) = v;
+    return true;
+  };
+  a.get = [field](const MapperConfig& c) { return formatDouble(read(field, c)); };
+  return a;
+}
+
+Accessor intParam(std::string name, std::string unit, int lo, int hi, std::string description,
+                  Field<int> field) {
+  Accessor a;
+  const std::string range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+  a.spec = {name, "int", unit, range, std::move(description)};
+  a.set = [=](MapperConfig* c, const std::string& text, std::string* error) {
+    int v = 0;
+    if (!parseInt(text, &v)) {
+      *error = "parameter '" + name + "': '" + text + "' is not an integer";
+      return false;
+    }
+    if (v < lo || v > hi) {
+      *error = "parameter '" + name + "' = " + text + " is out of range " + range;
+      return false;
+    }
+    field(*c) = v;
+    return true;
+  };
+  a.get = [field](const MapperConfig& c) { return std::to_string(read(field, c)); };
+  return a;
+}
+
+template <typename Enum>
+Accessor enumParam(std::string name, std::vector<std::pair<std::string, Enum>> values,
+                   std::string description, Field<Enum> field) {
+  Accessor a;
+  std::string range;
+  for (const auto& [label, value] : values) range += (range.empty() ? "" : " | ") + label;
+  a.spec = {name, "enum", "", range, std::move(description)};
+  a.set = [=](MapperConfig* c, const std::string& text, std::string* error) {
+    for (const auto& [label, value] : values) {
+      if (label == text) {
+        field(*c) = value;
+        return true;
+      }
+    }
+    *error = "parameter '" + name + "': '" + text + "' is not one of " + range;
+    return false;
+  };
+  a.get = [=](const MapperConfig& c) {
+    for (const auto& [label, value] : values)
+      if (value == read(field, c)) return label;
+    return std::string();
+  };
+  return a;
+}
+
+Accessor boolParam(std::string name, std::string description, Field<bool> field) {
+  Accessor a;
+  a.spec = {name, "bool", "", "true | false", std::move(description)};
+  a.set = [=](MapperConfig* c, const std::string& text, std::string* error) {
+    if (text == "true" || text == "1") {
+      field(*c) = true;
+    } else if (text == "false" || text == "0") {
+      field(*c) = false;
+    } else {
+      *error = "parameter '" + name + "': '" + text + "' is not true or false";
+      return false;
+    }
+    return true;
+  };
+  a.get = [field](const MapperConfig& c) { return std::string(read(field, c) ? "true" : "false"); };
+  return a;
+}
+
+const std::vector<Accessor>& accessors() {
+  static const std::vector<Accessor> table = [] {
+    std::vector<Accessor> t;
+    t.push_back(doubleParam("voxel_size_m", "m", 0.002, true, 1.0,
+                            "Edge of a finest-level (8³) voxel; a block is 8 voxels wide.",
+                            member(&MapperConfig::voxel_size_m)));
+    t.push_back(doubleParam("truncation_vox", "vox", 1.0, true, 32.0,
+                            "Truncation distance Φ in voxels of the measurement's level: "
+                            "Φ = truncation_vox · s · voxel_size_m (s = 1, 2, 4).",
+                            member(&MapperConfig::truncation_vox)));
+    t.push_back(doubleParam("min_depth_m", "m", 0.0, true, 1000.0,
+                            "Measurements nearer than this are ignored.",
+                            member(&MapperConfig::min_depth_m)));
+    t.push_back(doubleParam("max_depth_m", "m", 0.0, false, 1000.0,
+                            "Measurements farther than this are ignored (stereo error grows as z²).",
+                            member(&MapperConfig::max_depth_m)));
+    t.push_back(doubleParam("scale2_min_depth_m", "m", 0.0, false, 1000.0,
+                            "Depth from which a measurement is fused at the 4³ level and coarser "
+                            "(eq. 3.2; thesis: 2 m).",
+                            [](MapperConfig& c) -> double& { return c.levels.scale2_min_depth_m; }));
+    t.push_back(doubleParam("scale4_min_depth_m", "m", 0.0, false, 1000.0,
+                            "Depth from which a measurement is fused at the 2³ level only "
+                            "(eq. 3.2; thesis: 4 m).",
+                            [](MapperConfig& c) -> double& { return c.levels.scale4_min_depth_m; }));
+    t.push_back(enumParam<WeightMode>(
+        "weight_mode",
+        {{"constant", WeightMode::kConstant},
+         {"steinbruecker", WeightMode::kSteinbruecker},
+         {"depth_aware", WeightMode::kDepthAware}},
+        "Measurement weight: constant 1; Steinbrücker fall-off behind the surface (eq. 3.10); "
+        "or that fall-off × (depth_weight_reference_m / z)².",
+        member(&MapperConfig::weight_mode)));
+    t.push_back(doubleParam("weight_falloff_start_vox", "vox", 0.0, true, 32.0,
+                            "δ of eq. 3.10: behind the surface the weight falls linearly from 1 at δ "
+                            "to 0 at Φ (voxels of the measurement's level; must be < truncation_vox).",
+                            member(&MapperConfig::weight_falloff_start_vox)));
+    t.push_back(doubleParam("depth_weight_reference_m", "m", 0.0, false, 100.0,
+                            "Depth at which the depth-aware weight equals 1.",
+                            member(&MapperConfig::depth_weight_reference_m)));
+    t.push_back(doubleParam("max_weight", "", 0.0, false, 1e6,
+                            "Cap on a voxel's cumulative weight, so the map keeps adapting.",
+                            member(&MapperConfig::max_weight)));
+    t.push_back(enumParam<LookupMode>(
+        "lookup_mode", {{"naive", LookupMode::kNaive}, {"accelerated", LookupMode::kAccelerated}},
+        "Octree lookup: Algorithm 1 (search per pixel) or Algorithm 2 (search per distinct block "
+        "per image region).",
+        member(&MapperConfig::lookup_mode)));
+    t.push_back(intParam("lookup_region_px", "px", 1, 512,
+                         "Edge of the square image regions of Algorithm 2 and the histogram filter.",
+                         member(&MapperConfig::lookup_region_px)));
+    t.push_back(intParam("histogram_min_points", "points", 0, 1 << 20,
+                         "Histogram filter: a block reached by fewer points of one region is not "
+                         "updated from that region; 0 disables the filter.",
+                         member(&MapperConfig::histogram_min_points)));
+    t.push_back(intParam("num_threads", "", 0, 256,
+                         "Threads for lookup and fusion, the caller included; 0 = all cores.",
+                         member(&MapperConfig::num_threads)));
+    t.push_back(boolParam("use_color", "Fuse the colour image into per-voxel colour.",
+                          member(&MapperConfig::use_color)));
+    return t;
+  }();
+  return table;
+}
+
+const Accessor* findAccessor(const std::string& name) {
+  for (const Accessor& a : accessors())
+    if (a.spec.name == name) return &a;
+  return nullptr;
+}
+
+}  // namespace
+
+const std::vector<ParameterSpec>& mapperParameterSpecs() {
+  static const std::vector<ParameterSpec> specs = [] {
+    std::vector<ParameterSpec> s;
+    for (const Accessor& a : accessors()) s.push_back(a.spec);
+    return s;
+  }();
+  return specs;
+}
+
+bool setMapperParameter(MapperConfig* config, const std::string& name, const std::string& value,
+                        std::string* error) {
+  const Accessor* a = findAccessor(name);
+  if (a == nullptr) {
+    *error = "unknown parameter '" + name + "'";
+    return false;
+  }
+  return a->set(config, value, error);
+}
+
+std::string getMapperParameter(const MapperConfig& config, const std::string& name) {
+  const Accessor* a = findAccessor(name);
+  return a ? a->get(config) : std::string();
+}
+
+std::vector<std::string> validateMapperConfig(const MapperConfig& config) {
+  std::vector<std::string> errors;
+  // Range checks: re-apply every value through its setter, which owns the range.
+  for (const Accessor& a : accessors()) {
+    MapperConfig scratch;
+    std::string error;
+    if (!a.set(&scratch, a.get(config), &error)) errors.push_back(error);
+  }
+  if (config.min_depth_m >= config.max_depth_m)
+    errors.push_back("min_depth_m must be < max_depth_m");
+  if (config.levels.scale2_min_depth_m > config.levels.scale4_min_depth_m)
+    errors.push_back("scale2_min_depth_m must be <= scale4_min_depth_m");
+  if (config.weight_falloff_start_vox >= config.truncation_vox)
+    errors.push_back("weight_falloff_start_vox must be < truncation_vox");
+  return errors;
+}
+
+}  // namespace stereo_fusion

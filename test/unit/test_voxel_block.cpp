@@ -1,0 +1,76 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "stereo_fusion/map/VoxelBlock.h"
+
+using namespace stereo_fusion;
+
+TEST(VoxelBlock, SizesMatchTheReadme) {
+  static_assert(sizeof(Voxel) == 12);
+  static_assert(VoxelBlock::kVoxelCount == 8 * 8 * 8 + 4 * 4 * 4 + 2 * 2 * 2);
+  EXPECT_EQ(VoxelBlock::kVoxelCount, 584);
+  EXPECT_LE(sizeof(VoxelBlock), 584u * 12u + 32u);
+}
+
+TEST(VoxelBlock, FlatIndexEq34Eq35HandWorked) {
+  // I_B(i,j,k) = i + j·B + k·B² + O
+  EXPECT_EQ(VoxelBlock::index(0, 0, 0, 0), 0);
+  EXPECT_EQ(VoxelBlock::index(0, 1, 2, 3), 1 + 2 * 8 + 3 * 64);         // 209
+  EXPECT_EQ(VoxelBlock::index(0, 7, 7, 7), 511);
+  EXPECT_EQ(VoxelBlock::index(1, 0, 0, 0), 512);
+  EXPECT_EQ(VoxelBlock::index(1, 1, 2, 3), 1 + 2 * 4 + 3 * 16 + 512);    // 569
+  EXPECT_EQ(VoxelBlock::index(2, 0, 0, 0), 576);
+  EXPECT_EQ(VoxelBlock::index(2, 1, 1, 0), 1 + 2 + 576);                 // 579
+  EXPECT_EQ(VoxelBlock::index(2, 1, 1, 1), 583);
+}
+
+TEST(VoxelBlock, IndexIsABijectionOntoTheArray) {
+  std::vector<int> hits(VoxelBlock::kVoxelCount, 0);
+  for (int level = 0; level < kNumLevels; ++level) {
+    const int side = levelSide(level);
+    for (int k = 0; k < side; ++k)
+      for (int j = 0; j < side; ++j)
+        for (int i = 0; i < side; ++i) ++hits[VoxelBlock::index(level, i, j, k)];
+  }
+  for (int h : hits) EXPECT_EQ(h, 1);
+}
+
+TEST(VoxelBlock, LevelSideAndScaleEq33) {
+  EXPECT_EQ(levelSide(0), 8);
+  EXPECT_EQ(levelSide(1), 4);
+  EXPECT_EQ(levelSide(2), 2);
+  for (int l = 0; l < kNumLevels; ++l) EXPECT_EQ(levelSide(l) * levelScale(l), 8);  // B = 8/s
+}
+
+TEST(VoxelBlock, LevelForDepthEq32HandWorked) {
+  const LevelThresholds t;  // thesis values: s = 2 from 2 m, s = 4 from 4 m
+  EXPECT_EQ(levelForDepth(0.5, t), 0);
+  EXPECT_EQ(levelForDepth(1.0, t), 0);
+  EXPECT_EQ(levelForDepth(1.99, t), 0);  // ⌊log2 1.99⌋ = 0 → s = 1
+  EXPECT_EQ(levelForDepth(2.0, t), 1);
+  EXPECT_EQ(levelForDepth(3.99, t), 1);
+  EXPECT_EQ(levelForDepth(4.0, t), 2);
+  EXPECT_EQ(levelForDepth(50.0, t), 2);  // clamped to s = 4
+}
+
+TEST(VoxelBlock, DefaultThresholdsReproduceTheThesisFormula) {
+  const LevelThresholds t;
+  for (double z = 0.05; z < 20.0; z += 0.0137) {
+    // s(z) = 1 if z ≤ 1, else 2^⌊log2 z⌋ clamped to {1, 2, 4}
+    const int s = z <= 1.0 ? 1 : std::min(4, std::max(1, 1 << static_cast<int>(std::floor(std::log2(z)))));
+    EXPECT_EQ(levelScale(levelForDepth(z, t)), s) << "z = " << z;
+  }
+}
+
+TEST(VoxelBlock, ThresholdsAreParameters) {
+  const LevelThresholds t{1.0, 1.5};
+  EXPECT_EQ(levelForDepth(0.9, t), 0);
+  EXPECT_EQ(levelForDepth(1.2, t), 1);
+  EXPECT_EQ(levelForDepth(1.6, t), 2);
+}
+
+TEST(VoxelBlock, NewBlockIsUnobserved) {
+  VoxelBlock block;
+  for (const Voxel& v : block.voxels) EXPECT_EQ(v.weight, 0.0f);
+}
