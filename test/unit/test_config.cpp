@@ -1,0 +1,117 @@
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+#include <yaml-cpp/yaml.h>
+
+#include "stereo_fusion/MapperConfig.h"
+#include "stereo_fusion/io/ConfigFile.h"
+
+using namespace stereo_fusion;
+
+namespace {
+const std::string kSourceDir = STEREO_FUSION_SOURCE_DIR;
+std::string readFile(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+}  // namespace
+
+TEST(Config, DefaultYamlHoldsEveryParameterWithTheCompiledDefault) {
+  const YAML::Node yaml = YAML::LoadFile(kSourceDir + "/config/default.yaml");
+  const MapperConfig defaults;
+  std::vector<std::string> yaml_keys;
+  for (const auto& entry : yaml) yaml_keys.push_back(entry.first.as<std::string>());
+  std::vector<std::string> spec_keys;
+  for (const ParameterSpec& spec : mapperParameterSpecs()) spec_keys.push_back(spec.name);
+  EXPECT_EQ(yaml_keys, spec_keys) << "config/default.yaml must list every parameter, in order";
+  for (const ParameterSpec& spec : mapperParameterSpecs()) {
+    MapperConfig parsed;
+    std::string error;
+    ASSERT_TRUE(setMapperParameter(&parsed, spec.name, yaml[spec.name].Scalar(), &error)) << error;
+    EXPECT_EQ(getMapperParameter(parsed, spec.name), getMapperParameter(defaults, spec.name))
+        << spec.name << ": default.yaml and MapperConfig disagree";
+  }
+}
+
+TEST(Config, ReadmeDocumentsEveryParameter) {
+  const std::string readme = readFile(kSourceDir + "/README.md");
+  for (const ParameterSpec& spec : mapperParameterSpecs())
+    EXPECT_NE(readme.find("| `" + spec.name + "` |"), std::string::npos)
+        << spec.name << " is missing from the README parameter table";
+}
+
+TEST(Config, DefaultsAreValid) { EXPECT_TRUE(validateMapperConfig(MapperConfig{}).empty()); }
+
+TEST(Config, SetParsesAndRoundTrips) {
+  MapperConfig c;
+  std::string error;
+  EXPECT_TRUE(setMapperParameter(&c, "voxel_size_m", "0.01", &error)) << error;
+  EXPECT_DOUBLE_EQ(c.voxel_size_m, 0.01);
+  EXPECT_EQ(getMapperParameter(c, "voxel_size_m"), "0.01");
+  EXPECT_TRUE(setMapperParameter(&c, "weight_mode", "depth_aware", &error));
+  EXPECT_EQ(c.weight_mode, WeightMode::kDepthAware);
+  EXPECT_TRUE(setMapperParameter(&c, "lookup_mode", "naive", &error));
+  EXPECT_EQ(c.lookup_mode, LookupMode::kNaive);
+  EXPECT_TRUE(setMapperParameter(&c, "use_color", "false", &error));
+  EXPECT_FALSE(c.use_color);
+  EXPECT_TRUE(setMapperParameter(&c, "histogram_min_points", "0", &error));
+  EXPECT_EQ(c.histogram_min_points, 0);
+  EXPECT_TRUE(setMapperParameter(&c, "scale2_min_depth_m", "1.5", &error));
+  EXPECT_DOUBLE_EQ(c.levels.scale2_min_depth_m, 1.5);
+}
+
+TEST(Config, RejectsUnknownMalformedAndOutOfRange) {
+  MapperConfig c;
+  std::string error;
+  EXPECT_FALSE(setMapperParameter(&c, "voxel_size", "0.01", &error));
+  EXPECT_NE(error.find("unknown parameter 'voxel_size'"), std::string::npos) << error;
+  EXPECT_FALSE(setMapperParameter(&c, "voxel_size_m", "abc", &error));
+  EXPECT_NE(error.find("voxel_size_m"), std::string::npos) << error;
+  EXPECT_FALSE(setMapperParameter(&c, "voxel_size_m", "0.01m", &error));
+  EXPECT_FALSE(setMapperParameter(&c, "voxel_size_m", "nan", &error));
+  EXPECT_FALSE(setMapperParameter(&c, "voxel_size_m", "0", &error));
+  EXPECT_NE(error.find("out of range [0.002, 1]"), std::string::npos) << error;
+  EXPECT_FALSE(setMapperParameter(&c, "max_depth_m", "0", &error));  // exclusive lower bound
+  EXPECT_FALSE(setMapperParameter(&c, "lookup_region_px", "0", &error));
+  EXPECT_FALSE(setMapperParameter(&c, "lookup_region_px", "1.5", &error));
+  EXPECT_FALSE(setMapperParameter(&c, "weight_mode", "linear", &error));
+  EXPECT_NE(error.find("constant | steinbruecker | depth_aware"), std::string::npos) << error;
+  EXPECT_FALSE(setMapperParameter(&c, "use_color", "yes please", &error));
+  EXPECT_EQ(c.voxel_size_m, MapperConfig{}.voxel_size_m);  // failed sets change nothing
+}
+
+TEST(Config, CrossParameterRules) {
+  MapperConfig c;
+  c.weight_falloff_start_vox = 4;
+  c.truncation_vox = 4;
+  c.levels.scale2_min_depth_m = 5;
+  c.levels.scale4_min_depth_m = 3;
+  const auto errors = validateMapperConfig(c);
+  ASSERT_EQ(errors.size(), 2u);
+  EXPECT_NE(errors[0].find("scale2_min_depth_m"), std::string::npos);
+  EXPECT_NE(errors[1].find("weight_falloff_start_vox"), std::string::npos);
+}
+
+TEST(Config, YamlFileErrorsNameFileLineAndParameter) {
+  MapperConfig c;
+  std::string error;
+  EXPECT_FALSE(loadMapperConfigText("voxel_size_m: 0.01\ntruncation_vox: 100\n", "my.yaml", &c, &error));
+  EXPECT_NE(error.find("my.yaml:2"), std::string::npos) << error;
+  EXPECT_NE(error.find("truncation_vox"), std::string::npos) << error;
+  EXPECT_EQ(c.voxel_size_m, MapperConfig{}.voxel_size_m);  // nothing applied on error
+  EXPECT_FALSE(loadMapperConfigText("a: [1, 2\n", "broken.yaml", &c, &error));
+  EXPECT_NE(error.find("broken.yaml"), std::string::npos) << error;
+  EXPECT_FALSE(loadMapperConfigText("voxel_size_m: [1, 2]\n", "list.yaml", &c, &error));
+  EXPECT_FALSE(loadMapperConfigText("bogus_key: 3\n", "x.yaml", &c, &error));
+  EXPECT_NE(error.find("unknown parameter 'bogus_key'"), std::string::npos) << error;
+  EXPECT_FALSE(loadMapperConfigText("min_depth_m: 9\n", "x.yaml", &c, &error));
+  EXPECT_NE(error.find("min_depth_m must be < max_depth_m"), std::string::npos) << error;
+  EXPECT_FALSE(loadMapperConfigFile("/nonexistent/file.yaml", &c, &error));
+  EXPECT_NE(error.find("cannot open"), std::string::npos);
+  EXPECT_TRUE(loadMapperConfigText("voxel_size_m: 0.01\nweight_mode: constant\n", "ok.yaml", &c, &error)) << error;
+  EXPECT_DOUBLE_EQ(c.voxel_size_m, 0.01);
+  EXPECT_EQ(c.weight_mode, WeightMode::kConstant);
+}

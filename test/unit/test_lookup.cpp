@@ -1,0 +1,220 @@
+#include <gtest/gtest.h>
+
+#include <set>
+#include <tuple>
+
+#include "TestSupport.h"
+#include "stereo_fusion/integration/BlockLookup.h"
+
+using namespace stereo_fusion;
+using namespace stereo_fusion::test;
+
+namespace {
+
+std::vector<std::tuple<int, int, int>> keysOf(const std::vector<VoxelBlock*>& blocks) {
+  std::vector<std::tuple<int, int, int>> keys;
+  for (const VoxelBlock* b : blocks) keys.emplace_back(b->key.x, b->key.y, b->key.z);
+  return keys;
+}
+
+sim::AnalyticScene planeAndSphere() {
+  sim::AnalyticScene scene;
+  scene.add(sim::makePlane({0, 0, 3.0}, {0.2, -0.1, -1.0}));
+  scene.add(sim::makeSphere({0.3, 0.1, 1.4}, 0.35));
+  return scene;
+}
+
+struct LookupRun {
+  std::vector<VoxelBlock*> queue;
+  LookupStats stats;
+};
+
+LookupRun runLookup(const MapperConfig& config, const StereoFrame& frame, BlockOctree* tree) {
+  ThreadPool pool(config.num_threads);
+  BlockLookup lookup(config, &pool);
+  LookupRun run;
+  run.stats = lookup.run(frame, tree, &run.queue);
+  return run;
+}
+
+/// A frame in which every pixel sees the same depth (a fronto-parallel plane).
+StereoFrame constantDepthFrame(const StereoCamera& camera, float disparity) {
+  StereoFrame frame;
+  frame.camera = camera;
+  frame.disparity_px = cv::Mat(camera.height(), camera.width(), CV_32FC1, cv::Scalar(disparity));
+  return frame;
+}
+
+}  // namespace
+
+TEST(BlockLookup, NaiveAndAcceleratedQueueTheSameBlocks) {
+  const StereoCamera camera = vgaCamera();
+  const sim::AnalyticScene scene = planeAndSphere();
+  const StereoFrame frame = renderFrame(scene, camera, sim::lookAt({0.2, -0.3, -0.5}, {0, 0, 2.0}, -Eigen::Vector3d::UnitY()));
+  for (int histogram : {0, 4}) {
+    MapperConfig config;
+    config.histogram_min_points = histogram;
+    config.lookup_mode = LookupMode::kNaive;
+    BlockOctree naive_tree(config.blockSizeM());
+    const LookupRun naive = runLookup(config, frame, &naive_tree);
+    config.lookup_mode = LookupMode::kAccelerated;
+    BlockOctree accel_tree(config.blockSizeM());
+    const LookupRun accel = runLookup(config, frame, &accel_tree);
+
+    EXPECT_GT(naive.queue.size(), 100u);
+    EXPECT_EQ(keysOf(naive.queue), keysOf(accel.queue)) << "histogram " << histogram;
+    EXPECT_EQ(naive.stats.valid_points, accel.stats.valid_points);
+    EXPECT_EQ(naive_tree.blockCount(), accel_tree.blockCount());
+    EXPECT_EQ(accel.stats.blocks_allocated, accel_tree.blockCount());
+    // Algorithm 2 searches once per distinct block per region: far fewer searches.
+    EXPECT_LT(accel.stats.octree_searches * 20, naive.stats.octree_searches)
+        << "naive " << naive.stats.octree_searches << " accelerated "
+        << accel.stats.octree_searches;
+    // The counts are the octree's own: the lookup made exactly the searches it reports.
+    EXPECT_EQ(accel_tree.searchCount(), accel.stats.octree_searches);
+    EXPECT_EQ(naive_tree.searchCount(), naive.stats.octree_searches);
+    std::printf("[ lookup ] 640x480, histogram %d: %llu valid points, %zu blocks, searches naive %llu,"
+                " accelerated %llu (%.0fx fewer)\n",
+                histogram, static_cast<unsigned long long>(naive.stats.valid_points),
+                naive.queue.size(), static_cast<unsigned long long>(naive.stats.octree_searches),
+                static_cast<unsigned long long>(accel.stats.octree_searches),
+                double(naive.stats.octree_searches) / accel.stats.octree_searches);
+  }
+}
+
+TEST(BlockLookup, SearchCountsHandWorked) {
+  // 32×32 image, principal point far left/up so every point lies in one block:
+  // voxel 5 cm → block 0.4 m; Φ = 1 voxel = 0.05 m; disparity 50 → z = 500·0.1/50 = 1.0 m.
+  // X = (u + 300)·1/500 ∈ [0.600, 0.662] ± 0.05 → block 1; Z ∈ [0.95, 1.05] → block 2.
+  const StereoCamera camera = *StereoCamera::create(32, 32, 500, 500, -300, -300, 0.1);
+  const StereoFrame frame = constantDepthFrame(camera, 50.0f);
+  MapperConfig config;
+  config.voxel_size_m = 0.05;
+  config.truncation_vox = 1.0;
+  config.weight_falloff_start_vox = 0.5;
+  config.histogram_min_points = 0;
+  config.lookup_region_px = 16;
+
+  config.lookup_mode = LookupMode::kNaive;
+  BlockOctree naive_tree(config.blockSizeM());
+  const LookupRun naive = runLookup(config, frame, &naive_tree);
+  EXPECT_EQ(naive.stats.valid_points, 1024u);
+  EXPECT_EQ(naive.stats.octree_searches, 1024u);  // one per pixel
+  ASSERT_EQ(naive.queue.size(), 1u);
+  EXPECT_EQ(naive.queue[0]->key, (BlockKey{1, 1, 2}));
+
+  config.lookup_mode = LookupMode::kAccelerated;
+  BlockOctree accel_tree(config.blockSizeM());
+  const LookupRun accel = runLookup(config, frame, &accel_tree);
+  EXPECT_EQ(accel.stats.octree_searches, 4u);  // one per 16×16 region
+  ASSERT_EQ(accel.queue.size(), 1u);
+  EXPECT_EQ(accel.stats.blocks_queued, 1u);
+  EXPECT_EQ(accel.stats.blocks_allocated, 1u);
+}
+
+TEST(BlockLookup, QueuesTheWholeTruncationBand) {
+  // One valid pixel on the optical axis at z = 1.0 m, 2 cm voxels (16 cm blocks):
+  // block z-range 6 = [0.96, 1.12). Φ = 4 voxels = 8 cm → band [0.92, 1.08] → blocks 5 and 6.
+  // x, y = 0 exactly on a block corner: band ±8 cm → blocks −1 and 0 on both axes.
+  const StereoCamera camera = *StereoCamera::create(5, 5, 500, 500, 2, 2, 0.1);
+  StereoFrame frame = constantDepthFrame(camera, 0.0f);
+  frame.disparity_px.at<float>(2, 2) = 50.0f;  // z = 1.0
+  MapperConfig config;
+  config.histogram_min_points = 0;
+  BlockOctree tree(config.blockSizeM());
+  const LookupRun run = runLookup(config, frame, &tree);
+  EXPECT_EQ(run.stats.valid_points, 1u);
+  std::set<std::tuple<int, int, int>> expected;
+  for (int z : {5, 6})
+    for (int y : {-1, 0})
+      for (int x : {-1, 0}) expected.insert({x, y, z});
+  const auto got = keysOf(run.queue);
+  const std::set<std::tuple<int, int, int>> got_set(got.begin(), got.end());
+  EXPECT_EQ(got_set, expected);
+  EXPECT_EQ(got.size(), expected.size());  // each block queued once
+}
+
+TEST(BlockLookup, BandGrowsWithTheMeasurementLevel) {
+  // Same pixel at z = 2.5 m (level 1, s = 2): Φ = 4·2·2 cm = 16 cm → z ∈ [2.34, 2.66]
+  // → blocks 14 ([2.24, 2.40)), 15, 16 ([2.56, 2.72)); x, y ∈ [−0.16, 0.16] → blocks −1, 0, 1.
+  const StereoCamera camera = *StereoCamera::create(5, 5, 500, 500, 2, 2, 0.1);
+  StereoFrame frame = constantDepthFrame(camera, 0.0f);
+  frame.disparity_px.at<float>(2, 2) = 20.0f;  // z = 50/20 = 2.5
+  MapperConfig config;
+  config.histogram_min_points = 0;
+  BlockOctree tree(config.blockSizeM());
+  const LookupRun run = runLookup(config, frame, &tree);
+  std::set<int> zs;
+  for (const VoxelBlock* b : run.queue) zs.insert(b->key.z);
+  EXPECT_EQ(zs, (std::set<int>{14, 15, 16}));
+  EXPECT_EQ(run.queue.size(), 3u * 3u * 3u);
+}
+
+TEST(BlockLookup, InvalidDisparitiesAreSkipped) {
+  const StereoCamera camera = *StereoCamera::create(8, 1, 500, 500, 4, 0, 0.1);
+  StereoFrame frame = constantDepthFrame(camera, 0.0f);
+  float* row = frame.disparity_px.ptr<float>(0);
+  row[0] = NAN;
+  row[1] = INFINITY;
+  row[2] = -INFINITY;
+  row[3] = -5.0f;
+  row[4] = 0.0f;
+  row[5] = 2.0f;    // z = 25 m: beyond max_depth_m = 8
+  row[6] = 1000.f;  // z = 5 cm: nearer than min_depth_m = 0.1
+  row[7] = 25.0f;   // z = 2 m: the only valid one
+  MapperConfig config;
+  config.histogram_min_points = 0;
+  for (LookupMode mode : {LookupMode::kNaive, LookupMode::kAccelerated}) {
+    config.lookup_mode = mode;
+    BlockOctree tree(config.blockSizeM());
+    const LookupRun run = runLookup(config, frame, &tree);
+    EXPECT_EQ(run.stats.valid_points, 1u);
+    EXPECT_FALSE(run.queue.empty());
+  }
+}
+
+TEST(BlockLookup, HistogramFilterDropsSparseBlocks) {
+  // Region of 16×16: 253 pixels on a plane at 1 m, 3 isolated pixels far away at 5 m.
+  const StereoCamera camera = *StereoCamera::create(16, 16, 500, 500, 8, 8, 0.1);
+  StereoFrame frame = constantDepthFrame(camera, 50.0f);  // z = 1 m
+  frame.disparity_px.at<float>(0, 0) = 10.0f;               // z = 5 m
+  frame.disparity_px.at<float>(0, 1) = 10.0f;
+  frame.disparity_px.at<float>(1, 0) = 10.0f;
+  MapperConfig config;
+  auto farBlocks = [](const std::vector<VoxelBlock*>& queue) {
+    int n = 0;
+    for (const VoxelBlock* b : queue) n += b->key.z >= 20;  // 5 m / 0.16 = 31
+    return n;
+  };
+  config.histogram_min_points = 0;
+  BlockOctree all_tree(config.blockSizeM());
+  const LookupRun all = runLookup(config, frame, &all_tree);
+  EXPECT_GT(farBlocks(all.queue), 0);
+
+  config.histogram_min_points = 4;
+  BlockOctree filtered_tree(config.blockSizeM());
+  const LookupRun filtered = runLookup(config, frame, &filtered_tree);
+  EXPECT_EQ(farBlocks(filtered.queue), 0);
+  EXPECT_GT(filtered.stats.blocks_filtered, 0u);
+  EXPECT_EQ(filtered.queue.size() + farBlocks(all.queue), all.queue.size());
+  // Filtered blocks are never allocated.
+  EXPECT_EQ(filtered_tree.blockCount(), filtered.queue.size());
+}
+
+TEST(BlockLookup, ResultDoesNotDependOnThreadsOrRegionSize) {
+  const StereoCamera camera = vgaCamera();
+  const StereoFrame frame =
+      renderFrame(planeAndSphere(), camera, sim::lookAt({-0.4, 0.2, -0.2}, {0.1, 0, 2.0}, -Eigen::Vector3d::UnitY()));
+  MapperConfig config;
+  config.histogram_min_points = 0;
+  std::vector<std::tuple<int, int, int>> reference;
+  for (int threads : {1, 2, 4})
+    for (int region : {8, 16, 37}) {
+      config.num_threads = threads;
+      config.lookup_region_px = region;
+      BlockOctree tree(config.blockSizeM());
+      const auto keys = keysOf(runLookup(config, frame, &tree).queue);
+      if (reference.empty()) reference = keys;
+      EXPECT_EQ(keys, reference) << threads << " threads, region " << region;
+    }
+}

@@ -1,0 +1,182 @@
+// Properties of the whole integrate() path that DESIGN.md requires.
+#include <gtest/gtest.h>
+
+#include "TestSupport.h"
+
+using namespace stereo_fusion;
+using namespace stereo_fusion::test;
+
+namespace {
+
+sim::AnalyticScene tableTop() {
+  sim::AnalyticScene scene;
+  scene.add(sim::makePlane({0, 0.4, 0}, {0, -1, 0}), {180, 160, 120});  // floor (y down)
+  scene.add(sim::makeSphere({0.1, 0.1, 1.6}, 0.25), {200, 60, 60});
+  Eigen::Isometry3d box = Eigen::Isometry3d::Identity();
+  box.translate(Eigen::Vector3d(-0.4, 0.25, 1.9));
+  box.rotate(Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitY()));
+  scene.add(sim::makeBox(box, {0.15, 0.15, 0.15}), {60, 200, 60});
+  return scene;
+}
+
+std::vector<StereoFrame> orbitFrames(int n, double noise_px = 0.0) {
+  const sim::AnalyticScene scene = tableTop();
+  std::vector<StereoFrame> frames;
+  for (int f = 0; f < n; ++f) {
+    const double a = -0.5 + f * 0.25;
+    const Eigen::Vector3d eye(1.6 * std::sin(a), -0.3, 1.7 - 1.6 * std::cos(a));
+    frames.push_back(renderFrame(scene, vgaCamera(),
+                                 sim::lookAt(eye, {0, 0.1, 1.7}, -Eigen::Vector3d::UnitY()),
+                                 noise_px, 10 + f));
+  }
+  return frames;
+}
+
+}  // namespace
+
+TEST(MapperProperties, FusingTheSameFrameTwiceKeepsTheSurface) {
+  MapperConfig config;
+  Mapper mapper(config);
+  const StereoFrame frame = orbitFrames(1, 0.3)[0];
+  ASSERT_TRUE(mapper.integrate(frame).accepted);
+  const MapSnapshot once = snapshot(mapper.map());
+  const auto crossings_once = zeroCrossings(mapper.map(), 0, 2);
+  ASSERT_TRUE(mapper.integrate(frame).accepted);
+  const auto crossings_twice = zeroCrossings(mapper.map(), 0, 2);
+  ASSERT_EQ(crossings_once.size(), crossings_twice.size());
+  double worst = 0;
+  for (size_t i = 0; i < crossings_once.size(); ++i)
+    worst = std::max(worst, (crossings_once[i] - crossings_twice[i]).norm());
+  EXPECT_LT(worst, 1e-6);  // float rounding of the average only
+  // Same blocks, and every observed voxel's weight has grown.
+  EXPECT_EQ(snapshot(mapper.map()).keys, once.keys);
+}
+
+TEST(MapperProperties, ThreadCountDoesNotChangeTheMap) {
+  const std::vector<StereoFrame> frames = orbitFrames(4, 0.3);
+  std::optional<MapSnapshot> reference;
+  for (int threads : {1, 2, 4}) {
+    for (LookupMode mode : {LookupMode::kAccelerated, LookupMode::kNaive}) {
+      MapperConfig config;
+      config.num_threads = threads;
+      config.lookup_mode = mode;
+      Mapper mapper(config);
+      for (const StereoFrame& f : frames) ASSERT_TRUE(mapper.integrate(f).accepted);
+      const MapSnapshot s = snapshot(mapper.map());
+      if (!reference) {
+        reference = s;
+        EXPECT_GT(s.keys.size(), 500u);
+      } else {
+        EXPECT_TRUE(s == *reference) << threads << " threads: maps differ";
+      }
+    }
+  }
+}
+
+TEST(MapperProperties, IntegrationReportsTimingsAndCounts) {
+  Mapper mapper(MapperConfig{});
+  const IntegrationResult r = mapper.integrate(orbitFrames(1)[0]);
+  ASSERT_TRUE(r.accepted);
+  EXPECT_TRUE(r.error.empty());
+  EXPECT_GT(r.lookup.valid_points, 100000u);
+  EXPECT_GT(r.lookup.blocks_queued, 100u);
+  EXPECT_EQ(r.lookup.blocks_allocated, mapper.map().blockCount());
+  EXPECT_GT(r.fusion.voxels_updated, r.lookup.blocks_queued);
+  EXPECT_EQ(r.updated_blocks.size(), r.fusion.blocks_updated);
+  EXPECT_TRUE(std::is_sorted(r.updated_blocks.begin(), r.updated_blocks.end()));
+  EXPECT_GE(r.lookup_ms, 0.0);
+  EXPECT_GE(r.fusion_ms, 0.0);
+  EXPECT_EQ(mapper.framesIntegrated(), 1u);
+  mapper.reset();
+  EXPECT_EQ(mapper.map().blockCount(), 0u);
+}
+
+TEST(MapperProperties, NonFiniteDisparityPixelsAreSkippedLikeInvalidOnes) {
+  // Replacing invalid (0) pixels by NaN, ±inf or negative values must change nothing.
+  StereoFrame clean = orbitFrames(1)[0];
+  for (int v = 0; v < clean.disparity_px.rows; v += 3)
+    for (int u = v % 7; u < clean.disparity_px.cols; u += 5) clean.disparity_px.at<float>(v, u) = 0.0f;
+  StereoFrame dirty = clean;
+  dirty.disparity_px = clean.disparity_px.clone();
+  const float bad[] = {NAN, INFINITY, -INFINITY, -3.0f};
+  int n = 0;
+  for (int v = 0; v < dirty.disparity_px.rows; ++v)
+    for (int u = 0; u < dirty.disparity_px.cols; ++u)
+      if (dirty.disparity_px.at<float>(v, u) == 0.0f) dirty.disparity_px.at<float>(v, u) = bad[n++ % 4];
+  ASSERT_GT(n, 10000);
+  Mapper a(MapperConfig{}), b(MapperConfig{});
+  const IntegrationResult ra = a.integrate(clean);
+  const IntegrationResult rb = b.integrate(dirty);
+  ASSERT_TRUE(ra.accepted && rb.accepted);
+  EXPECT_EQ(ra.lookup.valid_points, rb.lookup.valid_points);
+  EXPECT_TRUE(snapshot(a.map()) == snapshot(b.map()));
+}
+
+TEST(MapperProperties, RejectedFramesLeaveTheMapUnchanged) {
+  const std::vector<StereoFrame> frames = orbitFrames(2);
+  Mapper mapper(MapperConfig{});
+  ASSERT_TRUE(mapper.integrate(frames[0]).accepted);
+  const MapSnapshot before = snapshot(mapper.map());
+
+  struct Case {
+    const char* name;
+    std::function<void(StereoFrame*)> corrupt;
+    const char* message;
+  };
+  const std::vector<Case> cases = {
+      {"colour size differs", [](StereoFrame* f) { f->color = cv::Mat(240, 320, CV_8UC3); }, "colour image is 320x240"},
+      {"disparity size differs from camera", [](StereoFrame* f) { f->disparity_px = cv::Mat(10, 10, CV_32FC1, cv::Scalar(5)); }, "disparity is 10x10"},
+      {"disparity wrong type", [](StereoFrame* f) { f->disparity_px.convertTo(f->disparity_px, CV_16UC1); }, "CV_32FC1"},
+      {"empty disparity", [](StereoFrame* f) { f->disparity_px = cv::Mat(); }, "empty"},
+      {"colour wrong type", [](StereoFrame* f) { f->color.convertTo(f->color, CV_32FC3); }, "8-bit"},
+      {"NaN in pose", [](StereoFrame* f) { f->T_world_camera.translation().x() = NAN; }, "not finite"},
+      {"inf in rotation", [](StereoFrame* f) { f->T_world_camera.linear()(0, 1) = INFINITY; }, "not finite"},
+      {"non-orthonormal rotation", [](StereoFrame* f) { f->T_world_camera.linear() *= 1.1; }, "not a rotation"},
+      {"reflection", [](StereoFrame* f) { f->T_world_camera.linear().col(0) *= -1; }, "not a rotation"},
+      {"pose beyond the map", [](StereoFrame* f) { f->T_world_camera.translation().x() = 1e9; }, "beyond the map"},
+      {"no camera", [](StereoFrame* f) { f->camera = StereoCamera(); }, "camera"},
+  };
+  for (const Case& c : cases) {
+    StereoFrame bad = frames[1];
+    bad.disparity_px = frames[1].disparity_px.clone();
+    bad.color = frames[1].color.clone();
+    c.corrupt(&bad);
+    const IntegrationResult r = mapper.integrate(bad);
+    EXPECT_FALSE(r.accepted) << c.name;
+    EXPECT_NE(r.error.find(c.message), std::string::npos) << c.name << ": " << r.error;
+    EXPECT_TRUE(snapshot(mapper.map()) == before) << c.name << " changed the map";
+  }
+  EXPECT_EQ(mapper.framesIntegrated(), 1u);
+  // A good frame is still accepted afterwards.
+  EXPECT_TRUE(mapper.integrate(frames[1]).accepted);
+}
+
+TEST(MapperProperties, GreyImagesAndMissingColourAreAccepted) {
+  StereoFrame frame = orbitFrames(1)[0];
+  cv::Mat grey(frame.color.size(), CV_8UC1, cv::Scalar(77));
+  frame.color = grey;
+  Mapper mapper(MapperConfig{});
+  ASSERT_TRUE(mapper.integrate(frame).accepted);
+  for (const VoxelBlock* b : mapper.map().blocks())
+    for (const Voxel& v : b->voxels)
+      if (v.weight > 0) {
+        ASSERT_TRUE(v.r == 77 && v.g == 77 && v.b == 77);
+      }
+  frame.color = cv::Mat();
+  EXPECT_TRUE(mapper.integrate(frame).accepted);
+}
+
+TEST(MapperProperties, InvalidConfigurationIsRefusedWithEveryReason) {
+  MapperConfig config;
+  config.voxel_size_m = -1;
+  config.min_depth_m = 10;
+  config.max_depth_m = 5;
+  try {
+    Mapper mapper(config);
+    FAIL() << "constructor accepted an invalid configuration";
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("voxel_size_m"), std::string::npos) << what;
+    EXPECT_NE(what.find("min_depth_m must be < max_depth_m"), std::string::npos) << what;
+  }
+}

@@ -1,0 +1,189 @@
+#include <gtest/gtest.h>
+
+#include <map>
+#include <random>
+#include <set>
+#include <thread>
+#include <tuple>
+
+#include "stereo_fusion/map/BlockOctree.h"
+
+using namespace stereo_fusion;
+
+namespace {
+std::tuple<int, int, int> tup(const BlockKey& k) { return {k.x, k.y, k.z}; }
+}  // namespace
+
+TEST(BlockOctree, OctantIndexEq27To210HandWorked) {
+  const BlockKey c{0, 0, 0};
+  // I = 4·[x ≥ cx] + 2·[y ≥ cy] + [z ≥ cz]
+  EXPECT_EQ(BlockOctree::octantIndex({-1, -1, -1}, c), 0);
+  EXPECT_EQ(BlockOctree::octantIndex({-1, -1, 0}, c), 1);
+  EXPECT_EQ(BlockOctree::octantIndex({-1, 0, -1}, c), 2);
+  EXPECT_EQ(BlockOctree::octantIndex({0, -1, -1}, c), 4);
+  EXPECT_EQ(BlockOctree::octantIndex({0, 0, 0}, c), 7);
+  EXPECT_EQ(BlockOctree::octantIndex({5, -3, 2}, c), 5);
+  EXPECT_EQ(BlockOctree::octantIndex({9, 9, 9}, {10, 8, 10}), 2);
+}
+
+TEST(BlockOctree, KeyForPointFloorsIncludingNegatives) {
+  BlockOctree tree(0.16);
+  EXPECT_EQ(tup(tree.keyForPoint({0.0, 0.159, 0.16})), std::make_tuple(0, 0, 1));
+  EXPECT_EQ(tup(tree.keyForPoint({-0.01, -0.16, -0.17})), std::make_tuple(-1, -1, -2));
+  EXPECT_NEAR((tree.blockOrigin({-1, 2, 0}) - Eigen::Vector3d(-0.16, 0.32, 0.0)).norm(), 0, 1e-12);
+  EXPECT_FALSE(BlockOctree::keyInRange(tree.keyForPoint({NAN, 0, 0})));
+  EXPECT_FALSE(BlockOctree::keyInRange(tree.keyForPoint({1e12, 0, 0})));
+}
+
+TEST(BlockOctree, RandomInsertAndFindAgainstStdMap) {
+  BlockOctree tree(0.16);
+  std::map<std::tuple<int, int, int>, VoxelBlock*> reference;
+  std::mt19937 rng(42);
+  std::uniform_int_distribution<int> coord(-300, 300);
+  for (int n = 0; n < 20000; ++n) {
+    const BlockKey key{coord(rng), coord(rng), coord(rng)};
+    bool allocated = false;
+    VoxelBlock* block = tree.findOrAllocate(key, &allocated);
+    ASSERT_NE(block, nullptr);
+    EXPECT_EQ(block->key, key);
+    auto it = reference.find(tup(key));
+    EXPECT_EQ(allocated, it == reference.end());
+    if (it == reference.end())
+      reference[tup(key)] = block;
+    else
+      EXPECT_EQ(it->second, block);
+  }
+  EXPECT_EQ(tree.blockCount(), reference.size());
+  for (const auto& [k, block] : reference)
+    EXPECT_EQ(tree.find({std::get<0>(k), std::get<1>(k), std::get<2>(k)}), block);
+  // Absent keys are not found and not created by find().
+  int absent = 0;
+  for (int n = 0; n < 5000; ++n) {
+    const BlockKey key{coord(rng), coord(rng), coord(rng)};
+    if (reference.count(tup(key))) continue;
+    ++absent;
+    EXPECT_EQ(tree.find(key), nullptr);
+  }
+  EXPECT_GT(absent, 4000);
+  EXPECT_EQ(tree.blockCount(), reference.size());
+}
+
+TEST(BlockOctree, GrowsToPointsOneKilometreAwayInEveryDirection) {
+  BlockOctree tree(0.16);
+  const Eigen::Vector3d points[] = {{0.1, 0.1, 0.1},     {1000.0, 0, 0},   {-1000.0, 0, 0},
+                                    {0, -1000.0, 500.0}, {0, 0, -1000.0},  {-700, -700, -700},
+                                    {999.9, -999.9, 0.05}};
+  std::vector<VoxelBlock*> blocks;
+  for (const auto& p : points) {
+    VoxelBlock* b = tree.findOrAllocate(tree.keyForPoint(p));
+    ASSERT_NE(b, nullptr) << p.transpose();
+    blocks.push_back(b);
+  }
+  for (size_t i = 0; i < blocks.size(); ++i)
+    EXPECT_EQ(tree.find(tree.keyForPoint(points[i])), blocks[i]);
+  EXPECT_EQ(tree.blockCount(), 7u);
+  // 2000 m / 0.16 m = 12 500 blocks across: the root spans at least 2^14.
+  EXPECT_GE(tree.height(), 14);
+  EXPECT_LE(tree.height(), 16);
+  // Search depth is the height: O(log N) in the extent, not O(N).
+}
+
+TEST(BlockOctree, RefusesKeysBeyondRange) {
+  BlockOctree tree(0.16);
+  EXPECT_EQ(tree.findOrAllocate({BlockOctree::kMaxKey + 1, 0, 0}), nullptr);
+  EXPECT_EQ(tree.findOrAllocate({0, -BlockOctree::kMaxKey - 1, 0}), nullptr);
+  EXPECT_NE(tree.findOrAllocate({BlockOctree::kMaxKey, -BlockOctree::kMaxKey, 0}), nullptr);
+  EXPECT_EQ(tree.blockCount(), 1u);
+}
+
+TEST(BlockOctree, NeighbourQueriesFacesEdgesCorners) {
+  BlockOctree tree(0.16);
+  const BlockKey centre{-3, 7, 0};
+  for (int dz = -1; dz <= 1; ++dz)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx)
+        if (dx || dy || dz) tree.findOrAllocate(centre.offset(dx, dy, dz));
+  EXPECT_EQ(tree.find(centre), nullptr);
+  for (int dz = -1; dz <= 1; ++dz)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        VoxelBlock* n = tree.neighbour(centre, dx, dy, dz);
+        if (!dx && !dy && !dz) {
+          EXPECT_EQ(n, nullptr);
+        } else {
+          ASSERT_NE(n, nullptr);
+          EXPECT_EQ(n->key, centre.offset(dx, dy, dz));
+        }
+      }
+  EXPECT_EQ(tree.neighbour(centre, 2, 0, 0), nullptr);
+}
+
+TEST(BlockOctree, MemoryAccounting) {
+  BlockOctree tree(0.16);
+  EXPECT_EQ(tree.memoryBytes(), 0u);
+  // A 40 × 40 surface sheet of blocks, like a wall.
+  for (int y = 0; y < 40; ++y)
+    for (int x = 0; x < 40; ++x) tree.findOrAllocate({x, y, 5});
+  EXPECT_EQ(tree.blockCount(), 1600u);
+  EXPECT_GE(tree.memoryBytes(), 1600 * sizeof(VoxelBlock));
+  // Octree overhead is small next to the 7 KiB of voxels: stays under 10 KiB per block.
+  EXPECT_LT(tree.bytesPerBlock(), 10 * 1024.0);
+  std::printf("[ memory ] %zu blocks, %zu nodes: %.0f bytes per block incl. octree (block alone %zu)\n",
+              tree.blockCount(), tree.nodeCount(), tree.bytesPerBlock(), sizeof(VoxelBlock));
+  EXPECT_GT(tree.nodeCount(), 0u);
+  EXPECT_LT(tree.nodeCount(), tree.blockCount());
+  tree.clear();
+  EXPECT_EQ(tree.blockCount(), 0u);
+  EXPECT_EQ(tree.find({0, 0, 5}), nullptr);
+  EXPECT_NE(tree.findOrAllocate({0, 0, 5}), nullptr);  // usable after clear
+}
+
+TEST(BlockOctree, SortedIterationIsDeterministic) {
+  BlockOctree tree(0.16);
+  tree.findOrAllocate({2, 0, 0});
+  tree.findOrAllocate({0, 0, 1});
+  tree.findOrAllocate({-1, 5, 0});
+  const auto sorted = tree.blocksSortedByKey();
+  ASSERT_EQ(sorted.size(), 3u);
+  EXPECT_EQ(sorted[0]->key, (BlockKey{2, 0, 0}));   // z = 0, y = 0
+  EXPECT_EQ(sorted[1]->key, (BlockKey{-1, 5, 0}));  // z = 0, y = 5
+  EXPECT_EQ(sorted[2]->key, (BlockKey{0, 0, 1}));
+}
+
+TEST(BlockOctree, ConcurrentAllocationCreatesEachBlockOnce) {
+  BlockOctree tree(0.16);
+  std::vector<BlockKey> keys;
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> coord(-2000, 2000);  // forces root growth while racing
+  for (int n = 0; n < 4000; ++n) keys.push_back({coord(rng), coord(rng) / 10, coord(rng) / 100});
+  std::set<std::tuple<int, int, int>> unique;
+  for (const auto& k : keys) unique.insert(tup(k));
+
+  std::vector<std::vector<VoxelBlock*>> seen(4, std::vector<VoxelBlock*>(keys.size()));
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 4; ++t)
+    threads.emplace_back([&, t] {
+      // Every thread walks all keys, in a different order, and also reads concurrently.
+      for (size_t n = 0; n < keys.size(); ++n) {
+        const size_t i = (t % 2 == 0) ? n : keys.size() - 1 - n;
+        seen[t][i] = tree.findOrAllocate(keys[i]);
+        (void)tree.find(keys[(i * 7919) % keys.size()]);
+      }
+    });
+  for (auto& th : threads) th.join();
+  EXPECT_EQ(tree.blockCount(), unique.size());
+  for (size_t i = 0; i < keys.size(); ++i) {
+    ASSERT_NE(seen[0][i], nullptr);
+    for (int t = 1; t < 4; ++t) EXPECT_EQ(seen[t][i], seen[0][i]);
+    EXPECT_EQ(tree.find(keys[i]), seen[0][i]);
+  }
+}
+
+TEST(BlockOctree, SearchCounter) {
+  BlockOctree tree(0.16);
+  tree.resetSearchCount();
+  tree.findOrAllocate({1, 2, 3});
+  tree.find({1, 2, 3});
+  tree.find({9, 9, 9});
+  EXPECT_EQ(tree.searchCount(), 3u);
+}
