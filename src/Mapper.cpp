@@ -23,7 +23,9 @@ Mapper::Mapper(const MapperConfig& config)
       pool_(config_.num_threads),
       octree_(config_.blockSizeM()),
       lookup_(config_, &pool_),
-      fuser_(config_, &pool_) {}
+      fuser_(config_, &pool_),
+      mesh_store_(MeshingParams{config_.voxel_size_m, config_.truncation_vox,
+                                config_.mesh_level_min_coverage}) {}
 
 IntegrationResult Mapper::integrate(const StereoFrame& frame) {
   IntegrationResult result;
@@ -42,11 +44,13 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame) {
 
   result.updated_blocks.reserve(updated_.size());
   for (const VoxelBlock* block : updated_) result.updated_blocks.push_back(block->key);
+  if (config_.mesh_enabled) result.mesh = mesh_store_.update(octree_, result.updated_blocks, &pool_);
   return result;
 }
 
 void Mapper::reset() {
   octree_.clear();
+  mesh_store_.clear();
   frames_integrated_ = 0;
 }
 

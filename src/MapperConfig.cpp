@@ -212,6 +212,13 @@ const std::vector<Accessor>& accessors() {
                          member(&MapperConfig::num_threads)));
     t.push_back(boolParam("use_color", "Fuse the colour image into per-voxel colour.",
                           member(&MapperConfig::use_color)));
+    t.push_back(boolParam("mesh_enabled",
+                          "Re-mesh the changed blocks after every frame (incremental marching cubes).",
+                          member(&MapperConfig::mesh_enabled)));
+    t.push_back(doubleParam("mesh_level_min_coverage", "", 0.0, false, 1.0,
+                            "A block is meshed at the finest level whose observed volume is at least "
+                            "this share of the largest observed volume among its three levels.",
+                            member(&MapperConfig::mesh_level_min_coverage)));
     return t;
   }();
   return table;

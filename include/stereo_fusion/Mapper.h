@@ -9,6 +9,7 @@
 #include "stereo_fusion/integration/StereoFrame.h"
 #include "stereo_fusion/integration/SurfaceFuser.h"
 #include "stereo_fusion/map/BlockOctree.h"
+#include "stereo_fusion/mesh/MeshStore.h"
 #include "stereo_fusion/util/ThreadPool.h"
 
 namespace stereo_fusion {
@@ -21,11 +22,13 @@ struct IntegrationResult {
   double fusion_ms = 0.0;
   LookupStats lookup;
   FusionStats fusion;
+  /// Submeshes changed / removed by this frame (empty when meshing is disabled).
+  MeshUpdate mesh;
   /// Blocks whose voxels changed in this frame, sorted by key (the meshing stage's input).
   std::vector<BlockKey> updated_blocks;
 };
 
-/// The ROS-free mapping pipeline: integrate(frame) = validate → lookup → fusion.
+/// The ROS-free mapping pipeline: integrate(frame) = validate → lookup → fusion → meshing.
 class Mapper {
  public:
   /// Throws std::invalid_argument listing every invalid parameter.
@@ -36,6 +39,12 @@ class Mapper {
   IntegrationResult integrate(const StereoFrame& frame);
 
   const BlockOctree& map() const { return octree_; }
+  /// The incrementally maintained mesh, one submesh per block.
+  const MeshStore& mesh() const { return mesh_store_; }
+  /// The whole mesh, submeshes welded into one (for export).
+  TriangleMesh extractMesh() const { return weldSubmeshes(mesh_store_.submeshes()); }
+  /// Re-meshes every block from scratch (also what a disabled incremental mesher catches up with).
+  MeshUpdate rebuildMesh() { return mesh_store_.rebuild(octree_, &pool_); }
   const MapperConfig& config() const { return config_; }
   /// Frames accepted so far.
   uint64_t framesIntegrated() const { return frames_integrated_; }
@@ -48,6 +57,7 @@ class Mapper {
   BlockOctree octree_;
   BlockLookup lookup_;
   SurfaceFuser fuser_;
+  MeshStore mesh_store_;
   uint64_t frames_integrated_ = 0;
   std::vector<VoxelBlock*> queue_;    // reused across frames
   std::vector<VoxelBlock*> updated_;  // reused across frames

@@ -89,12 +89,20 @@ class Torus : public Primitive {
     return std::hypot(q, p.z()) - r_;
   }
   double raycast(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min) const override {
+    // Rays missing the bounding sphere miss the torus: skip the tracing for them.
+    const Eigen::Vector3d oc = o - T_torus_world_.inverse().translation();
+    const double bound = R_ + r_;
+    const double b = oc.dot(d);
+    const double disc = b * b - (oc.squaredNorm() - bound * bound);
+    if (disc < 0.0) return INFINITY;
+    const double t_exit = -b + std::sqrt(disc);
+    if (t_exit <= t_min) return INFINITY;
     // Sphere tracing on the exact SDF, then bisection on the last step: exact to ~1e-9 m.
-    double t = t_min + 1e-9;
+    double t = std::max(t_min, -b - std::sqrt(disc)) + 1e-9;
     double prev_t = t;
     double sd = signedDistance(o + t * d);
     const bool inside = sd < 0;
-    for (int i = 0; i < 512 && t < 1e4; ++i) {
+    for (int i = 0; i < 512 && t < t_exit + 1e-6; ++i) {
       const double step = std::max(std::abs(sd), 1e-7);
       prev_t = t;
       t += step;

@@ -34,6 +34,8 @@ struct VoxelBlock {
   BlockKey key;
   /// Frame counter of the last fusion that changed this block (0 = never).
   uint64_t last_update_frame = 0;
+  /// Level the mesher samples this block at (see chooseMeshLevel()); refreshed after fusion.
+  int8_t mesh_level = kNumLevels - 1;
 };
 
 static_assert(VoxelBlock::index(0, 7, 7, 7) == 511, "8³ level ends at 511");

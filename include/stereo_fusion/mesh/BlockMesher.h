@@ -1,0 +1,81 @@
+#pragma once
+#include <cstdint>
+#include <unordered_map>
+
+#include "stereo_fusion/map/BlockOctree.h"
+#include "stereo_fusion/mesh/SubMesh.h"
+
+namespace stereo_fusion {
+
+/// What the mesher needs from the configuration.
+struct MeshingParams {
+  double voxel_size_m = 0.02;
+  /// Φ₁ = truncation_vox · voxel_size_m: a sign change between two values that are both at
+  /// least 0.99·Φ₁ away from zero is the edge of a truncation band, not a surface.
+  double truncation_vox = 4.0;
+  /// A block is sampled at the finest level whose observed volume is at least this share of
+  /// the largest observed volume among its levels (see chooseMeshLevel()).
+  double level_min_coverage = 0.8;
+};
+
+/// The level a block is meshed at: the finest level whose observed volume (observed voxels
+/// × voxel volume) is at least `level_min_coverage` × the largest observed volume of any of
+/// its levels. A block seen only from far meshes at 2³, one seen from near at 8³, and one
+/// seen from near in only a corner of what was seen from far stays coarse rather than
+/// opening holes.
+int chooseMeshLevel(const VoxelBlock& block, double level_min_coverage);
+
+/// Marching cubes for one block (thesis §3.6, Algorithm 3), crack-free across blocks of any
+/// levels.
+///
+/// Geometry. The mesher works on an integer lattice of half-finest-voxel units (a block is
+/// 16 units wide). A block sampled at level m (step s = 2^m) has its voxel centres at
+/// s·(2i+1). Its cube is cut by those centre planes and by its own faces into (8/s + 1)³
+/// boxes: the core boxes between centres, and half-voxel "skin" boxes between the outermost
+/// centres and the faces. Values on a block face, edge or corner are the 1/s-weighted mean
+/// of the touching blocks' fields (trilinear, clamped to each block's centres), so every
+/// block computes the same number at a shared point; between two blocks of one level this
+/// is exactly the linear interpolation along the classic seam cube's edge.
+///
+/// Ownership (Algorithm 3). A block owns its core and skin boxes on its +x/+y/+z side and
+/// the −x/−y/−z skin boxes of its +x/+y/+z neighbours (face slabs, edge columns, corner):
+/// the thesis' seam cubes, each split in two at the block face. A submesh therefore
+/// depends only on the block and its 7 neighbours towards +x/+y/+z.
+///
+/// Different levels. A box face on a block face is tiled by the grid of both blocks'
+/// centre lines, and every lattice point on a box edge (from any block touching that edge)
+/// becomes a polygon corner. Both sides of every shared face thus see identical polygons,
+/// and CellPolygonizer's face rule makes their traces identical: no cracks, no overlaps,
+/// with no transition tables. Boxes with no extra corners use the 256-case table.
+///
+/// Cells with an unobserved corner are skipped (thesis), as are cells whose only sign
+/// changes are between truncated values. Normals: area-weighted mean of the submesh's face
+/// normals. Colours: the fused voxel colour, interpolated like the position (method A).
+class BlockMesher {
+ public:
+  explicit BlockMesher(const MeshingParams& params);
+
+  /// Meshes everything `owner` owns; neighbours are looked up in `map`. The mesh_level of
+  /// the owner and its neighbours must be current.
+  void mesh(const BlockOctree& map, const VoxelBlock& owner, SubMesh* out) const;
+
+ private:
+  struct Context;
+  struct PointSample {
+    float sdf = 0.0f;
+    float rgb[3] = {0, 0, 0};
+  };
+  bool samplePoint(const Context& ctx, int qx, int qy, int qz, PointSample* out) const;
+  void meshBox(Context& ctx, const int lo[3], const int hi[3]) const;
+  void collectHangingPoints(const Context& ctx, int axis, const int fixed[3], int u0, int u1,
+                            std::vector<int>* points) const;
+  void faceGridLines(const Context& ctx, int normal_axis, int line_axis, const int lo[3],
+                     const int hi[3], std::vector<int>* lines) const;
+  uint32_t vertexOnEdge(Context& ctx, const int p[3], const PointSample& sp, const int q[3],
+                        const PointSample& sq) const;
+
+  MeshingParams params_;
+  float truncated_abs_;  // 0.99 · Φ₁
+};
+
+}  // namespace stereo_fusion

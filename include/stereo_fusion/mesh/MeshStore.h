@@ -1,0 +1,53 @@
+#pragma once
+#include <unordered_map>
+#include <vector>
+
+#include "stereo_fusion/map/BlockOctree.h"
+#include "stereo_fusion/mesh/BlockMesher.h"
+#include "stereo_fusion/mesh/SubMesh.h"
+#include "stereo_fusion/util/ThreadPool.h"
+
+namespace stereo_fusion {
+
+/// What one meshing pass changed: enough for a subscriber to keep an exact copy.
+struct MeshUpdate {
+  std::vector<BlockKey> changed;  ///< blocks whose submesh was (re)built and is non-empty, sorted
+  std::vector<BlockKey> removed;  ///< blocks whose submesh disappeared, sorted
+  size_t blocks_meshed = 0;       ///< owners re-meshed in this pass
+  double meshing_ms = 0.0;
+};
+
+/// The global mesh as one submesh per block, kept up to date incrementally (thesis §3.6).
+class MeshStore {
+ public:
+  explicit MeshStore(const MeshingParams& params);
+
+  /// After fusion changed `updated` blocks: refresh their mesh levels, then re-mesh them and
+  /// every block whose owned seams reach them — the −x/−y/−z neighbours and diagonals, i.e.
+  /// owners K − (0|1, 0|1, 0|1) — in parallel over blocks.
+  MeshUpdate update(const BlockOctree& map, const std::vector<BlockKey>& updated, ThreadPool* pool);
+  /// Meshes every block from scratch (the reference for the incremental result).
+  MeshUpdate rebuild(const BlockOctree& map, ThreadPool* pool);
+
+  const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes() const { return meshes_; }
+  size_t triangleCount() const;
+  void clear() { meshes_.clear(); }
+
+  /// The owners a change of `updated` must re-mesh (existing blocks only), sorted by key.
+  static std::vector<BlockKey> affectedOwners(const BlockOctree& map, const std::vector<BlockKey>& updated);
+
+ private:
+  MeshUpdate remesh(const BlockOctree& map, const std::vector<BlockKey>& owners, ThreadPool* pool);
+
+  MeshingParams params_;
+  BlockMesher mesher_;
+  std::unordered_map<BlockKey, SubMesh, BlockKeyHash> meshes_;
+  std::vector<SubMesh> scratch_;
+};
+
+/// All submeshes as one mesh, vertices shared between submeshes welded (they are computed
+/// bit-identically on both sides of a seam); welded normals are averaged. Deterministic:
+/// blocks are taken in key order.
+TriangleMesh weldSubmeshes(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes);
+
+}  // namespace stereo_fusion

@@ -1,0 +1,96 @@
+#pragma once
+// Helpers for the meshing tests: objects fused from views all around, and mesh topology checks.
+
+#include <map>
+#include <set>
+
+#include "TestSupport.h"
+#include "stereo_fusion/mesh/MeshStore.h"
+
+namespace stereo_fusion::test {
+
+inline StereoCamera qvgaCamera() {
+  return *StereoCamera::create(320, 240, 262.5, 262.5, 159.5, 119.5, 0.1);
+}
+
+/// Camera poses on a sphere of `radius` around `centre`, looking at it (Fibonacci lattice).
+inline std::vector<Eigen::Isometry3d> viewsAround(const Eigen::Vector3d& centre, double radius, int n) {
+  std::vector<Eigen::Isometry3d> poses;
+  const double golden = M_PI * (3.0 - std::sqrt(5.0));
+  for (int i = 0; i < n; ++i) {
+    const double y = 1.0 - 2.0 * (i + 0.5) / n;
+    const double r = std::sqrt(1.0 - y * y);
+    const Eigen::Vector3d dir(r * std::cos(golden * i), y, r * std::sin(golden * i));
+    poses.push_back(sim::lookAt(centre + radius * dir, centre, Eigen::Vector3d(0.3, 1.0, 0.2).normalized()));
+  }
+  return poses;
+}
+
+/// Fuses `scene` from `poses` (meshing off) and returns the mapper.
+inline std::unique_ptr<Mapper> fuseViews(const sim::AnalyticScene& scene,
+                                         const std::vector<Eigen::Isometry3d>& poses,
+                                         MapperConfig config = {}) {
+  config.mesh_enabled = false;
+  config.histogram_min_points = 0;
+  auto mapper = std::make_unique<Mapper>(config);
+  for (const auto& pose : poses) {
+    const IntegrationResult r = mapper->integrate(renderFrame(scene, qvgaCamera(), pose));
+    if (!r.accepted) throw std::runtime_error(r.error);
+  }
+  return mapper;
+}
+
+/// Topology of a welded mesh: directed edges must each appear once with their reverse once.
+struct Topology {
+  size_t triangles = 0;
+  size_t vertices = 0;
+  size_t boundary_edges = 0;     ///< directed edges without a reverse
+  size_t overused_edges = 0;     ///< directed edges used more than once (overlaps, bad winding)
+  size_t degenerate_triangles = 0;
+  bool watertight() const { return triangles > 0 && boundary_edges == 0 && overused_edges == 0 && degenerate_triangles == 0; }
+};
+
+inline Topology topology(const TriangleMesh& mesh) {
+  Topology t;
+  t.triangles = mesh.triangles.size();
+  t.vertices = mesh.positions.size();
+  std::map<std::pair<uint32_t, uint32_t>, int> directed;
+  for (const auto& tri : mesh.triangles) {
+    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) ++t.degenerate_triangles;
+    for (int k = 0; k < 3; ++k) ++directed[{tri[k], tri[(k + 1) % 3]}];
+  }
+  for (const auto& [edge, count] : directed) {
+    if (count > 1) ++t.overused_edges;
+    if (directed.find({edge.second, edge.first}) == directed.end()) ++t.boundary_edges;
+  }
+  return t;
+}
+
+inline std::string describe(const Topology& t) {
+  return std::to_string(t.triangles) + " triangles, " + std::to_string(t.vertices) + " vertices, " +
+         std::to_string(t.boundary_edges) + " boundary edges, " + std::to_string(t.overused_edges) +
+         " over-used edges, " + std::to_string(t.degenerate_triangles) + " degenerate";
+}
+
+/// Every triangle of every submesh as three position triples, rotated to start at the
+/// smallest vertex (winding kept): equal sets ⇔ same triangles up to vertex order.
+inline std::map<BlockKey, std::multiset<std::array<float, 9>>> triangleSets(const MeshStore& store) {
+  std::map<BlockKey, std::multiset<std::array<float, 9>>> out;
+  for (const auto& [key, mesh] : store.submeshes()) {
+    auto& set = out[key];
+    for (const auto& tri : mesh.triangles) {
+      std::array<std::array<float, 3>, 3> v;
+      for (int k = 0; k < 3; ++k) v[k] = {mesh.positions[tri[k]].x(), mesh.positions[tri[k]].y(), mesh.positions[tri[k]].z()};
+      int first = 0;
+      for (int k = 1; k < 3; ++k)
+        if (v[k] < v[first]) first = k;
+      std::array<float, 9> flat;
+      for (int k = 0; k < 3; ++k)
+        for (int c = 0; c < 3; ++c) flat[3 * k + c] = v[(first + k) % 3][c];
+      set.insert(flat);
+    }
+  }
+  return out;
+}
+
+}  // namespace stereo_fusion::test
