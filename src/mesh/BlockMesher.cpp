@@ -34,10 +34,22 @@ inline bool lexLess(const int a[3], const int b[3]) {
 bool blockField(const VoxelBlock& block, int level, const int local[3], float* sdf, float rgb[3]) {
   const int step = 1 << level;
   const int side = kFinestSide >> level;
+  // Most points are voxel centres: read the voxel (what the interpolation below yields).
+  const int den = 2 * step;
+  if ((local[0] - step) % den == 0 && (local[1] - step) % den == 0 && (local[2] - step) % den == 0 &&
+      local[0] > 0 && local[1] > 0 && local[2] > 0 && local[0] < kBlockUnits &&
+      local[1] < kBlockUnits && local[2] < kBlockUnits) {
+    const Voxel& v = block.at(level, (local[0] - step) / den, (local[1] - step) / den, (local[2] - step) / den);
+    if (!(v.weight > 0.0f)) return false;
+    *sdf = v.sdf_m;
+    rgb[0] = v.r;
+    rgb[1] = v.g;
+    rgb[2] = v.b;
+    return true;
+  }
   int i0[3];
   float frac[3];
   for (int a = 0; a < 3; ++a) {
-    const int den = 2 * step;
     const int num = std::clamp(local[a] - step, 0, (side - 1) * den);
     i0[a] = num / den;
     int rem = num % den;
@@ -85,6 +97,17 @@ int chooseMeshLevel(const VoxelBlock& block, double level_min_coverage) {
   return kNumLevels - 1;
 }
 
+void refreshMeshLevel(VoxelBlock* block, double level_min_coverage) {
+  const int level = chooseMeshLevel(*block, level_min_coverage);
+  block->mesh_level = static_cast<int8_t>(level);
+  block->mesh_has_negative = block->mesh_has_positive = false;
+  for (int n = 0; n < levelVoxelCount(level); ++n) {
+    const Voxel& v = block->voxels[levelOffset(level) + n];
+    if (!(v.weight > 0.0f)) continue;
+    (v.sdf_m < 0.0f ? block->mesh_has_negative : block->mesh_has_positive) = true;
+  }
+}
+
 struct BlockMesher::Context {
   const VoxelBlock* nb[8] = {};  // owner + (d & 1, (d >> 1) & 1, (d >> 2) & 1)
   int level[8] = {};
@@ -130,6 +153,27 @@ void BlockMesher::collectHangingPoints(const Context& ctx, int axis, const int f
                                        int u1, std::vector<int>* points) const {
   // Every lattice point, of any block touching this line, strictly inside (u0, u1).
   points->clear();
+  forEachLatticePoint(ctx, axis, fixed, u0, u1, [&](int u) {
+    points->push_back(u);
+    return true;
+  });
+  std::sort(points->begin(), points->end());
+  points->erase(std::unique(points->begin(), points->end()), points->end());
+}
+
+bool BlockMesher::hasHangingPoints(const Context& ctx, int axis, const int fixed[3], int u0,
+                                   int u1) const {
+  bool found = false;
+  forEachLatticePoint(ctx, axis, fixed, u0, u1, [&](int) {
+    found = true;
+    return false;  // stop at the first
+  });
+  return found;
+}
+
+template <typename F>
+void BlockMesher::forEachLatticePoint(const Context& ctx, int axis, const int fixed[3], int u0, int u1,
+                                      F&& f) const {
   const int du = u0 >= kBlockUnits ? 1 : 0;
   const int a = (axis + 1) % 3, b = (axis + 2) % 3;
   int fa, la, fb, lb;
@@ -146,22 +190,27 @@ void BlockMesher::collectHangingPoints(const Context& ctx, int axis, const int f
       const int step = ctx.step[d];
       for (int c = step; c < kBlockUnits; c += 2 * step) {
         const int u = kBlockUnits * du + c;
-        if (u > u0 && u < u1) points->push_back(u);
+        if (u > u0 && u < u1 && !f(u)) return;
       }
     }
-  std::sort(points->begin(), points->end());
-  points->erase(std::unique(points->begin(), points->end()), points->end());
 }
 
 void BlockMesher::faceGridLines(const Context& ctx, int normal_axis, int line_axis, const int lo[3],
                                 const int hi[3], std::vector<int>* lines) const {
-  // Lines across a face lying on a block face: both touching blocks' centre planes.
-  int fixed[3] = {lo[0], lo[1], lo[2]};
-  fixed[normal_axis] = kBlockUnits;
-  const int other = 3 - normal_axis - line_axis;
-  // A coordinate inside the box's block on the third axis: only the two face blocks touch it.
-  fixed[other] = lo[other] >= kBlockUnits ? kBlockUnits + kBlockUnits / 2 : kBlockUnits / 2;
+  int fixed[3];
+  faceInteriorLine(normal_axis, line_axis, lo, fixed);
   collectHangingPoints(ctx, line_axis, fixed, lo[line_axis], hi[line_axis], lines);
+}
+
+void BlockMesher::faceInteriorLine(int normal_axis, int line_axis, const int lo[3], int fixed[3]) {
+  // Lines across a face lying on a block face are both touching blocks' centre planes: the
+  // lattice points of a line through the face's interior, where only those two blocks touch.
+  const int other = 3 - normal_axis - line_axis;
+  fixed[0] = lo[0];
+  fixed[1] = lo[1];
+  fixed[2] = lo[2];
+  fixed[normal_axis] = kBlockUnits;
+  fixed[other] = lo[other] >= kBlockUnits ? kBlockUnits + kBlockUnits / 2 : kBlockUnits / 2;
 }
 
 uint32_t BlockMesher::vertexOnEdge(Context& ctx, const int p[3], const PointSample& sp,
@@ -198,7 +247,6 @@ void BlockMesher::meshBox(Context& ctx, const int lo[3], const int hi[3]) const 
   bool plain = true;
   if (!ctx.uniform && (hi[0] == kBlockUnits || hi[1] == kBlockUnits || hi[2] == kBlockUnits ||
                        lo[0] == kBlockUnits || lo[1] == kBlockUnits || lo[2] == kBlockUnits)) {
-    std::vector<int> pts;
     for (int axis = 0; axis < 3 && plain; ++axis)
       for (int c = 0; c < 4 && plain; ++c) {
         const int a = (axis + 1) % 3, b = (axis + 2) % 3;
@@ -206,15 +254,16 @@ void BlockMesher::meshBox(Context& ctx, const int lo[3], const int hi[3]) const 
         fixed[a] = (c & 1) ? hi[a] : lo[a];
         fixed[b] = (c & 2) ? hi[b] : lo[b];
         fixed[axis] = lo[axis];
-        collectHangingPoints(ctx, axis, fixed, lo[axis], hi[axis], &pts);
-        plain = pts.empty();
+        plain = !hasHangingPoints(ctx, axis, fixed, lo[axis], hi[axis]);
       }
     for (int axis = 0; axis < 3 && plain; ++axis)
       for (int side = 0; side < 2 && plain; ++side) {
         if ((side ? hi[axis] : lo[axis]) != kBlockUnits) continue;
         for (int k = 1; k < 3 && plain; ++k) {
-          faceGridLines(ctx, axis, (axis + k) % 3, lo, hi, &pts);
-          plain = pts.empty();
+          const int line_axis = (axis + k) % 3;
+          int fixed[3];
+          faceInteriorLine(axis, line_axis, lo, fixed);
+          plain = !hasHangingPoints(ctx, line_axis, fixed, lo[line_axis], hi[line_axis]);
         }
       }
   }
@@ -335,12 +384,20 @@ void BlockMesher::mesh(const BlockOctree& map, const VoxelBlock& owner, SubMesh*
   ctx.origin[0] = int64_t{owner.key.x} * kBlockUnits;
   ctx.origin[1] = int64_t{owner.key.y} * kBlockUnits;
   ctx.origin[2] = int64_t{owner.key.z} * kBlockUnits;
+  bool any_negative = false, any_positive = false;
   for (int d = 0; d < 8; ++d) {
     ctx.nb[d] = d == 0 ? &owner : map.find(owner.key.offset(d & 1, (d >> 1) & 1, (d >> 2) & 1));
     ctx.level[d] = ctx.nb[d] ? ctx.nb[d]->mesh_level : 0;
     ctx.step[d] = 1 << ctx.level[d];
     if (ctx.nb[d] && ctx.level[d] != owner.mesh_level) ctx.uniform = false;
+    if (ctx.nb[d]) {
+      any_negative |= ctx.nb[d]->mesh_has_negative;
+      any_positive |= ctx.nb[d]->mesh_has_positive;
+    }
   }
+  // Every value the mesher uses is a convex combination of these blocks' observed samples:
+  // with one sign only, no cell can change sign.
+  if (!any_negative || !any_positive) return;
 
   std::vector<std::pair<int, int>> intervals[3];
   for (int d = 0; d < 8; ++d) {

@@ -47,15 +47,14 @@ MeshUpdate MeshStore::remesh(const BlockOctree& map, const std::vector<BlockKey>
 MeshUpdate MeshStore::update(const BlockOctree& map, const std::vector<BlockKey>& updated,
                              ThreadPool* pool) {
   for (const BlockKey& key : updated)
-    if (VoxelBlock* block = map.find(key))
-      block->mesh_level = static_cast<int8_t>(chooseMeshLevel(*block, params_.level_min_coverage));
+    if (VoxelBlock* block = map.find(key)) refreshMeshLevel(block, params_.level_min_coverage);
   return remesh(map, affectedOwners(map, updated), pool);
 }
 
 MeshUpdate MeshStore::rebuild(const BlockOctree& map, ThreadPool* pool) {
   std::vector<BlockKey> all;
   for (VoxelBlock* block : map.blocksSortedByKey()) {
-    block->mesh_level = static_cast<int8_t>(chooseMeshLevel(*block, params_.level_min_coverage));
+    refreshMeshLevel(block, params_.level_min_coverage);
     all.push_back(block->key);
   }
   std::vector<BlockKey> stale;

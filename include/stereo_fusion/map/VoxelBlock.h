@@ -36,6 +36,10 @@ struct VoxelBlock {
   uint64_t last_update_frame = 0;
   /// Level the mesher samples this block at (see chooseMeshLevel()); refreshed after fusion.
   int8_t mesh_level = kNumLevels - 1;
+  /// Whether the observed voxels of mesh_level include negative / non-negative distances:
+  /// an owner whose whole neighbourhood has one sign cannot contain a surface.
+  bool mesh_has_negative = false;
+  bool mesh_has_positive = false;
 };
 
 static_assert(VoxelBlock::index(0, 7, 7, 7) == 511, "8³ level ends at 511");

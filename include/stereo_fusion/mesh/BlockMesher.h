@@ -25,6 +25,9 @@ struct MeshingParams {
 /// opening holes.
 int chooseMeshLevel(const VoxelBlock& block, double level_min_coverage);
 
+/// Sets block.mesh_level (chooseMeshLevel) and the sign flags of that level's observed voxels.
+void refreshMeshLevel(VoxelBlock* block, double level_min_coverage);
+
 /// Marching cubes for one block (thesis §3.6, Algorithm 3), crack-free across blocks of any
 /// levels.
 ///
@@ -69,8 +72,12 @@ class BlockMesher {
   void meshBox(Context& ctx, const int lo[3], const int hi[3]) const;
   void collectHangingPoints(const Context& ctx, int axis, const int fixed[3], int u0, int u1,
                             std::vector<int>* points) const;
+  bool hasHangingPoints(const Context& ctx, int axis, const int fixed[3], int u0, int u1) const;
+  template <typename F>
+  void forEachLatticePoint(const Context& ctx, int axis, const int fixed[3], int u0, int u1, F&& f) const;
   void faceGridLines(const Context& ctx, int normal_axis, int line_axis, const int lo[3],
                      const int hi[3], std::vector<int>* lines) const;
+  static void faceInteriorLine(int normal_axis, int line_axis, const int lo[3], int fixed[3]);
   uint32_t vertexOnEdge(Context& ctx, const int p[3], const PointSample& sp, const int q[3],
                         const PointSample& sq) const;
 
