@@ -1,0 +1,222 @@
+#include "fuser/OfflineFuser.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "stereo_fusion/Mapper.h"
+#include "stereo_fusion/io/ConfigFile.h"
+#include "stereo_fusion/io/DatasetReader.h"
+#include "stereo_fusion/io/PlyWriter.h"
+#include "stereo_fusion/util/Timer.h"
+
+namespace stereo_fusion {
+
+namespace fs = std::filesystem;
+
+bool parseFuseArguments(const std::vector<std::string>& args, FuseOptions* options, std::string* error) {
+  std::vector<std::string> positional, sets;
+  std::string config_file;
+  for (size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    auto value = [&](const char* flag) -> const std::string* {
+      if (i + 1 >= args.size()) {
+        *error = std::string(flag) + " needs a value";
+        return nullptr;
+      }
+      return &args[++i];
+    };
+    if (a == "--config") {
+      const std::string* v = value("--config");
+      if (!v) return false;
+      config_file = *v;
+    } else if (a == "--set") {
+      const std::string* v = value("--set");
+      if (!v) return false;
+      sets.push_back(*v);
+    } else if (a == "--frames") {
+      const std::string* v = value("--frames");
+      if (!v) return false;
+      try {
+        size_t used = 0;
+        const long n = std::stol(*v, &used);
+        if (used != v->size() || n < 0) throw std::invalid_argument("");
+        options->max_frames = static_cast<size_t>(n);
+      } catch (...) {
+        *error = "--frames: '" + *v + "' is not a frame count";
+        return false;
+      }
+    } else if (a == "--quiet") {
+      options->progress = false;
+    } else if (!a.empty() && a[0] == '-') {
+      *error = "unknown option '" + a + "'";
+      return false;
+    } else {
+      positional.push_back(a);
+    }
+  }
+  if (positional.size() != 2) {
+    *error = "expected <seq-folder | file.bag> <out-dir>, got " + std::to_string(positional.size()) + " arguments";
+    return false;
+  }
+  options->input = positional[0];
+  options->out_dir = positional[1];
+  if (!config_file.empty() && !loadMapperConfigFile(config_file, &options->config, error)) return false;
+  for (const std::string& s : sets) {
+    const size_t eq = s.find('=');
+    if (eq == std::string::npos) {
+      *error = "--set expects key=value, got '" + s + "'";
+      return false;
+    }
+    if (!setMapperParameter(&options->config, s.substr(0, eq), s.substr(eq + 1), error)) return false;
+  }
+  const auto problems = validateMapperConfig(options->config);
+  if (!problems.empty()) {
+    *error = problems.front();
+    return false;
+  }
+  return true;
+}
+
+namespace {
+
+void showProgress(size_t done, size_t total, double elapsed_s, bool terminal, size_t* last_decile) {
+  const double fps = elapsed_s > 0 ? done / elapsed_s : 0.0;
+  const double eta = fps > 0 ? (total - done) / fps : 0.0;
+  if (terminal) {
+    const int width = 30;
+    const int filled = total ? static_cast<int>(width * done / total) : width;
+    std::fprintf(stderr, "\r[%s%s] %zu/%zu frames  %.1f fps  ETA %.0f s ", std::string(filled, '=').c_str(),
+                 std::string(width - filled, ' ').c_str(), done, total, fps, eta);
+    if (done == total) std::fprintf(stderr, "\n");
+  } else {
+    const size_t decile = total ? 10 * done / total : 10;
+    if (decile != *last_decile) {
+      *last_decile = decile;
+      std::fprintf(stderr, "%zu/%zu frames  %.1f fps  ETA %.0f s\n", done, total, fps, eta);
+    }
+  }
+}
+
+struct Summary {
+  double mean = 0, p50 = 0, p99 = 0;
+};
+
+Summary summarize(std::vector<double> v) {
+  Summary s;
+  if (v.empty()) return s;
+  double sum = 0;
+  for (double x : v) sum += x;
+  s.mean = sum / v.size();
+  std::sort(v.begin(), v.end());
+  auto pct = [&](double p) { return v[std::min(v.size() - 1, static_cast<size_t>(p * (v.size() - 1) + 0.5))]; };
+  s.p50 = pct(0.50);
+  s.p99 = pct(0.99);
+  return s;
+}
+
+}  // namespace
+
+bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::string* error) {
+  *report = FuseReport{};
+  const std::string ext = fs::path(options.input).extension().string();
+  if (ext == ".bag") {
+    *error = options.input + ": reading rosbags is not supported yet; convert to a dataset folder";
+    return false;
+  }
+  auto reader = DatasetReader::open(options.input, error);
+  if (!reader) return false;
+  std::error_code ec;
+  fs::create_directories(options.out_dir, ec);
+  if (ec || !fs::is_directory(options.out_dir)) {
+    *error = options.out_dir + ": cannot create the output directory";
+    return false;
+  }
+
+  Mapper mapper(options.config);
+  const size_t total = options.max_frames ? std::min(options.max_frames, reader->size()) : reader->size();
+  report->frames_total = total;
+  const bool terminal = isatty(STDERR_FILENO);
+  size_t last_decile = 0;
+  Timer wall;
+  auto skip = [&](const std::string& reason, const std::string& message) {
+    ++report->skipped[reason];
+    if (report->skipped_examples.size() < 5) report->skipped_examples.push_back(message);
+    std::fprintf(stderr, "%sskipping frame: %s\n", terminal && options.progress ? "\n" : "", message.c_str());
+  };
+  for (size_t i = 0; i < total; ++i) {
+    StereoFrame frame;
+    std::string why;
+    if (!reader->load(i, &frame, &why)) {
+      skip("unreadable", why);
+    } else {
+      Timer frame_timer;
+      const IntegrationResult r = mapper.integrate(frame);
+      if (!r.accepted) {
+        skip("rejected", "frame " + std::to_string(i) + ": " + r.error);
+      } else {
+        ++report->frames_used;
+        report->timings.push_back({r.lookup_ms, r.fusion_ms, r.mesh.meshing_ms, frame_timer.elapsedMs()});
+      }
+    }
+    if (options.progress) showProgress(i + 1, total, wall.elapsedMs() / 1000.0, terminal, &last_decile);
+  }
+  report->wall_time_s = wall.elapsedMs() / 1000.0;
+
+  const TriangleMesh mesh = mapper.extractMesh();
+  report->mesh_vertices = mesh.positions.size();
+  report->mesh_triangles = mesh.triangles.size();
+  report->blocks = mapper.map().blockCount();
+  report->memory_bytes = mapper.map().memoryBytes();
+  report->bytes_per_block = mapper.map().bytesPerBlock();
+  for (const VoxelBlock* b : mapper.map().blocks()) ++report->blocks_per_level[b->mesh_level];
+
+  if (!writePly((fs::path(options.out_dir) / "mesh.ply").string(), mesh, error)) return false;
+  std::ofstream stats(fs::path(options.out_dir) / "stats.json");
+  stats << statsJson(*report, options.config) << "\n";
+  if (!stats) {
+    *error = options.out_dir + "/stats.json: write failed";
+    return false;
+  }
+  return true;
+}
+
+std::string statsJson(const FuseReport& report, const MapperConfig& config) {
+  nlohmann::ordered_json j;
+  j["frames"]["total"] = report.frames_total;
+  j["frames"]["used"] = report.frames_used;
+  size_t skipped = 0;
+  for (const auto& [reason, n] : report.skipped) skipped += n;
+  j["frames"]["skipped"] = skipped;
+  j["frames"]["skipped_by_reason"] = nlohmann::ordered_json::object();
+  for (const auto& [reason, n] : report.skipped) j["frames"]["skipped_by_reason"][reason] = n;
+  j["frames"]["skipped_examples"] = report.skipped_examples;
+  j["blocks"]["total"] = report.blocks;
+  j["blocks"]["meshed_at_8"] = report.blocks_per_level[0];
+  j["blocks"]["meshed_at_4"] = report.blocks_per_level[1];
+  j["blocks"]["meshed_at_2"] = report.blocks_per_level[2];
+  j["memory"]["bytes"] = report.memory_bytes;
+  j["memory"]["megabytes"] = report.memory_bytes / 1048576.0;
+  j["memory"]["bytes_per_block"] = report.bytes_per_block;
+  j["mesh"]["vertices"] = report.mesh_vertices;
+  j["mesh"]["triangles"] = report.mesh_triangles;
+  auto stage = [&](double StageTimings::*field) {
+    std::vector<double> v;
+    for (const StageTimings& t : report.timings) v.push_back(t.*field);
+    const Summary s = summarize(v);
+    return nlohmann::ordered_json{{"mean", s.mean}, {"p50", s.p50}, {"p99", s.p99}};
+  };
+  j["timings_ms"]["lookup"] = stage(&StageTimings::lookup_ms);
+  j["timings_ms"]["fusion"] = stage(&StageTimings::fusion_ms);
+  j["timings_ms"]["meshing"] = stage(&StageTimings::meshing_ms);
+  j["timings_ms"]["total"] = stage(&StageTimings::total_ms);
+  j["wall_time_s"] = report.wall_time_s;
+  for (const ParameterSpec& p : mapperParameterSpecs()) j["config"][p.name] = getMapperParameter(config, p.name);
+  return j.dump(2);
+}
+
+}  // namespace stereo_fusion

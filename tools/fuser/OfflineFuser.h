@@ -1,0 +1,55 @@
+#pragma once
+// The offline reconstruction of scripts/fuse.sh: a dataset folder in, mesh.ply and
+// stats.json out, with the same pipeline (lookup → fusion → incremental meshing) as the node.
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "stereo_fusion/MapperConfig.h"
+
+namespace stereo_fusion {
+
+/// What to fuse and where to write it.
+struct FuseOptions {
+  std::string input;    ///< dataset folder (a .bag is recognised but not supported yet)
+  std::string out_dir;  ///< receives mesh.ply and stats.json (created if missing)
+  MapperConfig config;
+  size_t max_frames = 0;  ///< 0 = all
+  bool progress = true;   ///< progress bar on stderr (a line per 10 % when not a terminal)
+};
+
+/// Per-frame stage timings in milliseconds.
+struct StageTimings {
+  double lookup_ms = 0, fusion_ms = 0, meshing_ms = 0, total_ms = 0;
+};
+
+/// What a run did; stats.json is this, plus the configuration.
+struct FuseReport {
+  size_t frames_total = 0;
+  size_t frames_used = 0;
+  std::map<std::string, size_t> skipped;        ///< reason → count
+  std::vector<std::string> skipped_examples;    ///< the first few messages, verbatim
+  std::vector<StageTimings> timings;            ///< one per used frame
+  size_t blocks = 0;
+  size_t blocks_per_level[3] = {0, 0, 0};       ///< by the level each block is meshed at
+  size_t memory_bytes = 0;
+  double bytes_per_block = 0;
+  size_t mesh_vertices = 0, mesh_triangles = 0;
+  double wall_time_s = 0;
+};
+
+/// Parses `fuse <input> <out-dir> [--config FILE] [--set key=value ...] [--frames N] [--quiet]`.
+/// --config is applied before every --set, whatever their order. False with a message (which
+/// names the parameter or flag) on any error: unknown flags, unknown keys, out-of-range values.
+bool parseFuseArguments(const std::vector<std::string>& args, FuseOptions* options, std::string* error);
+
+/// Runs the reconstruction. Frames that cannot be read or are rejected are skipped and
+/// counted by reason. Returns false (with a message) only when nothing can be done: a bad
+/// folder, an unwritable output directory.
+bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::string* error);
+
+/// stats.json content for `report` and the configuration used.
+std::string statsJson(const FuseReport& report, const MapperConfig& config);
+
+}  // namespace stereo_fusion
