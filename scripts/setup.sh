@@ -14,7 +14,8 @@ PACKAGES=(
   libeigen3-dev libopencv-dev libyaml-cpp-dev nlohmann-json3-dev
   # ROS 1 from Debian (catkin, messages, nodelet, tf2, synchronisation, images, bags)
   catkin ros-message-generation ros-message-runtime libroscpp-dev libnodeletlib-dev
-  libmessage-filters-dev libtf2-ros-dev libtf2-eigen-dev libstd-msgs-dev libgeometry-msgs-dev
+  libmessage-filters-dev libtf2-dev libtf2-msgs-dev libtf2-ros-dev libtf2-eigen-dev libstd-msgs-dev
+  libgeometry-msgs-dev libimage-transport-dev
   libsensor-msgs-dev libstereo-msgs-dev libvisualization-msgs-dev ros-std-msgs
   ros-geometry-msgs ros-sensor-msgs ros-stereo-msgs ros-visualization-msgs libcv-bridge-dev
   libpcl-dev librosbag-dev libdiagnostic-updater-dev

@@ -1,6 +1,8 @@
 #include "stereo_fusion/MapperConfig.h"
 
+#include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <functional>
 #include <limits>
 #include <sstream>
@@ -35,19 +37,17 @@ std::string formatDouble(double v) {
   // Print 0.02 rather than 0.020000000000000000416 when the short form round-trips.
   std::ostringstream shortest;
   shortest << v;
-  return std::stod(shortest.str()) == v ? shortest.str() : os.str();
+  // strtod, not stod: stod throws for subnormal values that are valid doubles.
+  return std::strtod(shortest.str().c_str(), nullptr) == v ? shortest.str() : os.str();
 }
 
 bool parseDouble(const std::string& text, double* out) {
-  try {
-    size_t used = 0;
-    const double v = std::stod(text, &used);
-    if (used != text.size()) return false;
-    *out = v;
-    return true;
-  } catch (...) {
-    return false;
-  }
+  if (text.empty() || std::isspace(static_cast<unsigned char>(text[0]))) return false;
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);  // subnormals parse (stod would throw)
+  if (end != text.c_str() + text.size()) return false;
+  *out = v;
+  return true;
 }
 
 bool parseInt(const std::string& text, int* out) {
@@ -159,9 +159,11 @@ const std::vector<Accessor>& accessors() {
     t.push_back(doubleParam("voxel_size_m", "m", 0.002, true, 1.0,
                             "Edge of a finest-level (8³) voxel; a block is 8 voxels wide.",
                             member(&MapperConfig::voxel_size_m)));
-    t.push_back(doubleParam("truncation_vox", "vox", 1.0, true, 32.0,
+    t.push_back(doubleParam("truncation_vox", "vox", 1.0, true, 8.0,
                             "Truncation distance Φ in voxels of the measurement's level: "
-                            "Φ = truncation_vox · s · voxel_size_m (s = 1, 2, 4).",
+                            "Φ = truncation_vox · s · voxel_size_m (s = 1, 2, 4), at least 2 voxels "
+                            "of the level being updated. At most 8: beyond, a far point's band "
+                            "spans dozens of blocks.",
                             member(&MapperConfig::truncation_vox)));
     t.push_back(doubleParam("min_depth_m", "m", 0.0, true, 1000.0,
                             "Measurements nearer than this are ignored.",
@@ -185,7 +187,7 @@ const std::vector<Accessor>& accessors() {
         "Measurement weight: constant 1; Steinbrücker fall-off behind the surface (eq. 3.10); "
         "or that fall-off × (depth_weight_reference_m / z)².",
         member(&MapperConfig::weight_mode)));
-    t.push_back(doubleParam("weight_falloff_start_vox", "vox", 0.0, true, 32.0,
+    t.push_back(doubleParam("weight_falloff_start_vox", "vox", 0.0, true, 8.0,
                             "δ of eq. 3.10: behind the surface the weight falls linearly from 1 at δ "
                             "to 0 at Φ (voxels of the measurement's level; must be < truncation_vox).",
                             member(&MapperConfig::weight_falloff_start_vox)));
@@ -216,8 +218,8 @@ const std::vector<Accessor>& accessors() {
                           "Re-mesh the changed blocks after every frame (incremental marching cubes).",
                           member(&MapperConfig::mesh_enabled)));
     t.push_back(doubleParam("mesh_level_min_coverage", "", 0.0, false, 1.0,
-                            "A block is meshed at the finest level whose observed volume is at least "
-                            "this share of the largest observed volume among its three levels.",
+                            "A block is meshed at the finest level whose observed surface area is at "
+                            "least this share of the largest among its three levels.",
                             member(&MapperConfig::mesh_level_min_coverage)));
     return t;
   }();

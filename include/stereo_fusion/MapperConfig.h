@@ -36,7 +36,7 @@ struct MapperConfig {
   int num_threads = 0;                 ///< Worker threads including the caller; 0 = all cores.
   bool use_color = true;               ///< Fuse the colour image into per-voxel colour.
   bool mesh_enabled = true;            ///< Re-mesh the changed blocks after every frame.
-  double mesh_level_min_coverage = 0.8;  ///< A block meshes at the finest level whose observed volume is ≥ this share of its best level's.
+  double mesh_level_min_coverage = 0.8;  ///< A block meshes at the finest level whose observed area is ≥ this share of its best level's.
 
   /// Block edge length in metres.
   double blockSizeM() const { return 8.0 * voxel_size_m; }

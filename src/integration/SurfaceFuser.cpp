@@ -37,6 +37,9 @@ uint64_t SurfaceFuser::fuseBlock(const StereoFrame& frame, const BlockOctree& oc
     const Eigen::Vector3f ey = R_cw.col(1) * level_voxel;
     const Eigen::Vector3f ez = R_cw.col(2) * level_voxel;
     const Eigen::Vector3f first = origin_c + 0.5f * (ex + ey + ez);
+    // A coarse level fed by near measurements still needs values on both sides of the surface
+    // at its own spacing: its band is never thinner than kMinBandVoxels of its voxels.
+    const float min_truncation = kMinBandVoxels * level_voxel;
     Voxel* voxels = &block->voxels[levelOffset(level)];
     for (int k = 0; k < side; ++k) {
       for (int j = 0; j < side; ++j) {
@@ -44,9 +47,11 @@ uint64_t SurfaceFuser::fuseBlock(const StereoFrame& frame, const BlockOctree& oc
           const Eigen::Vector3f p = first + static_cast<float>(i) * ex +
                                     static_cast<float>(j) * ey + static_cast<float>(k) * ez;
           if (!(p.z() > 0.0f)) continue;
-          // Eq. 3.12–3.14: nearest pixel of the voxel centre's projection.
+          // Eq. 3.12–3.14: nearest pixel of the voxel centre's projection. Bounds are checked
+          // in float first: u, v can be huge or infinite for z_c near 0.
           const float u = fx * p.x() / p.z() + cx;
           const float v = fy * p.y() / p.z() + cy;
+          if (!(u >= -0.5f && v >= -0.5f && u < width - 0.5f && v < height - 0.5f)) continue;
           const int iu = static_cast<int>(std::floor(u + 0.5f));
           const int iv = static_cast<int>(std::floor(v + 0.5f));
           if (iu < 0 || iv < 0 || iu >= width || iv >= height) continue;
@@ -57,7 +62,7 @@ uint64_t SurfaceFuser::fuseBlock(const StereoFrame& frame, const BlockOctree& oc
           const int measurement_level = levelForDepth(surface_depth, config_.levels);
           if (level < measurement_level) continue;  // too fine for this measurement
           const float scale = static_cast<float>(levelScale(measurement_level));
-          const float truncation = static_cast<float>(config_.truncation_vox) * scale * voxel;
+          const float truncation = std::max(static_cast<float>(config_.truncation_vox) * scale * voxel, min_truncation);
           const float delta = static_cast<float>(config_.weight_falloff_start_vox) * scale * voxel;
           const float sdf = signedDistanceAlongRay(p.x(), p.y(), p.z(), surface_depth);
           if (sdf > truncation) continue;  // far behind the surface: unobserved

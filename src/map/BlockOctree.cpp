@@ -6,14 +6,20 @@
 namespace stereo_fusion {
 
 struct BlockOctree::Node {
-  BlockKey origin;  // minimum corner, in blocks
-  int height = 0;   // covers 2^height blocks per axis; children of height-1 nodes are blocks
+  // 64-bit: a root spanning ±kMaxKey has corners beyond the int32 range.
+  std::array<int64_t, 3> origin{};  // minimum corner, in blocks
+  int height = 0;  // covers 2^height blocks per axis; children of height-1 nodes are blocks
   std::array<std::atomic<void*>, 8> child{};
 
-  int32_t halfSide() const { return int32_t{1} << (height - 1); }
-  BlockKey centre() const {
-    const int32_t h = halfSide();
-    return {origin.x + h, origin.y + h, origin.z + h};
+  int64_t halfSide() const { return int64_t{1} << (height - 1); }
+  std::array<int64_t, 3> centre() const {
+    const int64_t h = halfSide();
+    return {origin[0] + h, origin[1] + h, origin[2] + h};
+  }
+  /// Eq. 2.7–2.10 in 64-bit coordinates (see BlockOctree::octantIndex).
+  int octantOf(const BlockKey& key) const {
+    const auto c = centre();
+    return 4 * (key.x >= c[0]) + 2 * (key.y >= c[1]) + (key.z >= c[2]);
   }
 };
 
@@ -45,15 +51,12 @@ int BlockOctree::octantIndex(const BlockKey& key, const BlockKey& centre) {
 }
 
 bool BlockOctree::contains(const Node* node, const BlockKey& key) {
-  // 64-bit arithmetic: origin + side may exceed int32 for the largest roots.
   const int64_t side = int64_t{1} << node->height;
-  auto in = [side](int32_t o, int32_t v) {
-    return int64_t{v} >= int64_t{o} && int64_t{v} < int64_t{o} + side;
-  };
-  return in(node->origin.x, key.x) && in(node->origin.y, key.y) && in(node->origin.z, key.z);
+  auto in = [side](int64_t o, int32_t v) { return v >= o && v < o + side; };
+  return in(node->origin[0], key.x) && in(node->origin[1], key.y) && in(node->origin[2], key.z);
 }
 
-BlockOctree::Node* BlockOctree::newNode(const BlockKey& origin, int height) {
+BlockOctree::Node* BlockOctree::newNode(const std::array<int64_t, 3>& origin, int height) {
   nodes_.push_back(std::make_unique<Node>());
   Node* n = nodes_.back().get();
   n->origin = origin;
@@ -66,7 +69,7 @@ VoxelBlock* BlockOctree::find(const BlockKey& key) const {
   const Node* node = root_.load(std::memory_order_acquire);
   if (node == nullptr || !contains(node, key)) return nullptr;
   while (true) {
-    void* next = node->child[octantIndex(key, node->centre())].load(std::memory_order_acquire);
+    void* next = node->child[node->octantOf(key)].load(std::memory_order_acquire);
     if (next == nullptr) return nullptr;
     if (node->height == 1) return static_cast<VoxelBlock*>(next);
     node = static_cast<const Node*>(next);
@@ -78,21 +81,25 @@ void BlockOctree::growToContain(const BlockKey& key) {
   if (root == nullptr) {
     // First block: a height-1 root covering the 2×2×2 blocks with the key at its lower corner
     // aligned to even coordinates, so the tree stays aligned to powers of two.
-    auto align = [](int32_t v) { return static_cast<int32_t>(v & ~int32_t{1}); };
+    auto align = [](int32_t v) { return int64_t{v} & ~int64_t{1}; };
     root = newNode({align(key.x), align(key.y), align(key.z)}, 1);
     root_.store(root, std::memory_order_release);
   }
   while (!contains(root, key)) {
-    // Double the root towards the key; the old root becomes one octant of the new one.
-    // kMaxKey = 2^28 keeps every origin and side of this loop inside int32.
-    const int32_t side = static_cast<int32_t>(int64_t{1} << root->height);
-    BlockKey origin = root->origin;
-    if (key.x < origin.x) origin.x -= side;
-    if (key.y < origin.y) origin.y -= side;
-    if (key.z < origin.z) origin.z -= side;
+    // Double the root: towards the key on the axes that miss it, towards the world origin on
+    // the others, so the tree stays balanced around the map and the height stays ≤ 31.
+    const int64_t side = int64_t{1} << root->height;
+    std::array<int64_t, 3> origin = root->origin;
+    const int32_t k[3] = {key.x, key.y, key.z};
+    for (int a = 0; a < 3; ++a) {
+      const bool below = k[a] < origin[a];
+      const bool above = k[a] >= origin[a] + side;
+      if (below || (!above && origin[a] + side / 2 > 0)) origin[a] -= side;
+    }
     Node* grown = newNode(origin, root->height + 1);
-    grown->child[octantIndex(root->origin, grown->centre())].store(root,
-                                                                  std::memory_order_relaxed);
+    const BlockKey old_corner{static_cast<int32_t>(root->origin[0]), static_cast<int32_t>(root->origin[1]),
+                              static_cast<int32_t>(root->origin[2])};
+    grown->child[grown->octantOf(old_corner)].store(root, std::memory_order_relaxed);
     root_.store(grown, std::memory_order_release);
     root = grown;
   }
@@ -107,7 +114,7 @@ VoxelBlock* BlockOctree::findOrAllocate(const BlockKey& key, bool* allocated) {
   growToContain(key);
   Node* node = root_.load(std::memory_order_relaxed);
   while (true) {
-    std::atomic<void*>& slot = node->child[octantIndex(key, node->centre())];
+    std::atomic<void*>& slot = node->child[node->octantOf(key)];
     void* next = slot.load(std::memory_order_relaxed);
     if (node->height == 1) {
       if (next != nullptr) return static_cast<VoxelBlock*>(next);  // another thread won
@@ -120,10 +127,10 @@ VoxelBlock* BlockOctree::findOrAllocate(const BlockKey& key, bool* allocated) {
       return block;
     }
     if (next == nullptr) {
-      const int32_t h = node->halfSide();
-      const BlockKey c = node->centre();
-      const BlockKey child_origin{key.x >= c.x ? c.x : c.x - h, key.y >= c.y ? c.y : c.y - h,
-                                  key.z >= c.z ? c.z : c.z - h};
+      const int64_t h = node->halfSide();
+      const auto c = node->centre();
+      const std::array<int64_t, 3> child_origin{key.x >= c[0] ? c[0] : c[0] - h, key.y >= c[1] ? c[1] : c[1] - h,
+                                                key.z >= c[2] ? c[2] : c[2] - h};
       Node* child = newNode(child_origin, node->height - 1);
       slot.store(child, std::memory_order_release);
       next = child;

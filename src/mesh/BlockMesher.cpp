@@ -79,21 +79,22 @@ bool blockField(const VoxelBlock& block, int level, const int local[3], float* s
 }  // namespace
 
 int chooseMeshLevel(const VoxelBlock& block, double level_min_coverage) {
-  // Observed volume of each level, in finest-voxel units: observed voxels × (voxel edge)³.
-  // Volumes, not voxel shares: a coarse centre can miss the band that finer centres near
-  // the block's faces catch, so no level is assumed to contain another.
-  double volume[kNumLevels];
+  // Observed surface area of each level, in finest-voxel units: a level's band is
+  // truncation_vox of its own voxels thick, so area ≈ observed volume / thickness ∝ n · s².
+  // Areas, not voxel shares: a coarse centre can miss the band that finer centres near the
+  // block's faces catch, so no level is assumed to contain another.
+  double area[kNumLevels];
   double largest = 0.0;
   for (int level = 0; level < kNumLevels; ++level) {
     int observed = 0;
     for (int n = 0; n < levelVoxelCount(level); ++n)
       observed += block.voxels[levelOffset(level) + n].weight > 0.0f;
     const double scale = levelScale(level);
-    volume[level] = observed * scale * scale * scale;
-    largest = std::max(largest, volume[level]);
+    area[level] = observed * scale * scale;
+    largest = std::max(largest, area[level]);
   }
   for (int level = 0; level < kNumLevels; ++level)
-    if (largest > 0.0 && volume[level] >= level_min_coverage * largest) return level;
+    if (largest > 0.0 && area[level] >= level_min_coverage * largest) return level;
   return kNumLevels - 1;
 }
 
@@ -113,6 +114,7 @@ struct BlockMesher::Context {
   int level[8] = {};
   int step[8] = {};
   bool uniform = true;  // every present neighbour has the owner's level
+  float truncated_abs = 0.0f;  // 0.99 · Φ of the coarsest level present
   int64_t origin[3] = {};
   double unit = 0.0;
   SubMesh* out = nullptr;
@@ -120,9 +122,7 @@ struct BlockMesher::Context {
   std::vector<PointSample> vertex_samples;  // scratch for the generic path
 };
 
-BlockMesher::BlockMesher(const MeshingParams& params)
-    : params_(params),
-      truncated_abs_(static_cast<float>(0.99 * params.truncation_vox * params.voxel_size_m)) {}
+BlockMesher::BlockMesher(const MeshingParams& params) : params_(params) {}
 
 bool BlockMesher::samplePoint(const Context& ctx, int qx, int qy, int qz, PointSample* out) const {
   const int q[3] = {qx, qy, qz};
@@ -283,7 +283,7 @@ void BlockMesher::meshBox(Context& ctx, const int lo[3], const int hi[3]) const 
     const auto& edges = mc::cubeEdges();
     for (const mc::CubeEdge& e : edges) {
       const float va = s[e.corner_a].sdf, vb = s[e.corner_b].sdf;
-      if ((va >= 0.0f) != (vb >= 0.0f) && std::min(std::abs(va), std::abs(vb)) >= truncated_abs_)
+      if ((va >= 0.0f) != (vb >= 0.0f) && std::min(std::abs(va), std::abs(vb)) >= ctx.truncated_abs)
         return;  // truncation-band edge, not a surface
     }
     for (const auto& tri : mc::caseTable().triangles[case_index]) {
@@ -364,7 +364,7 @@ void BlockMesher::meshBox(Context& ctx, const int lo[3], const int hi[3]) const 
   mc::polygonizeCell(polygons, values.data(), &triangles);
   for (const auto& tri : triangles)
     for (const mc::Crossing& c : tri)
-      if (std::min(std::abs(values[c.a]), std::abs(values[c.b])) >= truncated_abs_) return;
+      if (std::min(std::abs(values[c.a]), std::abs(values[c.b])) >= ctx.truncated_abs) return;
   for (const auto& tri : triangles) {
     std::array<uint32_t, 3> t;
     for (int k = 0; k < 3; ++k)
@@ -395,6 +395,10 @@ void BlockMesher::mesh(const BlockOctree& map, const VoxelBlock& owner, SubMesh*
       any_positive |= ctx.nb[d]->mesh_has_positive;
     }
   }
+  int coarsest_step = 1;
+  for (int d = 0; d < 8; ++d)
+    if (ctx.nb[d]) coarsest_step = std::max(coarsest_step, ctx.step[d]);
+  ctx.truncated_abs = static_cast<float>(0.99 * params_.truncation_vox * coarsest_step * params_.voxel_size_m);
   // Every value the mesher uses is a convex combination of these blocks' observed samples:
   // with one sign only, no cell can change sign.
   if (!any_negative || !any_positive) return;

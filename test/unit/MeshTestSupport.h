@@ -1,6 +1,8 @@
 #pragma once
 // Helpers for the meshing tests: objects fused from views all around, and mesh topology checks.
 
+#include <Eigen/Geometry>
+#include <functional>
 #include <map>
 #include <set>
 
@@ -38,6 +40,36 @@ inline std::unique_ptr<Mapper> fuseViews(const sim::AnalyticScene& scene,
     if (!r.accepted) throw std::runtime_error(r.error);
   }
   return mapper;
+}
+
+/// A map holding the exact SDF of `scene` (our sign: negative outside the solids, in free
+/// space) at `level_of(key)` only, in every block within `margin_m` of the scene's surface
+/// inside `bounds`: fully observed data, so any hole in its mesh is the mesher's fault.
+inline void fillAnalytic(BlockOctree* map, const sim::AnalyticScene& scene, const Eigen::AlignedBox3d& bounds,
+                         double margin_m, const std::function<int(const BlockKey&)>& level_of) {
+  const BlockKey lo = map->keyForPoint(bounds.min()), hi = map->keyForPoint(bounds.max());
+  const double bs = map->blockSize();
+  for (int z = lo.z; z <= hi.z; ++z)
+    for (int y = lo.y; y <= hi.y; ++y)
+      for (int x = lo.x; x <= hi.x; ++x) {
+        const BlockKey key{x, y, z};
+        const Eigen::Vector3d centre = map->blockOrigin(key) + Eigen::Vector3d::Constant(bs / 2);
+        if (scene.distanceToSurface(centre) > margin_m + bs) continue;
+        VoxelBlock* b = map->findOrAllocate(key);
+        const int level = level_of(key);
+        const int side = levelSide(level);
+        const double h = bs / side;
+        for (int k = 0; k < side; ++k)
+          for (int j = 0; j < side; ++j)
+            for (int i = 0; i < side; ++i) {
+              const Eigen::Vector3d p = map->blockOrigin(key) + Eigen::Vector3d(i + 0.5, j + 0.5, k + 0.5) * h;
+              double inside = INFINITY;  // most negative primitive SDF = deepest inside
+              for (size_t s = 0; s < scene.size(); ++s) inside = std::min(inside, scene.primitive(static_cast<int>(s)).signedDistance(p));
+              Voxel& v = b->at(level, i, j, k);
+              v.sdf_m = static_cast<float>(-inside);
+              v.weight = 1.0f;
+            }
+      }
 }
 
 /// Topology of a welded mesh: directed edges must each appear once with their reverse once.

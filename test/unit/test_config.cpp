@@ -83,6 +83,18 @@ TEST(Config, RejectsUnknownMalformedAndOutOfRange) {
   EXPECT_EQ(c.voxel_size_m, MapperConfig{}.voxel_size_m);  // failed sets change nothing
 }
 
+TEST(Config, SubnormalAndSpacedValues) {
+  MapperConfig c;
+  std::string error;
+  EXPECT_TRUE(setMapperParameter(&c, "min_depth_m", "1e-310", &error)) << error;  // subnormal, in range
+  EXPECT_NO_THROW(validateMapperConfig(c));
+  EXPECT_TRUE(validateMapperConfig(c).empty());
+  EXPECT_EQ(getMapperParameter(c, "min_depth_m"), "1e-310");
+  EXPECT_FALSE(setMapperParameter(&c, "max_depth_m", " 5", &error));
+  EXPECT_FALSE(setMapperParameter(&c, "max_depth_m", "", &error));
+  EXPECT_FALSE(setMapperParameter(&c, "truncation_vox", "9", &error));  // capped at 8
+}
+
 TEST(Config, CrossParameterRules) {
   MapperConfig c;
   c.weight_falloff_start_vox = 4;

@@ -178,6 +178,26 @@ TEST(FusionSurface, SignConventionNegativeInFront) {
   EXPECT_GT(behind, 1000);
 }
 
+TEST(FusionSurface, CoarseLevelsGetABandOfTheirOwnVoxels) {
+  // With a 1-voxel truncation, near measurements must still give the 4³ and 2³ levels values
+  // on both sides of the surface: Φ is at least 2 voxels of the level being updated. The
+  // crossing count per area then matches across levels (a level-L voxel covers 4^L of the
+  // 8³ level's crossings on a plane).
+  const PlaneScene plane;
+  MapperConfig config = testConfig();
+  config.truncation_vox = 1.0;
+  config.weight_falloff_start_vox = 0.5;
+  Mapper mapper(config);
+  ASSERT_TRUE(mapper.integrate(renderFrame(plane.scene, vgaCamera(), Eigen::Isometry3d::Identity())).accepted);
+  const double fine = static_cast<double>(zeroCrossings(mapper.map(), 0, 2).size());
+  ASSERT_GT(fine, 3000);
+  for (int level = 1; level < kNumLevels; ++level) {
+    const double scaled = static_cast<double>(zeroCrossings(mapper.map(), level, 2).size()) * (1 << (2 * level));
+    std::printf("[ coarse band ] level %d: %.0f crossings per level-0 area vs %.0f at level 0\n", level, scaled, fine);
+    EXPECT_GT(scaled, 0.8 * fine) << "level " << level;
+  }
+}
+
 TEST(FusionSurface, FarMeasurementsOnlyReachCoarseLevels) {
   // A wall at 5 m is fused at level 2 only (s = 4): the 8³ and 4³ levels stay unobserved.
   sim::AnalyticScene scene;

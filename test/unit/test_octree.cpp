@@ -187,3 +187,20 @@ TEST(BlockOctree, SearchCounter) {
   tree.find({9, 9, 9});
   EXPECT_EQ(tree.searchCount(), 3u);
 }
+
+TEST(BlockOctree, ExtremeKeysOnEveryAxisStayBalancedAndExact) {
+  // Keys at ±kMaxKey on all axes, in an order that once pushed the root past int32.
+  BlockOctree tree(0.16);
+  const int32_t K = BlockOctree::kMaxKey;
+  const std::vector<BlockKey> keys = {{0, 0, 0},  {0, 0, K},   {0, 0, -K}, {0, -K, 0}, {-K, 0, 0},
+                                      {K, K, K},  {-K, -K, -K}, {K, -K, K}, {-K, K, -K}, {1, -1, 1}};
+  std::vector<VoxelBlock*> blocks;
+  for (const BlockKey& k : keys) {
+    blocks.push_back(tree.findOrAllocate(k));
+    ASSERT_NE(blocks.back(), nullptr) << k;
+  }
+  for (size_t i = 0; i < keys.size(); ++i) EXPECT_EQ(tree.find(keys[i]), blocks[i]) << keys[i];
+  EXPECT_EQ(tree.blockCount(), keys.size());
+  EXPECT_LE(tree.height(), 31);
+  EXPECT_EQ(tree.find({K, K, K - 1}), nullptr);
+}

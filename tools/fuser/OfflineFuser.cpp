@@ -12,6 +12,7 @@
 #include "stereo_fusion/io/ConfigFile.h"
 #include "stereo_fusion/io/DatasetReader.h"
 #include "stereo_fusion/io/PlyWriter.h"
+#include "stereo_fusion/ros/BagSequence.h"
 #include "stereo_fusion/util/Timer.h"
 
 namespace stereo_fusion {
@@ -50,6 +51,14 @@ bool parseFuseArguments(const std::vector<std::string>& args, FuseOptions* optio
         *error = "--frames: '" + *v + "' is not a frame count";
         return false;
       }
+    } else if (a == "--disparity-topic" || a == "--image-topic" || a == "--camera-info-topic" ||
+               a == "--world-frame") {
+      const std::string* v = value(a.c_str());
+      if (!v) return false;
+      (a == "--disparity-topic"   ? options->bag_topics.disparity
+       : a == "--image-topic"     ? options->bag_topics.image
+       : a == "--camera-info-topic" ? options->bag_topics.camera_info
+                                    : options->bag_topics.world_frame) = *v;
     } else if (a == "--quiet") {
       options->progress = false;
     } else if (!a.empty() && a[0] == '-') {
@@ -123,12 +132,12 @@ Summary summarize(std::vector<double> v) {
 
 bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::string* error) {
   *report = FuseReport{};
-  const std::string ext = fs::path(options.input).extension().string();
-  if (ext == ".bag") {
-    *error = options.input + ": reading rosbags is not supported yet; convert to a dataset folder";
-    return false;
+  std::unique_ptr<FrameSource> reader;
+  if (fs::path(options.input).extension() == ".bag") {
+    reader = BagSequence::open(options.input, options.bag_topics, error);
+  } else if (auto folder = DatasetReader::open(options.input, error)) {
+    reader = std::make_unique<DatasetReader>(std::move(*folder));
   }
-  auto reader = DatasetReader::open(options.input, error);
   if (!reader) return false;
   std::error_code ec;
   fs::create_directories(options.out_dir, ec);

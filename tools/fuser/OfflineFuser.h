@@ -7,12 +7,14 @@
 #include <vector>
 
 #include "stereo_fusion/MapperConfig.h"
+#include "stereo_fusion/ros/BagSequence.h"
 
 namespace stereo_fusion {
 
 /// What to fuse and where to write it.
 struct FuseOptions {
-  std::string input;    ///< dataset folder (a .bag is recognised but not supported yet)
+  std::string input;    ///< dataset folder, or a rosbag (*.bag)
+  BagTopics bag_topics;  ///< topics and world frame read from a bag (the nodelet's defaults)
   std::string out_dir;  ///< receives mesh.ply and stats.json (created if missing)
   MapperConfig config;
   size_t max_frames = 0;  ///< 0 = all
@@ -39,7 +41,8 @@ struct FuseReport {
   double wall_time_s = 0;
 };
 
-/// Parses `fuse <input> <out-dir> [--config FILE] [--set key=value ...] [--frames N] [--quiet]`.
+/// Parses `fuse <input> <out-dir> [--config FILE] [--set key=value ...] [--frames N] [--quiet]
+/// [--disparity-topic T] [--image-topic T] [--camera-info-topic T] [--world-frame F]`.
 /// --config is applied before every --set, whatever their order. False with a message (which
 /// names the parameter or flag) on any error: unknown flags, unknown keys, out-of-range values.
 bool parseFuseArguments(const std::vector<std::string>& args, FuseOptions* options, std::string* error);

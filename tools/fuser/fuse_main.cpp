@@ -8,10 +8,14 @@ namespace {
 const char* kUsage =
     "usage: stereo_fusion_fuse <seq-folder | file.bag> <out-dir> [--config FILE] [--set key=value ...]\n"
     "                          [--frames N] [--quiet]\n"
-    "Fuses a dataset folder (see DESIGN.md) and writes <out-dir>/mesh.ply and <out-dir>/stats.json.\n"
+    "Fuses a dataset folder (see DESIGN.md) or a rosbag (DisparityImage, Image, CameraInfo, /tf)\n"
+    "and writes <out-dir>/mesh.ply and <out-dir>/stats.json.\n"
     "  --config FILE     parameters in config/default.yaml's format (applied before --set)\n"
     "  --set key=value   override one parameter; every key of config/default.yaml is accepted\n"
     "  --frames N        fuse only the first N frames\n"
+    "  --disparity-topic, --image-topic, --camera-info-topic, --world-frame\n"
+    "                    what to read from a bag (defaults: /stereo/disparity,\n"
+    "                    /stereo/left/image_rect_color, /stereo/left/camera_info, world)\n"
     "  --quiet           no progress output\n";
 }
 

@@ -20,8 +20,8 @@ struct LookupStats {
 
 /// Stage 1 of the pipeline (thesis §3.4): turns a disparity map into the queue of voxel blocks
 /// to update, allocating missing blocks. Each valid pixel contributes the blocks that
-/// intersect the cube of ±Φ around its 3D point (Φ of the pixel's level), so the whole
-/// truncation band is covered. The histogram filter, when on, drops per image region the
+/// intersect the cube of ±Φ around its 3D point (Φ of the level its depth selects, eq. 3.2),
+/// so that level's whole truncation band is covered. The histogram filter, when on, drops per image region the
 /// blocks reached by fewer than `histogram_min_points` points.
 ///
 /// Naive (Algorithm 1) searches the octree for every (pixel, band block) pair; accelerated

@@ -20,7 +20,11 @@ struct FusionStats {
 /// (eq. 3.10) into the running average (eq. 3.8–3.9).
 ///
 /// The level of a measurement follows the surface depth z (eq. 3.2): it updates its own level
-/// and every coarser one (see VoxelBlock), with Φ = truncation_vox · s · voxel_size_m.
+/// and every coarser one (see VoxelBlock), with Φ = truncation_vox · s · voxel_size_m (s of the
+/// measurement's level) but never less than kMinBandVoxels voxels of the level being updated,
+/// so coarse levels fed by near measurements still bracket the surface. (A band of
+/// truncation_vox coarse voxels would be thicker than small objects and let views disagree
+/// about their far side.)
 /// Behind the surface, voxels farther than Φ are left untouched (unobserved); in front, the
 /// distance is clamped to −Φ (observed free space).
 ///
@@ -28,6 +32,9 @@ struct FusionStats {
 /// number of threads.
 class SurfaceFuser {
  public:
+  /// Minimum band half-width, in voxels of the level being updated.
+  static constexpr float kMinBandVoxels = 2.0f;
+
   SurfaceFuser(const MapperConfig& config, ThreadPool* pool);
 
   /// Fuses `frame` into `blocks` (from BlockLookup). `frame_index` (> 0) is written to

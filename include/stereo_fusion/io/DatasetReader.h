@@ -16,6 +16,7 @@
 
 #include "stereo_fusion/camera/StereoCamera.h"
 #include "stereo_fusion/integration/StereoFrame.h"
+#include "stereo_fusion/io/FrameSource.h"
 
 namespace stereo_fusion {
 
@@ -41,14 +42,14 @@ struct DatasetFrameInfo {
 /// A validated dataset folder. open() checks calibration, poses and file lists up front and
 /// fails with one message naming the file and line; load() reads one frame and fails (without
 /// throwing) for a missing, unreadable or truncated image, so a caller can skip and count it.
-class DatasetReader {
+class DatasetReader : public FrameSource {
  public:
   static std::optional<DatasetReader> open(const std::string& folder, std::string* error,
                                            const SgbmParams& sgbm = {});
 
   const std::string& folder() const { return folder_; }
   const StereoCamera& camera() const { return camera_; }
-  size_t size() const { return frames_.size(); }
+  size_t size() const override { return frames_.size(); }
   const DatasetFrameInfo& info(size_t i) const { return frames_[i]; }
   /// True when disparity must be computed from right/ images with SGBM.
   bool usesSgbm() const { return uses_sgbm_; }
@@ -57,7 +58,7 @@ class DatasetReader {
 
   /// Loads frame `i`: disparity (CV_32FC1 pixels, invalid = 0), colour (RGB or grey), pose,
   /// camera. Returns false with a reason naming the file on any problem.
-  bool load(size_t i, StereoFrame* frame, std::string* error) const;
+  bool load(size_t i, StereoFrame* frame, std::string* error) const override;
 
  private:
   std::string folder_;

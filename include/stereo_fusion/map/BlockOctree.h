@@ -27,7 +27,7 @@ namespace stereo_fusion {
 class BlockOctree {
  public:
   /// Keys beyond ±kMaxKey are refused (2.7e8 blocks, > 20 000 km at 8 cm blocks: far beyond
-  /// any real map, and far from int32 overflow while the root grows).
+  /// any real map, and far from int32 overflow of the keys themselves).
   static constexpr int32_t kMaxKey = 1 << 28;
 
   explicit BlockOctree(double block_size_m);
@@ -81,13 +81,15 @@ class BlockOctree {
 
  private:
   struct Node;
-  Node* newNode(const BlockKey& origin, int height);
+  Node* newNode(const std::array<int64_t, 3>& origin, int height);
   void growToContain(const BlockKey& key);  // caller holds alloc_mutex_
   static bool contains(const Node* node, const BlockKey& key);
 
   double block_size_m_;
   std::atomic<Node*> root_{nullptr};
-  mutable std::atomic<uint64_t> searches_{0};
+  // Own cache line: every find() bumps it, and it must not evict the root pointer.
+  alignas(64) mutable std::atomic<uint64_t> searches_{0};
+  alignas(64) char pad_[1] = {};
   std::mutex alloc_mutex_;
   std::vector<std::unique_ptr<Node>> nodes_;
   std::vector<VoxelBlock*> blocks_;

@@ -10,17 +10,18 @@ namespace stereo_fusion {
 /// What the mesher needs from the configuration.
 struct MeshingParams {
   double voxel_size_m = 0.02;
-  /// Φ₁ = truncation_vox · voxel_size_m: a sign change between two values that are both at
-  /// least 0.99·Φ₁ away from zero is the edge of a truncation band, not a surface.
+  /// Φ of a level = truncation_vox · s · voxel_size_m: a sign change between two values that
+  /// are both at least 0.99·Φ away from zero is the edge of a truncation band, not a surface
+  /// (Φ of the coarsest level among the blocks involved, to never drop a real surface).
   double truncation_vox = 4.0;
-  /// A block is sampled at the finest level whose observed volume is at least this share of
-  /// the largest observed volume among its levels (see chooseMeshLevel()).
+  /// A block is sampled at the finest level whose observed area is at least this share of
+  /// the largest observed area among its levels (see chooseMeshLevel()).
   double level_min_coverage = 0.8;
 };
 
-/// The level a block is meshed at: the finest level whose observed volume (observed voxels
-/// × voxel volume) is at least `level_min_coverage` × the largest observed volume of any of
-/// its levels. A block seen only from far meshes at 2³, one seen from near at 8³, and one
+/// The level a block is meshed at: the finest level whose observed surface area (observed
+/// voxels × voxel volume ÷ band thickness, ∝ n·s²) is at least `level_min_coverage` × the
+/// largest of its levels'. A block seen only from far meshes at 2³, one seen from near at 8³, and one
 /// seen from near in only a corner of what was seen from far stays coarse rather than
 /// opening holes.
 int chooseMeshLevel(const VoxelBlock& block, double level_min_coverage);
@@ -82,7 +83,6 @@ class BlockMesher {
                         const PointSample& sq) const;
 
   MeshingParams params_;
-  float truncated_abs_;  // 0.99 · Φ₁
 };
 
 }  // namespace stereo_fusion

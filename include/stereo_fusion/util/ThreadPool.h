@@ -2,6 +2,7 @@
 #include <atomic>
 #include <condition_variable>
 #include <cstddef>
+#include <exception>
 #include <functional>
 #include <mutex>
 #include <thread>
@@ -24,23 +25,27 @@ class ThreadPool {
 
   /// Calls fn(begin, end) over [0, n) in chunks of `grain` items, on all threads, and returns
   /// when every chunk is done. Chunks are claimed dynamically (balanced), so `fn` must only
-  /// write to per-item state for the result to be independent of the thread count.
-  /// Not re-entrant: do not call parallelFor from inside `fn`.
+  /// write to per-item state for the result to be independent of the thread count. The first
+  /// exception thrown by `fn` on any thread is rethrown here after all chunks have stopped.
+  /// Not re-entrant: do not call parallelFor from inside `fn`; one caller at a time.
   void parallelFor(size_t n, size_t grain, const std::function<void(size_t, size_t)>& fn);
 
  private:
+  struct Job {
+    const std::function<void(size_t, size_t)>* fn = nullptr;
+    size_t size = 0;
+    size_t grain = 1;
+  };
   void workerLoop();
-  void runChunks();
+  void runChunks(const Job& job);
 
   std::vector<std::thread> workers_;
   std::mutex mutex_;
   std::condition_variable wake_;
   std::condition_variable done_;
-  // Current job (valid while active_workers_ > 0 or the caller is running chunks).
-  const std::function<void(size_t, size_t)>* job_ = nullptr;
-  size_t job_size_ = 0;
-  size_t job_grain_ = 1;
-  std::atomic<size_t> next_index_{0};
+  Job current_;                        // guarded by mutex_; fn == nullptr when no job runs
+  std::atomic<size_t> next_index_{0};  // next unclaimed item of the current job
+  std::exception_ptr error_;           // guarded by mutex_
   uint64_t generation_ = 0;
   int busy_workers_ = 0;
   bool stopping_ = false;

@@ -1,0 +1,25 @@
+#pragma once
+// ROS messages ↔ core types. The ros/ folder is the only place that includes ROS headers.
+
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <stereo_msgs/DisparityImage.h>
+
+#include <Eigen/Geometry>
+#include <string>
+
+#include "stereo_fusion/integration/StereoFrame.h"
+
+namespace stereo_fusion {
+
+/// Builds a StereoFrame from one synchronised set of messages and the pose of the disparity's
+/// frame. Camera: fx, fy, cx, cy from the rectified projection P (K when P is unset); baseline
+/// from DisparityImage::T. Disparity must be 32FC1; values ≤ 0, non-finite or below
+/// min_disparity become invalid (0). Colour: rgb8, bgr8, rgba8, bgra8, mono8. Any
+/// inconsistency (sizes, encodings, zero f or T, focal lengths that disagree) returns false
+/// with a message; nothing is half-filled.
+bool toStereoFrame(const stereo_msgs::DisparityImage& disparity, const sensor_msgs::Image& image,
+                   const sensor_msgs::CameraInfo& info, const Eigen::Isometry3d& T_world_camera,
+                   StereoFrame* frame, std::string* error);
+
+}  // namespace stereo_fusion

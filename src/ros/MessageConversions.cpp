@@ -1,0 +1,91 @@
+#include "stereo_fusion/ros/MessageConversions.h"
+
+#include <cv_bridge/cv_bridge.h>
+#include <sensor_msgs/image_encodings.h>
+
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+namespace stereo_fusion {
+
+namespace enc = sensor_msgs::image_encodings;
+
+bool toStereoFrame(const stereo_msgs::DisparityImage& disparity, const sensor_msgs::Image& image,
+                   const sensor_msgs::CameraInfo& info, const Eigen::Isometry3d& T_world_camera,
+                   StereoFrame* frame, std::string* error) {
+  const sensor_msgs::Image& d = disparity.image;
+  if (d.encoding != enc::TYPE_32FC1) {
+    *error = "disparity encoding must be 32FC1, got '" + d.encoding + "'";
+    return false;
+  }
+  if (d.width == 0 || d.height == 0 || d.step < d.width * 4 || d.data.size() < size_t{d.step} * d.height) {
+    *error = "disparity image is empty or its data is shorter than step × height";
+    return false;
+  }
+  if (!(std::isfinite(disparity.f) && disparity.f > 0) || !(std::isfinite(disparity.T) && disparity.T > 0)) {
+    *error = "DisparityImage needs f > 0 and T > 0 (got f = " + std::to_string(disparity.f) +
+             ", T = " + std::to_string(disparity.T) + ")";
+    return false;
+  }
+  const bool has_p = info.P[0] != 0.0;
+  const double fx = has_p ? info.P[0] : info.K[0], fy = has_p ? info.P[5] : info.K[4];
+  const double cx = has_p ? info.P[2] : info.K[2], cy = has_p ? info.P[6] : info.K[5];
+  if (std::abs(fx - disparity.f) > 0.01 * disparity.f) {
+    *error = "CameraInfo fx = " + std::to_string(fx) + " disagrees with DisparityImage f = " +
+             std::to_string(disparity.f);
+    return false;
+  }
+  std::string why;
+  auto camera = StereoCamera::create(static_cast<int>(d.width), static_cast<int>(d.height), fx, fy, cx, cy,
+                                     disparity.T, &why);
+  if (!camera) {
+    *error = why;
+    return false;
+  }
+  if (info.width != 0 && (info.width != d.width || info.height != d.height)) {
+    *error = "CameraInfo is " + std::to_string(info.width) + "x" + std::to_string(info.height) +
+             " but the disparity is " + std::to_string(d.width) + "x" + std::to_string(d.height);
+    return false;
+  }
+  if (image.width != d.width || image.height != d.height) {
+    *error = "image is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+             " but the disparity is " + std::to_string(d.width) + "x" + std::to_string(d.height);
+    return false;
+  }
+  cv::Mat color;
+  try {
+    if (image.encoding == enc::RGB8 || image.encoding == enc::BGR8 || image.encoding == enc::RGBA8 ||
+        image.encoding == enc::BGRA8) {
+      color = cv_bridge::toCvCopy(image, enc::RGB8)->image;
+    } else if (image.encoding == enc::MONO8) {
+      color = cv_bridge::toCvCopy(image, enc::MONO8)->image;
+    } else {
+      *error = "unsupported image encoding '" + image.encoding + "' (rgb8, bgr8, rgba8, bgra8, mono8)";
+      return false;
+    }
+  } catch (const cv_bridge::Exception& e) {
+    *error = std::string("image conversion failed: ") + e.what();
+    return false;
+  }
+  cv::Mat disparity_px;
+  try {
+    disparity_px = cv_bridge::toCvCopy(d, enc::TYPE_32FC1)->image;
+  } catch (const cv_bridge::Exception& e) {
+    *error = std::string("disparity conversion failed: ") + e.what();
+    return false;
+  }
+  const float min_valid = std::max(0.0f, disparity.min_disparity);
+  for (int v = 0; v < disparity_px.rows; ++v) {
+    float* row = disparity_px.ptr<float>(v);
+    for (int u = 0; u < disparity_px.cols; ++u)
+      if (!std::isfinite(row[u]) || row[u] <= 0.0f || row[u] < min_valid) row[u] = 0.0f;
+  }
+  frame->timestamp_s = disparity.header.stamp.toSec();
+  frame->camera = *camera;
+  frame->disparity_px = disparity_px;
+  frame->color = color;
+  frame->T_world_camera = T_world_camera;
+  return true;
+}
+
+}  // namespace stereo_fusion
