@@ -1,0 +1,412 @@
+// Mesh evaluator: exact point-to-triangle distances, the BVH, area sampling, ground-truth scores
+// (accuracy, completeness, precision, F-score, visibility) and held-out scores on frames built
+// here with the camera model.
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <random>
+
+#include "evaluator/BatchDistance.h"
+#include "evaluator/DepthRasterizer.h"
+#include "evaluator/DistanceStats.h"
+#include "evaluator/EvaluateArguments.h"
+#include "evaluator/EvaluationReport.h"
+#include "evaluator/HeldOutEvaluator.h"
+#include "evaluator/HeldOutSelection.h"
+#include "evaluator/InMemoryFrameSource.h"
+#include "evaluator/MeshEvaluator.h"
+#include "evaluator/SampleVisibility.h"
+#include "evaluator/SurfaceSampler.h"
+#include "evaluator/TriangleBvh.h"
+#include "evaluator/TriangleDistance.h"
+
+namespace stereo_fusion::eval {
+namespace {
+
+using Eigen::Vector3d;
+
+/// A flat grid mesh over [x0, x1] × [y0, y1] with `n` × `n` squares; z = z0 + slope_x · x.
+TriangleMesh planeMesh(double x0, double x1, double y0, double y1, double z0, int n = 10,
+                       double slope_x = 0.0) {
+  TriangleMesh mesh;
+  for (int j = 0; j <= n; ++j) {
+    for (int i = 0; i <= n; ++i) {
+      const double x = x0 + (x1 - x0) * i / n, y = y0 + (y1 - y0) * j / n;
+      mesh.positions.emplace_back(static_cast<float>(x), static_cast<float>(y),
+                                  static_cast<float>(z0 + slope_x * x));
+    }
+  }
+  const auto index = [n](int i, int j) { return static_cast<uint32_t>(j * (n + 1) + i); };
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      mesh.triangles.push_back({index(i, j), index(i + 1, j), index(i + 1, j + 1)});
+      mesh.triangles.push_back({index(i, j), index(i + 1, j + 1), index(i, j + 1)});
+    }
+  }
+  return mesh;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Point-to-triangle distance, worked by hand on the triangle (0,0,0), (1,0,0), (0,1,0).
+// ---------------------------------------------------------------------------------------------
+const Vector3d kA(0, 0, 0), kB(1, 0, 0), kC(0, 1, 0);
+
+double distanceToUnitTriangle(const Vector3d& p) {
+  return std::sqrt(squaredDistanceToTriangle(p, kA, kB, kC));
+}
+
+TEST(EvaluatorTriangleDistance, FaceRegionIsTheDistanceToThePlane) {
+  EXPECT_NEAR(distanceToUnitTriangle({0.25, 0.25, 2.0}), 2.0, 1e-12);
+  EXPECT_NEAR(distanceToUnitTriangle({0.1, 0.2, -0.5}), 0.5, 1e-12);
+  EXPECT_TRUE(closestPointOnTriangle({0.25, 0.25, 2.0}, kA, kB, kC)
+                  .isApprox(Vector3d(0.25, 0.25, 0.0)));
+  EXPECT_NEAR(distanceToUnitTriangle({0.3, 0.3, 0.0}), 0.0, 1e-12);  // on the face
+}
+
+TEST(EvaluatorTriangleDistance, VertexRegionsSnapToTheCorner) {
+  // Behind corner a: |(−1, −1, 1)| = √3.
+  EXPECT_NEAR(distanceToUnitTriangle({-1, -1, 1}), std::sqrt(3.0), 1e-12);
+  // Beyond corner b: (p − b) = (1, −0.5, 0) makes an obtuse angle with both edges at b.
+  EXPECT_NEAR(distanceToUnitTriangle({2, -0.5, 0}), std::sqrt(1.25), 1e-12);
+  EXPECT_TRUE(closestPointOnTriangle({2, -0.5, 0}, kA, kB, kC).isApprox(kB));
+  // Beyond corner c.
+  EXPECT_NEAR(distanceToUnitTriangle({-0.5, 3, 0}), std::sqrt(0.25 + 4.0), 1e-12);
+}
+
+TEST(EvaluatorTriangleDistance, EdgeRegionsProjectOntoTheEdge) {
+  // Edge ab: closest (0.5, 0, 0), offset (0, −1, 1).
+  EXPECT_NEAR(distanceToUnitTriangle({0.5, -1, 1}), std::sqrt(2.0), 1e-12);
+  // Hypotenuse bc: (1, 1, 0) projects to its midpoint (0.5, 0.5, 0).
+  EXPECT_NEAR(distanceToUnitTriangle({1, 1, 0}), std::sqrt(0.5), 1e-12);
+  EXPECT_TRUE(closestPointOnTriangle({1, 1, 0}, kA, kB, kC).isApprox(Vector3d(0.5, 0.5, 0)));
+  // Edge ca (the y axis): (−2, 0.5, 0) → (0, 0.5, 0).
+  EXPECT_NEAR(distanceToUnitTriangle({-2, 0.5, 0}), 2.0, 1e-12);
+}
+
+TEST(EvaluatorTriangleDistance, DegenerateTrianglesActAsSegments) {
+  const Vector3d a(0, 0, 0), b(1, 0, 0), c(2, 0, 0);  // collinear
+  EXPECT_NEAR(std::sqrt(squaredDistanceToTriangle({1, 1, 0}, a, b, c)), 1.0, 1e-12);
+  EXPECT_NEAR(std::sqrt(squaredDistanceToTriangle({3, 0, 0}, a, b, c)), 1.0, 1e-12);
+  EXPECT_NEAR(std::sqrt(squaredDistanceToTriangle({0, 0, 2}, a, a, a)), 2.0, 1e-12);  // a point
+}
+
+TEST(EvaluatorBvh, MatchesBruteForceOnATriangleSoup) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> coordinate(-1.0f, 1.0f);
+  std::uniform_real_distribution<float> offset(-0.1f, 0.1f);
+  TriangleMesh soup;
+  for (uint32_t t = 0; t < 3000; ++t) {
+    const Eigen::Vector3f centre(coordinate(rng), coordinate(rng), coordinate(rng));
+    for (int k = 0; k < 3; ++k) {
+      soup.positions.push_back(centre + Eigen::Vector3f(offset(rng), offset(rng), offset(rng)));
+    }
+    soup.triangles.push_back({3 * t, 3 * t + 1, 3 * t + 2});
+  }
+  const TriangleBvh bvh(soup);
+  ASSERT_EQ(bvh.size(), soup.triangles.size());
+  for (int q = 0; q < 300; ++q) {
+    // Queries inside and well outside the soup's box.
+    const Vector3d p = 2.0 * Vector3d(coordinate(rng), coordinate(rng), coordinate(rng));
+    double brute = INFINITY;
+    for (const auto& t : soup.triangles) {
+      brute = std::min(brute, squaredDistanceToTriangle(p, soup.positions[t[0]].cast<double>(),
+                                                        soup.positions[t[1]].cast<double>(),
+                                                        soup.positions[t[2]].cast<double>()));
+    }
+    NearestSurfacePoint hit;
+    ASSERT_TRUE(bvh.nearest(p, &hit));
+    EXPECT_NEAR(hit.distance_m, std::sqrt(brute), 1e-12);
+    const auto& t = soup.triangles[hit.triangle];
+    EXPECT_NEAR((closestPointOnTriangle(p, soup.positions[t[0]].cast<double>(),
+                                        soup.positions[t[1]].cast<double>(),
+                                        soup.positions[t[2]].cast<double>()) - p).norm(),
+                hit.distance_m, 1e-12);
+  }
+  // Batched queries (Morton order, parallel) give the same distances in the caller's order.
+  std::vector<Vector3d> queries;
+  for (int q = 0; q < 5000; ++q) queries.push_back(2.0 * Vector3d(coordinate(rng), coordinate(rng), coordinate(rng)));
+  ThreadPool pool(2);
+  const std::vector<double> batch = distancesToSurface(bvh, queries, &pool);
+  ASSERT_EQ(batch.size(), queries.size());
+  for (size_t q = 0; q < queries.size(); ++q) ASSERT_EQ(batch[q], bvh.distance(queries[q]));
+  NearestSurfacePoint hit;
+  EXPECT_FALSE(bvh.nearest({100, 0, 0}, &hit, 1.0));  // nothing within 1 m
+  EXPECT_TRUE(std::isinf(TriangleBvh(TriangleMesh{}).distance({0, 0, 0})));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Sampling and statistics
+// ---------------------------------------------------------------------------------------------
+TEST(EvaluatorSampling, AreaUniformAndSeeded) {
+  // Two triangles of area 0.5 and 1.5: a quarter of the samples fall on the first.
+  TriangleMesh mesh;
+  mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {10, 0, 0}, {13, 0, 0}, {10, 1, 0}};
+  mesh.triangles = {{{0, 1, 2}}, {{3, 4, 5}}};
+  const SurfaceSamples samples = sampleSurface(mesh, 40000, 5);
+  EXPECT_NEAR(samples.area_m2, 2.0, 1e-9);
+  size_t on_first = 0;
+  for (const Vector3d& p : samples.points_m) {
+    EXPECT_NEAR(p.z(), 0.0, 1e-12);
+    if (p.x() < 5) {
+      ++on_first;
+      EXPECT_LE(p.x() + p.y(), 1.0 + 1e-12);  // inside the first triangle
+    }
+  }
+  EXPECT_NEAR(static_cast<double>(on_first) / samples.points_m.size(), 0.25, 0.01);
+  EXPECT_EQ(sampleSurface(mesh, 100, 5).points_m, sampleSurface(mesh, 100, 5).points_m);
+  EXPECT_NE(sampleSurface(mesh, 100, 5).points_m, sampleSurface(mesh, 100, 6).points_m);
+}
+
+TEST(EvaluatorStats, PercentilesAndFScoreByHand) {
+  const DistanceSummary s = summarizeDistances({4, 1, 3, 2});
+  EXPECT_DOUBLE_EQ(s.mean_m, 2.5);
+  EXPECT_DOUBLE_EQ(s.median_m, 2.5);  // rank 1.5 between 2 and 3
+  EXPECT_DOUBLE_EQ(s.p90_m, 3.7);     // rank 2.7 between 3 and 4
+  EXPECT_DOUBLE_EQ(s.max_m, 4.0);
+  EXPECT_TRUE(std::isnan(summarizeDistances({}).median_m));
+  EXPECT_DOUBLE_EQ(shareWithin({0.01, 0.02, 0.03, 0.05}, 0.02), 0.5);
+  // F = 2PR / (P + R): P = 0.5, R = 1 → 1 / 1.5.
+  EXPECT_DOUBLE_EQ(fScore(0.5, 1.0), 2.0 / 3.0);
+  EXPECT_NEAR(fScore(0.8, 0.6), 0.96 / 1.4, 1e-12);
+  EXPECT_DOUBLE_EQ(fScore(0.0, 0.0), 0.0);
+  EXPECT_DOUBLE_EQ(fScore(NAN, 1.0), 0.0);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Ground-truth mode
+// ---------------------------------------------------------------------------------------------
+GroundTruthOptions smallOptions(double tolerance_m) {
+  GroundTruthOptions options;
+  options.tolerance_m = tolerance_m;
+  options.samples = 20000;
+  options.seed = 11;
+  return options;
+}
+
+TEST(EvaluatorGroundTruth, PlaneShiftedByOneCentimetre) {
+  const TriangleMesh truth = planeMesh(0, 1, 0, 1, 0.0);
+  const TriangleMesh shifted = planeMesh(0, 1, 0, 1, 0.01);
+  const GroundTruthResult loose = evaluateAgainstGroundTruth(shifted, truth, smallOptions(0.02));
+  EXPECT_NEAR(loose.accuracy.mean_m, 0.01, 1e-4);
+  EXPECT_NEAR(loose.accuracy.median_m, 0.01, 1e-4);
+  EXPECT_NEAR(loose.accuracy.p90_m, 0.01, 1e-4);
+  EXPECT_NEAR(loose.completion.median_m, 0.01, 1e-4);
+  EXPECT_DOUBLE_EQ(loose.completeness, 1.0);
+  EXPECT_DOUBLE_EQ(loose.precision, 1.0);
+  EXPECT_DOUBLE_EQ(loose.f_score, 1.0);
+  EXPECT_NEAR(loose.ground_truth_area_m2, 1.0, 1e-6);
+
+  const GroundTruthResult tight = evaluateAgainstGroundTruth(shifted, truth, smallOptions(0.005));
+  EXPECT_DOUBLE_EQ(tight.completeness, 0.0);
+  EXPECT_DOUBLE_EQ(tight.precision, 0.0);
+  EXPECT_DOUBLE_EQ(tight.f_score, 0.0);
+}
+
+TEST(EvaluatorGroundTruth, HalfAPlaneIsHalfComplete) {
+  const TriangleMesh truth = planeMesh(0, 1, 0, 1, 0.0);
+  const TriangleMesh half = planeMesh(0, 0.5, 0, 1, 0.0);
+  const double tolerance = 0.02;
+  const GroundTruthResult r = evaluateAgainstGroundTruth(half, truth, smallOptions(tolerance));
+  EXPECT_DOUBLE_EQ(r.precision, 1.0);
+  // Truth within tolerance of the half: x ≤ 0.5 + tolerance → 0.52 of the area.
+  EXPECT_NEAR(r.completeness, 0.5 + tolerance, 0.01);
+  EXPECT_NEAR(r.f_score, 2 * 1.0 * r.completeness / (1.0 + r.completeness), 1e-12);
+  EXPECT_NEAR(r.f_score, 2 * 0.52 / 1.52, 0.01);
+  EXPECT_NEAR(r.accuracy.max_m, 0.0, 1e-6);
+  EXPECT_NEAR(r.completion.max_m, 0.5, 1e-3);  // the far edge of the truth
+}
+
+TEST(EvaluatorGroundTruth, EmptyReconstructionScoresZero) {
+  const GroundTruthResult r =
+      evaluateAgainstGroundTruth(TriangleMesh{}, planeMesh(0, 1, 0, 1, 0.0), smallOptions(0.02));
+  EXPECT_EQ(r.reconstruction_samples, 0u);
+  EXPECT_TRUE(std::isnan(r.precision));
+  EXPECT_DOUBLE_EQ(r.completeness, 0.0);
+  EXPECT_DOUBLE_EQ(r.f_score, 0.0);
+  EXPECT_NE(toJson(GroundTruthReport{"m", "g", "", smallOptions(0.02), r, {}, 0.0})
+                .find("\"precision\": null"),
+            std::string::npos);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Frames built with the camera model: a plane n·x = c seen from T_world_camera.
+// ---------------------------------------------------------------------------------------------
+StereoCamera smallCamera() { return *StereoCamera::create(160, 120, 100.0, 100.0, 79.5, 59.5, 0.1); }
+
+/// Exact disparity of the plane {x : n·x = c} at every pixel centre (0 where the ray misses it
+/// or the hit is behind the camera).
+StereoFrame planeFrame(const Vector3d& n, double c, const Eigen::Isometry3d& T_world_camera) {
+  const StereoCamera camera = smallCamera();
+  StereoFrame frame;
+  frame.camera = camera;
+  frame.T_world_camera = T_world_camera;
+  frame.disparity_px = cv::Mat(camera.height(), camera.width(), CV_32FC1, cv::Scalar(0));
+  const Vector3d origin = T_world_camera.translation();
+  for (int v = 0; v < camera.height(); ++v) {
+    for (int u = 0; u < camera.width(); ++u) {
+      // Ray with camera-frame z component 1, so the ray parameter is the depth z.
+      const Vector3d direction = T_world_camera.linear() *
+                                 Vector3d((u - camera.cx()) / camera.fx(), (v - camera.cy()) / camera.fy(), 1.0);
+      const double z = (c - n.dot(origin)) / n.dot(direction);
+      if (z > 0) frame.disparity_px.at<float>(v, u) = static_cast<float>(camera.disparityFromDepth(z));
+    }
+  }
+  return frame;
+}
+
+Eigen::Isometry3d cameraPose(const Vector3d& eye, double yaw_rad) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(yaw_rad, Vector3d::UnitY()).toRotationMatrix();
+  T.translation() = eye;
+  return T;
+}
+
+TEST(EvaluatorRasterizer, SlantedPlaneDepthIsExact) {
+  // z = 2 + 0.3·x in the camera frame (identity pose); depth along a pixel ray is
+  // z = 2 / (1 − 0.3·(u − cx)/fx), independent of the triangulation.
+  const StereoCamera camera = smallCamera();
+  const TriangleMesh mesh = planeMesh(-4, 4, -3, 3, 2.0, 7, 0.3);
+  const cv::Mat depth = rasterizeDepth(mesh, camera, Eigen::Isometry3d::Identity());
+  double worst = 0.0;
+  for (int v = 0; v < camera.height(); ++v) {
+    for (int u = 0; u < camera.width(); ++u) {
+      const double expected = 2.0 / (1.0 - 0.3 * (u - camera.cx()) / camera.fx());
+      ASSERT_GT(depth.at<float>(v, u), 0.0f) << u << "," << v;  // no cracks between triangles
+      worst = std::max(worst, std::abs(depth.at<float>(v, u) - expected));
+    }
+  }
+  EXPECT_LT(worst, 1e-5);
+}
+
+TEST(EvaluatorRasterizer, TrianglesBehindTheCameraAreClipped) {
+  // A floor plane y = 1 (below the camera) reaching from behind the camera to far ahead: only
+  // the part in front may appear, in the lower half of the image, with positive depth.
+  TriangleMesh floor;
+  floor.positions = {{-5, 1, -5}, {5, 1, -5}, {5, 1, 20}, {-5, 1, 20}};
+  floor.triangles = {{{0, 1, 2}}, {{0, 2, 3}}};
+  const cv::Mat depth = rasterizeDepth(floor, smallCamera(), Eigen::Isometry3d::Identity());
+  for (int v = 0; v < depth.rows; ++v) {
+    for (int u = 0; u < depth.cols; ++u) {
+      const float z = depth.at<float>(v, u);
+      if (v < 60) {
+        EXPECT_EQ(z, 0.0f) << u << "," << v;  // above the horizon (cy = 59.5)
+      } else if (z > 0) {
+        EXPECT_NEAR(z, 100.0 * 1.0 / (v - 59.5), 1e-3 * z);  // y = 1 = (v − cy)·z/fy
+      }
+    }
+  }
+  EXPECT_GT(depth.at<float>(119, 80), 0.0f);
+}
+
+TEST(EvaluatorHeldOut, MatchingPlaneHasZeroResidualAndFullCompleteness) {
+  const Vector3d n = Vector3d(-0.3, 0, 1).normalized();
+  const double c = 2.0 / std::sqrt(1.09);  // z = 2 + 0.3·x
+  const TriangleMesh mesh = planeMesh(-6, 6, -5, 5, 2.0, 9, 0.3);
+  std::vector<StereoFrame> frames = {planeFrame(n, c, Eigen::Isometry3d::Identity()),
+                                     planeFrame(n, c, cameraPose({0.4, -0.2, -0.5}, 0.2)),
+                                     planeFrame(n, c, cameraPose({-0.3, 0.1, 0.2}, -0.15))};
+  const InMemoryFrameSource source(frames);
+  HeldOutOptions options;
+  const HeldOutResult r = evaluateHeldOut(mesh, source, {0, 1, 2}, options);
+  ASSERT_EQ(r.frames_evaluated.size(), 3u);
+  EXPECT_EQ(r.total.measured_pixels, 3u * 160 * 120);
+  EXPECT_LT(r.median_abs_residual_m, 2e-4);  // one 0.1 mm histogram bin
+  EXPECT_LT(r.mean_abs_residual_m, 1e-4);
+  EXPECT_GT(r.completeness, 0.999);
+  EXPECT_LT(r.floating_share, 0.001);
+}
+
+TEST(EvaluatorHeldOut, MeshFiveCentimetresInFrontIsFloating) {
+  const StereoFrame frame = planeFrame({0, 0, 1}, 2.0, Eigen::Isometry3d::Identity());
+  const InMemoryFrameSource source({frame});
+  const TriangleMesh nearer = planeMesh(-4, 4, -3, 3, 2.0 - 0.05);
+  const HeldOutResult r = evaluateHeldOut(nearer, source, {0}, HeldOutOptions{});
+  EXPECT_GT(r.floating_share, 0.999);
+  EXPECT_LT(r.completeness, 0.001);
+  EXPECT_NEAR(r.median_abs_residual_m, 0.05, 2e-4);
+  // Missing frames are skipped with a reason, not fatal.
+  const HeldOutResult with_missing = evaluateHeldOut(nearer, source, {0, 5}, HeldOutOptions{});
+  EXPECT_EQ(with_missing.frames_skipped, 1u);
+  EXPECT_EQ(with_missing.frames_evaluated.size(), 1u);
+}
+
+TEST(EvaluatorHeldOut, SelectionParsing) {
+  std::vector<size_t> frames;
+  std::string error;
+  ASSERT_TRUE(parseHeldOutFrames("odd", 6, &frames, &error));
+  EXPECT_EQ(frames, (std::vector<size_t>{1, 3, 5}));
+  ASSERT_TRUE(parseHeldOutFrames("even", 5, &frames, &error));
+  EXPECT_EQ(frames, (std::vector<size_t>{0, 2, 4}));
+  ASSERT_TRUE(parseHeldOutFrames("7, 2,2", 8, &frames, &error));
+  EXPECT_EQ(frames, (std::vector<size_t>{2, 7}));
+  EXPECT_FALSE(parseHeldOutFrames("8", 8, &frames, &error));
+  EXPECT_FALSE(parseHeldOutFrames("1,x", 8, &frames, &error));
+  EXPECT_FALSE(parseHeldOutFrames("", 8, &frames, &error));
+  EXPECT_FALSE(parseHeldOutFrames("odd", 1, &frames, &error));  // no odd frame in [0, 1)
+}
+
+TEST(EvaluatorGroundTruth, VisibilityRestrictsCompletenessToWhatWasSeen) {
+  // Truth: the plane z = 2 over x in [−6, 6]. One camera at the origin sees x in about
+  // [−1.6, 1.6]; the reconstruction is exactly that part.
+  const TriangleMesh truth = planeMesh(-6, 6, -1, 1, 2.0, 24);
+  const TriangleMesh seen = planeMesh(-1.6, 1.6, -1, 1, 2.0, 8);
+  const InMemoryFrameSource source({planeFrame({0, 0, 1}, 2.0, Eigen::Isometry3d::Identity())});
+  const GroundTruthOptions options = smallOptions(0.02);
+  const SurfaceSamples samples = sampleSurface(truth, options.samples, options.seed);
+  const VisibilityResult visibility = computeVisibility(samples.points_m, source, 0.02);
+  EXPECT_EQ(visibility.frames_used, 1u);
+  // Visible: |x| ≤ 80/100·2 = 1.6 and |y| ≤ 60/100·2 = 1.2 (all of y): 3.2 / 12 of the area.
+  EXPECT_NEAR(static_cast<double>(visibility.visible_count) / samples.points_m.size(), 3.2 / 12, 0.01);
+  const GroundTruthResult r = evaluateAgainstGroundTruthSamples(
+      seen, truth, samples.points_m, samples.area_m2, visibility.visible, options);
+  EXPECT_TRUE(r.visibility_used);
+  EXPECT_GT(r.completeness, 0.99);
+  EXPECT_NEAR(r.completeness_all, 3.24 / 12, 0.01);  // seen part + 2 cm margins
+  EXPECT_DOUBLE_EQ(r.precision, 1.0);
+
+  // An occluder in front: the plane measured at z = 1 hides the truth at z = 2 entirely.
+  const InMemoryFrameSource occluded({planeFrame({0, 0, 1}, 1.0, Eigen::Isometry3d::Identity())});
+  EXPECT_EQ(computeVisibility(samples.points_m, occluded, 0.02).visible_count, 0u);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Command line
+// ---------------------------------------------------------------------------------------------
+TEST(EvaluatorArguments, ParsesOptionsAndRejectsBadOnes) {
+  EvaluateArguments args;
+  std::string error;
+  ASSERT_TRUE(parseEvaluateArguments({"m.ply", "seq", "--tolerance-m", "0.03", "--held-out",
+                                      "1,2", "--samples", "500", "--seed", "9", "--json", "o.json"},
+                                     &args, &error))
+      << error;
+  EXPECT_EQ(args.mesh_path, "m.ply");
+  EXPECT_EQ(args.reference_path, "seq");
+  EXPECT_DOUBLE_EQ(args.tolerance_m, 0.03);
+  EXPECT_TRUE(args.held_out_given);
+  EXPECT_EQ(args.held_out_spec, "1,2");
+  EXPECT_EQ(args.samples, 500u);
+  EXPECT_EQ(args.seed, 9u);
+  EXPECT_EQ(args.json_path, "o.json");
+
+  const std::vector<std::vector<std::string>> bad = {
+      {"m.ply"},
+      {"m.ply", "g.ply", "extra"},
+      {"m.ply", "g.ply", "--tolerance-m", "-1"},
+      {"m.ply", "g.ply", "--tolerance-m", "nan"},
+      {"m.ply", "g.ply", "--tolerance-m"},
+      {"m.ply", "g.ply", "--samples", "0"},
+      {"m.ply", "g.ply", "--seed", "-2"},
+      {"m.ply", "g.ply", "--frobnicate", "1"},
+      {"m.ply", "g.ply", "--min-depth-m", "9", "--max-depth-m", "8"},
+  };
+  for (const auto& arguments : bad) {
+    EvaluateArguments parsed;
+    EXPECT_FALSE(parseEvaluateArguments(arguments, &parsed, &error)) << arguments.back();
+    EXPECT_FALSE(error.empty());
+  }
+}
+
+}  // namespace
+}  // namespace stereo_fusion::eval

@@ -1,0 +1,122 @@
+#include "evaluator/EvaluateArguments.h"
+
+#include <charconv>
+#include <cmath>
+
+namespace stereo_fusion::eval {
+namespace {
+
+template <typename T>
+bool parseNumber(const std::string& text, T* value) {
+  const char* end = text.data() + text.size();
+  const auto [parsed_end, ec] = std::from_chars(text.data(), end, *value);
+  return !text.empty() && ec == std::errc() && parsed_end == end;
+}
+
+bool positiveFinite(double value) { return std::isfinite(value) && value > 0.0; }
+
+}  // namespace
+
+std::string evaluateUsage() {
+  return "usage: stereo_fusion_evaluate <mesh.ply> <gt_mesh.ply | seq-folder> [options]\n"
+         "\n"
+         "Scores a reconstructed mesh.\n"
+         "  <gt_mesh.ply>             ground-truth mode: accuracy, completeness, precision, F-score\n"
+         "  <seq-folder>/gt_mesh.ply  ground-truth mode, completeness over the ground truth the\n"
+         "                            sequence's frames saw\n"
+         "  <seq-folder> (no GT)      held-out mode: the mesh rendered into frames that were not\n"
+         "                            fused, compared with their measured depth\n"
+         "\n"
+         "options:\n"
+         "  --tolerance-m X   agreement distance in metres (default 0.04 = 2 voxels)\n"
+         "  --json FILE       also write the results as JSON (metres, fractions)\n"
+         "  --held-out SPEC   held-out frames: odd | even | i,j,k (default odd); forces\n"
+         "                    held-out mode on a folder that has gt_mesh.ply\n"
+         "  --samples N       surface samples per mesh in ground-truth mode (default 1000000)\n"
+         "  --seed K          sampling seed (default 1)\n"
+         "  --min-depth-m X   held-out: ignore measurements nearer than X (default 0.1)\n"
+         "  --max-depth-m X   held-out: ignore measurements farther than X (default 8)\n"
+         "  --threads N       worker threads, 0 = all cores (default 0)\n"
+         "  -h, --help        this text\n"
+         "\n"
+         "exit codes: 0 ok, 1 unreadable input or output, 2 bad arguments\n";
+}
+
+bool parseEvaluateArguments(const std::vector<std::string>& args, EvaluateArguments* parsed,
+                            std::string* error) {
+  std::vector<std::string> positional;
+  for (size_t i = 0; i < args.size(); ++i) {
+    const std::string& arg = args[i];
+    if (arg == "-h" || arg == "--help") {
+      parsed->help = true;
+      return true;
+    }
+    if (arg.rfind("--", 0) != 0 || arg == "--") {
+      positional.push_back(arg);
+      continue;
+    }
+    // Every option takes one value.
+    if (i + 1 >= args.size()) {
+      *error = arg + " needs a value";
+      return false;
+    }
+    const std::string& value = args[++i];
+    const std::string bad = "bad value \"" + value + "\" for " + arg;
+    if (arg == "--tolerance-m") {
+      if (!parseNumber(value, &parsed->tolerance_m) || !positiveFinite(parsed->tolerance_m)) {
+        *error = bad + " (a distance in metres > 0)";
+        return false;
+      }
+    } else if (arg == "--json") {
+      parsed->json_path = value;
+    } else if (arg == "--held-out") {
+      parsed->held_out_spec = value;
+      parsed->held_out_given = true;
+    } else if (arg == "--samples") {
+      // The cap keeps the sample arrays (24 bytes each, two meshes) within a few GB.
+      if (!parseNumber(value, &parsed->samples) || parsed->samples == 0 ||
+          parsed->samples > 100000000) {
+        *error = bad + " (an integer in [1, 100000000])";
+        return false;
+      }
+    } else if (arg == "--seed") {
+      if (!parseNumber(value, &parsed->seed)) {
+        *error = bad + " (a non-negative integer)";
+        return false;
+      }
+    } else if (arg == "--min-depth-m") {
+      if (!parseNumber(value, &parsed->min_depth_m) || !std::isfinite(parsed->min_depth_m) ||
+          parsed->min_depth_m < 0.0) {
+        *error = bad + " (a depth in metres >= 0)";
+        return false;
+      }
+    } else if (arg == "--max-depth-m") {
+      if (!parseNumber(value, &parsed->max_depth_m) || !positiveFinite(parsed->max_depth_m)) {
+        *error = bad + " (a depth in metres > 0)";
+        return false;
+      }
+    } else if (arg == "--threads") {
+      if (!parseNumber(value, &parsed->threads) || parsed->threads < 0 || parsed->threads > 256) {
+        *error = bad + " (an integer in [0, 256])";
+        return false;
+      }
+    } else {
+      *error = "unknown option " + arg;
+      return false;
+    }
+  }
+  if (positional.size() != 2) {
+    *error = "expected 2 arguments (mesh and ground truth or sequence folder), got " +
+             std::to_string(positional.size());
+    return false;
+  }
+  if (parsed->min_depth_m >= parsed->max_depth_m) {
+    *error = "--min-depth-m must be smaller than --max-depth-m";
+    return false;
+  }
+  parsed->mesh_path = positional[0];
+  parsed->reference_path = positional[1];
+  return true;
+}
+
+}  // namespace stereo_fusion::eval

@@ -1,0 +1,35 @@
+#pragma once
+// Command line of stereo_fusion_evaluate.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace stereo_fusion::eval {
+
+/// Everything the command line can set, with the defaults documented in the usage text.
+struct EvaluateArguments {
+  std::string mesh_path;       ///< reconstruction (.ply)
+  std::string reference_path;  ///< ground-truth .ply or sequence folder
+  double tolerance_m = 0.04;
+  std::string json_path;  ///< empty: no JSON file
+  std::string held_out_spec = "odd";
+  bool held_out_given = false;  ///< --held-out forces held-out mode on a folder with gt_mesh.ply
+  size_t samples = 1000000;
+  uint64_t seed = 1;
+  double min_depth_m = 0.1;
+  double max_depth_m = 8.0;
+  int threads = 0;
+  bool help = false;
+};
+
+/// Parses argv[1..]. Returns false with a one-line reason for unknown options, missing or
+/// malformed values and a wrong number of positional arguments (exit code 2 territory).
+/// `--help` sets `help` and succeeds.
+bool parseEvaluateArguments(const std::vector<std::string>& args, EvaluateArguments* parsed,
+                            std::string* error);
+
+/// The usage text printed for --help and after an argument error.
+std::string evaluateUsage();
+
+}  // namespace stereo_fusion::eval

@@ -1,0 +1,196 @@
+// stereo_fusion_evaluate: scores a reconstructed mesh against a ground-truth mesh, or against
+// held-out frames of a sequence without ground truth. See evaluateUsage() for the interface.
+
+#include <cctype>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <optional>
+
+#include "evaluator/EvaluateArguments.h"
+#include "evaluator/EvaluationReport.h"
+#include "evaluator/HeldOutSelection.h"
+#include "evaluator/SurfaceSampler.h"
+#include "stereo_fusion/io/DatasetReader.h"
+#include "stereo_fusion/io/PlyReader.h"
+
+namespace fs = std::filesystem;
+using namespace stereo_fusion;
+using namespace stereo_fusion::eval;
+
+namespace {
+
+constexpr int kExitOk = 0;
+constexpr int kExitUnreadable = 1;
+constexpr int kExitBadArguments = 2;
+
+/// Thrown on a failure that ends the program with `exit_code`.
+struct Failure {
+  int exit_code;
+  std::string message;
+};
+
+double secondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+TriangleMesh readMeshOrFail(const std::string& path, const char* role) {
+  TriangleMesh mesh;
+  std::string error;
+  if (!readPly(path, &mesh, &error)) throw Failure{kExitUnreadable, error};
+  std::fprintf(stderr, "[evaluate] %s: %zu vertices, %zu triangles\n", role, mesh.positions.size(),
+               mesh.triangles.size());
+  if (mesh.triangles.empty()) std::fprintf(stderr, "[evaluate] warning: %s has no faces\n", role);
+  return mesh;
+}
+
+DatasetReader openSequenceOrFail(const std::string& folder) {
+  std::string error;
+  std::optional<DatasetReader> reader = DatasetReader::open(folder, &error);
+  if (!reader) throw Failure{kExitUnreadable, error};
+  std::fprintf(stderr, "[evaluate] sequence %s: %zu frames\n", folder.c_str(), reader->size());
+  return std::move(*reader);
+}
+
+void writeJsonOrFail(const std::string& path, const std::string& json) {
+  if (path.empty()) return;
+  std::ofstream out(path);
+  out << json;
+  if (!out) throw Failure{kExitUnreadable, path + ": cannot write the JSON report"};
+  std::fprintf(stderr, "[evaluate] wrote %s\n", path.c_str());
+}
+
+void runGroundTruth(const EvaluateArguments& args, const std::string& gt_path,
+                    const std::string& sequence) {
+  const auto start = std::chrono::steady_clock::now();
+  GroundTruthReport report;
+  report.mesh_path = args.mesh_path;
+  report.ground_truth_path = gt_path;
+  report.sequence_path = sequence;
+  report.options.tolerance_m = args.tolerance_m;
+  report.options.samples = args.samples;
+  report.options.seed = args.seed;
+  report.options.num_threads = args.threads;
+
+  const TriangleMesh reconstruction = readMeshOrFail(args.mesh_path, "mesh");
+  const TriangleMesh ground_truth = readMeshOrFail(gt_path, "ground truth");
+  const SurfaceSamples gt_samples = sampleSurface(ground_truth, args.samples, args.seed);
+  if (gt_samples.points_m.empty()) throw Failure{kExitUnreadable, gt_path + ": has no surface area"};
+  if (!sequence.empty()) {
+    const DatasetReader frames = openSequenceOrFail(sequence);
+    report.visibility =
+        computeVisibility(gt_samples.points_m, frames, args.tolerance_m, args.threads);
+    for (const std::string& reason : report.visibility.skipped) {
+      std::fprintf(stderr, "[evaluate] skipped frame: %s\n", reason.c_str());
+    }
+    if (report.visibility.visible_count == 0) {
+      std::fprintf(stderr, "[evaluate] warning: no ground-truth sample is visible in %s\n",
+                   sequence.c_str());
+    }
+  }
+  report.result = evaluateAgainstGroundTruthSamples(reconstruction, ground_truth,
+                                                    gt_samples.points_m, gt_samples.area_m2,
+                                                    report.visibility.visible, report.options);
+  report.elapsed_s = secondsSince(start);
+  std::cout << formatTable(report);
+  writeJsonOrFail(args.json_path, toJson(report));
+}
+
+void runHeldOut(const EvaluateArguments& args) {
+  const auto start = std::chrono::steady_clock::now();
+  HeldOutReport report;
+  report.mesh_path = args.mesh_path;
+  report.sequence_path = args.reference_path;
+  report.held_out_spec = args.held_out_spec;
+  report.options.tolerance_m = args.tolerance_m;
+  report.options.min_depth_m = args.min_depth_m;
+  report.options.max_depth_m = args.max_depth_m;
+  report.options.num_threads = args.threads;
+
+  const TriangleMesh mesh = readMeshOrFail(args.mesh_path, "mesh");
+  const DatasetReader frames = openSequenceOrFail(args.reference_path);
+  std::vector<size_t> held_out;
+  std::string error;
+  if (!parseHeldOutFrames(args.held_out_spec, frames.size(), &held_out, &error)) {
+    throw Failure{kExitBadArguments, error};
+  }
+  report.result = evaluateHeldOut(mesh, frames, held_out, report.options);
+  for (const std::string& reason : report.result.skipped) {
+    std::fprintf(stderr, "[evaluate] skipped frame: %s\n", reason.c_str());
+  }
+  if (report.result.frames_evaluated.empty()) {
+    throw Failure{kExitUnreadable, "none of the held-out frames could be loaded"};
+  }
+  report.elapsed_s = secondsSince(start);
+  std::cout << formatTable(report);
+  writeJsonOrFail(args.json_path, toJson(report));
+}
+
+bool hasPlyExtension(const fs::path& path) {
+  std::string extension = path.extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return extension == ".ply";
+}
+
+/// Chooses the mode from the second argument (see the usage text) and runs it.
+void run(const EvaluateArguments& args) {
+  // Fail before minutes of work, not after, when the report cannot be written.
+  if (!args.json_path.empty()) {
+    const fs::path parent = fs::absolute(args.json_path).parent_path();
+    std::error_code ec;
+    if (!fs::is_directory(parent, ec)) {
+      throw Failure{kExitUnreadable, args.json_path + ": folder " + parent.string() + " does not exist"};
+    }
+  }
+  const fs::path reference(args.reference_path);
+  std::error_code ec;
+  const fs::file_status status = fs::status(reference, ec);
+  if (!fs::exists(status)) {
+    throw Failure{kExitUnreadable, args.reference_path + ": does not exist"};
+  }
+  if (fs::is_directory(status)) {
+    const fs::path gt_mesh = reference / "gt_mesh.ply";
+    if (!args.held_out_given && fs::exists(gt_mesh, ec)) {
+      runGroundTruth(args, gt_mesh.string(), args.reference_path);
+    } else {
+      runHeldOut(args);
+    }
+    return;
+  }
+  if (!hasPlyExtension(reference)) {
+    throw Failure{kExitBadArguments,
+                  args.reference_path + ": expected a ground-truth .ply or a sequence folder"};
+  }
+  if (args.held_out_given) {
+    throw Failure{kExitBadArguments, "--held-out needs a sequence folder, not a mesh"};
+  }
+  runGroundTruth(args, args.reference_path, "");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  EvaluateArguments args;
+  std::string error;
+  if (!parseEvaluateArguments(std::vector<std::string>(argv + 1, argv + argc), &args, &error)) {
+    std::fprintf(stderr, "error: %s\n\n%s", error.c_str(), evaluateUsage().c_str());
+    return kExitBadArguments;
+  }
+  if (args.help) {
+    std::cout << evaluateUsage();
+    return kExitOk;
+  }
+  try {
+    run(args);
+  } catch (const Failure& failure) {
+    std::fprintf(stderr, "error: %s\n", failure.message.c_str());
+    if (failure.exit_code == kExitBadArguments) std::fprintf(stderr, "\n%s", evaluateUsage().c_str());
+    return failure.exit_code;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "error: out of memory (try fewer --samples)\n");
+    return kExitUnreadable;
+  }
+  return kExitOk;
+}
