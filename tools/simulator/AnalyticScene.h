@@ -9,6 +9,10 @@
 
 #include "stereo_fusion/camera/StereoCamera.h"
 
+namespace stereo_fusion {
+struct TriangleMesh;
+}
+
 namespace stereo_fusion::sim {
 
 /// A solid with an exact surface. Distances are in metres; the signed distance is negative
@@ -19,8 +23,17 @@ class Primitive {
   /// Smallest t > t_min with origin + t·dir on the surface (dir normalised), or +inf.
   virtual double raycast(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
                          double t_min) const = 0;
-  /// Euclidean signed distance to the surface (exact for plane, sphere, box, torus).
+  /// Euclidean signed distance to the surface (exact for plane, sphere, box, torus, cylinder).
   virtual double signedDistance(const Eigen::Vector3d& p) const = 0;
+  /// Appends a triangulation of the surface to `mesh`: every vertex lies exactly on the
+  /// surface (up to float rounding), normals point out of the solid, triangles are wound
+  /// counter-clockwise seen from outside, colours are `base_rgb`. The grid step along each
+  /// surface direction is at most `max_edge_m` (quad diagonals may be up to √2 longer) and
+  /// curved surfaces use at least 24 segments around, so the chordal error is about
+  /// min(max_edge_m²/(8·radius), 0.9 % of the radius) per direction of curvature. Steps below
+  /// 1 mm are raised to 1 mm. Unbounded primitives (planes) append nothing: build rooms from
+  /// makeRoom() or boxes when a ground-truth mesh is needed.
+  virtual void tessellate(TriangleMesh* mesh, double max_edge_m) const;
   /// Base colour (RGB) modulated by the scene's procedural texture.
   Eigen::Vector3d base_rgb{200, 200, 200};
 };
@@ -30,6 +43,15 @@ std::unique_ptr<Primitive> makeSphere(const Eigen::Vector3d& centre, double radi
 /// Box with half extents `half_size` in its own frame, placed by `T_world_box`.
 std::unique_ptr<Primitive> makeBox(const Eigen::Isometry3d& T_world_box,
                                    const Eigen::Vector3d& half_size);
+/// The inside of a box seen from within: the solid is everything OUTSIDE the box, so the
+/// signed distance is positive inside the room and raycasts from inside return the walls.
+/// Tessellated normals point into the room (towards free space).
+std::unique_ptr<Primitive> makeRoom(const Eigen::Isometry3d& T_world_room,
+                                    const Eigen::Vector3d& half_size);
+/// Capped solid cylinder around the z axis of its own frame, centred at its origin:
+/// radius `radius_m`, extending ±`half_height_m` along z.
+std::unique_ptr<Primitive> makeCylinder(const Eigen::Isometry3d& T_world_cylinder,
+                                        double radius_m, double half_height_m);
 /// Torus around the z axis of its own frame: ring radius `major_m`, tube radius `minor_m`.
 std::unique_ptr<Primitive> makeTorus(const Eigen::Isometry3d& T_world_torus, double major_m,
                                      double minor_m);
@@ -47,6 +69,12 @@ class AnalyticScene {
   Hit raycast(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir) const;
   /// Distance to the nearest surface of any primitive (unsigned: primitives may overlap).
   double distanceToSurface(const Eigen::Vector3d& p) const;
+  /// Minimum of the primitives' signed distances: the clearance of `p` from every solid,
+  /// positive in free space and negative inside any solid (a room's walls included).
+  double clearance(const Eigen::Vector3d& p) const;
+  /// Appends the triangulation of every primitive (see Primitive::tessellate) to `mesh`,
+  /// with vertex colours from the procedural texture (colorAt).
+  void tessellate(TriangleMesh* mesh, double max_edge_m) const;
   /// Textured colour at a surface point of primitive `index`.
   Eigen::Vector3d colorAt(const Eigen::Vector3d& p, int index) const;
   const Primitive& primitive(int index) const { return *primitives_[index]; }

@@ -1,1 +1,20 @@
 # Targets of the stereo sequence simulator (owned by the simulator work; included from the root).
+
+# Scenes, trajectories, stereo rendering and the dataset writer; the analytic primitives
+# themselves are in stereo_fusion_sim (root CMakeLists.txt), shared with the tests and evaluator.
+add_library(stereo_fusion_simulator STATIC
+  tools/simulator/SceneLibrary.cpp
+  tools/simulator/Trajectory.cpp
+  tools/simulator/StereoRenderer.cpp
+  tools/simulator/DatasetWriter.cpp
+)
+target_link_libraries(stereo_fusion_simulator PUBLIC stereo_fusion_sim ${OpenCV_LIBS})
+
+# scripts/simulate.sh runs this: writes a simulated sequence as a dataset folder.
+add_executable(stereo_fusion_simulate tools/simulator/simulate_main.cpp)
+target_link_libraries(stereo_fusion_simulate stereo_fusion_simulator)
+
+if(CATKIN_ENABLE_TESTING)
+  # test/unit/test_simulator.cpp is globbed into the unit test binary by the root.
+  target_link_libraries(stereo_fusion_unit_tests stereo_fusion_simulator)
+endif()

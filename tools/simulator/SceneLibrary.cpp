@@ -1,0 +1,199 @@
+#include "simulator/SceneLibrary.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+namespace stereo_fusion::sim {
+
+namespace {
+
+/// Seeded draws. std::uniform_real_distribution is avoided on purpose: its output is
+/// implementation-defined, while this mapping of mt19937's 32-bit words is not, so a seed
+/// gives the same scene with any standard library.
+class Draw {
+ public:
+  explicit Draw(uint32_t seed) : rng_(seed) {}
+  double uniform(double lo, double hi) { return lo + (hi - lo) * (rng_() / 4294967296.0); }
+  int integer(int lo, int hi_inclusive) {
+    return lo + static_cast<int>(rng_() % static_cast<uint32_t>(hi_inclusive - lo + 1));
+  }
+  /// `rgb` with every channel shifted by up to ±`jitter`.
+  Eigen::Vector3d color(const Eigen::Vector3d& rgb, double jitter = 20.0) {
+    Eigen::Vector3d c;
+    for (int k = 0; k < 3; ++k) c[k] = std::clamp(rgb[k] + uniform(-jitter, jitter), 40.0, 235.0);
+    return c;
+  }
+
+ private:
+  std::mt19937 rng_;
+};
+
+Eigen::Isometry3d at(const Eigen::Vector3d& t, double yaw_rad = 0.0) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  T.translation() = t;
+  return T;
+}
+
+/// Adds the room shell: interior [-hx, hx] × [-hy, hy] × [0, height] (floor at z = 0).
+Eigen::AlignedBox3d addRoom(AnalyticScene* scene, double hx, double hy, double height,
+                            const Eigen::Vector3d& rgb) {
+  scene->add(makeRoom(at({0, 0, height / 2}), {hx, hy, height / 2}), rgb);
+  return Eigen::AlignedBox3d(Eigen::Vector3d(-hx, -hy, 0), Eigen::Vector3d(hx, hy, height));
+}
+
+/// A table: box top whose upper surface is at `top_z`, on four cylinder legs inset from the corners.
+void addTable(AnalyticScene* scene, const Eigen::Vector2d& centre_xy, double yaw_rad,
+              const Eigen::Vector2d& half_top_m, double top_z, double leg_radius_m,
+              const Eigen::Vector3d& top_rgb, const Eigen::Vector3d& leg_rgb) {
+  constexpr double kTopHalfThickness = 0.02;
+  const Eigen::Isometry3d T_world_table = at({centre_xy.x(), centre_xy.y(), 0.0}, yaw_rad);
+  scene->add(makeBox(T_world_table * at({0, 0, top_z - kTopHalfThickness}),
+                     {half_top_m.x(), half_top_m.y(), kTopHalfThickness}),
+             top_rgb);
+  const double leg_half_height = (top_z - 2 * kTopHalfThickness) / 2;
+  const double inset = leg_radius_m + 0.04;
+  for (const double sx : {-1.0, 1.0})
+    for (const double sy : {-1.0, 1.0})
+      scene->add(makeCylinder(T_world_table * at({sx * (half_top_m.x() - inset),
+                                                  sy * (half_top_m.y() - inset), leg_half_height}),
+                              leg_radius_m, leg_half_height),
+                 leg_rgb);
+}
+
+}  // namespace
+
+std::vector<std::string> presetNames() { return {"room", "tabletop"}; }
+
+std::optional<ScenePreset> makePreset(const std::string& name, uint32_t seed) {
+  if (name == "room") return makeRoomPreset(seed);
+  if (name == "tabletop") return makeTabletopPreset(seed);
+  return std::nullopt;
+}
+
+ScenePreset makeRoomPreset(uint32_t seed) {
+  Draw draw(seed);
+  ScenePreset preset;
+  preset.name = "room";
+  AnalyticScene& scene = preset.scene;
+  constexpr double kHx = 2.5, kHy = 1.5, kHeight = 2.6;
+  preset.room_interior = addRoom(&scene, kHx, kHy, kHeight, draw.color({215, 205, 185}, 15));
+
+  // A thin rug gives the floor a second colour and a small step edge.
+  scene.add(makeBox(at({draw.uniform(-0.4, 0.4), draw.uniform(-0.3, 0.1), 0.005},
+                       draw.uniform(-0.2, 0.2)),
+                    {draw.uniform(0.9, 1.2), draw.uniform(0.5, 0.7), 0.005}),
+            draw.color({150, 60, 55}));
+
+  // Sofa against the +y wall: seat and backrest.
+  const double sofa_x = draw.uniform(-1.0, 0.0);
+  const Eigen::Vector3d sofa_rgb = draw.color({90, 110, 150});
+  scene.add(makeBox(at({sofa_x, kHy - 0.45, 0.22}), {0.9, 0.45, 0.22}), sofa_rgb);
+  scene.add(makeBox(at({sofa_x, kHy - 0.1, 0.45}), {0.9, 0.1, 0.45}), sofa_rgb * 0.85);
+
+  // Low table in front of the sofa, a ring lying on it.
+  const Eigen::Vector2d table_xy(sofa_x + draw.uniform(-0.2, 0.2), kHy - 1.25);
+  const double table_top_z = 0.45;
+  addTable(&scene, table_xy, draw.uniform(-0.15, 0.15), {0.5, 0.3}, table_top_z, 0.025,
+           draw.color({165, 115, 75}), draw.color({90, 70, 55}));
+  scene.add(makeTorus(at({table_xy.x() + draw.uniform(-0.25, 0.25),
+                          table_xy.y() + draw.uniform(-0.1, 0.1), table_top_z + 0.03}),
+                      0.1, 0.03),
+            draw.color({200, 170, 60}));
+
+  // Cabinet against the +x wall with a ball on it.
+  const double cabinet_y = draw.uniform(-0.6, 0.6);
+  scene.add(makeBox(at({kHx - 0.25, cabinet_y, 0.55}), {0.25, 0.4, 0.55}),
+            draw.color({120, 140, 110}));
+  const double small_ball_r = draw.uniform(0.08, 0.13);
+  scene.add(makeSphere({kHx - 0.25, cabinet_y + draw.uniform(-0.2, 0.2), 1.1 + small_ball_r},
+                       small_ball_r),
+            draw.color({190, 80, 160}));
+
+  // Bookshelf against the -x wall.
+  scene.add(makeBox(at({-kHx + 0.2, draw.uniform(-0.2, 0.7), 0.9}), {0.2, 0.5, 0.9}),
+            draw.color({140, 100, 70}));
+
+  // Floor-to-ceiling column near the (-x, -y) corner.
+  scene.add(makeCylinder(at({-kHx + draw.uniform(0.45, 0.7), -kHy + draw.uniform(0.4, 0.6),
+                             kHeight / 2}),
+                         0.15, kHeight / 2),
+            draw.color({200, 200, 205}));
+
+  // Ball on the floor near the -y wall, and a stool (cylinder) beside it.
+  const double ball_r = draw.uniform(0.15, 0.22);
+  scene.add(makeSphere({draw.uniform(0.3, 1.5), -kHy + 0.35, ball_r}, ball_r),
+            draw.color({210, 90, 60}));
+  scene.add(makeCylinder(at({draw.uniform(-1.2, -0.2), -kHy + 0.3, 0.23}), 0.18, 0.23),
+            draw.color({70, 150, 140}));
+
+  // Orbits look across the room's middle at the furniture and walls beyond.
+  preset.focus_m = Eigen::Vector3d(0, 0, 0.9);
+  preset.orbit_radius_m = 0.9;
+  preset.orbit_height_m = 0.5;
+  return preset;
+}
+
+ScenePreset makeTabletopPreset(uint32_t seed) {
+  Draw draw(seed);
+  ScenePreset preset;
+  preset.name = "tabletop";
+  AnalyticScene& scene = preset.scene;
+  preset.room_interior = addRoom(&scene, 3.0, 3.0, 3.0, draw.color({210, 205, 195}, 15));
+
+  constexpr double kTopZ = 0.75;
+  const Eigen::Vector2d half_top(0.6, 0.4);
+  addTable(&scene, {0, 0}, 0.0, half_top, kTopZ, 0.03, draw.color({165, 115, 75}),
+           draw.color({80, 60, 45}));
+
+  // Objects: one torus, one each of sphere, box, cylinder, then 0–2 more of those three.
+  enum Kind { kTorus, kSphere, kBox, kCylinder };
+  std::vector<Kind> kinds = {kTorus, kSphere, kBox, kCylinder};
+  const int extra = draw.integer(0, 2);
+  for (int i = 0; i < extra; ++i) kinds.push_back(static_cast<Kind>(draw.integer(1, 3)));
+  const std::vector<Eigen::Vector3d> palette = {{200, 60, 50},  {60, 170, 70},  {60, 90, 200},
+                                                {220, 190, 50}, {230, 130, 40}, {150, 70, 190}};
+
+  // Rejection sampling of footprints (circles) inside the top, away from its edge.
+  std::vector<Eigen::Vector3d> placed;  // x, y, footprint radius
+  for (size_t i = 0; i < kinds.size(); ++i) {
+    const Kind kind = kinds[i];
+    double footprint = 0, a = 0, b = 0, c = 0;
+    switch (kind) {
+      case kTorus: a = draw.uniform(0.08, 0.11); b = draw.uniform(0.02, 0.035); footprint = a + b; break;
+      case kSphere: a = draw.uniform(0.05, 0.1); footprint = a; break;
+      case kBox:
+        a = draw.uniform(0.04, 0.09); b = draw.uniform(0.04, 0.09); c = draw.uniform(0.04, 0.1);
+        footprint = std::hypot(a, b);
+        break;
+      case kCylinder: a = draw.uniform(0.03, 0.07); b = draw.uniform(0.05, 0.12); footprint = a; break;
+    }
+    const double yaw = draw.uniform(-M_PI, M_PI);
+    bool ok = false;
+    Eigen::Vector2d xy;
+    for (int attempt = 0; attempt < 200 && !ok; ++attempt) {
+      xy = {draw.uniform(-half_top.x() + footprint + 0.03, half_top.x() - footprint - 0.03),
+            draw.uniform(-half_top.y() + footprint + 0.03, half_top.y() - footprint - 0.03)};
+      ok = std::all_of(placed.begin(), placed.end(), [&](const Eigen::Vector3d& o) {
+        return (xy - o.head<2>()).norm() > footprint + o.z() + 0.03;
+      });
+    }
+    if (!ok) continue;  // the top is full: fewer objects rather than overlapping ones
+    placed.emplace_back(xy.x(), xy.y(), footprint);
+    const Eigen::Vector3d rgb = draw.color(palette[i % palette.size()]);
+    switch (kind) {
+      case kTorus: scene.add(makeTorus(at({xy.x(), xy.y(), kTopZ + b}, yaw), a, b), rgb); break;
+      case kSphere: scene.add(makeSphere({xy.x(), xy.y(), kTopZ + a}, a), rgb); break;
+      case kBox: scene.add(makeBox(at({xy.x(), xy.y(), kTopZ + c}, yaw), {a, b, c}), rgb); break;
+      case kCylinder: scene.add(makeCylinder(at({xy.x(), xy.y(), kTopZ + b}, yaw), a, b), rgb); break;
+    }
+  }
+
+  preset.focus_m = Eigen::Vector3d(0, 0, kTopZ + 0.05);
+  preset.orbit_radius_m = 1.1;
+  preset.orbit_height_m = 0.6;
+  return preset;
+}
+
+}  // namespace stereo_fusion::sim
