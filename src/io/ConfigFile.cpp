@@ -2,8 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include <fstream>
-#include <sstream>
+#include "stereo_fusion/io/TextFile.h"
 
 namespace stereo_fusion {
 
@@ -44,14 +43,12 @@ bool loadMapperConfigText(const std::string& yaml_text, const std::string& sourc
 }
 
 bool loadMapperConfigFile(const std::string& path, MapperConfig* config, std::string* error) {
-  std::ifstream in(path);
-  if (!in) {
+  std::string text;
+  if (!readTextFile(path, &text)) {
     *error = path + ": cannot open configuration file";
     return false;
   }
-  std::stringstream text;
-  text << in.rdbuf();
-  return loadMapperConfigText(text.str(), path, config, error);
+  return loadMapperConfigText(text, path, config, error);
 }
 
 }  // namespace stereo_fusion

@@ -12,6 +12,8 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
+#include "stereo_fusion/io/TextFile.h"
+
 namespace stereo_fusion {
 
 namespace fs = std::filesystem;
@@ -38,14 +40,11 @@ std::vector<std::string> listImages(const fs::path& dir, std::initializer_list<c
 }
 
 bool readCalibration(const fs::path& path, StereoCamera* camera, std::string* error) {
-  std::ifstream in(path);
-  if (!in) {
+  std::string yaml;
+  if (!readTextFile(path.string(), &yaml)) {
     *error = path.string() + ": missing (the dataset folder needs calibration.yaml)";
     return false;
   }
-  std::stringstream text;
-  text << in.rdbuf();
-  std::string yaml = text.str();
   // OpenCV's FileStorage writes a "%YAML:1.0" directive that YAML parsers reject.
   if (yaml.rfind("%YAML:", 0) == 0) yaml = yaml.substr(yaml.find('\n') + 1);
   YAML::Node root;

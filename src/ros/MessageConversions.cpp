@@ -2,6 +2,7 @@
 
 #include <cv_bridge/cv_bridge.h>
 #include <sensor_msgs/image_encodings.h>
+#include <tf2_eigen/tf2_eigen.h>
 
 #include <cmath>
 #include <opencv2/imgproc.hpp>
@@ -86,6 +87,41 @@ bool toStereoFrame(const stereo_msgs::DisparityImage& disparity, const sensor_ms
   frame->color = color;
   frame->T_world_camera = T_world_camera;
   return true;
+}
+
+void toMessages(const StereoFrame& frame, const std_msgs::Header& header, float max_disparity_px,
+                stereo_msgs::DisparityImage* disparity, sensor_msgs::Image* image,
+                sensor_msgs::CameraInfo* info) {
+  const StereoCamera& cam = frame.camera;
+  disparity->header = header;
+  disparity->image = *cv_bridge::CvImage(header, enc::TYPE_32FC1, frame.disparity_px).toImageMsg();
+  disparity->f = static_cast<float>(cam.fx());
+  disparity->T = static_cast<float>(cam.baseline());
+  disparity->min_disparity = 0.0f;
+  disparity->max_disparity = max_disparity_px;
+  disparity->delta_d = 1.0f / 16.0f;  // SGBM's sub-pixel step
+  disparity->valid_window.width = cam.width();
+  disparity->valid_window.height = cam.height();
+  const std::string encoding = frame.color.channels() == 1 ? enc::MONO8 : enc::RGB8;
+  *image = *cv_bridge::CvImage(header, encoding, frame.color).toImageMsg();
+  info->header = header;
+  info->width = cam.width();
+  info->height = cam.height();
+  info->distortion_model = "plumb_bob";
+  info->D.assign(5, 0.0);  // rectified
+  info->K = {cam.fx(), 0, cam.cx(), 0, cam.fy(), cam.cy(), 0, 0, 1};
+  info->R = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  info->P = {cam.fx(), 0, cam.cx(), 0, 0, cam.fy(), cam.cy(), 0, 0, 0, 1, 0};
+}
+
+geometry_msgs::TransformStamped toTransform(const Eigen::Isometry3d& T_world_camera,
+                                           const std::string& world_frame,
+                                           const std_msgs::Header& camera_header) {
+  geometry_msgs::TransformStamped t = tf2::eigenToTransform(T_world_camera);
+  t.header.stamp = camera_header.stamp;
+  t.header.frame_id = world_frame;
+  t.child_frame_id = camera_header.frame_id;
+  return t;
 }
 
 }  // namespace stereo_fusion

@@ -13,6 +13,7 @@
 #include "fuser/OfflineFuser.h"
 #include "stereo_fusion/ros/BagSequence.h"
 #include "stereo_fusion/ros/MessageConversions.h"
+#include "stereo_fusion/ros/StereoBagWriter.h"
 
 using namespace stereo_fusion;
 using namespace stereo_fusion::test;
@@ -31,18 +32,7 @@ BagMessages toMessages(const StereoFrame& f, const ros::Time& stamp) {
   std_msgs::Header header;
   header.stamp = stamp;
   header.frame_id = "left_optical";
-  m.disparity.header = header;
-  m.disparity.image = *cv_bridge::CvImage(header, sensor_msgs::image_encodings::TYPE_32FC1, f.disparity_px).toImageMsg();
-  m.disparity.f = static_cast<float>(f.camera.fx());
-  m.disparity.T = static_cast<float>(f.camera.baseline());
-  m.disparity.min_disparity = 0.0f;
-  m.disparity.max_disparity = 128.0f;
-  m.image = *cv_bridge::CvImage(header, sensor_msgs::image_encodings::RGB8, f.color).toImageMsg();
-  m.info.header = header;
-  m.info.width = f.camera.width();
-  m.info.height = f.camera.height();
-  m.info.P = {f.camera.fx(), 0, f.camera.cx(), 0, 0, f.camera.fy(), f.camera.cy(), 0, 0, 0, 1, 0};
-  m.info.K = {f.camera.fx(), 0, f.camera.cx(), 0, f.camera.fy(), f.camera.cy(), 0, 0, 1};
+  stereo_fusion::toMessages(f, header, 128.0f, &m.disparity, &m.image, &m.info);
   return m;
 }
 
@@ -52,7 +42,8 @@ struct SmallBag {
   std::string path;
   std::vector<StereoFrame> frames;
   SmallBag() {
-    path = testing::TempDir() + "stereo_fusion_test.bag";
+    // One file per test: ctest runs the tests of this binary in parallel processes.
+    path = testing::TempDir() + "stereo_fusion_" + testing::UnitTest::GetInstance()->current_test_info()->name() + ".bag";
     sim::AnalyticScene scene;
     scene.add(sim::makePlane({0, 0.3, 0}, {0, -1, 0}), {180, 160, 120});
     scene.add(sim::makeSphere({0.05, 0.1, 1.2}, 0.2), {200, 60, 60});
@@ -64,12 +55,11 @@ struct SmallBag {
       f.timestamp_s = stamp.toSec();
       frames.push_back(f);
       if (i != 2) {
+        std_msgs::Header camera;
+        camera.stamp = stamp;
+        camera.frame_id = "left_optical";
         tf2_msgs::TFMessage tf;
-        geometry_msgs::TransformStamped t = tf2::eigenToTransform(T);
-        t.header.stamp = stamp;
-        t.header.frame_id = "world";
-        t.child_frame_id = "left_optical";
-        tf.transforms.push_back(t);
+        tf.transforms.push_back(toTransform(T, "world", camera));
         bag.write("/tf", stamp, tf);
       }
       const BagMessages m = toMessages(f, stamp);
@@ -132,6 +122,35 @@ TEST(BagSequence, BadBagsAndTopicsAreClearErrors) {
   topics.disparity = "/elsewhere/disparity";
   EXPECT_FALSE(BagSequence::open(bag.path, topics, &error));
   EXPECT_NE(error.find("no stereo_msgs/DisparityImage on topic /elsewhere/disparity"), std::string::npos) << error;
+}
+
+TEST(StereoBagWriter, WritesWhatBagSequenceReads) {
+  const std::string path = testing::TempDir() + "stereo_fusion_written.bag";
+  sim::AnalyticScene scene;
+  scene.add(sim::makeSphere({0, 0, 1.0}, 0.3), {90, 180, 200});
+  std::vector<StereoFrame> frames;
+  std::string error;
+  {
+    auto writer = StereoBagWriter::open(path, BagTopics{}, "cam", 1.0, &error);
+    ASSERT_TRUE(writer) << error;
+    for (int i = 0; i < 2; ++i) {
+      StereoFrame f = renderFrame(scene, qvgaCamera(), sim::lookAt({0.05 * i, 0, 0}, {0, 0, 1.0}, -Eigen::Vector3d::UnitY()));
+      f.timestamp_s = 0.1 * i;  // starts at 0: the writer's offset keeps it away from "latest"
+      ASSERT_TRUE(writer->write(f, 128.0f, &error)) << error;
+      frames.push_back(f);
+    }
+  }
+  auto seq = BagSequence::open(path, BagTopics{}, &error);
+  ASSERT_TRUE(seq) << error;
+  ASSERT_EQ(seq->size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    StereoFrame f;
+    ASSERT_TRUE(seq->load(i, &f, &error)) << error;
+    EXPECT_NEAR(f.timestamp_s, 1.0 + frames[i].timestamp_s, 1e-6);
+    EXPECT_LT((f.T_world_camera.matrix() - frames[i].T_world_camera.matrix()).cwiseAbs().maxCoeff(), 1e-9);
+    EXPECT_EQ(cv::norm(f.disparity_px, frames[i].disparity_px, cv::NORM_INF), 0.0);
+  }
+  fs::remove(path);
 }
 
 TEST(MessageConversions, RejectsInconsistentMessages) {

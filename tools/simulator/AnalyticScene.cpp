@@ -10,6 +10,15 @@ namespace stereo_fusion::sim {
 
 namespace {
 
+/// First ray parameter after t_min of a solid whose ray interval is [t0, t1] (entry, exit):
+/// the entry, or the exit when the ray starts inside.
+double firstHitInInterval(double t0, double t1, double t_min) {
+  if (t0 > t1) return INFINITY;
+  if (t0 > t_min) return t0;
+  if (t1 > t_min) return t1;
+  return INFINITY;
+}
+
 /// Appends vertices and triangles of one primitive to a mesh. Triangles are oriented so their
 /// geometric normal agrees with their vertices' normals: the generators below then need not
 /// get every winding right by hand, and inside-out primitives only flip the normals.
@@ -139,10 +148,7 @@ class Box : public Primitive {
       t0 = std::max(t0, ta);
       t1 = std::min(t1, tb);
     }
-    if (t0 > t1) return INFINITY;
-    if (t0 > t_min) return t0;
-    if (t1 > t_min) return t1;
-    return INFINITY;
+    return firstHitInInterval(t0, t1, t_min);
   }
   double signedDistance(const Eigen::Vector3d& p_w) const override {
     const Eigen::Vector3d q = (T_box_world_ * p_w).cwiseAbs() - h_;
@@ -219,10 +225,7 @@ class Cylinder : public Primitive {
       t0 = std::max(t0, ta);
       t1 = std::min(t1, tb);
     }
-    if (t0 > t1) return INFINITY;
-    if (t0 > t_min) return t0;
-    if (t1 > t_min) return t1;
-    return INFINITY;
+    return firstHitInInterval(t0, t1, t_min);
   }
   double signedDistance(const Eigen::Vector3d& p_w) const override {
     const Eigen::Vector3d p = T_cyl_world_ * p_w;

@@ -19,6 +19,7 @@
 #include "simulator/StereoRenderer.h"
 #include "simulator/Trajectory.h"
 #include "stereo_fusion/mesh/SubMesh.h"
+#include "stereo_fusion/ros/StereoBagWriter.h"
 
 using namespace stereo_fusion;
 using namespace stereo_fusion::sim;
@@ -40,6 +41,7 @@ struct Options {
   double outlier_fraction = 0.01;
   uint32_t seed = 0;
   double rate_hz = 10.0;
+  std::string bag;  ///< also write the frames as a rosbag here (empty: no bag)
   double gt_max_edge_m = 0.03;
   SgbmParams sgbm;
   std::string out;
@@ -66,6 +68,9 @@ calibration.yaml, poses.txt, disparity/ color/ right/ NNNNNN.png, gt_mesh.ply.
   --rate-hz R                     frame rate for the timestamps (default 10)
   --gt-max-edge M                 ground-truth mesh grid step in metres (default 0.03)
   --out DIR                       output folder (created; an old dataset there is replaced)
+  --bag FILE                      also write a rosbag: DisparityImage, Image, CameraInfo on
+                                  the nodelet's default topics and /tf (world -> left_optical);
+                                  stamps = timestamps + 1 s (ROS time 0 means "latest" to tf)
   --help                          this text
 
 Exit codes: 0 done, 1 generation or write failure, 2 bad arguments.
@@ -143,6 +148,10 @@ bool parseArguments(int argc, char** argv, Options* o) {
       {"--seed", [&](auto& f, auto& v) { o->seed = static_cast<uint32_t>(parseInteger(f, v, 0, 4294967295LL)); }},
       {"--rate-hz", [&](auto& f, auto& v) { o->rate_hz = parseDouble(f, v, 0, 1e6, true); }},
       {"--gt-max-edge", [&](auto& f, auto& v) { o->gt_max_edge_m = parseDouble(f, v, 0.001, 10, false); }},
+      {"--bag", [&](auto& f, auto& v) {
+         if (v.empty()) throw UsageError{f + ": expected a file name"};
+         o->bag = v;
+       }},
       {"--out", [&](auto& f, auto& v) {
          if (v.empty()) throw UsageError{f + ": expected a folder"};
          o->out = v;
@@ -214,6 +223,15 @@ int main(int argc, char** argv) {
     return 1;
   }
 
+  std::unique_ptr<StereoBagWriter> bag;
+  if (!o.bag.empty()) {
+    bag = StereoBagWriter::open(o.bag, BagTopics{}, "left_optical", 1.0, &error);
+    if (!bag) {
+      std::cerr << "stereo_fusion_simulate: " << error << "\n";
+      return 1;
+    }
+  }
+
   StereoRenderConfig config;
   config.mode = *parseDisparityMode(o.disparity);
   config.noise.sigma_px = o.noise_px;
@@ -245,12 +263,22 @@ int main(int argc, char** argv) {
     valid_share_sum += cv::countNonZero(view.disparity_px) / static_cast<double>(view.disparity_px.total());
     if (!finishWrite()) return 1;
     pending_write = std::async(std::launch::async, [&, k, pose, view = std::move(view)] {
-      return writer->writeFrame(k, pose.timestamp_s, pose.T_world_camera, view.disparity_px,
-                                view.left_rgb, view.right_rgb, &write_error);
+      if (!writer->writeFrame(k, pose.timestamp_s, pose.T_world_camera, view.disparity_px,
+                              view.left_rgb, view.right_rgb, &write_error))
+        return false;
+      if (!bag) return true;
+      StereoFrame frame;
+      frame.timestamp_s = pose.timestamp_s;
+      frame.T_world_camera = pose.T_world_camera;
+      frame.camera = *camera;
+      frame.disparity_px = view.disparity_px;
+      frame.color = view.left_rgb;
+      return bag->write(frame, static_cast<float>(o.sgbm.num_disparities), &write_error);
     });
     progress(k + 1, o.frames, elapsed());
   }
   if (!finishWrite()) return 1;
+  if (bag) bag->close();
 
   TriangleMesh gt_mesh;
   preset->scene.tessellate(&gt_mesh, o.gt_max_edge_m);

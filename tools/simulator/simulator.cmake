@@ -12,7 +12,7 @@ target_link_libraries(stereo_fusion_simulator PUBLIC stereo_fusion_sim ${OpenCV_
 
 # scripts/simulate.sh runs this: writes a simulated sequence as a dataset folder.
 add_executable(stereo_fusion_simulate tools/simulator/simulate_main.cpp)
-target_link_libraries(stereo_fusion_simulate stereo_fusion_simulator)
+target_link_libraries(stereo_fusion_simulate stereo_fusion_simulator stereo_fusion_ros)
 
 if(CATKIN_ENABLE_TESTING)
   # test/unit/test_simulator.cpp is globbed into the unit test binary by the root.

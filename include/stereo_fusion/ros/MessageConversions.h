@@ -1,6 +1,7 @@
 #pragma once
 // ROS messages ↔ core types. The ros/ folder is the only place that includes ROS headers.
 
+#include <geometry_msgs/TransformStamped.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <stereo_msgs/DisparityImage.h>
@@ -21,5 +22,17 @@ namespace stereo_fusion {
 bool toStereoFrame(const stereo_msgs::DisparityImage& disparity, const sensor_msgs::Image& image,
                    const sensor_msgs::CameraInfo& info, const Eigen::Isometry3d& T_world_camera,
                    StereoFrame* frame, std::string* error);
+
+/// The messages a stereo pipeline publishes for `frame`, stamped with `header`: disparity as
+/// 32FC1 with f, T and the disparity range [0, max_disparity_px]; the image as rgb8 (or mono8);
+/// CameraInfo with K and P of the rectified left camera.
+void toMessages(const StereoFrame& frame, const std_msgs::Header& header, float max_disparity_px,
+                stereo_msgs::DisparityImage* disparity, sensor_msgs::Image* image,
+                sensor_msgs::CameraInfo* info);
+
+/// T_world_camera as the tf transform world_frame → camera_header.frame_id.
+geometry_msgs::TransformStamped toTransform(const Eigen::Isometry3d& T_world_camera,
+                                           const std::string& world_frame,
+                                           const std_msgs::Header& camera_header);
 
 }  // namespace stereo_fusion

@@ -1,0 +1,72 @@
+#!/usr/bin/env bash
+# The benchmark: stereo_fusion (accelerated and naive lookup) and Open3D's ScalableTSDFVolume
+# on the same simulated 640×480 SGBM room sequence (100 frames), at 1, 2 and 4 cm voxels with
+# the same truncation (4 voxels); every mesh scored by scripts/evaluate.sh against the ground
+# truth. Prints per-stage medians (ms), fps, blocks, MB and accuracy side by side.
+#   scripts/bench.sh [--voxels "0.01 0.02 0.04"] [--frames N]
+# Timings depend on the machine's load: compare ratios from one run, not runs across days.
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+BIN="${BUILD_DIR:-$ROOT/.build}/devel/lib/stereo_fusion"
+VOXELS="0.01 0.02 0.04"
+FRAMES=100
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --voxels) VOXELS="$2"; shift 2 ;;
+    --frames) FRAMES="$2"; shift 2 ;;
+    *) echo "bench.sh: unknown option $1" >&2; exit 2 ;;
+  esac
+done
+"$ROOT/scripts/setup.sh" >&2
+if ! /usr/bin/python3 -c "import open3d, cv2, numpy" 2>/dev/null; then
+  echo "[bench] installing Open3D, OpenCV and NumPy for Debian's python3" >&2
+  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends \
+    python3-open3d python3-opencv python3-numpy >/dev/null
+fi
+WORK="$ROOT/.bench"
+SEQ="$WORK/room_sgbm_${FRAMES}"
+mkdir -p "$WORK"
+if [ ! -f "$SEQ/poses.txt" ]; then
+  echo "[bench] generating the room sequence ($FRAMES frames, SGBM) in $SEQ" >&2
+  "$BIN/stereo_fusion_simulate" --preset room --trajectory walkthrough --frames "$FRAMES" \
+    --disparity sgbm --seed 1 --out "$SEQ" >&2
+fi
+json() { /usr/bin/python3 -c "import json,sys; d=json.load(open('$1')); print($2)"; }
+rows=()
+for v in $VOXELS; do
+  out="$WORK/out_$v"
+  mkdir -p "$out"
+  echo "[bench] voxel $v m: stereo_fusion (accelerated, naive), Open3D" >&2
+  "$BIN/stereo_fusion_fuse" "$SEQ" "$out/ours" --set voxel_size_m="$v" --quiet >&2
+  "$BIN/stereo_fusion_fuse" "$SEQ" "$out/naive" --set voxel_size_m="$v" --set lookup_mode=naive --quiet >&2
+  /usr/bin/python3 "$ROOT/tools/bench/open3d_fuse.py" "$SEQ" "$out/open3d.ply" "$v" \
+    "$(/usr/bin/python3 -c "print(4*$v)")" 8 > "$out/open3d.json"
+  tol=$(/usr/bin/python3 -c "print(max(0.05, 2*$v))")
+  "$BIN/stereo_fusion_evaluate" "$out/ours/mesh.ply" "$SEQ" --tolerance-m "$tol" --json "$out/ours_eval.json" >/dev/null 2>&1
+  "$BIN/stereo_fusion_evaluate" "$out/open3d.ply" "$SEQ" --tolerance-m "$tol" --json "$out/open3d_eval.json" >/dev/null 2>&1
+  rows+=("$v|$out|$tol")
+done
+
+echo
+echo "stereo_fusion vs Open3D ScalableTSDFVolume — $FRAMES frames 640×480 SGBM room, $(nproc) cores, medians in ms"
+printf "%-6s | %-13s | %7s %7s %7s %7s | %7s %7s | %6s | %6s %6s | %8s %8s %6s\n" \
+  voxel system "lookN" "lookA" fusion mesh total "p99" fps blocks MB "acc_mm" "compl%" F%
+for row in "${rows[@]}"; do
+  IFS='|' read -r v out tol <<<"$row"
+  s="$out/ours/stats.json"; n="$out/naive/stats.json"; e="$out/ours_eval.json"; o="$out/open3d.json"; oe="$out/open3d_eval.json"
+  printf "%-6s | %-13s | %7.1f %7.1f %7.1f %7.1f | %7.1f %7.1f | %6.1f | %6d %6.1f | %8.2f %8.1f %6.1f\n" "$v" stereo_fusion \
+    "$(json "$n" "d['timings_ms']['lookup']['p50']")" "$(json "$s" "d['timings_ms']['lookup']['p50']")" \
+    "$(json "$s" "d['timings_ms']['fusion']['p50']")" "$(json "$s" "d['timings_ms']['meshing']['p50']")" \
+    "$(json "$s" "d['timings_ms']['total']['p50']")" "$(json "$s" "d['timings_ms']['total']['p99']")" \
+    "$(json "$s" "1000.0/d['timings_ms']['total']['p50']")" "$(json "$s" "d['blocks']['total']")" \
+    "$(json "$s" "d['memory']['megabytes']")" "$(json "$e" "d['accuracy_m']['median']*1000")" \
+    "$(json "$e" "d['completeness']*100")" "$(json "$e" "d['f_score']*100")"
+  printf "%-6s | %-13s | %7s %7s %7.1f %7s | %7.1f %7.1f | %6.1f | %6s %6s | %8.2f %8.1f %6.1f\n" "$v" "Open3D (int.)" - - \
+    "$(json "$o" "d['integrate_ms']['p50']")" "-" "$(json "$o" "d['integrate_ms']['p50']")" \
+    "$(json "$o" "d['integrate_ms']['p99']")" "$(json "$o" "1000.0/d['integrate_ms']['p50']")" - - \
+    "$(json "$oe" "d['accuracy_m']['median']*1000")" "$(json "$oe" "d['completeness']*100")" \
+    "$(json "$oe" "d['f_score']*100")"
+  echo "       Open3D final mesh extraction: $(json "$o" "round(d['extract_ms'])") ms once; ours meshes incrementally every frame (in 'total')"
+done
+echo "lookN / lookA: octree lookup with Algorithm 1 (naive) / Algorithm 2 (accelerated); tolerance for completeness: max(5 cm, 2 voxels)"

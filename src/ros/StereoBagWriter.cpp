@@ -1,0 +1,55 @@
+#include "stereo_fusion/ros/StereoBagWriter.h"
+
+#include <rosbag/bag.h>
+#include <tf2_msgs/TFMessage.h>
+
+#include "stereo_fusion/ros/MessageConversions.h"
+
+namespace stereo_fusion {
+
+std::unique_ptr<StereoBagWriter> StereoBagWriter::open(const std::string& path, const BagTopics& topics,
+                                                       const std::string& camera_frame, double stamp_offset_s,
+                                                       std::string* error) {
+  std::unique_ptr<StereoBagWriter> writer(new StereoBagWriter());
+  writer->topics_ = topics;
+  writer->camera_frame_ = camera_frame;
+  writer->stamp_offset_s_ = stamp_offset_s;
+  try {
+    writer->bag_ = std::make_unique<rosbag::Bag>(path, rosbag::bagmode::Write);
+  } catch (const rosbag::BagException& e) {
+    *error = path + ": cannot write the bag: " + e.what();
+    return nullptr;
+  }
+  return writer;
+}
+
+StereoBagWriter::~StereoBagWriter() { close(); }
+
+bool StereoBagWriter::write(const StereoFrame& frame, float max_disparity_px, std::string* error) {
+  std_msgs::Header header;
+  header.stamp = ros::Time(frame.timestamp_s + stamp_offset_s_);
+  header.frame_id = camera_frame_;
+  stereo_msgs::DisparityImage disparity;
+  sensor_msgs::Image image;
+  sensor_msgs::CameraInfo info;
+  toMessages(frame, header, max_disparity_px, &disparity, &image, &info);
+  tf2_msgs::TFMessage tf;
+  tf.transforms.push_back(toTransform(frame.T_world_camera, topics_.world_frame, header));
+  try {
+    bag_->write("/tf", header.stamp, tf);
+    bag_->write(topics_.disparity, header.stamp, disparity);
+    bag_->write(topics_.image, header.stamp, image);
+    bag_->write(topics_.camera_info, header.stamp, info);
+  } catch (const rosbag::BagException& e) {
+    *error = std::string("writing the bag failed: ") + e.what();
+    return false;
+  }
+  return true;
+}
+
+void StereoBagWriter::close() {
+  if (bag_) bag_->close();
+  bag_.reset();
+}
+
+}  // namespace stereo_fusion
