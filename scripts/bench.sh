@@ -3,17 +3,20 @@
 # on the same simulated 640×480 SGBM room sequence (100 frames), at 1, 2 and 4 cm voxels with
 # the same truncation (4 voxels); every mesh scored by scripts/evaluate.sh against the ground
 # truth. Prints per-stage medians (ms), fps, blocks, MB and accuracy side by side.
-#   scripts/bench.sh [--voxels "0.01 0.02 0.04"] [--frames N]
+#   scripts/bench.sh [--voxels "0.01 0.02 0.04"] [--frames N] [--reuse]
+# --reuse prints the table from the outputs of an earlier run without running anything.
 # Timings depend on the machine's load: compare ratios from one run, not runs across days.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 BIN="${BUILD_DIR:-$ROOT/.build}/devel/lib/stereo_fusion"
 VOXELS="0.01 0.02 0.04"
 FRAMES=100
+REUSE=0
 while [ $# -gt 0 ]; do
   case "$1" in
     --voxels) VOXELS="$2"; shift 2 ;;
     --frames) FRAMES="$2"; shift 2 ;;
+    --reuse) REUSE=1; shift ;;
     *) echo "bench.sh: unknown option $1" >&2; exit 2 ;;
   esac
 done
@@ -36,35 +39,38 @@ json() { /usr/bin/python3 -c "import json,sys; d=json.load(open('$1')); print($2
 rows=()
 for v in $VOXELS; do
   out="$WORK/out_$v"
+  tol=$(/usr/bin/python3 -c "print(max(0.05, 2*$v))")
+  rows+=("$v|$out|$tol")
+  if [ "$REUSE" = 1 ]; then continue; fi
   mkdir -p "$out"
   echo "[bench] voxel $v m: stereo_fusion (accelerated, naive), Open3D" >&2
   "$BIN/stereo_fusion_fuse" "$SEQ" "$out/ours" --set voxel_size_m="$v" --quiet >&2
   "$BIN/stereo_fusion_fuse" "$SEQ" "$out/naive" --set voxel_size_m="$v" --set lookup_mode=naive --quiet >&2
   /usr/bin/python3 "$ROOT/tools/bench/open3d_fuse.py" "$SEQ" "$out/open3d.ply" "$v" \
     "$(/usr/bin/python3 -c "print(4*$v)")" 8 > "$out/open3d.json"
-  tol=$(/usr/bin/python3 -c "print(max(0.05, 2*$v))")
   "$BIN/stereo_fusion_evaluate" "$out/ours/mesh.ply" "$SEQ" --tolerance-m "$tol" --json "$out/ours_eval.json" >/dev/null 2>&1
   "$BIN/stereo_fusion_evaluate" "$out/open3d.ply" "$SEQ" --tolerance-m "$tol" --json "$out/open3d_eval.json" >/dev/null 2>&1
-  rows+=("$v|$out|$tol")
 done
 
 echo
 echo "stereo_fusion vs Open3D ScalableTSDFVolume — $FRAMES frames 640×480 SGBM room, $(nproc) cores, medians in ms"
-printf "%-6s | %-13s | %7s %7s %7s %7s | %7s %7s | %6s | %6s %6s | %8s %8s %6s\n" \
-  voxel system "lookN" "lookA" fusion mesh total "p99" fps blocks MB "acc_mm" "compl%" F%
+printf "%-6s | %-13s | %7s %7s %7s %7s | %7s %7s %7s | %6s | %6s %6s | %8s %8s %6s\n" \
+  voxel system "lookN" "lookA" fusion mesh "total" "mean" "p99" fps blocks MB "acc_mm" "compl%" F%
 for row in "${rows[@]}"; do
   IFS='|' read -r v out tol <<<"$row"
   s="$out/ours/stats.json"; n="$out/naive/stats.json"; e="$out/ours_eval.json"; o="$out/open3d.json"; oe="$out/open3d_eval.json"
-  printf "%-6s | %-13s | %7.1f %7.1f %7.1f %7.1f | %7.1f %7.1f | %6.1f | %6d %6.1f | %8.2f %8.1f %6.1f\n" "$v" stereo_fusion \
+  printf "%-6s | %-13s | %7.1f %7.1f %7.1f %7.1f | %7.1f %7.1f %7.1f | %6.1f | %6d %6.1f | %8.2f %8.1f %6.1f\n" "$v" stereo_fusion \
     "$(json "$n" "d['timings_ms']['lookup']['p50']")" "$(json "$s" "d['timings_ms']['lookup']['p50']")" \
     "$(json "$s" "d['timings_ms']['fusion']['p50']")" "$(json "$s" "d['timings_ms']['meshing']['p50']")" \
-    "$(json "$s" "d['timings_ms']['total']['p50']")" "$(json "$s" "d['timings_ms']['total']['p99']")" \
+    "$(json "$s" "d['timings_ms']['total']['p50']")" "$(json "$s" "d['timings_ms']['total']['mean']")" \
+    "$(json "$s" "d['timings_ms']['total']['p99']")" \
     "$(json "$s" "1000.0/d['timings_ms']['total']['p50']")" "$(json "$s" "d['blocks']['total']")" \
     "$(json "$s" "d['memory']['megabytes']")" "$(json "$e" "d['accuracy_m']['median']*1000")" \
     "$(json "$e" "d['completeness']*100")" "$(json "$e" "d['f_score']*100")"
-  printf "%-6s | %-13s | %7s %7s %7.1f %7s | %7.1f %7.1f | %6.1f | %6s %6s | %8.2f %8.1f %6.1f\n" "$v" "Open3D (int.)" - - \
+  printf "%-6s | %-13s | %7s %7s %7.1f %7s | %7.1f %7.1f %7.1f | %6.1f | %6s %6s | %8.2f %8.1f %6.1f\n" "$v" "Open3D (int.)" - - \
     "$(json "$o" "d['integrate_ms']['p50']")" "-" "$(json "$o" "d['integrate_ms']['p50']")" \
-    "$(json "$o" "d['integrate_ms']['p99']")" "$(json "$o" "1000.0/d['integrate_ms']['p50']")" - - \
+    "$(json "$o" "d['integrate_ms']['mean']")" "$(json "$o" "d['integrate_ms']['p99']")" \
+    "$(json "$o" "1000.0/d['integrate_ms']['p50']")" - - \
     "$(json "$oe" "d['accuracy_m']['median']*1000")" "$(json "$oe" "d['completeness']*100")" \
     "$(json "$oe" "d['f_score']*100")"
   echo "       Open3D final mesh extraction: $(json "$o" "round(d['extract_ms'])") ms once; ours meshes incrementally every frame (in 'total')"
