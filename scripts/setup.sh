@@ -15,7 +15,7 @@ PACKAGES=(
   # ROS 1 from Debian (catkin, messages, nodelet, tf2, synchronisation, images, bags)
   catkin ros-message-generation ros-message-runtime libroscpp-dev libnodeletlib-dev
   libmessage-filters-dev libtf2-dev libtf2-msgs-dev libtf2-ros-dev libtf2-eigen-dev libstd-msgs-dev
-  libgeometry-msgs-dev libimage-transport-dev
+  libgeometry-msgs-dev libimage-transport-dev libstd-srvs-dev ros-std-srvs
   libsensor-msgs-dev libstereo-msgs-dev libvisualization-msgs-dev ros-std-msgs
   ros-geometry-msgs ros-sensor-msgs ros-stereo-msgs ros-visualization-msgs libcv-bridge-dev
   libpcl-dev librosbag-dev libdiagnostic-updater-dev
@@ -50,4 +50,6 @@ cmake -S "$ROOT" -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE="${BUILD_TYPE:-Release}" \
   -DCATKIN_ENABLE_TESTING=ON >"$BUILD_DIR.configure.log" 2>&1 \
   || { cat "$BUILD_DIR.configure.log"; exit 1; }
 cmake --build "$BUILD_DIR" -j"$(nproc)"
+# catkin builds the rostest executables only in its `tests` target.
+cmake --build "$BUILD_DIR" -j"$(nproc)" --target tests
 echo "[setup] build done"

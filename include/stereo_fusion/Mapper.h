@@ -23,7 +23,7 @@ struct IntegrationResult {
   LookupStats lookup;
   FusionStats fusion;
   /// Submeshes changed / removed by this frame (empty when meshing is disabled).
-  MeshUpdate mesh;
+  MeshChanges mesh;
   /// Blocks whose voxels changed in this frame, sorted by key (the meshing stage's input).
   std::vector<BlockKey> updated_blocks;
 };
@@ -44,7 +44,7 @@ class Mapper {
   /// The whole mesh, submeshes welded into one (for export).
   TriangleMesh extractMesh() const { return weldSubmeshes(mesh_store_.submeshes()); }
   /// Re-meshes every block from scratch (also what a disabled incremental mesher catches up with).
-  MeshUpdate rebuildMesh() { return mesh_store_.rebuild(octree_, &pool_); }
+  MeshChanges rebuildMesh() { return mesh_store_.rebuild(octree_, &pool_); }
   const MapperConfig& config() const { return config_; }
   /// Frames accepted so far.
   uint64_t framesIntegrated() const { return frames_integrated_; }

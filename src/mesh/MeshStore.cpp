@@ -23,14 +23,14 @@ std::vector<BlockKey> MeshStore::affectedOwners(const BlockOctree& map,
   return owners;
 }
 
-MeshUpdate MeshStore::remesh(const BlockOctree& map, const std::vector<BlockKey>& owners,
+MeshChanges MeshStore::remesh(const BlockOctree& map, const std::vector<BlockKey>& owners,
                              ThreadPool* pool) {
   Timer timer;
   if (scratch_.size() < owners.size()) scratch_.resize(owners.size());
   pool->parallelFor(owners.size(), 4, [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i) mesher_.mesh(map, *map.find(owners[i]), &scratch_[i]);
   });
-  MeshUpdate update;
+  MeshChanges update;
   update.blocks_meshed = owners.size();
   for (size_t i = 0; i < owners.size(); ++i) {
     if (!scratch_[i].empty()) {
@@ -44,14 +44,14 @@ MeshUpdate MeshStore::remesh(const BlockOctree& map, const std::vector<BlockKey>
   return update;
 }
 
-MeshUpdate MeshStore::update(const BlockOctree& map, const std::vector<BlockKey>& updated,
+MeshChanges MeshStore::update(const BlockOctree& map, const std::vector<BlockKey>& updated,
                              ThreadPool* pool) {
   for (const BlockKey& key : updated)
     if (VoxelBlock* block = map.find(key)) refreshMeshLevel(block, params_.level_min_coverage);
   return remesh(map, affectedOwners(map, updated), pool);
 }
 
-MeshUpdate MeshStore::rebuild(const BlockOctree& map, ThreadPool* pool) {
+MeshChanges MeshStore::rebuild(const BlockOctree& map, ThreadPool* pool) {
   std::vector<BlockKey> all;
   for (VoxelBlock* block : map.blocksSortedByKey()) {
     refreshMeshLevel(block, params_.level_min_coverage);
@@ -60,7 +60,7 @@ MeshUpdate MeshStore::rebuild(const BlockOctree& map, ThreadPool* pool) {
   std::vector<BlockKey> stale;
   for (const auto& [key, mesh] : meshes_)
     if (map.find(key) == nullptr) stale.push_back(key);
-  MeshUpdate update = remesh(map, all, pool);
+  MeshChanges update = remesh(map, all, pool);
   for (const BlockKey& key : stale) {
     meshes_.erase(key);
     update.removed.push_back(key);

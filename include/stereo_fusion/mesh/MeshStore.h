@@ -10,7 +10,7 @@
 namespace stereo_fusion {
 
 /// What one meshing pass changed: enough for a subscriber to keep an exact copy.
-struct MeshUpdate {
+struct MeshChanges {
   std::vector<BlockKey> changed;  ///< blocks whose submesh was (re)built and is non-empty, sorted
   std::vector<BlockKey> removed;  ///< blocks whose submesh disappeared, sorted
   size_t blocks_meshed = 0;       ///< owners re-meshed in this pass
@@ -25,9 +25,9 @@ class MeshStore {
   /// After fusion changed `updated` blocks: refresh their mesh levels, then re-mesh them and
   /// every block whose owned seams reach them — the −x/−y/−z neighbours and diagonals, i.e.
   /// owners K − (0|1, 0|1, 0|1) — in parallel over blocks.
-  MeshUpdate update(const BlockOctree& map, const std::vector<BlockKey>& updated, ThreadPool* pool);
+  MeshChanges update(const BlockOctree& map, const std::vector<BlockKey>& updated, ThreadPool* pool);
   /// Meshes every block from scratch (the reference for the incremental result).
-  MeshUpdate rebuild(const BlockOctree& map, ThreadPool* pool);
+  MeshChanges rebuild(const BlockOctree& map, ThreadPool* pool);
 
   const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes() const { return meshes_; }
   size_t triangleCount() const;
@@ -37,7 +37,7 @@ class MeshStore {
   static std::vector<BlockKey> affectedOwners(const BlockOctree& map, const std::vector<BlockKey>& updated);
 
  private:
-  MeshUpdate remesh(const BlockOctree& map, const std::vector<BlockKey>& owners, ThreadPool* pool);
+  MeshChanges remesh(const BlockOctree& map, const std::vector<BlockKey>& owners, ThreadPool* pool);
 
   MeshingParams params_;
   BlockMesher mesher_;

@@ -1,0 +1,102 @@
+#pragma once
+// The ROS face of stereo_fusion: synchronised DisparityImage + Image + CameraInfo in, pose from
+// tf2, fusion and incremental meshing off the subscriber thread, MeshUpdate + rviz markers out.
+
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <message_filters/subscriber.h>
+#include <message_filters/sync_policies/approximate_time.h>
+#include <message_filters/sync_policies/exact_time.h>
+#include <message_filters/synchronizer.h>
+#include <nodelet/nodelet.h>
+#include <ros/ros.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <std_srvs/Empty.h>
+#include <stereo_fusion/GetFullMesh.h>
+#include <stereo_fusion/SaveMesh.h>
+#include <stereo_msgs/DisparityImage.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
+
+#include <atomic>
+#include <condition_variable>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <set>
+#include <thread>
+
+#include "stereo_fusion/Mapper.h"
+#include "stereo_fusion/ros/MeshMessages.h"
+#include "stereo_fusion/ros/RosParameters.h"
+
+namespace stereo_fusion {
+
+/// Nodelet `stereo_fusion/FusionNodelet`. Topics: `disparity`, `image`, `camera_info` in;
+/// `~mesh_update`, `~mesh_markers` out. Services: `~save_mesh`, `~reset`, `~get_full_mesh`.
+/// Every dropped frame is counted by reason (queue full, tf timeout, bad input) and reported
+/// on /diagnostics together with rates, latency and map size.
+class FusionNodelet : public nodelet::Nodelet {
+ public:
+  ~FusionNodelet() override;
+
+ private:
+  using DisparityMsg = stereo_msgs::DisparityImage;
+  using ImageMsg = sensor_msgs::Image;
+  using InfoMsg = sensor_msgs::CameraInfo;
+  using ExactPolicy = message_filters::sync_policies::ExactTime<DisparityMsg, ImageMsg, InfoMsg>;
+  using ApproxPolicy = message_filters::sync_policies::ApproximateTime<DisparityMsg, ImageMsg, InfoMsg>;
+
+  struct QueuedFrame {
+    DisparityMsg::ConstPtr disparity;
+    ImageMsg::ConstPtr image;
+    InfoMsg::ConstPtr info;
+  };
+
+  void onInit() override;
+  void onFrame(const DisparityMsg::ConstPtr& d, const ImageMsg::ConstPtr& i, const InfoMsg::ConstPtr& c);
+  void workerLoop();
+  void processFrame(const QueuedFrame& frame);
+  void publishPending(const ros::Time& stamp, bool force);
+  bool saveMesh(SaveMesh::Request& req, SaveMesh::Response& res);
+  bool getFullMesh(GetFullMesh::Request& req, GetFullMesh::Response& res);
+  bool reset(std_srvs::Empty::Request& req, std_srvs::Empty::Response& res);
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
+
+  NodeConfig node_config_;
+  MapperConfig mapper_config_;
+
+  std::mutex map_mutex_;  // guards everything below it up to the queue
+  std::unique_ptr<Mapper> mapper_;
+  std::set<BlockKey> pending_changed_, pending_removed_;
+  MeshMarkers markers_;
+  bool markers_full_pending_ = false;
+  uint64_t sequence_ = 0;
+  ros::WallTime last_publish_;
+  std::deque<double> latencies_s_;  // frame stamp → publish, the last 1000 frames
+  std::vector<ros::Time> unpublished_stamps_;
+
+  std::mutex queue_mutex_;
+  std::condition_variable queue_cv_;
+  std::deque<QueuedFrame> queue_;
+  bool stopping_ = false;
+  std::thread worker_;
+
+  std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
+  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
+  message_filters::Subscriber<DisparityMsg> disparity_sub_;
+  message_filters::Subscriber<ImageMsg> image_sub_;
+  message_filters::Subscriber<InfoMsg> info_sub_;
+  std::unique_ptr<message_filters::Synchronizer<ExactPolicy>> exact_sync_;
+  std::unique_ptr<message_filters::Synchronizer<ApproxPolicy>> approx_sync_;
+  ros::Publisher mesh_update_pub_, markers_pub_;
+  ros::ServiceServer save_srv_, full_srv_, reset_srv_;
+  std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
+  ros::WallTimer diagnostics_timer_;
+
+  std::atomic<uint64_t> received_{0}, fused_{0}, dropped_queue_{0}, dropped_tf_{0}, dropped_bad_input_{0};
+  ros::WallTime started_;
+  std::atomic<double> last_total_ms_{0}, last_lookup_ms_{0}, last_fusion_ms_{0}, last_meshing_ms_{0};
+};
+
+}  // namespace stereo_fusion

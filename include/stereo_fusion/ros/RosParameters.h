@@ -1,0 +1,27 @@
+#pragma once
+#include <ros/node_handle.h>
+
+#include <string>
+
+#include "stereo_fusion/MapperConfig.h"
+
+namespace stereo_fusion {
+
+/// Settings of the ROS node itself (the mapping parameters are in MapperConfig).
+struct NodeConfig {
+  std::string world_frame = "world";       ///< fixed frame of the map and the mesh
+  int queue_size = 5;                      ///< frames waiting for the worker (≥ 1)
+  bool drop_oldest = true;                 ///< queue full: drop the oldest (true) or the newest frame
+  bool approximate_sync = false;           ///< ApproximateTime instead of ExactTime synchronisation
+  int sync_queue_size = 10;                ///< message_filters synchroniser queue
+  double tf_timeout_s = 0.2;               ///< how long the worker waits for T_world_camera
+  double mesh_publish_rate_hz = 2.0;       ///< 0 = publish after every frame
+  bool publish_markers = true;             ///< ~mesh_markers for rviz
+};
+
+/// Reads every MapperConfig key and the NodeConfig keys from the private namespace of `nh`
+/// (missing keys keep their defaults). False with a message naming the parameter when a value
+/// has the wrong type or is out of range.
+bool loadParameters(const ros::NodeHandle& private_nh, MapperConfig* mapper, NodeConfig* node, std::string* error);
+
+}  // namespace stereo_fusion

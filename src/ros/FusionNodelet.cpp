@@ -1,0 +1,289 @@
+#include "stereo_fusion/ros/FusionNodelet.h"
+
+#include <pluginlib/class_list_macros.hpp>
+#include <tf2_eigen/tf2_eigen.h>
+
+#include <algorithm>
+
+#include "stereo_fusion/io/PlyWriter.h"
+#include "stereo_fusion/ros/MessageConversions.h"
+
+namespace stereo_fusion {
+
+FusionNodelet::~FusionNodelet() {
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    stopping_ = true;
+  }
+  queue_cv_.notify_all();
+  if (worker_.joinable()) worker_.join();
+}
+
+void FusionNodelet::onInit() {
+  ros::NodeHandle& nh = getNodeHandle();
+  ros::NodeHandle& pnh = getPrivateNodeHandle();
+  std::string error;
+  if (!loadParameters(pnh, &mapper_config_, &node_config_, &error)) {
+    NODELET_FATAL("stereo_fusion: %s", error.c_str());
+    throw std::invalid_argument(error);
+  }
+  mapper_ = std::make_unique<Mapper>(mapper_config_);
+  started_ = ros::WallTime::now();
+  last_publish_ = ros::WallTime(0, 0);
+
+  tf_buffer_ = std::make_unique<tf2_ros::Buffer>(ros::Duration(30.0));
+  tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh);
+
+  mesh_update_pub_ = pnh.advertise<MeshUpdate>("mesh_update", 10);
+  // A new rviz gets the whole mesh, not only the blocks that change after it connects.
+  markers_pub_ = pnh.advertise<visualization_msgs::MarkerArray>(
+      "mesh_markers", 10, [this](const ros::SingleSubscriberPublisher&) {
+        std::lock_guard<std::mutex> lock(map_mutex_);
+        markers_full_pending_ = true;
+      });
+  save_srv_ = pnh.advertiseService("save_mesh", &FusionNodelet::saveMesh, this);
+  full_srv_ = pnh.advertiseService("get_full_mesh", &FusionNodelet::getFullMesh, this);
+  reset_srv_ = pnh.advertiseService("reset", &FusionNodelet::reset, this);
+
+  diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
+  diagnostics_->setHardwareID("stereo_fusion");
+  diagnostics_->add("fusion", this, &FusionNodelet::diagnose);
+  diagnostics_timer_ = nh.createWallTimer(ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) {
+    diagnostics_->force_update();
+  });
+
+  worker_ = std::thread([this] { workerLoop(); });
+
+  disparity_sub_.subscribe(nh, "disparity", 5);
+  image_sub_.subscribe(nh, "image", 5);
+  info_sub_.subscribe(nh, "camera_info", 5);
+  if (node_config_.approximate_sync) {
+    approx_sync_ = std::make_unique<message_filters::Synchronizer<ApproxPolicy>>(
+        ApproxPolicy(node_config_.sync_queue_size), disparity_sub_, image_sub_, info_sub_);
+    approx_sync_->registerCallback(&FusionNodelet::onFrame, this);
+  } else {
+    exact_sync_ = std::make_unique<message_filters::Synchronizer<ExactPolicy>>(
+        ExactPolicy(node_config_.sync_queue_size), disparity_sub_, image_sub_, info_sub_);
+    exact_sync_->registerCallback(&FusionNodelet::onFrame, this);
+  }
+  NODELET_INFO("stereo_fusion: fusing %s + %s + %s into frame '%s' (voxel %.3f m, %d threads)",
+               disparity_sub_.getTopic().c_str(), image_sub_.getTopic().c_str(), info_sub_.getTopic().c_str(),
+               node_config_.world_frame.c_str(), mapper_config_.voxel_size_m, mapper_config_.num_threads);
+}
+
+void FusionNodelet::onFrame(const DisparityMsg::ConstPtr& d, const ImageMsg::ConstPtr& i,
+                            const InfoMsg::ConstPtr& c) {
+  ++received_;
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    if (queue_.size() >= static_cast<size_t>(node_config_.queue_size)) {
+      ++dropped_queue_;
+      NODELET_WARN_THROTTLE(5.0, "stereo_fusion: frame queue full (%d), dropping the %s frame (%llu so far)",
+                            node_config_.queue_size, node_config_.drop_oldest ? "oldest" : "newest",
+                            static_cast<unsigned long long>(dropped_queue_.load()));
+      if (!node_config_.drop_oldest) return;
+      queue_.pop_front();
+    }
+    queue_.push_back({d, i, c});
+  }
+  queue_cv_.notify_one();
+}
+
+void FusionNodelet::workerLoop() {
+  while (true) {
+    QueuedFrame frame;
+    {
+      std::unique_lock<std::mutex> lock(queue_mutex_);
+      queue_cv_.wait_for(lock, std::chrono::milliseconds(100), [this] { return stopping_ || !queue_.empty(); });
+      if (stopping_) return;
+      if (queue_.empty()) {
+        lock.unlock();
+        publishPending(ros::Time(0), false);  // flush a rate-limited update
+        continue;
+      }
+      frame = queue_.front();
+      queue_.pop_front();
+    }
+    processFrame(frame);
+  }
+}
+
+void FusionNodelet::processFrame(const QueuedFrame& f) {
+  const std_msgs::Header& header = f.disparity->header;
+  std::string tf_error;
+  if (!tf_buffer_->canTransform(node_config_.world_frame, header.frame_id, header.stamp,
+                                ros::Duration(node_config_.tf_timeout_s), &tf_error)) {
+    ++dropped_tf_;
+    NODELET_WARN_THROTTLE(5.0, "stereo_fusion: no transform %s <- %s at %.3f within %.2f s, frame dropped (%llu so far): %s",
+                          node_config_.world_frame.c_str(), header.frame_id.c_str(), header.stamp.toSec(),
+                          node_config_.tf_timeout_s, static_cast<unsigned long long>(dropped_tf_.load()),
+                          tf_error.c_str());
+    return;
+  }
+  Eigen::Isometry3d T_world_camera;
+  try {
+    T_world_camera = tf2::transformToEigen(tf_buffer_->lookupTransform(node_config_.world_frame, header.frame_id, header.stamp));
+  } catch (const tf2::TransformException& e) {
+    ++dropped_tf_;
+    NODELET_WARN_THROTTLE(5.0, "stereo_fusion: %s", e.what());
+    return;
+  }
+  StereoFrame frame;
+  std::string error;
+  if (!toStereoFrame(*f.disparity, *f.image, *f.info, T_world_camera, &frame, &error)) {
+    ++dropped_bad_input_;
+    NODELET_ERROR_THROTTLE(5.0, "stereo_fusion: bad input, frame dropped (%llu so far): %s",
+                           static_cast<unsigned long long>(dropped_bad_input_.load()), error.c_str());
+    return;
+  }
+  IntegrationResult result;
+  {
+    std::lock_guard<std::mutex> lock(map_mutex_);
+    result = mapper_->integrate(frame);
+    if (result.accepted) {
+      for (const BlockKey& k : result.mesh.changed) {
+        pending_changed_.insert(k);
+        pending_removed_.erase(k);
+      }
+      for (const BlockKey& k : result.mesh.removed) {
+        pending_removed_.insert(k);
+        pending_changed_.erase(k);
+      }
+      unpublished_stamps_.push_back(header.stamp);
+    }
+  }
+  if (!result.accepted) {
+    ++dropped_bad_input_;
+    NODELET_ERROR_THROTTLE(5.0, "stereo_fusion: frame rejected (%llu so far): %s",
+                           static_cast<unsigned long long>(dropped_bad_input_.load()), result.error.c_str());
+    return;
+  }
+  ++fused_;
+  last_lookup_ms_ = result.lookup_ms;
+  last_fusion_ms_ = result.fusion_ms;
+  last_meshing_ms_ = result.mesh.meshing_ms;
+  last_total_ms_ = result.lookup_ms + result.fusion_ms + result.mesh.meshing_ms;
+  publishPending(header.stamp, false);
+}
+
+void FusionNodelet::publishPending(const ros::Time& stamp, bool force) {
+  std::lock_guard<std::mutex> lock(map_mutex_);
+  if (pending_changed_.empty() && pending_removed_.empty() && !markers_full_pending_) return;
+  const ros::WallTime now = ros::WallTime::now();
+  if (!force && node_config_.mesh_publish_rate_hz > 0 &&
+      (now - last_publish_).toSec() < 1.0 / node_config_.mesh_publish_rate_hz)
+    return;
+  last_publish_ = now;
+  std_msgs::Header header;
+  header.frame_id = node_config_.world_frame;
+  header.stamp = stamp.isZero() && !unpublished_stamps_.empty() ? unpublished_stamps_.back() : stamp;
+  const std::vector<BlockKey> changed(pending_changed_.begin(), pending_changed_.end());
+  const std::vector<BlockKey> removed(pending_removed_.begin(), pending_removed_.end());
+  // Publish only what someone listens to; a late subscriber asks ~get_full_mesh.
+  if (mesh_update_pub_.getNumSubscribers() > 0 && (!changed.empty() || !removed.empty())) {
+    mesh_update_pub_.publish(toMeshUpdate(mapper_->mesh(), changed, removed, header, mapper_config_.voxel_size_m,
+                                          ++sequence_, false));
+  }
+  if (node_config_.publish_markers && markers_pub_.getNumSubscribers() > 0) {
+    if (markers_full_pending_) {
+      std::vector<BlockKey> all;
+      for (const auto& [key, sub] : mapper_->mesh().submeshes()) all.push_back(key);
+      markers_pub_.publish(markers_.build(mapper_->mesh(), all, removed, header));
+      markers_full_pending_ = false;
+    } else {
+      markers_pub_.publish(markers_.build(mapper_->mesh(), changed, removed, header));
+    }
+  }
+  const ros::Time ros_now = ros::Time::now();
+  for (const ros::Time& t : unpublished_stamps_) {
+    latencies_s_.push_back((ros_now - t).toSec());
+    if (latencies_s_.size() > 1000) latencies_s_.pop_front();
+  }
+  unpublished_stamps_.clear();
+  pending_changed_.clear();
+  pending_removed_.clear();
+}
+
+bool FusionNodelet::saveMesh(SaveMesh::Request& req, SaveMesh::Response& res) {
+  TriangleMesh mesh;
+  {
+    std::lock_guard<std::mutex> lock(map_mutex_);
+    mesh = mapper_->extractMesh();
+  }
+  std::string error;
+  res.success = writePly(req.path, mesh, &error);
+  res.message = res.success ? "wrote " + std::to_string(mesh.triangles.size()) + " triangles to " + req.path : error;
+  if (res.success)
+    NODELET_INFO("stereo_fusion: save_mesh: %s", res.message.c_str());
+  else
+    NODELET_ERROR("stereo_fusion: save_mesh: %s", res.message.c_str());
+  return true;
+}
+
+bool FusionNodelet::getFullMesh(GetFullMesh::Request&, GetFullMesh::Response& res) {
+  std::lock_guard<std::mutex> lock(map_mutex_);
+  std::vector<BlockKey> all;
+  for (const auto& [key, sub] : mapper_->mesh().submeshes()) all.push_back(key);
+  std::sort(all.begin(), all.end());
+  std_msgs::Header header;
+  header.frame_id = node_config_.world_frame;
+  header.stamp = ros::Time::now();
+  // The sequence of the last published update: apply updates with a larger sequence on top.
+  res.mesh = toMeshUpdate(mapper_->mesh(), all, {}, header, mapper_config_.voxel_size_m, sequence_, true);
+  return true;
+}
+
+bool FusionNodelet::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
+  std::lock_guard<std::mutex> lock(map_mutex_);
+  mapper_->reset();
+  pending_changed_.clear();
+  pending_removed_.clear();
+  unpublished_stamps_.clear();
+  std_msgs::Header header;
+  header.frame_id = node_config_.world_frame;
+  header.stamp = ros::Time::now();
+  markers_pub_.publish(markers_.clear(header));
+  MeshUpdate empty = toMeshUpdate(mapper_->mesh(), {}, {}, header, mapper_config_.voxel_size_m, ++sequence_, true);
+  mesh_update_pub_.publish(empty);
+  NODELET_INFO("stereo_fusion: map reset");
+  return true;
+}
+
+void FusionNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  const double elapsed = std::max(1e-3, (ros::WallTime::now() - started_).toSec());
+  const uint64_t dropped = dropped_queue_ + dropped_tf_ + dropped_bad_input_;
+  std::vector<double> lat;
+  size_t blocks = 0, memory = 0;
+  {
+    std::lock_guard<std::mutex> lock(map_mutex_);
+    lat.assign(latencies_s_.begin(), latencies_s_.end());
+    blocks = mapper_->map().blockCount();
+    memory = mapper_->map().memoryBytes();
+  }
+  std::sort(lat.begin(), lat.end());
+  auto pct = [&](double p) { return lat.empty() ? 0.0 : lat[std::min(lat.size() - 1, static_cast<size_t>(p * (lat.size() - 1) + 0.5))]; };
+  if (received_ > 0 && fused_ == 0)
+    status.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "no frame fused yet; see the drop counters");
+  else if (dropped > 0)
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "frames dropped; see the counters");
+  else
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "fusing");
+  status.add("frames received", received_.load());
+  status.add("frames fused", fused_.load());
+  status.add("input rate (Hz)", received_ / elapsed);
+  status.add("dropped: queue full", dropped_queue_.load());
+  status.add("dropped: tf timeout", dropped_tf_.load());
+  status.add("dropped: bad input", dropped_bad_input_.load());
+  status.add("latency p50 (s)", pct(0.5));
+  status.add("latency p99 (s)", pct(0.99));
+  status.add("last frame total (ms)", last_total_ms_.load());
+  status.add("last lookup (ms)", last_lookup_ms_.load());
+  status.add("last fusion (ms)", last_fusion_ms_.load());
+  status.add("last meshing (ms)", last_meshing_ms_.load());
+  status.add("blocks", blocks);
+  status.add("memory (MB)", memory / 1048576.0);
+}
+
+}  // namespace stereo_fusion
+
+PLUGINLIB_EXPORT_CLASS(stereo_fusion::FusionNodelet, nodelet::Nodelet)

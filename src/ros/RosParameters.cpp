@@ -1,0 +1,70 @@
+#include "stereo_fusion/ros/RosParameters.h"
+
+#include <XmlRpcValue.h>
+
+#include <sstream>
+
+namespace stereo_fusion {
+
+namespace {
+
+/// The textual form setMapperParameter() parses, whatever type the YAML gave the value.
+bool toText(XmlRpc::XmlRpcValue& v, std::string* text) {
+  std::ostringstream os;
+  os.precision(17);
+  switch (v.getType()) {
+    case XmlRpc::XmlRpcValue::TypeBoolean: os << (static_cast<bool>(v) ? "true" : "false"); break;
+    case XmlRpc::XmlRpcValue::TypeInt: os << static_cast<int>(v); break;
+    case XmlRpc::XmlRpcValue::TypeDouble: os << static_cast<double>(v); break;
+    case XmlRpc::XmlRpcValue::TypeString: os << static_cast<std::string>(v); break;
+    default: return false;
+  }
+  *text = os.str();
+  return true;
+}
+
+}  // namespace
+
+bool loadParameters(const ros::NodeHandle& nh, MapperConfig* mapper, NodeConfig* node, std::string* error) {
+  for (const ParameterSpec& spec : mapperParameterSpecs()) {
+    XmlRpc::XmlRpcValue value;
+    if (!nh.getParam(spec.name, value)) continue;
+    std::string text;
+    if (!toText(value, &text)) {
+      *error = "parameter '" + nh.resolveName(spec.name) + "' must be a single value";
+      return false;
+    }
+    if (!setMapperParameter(mapper, spec.name, text, error)) {
+      *error = "parameter '" + nh.resolveName(spec.name) + "': " + *error;
+      return false;
+    }
+  }
+  for (const std::string& e : validateMapperConfig(*mapper)) {
+    *error = e;
+    return false;
+  }
+  nh.param("world_frame", node->world_frame, node->world_frame);
+  nh.param("queue_size", node->queue_size, node->queue_size);
+  std::string policy = node->drop_oldest ? "drop_oldest" : "drop_newest";
+  nh.param("queue_policy", policy, policy);
+  nh.param("approximate_sync", node->approximate_sync, node->approximate_sync);
+  nh.param("sync_queue_size", node->sync_queue_size, node->sync_queue_size);
+  nh.param("tf_timeout_s", node->tf_timeout_s, node->tf_timeout_s);
+  nh.param("mesh_publish_rate_hz", node->mesh_publish_rate_hz, node->mesh_publish_rate_hz);
+  nh.param("publish_markers", node->publish_markers, node->publish_markers);
+  auto fail = [&](const std::string& name, const std::string& why) {
+    *error = "parameter '" + nh.resolveName(name) + "' " + why;
+    return false;
+  };
+  if (node->world_frame.empty()) return fail("world_frame", "must not be empty");
+  if (node->queue_size < 1 || node->queue_size > 1000) return fail("queue_size", "must be in [1, 1000]");
+  if (policy != "drop_oldest" && policy != "drop_newest") return fail("queue_policy", "must be drop_oldest or drop_newest");
+  node->drop_oldest = policy == "drop_oldest";
+  if (node->sync_queue_size < 1 || node->sync_queue_size > 1000) return fail("sync_queue_size", "must be in [1, 1000]");
+  if (!(node->tf_timeout_s >= 0.0 && node->tf_timeout_s <= 10.0)) return fail("tf_timeout_s", "must be in [0, 10] s");
+  if (!(node->mesh_publish_rate_hz >= 0.0 && node->mesh_publish_rate_hz <= 1000.0))
+    return fail("mesh_publish_rate_hz", "must be in [0, 1000] Hz");
+  return true;
+}
+
+}  // namespace stereo_fusion

@@ -1,0 +1,185 @@
+// Integration test with a real master, the real nodelet and real messages (rostest).
+#include <gtest/gtest.h>
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <ros/ros.h>
+#include <std_srvs/Empty.h>
+#include <stereo_fusion/GetFullMesh.h>
+#include <stereo_fusion/MeshUpdate.h>
+#include <stereo_fusion/SaveMesh.h>
+#include <tf2_ros/transform_broadcaster.h>
+
+#include <map>
+#include <mutex>
+
+#include "../unit/TestSupport.h"
+#include "stereo_fusion/io/PlyReader.h"
+#include "stereo_fusion/ros/MeshMessages.h"
+#include "stereo_fusion/ros/MessageConversions.h"
+
+using namespace stereo_fusion;
+
+namespace {
+
+StereoCamera qvga() { return *StereoCamera::create(320, 240, 262.5, 262.5, 159.5, 119.5, 0.1); }
+
+sim::AnalyticScene scene() {
+  sim::AnalyticScene s;
+  s.add(sim::makePlane({0, 0.3, 0}, {0, -1, 0}), {180, 160, 120});
+  s.add(sim::makeSphere({0.05, 0.1, 1.2}, 0.2), {200, 60, 60});
+  return s;
+}
+
+/// Publishes frames like a stereo pipeline + SLAM would and watches what the nodelet says.
+class NodeletFixture : public testing::Test {
+ protected:
+  void SetUp() override {
+    ros::NodeHandle nh;
+    disparity_pub_ = nh.advertise<stereo_msgs::DisparityImage>("/stereo/disparity", 10);
+    image_pub_ = nh.advertise<sensor_msgs::Image>("/stereo/left/image_rect_color", 10);
+    info_pub_ = nh.advertise<sensor_msgs::CameraInfo>("/stereo/left/camera_info", 10);
+    update_sub_ = nh.subscribe("/stereo_fusion/mesh_update", 100, &NodeletFixture::onUpdate, this);
+    diag_sub_ = nh.subscribe("/diagnostics", 10, &NodeletFixture::onDiagnostics, this);
+    ASSERT_TRUE(waitFor([&] {
+      return disparity_pub_.getNumSubscribers() > 0 && image_pub_.getNumSubscribers() > 0 &&
+             info_pub_.getNumSubscribers() > 0 && update_sub_.getNumPublishers() > 0;
+    }, 30.0)) << "the nodelet did not connect";
+  }
+
+  template <typename F>
+  bool waitFor(F&& done, double timeout_s) {
+    const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(timeout_s);
+    while (ros::ok() && ros::WallTime::now() < end) {
+      if (done()) return true;
+      ros::WallDuration(0.05).sleep();
+    }
+    return done();
+  }
+
+  void publish(const StereoFrame& frame, const std::string& frame_id, bool with_tf,
+               const std::function<void(stereo_msgs::DisparityImage*, sensor_msgs::Image*)>& corrupt = {}) {
+    std_msgs::Header header;
+    header.stamp = ros::Time::now();
+    header.frame_id = frame_id;
+    if (with_tf) tf_.sendTransform(toTransform(frame.T_world_camera, "world", header));
+    stereo_msgs::DisparityImage d;
+    sensor_msgs::Image i;
+    sensor_msgs::CameraInfo c;
+    toMessages(frame, header, 128.0f, &d, &i, &c);
+    if (corrupt) corrupt(&d, &i);
+    ros::WallDuration(0.05).sleep();  // tf first, as a SLAM stack running ahead would
+    disparity_pub_.publish(d);
+    image_pub_.publish(i);
+    info_pub_.publish(c);
+  }
+
+  long diag(const std::string& key) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto it = diagnostics_.find(key);
+    return it == diagnostics_.end() ? -1 : std::stol(it->second);
+  }
+
+  void onUpdate(const MeshUpdate::ConstPtr& u) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (last_sequence_ && u->sequence != last_sequence_ + 1) ++sequence_gaps_;
+    last_sequence_ = u->sequence;
+    ++updates_;
+    applied_ok_ &= applyMeshUpdate(*u, &streamed_);
+  }
+
+  void onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstPtr& a) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const auto& status : a->status)
+      if (status.name.find("fusion") != std::string::npos)
+        for (const auto& kv : status.values) diagnostics_[kv.key] = kv.value;
+  }
+
+  ros::Publisher disparity_pub_, image_pub_, info_pub_;
+  ros::Subscriber update_sub_, diag_sub_;
+  tf2_ros::TransformBroadcaster tf_;
+  std::mutex mutex_;
+  std::map<std::string, std::string> diagnostics_;
+  std::unordered_map<BlockKey, SubMesh, BlockKeyHash> streamed_;
+  uint64_t last_sequence_ = 0;
+  int sequence_gaps_ = 0, updates_ = 0;
+  bool applied_ok_ = true;
+};
+
+}  // namespace
+
+TEST_F(NodeletFixture, StreamedMeshEqualsFullMeshAndSavedPly) {
+  const sim::AnalyticScene s = scene();
+  for (int f = 0; f < 4; ++f) {
+    const auto pose = sim::lookAt({-0.15 + 0.1 * f, -0.2, 0.0}, {0.05, 0.1, 1.2}, -Eigen::Vector3d::UnitY());
+    publish(test::renderFrame(s, qvga(), pose), "left_optical", true);
+  }
+  ASSERT_TRUE(waitFor([&] { return diag("frames fused") >= 4; }, 60.0)) << "fused " << diag("frames fused");
+  ros::WallDuration(1.0).sleep();  // let the last update arrive
+  EXPECT_EQ(diag("dropped: tf timeout"), 0);
+  EXPECT_EQ(diag("dropped: bad input"), 0);
+
+  GetFullMesh full;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", full));
+  EXPECT_TRUE(full.response.mesh.full);
+  std::unordered_map<BlockKey, SubMesh, BlockKeyHash> reference;
+  ASSERT_TRUE(applyMeshUpdate(full.response.mesh, &reference));
+  ASSERT_GT(reference.size(), 10u);
+  std::lock_guard<std::mutex> lock(mutex_);
+  EXPECT_TRUE(applied_ok_);
+  EXPECT_EQ(sequence_gaps_, 0);
+  EXPECT_GE(updates_, 4);
+  EXPECT_EQ(full.response.mesh.sequence, last_sequence_);
+  ASSERT_EQ(streamed_.size(), reference.size());
+  for (const auto& [key, ref] : reference) {
+    auto it = streamed_.find(key);
+    ASSERT_NE(it, streamed_.end()) << key;
+    EXPECT_EQ(it->second.positions, ref.positions) << key;
+    EXPECT_EQ(it->second.triangles, ref.triangles) << key;
+    EXPECT_EQ(it->second.colors, ref.colors) << key;
+  }
+  const TriangleMesh welded = weldSubmeshes(reference);
+  SaveMesh save;
+  save.request.path = testing::TempDir() + "stereo_fusion_rostest_mesh.ply";
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/save_mesh", save));
+  ASSERT_TRUE(save.response.success) << save.response.message;
+  TriangleMesh saved;
+  std::string error;
+  ASSERT_TRUE(readPly(save.request.path, &saved, &error)) << error;
+  EXPECT_EQ(saved.positions.size(), welded.positions.size());
+  EXPECT_EQ(saved.triangles.size(), welded.triangles.size());
+}
+
+TEST_F(NodeletFixture, MissingTfAndBadInputAreDroppedCountedAndSurvived) {
+  const sim::AnalyticScene s = scene();
+  const StereoFrame frame = test::renderFrame(s, qvga(), Eigen::Isometry3d::Identity());
+  const long fused_before = std::max(0L, diag("frames fused"));
+  publish(frame, "camera_without_tf", false);
+  publish(frame, "left_optical", true, [](stereo_msgs::DisparityImage* d, sensor_msgs::Image*) { d->T = 0.0f; });
+  publish(frame, "left_optical", true, [](stereo_msgs::DisparityImage*, sensor_msgs::Image* i) {
+    i->encoding = "yuv422";
+  });
+  publish(frame, "left_optical", true, [](stereo_msgs::DisparityImage* d, sensor_msgs::Image*) {
+    d->image.data.resize(d->image.data.size() / 2);  // truncated payload
+  });
+  ASSERT_TRUE(waitFor([&] { return diag("dropped: tf timeout") >= 1 && diag("dropped: bad input") >= 3; }, 30.0))
+      << "tf " << diag("dropped: tf timeout") << ", bad " << diag("dropped: bad input");
+  // The node keeps running and fusing.
+  publish(frame, "left_optical", true);
+  EXPECT_TRUE(waitFor([&] { return diag("frames fused") >= fused_before + 1; }, 30.0));
+  EXPECT_EQ(diag("dropped: tf timeout"), 1);
+  EXPECT_EQ(diag("dropped: bad input"), 3);
+  std_srvs::Empty reset;
+  EXPECT_TRUE(ros::service::call("/stereo_fusion/reset", reset));
+  GetFullMesh full;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", full));
+  EXPECT_TRUE(full.response.mesh.blocks.empty());
+}
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "stereo_fusion_rostest");
+  ros::AsyncSpinner spinner(2);
+  spinner.start();
+  const int result = RUN_ALL_TESTS();
+  ros::shutdown();
+  return result;
+}
