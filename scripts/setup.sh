@@ -16,11 +16,16 @@ PACKAGES=(
   catkin ros-message-generation ros-message-runtime libroscpp-dev libnodeletlib-dev
   libmessage-filters-dev libtf2-dev libtf2-msgs-dev libtf2-ros-dev libtf2-eigen-dev libstd-msgs-dev
   libgeometry-msgs-dev libimage-transport-dev libstd-srvs-dev ros-std-srvs
+  libnav-msgs-dev ros-nav-msgs
   libsensor-msgs-dev libstereo-msgs-dev libvisualization-msgs-dev ros-std-msgs
   ros-geometry-msgs ros-sensor-msgs ros-stereo-msgs ros-visualization-msgs libcv-bridge-dev
   libpcl-dev librosbag-dev libdiagnostic-updater-dev
   # tests
   libgtest-dev librostest-dev python3-rostest libnodeletlib-tools
+  # running: demo, replay, command-line tools
+  python3-rosbag python3-rosnode python3-rosservice python3-rostopic python3-rospy
+  python3-sensor-msgs python3-stereo-msgs python3-visualization-msgs python3-tf2-msgs
+  python3-diagnostic-msgs tf2-tools
 )
 
 missing=()

@@ -41,6 +41,8 @@ void FusionNodelet::onInit() {
         std::lock_guard<std::mutex> lock(map_mutex_);
         markers_full_pending_ = true;
       });
+  if (node_config_.publish_path) path_pub_ = pnh.advertise<nav_msgs::Path>("camera_path", 1, true);
+  path_.header.frame_id = node_config_.world_frame;
   save_srv_ = pnh.advertiseService("save_mesh", &FusionNodelet::saveMesh, this);
   full_srv_ = pnh.advertiseService("get_full_mesh", &FusionNodelet::getFullMesh, this);
   reset_srv_ = pnh.advertiseService("reset", &FusionNodelet::reset, this);
@@ -150,6 +152,18 @@ void FusionNodelet::processFrame(const QueuedFrame& f) {
         pending_changed_.erase(k);
       }
       unpublished_stamps_.push_back(header.stamp);
+      stage_ms_.push_back({result.lookup_ms, result.fusion_ms, result.mesh.meshing_ms,
+                           result.lookup_ms + result.fusion_ms + result.mesh.meshing_ms});
+      if (stage_ms_.size() > 1000) stage_ms_.pop_front();
+      if (node_config_.publish_path) {
+        geometry_msgs::PoseStamped pose;
+        pose.header = header;
+        pose.header.frame_id = node_config_.world_frame;
+        pose.pose = tf2::toMsg(T_world_camera);
+        path_.poses.push_back(pose);
+        path_.header.stamp = header.stamp;
+        if (path_pub_.getNumSubscribers() > 0) path_pub_.publish(path_);
+      }
     }
   }
   if (!result.accepted) {
@@ -159,10 +173,6 @@ void FusionNodelet::processFrame(const QueuedFrame& f) {
     return;
   }
   ++fused_;
-  last_lookup_ms_ = result.lookup_ms;
-  last_fusion_ms_ = result.fusion_ms;
-  last_meshing_ms_ = result.mesh.meshing_ms;
-  last_total_ms_ = result.lookup_ms + result.fusion_ms + result.mesh.meshing_ms;
   publishPending(header.stamp, false);
 }
 
@@ -236,6 +246,8 @@ bool FusionNodelet::getFullMesh(GetFullMesh::Request&, GetFullMesh::Response& re
 bool FusionNodelet::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
   std::lock_guard<std::mutex> lock(map_mutex_);
   mapper_->reset();
+  path_.poses.clear();
+  stage_ms_.clear();
   pending_changed_.clear();
   pending_removed_.clear();
   unpublished_stamps_.clear();
@@ -253,15 +265,22 @@ void FusionNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
   const double elapsed = std::max(1e-3, (ros::WallTime::now() - started_).toSec());
   const uint64_t dropped = dropped_queue_ + dropped_tf_ + dropped_bad_input_;
   std::vector<double> lat;
+  std::vector<double> stages[4];
   size_t blocks = 0, memory = 0;
   {
     std::lock_guard<std::mutex> lock(map_mutex_);
     lat.assign(latencies_s_.begin(), latencies_s_.end());
+    for (const auto& s : stage_ms_)
+      for (int k = 0; k < 4; ++k) stages[k].push_back(s[k]);
     blocks = mapper_->map().blockCount();
     memory = mapper_->map().memoryBytes();
   }
-  std::sort(lat.begin(), lat.end());
-  auto pct = [&](double p) { return lat.empty() ? 0.0 : lat[std::min(lat.size() - 1, static_cast<size_t>(p * (lat.size() - 1) + 0.5))]; };
+  auto percentile = [](std::vector<double> v, double p) {
+    if (v.empty()) return 0.0;
+    std::sort(v.begin(), v.end());
+    return v[std::min(v.size() - 1, static_cast<size_t>(p * (v.size() - 1) + 0.5))];
+  };
+  auto pct = [&](double p) { return percentile(lat, p); };
   if (received_ > 0 && fused_ == 0)
     status.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "no frame fused yet; see the drop counters");
   else if (dropped > 0)
@@ -276,10 +295,11 @@ void FusionNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
   status.add("dropped: bad input", dropped_bad_input_.load());
   status.add("latency p50 (s)", pct(0.5));
   status.add("latency p99 (s)", pct(0.99));
-  status.add("last frame total (ms)", last_total_ms_.load());
-  status.add("last lookup (ms)", last_lookup_ms_.load());
-  status.add("last fusion (ms)", last_fusion_ms_.load());
-  status.add("last meshing (ms)", last_meshing_ms_.load());
+  const char* names[4] = {"lookup", "fusion", "meshing", "total"};
+  for (int k = 0; k < 4; ++k) {
+    status.add(std::string(names[k]) + " p50 (ms)", percentile(stages[k], 0.5));
+    status.add(std::string(names[k]) + " p99 (ms)", percentile(stages[k], 0.99));
+  }
   status.add("blocks", blocks);
   status.add("memory (MB)", memory / 1048576.0);
 }

@@ -52,6 +52,7 @@ bool loadParameters(const ros::NodeHandle& nh, MapperConfig* mapper, NodeConfig*
   nh.param("tf_timeout_s", node->tf_timeout_s, node->tf_timeout_s);
   nh.param("mesh_publish_rate_hz", node->mesh_publish_rate_hz, node->mesh_publish_rate_hz);
   nh.param("publish_markers", node->publish_markers, node->publish_markers);
+  nh.param("publish_path", node->publish_path, node->publish_path);
   auto fail = [&](const std::string& name, const std::string& why) {
     *error = "parameter '" + nh.resolveName(name) + "' " + why;
     return false;

@@ -7,6 +7,7 @@
 #include <message_filters/sync_policies/approximate_time.h>
 #include <message_filters/sync_policies/exact_time.h>
 #include <message_filters/synchronizer.h>
+#include <nav_msgs/Path.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
@@ -18,6 +19,7 @@
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 
+#include <array>
 #include <atomic>
 #include <condition_variable>
 #include <deque>
@@ -74,6 +76,8 @@ class FusionNodelet : public nodelet::Nodelet {
   uint64_t sequence_ = 0;
   ros::WallTime last_publish_;
   std::deque<double> latencies_s_;  // frame stamp → publish, the last 1000 frames
+  std::deque<std::array<double, 4>> stage_ms_;  // lookup, fusion, meshing, total: last 1000 frames
+  nav_msgs::Path path_;
   std::vector<ros::Time> unpublished_stamps_;
 
   std::mutex queue_mutex_;
@@ -89,14 +93,13 @@ class FusionNodelet : public nodelet::Nodelet {
   message_filters::Subscriber<InfoMsg> info_sub_;
   std::unique_ptr<message_filters::Synchronizer<ExactPolicy>> exact_sync_;
   std::unique_ptr<message_filters::Synchronizer<ApproxPolicy>> approx_sync_;
-  ros::Publisher mesh_update_pub_, markers_pub_;
+  ros::Publisher mesh_update_pub_, markers_pub_, path_pub_;
   ros::ServiceServer save_srv_, full_srv_, reset_srv_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
   ros::WallTimer diagnostics_timer_;
 
   std::atomic<uint64_t> received_{0}, fused_{0}, dropped_queue_{0}, dropped_tf_{0}, dropped_bad_input_{0};
   ros::WallTime started_;
-  std::atomic<double> last_total_ms_{0}, last_lookup_ms_{0}, last_fusion_ms_{0}, last_meshing_ms_{0};
 };
 
 }  // namespace stereo_fusion

@@ -17,6 +17,7 @@ struct NodeConfig {
   double tf_timeout_s = 0.2;               ///< how long the worker waits for T_world_camera
   double mesh_publish_rate_hz = 2.0;       ///< 0 = publish after every frame
   bool publish_markers = true;             ///< ~mesh_markers for rviz
+  bool publish_path = true;                ///< ~camera_path (nav_msgs/Path) of the fused frames
 };
 
 /// Reads every MapperConfig key and the NodeConfig keys from the private namespace of `nh`
