@@ -152,6 +152,8 @@ TEST_F(NodeletFixture, MissingTfAndBadInputAreDroppedCountedAndSurvived) {
   const sim::AnalyticScene s = scene();
   const StereoFrame frame = test::renderFrame(s, qvga(), Eigen::Isometry3d::Identity());
   const long fused_before = std::max(0L, diag("frames fused"));
+  GetFullMesh before;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", before));
   publish(frame, "camera_without_tf", false);
   publish(frame, "left_optical", true, [](stereo_msgs::DisparityImage* d, sensor_msgs::Image*) { d->T = 0.0f; });
   publish(frame, "left_optical", true, [](stereo_msgs::DisparityImage*, sensor_msgs::Image* i) {
@@ -160,13 +162,32 @@ TEST_F(NodeletFixture, MissingTfAndBadInputAreDroppedCountedAndSurvived) {
   publish(frame, "left_optical", true, [](stereo_msgs::DisparityImage* d, sensor_msgs::Image*) {
     d->image.data.resize(d->image.data.size() / 2);  // truncated payload
   });
-  ASSERT_TRUE(waitFor([&] { return diag("dropped: tf timeout") >= 1 && diag("dropped: bad input") >= 3; }, 30.0))
+  publish(frame, "left_optical", true, [](stereo_msgs::DisparityImage*, sensor_msgs::Image* i) {
+    i->width /= 2;  // image and disparity sizes differ
+    i->step /= 2;
+    i->data.resize(i->step * i->height);
+  });
+  ASSERT_TRUE(waitFor([&] { return diag("dropped: tf timeout") >= 1 && diag("dropped: bad input") >= 4; }, 30.0))
       << "tf " << diag("dropped: tf timeout") << ", bad " << diag("dropped: bad input");
+  // A disparity image full of NaN is valid input with nothing in it: fused, map unchanged.
+  const long fused_mid = diag("frames fused");
+  publish(frame, "left_optical", true, [](stereo_msgs::DisparityImage* d, sensor_msgs::Image*) {
+    float* px = reinterpret_cast<float*>(d->image.data.data());
+    for (size_t k = 0; k < d->image.data.size() / 4; ++k) px[k] = NAN;
+  });
+  ASSERT_TRUE(waitFor([&] { return diag("frames fused") >= fused_mid + 1; }, 30.0));
+  GetFullMesh after;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", after));
+  ASSERT_EQ(after.response.mesh.blocks.size(), before.response.mesh.blocks.size()) << "bad input changed the map";
+  for (size_t b = 0; b < before.response.mesh.blocks.size(); ++b) {
+    EXPECT_EQ(after.response.mesh.blocks[b].key, before.response.mesh.blocks[b].key);
+    EXPECT_EQ(after.response.mesh.blocks[b].vertices, before.response.mesh.blocks[b].vertices);
+  }
   // The node keeps running and fusing.
   publish(frame, "left_optical", true);
-  EXPECT_TRUE(waitFor([&] { return diag("frames fused") >= fused_before + 1; }, 30.0));
+  EXPECT_TRUE(waitFor([&] { return diag("frames fused") >= fused_before + 2; }, 30.0));
   EXPECT_EQ(diag("dropped: tf timeout"), 1);
-  EXPECT_EQ(diag("dropped: bad input"), 3);
+  EXPECT_EQ(diag("dropped: bad input"), 4);
   std_srvs::Empty reset;
   EXPECT_TRUE(ros::service::call("/stereo_fusion/reset", reset));
   GetFullMesh full;
