@@ -35,7 +35,10 @@ bool loadParameters(const ros::NodeHandle& nh, MapperConfig* mapper, NodeConfig*
       return false;
     }
     if (!setMapperParameter(mapper, spec.name, text, error)) {
-      *error = "parameter '" + nh.resolveName(spec.name) + "': " + *error;
+      // Name the parameter as ROS knows it (with its namespace).
+      const std::string local = "'" + spec.name + "'";
+      const size_t at = error->find(local);
+      if (at != std::string::npos) error->replace(at, local.size(), "'" + nh.resolveName(spec.name) + "'");
       return false;
     }
   }
