@@ -1,7 +1,4 @@
 // Integration test with a real master, the real nodelet and real messages (rostest).
-#include <gtest/gtest.h>
-#include <diagnostic_msgs/DiagnosticArray.h>
-#include <ros/ros.h>
 #include <std_srvs/Empty.h>
 #include <stereo_fusion/GetFullMesh.h>
 #include <stereo_fusion/MeshUpdate.h>
@@ -12,6 +9,7 @@
 #include <mutex>
 
 #include "../unit/TestSupport.h"
+#include "RosTestSupport.h"
 #include "stereo_fusion/io/PlyReader.h"
 #include "stereo_fusion/ros/MeshMessages.h"
 #include "stereo_fusion/ros/MessageConversions.h"
@@ -38,7 +36,6 @@ class NodeletFixture : public testing::Test {
     image_pub_ = nh.advertise<sensor_msgs::Image>("/stereo/left/image_rect_color", 10);
     info_pub_ = nh.advertise<sensor_msgs::CameraInfo>("/stereo/left/camera_info", 10);
     update_sub_ = nh.subscribe("/stereo_fusion/mesh_update", 100, &NodeletFixture::onUpdate, this);
-    diag_sub_ = nh.subscribe("/diagnostics", 10, &NodeletFixture::onDiagnostics, this);
     ASSERT_TRUE(waitFor([&] {
       return disparity_pub_.getNumSubscribers() > 0 && image_pub_.getNumSubscribers() > 0 &&
              info_pub_.getNumSubscribers() > 0 && update_sub_.getNumPublishers() > 0;
@@ -47,12 +44,7 @@ class NodeletFixture : public testing::Test {
 
   template <typename F>
   bool waitFor(F&& done, double timeout_s) {
-    const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(timeout_s);
-    while (ros::ok() && ros::WallTime::now() < end) {
-      if (done()) return true;
-      ros::WallDuration(0.05).sleep();
-    }
-    return done();
+    return test::waitFor(std::forward<F>(done), timeout_s);
   }
 
   void publish(const StereoFrame& frame, const std::string& frame_id, bool with_tf,
@@ -72,11 +64,7 @@ class NodeletFixture : public testing::Test {
     info_pub_.publish(c);
   }
 
-  long diag(const std::string& key) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    auto it = diagnostics_.find(key);
-    return it == diagnostics_.end() ? -1 : std::stol(it->second);
-  }
+  long diag(const std::string& key) { return diagnostics_.value(key); }
 
   void onUpdate(const MeshUpdate::ConstPtr& u) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -86,18 +74,11 @@ class NodeletFixture : public testing::Test {
     applied_ok_ &= applyMeshUpdate(*u, &streamed_);
   }
 
-  void onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstPtr& a) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    for (const auto& status : a->status)
-      if (status.name.find("fusion") != std::string::npos)
-        for (const auto& kv : status.values) diagnostics_[kv.key] = kv.value;
-  }
-
   ros::Publisher disparity_pub_, image_pub_, info_pub_;
-  ros::Subscriber update_sub_, diag_sub_;
+  ros::Subscriber update_sub_;
+  test::DiagnosticsWatcher diagnostics_;
   tf2_ros::TransformBroadcaster tf_;
   std::mutex mutex_;
-  std::map<std::string, std::string> diagnostics_;
   std::unordered_map<BlockKey, SubMesh, BlockKeyHash> streamed_;
   uint64_t last_sequence_ = 0;
   int sequence_gaps_ = 0, updates_ = 0;
@@ -195,12 +176,4 @@ TEST_F(NodeletFixture, MissingTfAndBadInputAreDroppedCountedAndSurvived) {
   EXPECT_TRUE(full.response.mesh.blocks.empty());
 }
 
-int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "stereo_fusion_rostest");
-  ros::AsyncSpinner spinner(2);
-  spinner.start();
-  const int result = RUN_ALL_TESTS();
-  ros::shutdown();
-  return result;
-}
+int main(int argc, char** argv) { return test::runRosTests(argc, argv, "stereo_fusion_rostest"); }

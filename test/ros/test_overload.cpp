@@ -1,40 +1,22 @@
 // Input much faster than fusion: the queue stays bounded, every frame is fused or counted as
 // dropped, the node keeps running.
-#include <gtest/gtest.h>
-#include <diagnostic_msgs/DiagnosticArray.h>
-#include <ros/ros.h>
 #include <tf2_ros/transform_broadcaster.h>
 
-#include <map>
-#include <mutex>
+#include "RosTestSupport.h"
 
 #include "../unit/TestSupport.h"
 #include "stereo_fusion/ros/MessageConversions.h"
 
 using namespace stereo_fusion;
 
-namespace {
-std::mutex g_mutex;
-std::map<std::string, std::string> g_diagnostics;
-void onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstPtr& a) {
-  std::lock_guard<std::mutex> lock(g_mutex);
-  for (const auto& status : a->status)
-    if (status.name.find("fusion") != std::string::npos)
-      for (const auto& kv : status.values) g_diagnostics[kv.key] = kv.value;
-}
-long diag(const std::string& key) {
-  std::lock_guard<std::mutex> lock(g_mutex);
-  auto it = g_diagnostics.find(key);
-  return it == g_diagnostics.end() ? -1 : std::stol(it->second);
-}
-}  // namespace
 
 TEST(Overload, QueueStaysBoundedAndEveryFrameIsCounted) {
   ros::NodeHandle nh;
   ros::Publisher disparity_pub = nh.advertise<stereo_msgs::DisparityImage>("/stereo/disparity", 100);
   ros::Publisher image_pub = nh.advertise<sensor_msgs::Image>("/stereo/left/image_rect_color", 100);
   ros::Publisher info_pub = nh.advertise<sensor_msgs::CameraInfo>("/stereo/left/camera_info", 100);
-  ros::Subscriber sub = nh.subscribe("/diagnostics", 10, onDiagnostics);
+  test::DiagnosticsWatcher diagnostics;
+  auto diag = [&](const char* key) { return diagnostics.value(key); };
   tf2_ros::TransformBroadcaster tf;
   auto connected = [&] {
     return disparity_pub.getNumSubscribers() > 0 && image_pub.getNumSubscribers() > 0 && info_pub.getNumSubscribers() > 0;
@@ -65,8 +47,7 @@ TEST(Overload, QueueStaysBoundedAndEveryFrameIsCounted) {
   auto accounted = [&] {
     return diag("frames fused") + diag("dropped: queue full") + diag("dropped: tf timeout") + diag("dropped: bad input");
   };
-  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(120.0);
-  while (ros::ok() && ros::WallTime::now() < end && accounted() < diag("frames received")) ros::WallDuration(0.2).sleep();
+  test::waitFor([&] { return diag("frames received") > 0 && accounted() >= diag("frames received"); }, 120.0);
   ros::WallDuration(1.5).sleep();  // a last diagnostics update
   const long received = diag("frames received");
   EXPECT_GT(received, sent / 2) << "the synchroniser matched too few frames";
@@ -76,12 +57,4 @@ TEST(Overload, QueueStaysBoundedAndEveryFrameIsCounted) {
   EXPECT_EQ(diag("dropped: bad input"), 0);
 }
 
-int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "stereo_fusion_overload_test");
-  ros::AsyncSpinner spinner(2);
-  spinner.start();
-  const int result = RUN_ALL_TESTS();
-  ros::shutdown();
-  return result;
-}
+int main(int argc, char** argv) { return test::runRosTests(argc, argv, "stereo_fusion_overload_test"); }

@@ -1,12 +1,8 @@
 // A simulator bag played through launch/replay.launch (sim time) gives the same mesh as the
 // offline pipeline on the same bag with the same parameters.
-#include <gtest/gtest.h>
-#include <diagnostic_msgs/DiagnosticArray.h>
-#include <ros/ros.h>
 #include <stereo_fusion/GetFullMesh.h>
 
-#include <map>
-#include <mutex>
+#include "RosTestSupport.h"
 
 #include "stereo_fusion/Mapper.h"
 #include "stereo_fusion/ros/BagSequence.h"
@@ -15,23 +11,6 @@
 
 using namespace stereo_fusion;
 
-namespace {
-std::mutex g_mutex;
-std::map<std::string, std::string> g_diagnostics;
-
-void onDiagnostics(const diagnostic_msgs::DiagnosticArray::ConstPtr& a) {
-  std::lock_guard<std::mutex> lock(g_mutex);
-  for (const auto& status : a->status)
-    if (status.name.find("fusion") != std::string::npos)
-      for (const auto& kv : status.values) g_diagnostics[kv.key] = kv.value;
-}
-
-long diag(const std::string& key) {
-  std::lock_guard<std::mutex> lock(g_mutex);
-  auto it = g_diagnostics.find(key);
-  return it == g_diagnostics.end() ? -1 : std::stol(it->second);
-}
-}  // namespace
 
 TEST(Replay, BagThroughTheNodeletEqualsTheOfflinePipeline) {
   ros::NodeHandle pnh("~");
@@ -43,10 +22,9 @@ TEST(Replay, BagThroughTheNodeletEqualsTheOfflinePipeline) {
   const long frames = static_cast<long>(bag->size());
   ASSERT_GT(frames, 5);
 
-  ros::NodeHandle nh;
-  ros::Subscriber sub = nh.subscribe("/diagnostics", 10, onDiagnostics);
-  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(120.0);
-  while (ros::ok() && ros::WallTime::now() < end && diag("frames fused") < frames) ros::WallDuration(0.2).sleep();
+  test::DiagnosticsWatcher diagnostics;
+  auto diag = [&](const char* key) { return diagnostics.value(key); };
+  test::waitFor([&] { return diag("frames fused") >= frames; }, 120.0);
   ASSERT_EQ(diag("frames fused"), frames) << "dropped tf " << diag("dropped: tf timeout") << ", queue "
                                           << diag("dropped: queue full") << ", bad " << diag("dropped: bad input");
 
@@ -76,12 +54,4 @@ TEST(Replay, BagThroughTheNodeletEqualsTheOfflinePipeline) {
   }
 }
 
-int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "stereo_fusion_replay_test");
-  ros::AsyncSpinner spinner(2);
-  spinner.start();
-  const int result = RUN_ALL_TESTS();
-  ros::shutdown();
-  return result;
-}
+int main(int argc, char** argv) { return test::runRosTests(argc, argv, "stereo_fusion_replay_test"); }

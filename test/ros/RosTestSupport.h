@@ -1,0 +1,62 @@
+#pragma once
+// Shared by the ROS integration tests: reading the nodelet's counters from /diagnostics, and
+// the main() every rostest gtest node needs.
+
+#include <gtest/gtest.h>
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <ros/ros.h>
+
+#include <map>
+#include <mutex>
+#include <string>
+
+namespace stereo_fusion::test {
+
+/// The latest key/value pairs of the "fusion" diagnostics status.
+class DiagnosticsWatcher {
+ public:
+  DiagnosticsWatcher() { sub_ = ros::NodeHandle().subscribe("/diagnostics", 10, &DiagnosticsWatcher::onMessage, this); }
+
+  /// The value of `key` as an integer, or -1 when it has not been reported yet.
+  long value(const std::string& key) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto it = values_.find(key);
+    return it == values_.end() ? -1 : std::stol(it->second);
+  }
+
+ private:
+  void onMessage(const diagnostic_msgs::DiagnosticArray::ConstPtr& a) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const auto& status : a->status)
+      if (status.name.find("fusion") != std::string::npos)
+        for (const auto& kv : status.values) values_[kv.key] = kv.value;
+  }
+  ros::Subscriber sub_;
+  std::mutex mutex_;
+  std::map<std::string, std::string> values_;
+};
+
+/// Polls `done` every 50 ms (callbacks run on the spinner threads) until it holds or
+/// `timeout_s` of wall time pass.
+template <typename F>
+bool waitFor(F&& done, double timeout_s) {
+  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(timeout_s);
+  while (ros::ok() && ros::WallTime::now() < end) {
+    if (done()) return true;
+    ros::WallDuration(0.05).sleep();
+  }
+  return done();
+}
+
+/// gtest + a ROS node with a two-thread spinner, then every test.
+inline int runRosTests(int argc, char** argv, const char* node_name) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, node_name);
+  ros::AsyncSpinner spinner(2);
+  spinner.start();
+  const int result = RUN_ALL_TESTS();
+  ros::shutdown();
+  return result;
+}
+
+}  // namespace stereo_fusion::test
