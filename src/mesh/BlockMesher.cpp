@@ -34,12 +34,16 @@ inline bool lexLess(const int a[3], const int b[3]) {
 bool blockField(const VoxelBlock& block, int level, const int local[3], float* sdf, float rgb[3]) {
   const int step = 1 << level;
   const int side = kFinestSide >> level;
-  // Most points are voxel centres: read the voxel (what the interpolation below yields).
+  // Centres are `den` = 2·step apart: shifts and masks instead of integer division (the
+  // operands below are non-negative where divided, so the results are the same).
   const int den = 2 * step;
-  if ((local[0] - step) % den == 0 && (local[1] - step) % den == 0 && (local[2] - step) % den == 0 &&
+  const int shift = level + 1;
+  const int mask = den - 1;
+  // Most points are voxel centres: read the voxel (what the interpolation below yields).
+  if (((local[0] - step) & mask) == 0 && ((local[1] - step) & mask) == 0 && ((local[2] - step) & mask) == 0 &&
       local[0] > 0 && local[1] > 0 && local[2] > 0 && local[0] < kBlockUnits &&
       local[1] < kBlockUnits && local[2] < kBlockUnits) {
-    const Voxel& v = block.at(level, (local[0] - step) / den, (local[1] - step) / den, (local[2] - step) / den);
+    const Voxel& v = block.at(level, (local[0] - step) >> shift, (local[1] - step) >> shift, (local[2] - step) >> shift);
     if (!(v.weight > 0.0f)) return false;
     *sdf = v.sdf_m;
     rgb[0] = v.r;
@@ -51,8 +55,8 @@ bool blockField(const VoxelBlock& block, int level, const int local[3], float* s
   float frac[3];
   for (int a = 0; a < 3; ++a) {
     const int num = std::clamp(local[a] - step, 0, (side - 1) * den);
-    i0[a] = num / den;
-    int rem = num % den;
+    i0[a] = num >> shift;
+    int rem = num & mask;
     if (i0[a] == side - 1) {  // on the last centre: use the last cell with fraction 1
       i0[a] = side - 2;
       rem = den;
@@ -109,6 +113,32 @@ void refreshMeshLevel(VoxelBlock* block, double level_min_coverage) {
   }
 }
 
+namespace {
+/// Lattice coordinates on one axis are 0..32 (owner 0..16, +neighbour 16..32).
+constexpr int kAxisCoords = 2 * kBlockUnits + 1;
+/// The highest coordinate a box reaches: the +neighbours' low skins end at their first
+/// centre, 16 + step ≤ 16 + 4.
+constexpr int kMaxBoxCoord = kBlockUnits + (1 << (kNumLevels - 1));
+
+enum SampleState : uint8_t { kUnknown = 0, kObserved = 1, kUnobserved = 2 };
+/// Bit flags: a box's corner codes OR to 3 iff both signs occur.
+enum CoreCode : uint8_t { kCoreUnobserved = 0, kCoreNegative = 1, kCoreNonNegative = 2 };
+
+/// Per-thread buffers reused across mesh() calls, so the hot path does not allocate.
+struct MeshScratch {
+  std::vector<uint8_t> sample_state;           // SampleState per lattice grid point
+  std::vector<float> sample_sdf;               // per grid point, valid when kObserved
+  std::vector<std::array<float, 3>> sample_rgb;
+  // Generic-box scratch.
+  std::vector<std::array<int, 3>> points;
+  std::vector<std::vector<int>> polygons;  // only the first `polygon_count` are in use
+  std::vector<int> grid_u, grid_v, lines, hanging;
+  std::vector<float> values;
+  std::vector<std::array<mc::Crossing, 3>> triangles;
+  std::unordered_map<uint64_t, uint32_t> vertex_of;
+};
+}  // namespace
+
 struct BlockMesher::Context {
   const VoxelBlock* nb[8] = {};  // owner + (d & 1, (d >> 1) & 1, (d >> 2) & 1)
   int level[8] = {};
@@ -118,8 +148,114 @@ struct BlockMesher::Context {
   int64_t origin[3] = {};
   double unit = 0.0;
   SubMesh* out = nullptr;
-  std::unordered_map<uint64_t, uint32_t> vertex_of;
-  std::vector<PointSample> vertex_samples;  // scratch for the generic path
+  MeshScratch* scratch = nullptr;
+  std::unordered_map<uint64_t, uint32_t>* vertex_of = nullptr;  // edge → vertex, per owner
+  std::vector<PointSample>* vertex_samples = nullptr;            // generic-box scratch
+  // Sample cache. Every point the mesher samples is a block face coordinate (16) or a voxel
+  // centre of a present block on each axis; those coordinates get a dense grid index so
+  // that each point is sampled once per owner instead of once per box using it.
+  int8_t grid_index[3][kAxisCoords] = {};  // −1: coordinate not in the grid
+  int grid_coords[3][kAxisCoords] = {};     // grid index → coordinate, ascending
+  int grid_dim[3] = {};
+  // Lattice points on lines along each axis, as bit masks over the coordinate u (bit u set:
+  // a present block touching the line has a voxel centre at u). Indexed [axis][class of the
+  // next axis' coordinate][class of the one after][u ≥ 16], class 0 below the block face
+  // (only offset-0 blocks touch), 1 on it (both), 2 above (only offset-1 blocks).
+  uint64_t line_points[3][3][3][2] = {};
+
+  void buildLinePoints() {
+    for (int axis = 0; axis < 3; ++axis)
+      for (int ca = 0; ca < 3; ++ca)
+        for (int cb = 0; cb < 3; ++cb)
+          for (int du = 0; du < 2; ++du) {
+            uint64_t bits = 0;
+            for (int oa = ca == 2 ? 1 : 0; oa <= (ca >= 1 ? 1 : 0); ++oa)
+              for (int ob = cb == 2 ? 1 : 0; ob <= (cb >= 1 ? 1 : 0); ++ob) {
+                int off[3];
+                off[axis] = du;
+                off[(axis + 1) % 3] = oa;
+                off[(axis + 2) % 3] = ob;
+                const int d = off[0] + 2 * off[1] + 4 * off[2];
+                if (nb[d] == nullptr) continue;
+                for (int c = step[d]; c < kBlockUnits; c += 2 * step[d])
+                  bits |= uint64_t{1} << (kBlockUnits * du + c);
+              }
+            line_points[axis][ca][cb][du] = bits;
+          }
+  }
+
+  /// The lattice points strictly inside (u0, u1) on the line along `axis` through `fixed`
+  /// (the segment lies on one side of the block face: u0 ≥ 16 or u1 ≤ 16).
+  uint64_t hangingBits(int axis, const int fixed[3], int u0, int u1) const {
+    auto cls = [](int q) { return q < kBlockUnits ? 0 : (q == kBlockUnits ? 1 : 2); };
+    const uint64_t line = line_points[axis][cls(fixed[(axis + 1) % 3])][cls(fixed[(axis + 2) % 3])][u0 >= kBlockUnits];
+    const uint64_t inside = ((uint64_t{1} << u1) - 1) & ~((uint64_t{2} << u0) - 1);
+    return line & inside;
+  }
+
+  // Sign class of each owner voxel centre's sample (kCoreUnobserved / kCoreNegative /
+  // kCoreNonNegative), for the core-box pre-test; indexed like the owner's level.
+  uint8_t core_code[kFinestSide * kFinestSide * kFinestSide] = {};
+
+  /// Fills core_code with the sign of exactly the value samplePoint() computes at an owner
+  /// centre (one block, weight 1/s: the same float operations in the same order).
+  void buildCoreCodes() {
+    const int level = this->level[0];
+    const int n = levelVoxelCount(level);
+    const float w = 1.0f / static_cast<float>(step[0]);
+    for (int i = 0; i < n; ++i) {
+      const Voxel& v = nb[0]->voxels[levelOffset(level) + i];
+      if (!(v.weight > 0.0f)) {
+        core_code[i] = kCoreUnobserved;
+        continue;
+      }
+      float weight_sum = 0.0f, acc = 0.0f;
+      weight_sum += w;
+      acc += w * v.sdf_m;
+      core_code[i] = acc / weight_sum >= 0.0f ? kCoreNonNegative : kCoreNegative;
+    }
+  }
+
+  /// For a core box (all corners are owner centres): true if it certainly yields nothing —
+  /// an unobserved corner, or one sign at all 8 corners. Such a box is plain (it touches no
+  /// block face), so meshBox() would return without output too.
+  bool coreBoxIsEmpty(const int lo[3]) const {
+    const int shift = level[0] + 1, side = levelSide(level[0]);
+    const int i = (lo[0] - step[0]) >> shift, j = (lo[1] - step[0]) >> shift, k = (lo[2] - step[0]) >> shift;
+    bool unobserved = false;
+    uint8_t any = 0;
+    for (int c = 0; c < 8; ++c) {
+      const uint8_t code = core_code[(i + (c & 1)) + (j + ((c >> 1) & 1)) * side + (k + (c >> 2)) * side * side];
+      unobserved |= code == kCoreUnobserved;
+      any |= code;
+    }
+    return unobserved || any != (kCoreNegative | kCoreNonNegative);
+  }
+
+  /// Builds the grid's coordinates from the present blocks' levels (call after nb/step).
+  void buildSampleGrid() {
+    for (int a = 0; a < 3; ++a) {
+      bool used[kAxisCoords] = {};
+      used[kBlockUnits] = true;
+      for (int d = 0; d < 8; ++d) {
+        if (nb[d] == nullptr) continue;
+        const int base = ((d >> a) & 1) * kBlockUnits;
+        for (int c = step[d]; c < kBlockUnits; c += 2 * step[d])
+          if (base + c <= kMaxBoxCoord) used[base + c] = true;
+      }
+      grid_dim[a] = 0;
+      for (int q = 0; q < kAxisCoords; ++q) {
+        grid_index[a][q] = static_cast<int8_t>(used[q] ? grid_dim[a] : -1);
+        if (used[q]) grid_coords[a][grid_dim[a]++] = q;
+      }
+    }
+    const size_t n = static_cast<size_t>(grid_dim[0]) * grid_dim[1] * grid_dim[2];
+    scratch->sample_state.assign(n, kUnknown);
+    if (scratch->sample_sdf.size() < n) {
+      scratch->sample_sdf.resize(n);
+      scratch->sample_rgb.resize(n);
+    }
+  }
 };
 
 BlockMesher::BlockMesher(const MeshingParams& params) : params_(params) {}
@@ -151,48 +287,15 @@ bool BlockMesher::samplePoint(const Context& ctx, int qx, int qy, int qz, PointS
 
 void BlockMesher::collectHangingPoints(const Context& ctx, int axis, const int fixed[3], int u0,
                                        int u1, std::vector<int>* points) const {
-  // Every lattice point, of any block touching this line, strictly inside (u0, u1).
+  // Every lattice point, of any block touching this line, strictly inside (u0, u1), ascending.
   points->clear();
-  forEachLatticePoint(ctx, axis, fixed, u0, u1, [&](int u) {
-    points->push_back(u);
-    return true;
-  });
-  std::sort(points->begin(), points->end());
-  points->erase(std::unique(points->begin(), points->end()), points->end());
+  for (uint64_t bits = ctx.hangingBits(axis, fixed, u0, u1); bits != 0; bits &= bits - 1)
+    points->push_back(__builtin_ctzll(bits));
 }
 
 bool BlockMesher::hasHangingPoints(const Context& ctx, int axis, const int fixed[3], int u0,
                                    int u1) const {
-  bool found = false;
-  forEachLatticePoint(ctx, axis, fixed, u0, u1, [&](int) {
-    found = true;
-    return false;  // stop at the first
-  });
-  return found;
-}
-
-template <typename F>
-void BlockMesher::forEachLatticePoint(const Context& ctx, int axis, const int fixed[3], int u0, int u1,
-                                      F&& f) const {
-  const int du = u0 >= kBlockUnits ? 1 : 0;
-  const int a = (axis + 1) % 3, b = (axis + 2) % 3;
-  int fa, la, fb, lb;
-  incidentRange(fixed[a], &fa, &la);
-  incidentRange(fixed[b], &fb, &lb);
-  for (int oa = fa; oa <= la; ++oa)
-    for (int ob = fb; ob <= lb; ++ob) {
-      int off[3];
-      off[axis] = du;
-      off[a] = oa;
-      off[b] = ob;
-      const int d = off[0] + 2 * off[1] + 4 * off[2];
-      if (ctx.nb[d] == nullptr) continue;
-      const int step = ctx.step[d];
-      for (int c = step; c < kBlockUnits; c += 2 * step) {
-        const int u = kBlockUnits * du + c;
-        if (u > u0 && u < u1 && !f(u)) return;
-      }
-    }
+  return ctx.hangingBits(axis, fixed, u0, u1) != 0;
 }
 
 void BlockMesher::faceGridLines(const Context& ctx, int normal_axis, int line_axis, const int lo[3],
@@ -222,7 +325,7 @@ uint32_t BlockMesher::vertexOnEdge(Context& ctx, const int p[3], const PointSamp
   const PointSample& sa = swap ? sq : sp;
   const PointSample& sb = swap ? sp : sq;
   const uint64_t key = (packPoint(a) << 18) | packPoint(b);
-  auto [it, inserted] = ctx.vertex_of.try_emplace(key, static_cast<uint32_t>(ctx.out->positions.size()));
+  auto [it, inserted] = ctx.vertex_of->try_emplace(key, static_cast<uint32_t>(ctx.out->positions.size()));
   if (!inserted) return it->second;
   // Eq. 2.11–2.12: k = (α − s1)/(s2 − s1) with α = 0. Kept off the end points so distinct
   // edges never produce coincident vertices.
@@ -241,82 +344,139 @@ uint32_t BlockMesher::vertexOnEdge(Context& ctx, const int p[3], const PointSamp
   return it->second;
 }
 
-void BlockMesher::meshBox(Context& ctx, const int lo[3], const int hi[3]) const {
+bool BlockMesher::cachedSample(Context& ctx, const int q[3], PointSample* out) const {
+  const int gx = ctx.grid_index[0][q[0]], gy = ctx.grid_index[1][q[1]], gz = ctx.grid_index[2][q[2]];
+  if ((gx | gy | gz) < 0) return samplePoint(ctx, q[0], q[1], q[2], out);  // not expected
+  const size_t g = (static_cast<size_t>(gz) * ctx.grid_dim[1] + gy) * ctx.grid_dim[0] + gx;
+  MeshScratch& m = *ctx.scratch;
+  if (m.sample_state[g] == kUnknown) {
+    PointSample sample;
+    const bool observed = samplePoint(ctx, q[0], q[1], q[2], &sample);
+    m.sample_state[g] = observed ? kObserved : kUnobserved;
+    m.sample_sdf[g] = sample.sdf;
+    m.sample_rgb[g] = {sample.rgb[0], sample.rgb[1], sample.rgb[2]};
+  }
+  if (m.sample_state[g] != kObserved) return false;
+  out->sdf = m.sample_sdf[g];
+  for (int k = 0; k < 3; ++k) out->rgb[k] = m.sample_rgb[g][k];
+  return true;
+}
+
+bool BlockMesher::boxHasNoSurface(Context& ctx, const int lo[3], const int hi[3]) const {
+  // Every point a generic box uses (corners, hanging points, face grid crossings) is a grid
+  // point inside the closed box: if all of those are observed and share one sign, the box
+  // has no crossing. Conservative: an unobserved grid point means "cannot tell".
+  bool negative = false, positive = false;
+  for (int iz = ctx.grid_index[2][lo[2]]; iz <= ctx.grid_index[2][hi[2]]; ++iz)
+    for (int iy = ctx.grid_index[1][lo[1]]; iy <= ctx.grid_index[1][hi[1]]; ++iy)
+      for (int ix = ctx.grid_index[0][lo[0]]; ix <= ctx.grid_index[0][hi[0]]; ++ix) {
+        const int q[3] = {ctx.grid_coords[0][ix], ctx.grid_coords[1][iy], ctx.grid_coords[2][iz]};
+        PointSample sample;
+        if (!cachedSample(ctx, q, &sample)) return false;
+        (sample.sdf >= 0.0f ? positive : negative) = true;
+        if (positive && negative) return false;
+      }
+  return true;
+}
+
+bool BlockMesher::boxIsPlain(const Context& ctx, const int lo[3], const int hi[3]) const {
   // Plain boxes (8 corners, nothing on their edges or faces) use the case table. Only a box
   // touching a block face can carry extra points, and only when levels differ.
-  bool plain = true;
-  if (!ctx.uniform && (hi[0] == kBlockUnits || hi[1] == kBlockUnits || hi[2] == kBlockUnits ||
-                       lo[0] == kBlockUnits || lo[1] == kBlockUnits || lo[2] == kBlockUnits)) {
-    for (int axis = 0; axis < 3 && plain; ++axis)
-      for (int c = 0; c < 4 && plain; ++c) {
-        const int a = (axis + 1) % 3, b = (axis + 2) % 3;
+  if (ctx.uniform || !(hi[0] == kBlockUnits || hi[1] == kBlockUnits || hi[2] == kBlockUnits ||
+                       lo[0] == kBlockUnits || lo[1] == kBlockUnits || lo[2] == kBlockUnits))
+    return true;
+  for (int axis = 0; axis < 3; ++axis)
+    for (int c = 0; c < 4; ++c) {
+      const int a = (axis + 1) % 3, b = (axis + 2) % 3;
+      int fixed[3];
+      fixed[a] = (c & 1) ? hi[a] : lo[a];
+      fixed[b] = (c & 2) ? hi[b] : lo[b];
+      fixed[axis] = lo[axis];
+      if (hasHangingPoints(ctx, axis, fixed, lo[axis], hi[axis])) return false;
+    }
+  for (int axis = 0; axis < 3; ++axis)
+    for (int side = 0; side < 2; ++side) {
+      if ((side ? hi[axis] : lo[axis]) != kBlockUnits) continue;
+      for (int k = 1; k < 3; ++k) {
+        const int line_axis = (axis + k) % 3;
         int fixed[3];
-        fixed[a] = (c & 1) ? hi[a] : lo[a];
-        fixed[b] = (c & 2) ? hi[b] : lo[b];
-        fixed[axis] = lo[axis];
-        plain = !hasHangingPoints(ctx, axis, fixed, lo[axis], hi[axis]);
+        faceInteriorLine(axis, line_axis, lo, fixed);
+        if (hasHangingPoints(ctx, line_axis, fixed, lo[line_axis], hi[line_axis])) return false;
       }
-    for (int axis = 0; axis < 3 && plain; ++axis)
-      for (int side = 0; side < 2 && plain; ++side) {
-        if ((side ? hi[axis] : lo[axis]) != kBlockUnits) continue;
-        for (int k = 1; k < 3 && plain; ++k) {
-          const int line_axis = (axis + k) % 3;
-          int fixed[3];
-          faceInteriorLine(axis, line_axis, lo, fixed);
-          plain = !hasHangingPoints(ctx, line_axis, fixed, lo[line_axis], hi[line_axis]);
-        }
-      }
-  }
+    }
+  return true;
+}
 
-  if (plain) {
-    int corner[8][3];
-    PointSample s[8];
-    int case_index = 0;
-    for (int c = 0; c < 8; ++c) {
-      corner[c][0] = (c & 1) ? hi[0] : lo[0];
-      corner[c][1] = (c & 2) ? hi[1] : lo[1];
-      corner[c][2] = (c & 4) ? hi[2] : lo[2];
-      if (!samplePoint(ctx, corner[c][0], corner[c][1], corner[c][2], &s[c])) return;
-      case_index |= (s[c].sdf >= 0.0f) << c;
-    }
-    if (case_index == 0 || case_index == 255) return;
-    const auto& edges = mc::cubeEdges();
-    for (const mc::CubeEdge& e : edges) {
-      const float va = s[e.corner_a].sdf, vb = s[e.corner_b].sdf;
-      if ((va >= 0.0f) != (vb >= 0.0f) && std::min(std::abs(va), std::abs(vb)) >= ctx.truncated_abs)
-        return;  // truncation-band edge, not a surface
-    }
-    for (const auto& tri : mc::caseTable().triangles[case_index]) {
-      std::array<uint32_t, 3> t;
-      for (int v = 0; v < 3; ++v) {
-        const mc::CubeEdge& e = edges[tri[v]];
-        t[v] = vertexOnEdge(ctx, corner[e.corner_a], s[e.corner_a], corner[e.corner_b], s[e.corner_b]);
-      }
-      ctx.out->triangles.push_back(t);
-    }
+void BlockMesher::meshBox(Context& ctx, const int lo[3], const int hi[3]) const {
+  // The 8 corners first: both the plain and the generic path give up on a box with an
+  // unobserved corner, and most boxes have no sign change at all.
+  int corner[8][3];
+  PointSample s[8];
+  int case_index = 0;
+  for (int c = 0; c < 8; ++c) {
+    corner[c][0] = (c & 1) ? hi[0] : lo[0];
+    corner[c][1] = (c & 2) ? hi[1] : lo[1];
+    corner[c][2] = (c & 4) ? hi[2] : lo[2];
+    if (!cachedSample(ctx, corner[c], &s[c])) return;
+    case_index |= (s[c].sdf >= 0.0f) << c;
+  }
+  const bool single_sign = case_index == 0 || case_index == 255;
+  if (boxIsPlain(ctx, lo, hi)) {
+    if (!single_sign) meshPlainBox(ctx, corner, s);
     return;
   }
+  // Hanging points may change sign even when the corners do not.
+  if (single_sign && boxHasNoSurface(ctx, lo, hi)) return;
+  meshGenericBox(ctx, lo, hi);
+}
 
+void BlockMesher::meshPlainBox(Context& ctx, const int corner[8][3], const PointSample s[8]) const {
+  int case_index = 0;
+  for (int c = 0; c < 8; ++c) case_index |= (s[c].sdf >= 0.0f) << c;
+  const auto& edges = mc::cubeEdges();
+  for (const mc::CubeEdge& e : edges) {
+    const float va = s[e.corner_a].sdf, vb = s[e.corner_b].sdf;
+    if ((va >= 0.0f) != (vb >= 0.0f) && std::min(std::abs(va), std::abs(vb)) >= ctx.truncated_abs)
+      return;  // truncation-band edge, not a surface
+  }
+  for (const auto& tri : mc::caseTable().triangles[case_index]) {
+    std::array<uint32_t, 3> t;
+    for (int v = 0; v < 3; ++v) {
+      const mc::CubeEdge& e = edges[tri[v]];
+      t[v] = vertexOnEdge(ctx, corner[e.corner_a], s[e.corner_a], corner[e.corner_b], s[e.corner_b]);
+    }
+    ctx.out->triangles.push_back(t);
+  }
+}
+
+void BlockMesher::meshGenericBox(Context& ctx, const int lo[3], const int hi[3]) const {
   // Generic box: tile each face, put every lattice point on an edge into the polygons.
-  std::vector<std::array<int, 3>> points;
-  std::unordered_map<uint64_t, int> id_of;
+  MeshScratch& m = *ctx.scratch;
+  std::vector<std::array<int, 3>>& points = m.points;
+  points.clear();
   auto pointId = [&](const int q[3]) {
-    auto [it, inserted] = id_of.try_emplace(packPoint(q), static_cast<int>(points.size()));
-    if (inserted) points.push_back({q[0], q[1], q[2]});
-    return it->second;
+    // Few points per box (corners + hanging points): a linear search beats hashing.
+    for (size_t i = 0; i < points.size(); ++i)
+      if (points[i][0] == q[0] && points[i][1] == q[1] && points[i][2] == q[2]) return static_cast<int>(i);
+    points.push_back({q[0], q[1], q[2]});
+    return static_cast<int>(points.size() - 1);
   };
-  std::vector<std::vector<int>> polygons;
-  std::vector<int> lines_u, lines_v, hanging;
+  size_t polygon_count = 0;
+  for (auto& poly : m.polygons) poly.clear();  // unused trailing polygons stay empty
+  std::vector<int>& grid_u = m.grid_u;
+  std::vector<int>& grid_v = m.grid_v;
+  std::vector<int>& hanging = m.hanging;
   for (int axis = 0; axis < 3; ++axis) {
     const int u = (axis + 1) % 3, v = (axis + 2) % 3;
     for (int side = 0; side < 2; ++side) {
       const int plane = side ? hi[axis] : lo[axis];
-      std::vector<int> grid_u = {lo[u]}, grid_v = {lo[v]};
+      grid_u.assign(1, lo[u]);
+      grid_v.assign(1, lo[v]);
       if (plane == kBlockUnits) {
-        faceGridLines(ctx, axis, u, lo, hi, &lines_u);
-        faceGridLines(ctx, axis, v, lo, hi, &lines_v);
-        grid_u.insert(grid_u.end(), lines_u.begin(), lines_u.end());
-        grid_v.insert(grid_v.end(), lines_v.begin(), lines_v.end());
+        faceGridLines(ctx, axis, u, lo, hi, &m.lines);
+        grid_u.insert(grid_u.end(), m.lines.begin(), m.lines.end());
+        faceGridLines(ctx, axis, v, lo, hi, &m.lines);
+        grid_v.insert(grid_v.end(), m.lines.begin(), m.lines.end());
       }
       grid_u.push_back(hi[u]);
       grid_v.push_back(hi[v]);
@@ -329,7 +489,8 @@ void BlockMesher::meshBox(Context& ctx, const int lo[3], const int hi[3]) const 
             std::swap(cu[1], cu[3]);
             std::swap(cv[1], cv[3]);
           }
-          std::vector<int> poly;
+          if (polygon_count == m.polygons.size()) m.polygons.emplace_back();
+          std::vector<int>& poly = m.polygons[polygon_count++];
           for (int c = 0; c < 4; ++c) {
             int p[3];
             p[axis] = plane;
@@ -349,23 +510,23 @@ void BlockMesher::meshBox(Context& ctx, const int lo[3], const int hi[3]) const 
               poly.push_back(pointId(hp));
             }
           }
-          polygons.push_back(std::move(poly));
         }
     }
   }
-  std::vector<PointSample>& samples = ctx.vertex_samples;
+  std::vector<PointSample>& samples = *ctx.vertex_samples;
   samples.resize(points.size());
-  std::vector<float> values(points.size());
+  m.values.resize(points.size());
   for (size_t i = 0; i < points.size(); ++i) {
-    if (!samplePoint(ctx, points[i][0], points[i][1], points[i][2], &samples[i])) return;
-    values[i] = samples[i].sdf;
+    if (!cachedSample(ctx, points[i].data(), &samples[i])) return;
+    m.values[i] = samples[i].sdf;
   }
-  std::vector<std::array<mc::Crossing, 3>> triangles;
-  mc::polygonizeCell(polygons, values.data(), &triangles);
-  for (const auto& tri : triangles)
+  const float* values = m.values.data();
+  m.triangles.clear();
+  mc::polygonizeCell(m.polygons, values, &m.triangles);  // empty trailing polygons add nothing
+  for (const auto& tri : m.triangles)
     for (const mc::Crossing& c : tri)
       if (std::min(std::abs(values[c.a]), std::abs(values[c.b])) >= ctx.truncated_abs) return;
-  for (const auto& tri : triangles) {
+  for (const auto& tri : m.triangles) {
     std::array<uint32_t, 3> t;
     for (int k = 0; k < 3; ++k)
       t[k] = vertexOnEdge(ctx, points[tri[k].a].data(), samples[tri[k].a], points[tri[k].b].data(),
@@ -378,8 +539,14 @@ void BlockMesher::mesh(const BlockOctree& map, const VoxelBlock& owner, SubMesh*
   out->clear();
   out->key = owner.key;
   out->level = owner.mesh_level;
+  thread_local MeshScratch scratch;
+  thread_local std::vector<PointSample> vertex_samples;
   Context ctx;
   ctx.out = out;
+  ctx.scratch = &scratch;
+  scratch.vertex_of.clear();
+  ctx.vertex_of = &scratch.vertex_of;
+  ctx.vertex_samples = &vertex_samples;
   ctx.unit = params_.voxel_size_m / 2.0;
   ctx.origin[0] = int64_t{owner.key.x} * kBlockUnits;
   ctx.origin[1] = int64_t{owner.key.y} * kBlockUnits;
@@ -402,25 +569,34 @@ void BlockMesher::mesh(const BlockOctree& map, const VoxelBlock& owner, SubMesh*
   // Every value the mesher uses is a convex combination of these blocks' observed samples:
   // with one sign only, no cell can change sign.
   if (!any_negative || !any_positive) return;
+  ctx.buildSampleGrid();
+  ctx.buildCoreCodes();
+  ctx.buildLinePoints();
 
-  std::vector<std::pair<int, int>> intervals[3];
+  // Box extents per axis: at most kFinestSide intervals (fixed arrays: no allocation).
+  std::pair<int, int> intervals[3][kFinestSide];
+  int interval_count[3];
   for (int d = 0; d < 8; ++d) {
     if (ctx.nb[d] == nullptr) continue;
     const int step = ctx.step[d];
     const int side = kFinestSide / step;
     for (int a = 0; a < 3; ++a) {
-      intervals[a].clear();
+      int& n = interval_count[a];
+      n = 0;
       if ((d >> a) & 1) {
-        intervals[a].push_back({kBlockUnits, kBlockUnits + step});  // neighbour's low skin
+        intervals[a][n++] = {kBlockUnits, kBlockUnits + step};  // neighbour's low skin
       } else {
-        for (int i = 0; i + 1 < side; ++i) intervals[a].push_back({step * (2 * i + 1), step * (2 * i + 3)});
-        intervals[a].push_back({step * (2 * side - 1), kBlockUnits});  // own high skin
+        for (int i = 0; i + 1 < side; ++i) intervals[a][n++] = {step * (2 * i + 1), step * (2 * i + 3)};
+        intervals[a][n++] = {step * (2 * side - 1), kBlockUnits};  // own high skin
       }
     }
-    for (const auto& [z0, z1] : intervals[2])
-      for (const auto& [y0, y1] : intervals[1])
-        for (const auto& [x0, x1] : intervals[0]) {
-          const int lo[3] = {x0, y0, z0}, hi[3] = {x1, y1, z1};
+    for (int iz = 0; iz < interval_count[2]; ++iz)
+      for (int iy = 0; iy < interval_count[1]; ++iy)
+        for (int ix = 0; ix < interval_count[0]; ++ix) {
+          const int lo[3] = {intervals[0][ix].first, intervals[1][iy].first, intervals[2][iz].first};
+          const int hi[3] = {intervals[0][ix].second, intervals[1][iy].second, intervals[2][iz].second};
+          const bool core = d == 0 && hi[0] < kBlockUnits && hi[1] < kBlockUnits && hi[2] < kBlockUnits;
+          if (core && ctx.coreBoxIsEmpty(lo)) continue;  // most boxes: no voxel-level sign change
           meshBox(ctx, lo, hi);
         }
   }

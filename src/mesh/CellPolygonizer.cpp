@@ -16,9 +16,12 @@ void polygonizeCell(const std::vector<std::vector<int>>& polygons, const float* 
     Crossing start, end;
     bool used = false;
   };
-  std::vector<Segment> segments;
-  std::vector<Crossing> crossings;  // per polygon, in walking order
-  std::vector<bool> entering;
+  // Per-thread buffers: the mesher calls this for every irregular seam cell.
+  thread_local std::vector<Segment> segments;
+  thread_local std::vector<Crossing> crossings;  // per polygon, in walking order
+  thread_local std::vector<bool> entering;
+  thread_local std::vector<Crossing> loop;
+  segments.clear();
   for (const std::vector<int>& poly : polygons) {
     const size_t n = poly.size();
     crossings.clear();
@@ -41,7 +44,7 @@ void polygonizeCell(const std::vector<std::vector<int>>& polygons, const float* 
   // Link segments into loops: each crossing starts exactly one segment and ends one.
   for (size_t s = 0; s < segments.size(); ++s) {
     if (segments[s].used) continue;
-    std::vector<Crossing> loop;
+    loop.clear();
     size_t current = s;
     while (!segments[current].used) {
       segments[current].used = true;

@@ -55,6 +55,11 @@ void refreshMeshLevel(VoxelBlock* block, double level_min_coverage);
 /// Cells with an unobserved corner are skipped (thesis), as are cells whose only sign
 /// changes are between truncated values. Normals: area-weighted mean of the submesh's face
 /// normals. Colours: the fused voxel colour, interpolated like the position (method A).
+///
+/// Speed (output unchanged bit for bit): each lattice point is sampled once per owner (a
+/// dense per-owner grid over the coordinates in use); core boxes are pre-tested on the
+/// owner's voxel signs; every box is rejected on its 8 corners before any hanging-point
+/// work; hanging points come from per-owner bit masks; scratch buffers are per thread.
 class BlockMesher {
  public:
   explicit BlockMesher(const MeshingParams& params);
@@ -70,12 +75,15 @@ class BlockMesher {
     float rgb[3] = {0, 0, 0};
   };
   bool samplePoint(const Context& ctx, int qx, int qy, int qz, PointSample* out) const;
+  bool cachedSample(Context& ctx, const int q[3], PointSample* out) const;
+  bool boxHasNoSurface(Context& ctx, const int lo[3], const int hi[3]) const;
+  bool boxIsPlain(const Context& ctx, const int lo[3], const int hi[3]) const;
+  void meshPlainBox(Context& ctx, const int corner[8][3], const PointSample s[8]) const;
+  void meshGenericBox(Context& ctx, const int lo[3], const int hi[3]) const;
   void meshBox(Context& ctx, const int lo[3], const int hi[3]) const;
   void collectHangingPoints(const Context& ctx, int axis, const int fixed[3], int u0, int u1,
                             std::vector<int>* points) const;
   bool hasHangingPoints(const Context& ctx, int axis, const int fixed[3], int u0, int u1) const;
-  template <typename F>
-  void forEachLatticePoint(const Context& ctx, int axis, const int fixed[3], int u0, int u1, F&& f) const;
   void faceGridLines(const Context& ctx, int normal_axis, int line_axis, const int lo[3],
                      const int hi[3], std::vector<int>* lines) const;
   static void faceInteriorLine(int normal_axis, int line_axis, const int lo[3], int fixed[3]);
