@@ -74,9 +74,9 @@ bool readCalibration(const fs::path& path, StereoCamera* camera, std::string* er
       return false;
     }
   }
-  if (values[0] != std::floor(values[0]) || values[1] != std::floor(values[1]) || values[0] > 1e5 ||
-      values[1] > 1e5) {
-    *error = path.string() + ": width and height must be whole pixel counts";
+  if (values[0] != std::floor(values[0]) || values[1] != std::floor(values[1]) || !(values[0] > 0) ||
+      !(values[1] > 0) || values[0] > 1e5 || values[1] > 1e5) {
+    *error = path.string() + ": width and height must be whole pixel counts in [1, 100000]";
     return false;
   }
   std::string why;
@@ -333,6 +333,16 @@ cv::Mat readPfm(const std::string& path, std::string* error) {
     return {};
   }
   const size_t count = static_cast<size_t>(width) * height * channels;
+  // Check the file really holds the data before allocating: a corrupt header must not ask for
+  // 100 GB.
+  const std::streampos data_start = in.tellg();
+  in.seekg(0, std::ios::end);
+  const std::streamoff available = in.tellg() - data_start;
+  in.seekg(data_start);
+  if (available < 0 || static_cast<size_t>(available) < count * sizeof(float)) {
+    *error = path + ": truncated PFM (expected " + std::to_string(count * sizeof(float)) + " data bytes)";
+    return {};
+  }
   std::vector<float> data(count);
   in.read(reinterpret_cast<char*>(data.data()), static_cast<std::streamsize>(count * sizeof(float)));
   if (static_cast<size_t>(in.gcount()) != count * sizeof(float)) {

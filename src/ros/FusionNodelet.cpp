@@ -106,15 +106,34 @@ void FusionNodelet::workerLoop() {
       frame = queue_.front();
       queue_.pop_front();
     }
-    processFrame(frame);
+    try {
+      processFrame(frame);
+    } catch (const std::exception& e) {
+      // One bad frame (or an allocation failure) must not take the nodelet manager down.
+      ++dropped_bad_input_;
+      NODELET_ERROR_THROTTLE(5.0, "stereo_fusion: frame dropped after an error: %s", e.what());
+    }
   }
 }
 
 void FusionNodelet::processFrame(const QueuedFrame& f) {
   const std_msgs::Header& header = f.disparity->header;
   std::string tf_error;
-  if (!tf_buffer_->canTransform(node_config_.world_frame, header.frame_id, header.stamp,
-                                ros::Duration(node_config_.tf_timeout_s), &tf_error)) {
+  // Wait in wall time: under simulated time a paused or finished bag stops the ROS clock, and a
+  // ROS-time timeout would then never expire. Shutdown interrupts the wait.
+  const ros::WallTime tf_deadline = ros::WallTime::now() + ros::WallDuration(node_config_.tf_timeout_s);
+  bool have_tf = false;
+  while (true) {
+    tf_error.clear();
+    have_tf = tf_buffer_->canTransform(node_config_.world_frame, header.frame_id, header.stamp, &tf_error);
+    if (have_tf || ros::WallTime::now() >= tf_deadline) break;
+    {
+      std::lock_guard<std::mutex> lock(queue_mutex_);
+      if (stopping_) return;
+    }
+    ros::WallDuration(0.005).sleep();
+  }
+  if (!have_tf) {
     ++dropped_tf_;
     NODELET_WARN_THROTTLE(5.0, "stereo_fusion: no transform %s <- %s at %.3f within %.2f s, frame dropped (%llu so far): %s",
                           node_config_.world_frame.c_str(), header.frame_id.c_str(), header.stamp.toSec(),
@@ -161,6 +180,13 @@ void FusionNodelet::processFrame(const QueuedFrame& f) {
         pose.header.frame_id = node_config_.world_frame;
         pose.pose = tf2::toMsg(T_world_camera);
         path_.poses.push_back(pose);
+        // Bounded: keep the newest kMaxPathPoses, thinning the older half when full.
+        if (path_.poses.size() > kMaxPathPoses) {
+          std::vector<geometry_msgs::PoseStamped> thinned;
+          for (size_t k = 0; k < path_.poses.size() / 2; k += 2) thinned.push_back(path_.poses[k]);
+          thinned.insert(thinned.end(), path_.poses.begin() + path_.poses.size() / 2, path_.poses.end());
+          path_.poses.swap(thinned);
+        }
         path_.header.stamp = header.stamp;
         if (path_pub_.getNumSubscribers() > 0) path_pub_.publish(path_);
       }
@@ -189,10 +215,13 @@ void FusionNodelet::publishPending(const ros::Time& stamp, bool force) {
   header.stamp = stamp.isZero() && !unpublished_stamps_.empty() ? unpublished_stamps_.back() : stamp;
   const std::vector<BlockKey> changed(pending_changed_.begin(), pending_changed_.end());
   const std::vector<BlockKey> removed(pending_removed_.begin(), pending_removed_.end());
-  // Publish only what someone listens to; a late subscriber asks ~get_full_mesh.
-  if (mesh_update_pub_.getNumSubscribers() > 0 && (!changed.empty() || !removed.empty())) {
-    mesh_update_pub_.publish(toMeshUpdate(mapper_->mesh(), changed, removed, header, mapper_config_.voxel_size_m,
-                                          ++sequence_, false));
+  // Every flush of changes gets a sequence number, sent or not: a subscriber that was not
+  // connected for one sees the gap and asks ~get_full_mesh. Publish only what someone hears.
+  if (!changed.empty() || !removed.empty()) {
+    ++sequence_;
+    if (mesh_update_pub_.getNumSubscribers() > 0)
+      mesh_update_pub_.publish(toMeshUpdate(mapper_->mesh(), changed, removed, header,
+                                            mapper_config_.voxel_size_m, sequence_, false));
   }
   if (node_config_.publish_markers && markers_pub_.getNumSubscribers() > 0) {
     if (markers_full_pending_) {

@@ -39,14 +39,20 @@ MeshUpdate toMeshUpdate(const MeshStore& store, const std::vector<BlockKey>& cha
 }
 
 bool applyMeshUpdate(const MeshUpdate& update, std::unordered_map<BlockKey, SubMesh, BlockKeyHash>* mesh) {
-  if (update.full) mesh->clear();
+  // Validate everything first: a malformed message leaves the mesh untouched.
   if (update.removed_keys.size() % 3 != 0) return false;
-  for (size_t i = 0; i < update.removed_keys.size(); i += 3)
-    mesh->erase({update.removed_keys[i], update.removed_keys[i + 1], update.removed_keys[i + 2]});
   for (const MeshBlock& b : update.blocks) {
     const size_t n = b.vertices.size() / 3;
     if (b.vertices.size() % 3 || b.normals.size() != 3 * n || b.colors.size() != 3 * n || b.triangles.size() % 3)
       return false;
+    for (uint32_t index : b.triangles)
+      if (index >= n) return false;
+  }
+  if (update.full) mesh->clear();
+  for (size_t i = 0; i < update.removed_keys.size(); i += 3)
+    mesh->erase({update.removed_keys[i], update.removed_keys[i + 1], update.removed_keys[i + 2]});
+  for (const MeshBlock& b : update.blocks) {
+    const size_t n = b.vertices.size() / 3;
     SubMesh s;
     s.key = {b.key[0], b.key[1], b.key[2]};
     s.level = b.level;
@@ -55,11 +61,8 @@ bool applyMeshUpdate(const MeshUpdate& update, std::unordered_map<BlockKey, SubM
       s.normals.emplace_back(b.normals[3 * v], b.normals[3 * v + 1], b.normals[3 * v + 2]);
       s.colors.push_back({b.colors[3 * v], b.colors[3 * v + 1], b.colors[3 * v + 2]});
     }
-    for (size_t t = 0; t < b.triangles.size(); t += 3) {
-      for (int k = 0; k < 3; ++k)
-        if (b.triangles[t + k] >= n) return false;
+    for (size_t t = 0; t < b.triangles.size(); t += 3)
       s.triangles.push_back({b.triangles[t], b.triangles[t + 1], b.triangles[t + 2]});
-    }
     (*mesh)[s.key] = std::move(s);
   }
   return true;

@@ -104,6 +104,12 @@ TEST_F(NodeletFixture, StreamedMeshEqualsFullMeshAndSavedPly) {
   std::unordered_map<BlockKey, SubMesh, BlockKeyHash> reference;
   ASSERT_TRUE(applyMeshUpdate(full.response.mesh, &reference));
   ASSERT_GT(reference.size(), 10u);
+  // A malformed update (a triangle index past the last vertex) is refused and changes nothing.
+  MeshUpdate broken = full.response.mesh;
+  broken.blocks.back().triangles.back() = 1u << 30;
+  std::unordered_map<BlockKey, SubMesh, BlockKeyHash> untouched = reference;
+  EXPECT_FALSE(applyMeshUpdate(broken, &untouched));
+  EXPECT_EQ(untouched.size(), reference.size());
   std::lock_guard<std::mutex> lock(mutex_);
   EXPECT_TRUE(applied_ok_);
   EXPECT_EQ(sequence_gaps_, 0);

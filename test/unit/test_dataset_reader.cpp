@@ -116,6 +116,9 @@ TEST(DatasetReader, PfmRoundTripAndTruncation) {
   fs::resize_file(path, fs::file_size(path) - 10);
   EXPECT_TRUE(readPfm(path, &error).empty());
   EXPECT_NE(error.find("truncated"), std::string::npos) << error;
+  writeText(path, "Pf\n100000 100000\n-1\nabcd");  // claims 40 GB: refused before allocating
+  EXPECT_TRUE(readPfm(path, &error).empty());
+  EXPECT_NE(error.find("truncated"), std::string::npos) << error;
   writeText(path, "P6\n5 7\n255\n");
   EXPECT_TRUE(readPfm(path, &error).empty());
   EXPECT_NE(error.find("not a PFM"), std::string::npos) << error;
@@ -142,6 +145,8 @@ TEST(DatasetReader, BadFoldersNameTheFileAndLine) {
   EXPECT_NE(openError(seq.dir).find("baseline"), std::string::npos);
   writeText(calib, "width: 320\nheight: 240\nfx: abc\nfy: 262.5\ncx: 159.5\ncy: 119.5\nbaseline: 0.1\n");
   EXPECT_NE(openError(seq.dir).find("calibration.yaml:3: 'fx' is not a number"), std::string::npos) << openError(seq.dir);
+  writeText(calib, "width: -1e10\nheight: 240\nfx: 262.5\nfy: 262.5\ncx: 159.5\ncy: 119.5\nbaseline: 0.1\n");
+  EXPECT_NE(openError(seq.dir).find("width and height must be whole pixel counts"), std::string::npos);
   writeText(calib, "width: [320\n");
   EXPECT_NE(openError(seq.dir).find("not valid YAML"), std::string::npos);
   writeText(calib, "%YAML:1.0\n" + good_calib);  // OpenCV FileStorage style is accepted

@@ -160,7 +160,13 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
   for (size_t i = 0; i < total; ++i) {
     StereoFrame frame;
     std::string why;
-    if (!reader->load(i, &frame, &why)) {
+    bool loaded = false;
+    try {
+      loaded = reader->load(i, &frame, &why);
+    } catch (const std::exception& e) {  // e.g. OpenCV on a pathological image
+      why = "frame " + std::to_string(i) + ": " + e.what();
+    }
+    if (!loaded) {
       skip("unreadable", why);
     } else {
       Timer frame_timer;
