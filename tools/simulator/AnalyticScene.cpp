@@ -10,6 +10,17 @@ namespace stereo_fusion::sim {
 
 namespace {
 
+/// Narrows the ray interval [t0, t1] to the slab |o + t·d| ≤ h of one axis. False when the ray
+/// runs parallel to the slab outside it.
+bool clipToSlab(double o, double d, double h, double* t0, double* t1) {
+  if (std::abs(d) < 1e-15) return std::abs(o) <= h;
+  double ta = (-h - o) / d, tb = (h - o) / d;
+  if (ta > tb) std::swap(ta, tb);
+  *t0 = std::max(*t0, ta);
+  *t1 = std::min(*t1, tb);
+  return true;
+}
+
 /// First ray parameter after t_min of a solid whose ray interval is [t0, t1] (entry, exit):
 /// the entry, or the exit when the ray starts inside.
 double firstHitInInterval(double t0, double t1, double t_min) {
@@ -138,16 +149,8 @@ class Box : public Primitive {
     const Eigen::Vector3d o = T_box_world_ * o_w;
     const Eigen::Vector3d d = T_box_world_.linear() * d_w;
     double t0 = -INFINITY, t1 = INFINITY;
-    for (int a = 0; a < 3; ++a) {
-      if (std::abs(d[a]) < 1e-15) {
-        if (std::abs(o[a]) > h_[a]) return INFINITY;
-        continue;
-      }
-      double ta = (-h_[a] - o[a]) / d[a], tb = (h_[a] - o[a]) / d[a];
-      if (ta > tb) std::swap(ta, tb);
-      t0 = std::max(t0, ta);
-      t1 = std::min(t1, tb);
-    }
+    for (int a = 0; a < 3; ++a)
+      if (!clipToSlab(o[a], d[a], h_[a], &t0, &t1)) return INFINITY;
     return firstHitInInterval(t0, t1, t_min);
   }
   double signedDistance(const Eigen::Vector3d& p_w) const override {
@@ -202,14 +205,7 @@ class Cylinder : public Primitive {
     const Eigen::Vector3d o = T_cyl_world_ * o_w;
     const Eigen::Vector3d d = T_cyl_world_.linear() * d_w;
     double t0 = -INFINITY, t1 = INFINITY;
-    if (std::abs(d.z()) < 1e-15) {
-      if (std::abs(o.z()) > h_) return INFINITY;
-    } else {
-      double ta = (-h_ - o.z()) / d.z(), tb = (h_ - o.z()) / d.z();
-      if (ta > tb) std::swap(ta, tb);
-      t0 = ta;
-      t1 = tb;
-    }
+    if (!clipToSlab(o.z(), d.z(), h_, &t0, &t1)) return INFINITY;
     const double a = d.x() * d.x() + d.y() * d.y();
     const double b = o.x() * d.x() + o.y() * d.y();
     const double c = o.x() * o.x() + o.y() * o.y() - r_ * r_;
