@@ -147,6 +147,13 @@ bool readPoses(const fs::path& path, std::vector<DatasetFrameInfo>* frames, std:
   return true;
 }
 
+/// cv::imread, with the one message every caller gives when the file cannot be decoded.
+cv::Mat readImage(const std::string& path, int flags, std::string* error) {
+  cv::Mat image = cv::imread(path, flags);
+  if (image.empty()) *error = path + ": unreadable or truncated image";
+  return image;
+}
+
 cv::Mat readDisparity(const std::string& path, std::string* error) {
   if (hasExtension(path, {".pfm"})) {
     cv::Mat pfm = readPfm(path, error);
@@ -159,11 +166,8 @@ cv::Mat readDisparity(const std::string& path, std::string* error) {
     }
     return disparity;
   }
-  const cv::Mat raw = cv::imread(path, cv::IMREAD_UNCHANGED);
-  if (raw.empty()) {
-    *error = path + ": unreadable or truncated image";
-    return {};
-  }
+  const cv::Mat raw = readImage(path, cv::IMREAD_UNCHANGED, error);
+  if (raw.empty()) return {};
   if (raw.type() != CV_16UC1) {
     *error = path + ": disparity PNG must be 16-bit single channel (KITTI: value / 256)";
     return {};
@@ -174,11 +178,8 @@ cv::Mat readDisparity(const std::string& path, std::string* error) {
 }
 
 cv::Mat readColor(const std::string& path, std::string* error) {
-  const cv::Mat raw = cv::imread(path, cv::IMREAD_UNCHANGED);
-  if (raw.empty()) {
-    *error = path + ": unreadable or truncated image";
-    return {};
-  }
+  const cv::Mat raw = readImage(path, cv::IMREAD_UNCHANGED, error);
+  if (raw.empty()) return {};
   if (raw.depth() != CV_8U) {
     *error = path + ": colour image must be 8-bit";
     return {};
@@ -275,11 +276,8 @@ bool DatasetReader::load(size_t i, StereoFrame* frame, std::string* error) const
     }
   }
   if (uses_sgbm_) {
-    const cv::Mat right = cv::imread(info.right_path, cv::IMREAD_GRAYSCALE);
-    if (right.empty()) {
-      *error = info.right_path + ": unreadable or truncated image";
-      return false;
-    }
+    const cv::Mat right = readImage(info.right_path, cv::IMREAD_GRAYSCALE, error);
+    if (right.empty()) return false;
     if (right.size() != expected) {
       *error = info.right_path + ": right image size differs from calibration.yaml";
       return false;
