@@ -6,6 +6,7 @@
 #include <algorithm>
 
 #include "stereo_fusion/io/PlyWriter.h"
+#include "stereo_fusion/util/Percentile.h"
 #include "stereo_fusion/ros/MessageConversions.h"
 
 namespace stereo_fusion {
@@ -304,11 +305,6 @@ void FusionNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
     blocks = mapper_->map().blockCount();
     memory = mapper_->map().memoryBytes();
   }
-  auto percentile = [](std::vector<double> v, double p) {
-    if (v.empty()) return 0.0;
-    std::sort(v.begin(), v.end());
-    return v[std::min(v.size() - 1, static_cast<size_t>(p * (v.size() - 1) + 0.5))];
-  };
   auto pct = [&](double p) { return percentile(lat, p); };
   if (received_ > 0 && fused_ == 0)
     status.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "no frame fused yet; see the drop counters");

@@ -13,6 +13,7 @@
 #include "stereo_fusion/io/DatasetReader.h"
 #include "stereo_fusion/io/PlyWriter.h"
 #include "stereo_fusion/ros/BagSequence.h"
+#include "stereo_fusion/util/Percentile.h"
 #include "stereo_fusion/util/Timer.h"
 
 namespace stereo_fusion {
@@ -122,9 +123,8 @@ Summary summarize(std::vector<double> v) {
   for (double x : v) sum += x;
   s.mean = sum / v.size();
   std::sort(v.begin(), v.end());
-  auto pct = [&](double p) { return v[std::min(v.size() - 1, static_cast<size_t>(p * (v.size() - 1) + 0.5))]; };
-  s.p50 = pct(0.50);
-  s.p99 = pct(0.99);
+  s.p50 = percentileOfSorted(v, 0.50);
+  s.p99 = percentileOfSorted(v, 0.99);
   return s;
 }
 
