@@ -50,7 +50,10 @@ if [ "${1:-}" = "--no-build" ]; then exit 0; fi
 # ROS tooling must run on Debian's Python, not the python3 first on PATH (ros-on-debian.md #1).
 export PYENV_VERSION=system
 echo "[setup] configuring and building in ${BUILD_DIR} (${BUILD_TYPE:-Release})"
-cmake -S "$ROOT" -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE="${BUILD_TYPE:-Release}" \
+# ccache only speeds up rebuilds on a developer's machine; it is optional and not installed here.
+LAUNCHER=()
+if command -v ccache >/dev/null 2>&1; then LAUNCHER=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
+cmake -S "$ROOT" -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE="${BUILD_TYPE:-Release}" "${LAUNCHER[@]}" \
   -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 \
   -DCATKIN_ENABLE_TESTING=ON >"$BUILD_DIR.configure.log" 2>&1 \
   || { cat "$BUILD_DIR.configure.log"; exit 1; }
