@@ -29,8 +29,24 @@ uint64_t SurfaceFuser::fuseBlock(const StereoFrame& frame, const BlockOctree& oc
   const bool use_color = config_.use_color && !frame.color.empty();
   const bool grey = use_color && frame.color.channels() == 1;
 
+  // Block-level depth test: a voxel is only updated by a surface at depth ≥ z_voxel − Φ
+  // (eq. 3.15 with sdf ≤ Φ), and a level finer than the measurement's is skipped. When even
+  // the block's nearest corner is so far that every possible measurement is coarser than a
+  // level, none of that level's voxels can change: skip it without projecting them.
+  const float block_m = voxel * kFinestSide;
+  float nearest_z = origin_c.z();
+  for (int c = 1; c < 8; ++c)
+    nearest_z = std::min(nearest_z, origin_c.z() + block_m * ((c & 1 ? R_cw(2, 0) : 0.0f) +
+                                                            (c & 2 ? R_cw(2, 1) : 0.0f) +
+                                                            (c & 4 ? R_cw(2, 2) : 0.0f)));
+  const float max_truncation =
+      std::max(static_cast<float>(config_.truncation_vox), kMinBandVoxels) * levelScale(kNumLevels - 1) * voxel;
+  // Margin: the voxel loop computes depths with other float roundings.
+  const double nearest_surface_m = static_cast<double>(nearest_z) - max_truncation - 1e-3;
+  const int first_level = levelForDepth(nearest_surface_m, config_.levels);
+
   uint64_t updates = 0;
-  for (int level = 0; level < kNumLevels; ++level) {
+  for (int level = first_level; level < kNumLevels; ++level) {
     const int side = levelSide(level);
     const float level_voxel = voxel * levelScale(level);
     const Eigen::Vector3f ex = R_cw.col(0) * level_voxel;

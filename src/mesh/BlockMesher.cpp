@@ -63,6 +63,18 @@ bool blockField(const VoxelBlock& block, int level, const int local[3], float* s
     }
     frac[a] = static_cast<float>(rem) / static_cast<float>(den);
   }
+  // On centre planes in every axis (block faces clamp to the outer centres): one voxel with
+  // weight 1. The sums start at +0 as in the loop below, so −0 reads as +0 there too.
+  if ((frac[0] == 0.0f || frac[0] == 1.0f) && (frac[1] == 0.0f || frac[1] == 1.0f) &&
+      (frac[2] == 0.0f || frac[2] == 1.0f)) {
+    const Voxel& v = block.at(level, i0[0] + (frac[0] == 1.0f), i0[1] + (frac[1] == 1.0f), i0[2] + (frac[2] == 1.0f));
+    if (!(v.weight > 0.0f)) return false;
+    *sdf = 0.0f + v.sdf_m;
+    rgb[0] = 0.0f + v.r;
+    rgb[1] = 0.0f + v.g;
+    rgb[2] = 0.0f + v.b;
+    return true;
+  }
   float acc = 0.0f, acc_rgb[3] = {0, 0, 0};
   for (int c = 0; c < 8; ++c) {
     const int dx = c & 1, dy = (c >> 1) & 1, dz = (c >> 2) & 1;
@@ -122,7 +134,7 @@ constexpr int kMaxBoxCoord = kBlockUnits + (1 << (kNumLevels - 1));
 
 enum SampleState : uint8_t { kUnknown = 0, kObserved = 1, kUnobserved = 2 };
 /// Bit flags: a box's corner codes OR to 3 iff both signs occur.
-enum CoreCode : uint8_t { kCoreUnobserved = 0, kCoreNegative = 1, kCoreNonNegative = 2 };
+enum CoreCode : uint8_t { kCoreUnobserved = 0, kCoreNegative = 1, kCoreNonNegative = 2, kCoreMixed = 3 };
 
 /// Per-thread buffers reused across mesh() calls, so the hot path does not allocate.
 struct MeshScratch {
@@ -230,6 +242,68 @@ struct BlockMesher::Context {
       any |= code;
     }
     return unobserved || any != (kCoreNegative | kCoreNonNegative);
+  }
+
+  // Uniform neighbourhoods (every present block at the owner's level): the voxel centres of
+  // the 8 blocks around the owner's high corner form one lattice, index 0..side-1 per axis
+  // for the owner's centres and `side` for the +neighbours' first centres. Every point a box
+  // samples is then an equal-weight average of 1, 2, 4 or 8 of these centres — the box's
+  // support, two consecutive indices per axis starting at the box's start index (a core box
+  // [c_i, c_i+1] starts at i; both skins around the face, [c_side-1, 16] and [16, 16 + s],
+  // start at side-1). Bit i of a row mask describes the centre (i, j, k).
+  uint16_t row_negative[kFinestSide + 1][kFinestSide + 1] = {};     // [k][j]
+  uint16_t row_nonnegative[kFinestSide + 1][kFinestSide + 1] = {};  // [k][j]
+  uint16_t row_unobserved[kFinestSide + 1][kFinestSide + 1] = {};   // [k][j], incl. absent blocks
+
+  /// Fills the row masks (uniform neighbourhoods only). A centre counts as negative only when
+  /// sdf < −1e-30, so that the weighted sums of samplePoint() cannot underflow to −0 (which
+  /// compares as non-negative); centres nearer 0 are in neither mask and make their boxes
+  /// candidates.
+  void buildRowMasks() {
+    const int level = this->level[0];
+    const int side = levelSide(level);
+    for (int k = 0; k <= side; ++k)
+      for (int j = 0; j <= side; ++j) {
+        uint16_t neg = 0, nonneg = 0, unobserved = 0;
+        for (int i = 0; i <= side; ++i) {
+          const int d = (i == side) + 2 * (j == side) + 4 * (k == side);
+          const uint16_t bit = static_cast<uint16_t>(1u << i);
+          if (nb[d] == nullptr) {
+            unobserved |= bit;
+            continue;
+          }
+          const Voxel& v = nb[d]->at(level, i == side ? 0 : i, j == side ? 0 : j, k == side ? 0 : k);
+          if (!(v.weight > 0.0f))
+            unobserved |= bit;
+          else if (v.sdf_m >= 0.0f)
+            nonneg |= bit;
+          else if (v.sdf_m < -1e-30f)
+            neg |= bit;
+        }
+        row_negative[k][j] = neg;
+        row_nonnegative[k][j] = nonneg;
+        row_unobserved[k][j] = unobserved;
+      }
+  }
+
+  /// Bit i set: the boxes starting at (i, j, k) may yield triangles. A clear bit means a
+  /// support centre is unobserved (some corner is unobserved: meshBox() gives up) or the
+  /// support has one sign (every corner, a convex combination of it, has that sign).
+  uint16_t candidateStarts(int j, int k) const {
+    uint16_t neg = 0, nonneg = 0, unobserved = 0;
+    for (int dk = 0; dk < 2; ++dk)
+      for (int dj = 0; dj < 2; ++dj) {
+        neg |= row_negative[k + dk][j + dj];
+        nonneg |= row_nonnegative[k + dk][j + dj];
+        unobserved |= row_unobserved[k + dk][j + dj];
+      }
+    // Over pairs (i, i+1): a candidate has no unobserved centre, and both signs or a centre
+    // too near 0 to classify.
+    const uint16_t unknown = static_cast<uint16_t>(~(neg | nonneg));  // near 0 (or unobserved)
+    const uint16_t pair_neg = neg | (neg >> 1), pair_nonneg = nonneg | (nonneg >> 1);
+    const uint16_t pair_unknown = unknown | (unknown >> 1);
+    const uint16_t pair_unobserved = unobserved | (unobserved >> 1);
+    return static_cast<uint16_t>(((pair_neg & pair_nonneg) | pair_unknown) & ~pair_unobserved);
   }
 
   /// Builds the grid's coordinates from the present blocks' levels (call after nb/step).
@@ -570,6 +644,50 @@ void BlockMesher::mesh(const BlockOctree& map, const VoxelBlock& owner, SubMesh*
   // with one sign only, no cell can change sign.
   if (!any_negative || !any_positive) return;
   ctx.buildSampleGrid();
+  if (ctx.uniform)
+    meshUniformBoxes(ctx);
+  else
+    meshMixedBoxes(ctx);
+  computeNormals(out);
+}
+
+void BlockMesher::meshUniformBoxes(Context& ctx) const {
+  ctx.buildRowMasks();
+  const int step = ctx.step[0], side = kFinestSide / step;
+  // Box extents per axis by start index; the last start has two boxes (own skin, neighbour skin).
+  auto interval = [&](int start, bool neighbour_side, int* lo, int* hi) {
+    if (neighbour_side) {
+      *lo = kBlockUnits;
+      *hi = kBlockUnits + step;
+    } else {
+      *lo = step * (2 * start + 1);
+      *hi = start + 1 < side ? step * (2 * start + 3) : kBlockUnits;
+    }
+  };
+  // Same box order as meshMixedBoxes(): by block d, then z, y, x — the submesh's vertex and
+  // triangle order does not depend on which path ran.
+  for (int d = 0; d < 8; ++d) {
+    if (ctx.nb[d] == nullptr) continue;
+    int first[3], last[3];
+    for (int a = 0; a < 3; ++a) {
+      first[a] = (d >> a) & 1 ? side - 1 : 0;
+      last[a] = side - 1;
+    }
+    const uint16_t x_range = static_cast<uint16_t>(((1u << (last[0] + 1)) - 1) & ~((1u << first[0]) - 1));
+    for (int k = first[2]; k <= last[2]; ++k)
+      for (int j = first[1]; j <= last[1]; ++j)
+        for (uint16_t bits = ctx.candidateStarts(j, k) & x_range; bits != 0; bits &= bits - 1) {
+          const int i = __builtin_ctz(bits);
+          int lo[3], hi[3];
+          interval(i, d & 1, &lo[0], &hi[0]);
+          interval(j, (d >> 1) & 1, &lo[1], &hi[1]);
+          interval(k, (d >> 2) & 1, &lo[2], &hi[2]);
+          meshBox(ctx, lo, hi);
+        }
+  }
+}
+
+void BlockMesher::meshMixedBoxes(Context& ctx) const {
   ctx.buildCoreCodes();
   ctx.buildLinePoints();
 
@@ -600,7 +718,9 @@ void BlockMesher::mesh(const BlockOctree& map, const VoxelBlock& owner, SubMesh*
           meshBox(ctx, lo, hi);
         }
   }
+}
 
+void BlockMesher::computeNormals(SubMesh* out) {
   // Area-weighted face normals, pointing to negative SDF (the triangles' winding).
   out->normals.assign(out->positions.size(), Eigen::Vector3f::Zero());
   for (const auto& t : out->triangles) {

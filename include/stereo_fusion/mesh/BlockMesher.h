@@ -74,6 +74,12 @@ class BlockMesher {
     float sdf = 0.0f;
     float rgb[3] = {0, 0, 0};
   };
+  /// Boxes of a neighbourhood whose blocks all share the owner's level: only the boxes whose
+  /// support centres are observed and change sign are visited (row bit masks).
+  void meshUniformBoxes(Context& ctx) const;
+  /// Boxes of a neighbourhood with several levels (hanging points on shared faces).
+  void meshMixedBoxes(Context& ctx) const;
+  static void computeNormals(SubMesh* out);
   bool samplePoint(const Context& ctx, int qx, int qy, int qz, PointSample* out) const;
   bool cachedSample(Context& ctx, const int q[3], PointSample* out) const;
   bool boxHasNoSurface(Context& ctx, const int lo[3], const int hi[3]) const;
