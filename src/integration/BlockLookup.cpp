@@ -1,6 +1,7 @@
 #include "stereo_fusion/integration/BlockLookup.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
 namespace stereo_fusion {
@@ -8,18 +9,34 @@ namespace stereo_fusion {
 BlockLookup::BlockLookup(const MapperConfig& config, ThreadPool* pool)
     : config_(config), pool_(pool) {}
 
-bool BlockLookup::bandBoxOfPixel(const StereoFrame& frame, int u, int v, const BlockOctree& octree,
-                                 BandBox* box) const {
+BlockLookup::PixelGeometry BlockLookup::pixelGeometry(const StereoFrame& frame,
+                                                      const BlockOctree& octree) const {
+  PixelGeometry g;
+  g.R_world_camera = frame.T_world_camera.linear();
+  g.t_world_camera = frame.T_world_camera.translation();
+  const StereoCamera& cam = frame.camera;
+  g.fb = cam.fx() * cam.baseline();
+  g.cx = cam.cx();
+  g.cy = cam.cy();
+  g.inv_fx = 1.0 / cam.fx();
+  g.inv_fy = 1.0 / cam.fy();
+  g.inv_block_size = 1.0 / octree.blockSize();
+  for (int level = 0; level < kNumLevels; ++level)
+    g.band_blocks[level] = config_.truncation_vox * levelScale(level) * config_.voxel_size_m * g.inv_block_size;
+  return g;
+}
+
+bool BlockLookup::bandBoxOfPixel(const StereoFrame& frame, int u, int v, BandBox* box) const {
+  const PixelGeometry& g = geometry_;
   const float d = frame.disparity_px.at<float>(v, u);
   if (!(d > 0.0f) || !std::isfinite(d)) return false;
-  const double z = frame.camera.depthFromDisparity(d);
+  const double z = g.fb / d;
   if (!(z >= config_.min_depth_m && z <= config_.max_depth_m)) return false;
-  const Eigen::Vector3d p_world = frame.T_world_camera * frame.camera.backProject(u, v, z);
-  const int level = levelForDepth(z, config_.levels);
-  const double truncation_m = config_.truncation_vox * levelScale(level) * config_.voxel_size_m;
-  const Eigen::Vector3d band(truncation_m, truncation_m, truncation_m);
-  box->lo = octree.keyForPoint(p_world - band);
-  box->hi = octree.keyForPoint(p_world + band);
+  const Eigen::Vector3d p_camera((u - g.cx) * z * g.inv_fx, (v - g.cy) * z * g.inv_fy, z);
+  const Eigen::Vector3d p_blocks = (g.R_world_camera * p_camera + g.t_world_camera) * g.inv_block_size;
+  const double band = g.band_blocks[levelForDepth(z, config_.levels)];
+  box->lo = BlockOctree::keyForBlockCoordinates(p_blocks.array() - band);
+  box->hi = BlockOctree::keyForBlockCoordinates(p_blocks.array() + band);
   return BlockOctree::keyInRange(box->lo) && BlockOctree::keyInRange(box->hi);
 }
 
@@ -30,8 +47,7 @@ static void forEachKeyInBox(const BlockKey& lo, const BlockKey& hi, F&& f) {
       for (int32_t x = lo.x; x <= hi.x; ++x) f(BlockKey{x, y, z});
 }
 
-void BlockLookup::gatherHistogram(const StereoFrame& frame, const cv::Rect& region,
-                                  const BlockOctree& octree, RegionScratch* s) const {
+void BlockLookup::gatherHistogram(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const {
   // Neighbouring pixels almost always share a band box, so count points per distinct box
   // first (a comparison with the previous box per pixel) and expand boxes to blocks after.
   s->boxes.clear();
@@ -40,7 +56,7 @@ void BlockLookup::gatherHistogram(const StereoFrame& frame, const cv::Rect& regi
   for (int v = region.y; v < region.y + region.height; ++v) {
     for (int u = region.x; u < region.x + region.width; ++u) {
       BandBox box;
-      if (!bandBoxOfPixel(frame, u, v, octree, &box)) continue;
+      if (!bandBoxOfPixel(frame, u, v, &box)) continue;
       ++s->stats.valid_points;
       if (last < s->boxes.size() && s->boxes[last].first == box) {
         ++s->boxes[last].second;
@@ -78,7 +94,7 @@ bool BlockLookup::passesFilter(const RegionScratch& s, const BlockKey& key) cons
 
 void BlockLookup::runRegionAccelerated(const StereoFrame& frame, const cv::Rect& region,
                                        BlockOctree* octree, RegionScratch* s) const {
-  gatherHistogram(frame, region, *octree, s);
+  gatherHistogram(frame, region, s);
   for (const auto& [key, count] : s->key_counts) {
     if (config_.histogram_min_points > 0 && count < config_.histogram_min_points) {
       ++s->stats.blocks_filtered;
@@ -97,7 +113,7 @@ void BlockLookup::runRegionNaive(const StereoFrame& frame, const cv::Rect& regio
                                  BlockOctree* octree, RegionScratch* s) const {
   const bool filter = config_.histogram_min_points > 0;
   if (filter) {
-    gatherHistogram(frame, region, *octree, s);
+    gatherHistogram(frame, region, s);
     for (const auto& [key, count] : s->key_counts)
       s->stats.blocks_filtered += count < config_.histogram_min_points;
     s->stats.valid_points = 0;  // counted again below
@@ -105,7 +121,7 @@ void BlockLookup::runRegionNaive(const StereoFrame& frame, const cv::Rect& regio
   for (int v = region.y; v < region.y + region.height; ++v) {
     for (int u = region.x; u < region.x + region.width; ++u) {
       BandBox box;
-      if (!bandBoxOfPixel(frame, u, v, *octree, &box)) continue;
+      if (!bandBoxOfPixel(frame, u, v, &box)) continue;
       ++s->stats.valid_points;
       forEachKeyInBox(box.lo, box.hi, [&](const BlockKey& key) {
         if (filter && !passesFilter(*s, key)) return;
@@ -127,6 +143,7 @@ LookupStats BlockLookup::run(const StereoFrame& frame, BlockOctree* octree,
   const int rows = (frame.disparity_px.rows + region_px - 1) / region_px;
   const size_t num_regions = static_cast<size_t>(cols) * rows;
   if (scratch_.size() < num_regions) scratch_.resize(num_regions);
+  geometry_ = pixelGeometry(frame, *octree);
 
   pool_->parallelFor(num_regions, 4, [&](size_t begin, size_t end) {
     for (size_t r = begin; r < end; ++r) {
@@ -144,11 +161,19 @@ LookupStats BlockLookup::run(const StereoFrame& frame, BlockOctree* octree,
     }
   });
 
+  // Regions overlap in blocks: keep each block's first find. Stamps are unique across all
+  // BlockLookup instances, so two lookups on one octree never mistake each other's marks.
+  static std::atomic<uint64_t> last_stamp{0};
+  const uint64_t stamp = ++last_stamp;
   LookupStats total;
   queue->clear();
   for (size_t r = 0; r < num_regions; ++r) {
     const RegionScratch& s = scratch_[r];
-    queue->insert(queue->end(), s.found.begin(), s.found.end());
+    for (VoxelBlock* block : s.found) {
+      if (block->lookup_stamp == stamp) continue;
+      block->lookup_stamp = stamp;
+      queue->push_back(block);
+    }
     total.valid_points += s.stats.valid_points;
     total.octree_searches += s.stats.octree_searches;
     total.blocks_allocated += s.stats.blocks_allocated;
@@ -156,7 +181,6 @@ LookupStats BlockLookup::run(const StereoFrame& frame, BlockOctree* octree,
   }
   std::sort(queue->begin(), queue->end(),
             [](const VoxelBlock* a, const VoxelBlock* b) { return a->key < b->key; });
-  queue->erase(std::unique(queue->begin(), queue->end()), queue->end());
   total.blocks_queued = queue->size();
   return total;
 }

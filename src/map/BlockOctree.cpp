@@ -27,7 +27,11 @@ BlockOctree::BlockOctree(double block_size_m) : block_size_m_(block_size_m) {}
 BlockOctree::~BlockOctree() = default;
 
 BlockKey BlockOctree::keyForPoint(const Eigen::Vector3d& p_world) const {
-  const Eigen::Vector3d k = (p_world / block_size_m_).array().floor();
+  return keyForBlockCoordinates(p_world / block_size_m_);
+}
+
+BlockKey BlockOctree::keyForBlockCoordinates(const Eigen::Vector3d& p_blocks) {
+  const Eigen::Vector3d k = p_blocks.array().floor();
   const double lim = static_cast<double>(kMaxKey) + 1.0;
   auto clampToInt = [lim](double v) {
     // Out-of-range (or NaN) coordinates map beyond kMaxKey so keyInRange() refuses them.

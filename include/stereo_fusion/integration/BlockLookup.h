@@ -40,6 +40,15 @@ class BlockLookup {
     BlockKey lo, hi;  // inclusive key range of the blocks a point's band touches
     bool operator==(const BandBox& o) const { return lo == o.lo && hi == o.hi; }
   };
+  /// Per-frame constants of the pixel → band box mapping, so the per-pixel work is
+  /// multiplications (no divisions except z = f·b/d, no function calls).
+  struct PixelGeometry {
+    Eigen::Matrix3d R_world_camera;
+    Eigen::Vector3d t_world_camera;
+    double fb = 0.0, cx = 0.0, cy = 0.0, inv_fx = 0.0, inv_fy = 0.0;
+    double inv_block_size = 0.0;                       ///< 1 / block edge, per metre
+    double band_blocks[kNumLevels] = {};               ///< Φ of each level, in blocks
+  };
   struct RegionScratch {
     std::vector<std::pair<BandBox, int>> boxes;      // distinct band boxes and their point counts
     std::vector<std::pair<BlockKey, int>> key_counts;  // histogram: points per block
@@ -47,10 +56,9 @@ class BlockLookup {
     LookupStats stats;
   };
 
-  bool bandBoxOfPixel(const StereoFrame& frame, int u, int v, const BlockOctree& octree,
-                      BandBox* box) const;
-  void gatherHistogram(const StereoFrame& frame, const cv::Rect& region, const BlockOctree& octree,
-                       RegionScratch* s) const;
+  PixelGeometry pixelGeometry(const StereoFrame& frame, const BlockOctree& octree) const;
+  bool bandBoxOfPixel(const StereoFrame& frame, int u, int v, BandBox* box) const;
+  void gatherHistogram(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const;
   bool passesFilter(const RegionScratch& s, const BlockKey& key) const;
   void runRegionAccelerated(const StereoFrame& frame, const cv::Rect& region, BlockOctree* octree,
                             RegionScratch* s) const;
@@ -60,6 +68,7 @@ class BlockLookup {
   MapperConfig config_;
   ThreadPool* pool_;
   std::vector<RegionScratch> scratch_;  // one per region, reused across frames
+  PixelGeometry geometry_;              // of the frame being looked up
 };
 
 }  // namespace stereo_fusion

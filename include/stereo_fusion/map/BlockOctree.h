@@ -39,6 +39,9 @@ class BlockOctree {
 
   /// Key of the block containing `p_world` (floor(p / block edge)).
   BlockKey keyForPoint(const Eigen::Vector3d& p_world) const;
+  /// The same for a point already in block units (world coordinates / block size), for
+  /// callers that scale many points by a precomputed reciprocal.
+  static BlockKey keyForBlockCoordinates(const Eigen::Vector3d& p_blocks);
   /// World coordinates of the block's minimum corner.
   Eigen::Vector3d blockOrigin(const BlockKey& key) const;
   static bool keyInRange(const BlockKey& key);

@@ -32,14 +32,18 @@ struct VoxelBlock {
 
   std::array<Voxel, kVoxelCount> voxels{};
   BlockKey key;
-  /// Frame counter of the last fusion that changed this block (0 = never).
-  uint64_t last_update_frame = 0;
   /// Level the mesher samples this block at (see chooseMeshLevel()); refreshed after fusion.
   int8_t mesh_level = kNumLevels - 1;
   /// Whether the observed voxels of mesh_level include negative / non-negative distances:
   /// an owner whose whole neighbourhood has one sign cannot contain a surface.
   bool mesh_has_negative = false;
   bool mesh_has_positive = false;
+  // (The 8-byte fields last: the small ones above fill the padding after `key`.)
+  /// Frame counter of the last fusion that changed this block (0 = never).
+  uint64_t last_update_frame = 0;
+  /// Stamp of the last lookup pass that queued this block (BlockLookup de-duplicates its
+  /// queue with it instead of sorting every region's finds).
+  uint64_t lookup_stamp = 0;
 };
 
 static_assert(VoxelBlock::index(0, 7, 7, 7) == 511, "8³ level ends at 511");
