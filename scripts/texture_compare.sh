@@ -39,3 +39,19 @@ fi
 mkdir -p "$OUT"
 "$BUILD_DIR/devel/lib/stereo_fusion/stereo_fusion_texture_compare" "$SEQ" "$OUT" --views "$VIEWS" "${EXTRA[@]}"
 echo "[texture_compare] wrote $OUT/texture_compare_full.png, texture_compare_zoom.png, texture_compare.json"
+
+# Optional third-party check of the export (python3-open3d is not a dependency of the package).
+if /usr/bin/python3 -c "import open3d" >/dev/null 2>&1; then
+  tmp="$(mktemp -d)"
+  "$BUILD_DIR/devel/lib/stereo_fusion/stereo_fusion_fuse" "$SEQ" "$tmp" --set texture=patches --quiet >/dev/null
+  /usr/bin/python3 - "$tmp/mesh.obj" <<'PY'
+import sys
+import numpy as np
+import open3d as o3d
+m = o3d.io.read_triangle_mesh(sys.argv[1], True)
+textures = [np.asarray(t).shape for t in m.textures if not t.is_empty()]
+print(f"[texture_compare] Open3D {o3d.__version__} reads mesh.obj: {len(m.triangles)} triangles, "
+      f"triangle UVs: {m.has_triangle_uvs()}, textures: {textures}")
+PY
+  rm -rf "$tmp"
+fi

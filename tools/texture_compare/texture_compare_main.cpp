@@ -1,6 +1,8 @@
 // stereo_fusion_texture_compare: fuses the even frames of a simulated sequence with texture
 // patches on, renders the vertex-coloured and the textured mesh into the held-out odd frames'
 // poses and compares both with the simulator's ground-truth colour images (PSNR, sharpness).
+#include <unistd.h>
+
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -11,8 +13,11 @@
 #include "fuser/OfflineFuser.h"
 #include "stereo_fusion/Mapper.h"
 #include "stereo_fusion/io/DatasetReader.h"
+#include "stereo_fusion/io/ObjReader.h"
+#include "stereo_fusion/io/ObjWriter.h"
 #include "texture_compare/ImageMetrics.h"
 #include "texture_compare/MeshRasterizer.h"
+#include "texture_compare/ObjRenderable.h"
 
 namespace {
 
@@ -24,7 +29,8 @@ const char* kUsage =
     "                                     [--views N] [--figure-view K]\n"
     "Fuses the even frames of a dataset folder with texture=patches, renders the vertex-coloured\n"
     "and the textured mesh into the poses of the odd (held-out) frames and compares both with\n"
-    "those frames' colour images (for simulated sequences: the exact ground truth).\n"
+    "those frames' colour images (for simulated sequences: the exact ground truth). The textured\n"
+    "mesh is also exported as OBJ + MTL + atlas, read back and rendered, to check the export.\n"
     "Prints and writes <out-dir>/texture_compare.json and the figures\n"
     "<out-dir>/texture_compare_full.png and texture_compare_zoom.png (ground truth | vertex colour | texture).\n"
     "  --views N        evaluate N held-out frames spread over the sequence (default: all)\n"
@@ -128,6 +134,23 @@ int main(int argc, char** argv) {
               fused, submeshes.size(), patches.size(), mapper.textures().memoryBytes() / 1048576.0,
               options.config.texture_max_patch_px);
 
+  // The export, read back: what a viewer loading mesh.obj gets.
+  const fs::path obj_dir = fs::temp_directory_path() / ("stereo_fusion_texture_compare_" + std::to_string(getpid()));
+  fs::create_directories(obj_dir);
+  ObjExportInfo export_info;
+  ObjMesh obj;
+  std::unordered_map<BlockKey, SubMesh, BlockKeyHash> obj_meshes;
+  std::unordered_map<BlockKey, TexturePatch, BlockKeyHash> obj_patches;
+  const bool obj_ok =
+      writeTexturedObj((obj_dir / "mesh.obj").string(), submeshes, patches, ObjExportOptions{}, &export_info, &error) &&
+      readObj((obj_dir / "mesh.obj").string(), &obj, &error) &&
+      texcmp::objToRenderable(obj, &obj_meshes, &obj_patches, &error);
+  fs::remove_all(obj_dir);
+  if (!obj_ok) {
+    std::fprintf(stderr, "error: OBJ export round trip: %s\n", error.c_str());
+    return 1;
+  }
+
   // Held-out odd frames, spread evenly when fewer are asked for.
   std::vector<size_t> held_out;
   for (size_t i = 1; i < reader->size(); i += 2) held_out.push_back(i);
@@ -138,12 +161,12 @@ int main(int argc, char** argv) {
   }
   if (figure_view < 0 || figure_view >= static_cast<long>(held_out.size())) figure_view = held_out.size() / 2;
 
-  texcmp::SquaredError err_vertex, err_texture;
+  texcmp::SquaredError err_vertex, err_texture, err_obj;
   texcmp::GradientEnergy ge_vertex, ge_texture, ge_truth;
   size_t covered = 0, textured_px = 0;
   nlohmann::ordered_json per_view = nlohmann::ordered_json::array();
-  std::printf("%6s %10s %12s %12s %10s %10s %10s\n", "frame", "covered", "PSNR vertex", "PSNR texture",
-              "GE vertex", "GE texture", "GE truth");
+  std::printf("%6s %10s %12s %12s %12s %10s %10s %10s\n", "frame", "covered", "PSNR vertex", "PSNR texture",
+              "PSNR OBJ", "GE vertex", "GE texture", "GE truth");
   for (size_t k = 0; k < held_out.size(); ++k) {
     StereoFrame frame;
     if (!reader->load(held_out[k], &frame, &error) || frame.color.empty()) {
@@ -153,10 +176,14 @@ int main(int argc, char** argv) {
     const cv::Mat truth = toRgb(frame.color);
     const texcmp::RenderedView vertex = texcmp::renderMesh(submeshes, nullptr, frame.camera, frame.T_world_camera);
     const texcmp::RenderedView texture = texcmp::renderMesh(submeshes, &patches, frame.camera, frame.T_world_camera);
-    // Both renders share the geometry, so they cover the same pixels.
+    const texcmp::RenderedView exported = texcmp::renderMesh(obj_meshes, &obj_patches, frame.camera, frame.T_world_camera);
+    // The renders share the geometry, so they cover the same pixels (up to ties on edges the
+    // unwelded OBJ may resolve differently).
     const cv::Mat mask = vertex.depth_m > 0;
     const auto ev = texcmp::squaredError(vertex.rgb, truth, mask);
     const auto et = texcmp::squaredError(texture.rgb, truth, mask);
+    const auto eo = texcmp::squaredError(exported.rgb, truth, mask);
+    err_obj.sum += eo.sum, err_obj.values += eo.values;
     const auto gv = texcmp::gradientEnergy(vertex.rgb, mask);
     const auto gt = texcmp::gradientEnergy(texture.rgb, mask);
     const auto gg = texcmp::gradientEnergy(truth, mask);
@@ -169,12 +196,13 @@ int main(int argc, char** argv) {
     covered += n;
     textured_px += static_cast<size_t>(cv::countNonZero(texture.textured));
     const double share = n / static_cast<double>(mask.total());
-    std::printf("%6zu %9.1f%% %9.2f dB %9.2f dB %10.1f %10.1f %10.1f\n", held_out[k], 100 * share, ev.psnrDb(),
-                et.psnrDb(), gv.mean(), gt.mean(), gg.mean());
+    std::printf("%6zu %9.1f%% %9.2f dB %9.2f dB %9.2f dB %10.1f %10.1f %10.1f\n", held_out[k], 100 * share,
+                ev.psnrDb(), et.psnrDb(), eo.psnrDb(), gv.mean(), gt.mean(), gg.mean());
     per_view.push_back({{"frame", held_out[k]},
                         {"covered_share", share},
                         {"psnr_vertex_db", ev.psnrDb()},
                         {"psnr_texture_db", et.psnrDb()},
+                        {"psnr_exported_obj_db", eo.psnrDb()},
                         {"gradient_energy_vertex", gv.mean()},
                         {"gradient_energy_texture", gt.mean()},
                         {"gradient_energy_truth", gg.mean()}});
@@ -201,9 +229,11 @@ int main(int argc, char** argv) {
     return 1;
   }
   std::printf("all %zu views: PSNR vertex colour %.2f dB, texture patches %.2f dB; gradient energy vertex %.1f, "
-              "texture %.1f, ground truth %.1f; %.1f %% of covered pixels drawn from a patch\n",
+              "texture %.1f, ground truth %.1f; %.1f %% of covered pixels drawn from a patch\n"
+              "exported mesh.obj read back and rendered: PSNR %.2f dB (%zu textured + %zu baked vertex-colour blocks)\n",
               held_out.size(), err_vertex.psnrDb(), err_texture.psnrDb(), ge_vertex.mean(), ge_texture.mean(),
-              ge_truth.mean(), 100.0 * textured_px / covered);
+              ge_truth.mean(), 100.0 * textured_px / covered, err_obj.psnrDb(), export_info.textured_blocks,
+              export_info.vertex_colour_blocks);
   nlohmann::ordered_json j;
   j["sequence"] = options.input;
   j["fused_frames"] = fused;
@@ -215,6 +245,7 @@ int main(int argc, char** argv) {
   j["textured_pixel_share"] = static_cast<double>(textured_px) / covered;
   j["psnr_vertex_db"] = err_vertex.psnrDb();
   j["psnr_texture_db"] = err_texture.psnrDb();
+  j["psnr_exported_obj_db"] = err_obj.psnrDb();
   j["gradient_energy_vertex"] = ge_vertex.mean();
   j["gradient_energy_texture"] = ge_texture.mean();
   j["gradient_energy_truth"] = ge_truth.mean();
