@@ -225,7 +225,7 @@ const std::vector<Accessor>& accessors() {
         "texture", {{"off", TextureMode::kOff}, {"patches", TextureMode::kPatches}},
         "Colour of the exported / published mesh: vertex colours only, or also one image patch "
         "per submesh cut from the best view (thesis §3.6 method B); patches add mesh.obj + .mtl + "
-        "atlas PNGs to scripts/fuse.sh and textures to ~mesh_update.",
+        "atlas PNGs to scripts/fuse.sh and textures to ~mesh_update. Needs mesh_enabled.",
         member(&MapperConfig::texture)));
     t.push_back(intParam("texture_border_px", "px", 0, 1000,
                          "A frame textures a block only if every vertex of its submesh projects at "
@@ -287,6 +287,9 @@ std::vector<std::string> validateMapperConfig(const MapperConfig& config) {
     errors.push_back("scale2_min_depth_m must be <= scale4_min_depth_m");
   if (config.weight_falloff_start_vox >= config.truncation_vox)
     errors.push_back("weight_falloff_start_vox must be < truncation_vox");
+  // Patches are cut from the frame being fused, right after its meshing pass.
+  if (config.texture == TextureMode::kPatches && !config.mesh_enabled)
+    errors.push_back("texture = patches needs mesh_enabled = true");
   return errors;
 }
 

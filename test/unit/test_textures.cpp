@@ -126,6 +126,15 @@ TEST(TextureStore, OffByDefaultAndNothingIsStored) {
   EXPECT_TRUE(mapper.textures().patches().empty());
 }
 
+TEST(TextureStore, PatchesNeedIncrementalMeshing) {
+  MapperConfig config = texturedConfig();
+  config.mesh_enabled = false;
+  const std::vector<std::string> errors = validateMapperConfig(config);
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("mesh_enabled"), std::string::npos);
+  EXPECT_THROW(Mapper{config}, std::invalid_argument);
+}
+
 TEST(TextureStore, HiddenVerticesNeverTakeTheOccludersColour) {
   // A blue wall at z = 2 m and a red box in front of it. Two oblique views see the wall behind
   // the box; the last view is closer and frontal (it scores higher) but the box hides part of
