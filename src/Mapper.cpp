@@ -25,7 +25,9 @@ Mapper::Mapper(const MapperConfig& config)
       lookup_(config_, &pool_),
       fuser_(config_, &pool_),
       mesh_store_(MeshingParams{config_.voxel_size_m, config_.truncation_vox,
-                                config_.mesh_level_min_coverage}) {}
+                                config_.mesh_level_min_coverage}),
+      texture_store_(TextureParams{config_.texture_border_px, config_.texture_max_patch_px,
+                                   config_.voxel_size_m, config_.truncation_vox}) {}
 
 IntegrationResult Mapper::integrate(const StereoFrame& frame) {
   IntegrationResult result;
@@ -44,13 +46,25 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame) {
 
   result.updated_blocks.reserve(updated_.size());
   for (const VoxelBlock* block : updated_) result.updated_blocks.push_back(block->key);
-  if (config_.mesh_enabled) result.mesh = mesh_store_.update(octree_, result.updated_blocks, &pool_);
+  if (config_.mesh_enabled) {
+    result.mesh = mesh_store_.update(octree_, result.updated_blocks, &pool_);
+    if (config_.texture == TextureMode::kPatches)
+      result.texture = texture_store_.update(mesh_store_, result.mesh, frame, frames_integrated_, &pool_);
+  }
   return result;
+}
+
+MeshChanges Mapper::rebuildMesh() {
+  MeshChanges changes = mesh_store_.rebuild(octree_, &pool_);
+  // No frame at hand: the stored patches are re-projected onto the rebuilt submeshes.
+  if (config_.texture == TextureMode::kPatches) texture_store_.reprojectAll(mesh_store_);
+  return changes;
 }
 
 void Mapper::reset() {
   octree_.clear();
   mesh_store_.clear();
+  texture_store_.clear();
   frames_integrated_ = 0;
 }
 

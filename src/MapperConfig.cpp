@@ -221,6 +221,21 @@ const std::vector<Accessor>& accessors() {
                             "A block is meshed at the finest level whose observed surface area is at "
                             "least this share of the largest among its three levels.",
                             member(&MapperConfig::mesh_level_min_coverage)));
+    t.push_back(enumParam<TextureMode>(
+        "texture", {{"off", TextureMode::kOff}, {"patches", TextureMode::kPatches}},
+        "Colour of the exported / published mesh: vertex colours only, or also one image patch "
+        "per submesh cut from the best view (thesis §3.6 method B); patches add mesh.obj + .mtl + "
+        "atlas PNGs to scripts/fuse.sh and textures to ~mesh_update. Needs mesh_enabled.",
+        member(&MapperConfig::texture)));
+    t.push_back(intParam("texture_border_px", "px", 0, 1000,
+                         "A frame textures a block only if every vertex of its submesh projects at "
+                         "least this far inside the image (thesis: 24 px), so border submeshes are "
+                         "fully covered.",
+                         member(&MapperConfig::texture_border_px)));
+    t.push_back(intParam("texture_max_patch_px", "px", 4, 1024,
+                         "Cap on a texture patch's width and height; larger crops are downscaled. "
+                         "Bounds texture memory to 3 · cap² bytes per block.",
+                         member(&MapperConfig::texture_max_patch_px)));
     return t;
   }();
   return table;
@@ -272,6 +287,9 @@ std::vector<std::string> validateMapperConfig(const MapperConfig& config) {
     errors.push_back("scale2_min_depth_m must be <= scale4_min_depth_m");
   if (config.weight_falloff_start_vox >= config.truncation_vox)
     errors.push_back("weight_falloff_start_vox must be < truncation_vox");
+  // Patches are cut from the frame being fused, right after its meshing pass.
+  if (config.texture == TextureMode::kPatches && !config.mesh_enabled)
+    errors.push_back("texture = patches needs mesh_enabled = true");
   return errors;
 }
 

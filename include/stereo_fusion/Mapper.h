@@ -10,6 +10,7 @@
 #include "stereo_fusion/integration/SurfaceFuser.h"
 #include "stereo_fusion/map/BlockOctree.h"
 #include "stereo_fusion/mesh/MeshStore.h"
+#include "stereo_fusion/mesh/TextureStore.h"
 #include "stereo_fusion/util/ThreadPool.h"
 
 namespace stereo_fusion {
@@ -26,6 +27,8 @@ struct IntegrationResult {
   MeshChanges mesh;
   /// Blocks whose voxels changed in this frame, sorted by key (the meshing stage's input).
   std::vector<BlockKey> updated_blocks;
+  /// What the texture pass did (all zero unless texture = patches).
+  TextureStats texture;
 };
 
 /// The ROS-free mapping pipeline: integrate(frame) = validate → lookup → fusion → meshing.
@@ -44,7 +47,9 @@ class Mapper {
   /// The whole mesh, submeshes welded into one (for export).
   TriangleMesh extractMesh() const { return weldSubmeshes(mesh_store_.submeshes()); }
   /// Re-meshes every block from scratch (also what a disabled incremental mesher catches up with).
-  MeshChanges rebuildMesh() { return mesh_store_.rebuild(octree_, &pool_); }
+  MeshChanges rebuildMesh();
+  /// Texture patches of the submeshes (empty unless texture = patches).
+  const TextureStore& textures() const { return texture_store_; }
   const MapperConfig& config() const { return config_; }
   /// Frames accepted so far.
   uint64_t framesIntegrated() const { return frames_integrated_; }
@@ -58,6 +63,7 @@ class Mapper {
   BlockLookup lookup_;
   SurfaceFuser fuser_;
   MeshStore mesh_store_;
+  TextureStore texture_store_;
   uint64_t frames_integrated_ = 0;
   std::vector<VoxelBlock*> queue_;    // reused across frames
   std::vector<VoxelBlock*> updated_;  // reused across frames

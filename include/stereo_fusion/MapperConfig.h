@@ -18,6 +18,12 @@ enum class LookupMode {
   kAccelerated,  ///< Algorithm 2: one search per distinct block per image region.
 };
 
+/// How submeshes are coloured for export and publication (thesis §3.6).
+enum class TextureMode {
+  kOff,      ///< vertex colours only (method A)
+  kPatches,  ///< plus one image patch per submesh with per-vertex UVs (method B)
+};
+
 /// Every parameter of the mapping core. Defaults here are the single source of truth:
 /// config/default.yaml and the README table are checked against them by the tests.
 struct MapperConfig {
@@ -37,6 +43,9 @@ struct MapperConfig {
   bool use_color = true;               ///< Fuse the colour image into per-voxel colour.
   bool mesh_enabled = true;            ///< Re-mesh the changed blocks after every frame.
   double mesh_level_min_coverage = 0.8;  ///< A block meshes at the finest level whose observed area is ≥ this share of its best level's.
+  TextureMode texture = TextureMode::kOff;  ///< off: vertex colours only; patches: a texture patch per submesh.
+  int texture_border_px = 24;          ///< A frame textures a block only if all its vertices project this far inside the image.
+  int texture_max_patch_px = 64;       ///< Cap on a patch's edge; larger crops are downscaled (bounds texture memory).
 
   /// Block edge length in metres.
   double blockSizeM() const { return 8.0 * voxel_size_m; }

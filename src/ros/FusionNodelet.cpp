@@ -4,7 +4,9 @@
 #include <tf2_eigen/tf2_eigen.h>
 
 #include <algorithm>
+#include <filesystem>
 
+#include "stereo_fusion/io/ObjWriter.h"
 #include "stereo_fusion/io/PlyWriter.h"
 #include "stereo_fusion/util/Percentile.h"
 #include "stereo_fusion/ros/MessageConversions.h"
@@ -222,7 +224,8 @@ void FusionNodelet::publishPending(const ros::Time& stamp, bool force) {
     ++sequence_;
     if (mesh_update_pub_.getNumSubscribers() > 0)
       mesh_update_pub_.publish(toMeshUpdate(mapper_->mesh(), changed, removed, header,
-                                            mapper_config_.voxel_size_m, sequence_, false));
+                                            mapper_config_.voxel_size_m, sequence_, false,
+                                            &mapper_->textures()));
   }
   if (node_config_.publish_markers && markers_pub_.getNumSubscribers() > 0) {
     if (markers_full_pending_) {
@@ -245,14 +248,26 @@ void FusionNodelet::publishPending(const ros::Time& stamp, bool force) {
 }
 
 bool FusionNodelet::saveMesh(SaveMesh::Request& req, SaveMesh::Response& res) {
-  TriangleMesh mesh;
-  {
-    std::lock_guard<std::mutex> lock(map_mutex_);
-    mesh = mapper_->extractMesh();
-  }
   std::string error;
-  res.success = writePly(req.path, mesh, &error);
-  res.message = res.success ? "wrote " + std::to_string(mesh.triangles.size()) + " triangles to " + req.path : error;
+  if (std::filesystem::path(req.path).extension() == ".obj") {
+    // OBJ + MTL + atlas PNGs: written under the lock, the patches are not copied.
+    std::lock_guard<std::mutex> lock(map_mutex_);
+    ObjExportInfo info;
+    res.success = writeTexturedObj(req.path, mapper_->mesh().submeshes(), mapper_->textures().patches(),
+                                   ObjExportOptions{}, &info, &error);
+    res.message = res.success ? "wrote " + std::to_string(info.textured_blocks) + " textured and " +
+                                    std::to_string(info.vertex_colour_blocks) + " vertex-coloured blocks to " +
+                                    req.path
+                              : error;
+  } else {
+    TriangleMesh mesh;
+    {
+      std::lock_guard<std::mutex> lock(map_mutex_);
+      mesh = mapper_->extractMesh();
+    }
+    res.success = writePly(req.path, mesh, &error);
+    res.message = res.success ? "wrote " + std::to_string(mesh.triangles.size()) + " triangles to " + req.path : error;
+  }
   if (res.success)
     NODELET_INFO("stereo_fusion: save_mesh: %s", res.message.c_str());
   else
@@ -269,7 +284,8 @@ bool FusionNodelet::getFullMesh(GetFullMesh::Request&, GetFullMesh::Response& re
   header.frame_id = node_config_.world_frame;
   header.stamp = ros::Time::now();
   // The sequence of the last published update: apply updates with a larger sequence on top.
-  res.mesh = toMeshUpdate(mapper_->mesh(), all, {}, header, mapper_config_.voxel_size_m, sequence_, true);
+  res.mesh = toMeshUpdate(mapper_->mesh(), all, {}, header, mapper_config_.voxel_size_m, sequence_, true,
+                          &mapper_->textures());
   return true;
 }
 

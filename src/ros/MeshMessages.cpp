@@ -1,8 +1,28 @@
 #include "stereo_fusion/ros/MeshMessages.h"
 
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
 namespace stereo_fusion {
 
-MeshBlock toMeshBlock(const SubMesh& s) {
+namespace {
+
+/// compressed_image_transport's format string: original encoding; codec and stored encoding.
+constexpr const char* kTextureFormat = "rgb8; png compressed bgr8";
+
+void encodeTexture(const TexturePatch& patch, MeshBlock* b) {
+  cv::Mat bgr;
+  cv::cvtColor(patch.image_rgb, bgr, cv::COLOR_RGB2BGR);
+  // Level 1: patches are small and published often; speed matters more than the last bytes.
+  cv::imencode(".png", bgr, b->texture.data, {cv::IMWRITE_PNG_COMPRESSION, 1});
+  b->texture.format = kTextureFormat;
+  b->uvs.reserve(2 * patch.uvs.size());
+  for (const Eigen::Vector2f& uv : patch.uvs) b->uvs.insert(b->uvs.end(), {uv.x(), uv.y()});
+}
+
+}  // namespace
+
+MeshBlock toMeshBlock(const SubMesh& s, const TexturePatch* patch) {
   MeshBlock b;
   b.key = {s.key.x, s.key.y, s.key.z};
   b.level = static_cast<uint8_t>(s.level);
@@ -18,12 +38,13 @@ MeshBlock toMeshBlock(const SubMesh& s) {
   }
   b.triangles.reserve(3 * s.triangles.size());
   for (const auto& t : s.triangles) b.triangles.insert(b.triangles.end(), t.begin(), t.end());
+  if (patch && patch->uvs.size() == s.positions.size() && !patch->image_rgb.empty()) encodeTexture(*patch, &b);
   return b;
 }
 
 MeshUpdate toMeshUpdate(const MeshStore& store, const std::vector<BlockKey>& changed,
                         const std::vector<BlockKey>& removed, const std_msgs::Header& header,
-                        double voxel_size_m, uint64_t sequence, bool full) {
+                        double voxel_size_m, uint64_t sequence, bool full, const TextureStore* textures) {
   MeshUpdate u;
   u.header = header;
   u.sequence = sequence;
@@ -32,13 +53,15 @@ MeshUpdate toMeshUpdate(const MeshStore& store, const std::vector<BlockKey>& cha
   u.block_size = static_cast<float>(8.0 * voxel_size_m);
   for (const BlockKey& key : changed) {
     auto it = store.submeshes().find(key);
-    if (it != store.submeshes().end()) u.blocks.push_back(toMeshBlock(it->second));
+    if (it != store.submeshes().end())
+      u.blocks.push_back(toMeshBlock(it->second, textures ? textures->find(key) : nullptr));
   }
   for (const BlockKey& key : removed) u.removed_keys.insert(u.removed_keys.end(), {key.x, key.y, key.z});
   return u;
 }
 
-bool applyMeshUpdate(const MeshUpdate& update, std::unordered_map<BlockKey, SubMesh, BlockKeyHash>* mesh) {
+bool applyMeshUpdate(const MeshUpdate& update, std::unordered_map<BlockKey, SubMesh, BlockKeyHash>* mesh,
+                     std::unordered_map<BlockKey, TexturePatch, BlockKeyHash>* textures) {
   // Validate everything first: a malformed message leaves the mesh untouched.
   if (update.removed_keys.size() % 3 != 0) return false;
   for (const MeshBlock& b : update.blocks) {
@@ -47,10 +70,44 @@ bool applyMeshUpdate(const MeshUpdate& update, std::unordered_map<BlockKey, SubM
       return false;
     for (uint32_t index : b.triangles)
       if (index >= n) return false;
+    if (!b.uvs.empty() && (b.uvs.size() != 2 * n || b.texture.data.empty())) return false;
+    for (float c : b.uvs)
+      if (!(c >= 0.0f && c <= 1.0f)) return false;
   }
-  if (update.full) mesh->clear();
-  for (size_t i = 0; i < update.removed_keys.size(); i += 3)
-    mesh->erase({update.removed_keys[i], update.removed_keys[i + 1], update.removed_keys[i + 2]});
+  // Decode the textures before touching anything, so a corrupt PNG also changes nothing.
+  std::vector<cv::Mat> decoded(update.blocks.size());
+  if (textures) {
+    for (size_t i = 0; i < update.blocks.size(); ++i) {
+      const MeshBlock& b = update.blocks[i];
+      if (b.uvs.empty()) continue;
+      const cv::Mat bgr = cv::imdecode(b.texture.data, cv::IMREAD_COLOR);
+      if (bgr.empty()) return false;
+      cv::cvtColor(bgr, decoded[i], cv::COLOR_BGR2RGB);
+    }
+  }
+  if (update.full) {
+    mesh->clear();
+    if (textures) textures->clear();
+  }
+  for (size_t i = 0; i < update.removed_keys.size(); i += 3) {
+    const BlockKey key{update.removed_keys[i], update.removed_keys[i + 1], update.removed_keys[i + 2]};
+    mesh->erase(key);
+    if (textures) textures->erase(key);
+  }
+  if (textures) {
+    for (size_t i = 0; i < update.blocks.size(); ++i) {
+      const MeshBlock& b = update.blocks[i];
+      const BlockKey key{b.key[0], b.key[1], b.key[2]};
+      if (b.uvs.empty()) {
+        textures->erase(key);
+        continue;
+      }
+      TexturePatch& patch = (*textures)[key];
+      patch = TexturePatch{};
+      patch.image_rgb = decoded[i];
+      for (size_t v = 0; v < b.uvs.size(); v += 2) patch.uvs.emplace_back(b.uvs[v], b.uvs[v + 1]);
+    }
+  }
   for (const MeshBlock& b : update.blocks) {
     const size_t n = b.vertices.size() / 3;
     SubMesh s;

@@ -5,11 +5,16 @@
 #include <stereo_fusion/SaveMesh.h>
 #include <tf2_ros/transform_broadcaster.h>
 
+#include <unistd.h>
+
+#include <fstream>
+#include <opencv2/core.hpp>
 #include <map>
 #include <mutex>
 
 #include "../unit/TestSupport.h"
 #include "RosTestSupport.h"
+#include "stereo_fusion/io/ObjReader.h"
 #include "stereo_fusion/io/PlyReader.h"
 #include "stereo_fusion/ros/MeshMessages.h"
 #include "stereo_fusion/ros/MessageConversions.h"
@@ -71,7 +76,7 @@ class NodeletFixture : public testing::Test {
     if (last_sequence_ && u->sequence != last_sequence_ + 1) ++sequence_gaps_;
     last_sequence_ = u->sequence;
     ++updates_;
-    applied_ok_ &= applyMeshUpdate(*u, &streamed_);
+    applied_ok_ &= applyMeshUpdate(*u, &streamed_, &streamed_textures_);
   }
 
   ros::Publisher disparity_pub_, image_pub_, info_pub_;
@@ -80,6 +85,7 @@ class NodeletFixture : public testing::Test {
   tf2_ros::TransformBroadcaster tf_;
   std::mutex mutex_;
   std::unordered_map<BlockKey, SubMesh, BlockKeyHash> streamed_;
+  std::unordered_map<BlockKey, TexturePatch, BlockKeyHash> streamed_textures_;
   uint64_t last_sequence_ = 0;
   int sequence_gaps_ = 0, updates_ = 0;
   bool applied_ok_ = true;
@@ -102,8 +108,23 @@ TEST_F(NodeletFixture, StreamedMeshEqualsFullMeshAndSavedPly) {
   ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", full));
   EXPECT_TRUE(full.response.mesh.full);
   std::unordered_map<BlockKey, SubMesh, BlockKeyHash> reference;
-  ASSERT_TRUE(applyMeshUpdate(full.response.mesh, &reference));
+  std::unordered_map<BlockKey, TexturePatch, BlockKeyHash> reference_textures;
+  ASSERT_TRUE(applyMeshUpdate(full.response.mesh, &reference, &reference_textures));
   ASSERT_GT(reference.size(), 10u);
+  // fusion_nodelet.test turns texture patches on: textured blocks carry a PNG and one UV per vertex.
+  ASSERT_GT(reference_textures.size(), 3u);
+  for (const auto& [key, patch] : reference_textures) {
+    ASSERT_EQ(patch.uvs.size(), reference.at(key).positions.size()) << key;
+    EXPECT_LE(patch.image_rgb.cols, 64);  // texture_max_patch_px default
+    EXPECT_LE(patch.image_rgb.rows, 64);
+    EXPECT_GT(patch.image_rgb.total(), 0u);
+  }
+  // UVs without a texture are refused.
+  MeshUpdate no_texture = full.response.mesh;
+  for (auto& b : no_texture.blocks)
+    if (!b.uvs.empty()) b.texture.data.clear();
+  std::unordered_map<BlockKey, SubMesh, BlockKeyHash> unchanged = reference;
+  EXPECT_FALSE(applyMeshUpdate(no_texture, &unchanged));
   // A malformed update (a triangle index past the last vertex) is refused and changes nothing.
   MeshUpdate broken = full.response.mesh;
   broken.blocks.back().triangles.back() = 1u << 30;
@@ -123,6 +144,15 @@ TEST_F(NodeletFixture, StreamedMeshEqualsFullMeshAndSavedPly) {
     EXPECT_EQ(it->second.triangles, ref.triangles) << key;
     EXPECT_EQ(it->second.colors, ref.colors) << key;
   }
+  // The streamed textures equal the full mesh's: same blocks, same texels, same UVs.
+  ASSERT_EQ(streamed_textures_.size(), reference_textures.size());
+  for (const auto& [key, ref] : reference_textures) {
+    auto it = streamed_textures_.find(key);
+    ASSERT_NE(it, streamed_textures_.end()) << key;
+    EXPECT_EQ(it->second.uvs, ref.uvs) << key;
+    ASSERT_EQ(it->second.image_rgb.size(), ref.image_rgb.size()) << key;
+    EXPECT_EQ(cv::norm(it->second.image_rgb, ref.image_rgb, cv::NORM_INF), 0.0) << key;
+  }
   const TriangleMesh welded = weldSubmeshes(reference);
   SaveMesh save;
   save.request.path = testing::TempDir() + "stereo_fusion_rostest_mesh.ply";
@@ -133,6 +163,22 @@ TEST_F(NodeletFixture, StreamedMeshEqualsFullMeshAndSavedPly) {
   ASSERT_TRUE(readPly(save.request.path, &saved, &error)) << error;
   EXPECT_EQ(saved.positions.size(), welded.positions.size());
   EXPECT_EQ(saved.triangles.size(), welded.triangles.size());
+
+  // save_mesh with a .obj path writes the textured mesh: OBJ + MTL + atlas PNG.
+  save.request.path = testing::TempDir() + "stereo_fusion_rostest_mesh_" + std::to_string(getpid()) + ".obj";
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/save_mesh", save));
+  ASSERT_TRUE(save.response.success) << save.response.message;
+  ObjMesh obj;
+  ASSERT_TRUE(readObj(save.request.path, &obj, &error)) << error;
+  size_t triangles = 0;
+  for (const auto& [key, sub] : reference) triangles += sub.triangles.size();
+  EXPECT_EQ(obj.faces.size(), triangles);
+  size_t textured_faces = 0;
+  for (const ObjFace& f : obj.faces) textured_faces += f.vt[0] >= 0;
+  EXPECT_GT(textured_faces, 0u);
+  bool atlas_found = false;
+  for (const ObjMaterial& m : obj.materials) atlas_found |= !m.diffuse_map.empty() && std::ifstream(m.diffuse_map).good();
+  EXPECT_TRUE(atlas_found);
 }
 
 TEST_F(NodeletFixture, MissingTfAndBadInputAreDroppedCountedAndSurvived) {

@@ -10,6 +10,7 @@
 #include "MeshTestSupport.h"
 #include "fuser/OfflineFuser.h"
 #include "stereo_fusion/io/DatasetReader.h"
+#include "stereo_fusion/io/ObjReader.h"
 
 using namespace stereo_fusion;
 using namespace stereo_fusion::test;
@@ -251,6 +252,34 @@ TEST(OfflineFuser, WritesMeshAndStatsAndCountsSkippedFrames) {
   EXPECT_EQ(stats["blocks"]["meshed_at_8"].get<size_t>() + stats["blocks"]["meshed_at_4"].get<size_t>() +
                 stats["blocks"]["meshed_at_2"].get<size_t>(),
             report.blocks);
+  fs::remove_all(out);
+}
+
+TEST(OfflineFuser, TexturePatchesAddObjMtlAndAtlasAndTheirMemoryToStats) {
+  SmallSequence seq("fuse_textured", 3);
+  FuseOptions options;
+  std::string error;
+  const fs::path out = fs::path(testing::TempDir()) / "stereo_fusion_fuse_textured_out";
+  fs::remove_all(out);
+  ASSERT_TRUE(parseFuseArguments({seq.dir.string(), out.string(), "--set", "texture=patches", "--quiet"}, &options,
+                                 &error)) << error;
+  FuseReport report;
+  ASSERT_TRUE(runOfflineFusion(options, &report, &error)) << error;
+  ASSERT_TRUE(fs::exists(out / "mesh.ply"));
+  ASSERT_TRUE(fs::exists(out / "mesh.mtl"));
+  ASSERT_TRUE(fs::exists(out / "mesh_atlas_0.png"));
+  EXPECT_EQ(report.atlas_count, 1u);
+  EXPECT_GT(report.textured_blocks, 5u);
+  EXPECT_GT(report.texture_bytes, report.textured_blocks * 3 * 4);  // at least a few texels each
+  EXPECT_LE(report.texture_bytes, report.textured_blocks * (3 * 64 * 64 + 8 * 2000 + 1024));
+  ObjMesh obj;
+  ASSERT_TRUE(readObj((out / "mesh.obj").string(), &obj, &error)) << error;
+  EXPECT_EQ(obj.faces.size(), report.mesh_triangles);  // same triangles as the welded PLY
+  std::ifstream stats_file(out / "stats.json");
+  const nlohmann::json stats = nlohmann::json::parse(stats_file);
+  EXPECT_EQ(stats["texture"]["textured_blocks"].get<size_t>(), report.textured_blocks);
+  EXPECT_EQ(stats["texture"]["bytes"].get<size_t>(), report.texture_bytes);
+  EXPECT_EQ(stats["config"]["texture"], "patches");
   fs::remove_all(out);
 }
 

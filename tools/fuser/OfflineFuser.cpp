@@ -11,6 +11,7 @@
 #include "stereo_fusion/Mapper.h"
 #include "stereo_fusion/io/ConfigFile.h"
 #include "stereo_fusion/io/DatasetReader.h"
+#include "stereo_fusion/io/ObjWriter.h"
 #include "stereo_fusion/io/PlyWriter.h"
 #include "stereo_fusion/ros/BagSequence.h"
 #include "stereo_fusion/util/Percentile.h"
@@ -175,7 +176,8 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
         skip("rejected", "frame " + std::to_string(i) + ": " + r.error);
       } else {
         ++report->frames_used;
-        report->timings.push_back({r.lookup_ms, r.fusion_ms, r.mesh.meshing_ms, frame_timer.elapsedMs()});
+        report->timings.push_back(
+            {r.lookup_ms, r.fusion_ms, r.mesh.meshing_ms, r.texture.texture_ms, frame_timer.elapsedMs()});
       }
     }
     if (options.progress) showProgress(i + 1, total, wall.elapsedMs() / 1000.0, terminal, &last_decile);
@@ -191,6 +193,15 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
   for (const VoxelBlock* b : mapper.map().blocks()) ++report->blocks_per_level[b->mesh_level];
 
   if (!writePly((fs::path(options.out_dir) / "mesh.ply").string(), mesh, error)) return false;
+  report->textured_blocks = mapper.textures().patches().size();
+  report->texture_bytes = mapper.textures().memoryBytes();
+  if (options.config.texture == TextureMode::kPatches) {
+    ObjExportInfo info;
+    if (!writeTexturedObj((fs::path(options.out_dir) / "mesh.obj").string(), mapper.mesh().submeshes(),
+                          mapper.textures().patches(), ObjExportOptions{}, &info, error))
+      return false;
+    report->atlas_count = info.files.size() - 2;  // besides the .obj and the .mtl
+  }
   std::ofstream stats(fs::path(options.out_dir) / "stats.json");
   stats << statsJson(*report, options.config) << "\n";
   if (!stats) {
@@ -219,6 +230,10 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   j["memory"]["bytes_per_block"] = report.bytes_per_block;
   j["mesh"]["vertices"] = report.mesh_vertices;
   j["mesh"]["triangles"] = report.mesh_triangles;
+  j["texture"]["textured_blocks"] = report.textured_blocks;
+  j["texture"]["bytes"] = report.texture_bytes;
+  j["texture"]["megabytes"] = report.texture_bytes / 1048576.0;
+  j["texture"]["atlases"] = report.atlas_count;
   auto stage = [&](double StageTimings::*field) {
     std::vector<double> v;
     for (const StageTimings& t : report.timings) v.push_back(t.*field);
@@ -228,6 +243,7 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   j["timings_ms"]["lookup"] = stage(&StageTimings::lookup_ms);
   j["timings_ms"]["fusion"] = stage(&StageTimings::fusion_ms);
   j["timings_ms"]["meshing"] = stage(&StageTimings::meshing_ms);
+  j["timings_ms"]["texture"] = stage(&StageTimings::texture_ms);
   j["timings_ms"]["total"] = stage(&StageTimings::total_ms);
   j["wall_time_s"] = report.wall_time_s;
   for (const ParameterSpec& p : mapperParameterSpecs()) j["config"][p.name] = getMapperParameter(config, p.name);

@@ -15,7 +15,7 @@ namespace stereo_fusion {
 struct FuseOptions {
   std::string input;    ///< dataset folder, or a rosbag (*.bag)
   BagTopics bag_topics;  ///< topics and world frame read from a bag (the nodelet's defaults)
-  std::string out_dir;  ///< receives mesh.ply and stats.json (created if missing)
+  std::string out_dir;  ///< receives mesh.ply and stats.json (and mesh.obj + .mtl + atlas PNGs with texture = patches)
   MapperConfig config;
   size_t max_frames = 0;  ///< 0 = all
   bool progress = true;   ///< progress bar on stderr (a line per 10 % when not a terminal)
@@ -23,7 +23,7 @@ struct FuseOptions {
 
 /// Per-frame stage timings in milliseconds.
 struct StageTimings {
-  double lookup_ms = 0, fusion_ms = 0, meshing_ms = 0, total_ms = 0;
+  double lookup_ms = 0, fusion_ms = 0, meshing_ms = 0, texture_ms = 0, total_ms = 0;
 };
 
 /// What a run did; stats.json is this, plus the configuration.
@@ -38,6 +38,9 @@ struct FuseReport {
   size_t memory_bytes = 0;
   double bytes_per_block = 0;
   size_t mesh_vertices = 0, mesh_triangles = 0;
+  size_t textured_blocks = 0;        ///< blocks with a texture patch (texture = patches)
+  size_t texture_bytes = 0;          ///< memory held by the texture patches
+  size_t atlas_count = 0;            ///< atlas PNGs written with mesh.obj
   double wall_time_s = 0;
 };
 

@@ -9,7 +9,8 @@ const char* kUsage =
     "usage: stereo_fusion_fuse <seq-folder | file.bag> <out-dir> [--config FILE] [--set key=value ...]\n"
     "                          [--frames N] [--quiet]\n"
     "Fuses a dataset folder (see DESIGN.md) or a rosbag (DisparityImage, Image, CameraInfo, /tf)\n"
-    "and writes <out-dir>/mesh.ply and <out-dir>/stats.json.\n"
+    "and writes <out-dir>/mesh.ply and <out-dir>/stats.json (with --set texture=patches also\n"
+    "<out-dir>/mesh.obj + mesh.mtl + mesh_atlas_K.png, textured from the camera images).\n"
     "  --config FILE     parameters in config/default.yaml's format (applied before --set)\n"
     "  --set key=value   override one parameter; every key of config/default.yaml is accepted\n"
     "  --frames N        fuse only the first N frames\n"
@@ -43,5 +44,8 @@ int main(int argc, char** argv) {
               report.frames_used, report.frames_total, skipped, report.wall_time_s, report.blocks,
               report.memory_bytes / 1048576.0, report.mesh_vertices, report.mesh_triangles);
   std::printf("wrote %s/mesh.ply and %s/stats.json\n", options.out_dir.c_str(), options.out_dir.c_str());
+  if (options.config.texture == stereo_fusion::TextureMode::kPatches)
+    std::printf("wrote %s/mesh.obj + mesh.mtl + %zu atlas PNG(s): %zu textured blocks, texture memory %.1f MB\n",
+                options.out_dir.c_str(), report.atlas_count, report.textured_blocks, report.texture_bytes / 1048576.0);
   return report.frames_used > 0 ? 0 : 1;
 }
