@@ -30,24 +30,8 @@ BlockKey BlockOctree::keyForPoint(const Eigen::Vector3d& p_world) const {
   return keyForBlockCoordinates(p_world / block_size_m_);
 }
 
-BlockKey BlockOctree::keyForBlockCoordinates(const Eigen::Vector3d& p_blocks) {
-  const Eigen::Vector3d k = p_blocks.array().floor();
-  const double lim = static_cast<double>(kMaxKey) + 1.0;
-  auto clampToInt = [lim](double v) {
-    // Out-of-range (or NaN) coordinates map beyond kMaxKey so keyInRange() refuses them.
-    if (!(std::abs(v) < lim)) return static_cast<int32_t>(kMaxKey) + 1;
-    return static_cast<int32_t>(v);
-  };
-  return {clampToInt(k.x()), clampToInt(k.y()), clampToInt(k.z())};
-}
-
 Eigen::Vector3d BlockOctree::blockOrigin(const BlockKey& key) const {
   return Eigen::Vector3d(key.x, key.y, key.z) * block_size_m_;
-}
-
-bool BlockOctree::keyInRange(const BlockKey& key) {
-  auto ok = [](int32_t v) { return v >= -kMaxKey && v <= kMaxKey; };
-  return ok(key.x) && ok(key.y) && ok(key.z);
 }
 
 int BlockOctree::octantIndex(const BlockKey& key, const BlockKey& centre) {

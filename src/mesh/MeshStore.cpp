@@ -10,14 +10,26 @@ namespace stereo_fusion {
 MeshStore::MeshStore(const MeshingParams& params) : params_(params), mesher_(params) {}
 
 std::vector<BlockKey> MeshStore::affectedOwners(const BlockOctree& map,
-                                                const std::vector<BlockKey>& updated) {
+                                                const std::vector<BlockKey>& updated, ThreadPool* pool) {
+  // The octree searches dominate: run them in parallel, one slot per (block, offset).
+  std::vector<BlockKey> candidates(updated.size() * 8);
+  std::vector<uint8_t> exists(candidates.size(), 0);
+  auto search = [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i)
+      for (int d = 0; d < 8; ++d) {
+        const BlockKey owner = updated[i].offset(-(d & 1), -((d >> 1) & 1), -((d >> 2) & 1));
+        candidates[8 * i + d] = owner;
+        exists[8 * i + d] = map.find(owner) != nullptr;
+      }
+  };
+  if (pool != nullptr)
+    pool->parallelFor(updated.size(), 64, search);
+  else
+    search(0, updated.size());
   std::vector<BlockKey> owners;
-  owners.reserve(updated.size() * 8);
-  for (const BlockKey& key : updated)
-    for (int d = 0; d < 8; ++d) {
-      const BlockKey owner = key.offset(-(d & 1), -((d >> 1) & 1), -((d >> 2) & 1));
-      if (map.find(owner) != nullptr) owners.push_back(owner);
-    }
+  owners.reserve(candidates.size());
+  for (size_t i = 0; i < candidates.size(); ++i)
+    if (exists[i]) owners.push_back(candidates[i]);
   std::sort(owners.begin(), owners.end());
   owners.erase(std::unique(owners.begin(), owners.end()), owners.end());
   return owners;
@@ -46,9 +58,12 @@ MeshChanges MeshStore::remesh(const BlockOctree& map, const std::vector<BlockKey
 
 MeshChanges MeshStore::update(const BlockOctree& map, const std::vector<BlockKey>& updated,
                              ThreadPool* pool) {
-  for (const BlockKey& key : updated)
-    if (VoxelBlock* block = map.find(key)) refreshMeshLevel(block, params_.level_min_coverage);
-  return remesh(map, affectedOwners(map, updated), pool);
+  // Each level choice reads one block's voxels: independent, so in parallel.
+  pool->parallelFor(updated.size(), 16, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i)
+      if (VoxelBlock* block = map.find(updated[i])) refreshMeshLevel(block, params_.level_min_coverage);
+  });
+  return remesh(map, affectedOwners(map, updated, pool), pool);
 }
 
 MeshChanges MeshStore::rebuild(const BlockOctree& map, ThreadPool* pool) {

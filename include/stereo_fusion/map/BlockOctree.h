@@ -2,6 +2,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <atomic>
+#include <cmath>
 #include <cstddef>
 #include <memory>
 #include <mutex>
@@ -98,5 +99,22 @@ class BlockOctree {
   std::vector<VoxelBlock*> blocks_;
   std::vector<std::unique_ptr<VoxelBlock>> block_storage_;
 };
+
+// Inline: the lookup calls these twice per pixel.
+inline BlockKey BlockOctree::keyForBlockCoordinates(const Eigen::Vector3d& p_blocks) {
+  const double lim = static_cast<double>(kMaxKey) + 1.0;
+  auto toKey = [lim](double v) {
+    const double k = std::floor(v);
+    // Out-of-range (or NaN) coordinates map beyond kMaxKey so keyInRange() refuses them.
+    if (!(std::abs(k) < lim)) return static_cast<int32_t>(kMaxKey) + 1;
+    return static_cast<int32_t>(k);
+  };
+  return {toKey(p_blocks.x()), toKey(p_blocks.y()), toKey(p_blocks.z())};
+}
+
+inline bool BlockOctree::keyInRange(const BlockKey& key) {
+  auto ok = [](int32_t v) { return v >= -kMaxKey && v <= kMaxKey; };
+  return ok(key.x) && ok(key.y) && ok(key.z);
+}
 
 }  // namespace stereo_fusion

@@ -34,7 +34,9 @@ class MeshStore {
   void clear() { meshes_.clear(); }
 
   /// The owners a change of `updated` must re-mesh (existing blocks only), sorted by key.
-  static std::vector<BlockKey> affectedOwners(const BlockOctree& map, const std::vector<BlockKey>& updated);
+  /// The searches run on `pool` when given.
+  static std::vector<BlockKey> affectedOwners(const BlockOctree& map, const std::vector<BlockKey>& updated,
+                                              ThreadPool* pool = nullptr);
 
  private:
   MeshChanges remesh(const BlockOctree& map, const std::vector<BlockKey>& owners, ThreadPool* pool);
