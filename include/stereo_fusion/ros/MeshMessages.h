@@ -11,23 +11,40 @@
 
 namespace stereo_fusion {
 
-/// One submesh as a MeshBlock message.
-MeshBlock toMeshBlock(const SubMesh& submesh);
+/// How MeshBlock carries positions, normals and triangles (see msg/MeshBlock.msg).
+enum class MeshEncoding {
+  kFloat32,  ///< float32 positions and normals, uint32 indices: exact
+  kCompact,  ///< uint16 positions relative to the block origin, int8 normals, uint16 indices
+};
 
-/// A MeshUpdate with the submeshes of `changed` (taken from `store`) and the `removed` keys.
-MeshUpdate toMeshUpdate(const MeshStore& store, const std::vector<BlockKey>& changed,
-                        const std::vector<BlockKey>& removed, const std_msgs::Header& header,
-                        double voxel_size_m, uint64_t sequence, bool full);
+/// "float32" | "compact" → encoding; false for anything else.
+bool parseMeshEncoding(const std::string& text, MeshEncoding* encoding);
 
-/// Applies `update` to `mesh` (key → submesh), as a subscriber would. Returns false when a
-/// message is malformed (index out of range, array sizes that do not match).
+/// Metres per unit of MeshBlock::vertices_q for blocks of `block_size_m`.
+inline double compactPositionStep(double block_size_m) { return block_size_m / 32768.0; }
+
+/// One submesh as a MeshBlock message. kCompact falls back to float32 for a block whose
+/// vertices do not fit the quantisation (see msg/MeshBlock.msg).
+MeshBlock toMeshBlock(const SubMesh& submesh, MeshEncoding encoding = MeshEncoding::kFloat32,
+                      double block_size_m = 0.0);
+
+/// A MeshUpdate with the submeshes of `changed` (taken from `submeshes`) and the `removed` keys.
+MeshUpdate toMeshUpdate(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes,
+                        const std::vector<BlockKey>& changed, const std::vector<BlockKey>& removed,
+                        const std_msgs::Header& header, double voxel_size_m, uint64_t sequence, bool full,
+                        MeshEncoding encoding = MeshEncoding::kFloat32);
+
+/// Applies `update` to `mesh` (key → submesh), as a subscriber would; decodes both encodings.
+/// Returns false when a message is malformed (index out of range, array sizes that do not
+/// match) and then leaves `mesh` untouched.
 bool applyMeshUpdate(const MeshUpdate& update, std::unordered_map<BlockKey, SubMesh, BlockKeyHash>* mesh);
 
 /// rviz markers for the changed blocks (one vertex-coloured TRIANGLE_LIST per block, namespace
 /// "mesh", a stable id per block) and DELETE markers for the removed ones.
 class MeshMarkers {
  public:
-  visualization_msgs::MarkerArray build(const MeshStore& store, const std::vector<BlockKey>& changed,
+  visualization_msgs::MarkerArray build(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes,
+                                        const std::vector<BlockKey>& changed,
                                         const std::vector<BlockKey>& removed, const std_msgs::Header& header);
   /// A DELETEALL marker, and forget every id (after ~reset).
   visualization_msgs::MarkerArray clear(const std_msgs::Header& header);
