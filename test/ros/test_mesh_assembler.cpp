@@ -180,6 +180,41 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   else EXPECT_EQ(robot_ply.size(), base_ply.size());
   std::remove(save_robot.request.path.c_str());
   std::remove(save_base.request.path.c_str());
+
+  // A gap: an update whose sequence skips one (as if the one before it was lost), carrying a
+  // block the robot does not have. It must not be applied on top of a mesh that misses the lost
+  // update: the assembler asks for the full mesh again and ends, after the next real frame, with
+  // exactly the robot's mesh, without that block.
+  ros::Publisher injector = nh.advertise<MeshUpdate>("/stereo_fusion/mesh_update", 1, true);
+  MeshUpdate after_gap;
+  after_gap.sequence = robot_sequence + 2;
+  after_gap.voxel_size = static_cast<float>(config.voxel_size_m);
+  after_gap.block_size = static_cast<float>(8.0 * config.voxel_size_m);
+  SubMesh stray;
+  stray.key = {1000, 1000, 1000};
+  stray.positions = {{160.0f, 160.0f, 160.0f}, {160.1f, 160.0f, 160.0f}, {160.0f, 160.1f, 160.0f}};
+  stray.normals.assign(3, Eigen::Vector3f::UnitZ());
+  stray.colors.assign(3, {255, 0, 0});
+  stray.triangles = {{0, 1, 2}};
+  after_gap.blocks.push_back(toMeshBlock(stray));
+  ASSERT_TRUE(test::waitFor([&] { return injector.getNumSubscribers() > 0; }, 30.0));
+  injector.publish(after_gap);
+  ros::WallDuration(1.0).sleep();  // let it arrive before the next real update
+  publishFrame(kFrames);
+  ASSERT_TRUE(test::waitFor([&] { return diagnostics.value("frames fused") >= kFrames + 1; }, 60.0));
+  ASSERT_TRUE(test::waitFor([&] {
+    return fetch("/stereo_fusion/get_full_mesh", &robot, &robot_sequence) &&
+           fetch("/mesh_assembler/get_full_mesh", &assembled, &assembled_sequence) &&
+           assembled_sequence == robot_sequence;
+  }, 30.0)) << "assembler at sequence " << assembled_sequence << ", robot at " << robot_sequence;
+  EXPECT_EQ(assembled.count(stray.key), 0u) << "the update after the gap was applied";
+  ASSERT_EQ(assembled.size(), robot.size());
+  for (const auto& [key, sub] : robot) {
+    auto it = assembled.find(key);
+    ASSERT_NE(it, assembled.end()) << key;
+    EXPECT_EQ(it->second.positions, sub.positions) << key;
+    EXPECT_EQ(it->second.triangles, sub.triangles) << key;
+  }
 }
 
 int main(int argc, char** argv) { return test::runRosTests(argc, argv, "stereo_fusion_assembler_test"); }
