@@ -244,7 +244,8 @@ void FusionNodelet::publishPending(const ros::Time& stamp, bool force) {
       markers_pub_.publish(markers_.build(mapper_->mesh().submeshes(), changed, removed, header));
     }
   }
-  if (node_config_.publish_block_bounds && block_bounds_pub_.getNumSubscribers() > 0)
+  // Latched and opt-in (debug): published even unheard, so a display ticked later shows it.
+  if (node_config_.publish_block_bounds)
     block_bounds_pub_.publish(blockBoundsMarker(mapper_->mesh().submeshes(), 8.0 * mapper_config_.voxel_size_m, header));
   const ros::Time ros_now = ros::Time::now();
   for (const ros::Time& t : unpublished_stamps_) {
