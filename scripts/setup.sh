@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian packages stereo_fusion needs (only the missing ones) and builds the
 # package into .build/. Idempotent; safe to run on a fresh Debian bookworm machine.
-#   scripts/setup.sh [--no-build]
+#   scripts/setup.sh [--no-build] [--screenshots]
 # Environment: BUILD_TYPE (default Release), BUILD_DIR (default <repo>/.build).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -26,7 +26,21 @@ PACKAGES=(
   python3-rosbag python3-rosnode python3-rosservice python3-rostopic python3-rospy
   python3-sensor-msgs python3-stereo-msgs python3-visualization-msgs python3-tf2-msgs
   python3-diagnostic-msgs tf2-tools
+  # launch/stereo_pipeline.launch and its rostest: image_proc + stereo_image_proc nodelets (the
+  # -dev packages hold their package.xml and plugin XML: without them roslaunch cannot load them)
+  ros-image-proc libimage-proc-dev ros-stereo-image-proc libstereo-image-proc-dev
 )
+# rviz under Xvfb with software OpenGL for scripts/screenshots.sh: opt-in (`--screenshots`, which
+# that script passes); CI does not need them.
+SCREENSHOT_PACKAGES=(rviz xvfb xauth imagemagick libgl1-mesa-dri x11-apps)
+BUILD=true
+for arg in "$@"; do
+  case "$arg" in
+    --screenshots) PACKAGES+=("${SCREENSHOT_PACKAGES[@]}") ;;
+    --no-build) BUILD=false ;;
+    *) echo "setup.sh: unknown option $arg" >&2; exit 2 ;;
+  esac
+done
 
 missing=()
 for pkg in "${PACKAGES[@]}"; do
@@ -45,7 +59,7 @@ else
   echo "[setup] all ${#PACKAGES[@]} Debian packages present"
 fi
 
-if [ "${1:-}" = "--no-build" ]; then exit 0; fi
+if [ "$BUILD" = false ]; then exit 0; fi
 
 # ROS tooling must run on Debian's Python, not the python3 first on PATH (ros-on-debian.md #1).
 export PYENV_VERSION=system

@@ -9,6 +9,7 @@
 #include "stereo_fusion/io/ObjWriter.h"
 #include "stereo_fusion/io/PlyWriter.h"
 #include "stereo_fusion/util/Percentile.h"
+#include "stereo_fusion/ros/DebugMarkers.h"
 #include "stereo_fusion/ros/MessageConversions.h"
 
 namespace stereo_fusion {
@@ -46,6 +47,9 @@ void FusionNodelet::onInit() {
       });
   if (node_config_.publish_path) path_pub_ = pnh.advertise<nav_msgs::Path>("camera_path", 1, true);
   path_.header.frame_id = node_config_.world_frame;
+  if (node_config_.publish_frustum) frustum_pub_ = pnh.advertise<visualization_msgs::Marker>("frustum", 1, true);
+  if (node_config_.publish_block_bounds)
+    block_bounds_pub_ = pnh.advertise<visualization_msgs::Marker>("block_bounds", 1, true);
   save_srv_ = pnh.advertiseService("save_mesh", &FusionNodelet::saveMesh, this);
   full_srv_ = pnh.advertiseService("get_full_mesh", &FusionNodelet::getFullMesh, this);
   reset_srv_ = pnh.advertiseService("reset", &FusionNodelet::reset, this);
@@ -193,6 +197,11 @@ void FusionNodelet::processFrame(const QueuedFrame& f) {
         path_.header.stamp = header.stamp;
         if (path_pub_.getNumSubscribers() > 0) path_pub_.publish(path_);
       }
+      if (node_config_.publish_frustum) {
+        std_msgs::Header world_header = header;
+        world_header.frame_id = node_config_.world_frame;
+        frustum_pub_.publish(frustumMarker(frame.camera, T_world_camera, node_config_.frustum_depth_m, world_header));
+      }
     }
   }
   if (!result.accepted) {
@@ -223,20 +232,23 @@ void FusionNodelet::publishPending(const ros::Time& stamp, bool force) {
   if (!changed.empty() || !removed.empty()) {
     ++sequence_;
     if (mesh_update_pub_.getNumSubscribers() > 0)
-      mesh_update_pub_.publish(toMeshUpdate(mapper_->mesh(), changed, removed, header,
+      mesh_update_pub_.publish(toMeshUpdate(mapper_->mesh().submeshes(), changed, removed, header,
                                             mapper_config_.voxel_size_m, sequence_, false,
-                                            &mapper_->textures()));
+                                            node_config_.mesh_encoding, &mapper_->textures()));
   }
   if (node_config_.publish_markers && markers_pub_.getNumSubscribers() > 0) {
     if (markers_full_pending_) {
       std::vector<BlockKey> all;
       for (const auto& [key, sub] : mapper_->mesh().submeshes()) all.push_back(key);
-      markers_pub_.publish(markers_.build(mapper_->mesh(), all, removed, header));
+      markers_pub_.publish(markers_.build(mapper_->mesh().submeshes(), all, removed, header));
       markers_full_pending_ = false;
     } else {
-      markers_pub_.publish(markers_.build(mapper_->mesh(), changed, removed, header));
+      markers_pub_.publish(markers_.build(mapper_->mesh().submeshes(), changed, removed, header));
     }
   }
+  // Latched and opt-in (debug): published even unheard, so a display ticked later shows it.
+  if (node_config_.publish_block_bounds)
+    block_bounds_pub_.publish(blockBoundsMarker(mapper_->mesh().submeshes(), 8.0 * mapper_config_.voxel_size_m, header));
   const ros::Time ros_now = ros::Time::now();
   for (const ros::Time& t : unpublished_stamps_) {
     latencies_s_.push_back((ros_now - t).toSec());
@@ -284,8 +296,8 @@ bool FusionNodelet::getFullMesh(GetFullMesh::Request&, GetFullMesh::Response& re
   header.frame_id = node_config_.world_frame;
   header.stamp = ros::Time::now();
   // The sequence of the last published update: apply updates with a larger sequence on top.
-  res.mesh = toMeshUpdate(mapper_->mesh(), all, {}, header, mapper_config_.voxel_size_m, sequence_, true,
-                          &mapper_->textures());
+  res.mesh = toMeshUpdate(mapper_->mesh().submeshes(), all, {}, header, mapper_config_.voxel_size_m, sequence_,
+                          true, node_config_.mesh_encoding, &mapper_->textures());
   return true;
 }
 
@@ -301,7 +313,8 @@ bool FusionNodelet::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&)
   header.frame_id = node_config_.world_frame;
   header.stamp = ros::Time::now();
   markers_pub_.publish(markers_.clear(header));
-  MeshUpdate empty = toMeshUpdate(mapper_->mesh(), {}, {}, header, mapper_config_.voxel_size_m, ++sequence_, true);
+  MeshUpdate empty =
+      toMeshUpdate(mapper_->mesh().submeshes(), {}, {}, header, mapper_config_.voxel_size_m, ++sequence_, true);
   mesh_update_pub_.publish(empty);
   NODELET_INFO("stereo_fusion: map reset");
   return true;

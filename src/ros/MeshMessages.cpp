@@ -3,7 +3,17 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <cmath>
+#include <limits>
+
 namespace stereo_fusion {
+
+bool parseMeshEncoding(const std::string& text, MeshEncoding* encoding) {
+  if (text == "float32") *encoding = MeshEncoding::kFloat32;
+  else if (text == "compact") *encoding = MeshEncoding::kCompact;
+  else return false;
+  return true;
+}
 
 namespace {
 
@@ -20,12 +30,48 @@ void encodeTexture(const TexturePatch& patch, MeshBlock* b) {
   for (const Eigen::Vector2f& uv : patch.uvs) b->uvs.insert(b->uvs.end(), {uv.x(), uv.y()});
 }
 
+/// Fills the compact fields of `b` from `s`; false (b's compact fields then unspecified) when a
+/// vertex is outside the quantised range or there are too many vertices for uint16 indices.
+bool encodeCompact(const SubMesh& s, double block_size_m, MeshBlock* b) {
+  if (!(block_size_m > 0) || s.positions.size() > std::numeric_limits<uint16_t>::max() + size_t{1}) return false;
+  const double step = compactPositionStep(block_size_m);
+  const Eigen::Vector3d origin(s.key.x * block_size_m, s.key.y * block_size_m, s.key.z * block_size_m);
+  b->position_step_m = static_cast<float>(step);
+  b->vertices_q.reserve(3 * s.positions.size());
+  b->normals_q.reserve(3 * s.normals.size());
+  for (size_t v = 0; v < s.positions.size(); ++v) {
+    for (int k = 0; k < 3; ++k) {
+      const double q = std::round((s.positions[v][k] - origin[k]) / step);
+      if (!(q >= 0.0 && q <= 65535.0)) return false;
+      b->vertices_q.push_back(static_cast<uint16_t>(q));
+      const float n = std::max(-1.0f, std::min(1.0f, s.normals[v][k]));
+      b->normals_q.push_back(static_cast<int8_t>(std::lround(n * 127.0f)));
+    }
+  }
+  b->triangles_q.reserve(3 * s.triangles.size());
+  for (const auto& t : s.triangles) b->triangles_q.insert(b->triangles_q.end(), t.begin(), t.end());
+  return true;
+}
+
 }  // namespace
 
-MeshBlock toMeshBlock(const SubMesh& s, const TexturePatch* patch) {
+MeshBlock toMeshBlock(const SubMesh& s, MeshEncoding encoding, double block_size_m,
+                      const TexturePatch* patch) {
   MeshBlock b;
   b.key = {s.key.x, s.key.y, s.key.z};
   b.level = static_cast<uint8_t>(s.level);
+  b.position_step_m = 0.0f;
+  if (encoding == MeshEncoding::kCompact) {
+    if (encodeCompact(s, block_size_m, &b)) {
+      b.colors.reserve(3 * s.colors.size());
+      for (const auto& c : s.colors) b.colors.insert(b.colors.end(), c.begin(), c.end());
+      return b;
+    }
+    b.position_step_m = 0.0f;  // does not fit: this block goes as float32
+    b.vertices_q.clear();
+    b.normals_q.clear();
+    b.triangles_q.clear();
+  }
   b.vertices.reserve(3 * s.positions.size());
   b.normals.reserve(3 * s.normals.size());
   b.colors.reserve(3 * s.colors.size());
@@ -42,9 +88,10 @@ MeshBlock toMeshBlock(const SubMesh& s, const TexturePatch* patch) {
   return b;
 }
 
-MeshUpdate toMeshUpdate(const MeshStore& store, const std::vector<BlockKey>& changed,
-                        const std::vector<BlockKey>& removed, const std_msgs::Header& header,
-                        double voxel_size_m, uint64_t sequence, bool full, const TextureStore* textures) {
+MeshUpdate toMeshUpdate(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes,
+                        const std::vector<BlockKey>& changed, const std::vector<BlockKey>& removed,
+                        const std_msgs::Header& header, double voxel_size_m, uint64_t sequence, bool full,
+                        MeshEncoding encoding, const TextureStore* textures) {
   MeshUpdate u;
   u.header = header;
   u.sequence = sequence;
@@ -52,9 +99,9 @@ MeshUpdate toMeshUpdate(const MeshStore& store, const std::vector<BlockKey>& cha
   u.voxel_size = static_cast<float>(voxel_size_m);
   u.block_size = static_cast<float>(8.0 * voxel_size_m);
   for (const BlockKey& key : changed) {
-    auto it = store.submeshes().find(key);
-    if (it != store.submeshes().end())
-      u.blocks.push_back(toMeshBlock(it->second, textures ? textures->find(key) : nullptr));
+    auto it = submeshes.find(key);
+    if (it != submeshes.end())
+      u.blocks.push_back(toMeshBlock(it->second, encoding, u.block_size, textures ? textures->find(key) : nullptr));
   }
   for (const BlockKey& key : removed) u.removed_keys.insert(u.removed_keys.end(), {key.x, key.y, key.z});
   return u;
@@ -65,11 +112,21 @@ bool applyMeshUpdate(const MeshUpdate& update, std::unordered_map<BlockKey, SubM
   // Validate everything first: a malformed message leaves the mesh untouched.
   if (update.removed_keys.size() % 3 != 0) return false;
   for (const MeshBlock& b : update.blocks) {
-    const size_t n = b.vertices.size() / 3;
-    if (b.vertices.size() % 3 || b.normals.size() != 3 * n || b.colors.size() != 3 * n || b.triangles.size() % 3)
-      return false;
-    for (uint32_t index : b.triangles)
-      if (index >= n) return false;
+    size_t n = 0;
+    if (b.position_step_m > 0) {
+      n = b.vertices_q.size() / 3;
+      if (!(update.block_size > 0) || !std::isfinite(b.position_step_m) || b.vertices_q.size() % 3 ||
+          b.normals_q.size() != 3 * n || b.colors.size() != 3 * n || b.triangles_q.size() % 3)
+        return false;
+      for (uint16_t index : b.triangles_q)
+        if (index >= n) return false;
+    } else {
+      n = b.vertices.size() / 3;
+      if (b.vertices.size() % 3 || b.normals.size() != 3 * n || b.colors.size() != 3 * n || b.triangles.size() % 3)
+        return false;
+      for (uint32_t index : b.triangles)
+        if (index >= n) return false;
+    }
     if (!b.uvs.empty() && (b.uvs.size() != 2 * n || b.texture.data.empty())) return false;
     for (float c : b.uvs)
       if (!(c >= 0.0f && c <= 1.0f)) return false;
@@ -109,10 +166,30 @@ bool applyMeshUpdate(const MeshUpdate& update, std::unordered_map<BlockKey, SubM
     }
   }
   for (const MeshBlock& b : update.blocks) {
-    const size_t n = b.vertices.size() / 3;
     SubMesh s;
     s.key = {b.key[0], b.key[1], b.key[2]};
     s.level = b.level;
+    if (b.position_step_m > 0) {
+      const double block = update.block_size;
+      const Eigen::Vector3d origin(s.key.x * block, s.key.y * block, s.key.z * block);
+      const size_t n = b.vertices_q.size() / 3;
+      for (size_t v = 0; v < n; ++v) {
+        Eigen::Vector3d p, normal;
+        for (int k = 0; k < 3; ++k) {
+          p[k] = origin[k] + b.vertices_q[3 * v + k] * static_cast<double>(b.position_step_m);
+          normal[k] = b.normals_q[3 * v + k] / 127.0;
+        }
+        if (normal.norm() > 0) normal.normalize();
+        s.positions.push_back(p.cast<float>());
+        s.normals.push_back(normal.cast<float>());
+        s.colors.push_back({b.colors[3 * v], b.colors[3 * v + 1], b.colors[3 * v + 2]});
+      }
+      for (size_t t = 0; t < b.triangles_q.size(); t += 3)
+        s.triangles.push_back({b.triangles_q[t], b.triangles_q[t + 1], b.triangles_q[t + 2]});
+      (*mesh)[s.key] = std::move(s);
+      continue;
+    }
+    const size_t n = b.vertices.size() / 3;
     for (size_t v = 0; v < n; ++v) {
       s.positions.emplace_back(b.vertices[3 * v], b.vertices[3 * v + 1], b.vertices[3 * v + 2]);
       s.normals.emplace_back(b.normals[3 * v], b.normals[3 * v + 1], b.normals[3 * v + 2]);
@@ -131,13 +208,13 @@ int MeshMarkers::idOf(const BlockKey& key) {
   return it->second;
 }
 
-visualization_msgs::MarkerArray MeshMarkers::build(const MeshStore& store, const std::vector<BlockKey>& changed,
-                                                   const std::vector<BlockKey>& removed,
-                                                   const std_msgs::Header& header) {
+visualization_msgs::MarkerArray MeshMarkers::build(
+    const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes, const std::vector<BlockKey>& changed,
+    const std::vector<BlockKey>& removed, const std_msgs::Header& header) {
   visualization_msgs::MarkerArray array;
   for (const BlockKey& key : changed) {
-    auto it = store.submeshes().find(key);
-    if (it == store.submeshes().end()) continue;
+    auto it = submeshes.find(key);
+    if (it == submeshes.end()) continue;
     const SubMesh& s = it->second;
     visualization_msgs::Marker m;
     m.header = header;

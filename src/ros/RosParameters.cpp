@@ -56,6 +56,11 @@ bool loadParameters(const ros::NodeHandle& nh, MapperConfig* mapper, NodeConfig*
   nh.param("mesh_publish_rate_hz", node->mesh_publish_rate_hz, node->mesh_publish_rate_hz);
   nh.param("publish_markers", node->publish_markers, node->publish_markers);
   nh.param("publish_path", node->publish_path, node->publish_path);
+  nh.param("publish_frustum", node->publish_frustum, node->publish_frustum);
+  nh.param("frustum_depth_m", node->frustum_depth_m, node->frustum_depth_m);
+  nh.param("publish_block_bounds", node->publish_block_bounds, node->publish_block_bounds);
+  std::string encoding = node->mesh_encoding == MeshEncoding::kCompact ? "compact" : "float32";
+  nh.param("mesh_encoding", encoding, encoding);
   auto fail = [&](const std::string& name, const std::string& why) {
     *error = "parameter '" + nh.resolveName(name) + "' " + why;
     return false;
@@ -68,6 +73,9 @@ bool loadParameters(const ros::NodeHandle& nh, MapperConfig* mapper, NodeConfig*
   if (!(node->tf_timeout_s >= 0.0 && node->tf_timeout_s <= 10.0)) return fail("tf_timeout_s", "must be in [0, 10] s");
   if (!(node->mesh_publish_rate_hz >= 0.0 && node->mesh_publish_rate_hz <= 1000.0))
     return fail("mesh_publish_rate_hz", "must be in [0, 1000] Hz");
+  if (!(node->frustum_depth_m > 0.0 && node->frustum_depth_m <= 100.0))
+    return fail("frustum_depth_m", "must be in (0, 100] m");
+  if (!parseMeshEncoding(encoding, &node->mesh_encoding)) return fail("mesh_encoding", "must be float32 or compact");
   return true;
 }
 

@@ -1,6 +1,8 @@
 #include "stereo_fusion/ros/StereoBagWriter.h"
 
+#include <cv_bridge/cv_bridge.h>
 #include <rosbag/bag.h>
+#include <sensor_msgs/image_encodings.h>
 #include <tf2_msgs/TFMessage.h>
 
 #include "stereo_fusion/ros/MessageConversions.h"
@@ -40,6 +42,35 @@ bool StereoBagWriter::write(const StereoFrame& frame, float max_disparity_px, st
     bag_->write(topics_.disparity, header.stamp, disparity);
     bag_->write(topics_.image, header.stamp, image);
     bag_->write(topics_.camera_info, header.stamp, info);
+  } catch (const rosbag::BagException& e) {
+    *error = std::string("writing the bag failed: ") + e.what();
+    return false;
+  }
+  return true;
+}
+
+bool StereoBagWriter::writePair(const StereoFrame& frame, const cv::Mat& right_rgb, const PairTopics& topics,
+                                std::string* error) {
+  std_msgs::Header header;
+  header.stamp = ros::Time(frame.timestamp_s + stamp_offset_s_);
+  header.frame_id = camera_frame_;
+  stereo_msgs::DisparityImage unused_disparity;
+  sensor_msgs::Image left;
+  sensor_msgs::CameraInfo left_info;
+  toMessages(frame, header, 0.0f, &unused_disparity, &left, &left_info);
+  const sensor_msgs::Image right =
+      *cv_bridge::CvImage(header, sensor_msgs::image_encodings::RGB8, right_rgb).toImageMsg();
+  sensor_msgs::CameraInfo right_info = left_info;
+  // The right camera's projection: x_right = fx * (X - baseline) / Z + cx (ROS stereo convention).
+  right_info.P[3] = -frame.camera.fx() * frame.camera.baseline();
+  tf2_msgs::TFMessage tf;
+  tf.transforms.push_back(toTransform(frame.T_world_camera, topics_.world_frame, header));
+  try {
+    bag_->write("/tf", header.stamp, tf);
+    bag_->write(topics.left_image, header.stamp, left);
+    bag_->write(topics.right_image, header.stamp, right);
+    bag_->write(topics.left_info, header.stamp, left_info);
+    bag_->write(topics.right_info, header.stamp, right_info);
   } catch (const rosbag::BagException& e) {
     *error = std::string("writing the bag failed: ") + e.what();
     return false;

@@ -35,7 +35,7 @@
 namespace stereo_fusion {
 
 /// Nodelet `stereo_fusion/FusionNodelet`. Topics: `disparity`, `image`, `camera_info` in;
-/// `~mesh_update`, `~mesh_markers` out. Services: `~save_mesh`, `~reset`, `~get_full_mesh`.
+/// `~mesh_update`, `~mesh_markers`, `~camera_path`, `~frustum`, `~block_bounds` out. Services: `~save_mesh`, `~reset`, `~get_full_mesh`.
 /// Every dropped frame is counted by reason (queue full, tf timeout, bad input) and reported
 /// on /diagnostics together with rates, latency and map size.
 class FusionNodelet : public nodelet::Nodelet {
@@ -94,7 +94,7 @@ class FusionNodelet : public nodelet::Nodelet {
   message_filters::Subscriber<InfoMsg> info_sub_;
   std::unique_ptr<message_filters::Synchronizer<ExactPolicy>> exact_sync_;
   std::unique_ptr<message_filters::Synchronizer<ApproxPolicy>> approx_sync_;
-  ros::Publisher mesh_update_pub_, markers_pub_, path_pub_;
+  ros::Publisher mesh_update_pub_, markers_pub_, path_pub_, frustum_pub_, block_bounds_pub_;
   ros::ServiceServer save_srv_, full_srv_, reset_srv_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
   ros::WallTimer diagnostics_timer_;

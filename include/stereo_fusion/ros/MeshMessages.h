@@ -12,21 +12,36 @@
 
 namespace stereo_fusion {
 
-/// One submesh as a MeshBlock message, with its texture patch (PNG) and UVs when `patch` is
-/// given and matches the submesh.
-MeshBlock toMeshBlock(const SubMesh& submesh, const TexturePatch* patch = nullptr);
+/// How MeshBlock carries positions, normals and triangles (see msg/MeshBlock.msg).
+enum class MeshEncoding {
+  kFloat32,  ///< float32 positions and normals, uint32 indices: exact
+  kCompact,  ///< uint16 positions relative to the block origin, int8 normals, uint16 indices
+};
 
-/// A MeshUpdate with the submeshes of `changed` (taken from `store`) and the `removed` keys;
+/// "float32" | "compact" → encoding; false for anything else.
+bool parseMeshEncoding(const std::string& text, MeshEncoding* encoding);
+
+/// Metres per unit of MeshBlock::vertices_q for blocks of `block_size_m`.
+inline double compactPositionStep(double block_size_m) { return block_size_m / 32768.0; }
+
+/// One submesh as a MeshBlock message. kCompact falls back to float32 for a block whose
+/// vertices do not fit the quantisation (see msg/MeshBlock.msg). With `patch` (matching the
+/// submesh) the block carries its texture patch (PNG) and UVs.
+MeshBlock toMeshBlock(const SubMesh& submesh, MeshEncoding encoding = MeshEncoding::kFloat32,
+                      double block_size_m = 0.0, const TexturePatch* patch = nullptr);
+
+/// A MeshUpdate with the submeshes of `changed` (taken from `submeshes`) and the `removed` keys;
 /// textured blocks carry their patch when `textures` is given.
-MeshUpdate toMeshUpdate(const MeshStore& store, const std::vector<BlockKey>& changed,
-                        const std::vector<BlockKey>& removed, const std_msgs::Header& header,
-                        double voxel_size_m, uint64_t sequence, bool full,
-                        const TextureStore* textures = nullptr);
+MeshUpdate toMeshUpdate(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes,
+                        const std::vector<BlockKey>& changed, const std::vector<BlockKey>& removed,
+                        const std_msgs::Header& header, double voxel_size_m, uint64_t sequence, bool full,
+                        MeshEncoding encoding = MeshEncoding::kFloat32, const TextureStore* textures = nullptr);
 
-/// Applies `update` to `mesh` (key → submesh), as a subscriber would. Returns false when a
-/// message is malformed (index out of range, array sizes that do not match, UVs without a
-/// texture or outside [0, 1]). With `textures`, the blocks' patches are decoded into it too
-/// (image and UVs only; a block without UVs loses its patch).
+/// Applies `update` to `mesh` (key → submesh), as a subscriber would; decodes both encodings.
+/// Returns false when a message is malformed (index out of range, array sizes that do not
+/// match, UVs without a texture or outside [0, 1]) and then leaves `mesh` untouched. With
+/// `textures`, the blocks' patches are decoded into it too (image and UVs only; a block
+/// without UVs loses its patch).
 bool applyMeshUpdate(const MeshUpdate& update, std::unordered_map<BlockKey, SubMesh, BlockKeyHash>* mesh,
                      std::unordered_map<BlockKey, TexturePatch, BlockKeyHash>* textures = nullptr);
 
@@ -34,7 +49,8 @@ bool applyMeshUpdate(const MeshUpdate& update, std::unordered_map<BlockKey, SubM
 /// "mesh", a stable id per block) and DELETE markers for the removed ones.
 class MeshMarkers {
  public:
-  visualization_msgs::MarkerArray build(const MeshStore& store, const std::vector<BlockKey>& changed,
+  visualization_msgs::MarkerArray build(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes,
+                                        const std::vector<BlockKey>& changed,
                                         const std::vector<BlockKey>& removed, const std_msgs::Header& header);
   /// A DELETEALL marker, and forget every id (after ~reset).
   visualization_msgs::MarkerArray clear(const std_msgs::Header& header);

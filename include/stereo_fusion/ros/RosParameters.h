@@ -4,6 +4,7 @@
 #include <string>
 
 #include "stereo_fusion/MapperConfig.h"
+#include "stereo_fusion/ros/MeshMessages.h"
 
 namespace stereo_fusion {
 
@@ -18,6 +19,10 @@ struct NodeConfig {
   double mesh_publish_rate_hz = 2.0;       ///< 0 = publish after every frame
   bool publish_markers = true;             ///< ~mesh_markers for rviz
   bool publish_path = true;                ///< ~camera_path (nav_msgs/Path) of the fused frames
+  bool publish_frustum = true;             ///< ~frustum: the newest fused frame's view (Marker)
+  double frustum_depth_m = 1.0;            ///< depth at which ~frustum is drawn
+  bool publish_block_bounds = false;       ///< ~block_bounds: edges of every meshed block (debug)
+  MeshEncoding mesh_encoding = MeshEncoding::kFloat32;  ///< how ~mesh_update carries the mesh
 };
 
 /// Reads every MapperConfig key and the NodeConfig keys from the private namespace of `nh`

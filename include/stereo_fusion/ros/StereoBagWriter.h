@@ -1,4 +1,6 @@
 #pragma once
+#include <opencv2/core.hpp>
+
 #include <memory>
 #include <string>
 
@@ -10,6 +12,15 @@ class Bag;
 }
 
 namespace stereo_fusion {
+
+/// Topics of a stereo camera driver: both images and both camera infos, before any stereo
+/// matching. The defaults are the names stereo_image_proc expects under /stereo.
+struct PairTopics {
+  std::string left_image = "/stereo/left/image_raw";
+  std::string right_image = "/stereo/right/image_raw";
+  std::string left_info = "/stereo/left/camera_info";
+  std::string right_info = "/stereo/right/camera_info";
+};
 
 /// Records stereo frames as a rosbag a stereo camera pipeline would produce: DisparityImage,
 /// Image, CameraInfo (the topics of BagTopics) and the pose on /tf. Stamps are the frames'
@@ -23,6 +34,13 @@ class StereoBagWriter {
   ~StereoBagWriter();
   /// Writes one frame; false with a message on I/O failure.
   bool write(const StereoFrame& frame, float max_disparity_px, std::string* error);
+  /// Writes one frame as a stereo camera driver publishes it (no disparity): the left colour
+  /// image, `right_rgb` (CV_8UC3 RGB, rectified right camera), both CameraInfos (distortion
+  /// zero, R = I, the right P with Tx = -fx * baseline as stereo_image_proc needs it) on
+  /// `topics`, and the left pose on /tf. Both images carry the left camera's frame_id:
+  /// stereo_image_proc requires one frame for the pair (the baseline is in the right P). False with a message on I/O failure.
+  bool writePair(const StereoFrame& frame, const cv::Mat& right_rgb, const PairTopics& topics,
+                 std::string* error);
   void close();
 
  private:

@@ -1,0 +1,59 @@
+#pragma once
+// The base-station side of ~mesh_update: keeps a copy of the robot's global mesh, repairs it
+// from ~get_full_mesh after a late join or a missed update, saves it and draws it locally.
+
+#include <nodelet/nodelet.h>
+#include <ros/ros.h>
+#include <stereo_fusion/GetFullMesh.h>
+#include <stereo_fusion/MeshUpdate.h>
+#include <stereo_fusion/SaveMesh.h>
+
+#include <cstdint>
+#include <mutex>
+#include <unordered_map>
+
+#include "stereo_fusion/mesh/SubMesh.h"
+#include "stereo_fusion/ros/MeshMessages.h"
+
+namespace stereo_fusion {
+
+/// Nodelet `stereo_fusion/MeshAssembler` (standalone: `mesh_assembler_node`).
+/// In: topic `mesh_update` (remap to the robot's `/stereo_fusion/mesh_update`), service client
+/// `get_full_mesh` (remap to `/stereo_fusion/get_full_mesh`).
+/// Out: `~mesh_markers` (the same markers as the robot's, built here so rviz on the base station
+/// costs the link nothing), services `~save_mesh` (PLY of the assembled mesh) and
+/// `~get_full_mesh` (the assembled mesh, with the sequence of the last update applied).
+/// Updates are applied in sequence order; a first update with no base mesh or a gap in the
+/// sequence numbers makes it fetch the whole mesh and continue from that sequence.
+/// Parameters: `~publish_markers` (bool, default true), `~full_mesh_timeout_s` (double, default 5).
+class MeshAssembler : public nodelet::Nodelet {
+ private:
+  void onInit() override;
+  void onUpdate(const MeshUpdate::ConstPtr& update);
+  /// Replaces the mesh by the robot's full mesh; false (mesh kept, not synced) when the service
+  /// is unavailable or the reply is malformed.
+  bool fetchFullMesh();
+  /// Applies `update` and draws what it changed; false for a malformed message.
+  bool apply(const MeshUpdate& update);
+  bool saveMesh(SaveMesh::Request& req, SaveMesh::Response& res);
+  bool getFullMesh(GetFullMesh::Request& req, GetFullMesh::Response& res);
+
+  std::mutex mutex_;  // the node handle is single-threaded; this guards against the timer anyway
+  std::unordered_map<BlockKey, SubMesh, BlockKeyHash> mesh_;
+  MeshMarkers markers_;
+  bool synced_ = false;        ///< mesh_ equals the robot's mesh at last_sequence_
+  uint64_t last_sequence_ = 0;
+  float voxel_size_m_ = 0.0f;
+  std_msgs::Header last_header_;
+  uint64_t full_requests_ = 0, gaps_ = 0, malformed_ = 0;
+  bool publish_markers_ = true;
+  double full_mesh_timeout_s_ = 5.0;
+
+  ros::Subscriber update_sub_;
+  ros::ServiceClient full_client_;
+  ros::Publisher markers_pub_;
+  ros::ServiceServer save_srv_, full_srv_;
+  ros::WallTimer join_timer_;
+};
+
+}  // namespace stereo_fusion
