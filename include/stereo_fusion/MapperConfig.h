@@ -37,6 +37,10 @@ struct MapperConfig {
   bool use_color = true;               ///< Fuse the colour image into per-voxel colour.
   bool mesh_enabled = true;            ///< Re-mesh the changed blocks after every frame.
   double mesh_level_min_coverage = 0.8;  ///< A block meshes at the finest level whose observed area is ≥ this share of its best level's.
+  int max_blocks = 0;                  ///< Memory budget in blocks (~7 KB each); beyond it the least recently updated are evicted. 0 = unlimited.
+  double max_distance_from_camera_m = 0.0;  ///< Blocks whose centre is farther from the current camera are evicted. 0 = unlimited.
+  double max_pose_jump_m = 100.0;      ///< A camera more than this from the previous frame's camera is rejected. 0 = no check.
+  bool require_increasing_timestamps = true;  ///< Reject frames whose (non-zero) timestamp is not after the last fused frame's.
 
   /// Block edge length in metres.
   double blockSizeM() const { return 8.0 * voxel_size_m; }

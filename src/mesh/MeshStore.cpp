@@ -45,10 +45,18 @@ MeshChanges MeshStore::remesh(const BlockOctree& map, const std::vector<BlockKey
 }
 
 MeshChanges MeshStore::update(const BlockOctree& map, const std::vector<BlockKey>& updated,
-                             ThreadPool* pool) {
+                             ThreadPool* pool, const std::vector<BlockKey>& erased) {
   for (const BlockKey& key : updated)
     if (VoxelBlock* block = map.find(key)) refreshMeshLevel(block, params_.level_min_coverage);
-  return remesh(map, affectedOwners(map, updated), pool);
+  if (erased.empty()) return remesh(map, affectedOwners(map, updated), pool);
+  // An erased block's own submesh goes; its owners lose a seam neighbour and are re-meshed.
+  std::vector<BlockKey> touched = updated;
+  touched.insert(touched.end(), erased.begin(), erased.end());
+  MeshChanges changes = remesh(map, affectedOwners(map, touched), pool);
+  for (const BlockKey& key : erased)
+    if (map.find(key) == nullptr && meshes_.erase(key) > 0) changes.removed.push_back(key);
+  std::sort(changes.removed.begin(), changes.removed.end());
+  return changes;
 }
 
 MeshChanges MeshStore::rebuild(const BlockOctree& map, ThreadPool* pool) {
