@@ -231,6 +231,7 @@ TEST(MapFile, VersionParametersAndContentAreChecked) {
 
 TEST(MapFile, AFailedLoadLeavesTheMapAndMeshUntouched) {
   MapperConfig config;
+  config.voxel_size_m = 0.04;  // fewer blocks: the map is compared after every case
   const auto mapper = fusedMapper(3, config);
   const MapSnapshot before = snapshot(mapper->map());
   const auto mesh_before = triangleSets(mapper->mesh());
@@ -267,6 +268,7 @@ TEST(MapFile, AFailedLoadLeavesTheMapAndMeshUntouched) {
 
 TEST(MapFile, LoadingReplacesTheMapAndReportsTheOldSubmeshesAsRemoved) {
   MapperConfig config;
+  config.voxel_size_m = 0.04;
   const auto small = fusedMapper(1, config);
   Mapper mapper(config);
   // A different map first: a plane far away.
