@@ -42,7 +42,7 @@ int main(int argc, char** argv) {
     }
     std::vector<std::pair<std::string, std::vector<soak::SoakSample>>> series;
     for (size_t i = 2; i < args.size(); ++i) {
-      const size_t eq = args[i].find('=');
+      const size_t eq = args[i].rfind('=');  // labels may hold "=", paths rarely do
       if (eq == std::string::npos) {
         std::fprintf(stderr, "stereo_fusion_soak: expected LABEL=FILE.csv, got '%s'\n", args[i].c_str());
         return 2;
