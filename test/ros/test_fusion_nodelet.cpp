@@ -18,6 +18,7 @@
 #include "stereo_fusion/io/PlyReader.h"
 #include "stereo_fusion/ros/MeshMessages.h"
 #include "stereo_fusion/ros/MessageConversions.h"
+#include "stereo_fusion/ros/RosParameters.h"
 
 using namespace stereo_fusion;
 
@@ -319,6 +320,40 @@ TEST_F(NodeletFixture, SaveMapAndLoadMapRoundTripAndABadFileChangesNothing) {
   }
   std::filesystem::remove(path);
   std::filesystem::remove(truncated);
+}
+
+TEST(NodeParameters, OutOfRangeValuesAtStartUpNameTheParameter) {
+  // loadParameters() is what FusionNodelet::onInit() runs before anything else; it throws with
+  // this message. Parameters go through a real master, with the types YAML would give them.
+  struct Case {
+    const char* name;
+    std::function<void(const std::string& ns)> set;
+    const char* message;
+  };
+  const std::vector<Case> cases = {
+      {"truncation_vox", [](const std::string& ns) { ros::param::set(ns + "/truncation_vox", 100); },
+       "parameter '/bad_truncation_vox/truncation_vox' = 100 is out of range [1, 8]"},
+      {"max_blocks", [](const std::string& ns) { ros::param::set(ns + "/max_blocks", -1); }, "= -1 is out of range [0, 100000000]"},
+      {"max_pose_jump_m", [](const std::string& ns) { ros::param::set(ns + "/max_pose_jump_m", -5.0); }, "is out of range [0, 1e+06]"},
+      {"voxel_size_m", [](const std::string& ns) { ros::param::set(ns + "/voxel_size_m", std::string("abc")); }, "is not a finite number"},
+      {"depths", [](const std::string& ns) { ros::param::set(ns + "/min_depth_m", 9.0); }, "min_depth_m must be < max_depth_m"},
+      {"queue_size", [](const std::string& ns) { ros::param::set(ns + "/queue_size", 0); }, "queue_size' must be in [1, 1000]"},
+      {"tf_timeout_s", [](const std::string& ns) { ros::param::set(ns + "/tf_timeout_s", -1.0); }, "tf_timeout_s' must be in [0, 10] s"},
+      {"list", [](const std::string& ns) { ros::param::set(ns + "/max_weight", std::vector<double>{1, 2}); }, "must be a single value"},
+  };
+  for (const Case& c : cases) {
+    const std::string ns = std::string("/bad_") + c.name;
+    c.set(ns);
+    MapperConfig mapper;
+    NodeConfig node;
+    std::string error;
+    EXPECT_FALSE(loadParameters(ros::NodeHandle(ns), &mapper, &node, &error)) << c.name;
+    EXPECT_NE(error.find(c.message), std::string::npos) << c.name << ": " << error;
+  }
+  MapperConfig mapper;
+  NodeConfig node;
+  std::string error;
+  EXPECT_TRUE(loadParameters(ros::NodeHandle("/no_parameters_here"), &mapper, &node, &error)) << error;
 }
 
 int main(int argc, char** argv) { return test::runRosTests(argc, argv, "stereo_fusion_rostest"); }
