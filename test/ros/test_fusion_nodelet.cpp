@@ -250,7 +250,7 @@ TEST_F(NodeletFixture, OutOfOrderDuplicateJumpingAndFutureTfFramesAreDroppedByRe
   late.stamp = t1;
   late.frame_id = "late_optical";
   publish(frame, "late_optical", false, {}, t1);
-  ros::WallDuration(0.15).sleep();
+  ros::WallDuration(0.1).sleep();  // late, yet well inside tf_timeout_s = 0.5 s
   tf_.sendTransform(toTransform(frame.T_world_camera, "world", late));
   late.stamp = t1 + ros::Duration(0.5);  // a later transform, so t1 is interpolated, not extrapolated
   tf_.sendTransform(toTransform(frame.T_world_camera, "world", late));
