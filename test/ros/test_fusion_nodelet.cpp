@@ -262,12 +262,13 @@ TEST_F(NodeletFixture, OutOfOrderDuplicateJumpingAndFutureTfFramesAreDroppedByRe
 
 TEST_F(NodeletFixture, SaveMapAndLoadMapRoundTripAndABadFileChangesNothing) {
   const sim::AnalyticScene s = scene();
+  const long fused_before = std::max(0L, diag("frames fused"));
   for (int f = 0; f < 3; ++f) {
     const auto pose = sim::lookAt({-0.1 + 0.1 * f, -0.25, 0.0}, {0.05, 0.1, 1.2}, -Eigen::Vector3d::UnitY());
     publish(test::renderFrame(s, qvga(), pose), "left_optical", true);
   }
-  ASSERT_TRUE(waitFor([&] { return diag("frames fused") >= 1; }, 60.0));
-  ros::WallDuration(1.5).sleep();  // let the queue drain
+  // All three fused before the reference mesh is taken, or save_map would see a later map.
+  ASSERT_TRUE(waitFor([&] { return diag("frames fused") >= fused_before + 3; }, 60.0)) << diag("frames fused");
   GetFullMesh original;
   ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", original));
   ASSERT_GT(original.response.mesh.blocks.size(), 10u);
