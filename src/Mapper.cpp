@@ -1,7 +1,11 @@
 #include "stereo_fusion/Mapper.h"
 
+#include <algorithm>
+#include <iterator>
 #include <stdexcept>
 
+#include "stereo_fusion/io/MapFile.h"
+#include "stereo_fusion/map/EvictionPolicy.h"
 #include "stereo_fusion/util/Timer.h"
 
 namespace stereo_fusion {
@@ -27,12 +31,19 @@ Mapper::Mapper(const MapperConfig& config)
       mesh_store_(MeshingParams{config_.voxel_size_m, config_.truncation_vox,
                                 config_.mesh_level_min_coverage}),
       texture_store_(TextureParams{config_.texture_border_px, config_.texture_max_patch_px,
-                                   config_.voxel_size_m, config_.truncation_vox}) {}
+                                   config_.voxel_size_m, config_.truncation_vox}),
+      gate_(config_.max_pose_jump_m, config_.require_increasing_timestamps) {}
 
 IntegrationResult Mapper::integrate(const StereoFrame& frame) {
   IntegrationResult result;
   result.error = validateFrame(frame, config_.blockSizeM());
-  if (!result.error.empty()) return result;
+  if (!result.error.empty()) {
+    result.reason = RejectReason::kInvalidFrame;
+    return result;
+  }
+  result.reason = gate_.check(frame, &result.error);
+  if (result.reason != RejectReason::kNone) return result;
+  gate_.accepted(frame);
   result.accepted = true;
   ++frames_integrated_;
 
@@ -46,8 +57,21 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame) {
 
   result.updated_blocks.reserve(updated_.size());
   for (const VoxelBlock* block : updated_) result.updated_blocks.push_back(block->key);
+
+  // Memory bound, between fusion and meshing: nothing else touches the octree now.
+  const EvictionLimits limits{static_cast<size_t>(config_.max_blocks), config_.max_distance_from_camera_m};
+  result.evicted_blocks = selectBlocksToEvict(octree_, frame.T_world_camera.translation(), limits);
+  if (!result.evicted_blocks.empty()) {
+    queue_.clear();  // their pointers dangle after erase
+    updated_.clear();
+    blocks_evicted_ += octree_.erase(result.evicted_blocks);
+    std::vector<BlockKey> kept;
+    std::set_difference(result.updated_blocks.begin(), result.updated_blocks.end(), result.evicted_blocks.begin(),
+                        result.evicted_blocks.end(), std::back_inserter(kept));
+    result.updated_blocks.swap(kept);
+  }
   if (config_.mesh_enabled) {
-    result.mesh = mesh_store_.update(octree_, result.updated_blocks, &pool_);
+    result.mesh = mesh_store_.update(octree_, result.updated_blocks, &pool_, result.evicted_blocks);
     if (config_.texture == TextureMode::kPatches)
       result.texture = texture_store_.update(mesh_store_, result.mesh, frame, frames_integrated_, &pool_);
   }
@@ -61,11 +85,38 @@ MeshChanges Mapper::rebuildMesh() {
   return changes;
 }
 
+bool Mapper::saveMap(const std::string& path, std::string* error) const {
+  return writeMapFile(path, octree_, config_, frames_integrated_, error);
+}
+
+bool Mapper::loadMap(const std::string& path, MeshChanges* changes, std::string* error) {
+  BlockOctree loaded(config_.blockSizeM());
+  MapFileInfo info;
+  if (!readMapFile(path, config_, &loaded, &info, error)) return false;
+  octree_.swap(loaded);  // the old map now lives in `loaded` and is freed on return
+  queue_.clear();
+  updated_.clear();
+  // Later frames must count on from the saved ones, so last_update_frame keeps its LRU order.
+  frames_integrated_ = info.frames_integrated;
+  for (const VoxelBlock* b : octree_.blocks()) frames_integrated_ = std::max(frames_integrated_, b->last_update_frame);
+  blocks_evicted_ = 0;
+  gate_.reset();
+  // The map file holds no texture patches: the loaded map starts with vertex colours.
+  texture_store_.clear();
+  // A rebuild over the kept store reports the old map's vanished submeshes as removed.
+  MeshChanges rebuilt = config_.mesh_enabled ? mesh_store_.rebuild(octree_, &pool_) : MeshChanges{};
+  if (!config_.mesh_enabled) mesh_store_.clear();
+  if (changes) *changes = std::move(rebuilt);
+  return true;
+}
+
 void Mapper::reset() {
   octree_.clear();
   mesh_store_.clear();
   texture_store_.clear();
   frames_integrated_ = 0;
+  blocks_evicted_ = 0;
+  gate_.reset();
 }
 
 }  // namespace stereo_fusion

@@ -236,6 +236,25 @@ const std::vector<Accessor>& accessors() {
                          "Cap on a texture patch's width and height; larger crops are downscaled. "
                          "Bounds texture memory to 3 · cap² bytes per block.",
                          member(&MapperConfig::texture_max_patch_px)));
+    t.push_back(intParam("max_blocks", "blocks", 0, 100000000,
+                         "Memory budget: after each frame, while the map holds more blocks (~7 KB "
+                         "each), the least recently updated ones (farthest first among equals) are "
+                         "evicted and their submeshes removed. 0 = unlimited.",
+                         member(&MapperConfig::max_blocks)));
+    t.push_back(doubleParam("max_distance_from_camera_m", "m", 0.0, true, 1e6,
+                            "After each frame, blocks whose centre is farther than this from the "
+                            "camera are evicted and their submeshes removed. 0 = unlimited.",
+                            member(&MapperConfig::max_distance_from_camera_m)));
+    t.push_back(doubleParam("max_pose_jump_m", "m", 0.0, true, 1e6,
+                            "A frame whose camera is farther than this from the previous frame's "
+                            "camera is rejected (a SLAM glitch); the next frame is compared with it, "
+                            "so a real relocalisation costs one frame. 0 = no check.",
+                            member(&MapperConfig::max_pose_jump_m)));
+    t.push_back(boolParam("require_increasing_timestamps",
+                          "Reject a frame whose timestamp is before (backwards) or equal to "
+                          "(duplicate) the last fused frame's; timestamp 0 means unknown and is "
+                          "not checked.",
+                          member(&MapperConfig::require_increasing_timestamps)));
     return t;
   }();
   return table;

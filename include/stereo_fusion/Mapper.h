@@ -6,6 +6,7 @@
 
 #include "stereo_fusion/MapperConfig.h"
 #include "stereo_fusion/integration/BlockLookup.h"
+#include "stereo_fusion/integration/FrameGate.h"
 #include "stereo_fusion/integration/StereoFrame.h"
 #include "stereo_fusion/integration/SurfaceFuser.h"
 #include "stereo_fusion/map/BlockOctree.h"
@@ -18,17 +19,21 @@ namespace stereo_fusion {
 /// What integrate() did with one frame.
 struct IntegrationResult {
   bool accepted = false;  ///< false: the frame was rejected and the map is unchanged
-  std::string error;      ///< why it was rejected
+  RejectReason reason = RejectReason::kNone;  ///< why it was rejected, for counters
+  std::string error;      ///< why it was rejected, one sentence
   double lookup_ms = 0.0;
   double fusion_ms = 0.0;
   LookupStats lookup;
   FusionStats fusion;
   /// Submeshes changed / removed by this frame (empty when meshing is disabled).
   MeshChanges mesh;
-  /// Blocks whose voxels changed in this frame, sorted by key (the meshing stage's input).
+  /// Blocks whose voxels changed in this frame and were kept, sorted by key (the meshing stage's input).
   std::vector<BlockKey> updated_blocks;
   /// What the texture pass did (all zero unless texture = patches).
   TextureStats texture;
+  /// Blocks evicted after this frame by the memory bound (max_blocks,
+  /// max_distance_from_camera_m), sorted by key; their submeshes are in mesh.removed.
+  std::vector<BlockKey> evicted_blocks;
 };
 
 /// The ROS-free mapping pipeline: integrate(frame) = validate → lookup → fusion → meshing.
@@ -53,8 +58,19 @@ class Mapper {
   const MapperConfig& config() const { return config_; }
   /// Frames accepted so far.
   uint64_t framesIntegrated() const { return frames_integrated_; }
+  /// Blocks evicted by the memory bound since construction, reset() or loadMap().
+  uint64_t blocksEvicted() const { return blocks_evicted_; }
   /// Drops the whole map.
   void reset();
+
+  /// Writes the map to `path` (io/MapFile.h format, via a temporary file renamed into place).
+  bool saveMap(const std::string& path, std::string* error) const;
+  /// Replaces the map by the one in `path` and re-meshes it (the returned changes list every
+  /// submesh of the new map as changed and every old one that is gone as removed). The file
+  /// is read and checked completely into a fresh octree first: on any error (missing,
+  /// truncated, corrupted, other version or voxel size) false with a message, and the current
+  /// map and mesh are untouched.
+  bool loadMap(const std::string& path, MeshChanges* changes, std::string* error);
 
  private:
   MapperConfig config_;
@@ -65,6 +81,8 @@ class Mapper {
   MeshStore mesh_store_;
   TextureStore texture_store_;
   uint64_t frames_integrated_ = 0;
+  uint64_t blocks_evicted_ = 0;
+  FrameGate gate_;
   std::vector<VoxelBlock*> queue_;    // reused across frames
   std::vector<VoxelBlock*> updated_;  // reused across frames
 };

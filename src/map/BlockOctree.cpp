@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <unordered_set>
 
 namespace stereo_fusion {
 
@@ -156,6 +157,64 @@ void BlockOctree::clear() {
   blocks_.clear();
   block_storage_.clear();
   nodes_.clear();
+}
+
+size_t BlockOctree::erase(const std::vector<BlockKey>& keys) {
+  std::lock_guard<std::mutex> lock(alloc_mutex_);
+  std::unordered_set<const void*> doomed_blocks, doomed_nodes;
+  for (const BlockKey& key : keys) {
+    Node* root = root_.load(std::memory_order_relaxed);
+    if (root == nullptr || !keyInRange(key) || !contains(root, key)) continue;
+    // Walk down remembering the path, so that emptied nodes can be unlinked bottom-up.
+    std::vector<std::pair<Node*, int>> path;  // node, octant taken
+    Node* node = root;
+    void* leaf = nullptr;
+    while (true) {
+      const int octant = node->octantOf(key);
+      void* next = node->child[octant].load(std::memory_order_relaxed);
+      if (next == nullptr) break;
+      path.emplace_back(node, octant);
+      if (node->height == 1) {
+        leaf = next;
+        break;
+      }
+      node = static_cast<Node*>(next);
+    }
+    if (leaf == nullptr) continue;
+    doomed_blocks.insert(leaf);
+    for (auto it = path.rbegin(); it != path.rend(); ++it) {
+      Node* n = it->first;
+      n->child[it->second].store(nullptr, std::memory_order_release);
+      const bool empty = std::all_of(n->child.begin(), n->child.end(),
+                                     [](const std::atomic<void*>& c) { return c.load(std::memory_order_relaxed) == nullptr; });
+      if (!empty) break;
+      doomed_nodes.insert(n);
+      if (n == root) root_.store(nullptr, std::memory_order_release);
+    }
+  }
+  if (doomed_blocks.empty()) return 0;
+  blocks_.erase(std::remove_if(blocks_.begin(), blocks_.end(),
+                               [&](const VoxelBlock* b) { return doomed_blocks.count(b) > 0; }),
+                blocks_.end());
+  block_storage_.erase(std::remove_if(block_storage_.begin(), block_storage_.end(),
+                                      [&](const std::unique_ptr<VoxelBlock>& b) { return doomed_blocks.count(b.get()) > 0; }),
+                       block_storage_.end());
+  nodes_.erase(std::remove_if(nodes_.begin(), nodes_.end(),
+                              [&](const std::unique_ptr<Node>& n) { return doomed_nodes.count(n.get()) > 0; }),
+               nodes_.end());
+  return doomed_blocks.size();
+}
+
+void BlockOctree::swap(BlockOctree& other) {
+  if (this == &other) return;
+  std::scoped_lock lock(alloc_mutex_, other.alloc_mutex_);
+  std::swap(block_size_m_, other.block_size_m_);
+  Node* mine = root_.load(std::memory_order_relaxed);
+  root_.store(other.root_.load(std::memory_order_relaxed), std::memory_order_release);
+  other.root_.store(mine, std::memory_order_release);
+  nodes_.swap(other.nodes_);
+  blocks_.swap(other.blocks_);
+  block_storage_.swap(other.block_storage_);
 }
 
 }  // namespace stereo_fusion

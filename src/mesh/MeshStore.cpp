@@ -57,13 +57,21 @@ MeshChanges MeshStore::remesh(const BlockOctree& map, const std::vector<BlockKey
 }
 
 MeshChanges MeshStore::update(const BlockOctree& map, const std::vector<BlockKey>& updated,
-                             ThreadPool* pool) {
+                             ThreadPool* pool, const std::vector<BlockKey>& erased) {
   // Each level choice reads one block's voxels: independent, so in parallel.
   pool->parallelFor(updated.size(), 16, [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i)
       if (VoxelBlock* block = map.find(updated[i])) refreshMeshLevel(block, params_.level_min_coverage);
   });
-  return remesh(map, affectedOwners(map, updated, pool), pool);
+  if (erased.empty()) return remesh(map, affectedOwners(map, updated, pool), pool);
+  // An erased block's own submesh goes; its owners lose a seam neighbour and are re-meshed.
+  std::vector<BlockKey> touched = updated;
+  touched.insert(touched.end(), erased.begin(), erased.end());
+  MeshChanges changes = remesh(map, affectedOwners(map, touched, pool), pool);
+  for (const BlockKey& key : erased)
+    if (map.find(key) == nullptr && meshes_.erase(key) > 0) changes.removed.push_back(key);
+  std::sort(changes.removed.begin(), changes.removed.end());
+  return changes;
 }
 
 MeshChanges MeshStore::rebuild(const BlockOctree& map, ThreadPool* pool) {

@@ -53,6 +53,8 @@ void FusionNodelet::onInit() {
   save_srv_ = pnh.advertiseService("save_mesh", &FusionNodelet::saveMesh, this);
   full_srv_ = pnh.advertiseService("get_full_mesh", &FusionNodelet::getFullMesh, this);
   reset_srv_ = pnh.advertiseService("reset", &FusionNodelet::reset, this);
+  save_map_srv_ = pnh.advertiseService("save_map", &FusionNodelet::saveMap, this);
+  load_map_srv_ = pnh.advertiseService("load_map", &FusionNodelet::loadMap, this);
 
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
   diagnostics_->setHardwareID("stereo_fusion");
@@ -168,6 +170,7 @@ void FusionNodelet::processFrame(const QueuedFrame& f) {
   {
     std::lock_guard<std::mutex> lock(map_mutex_);
     result = mapper_->integrate(frame);
+    blocks_evicted_ += result.evicted_blocks.size();
     if (result.accepted) {
       for (const BlockKey& k : result.mesh.changed) {
         pending_changed_.insert(k);
@@ -205,9 +208,13 @@ void FusionNodelet::processFrame(const QueuedFrame& f) {
     }
   }
   if (!result.accepted) {
-    ++dropped_bad_input_;
-    NODELET_ERROR_THROTTLE(5.0, "stereo_fusion: frame rejected (%llu so far): %s",
-                           static_cast<unsigned long long>(dropped_bad_input_.load()), result.error.c_str());
+    std::atomic<uint64_t>& counter = result.reason == RejectReason::kTimestampBackwards ? dropped_backwards_
+                                     : result.reason == RejectReason::kDuplicateTimestamp ? dropped_duplicate_
+                                     : result.reason == RejectReason::kPoseJump          ? dropped_pose_jump_
+                                                                                          : dropped_bad_input_;
+    ++counter;
+    NODELET_ERROR_THROTTLE(5.0, "stereo_fusion: frame rejected (%s, %llu so far): %s", rejectReasonName(result.reason),
+                           static_cast<unsigned long long>(counter.load()), result.error.c_str());
     return;
   }
   ++fused_;
@@ -320,9 +327,62 @@ bool FusionNodelet::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&)
   return true;
 }
 
+bool FusionNodelet::saveMap(SaveMap::Request& req, SaveMap::Response& res) {
+  std::string error;
+  {
+    // Held while writing: the map must not change under the encoder (a few ms per 1000 blocks).
+    std::lock_guard<std::mutex> lock(map_mutex_);
+    res.success = mapper_->saveMap(req.path, &error);
+    res.blocks = mapper_->map().blockCount();
+  }
+  res.message = res.success ? "saved " + std::to_string(res.blocks) + " blocks to " + req.path : error;
+  if (res.success)
+    NODELET_INFO("stereo_fusion: save_map: %s", res.message.c_str());
+  else
+    NODELET_ERROR("stereo_fusion: save_map: %s", res.message.c_str());
+  return true;
+}
+
+bool FusionNodelet::loadMap(LoadMap::Request& req, LoadMap::Response& res) {
+  std::lock_guard<std::mutex> lock(map_mutex_);
+  MeshChanges changes;
+  std::string error;
+  res.success = mapper_->loadMap(req.path, &changes, &error);
+  res.blocks = mapper_->map().blockCount();
+  if (!res.success) {
+    res.message = error + " (the current map is unchanged)";
+    NODELET_ERROR("stereo_fusion: load_map: %s", res.message.c_str());
+    return true;
+  }
+  path_.poses.clear();
+  stage_ms_.clear();
+  publishFullLocked(changes.removed);
+  res.message = "loaded " + std::to_string(res.blocks) + " blocks from " + req.path;
+  NODELET_INFO("stereo_fusion: load_map: %s", res.message.c_str());
+  return true;
+}
+
+void FusionNodelet::publishFullLocked(const std::vector<BlockKey>& removed) {
+  pending_changed_.clear();
+  pending_removed_.clear();
+  unpublished_stamps_.clear();
+  std_msgs::Header header;
+  header.frame_id = node_config_.world_frame;
+  header.stamp = ros::Time::now();
+  std::vector<BlockKey> all;
+  for (const auto& [key, sub] : mapper_->mesh().submeshes()) all.push_back(key);
+  std::sort(all.begin(), all.end());
+  // A full update replaces whatever a subscriber held; markers: drop the gone blocks, draw all.
+  mesh_update_pub_.publish(toMeshUpdate(mapper_->mesh().submeshes(), all, {}, header, mapper_config_.voxel_size_m,
+                                        ++sequence_, true, node_config_.mesh_encoding, &mapper_->textures()));
+  if (node_config_.publish_markers)
+    markers_pub_.publish(markers_.build(mapper_->mesh().submeshes(), all, removed, header));
+}
+
 void FusionNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   const double elapsed = std::max(1e-3, (ros::WallTime::now() - started_).toSec());
-  const uint64_t dropped = dropped_queue_ + dropped_tf_ + dropped_bad_input_;
+  const uint64_t dropped = dropped_queue_ + dropped_tf_ + dropped_bad_input_ + dropped_backwards_ +
+                           dropped_duplicate_ + dropped_pose_jump_;
   std::vector<double> lat;
   std::vector<double> stages[4];
   size_t blocks = 0, memory = 0;
@@ -347,6 +407,9 @@ void FusionNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
   status.add("dropped: queue full", dropped_queue_.load());
   status.add("dropped: tf timeout", dropped_tf_.load());
   status.add("dropped: bad input", dropped_bad_input_.load());
+  status.add("dropped: timestamp backwards", dropped_backwards_.load());
+  status.add("dropped: duplicate frame", dropped_duplicate_.load());
+  status.add("dropped: pose jump", dropped_pose_jump_.load());
   status.add("latency p50 (s)", pct(0.5));
   status.add("latency p99 (s)", pct(0.99));
   const char* names[4] = {"lookup", "fusion", "meshing", "total"};
@@ -355,6 +418,7 @@ void FusionNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
     status.add(std::string(names[k]) + " p99 (ms)", percentile(stages[k], 0.99));
   }
   status.add("blocks", blocks);
+  status.add("blocks evicted", blocks_evicted_.load());
   status.add("memory (MB)", memory / 1048576.0);
 }
 

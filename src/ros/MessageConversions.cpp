@@ -53,6 +53,17 @@ bool toStereoFrame(const stereo_msgs::DisparityImage& disparity, const sensor_ms
              " but the disparity is " + std::to_string(d.width) + "x" + std::to_string(d.height);
     return false;
   }
+  // cv_bridge trusts step and the data length: check them, or a short message is read past its end.
+  const bool four_channels = image.encoding == enc::RGBA8 || image.encoding == enc::BGRA8;
+  const size_t bytes_per_pixel = image.encoding == enc::MONO8 ? 1 : four_channels ? 4 : 3;
+  if (size_t{image.step} < image.width * bytes_per_pixel || image.data.size() < size_t{image.step} * image.height) {
+    const bool known = image.encoding == enc::RGB8 || image.encoding == enc::BGR8 || four_channels ||
+                       image.encoding == enc::MONO8;
+    if (known) {
+      *error = "image data is shorter than step × height";
+      return false;
+    }
+  }
   cv::Mat color;
   try {
     if (image.encoding == enc::RGB8 || image.encoding == enc::BGR8 || image.encoding == enc::RGBA8 ||

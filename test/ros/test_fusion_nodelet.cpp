@@ -1,7 +1,9 @@
 // Integration test with a real master, the real nodelet and real messages (rostest).
 #include <std_srvs/Empty.h>
 #include <stereo_fusion/GetFullMesh.h>
+#include <stereo_fusion/LoadMap.h>
 #include <stereo_fusion/MeshUpdate.h>
+#include <stereo_fusion/SaveMap.h>
 #include <stereo_fusion/SaveMesh.h>
 #include <tf2_ros/transform_broadcaster.h>
 
@@ -9,6 +11,7 @@
 
 #include <fstream>
 #include <opencv2/core.hpp>
+#include <filesystem>
 #include <map>
 #include <mutex>
 
@@ -18,6 +21,7 @@
 #include "stereo_fusion/io/PlyReader.h"
 #include "stereo_fusion/ros/MeshMessages.h"
 #include "stereo_fusion/ros/MessageConversions.h"
+#include "stereo_fusion/ros/RosParameters.h"
 
 using namespace stereo_fusion;
 
@@ -52,10 +56,12 @@ class NodeletFixture : public testing::Test {
     return test::waitFor(std::forward<F>(done), timeout_s);
   }
 
+  /// Publishes `frame` stamped `stamp` (now when zero), with its tf first when `with_tf`.
   void publish(const StereoFrame& frame, const std::string& frame_id, bool with_tf,
-               const std::function<void(stereo_msgs::DisparityImage*, sensor_msgs::Image*)>& corrupt = {}) {
+               const std::function<void(stereo_msgs::DisparityImage*, sensor_msgs::Image*)>& corrupt = {},
+               ros::Time stamp = ros::Time()) {
     std_msgs::Header header;
-    header.stamp = ros::Time::now();
+    header.stamp = stamp.isZero() ? ros::Time::now() : stamp;
     header.frame_id = frame_id;
     if (with_tf) tf_.sendTransform(toTransform(frame.T_world_camera, "world", header));
     stereo_msgs::DisparityImage d;
@@ -226,6 +232,173 @@ TEST_F(NodeletFixture, MissingTfAndBadInputAreDroppedCountedAndSurvived) {
   GetFullMesh full;
   ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", full));
   EXPECT_TRUE(full.response.mesh.blocks.empty());
+}
+
+namespace {
+/// Equal submesh keys, vertices and triangles in two full meshes.
+void expectSameMesh(const MeshUpdate& a, const MeshUpdate& b) {
+  ASSERT_EQ(a.blocks.size(), b.blocks.size());
+  for (size_t k = 0; k < a.blocks.size(); ++k) {
+    EXPECT_EQ(a.blocks[k].key, b.blocks[k].key);
+    EXPECT_EQ(a.blocks[k].vertices, b.blocks[k].vertices);
+    EXPECT_EQ(a.blocks[k].triangles, b.blocks[k].triangles);
+  }
+}
+}  // namespace
+
+TEST_F(NodeletFixture, OutOfOrderDuplicateJumpingAndFutureTfFramesAreDroppedByReason) {
+  const sim::AnalyticScene s = scene();
+  const auto pose = sim::lookAt({0.05, -0.2, 0.0}, {0.05, 0.1, 1.2}, -Eigen::Vector3d::UnitY());
+  const StereoFrame frame = test::renderFrame(s, qvga(), pose);
+  const long fused_before = std::max(0L, diag("frames fused"));
+  const ros::Time t0 = ros::Time::now();
+  publish(frame, "left_optical", true, {}, t0);
+  ASSERT_TRUE(waitFor([&] { return diag("frames fused") >= fused_before + 1; }, 30.0));
+  GetFullMesh before;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", before));
+
+  publish(frame, "left_optical", true, {}, t0);                             // the same stamp again
+  publish(frame, "left_optical", true, {}, t0 - ros::Duration(0.5));        // older than the last fused
+  StereoFrame jumped = frame;
+  jumped.T_world_camera.translation().x() += 5000.0;                        // 5 km away
+  publish(jumped, "left_optical", true, {}, t0 + ros::Duration(0.1));
+  ASSERT_TRUE(waitFor([&] {
+    return diag("dropped: duplicate frame") >= 1 && diag("dropped: timestamp backwards") >= 1 &&
+           diag("dropped: pose jump") >= 1;
+  }, 30.0)) << "duplicate " << diag("dropped: duplicate frame") << ", backwards "
+            << diag("dropped: timestamp backwards") << ", jump " << diag("dropped: pose jump");
+  // tf only in the future of the frame: no transform at the frame's stamp.
+  const long tf_before = std::max(0L, diag("dropped: tf timeout"));
+  std_msgs::Header later;
+  later.stamp = t0 + ros::Duration(30.0);
+  later.frame_id = "future_only_optical";
+  tf_.sendTransform(toTransform(frame.T_world_camera, "world", later));
+  publish(frame, "future_only_optical", false, {}, t0 + ros::Duration(0.2));
+  ASSERT_TRUE(waitFor([&] { return diag("dropped: tf timeout") >= tf_before + 1; }, 30.0));
+
+  GetFullMesh after;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", after));
+  expectSameMesh(before.response.mesh, after.response.mesh);
+  EXPECT_EQ(diag("dropped: duplicate frame"), 1);
+  EXPECT_EQ(diag("dropped: timestamp backwards"), 1);
+  EXPECT_EQ(diag("dropped: pose jump"), 1);
+
+  // The jumped frame is now the reference of the jump check: the first frame back at the
+  // original place is a jump as well (a one-frame glitch costs two frames), then fusing resumes.
+  const long fused_mid = diag("frames fused");
+  publish(frame, "left_optical", true);
+  ASSERT_TRUE(waitFor([&] { return diag("dropped: pose jump") >= 2; }, 30.0));
+  // tf arriving late (after the images, within tf_timeout_s) costs nothing.
+  const ros::Time t1 = ros::Time::now();
+  std_msgs::Header late;
+  late.stamp = t1;
+  late.frame_id = "late_optical";
+  publish(frame, "late_optical", false, {}, t1);
+  ros::WallDuration(0.1).sleep();  // late, yet well inside tf_timeout_s = 0.5 s
+  tf_.sendTransform(toTransform(frame.T_world_camera, "world", late));
+  late.stamp = t1 + ros::Duration(0.5);  // a later transform, so t1 is interpolated, not extrapolated
+  tf_.sendTransform(toTransform(frame.T_world_camera, "world", late));
+  EXPECT_TRUE(waitFor([&] { return diag("frames fused") >= fused_mid + 1; }, 30.0));
+  EXPECT_EQ(diag("dropped: pose jump"), 2);
+  EXPECT_EQ(diag("dropped: tf timeout"), tf_before + 1) << "a late tf within tf_timeout_s must not drop the frame";
+  EXPECT_EQ(diag("blocks evicted"), 0);
+}
+
+TEST_F(NodeletFixture, SaveMapAndLoadMapRoundTripAndABadFileChangesNothing) {
+  const sim::AnalyticScene s = scene();
+  const long fused_before = std::max(0L, diag("frames fused"));
+  for (int f = 0; f < 3; ++f) {
+    const auto pose = sim::lookAt({-0.1 + 0.1 * f, -0.25, 0.0}, {0.05, 0.1, 1.2}, -Eigen::Vector3d::UnitY());
+    publish(test::renderFrame(s, qvga(), pose), "left_optical", true);
+  }
+  // All three fused before the reference mesh is taken, or save_map would see a later map.
+  ASSERT_TRUE(waitFor([&] { return diag("frames fused") >= fused_before + 3; }, 60.0)) << diag("frames fused");
+  GetFullMesh original;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", original));
+  ASSERT_GT(original.response.mesh.blocks.size(), 10u);
+
+  const std::string path = testing::TempDir() + "stereo_fusion_rostest_" + std::to_string(::getpid()) + ".sfmap";
+  SaveMap save;
+  save.request.path = path;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/save_map", save));
+  ASSERT_TRUE(save.response.success) << save.response.message;
+  EXPECT_GT(save.response.blocks, 10u);
+  EXPECT_EQ(std::filesystem::file_size(path), 72 + save.response.blocks * (24 + 584 * 12));
+
+  // A truncated copy is refused and the map stays as it was.
+  const std::string truncated = path + ".cut";
+  std::filesystem::copy_file(path, truncated, std::filesystem::copy_options::overwrite_existing);
+  std::filesystem::resize_file(truncated, std::filesystem::file_size(path) / 2);
+  LoadMap bad;
+  bad.request.path = truncated;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/load_map", bad));
+  EXPECT_FALSE(bad.response.success);
+  EXPECT_NE(bad.response.message.find("truncated map file"), std::string::npos) << bad.response.message;
+  EXPECT_NE(bad.response.message.find("current map is unchanged"), std::string::npos) << bad.response.message;
+  GetFullMesh after_bad;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", after_bad));
+  expectSameMesh(original.response.mesh, after_bad.response.mesh);
+
+  // Reset, load: the identical mesh, also in what subscribers were sent.
+  std_srvs::Empty reset;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/reset", reset));
+  LoadMap load;
+  load.request.path = path;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/load_map", load));
+  ASSERT_TRUE(load.response.success) << load.response.message;
+  EXPECT_EQ(load.response.blocks, save.response.blocks);
+  GetFullMesh loaded;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", loaded));
+  expectSameMesh(original.response.mesh, loaded.response.mesh);
+  ASSERT_TRUE(waitFor([&] {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return streamed_.size() == loaded.response.mesh.blocks.size();
+  }, 10.0)) << "the full update after load_map did not arrive";
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    EXPECT_TRUE(applied_ok_);
+    for (const auto& block : loaded.response.mesh.blocks) {
+      auto it = streamed_.find(BlockKey{block.key[0], block.key[1], block.key[2]});
+      ASSERT_NE(it, streamed_.end());
+      EXPECT_EQ(it->second.triangles.size() * 3, block.triangles.size());
+    }
+  }
+  std::filesystem::remove(path);
+  std::filesystem::remove(truncated);
+}
+
+TEST(NodeParameters, OutOfRangeValuesAtStartUpNameTheParameter) {
+  // loadParameters() is what FusionNodelet::onInit() runs before anything else; it throws with
+  // this message. Parameters go through a real master, with the types YAML would give them.
+  struct Case {
+    const char* name;
+    std::function<void(const std::string& ns)> set;
+    const char* message;
+  };
+  const std::vector<Case> cases = {
+      {"truncation_vox", [](const std::string& ns) { ros::param::set(ns + "/truncation_vox", 100); },
+       "parameter '/bad_truncation_vox/truncation_vox' = 100 is out of range [1, 8]"},
+      {"max_blocks", [](const std::string& ns) { ros::param::set(ns + "/max_blocks", -1); }, "= -1 is out of range [0, 100000000]"},
+      {"max_pose_jump_m", [](const std::string& ns) { ros::param::set(ns + "/max_pose_jump_m", -5.0); }, "is out of range [0, 1e+06]"},
+      {"voxel_size_m", [](const std::string& ns) { ros::param::set(ns + "/voxel_size_m", std::string("abc")); }, "is not a finite number"},
+      {"depths", [](const std::string& ns) { ros::param::set(ns + "/min_depth_m", 9.0); }, "min_depth_m must be < max_depth_m"},
+      {"queue_size", [](const std::string& ns) { ros::param::set(ns + "/queue_size", 0); }, "queue_size' must be in [1, 1000]"},
+      {"tf_timeout_s", [](const std::string& ns) { ros::param::set(ns + "/tf_timeout_s", -1.0); }, "tf_timeout_s' must be in [0, 10] s"},
+      {"list", [](const std::string& ns) { ros::param::set(ns + "/max_weight", std::vector<double>{1, 2}); }, "must be a single value"},
+  };
+  for (const Case& c : cases) {
+    const std::string ns = std::string("/bad_") + c.name;
+    c.set(ns);
+    MapperConfig mapper;
+    NodeConfig node;
+    std::string error;
+    EXPECT_FALSE(loadParameters(ros::NodeHandle(ns), &mapper, &node, &error)) << c.name;
+    EXPECT_NE(error.find(c.message), std::string::npos) << c.name << ": " << error;
+  }
+  MapperConfig mapper;
+  NodeConfig node;
+  std::string error;
+  EXPECT_TRUE(loadParameters(ros::NodeHandle("/no_parameters_here"), &mapper, &node, &error)) << error;
 }
 
 int main(int argc, char** argv) { return test::runRosTests(argc, argv, "stereo_fusion_rostest"); }

@@ -61,6 +61,10 @@ bool parseFuseArguments(const std::vector<std::string>& args, FuseOptions* optio
        : a == "--image-topic"     ? options->bag_topics.image
        : a == "--camera-info-topic" ? options->bag_topics.camera_info
                                     : options->bag_topics.world_frame) = *v;
+    } else if (a == "--load-map" || a == "--save-map") {
+      const std::string* v = value(a.c_str());
+      if (!v) return false;
+      (a == "--load-map" ? options->load_map : options->save_map) = *v;
     } else if (a == "--quiet") {
       options->progress = false;
     } else if (!a.empty() && a[0] == '-') {
@@ -70,12 +74,16 @@ bool parseFuseArguments(const std::vector<std::string>& args, FuseOptions* optio
       positional.push_back(a);
     }
   }
-  if (positional.size() != 2) {
-    *error = "expected <seq-folder | file.bag> <out-dir>, got " + std::to_string(positional.size()) + " arguments";
+  if (positional.size() == 1 && !options->load_map.empty()) {
+    options->out_dir = positional[0];  // mesh a saved map, no frames
+  } else if (positional.size() == 2) {
+    options->input = positional[0];
+    options->out_dir = positional[1];
+  } else {
+    *error = "expected <seq-folder | file.bag> <out-dir> (or <out-dir> with --load-map), got " +
+             std::to_string(positional.size()) + " arguments";
     return false;
   }
-  options->input = positional[0];
-  options->out_dir = positional[1];
   if (!config_file.empty() && !loadMapperConfigFile(config_file, &options->config, error)) return false;
   for (const std::string& s : sets) {
     const size_t eq = s.find('=');
@@ -134,12 +142,21 @@ Summary summarize(std::vector<double> v) {
 bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::string* error) {
   *report = FuseReport{};
   std::unique_ptr<FrameSource> reader;
-  if (fs::path(options.input).extension() == ".bag") {
+  if (options.input.empty()) {
+    // No frames: only the loaded map is meshed.
+  } else if (fs::path(options.input).extension() == ".bag") {
     reader = BagSequence::open(options.input, options.bag_topics, error);
+    if (!reader) return false;
   } else if (auto folder = DatasetReader::open(options.input, error)) {
     reader = std::make_unique<DatasetReader>(std::move(*folder));
+  } else {
+    return false;
   }
-  if (!reader) return false;
+  Mapper mapper(options.config);
+  if (!options.load_map.empty()) {
+    if (!mapper.loadMap(options.load_map, nullptr, error)) return false;
+    report->blocks_loaded = mapper.map().blockCount();
+  }
   std::error_code ec;
   fs::create_directories(options.out_dir, ec);
   if (ec || !fs::is_directory(options.out_dir)) {
@@ -147,8 +164,8 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
     return false;
   }
 
-  Mapper mapper(options.config);
-  const size_t total = options.max_frames ? std::min(options.max_frames, reader->size()) : reader->size();
+  const size_t available = reader ? reader->size() : 0;
+  const size_t total = options.max_frames ? std::min(options.max_frames, available) : available;
   report->frames_total = total;
   const bool terminal = isatty(STDERR_FILENO);
   size_t last_decile = 0;
@@ -171,9 +188,20 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
       skip("unreadable", why);
     } else {
       Timer frame_timer;
-      const IntegrationResult r = mapper.integrate(frame);
+      IntegrationResult r;
+      try {
+        r = mapper.integrate(frame);
+      } catch (const std::bad_alloc&) {
+        // Out of memory mid-frame: this frame's blocks may be half fused; stop cleanly with what
+        // we have rather than crash. Set max_blocks to stay within memory.
+        *error = "out of memory at frame " + std::to_string(i) + " with " +
+                 std::to_string(mapper.map().blockCount()) + " blocks; set max_blocks";
+        return false;
+      }
       if (!r.accepted) {
-        skip("rejected", "frame " + std::to_string(i) + ": " + r.error);
+        // Invalid frames keep the historical key "rejected"; order and pose checks name theirs.
+        const std::string reason = r.reason == RejectReason::kInvalidFrame ? "rejected" : rejectReasonName(r.reason);
+        skip(reason, "frame " + std::to_string(i) + ": " + r.error);
       } else {
         ++report->frames_used;
         report->timings.push_back(
@@ -188,6 +216,8 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
   report->mesh_vertices = mesh.positions.size();
   report->mesh_triangles = mesh.triangles.size();
   report->blocks = mapper.map().blockCount();
+  report->blocks_evicted = mapper.blocksEvicted();
+  if (!options.save_map.empty() && !mapper.saveMap(options.save_map, error)) return false;
   report->memory_bytes = mapper.map().memoryBytes();
   report->bytes_per_block = mapper.map().bytesPerBlock();
   for (const VoxelBlock* b : mapper.map().blocks()) ++report->blocks_per_level[b->mesh_level];
@@ -225,6 +255,8 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   j["blocks"]["meshed_at_8"] = report.blocks_per_level[0];
   j["blocks"]["meshed_at_4"] = report.blocks_per_level[1];
   j["blocks"]["meshed_at_2"] = report.blocks_per_level[2];
+  j["blocks"]["evicted"] = report.blocks_evicted;
+  j["map"]["loaded_blocks"] = report.blocks_loaded;
   j["memory"]["bytes"] = report.memory_bytes;
   j["memory"]["megabytes"] = report.memory_bytes / 1048576.0;
   j["memory"]["bytes_per_block"] = report.bytes_per_block;

@@ -18,6 +18,8 @@ struct FuseOptions {
   std::string out_dir;  ///< receives mesh.ply and stats.json (and mesh.obj + .mtl + atlas PNGs with texture = patches)
   MapperConfig config;
   size_t max_frames = 0;  ///< 0 = all
+  std::string load_map;  ///< map file to start from (empty = an empty map); `input` may then be empty
+  std::string save_map;  ///< where to save the map after the last frame (empty = not saved)
   bool progress = true;   ///< progress bar on stderr (a line per 10 % when not a terminal)
 };
 
@@ -34,6 +36,8 @@ struct FuseReport {
   std::vector<std::string> skipped_examples;    ///< the first few messages, verbatim
   std::vector<StageTimings> timings;            ///< one per used frame
   size_t blocks = 0;
+  size_t blocks_loaded = 0;                     ///< blocks of the --load-map file
+  uint64_t blocks_evicted = 0;                  ///< by the memory bound (max_blocks, max_distance_from_camera_m)
   size_t blocks_per_level[3] = {0, 0, 0};       ///< by the level each block is meshed at
   size_t memory_bytes = 0;
   double bytes_per_block = 0;
@@ -45,7 +49,9 @@ struct FuseReport {
 };
 
 /// Parses `fuse <input> <out-dir> [--config FILE] [--set key=value ...] [--frames N] [--quiet]
-/// [--disparity-topic T] [--image-topic T] [--camera-info-topic T] [--world-frame F]`.
+/// [--disparity-topic T] [--image-topic T] [--camera-info-topic T] [--world-frame F]
+/// [--load-map FILE] [--save-map FILE]`; with --load-map the input may be left out
+/// (`fuse <out-dir> --load-map FILE` meshes a saved map).
 /// --config is applied before every --set, whatever their order. False with a message (which
 /// names the parameter or flag) on any error: unknown flags, unknown keys, out-of-range values.
 bool parseFuseArguments(const std::vector<std::string>& args, FuseOptions* options, std::string* error);

@@ -7,7 +7,8 @@
 namespace {
 const char* kUsage =
     "usage: stereo_fusion_fuse <seq-folder | file.bag> <out-dir> [--config FILE] [--set key=value ...]\n"
-    "                          [--frames N] [--quiet]\n"
+    "                          [--frames N] [--quiet] [--load-map FILE] [--save-map FILE]\n"
+    "       stereo_fusion_fuse <out-dir> --load-map FILE [...]   (mesh a saved map)\n"
     "Fuses a dataset folder (see DESIGN.md) or a rosbag (DisparityImage, Image, CameraInfo, /tf)\n"
     "and writes <out-dir>/mesh.ply and <out-dir>/stats.json (with --set texture=patches also\n"
     "<out-dir>/mesh.obj + mesh.mtl + mesh_atlas_K.png, textured from the camera images).\n"
@@ -17,6 +18,8 @@ const char* kUsage =
     "  --disparity-topic, --image-topic, --camera-info-topic, --world-frame\n"
     "                    what to read from a bag (defaults: /stereo/disparity,\n"
     "                    /stereo/left/image_rect_color, /stereo/left/camera_info, world)\n"
+    "  --load-map FILE   start from a map saved with --save-map (same voxel_size_m, truncation_vox)\n"
+    "  --save-map FILE   save the map after the last frame (versioned binary, checksummed)\n"
     "  --quiet           no progress output\n";
 }
 
@@ -43,9 +46,13 @@ int main(int argc, char** argv) {
   std::printf("fused %zu of %zu frames (%zu skipped) in %.1f s: %zu blocks, %.1f MB, mesh %zu vertices / %zu triangles\n",
               report.frames_used, report.frames_total, skipped, report.wall_time_s, report.blocks,
               report.memory_bytes / 1048576.0, report.mesh_vertices, report.mesh_triangles);
+  if (report.blocks_evicted > 0)
+    std::printf("memory bound: %llu blocks evicted\n", static_cast<unsigned long long>(report.blocks_evicted));
   std::printf("wrote %s/mesh.ply and %s/stats.json\n", options.out_dir.c_str(), options.out_dir.c_str());
   if (options.config.texture == stereo_fusion::TextureMode::kPatches)
     std::printf("wrote %s/mesh.obj + mesh.mtl + %zu atlas PNG(s): %zu textured blocks, texture memory %.1f MB\n",
                 options.out_dir.c_str(), report.atlas_count, report.textured_blocks, report.texture_bytes / 1048576.0);
-  return report.frames_used > 0 ? 0 : 1;
+  if (!options.save_map.empty()) std::printf("saved the map (%zu blocks) to %s\n", report.blocks, options.save_map.c_str());
+  // Meshing a loaded map alone is a success without frames.
+  return report.frames_used > 0 || (!options.load_map.empty() && report.frames_total == 0) ? 0 : 1;
 }

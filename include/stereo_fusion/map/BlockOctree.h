@@ -24,7 +24,8 @@ namespace stereo_fusion {
 /// Concurrency: find() is lock-free and may run in parallel with findOrAllocate();
 /// findOrAllocate() serialises only the allocation itself (a node or block is built
 /// completely before it is published with a release store). Everything else
-/// (iteration, clear) must not overlap with allocation.
+/// (iteration, erase, swap, clear) must not overlap with allocation or find(): the Mapper calls
+/// them between frames on the integrating thread.
 class BlockOctree {
  public:
   /// Keys beyond ±kMaxKey are refused (2.7e8 blocks, > 20 000 km at 8 cm blocks: far beyond
@@ -82,6 +83,16 @@ class BlockOctree {
 
   /// Removes every block and node; the block size stays.
   void clear();
+
+  /// Removes the blocks at `keys` (missing keys are ignored) and every inner node left without
+  /// children, so a map that keeps moving does not keep the nodes of space it has forgotten.
+  /// Pointers to the erased blocks become invalid. Returns how many blocks were removed.
+  /// Not thread-safe: nothing may search or allocate meanwhile.
+  size_t erase(const std::vector<BlockKey>& keys);
+
+  /// Exchanges the contents (blocks, nodes, block size) with `other`; counters stay. Used to
+  /// install a map loaded into a fresh octree in one step. Not thread-safe.
+  void swap(BlockOctree& other);
 
  private:
   struct Node;

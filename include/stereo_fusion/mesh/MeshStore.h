@@ -24,8 +24,11 @@ class MeshStore {
 
   /// After fusion changed `updated` blocks: refresh their mesh levels, then re-mesh them and
   /// every block whose owned seams reach them — the −x/−y/−z neighbours and diagonals, i.e.
-  /// owners K − (0|1, 0|1, 0|1) — in parallel over blocks.
-  MeshChanges update(const BlockOctree& map, const std::vector<BlockKey>& updated, ThreadPool* pool);
+  /// owners K − (0|1, 0|1, 0|1) — in parallel over blocks. `erased` lists blocks just removed
+  /// from the map (eviction): their submeshes are dropped (reported in `removed`) and the
+  /// owners whose seams reached them are re-meshed, so the result equals a rebuild.
+  MeshChanges update(const BlockOctree& map, const std::vector<BlockKey>& updated, ThreadPool* pool,
+                     const std::vector<BlockKey>& erased = {});
   /// Meshes every block from scratch (the reference for the incremental result).
   MeshChanges rebuild(const BlockOctree& map, ThreadPool* pool);
 

@@ -14,6 +14,8 @@
 #include <sensor_msgs/Image.h>
 #include <std_srvs/Empty.h>
 #include <stereo_fusion/GetFullMesh.h>
+#include <stereo_fusion/LoadMap.h>
+#include <stereo_fusion/SaveMap.h>
 #include <stereo_fusion/SaveMesh.h>
 #include <stereo_msgs/DisparityImage.h>
 #include <tf2_ros/buffer.h>
@@ -35,9 +37,11 @@
 namespace stereo_fusion {
 
 /// Nodelet `stereo_fusion/FusionNodelet`. Topics: `disparity`, `image`, `camera_info` in;
-/// `~mesh_update`, `~mesh_markers`, `~camera_path`, `~frustum`, `~block_bounds` out. Services: `~save_mesh`, `~reset`, `~get_full_mesh`.
-/// Every dropped frame is counted by reason (queue full, tf timeout, bad input) and reported
-/// on /diagnostics together with rates, latency and map size.
+/// `~mesh_update`, `~mesh_markers`, `~camera_path`, `~frustum`, `~block_bounds` out. Services:
+/// `~save_mesh`, `~reset`, `~get_full_mesh`, `~save_map`, `~load_map`. Every dropped frame is
+/// counted by reason (queue full, tf timeout, bad input, timestamp backwards, duplicate, pose
+/// jump) and reported on /diagnostics together with rates, latency, map size and blocks
+/// evicted by the memory bound.
 class FusionNodelet : public nodelet::Nodelet {
  public:
   ~FusionNodelet() override;
@@ -63,6 +67,11 @@ class FusionNodelet : public nodelet::Nodelet {
   bool saveMesh(SaveMesh::Request& req, SaveMesh::Response& res);
   bool getFullMesh(GetFullMesh::Request& req, GetFullMesh::Response& res);
   bool reset(std_srvs::Empty::Request& req, std_srvs::Empty::Response& res);
+  bool saveMap(SaveMap::Request& req, SaveMap::Response& res);
+  bool loadMap(LoadMap::Request& req, LoadMap::Response& res);
+  /// Publishes the whole mesh as a `full` update and redraws the markers (after reset / load).
+  /// Caller holds map_mutex_.
+  void publishFullLocked(const std::vector<BlockKey>& removed);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
 
   NodeConfig node_config_;
@@ -95,11 +104,13 @@ class FusionNodelet : public nodelet::Nodelet {
   std::unique_ptr<message_filters::Synchronizer<ExactPolicy>> exact_sync_;
   std::unique_ptr<message_filters::Synchronizer<ApproxPolicy>> approx_sync_;
   ros::Publisher mesh_update_pub_, markers_pub_, path_pub_, frustum_pub_, block_bounds_pub_;
-  ros::ServiceServer save_srv_, full_srv_, reset_srv_;
+  ros::ServiceServer save_srv_, full_srv_, reset_srv_, save_map_srv_, load_map_srv_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
   ros::WallTimer diagnostics_timer_;
 
   std::atomic<uint64_t> received_{0}, fused_{0}, dropped_queue_{0}, dropped_tf_{0}, dropped_bad_input_{0};
+  std::atomic<uint64_t> dropped_backwards_{0}, dropped_duplicate_{0}, dropped_pose_jump_{0};
+  std::atomic<uint64_t> blocks_evicted_{0};  // by the memory bound, since start (reset and load included)
   ros::WallTime started_;
 };
 

@@ -1,0 +1,60 @@
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "stereo_fusion/MapperConfig.h"
+#include "stereo_fusion/map/BlockOctree.h"
+
+namespace stereo_fusion {
+
+/// Map file format (all numbers little-endian):
+///
+///   header, 72 bytes:
+///     0  char[8] magic "SFUSEMAP"       8  u32 version (kMapFileVersion)   12 u32 header bytes (72)
+///     16 f64 voxel_size_m               24 f64 truncation_vox
+///     32 f64 scale2_min_depth_m         40 f64 scale4_min_depth_m
+///     48 u64 frames integrated          56 u64 block count
+///     64 u32 CRC-32 of the payload      68 u32 CRC-32 of header bytes 0..67
+///   payload: block count records of kMapFileRecordBytes, sorted by key:
+///     i32 x, y, z; u64 last_update_frame; i8 mesh_level; u8 flags (1 = has negative,
+///     2 = has positive); u16 0; then the 584 voxels of VoxelBlock in index order, each
+///     f32 sdf_m, f32 weight, u8 r, g, b, reserved.
+///
+/// voxel_size_m and truncation_vox must equal the loading mapper's: they fix the block grid
+/// and the SDF's clamp. The level thresholds are recorded for information only.
+constexpr uint32_t kMapFileVersion = 1;
+constexpr size_t kMapFileHeaderBytes = 72;
+constexpr size_t kMapFileRecordBytes = 24 + 584 * 12;
+
+/// What a map file says about itself besides its blocks.
+struct MapFileInfo {
+  uint32_t version = 0;
+  double voxel_size_m = 0;
+  double truncation_vox = 0;
+  double scale2_min_depth_m = 0;
+  double scale4_min_depth_m = 0;
+  uint64_t frames_integrated = 0;  ///< of the mapper that saved it
+  uint64_t block_count = 0;
+};
+
+/// The file bytes for `map`, built with `config`, after `frames_integrated` frames.
+std::vector<uint8_t> encodeMapFile(const BlockOctree& map, const MapperConfig& config, uint64_t frames_integrated);
+
+/// Parses and checks file bytes completely (magic, version, sizes, both checksums, parameters
+/// against `config`, keys in range and unique, finite voxels with weight ≥ 0) into `out`, which
+/// must be empty and have config's block size. False with one sentence in `error` on the first
+/// problem; then `out` may hold part of the blocks and must be discarded.
+bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config, BlockOctree* out,
+                   MapFileInfo* info, std::string* error);
+
+/// Writes encodeMapFile() to `path` through `path`.tmp-<pid> renamed into place, so a crash
+/// never leaves a half-written file under the final name.
+bool writeMapFile(const std::string& path, const BlockOctree& map, const MapperConfig& config,
+                  uint64_t frames_integrated, std::string* error);
+/// Reads `path` and decodeMapFile()s it; errors are prefixed with the path.
+bool readMapFile(const std::string& path, const MapperConfig& config, BlockOctree* out, MapFileInfo* info,
+                 std::string* error);
+
+}  // namespace stereo_fusion

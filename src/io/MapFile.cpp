@@ -1,0 +1,243 @@
+#include "stereo_fusion/io/MapFile.h"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+
+#include "stereo_fusion/util/Crc32.h"
+
+namespace stereo_fusion {
+
+namespace {
+
+constexpr char kMagic[8] = {'S', 'F', 'U', 'S', 'E', 'M', 'A', 'P'};
+
+// Explicit little-endian encoding: the file must read the same on any host.
+void putU32(std::vector<uint8_t>* b, uint32_t v) {
+  for (int i = 0; i < 4; ++i) b->push_back(static_cast<uint8_t>(v >> (8 * i)));
+}
+void putU64(std::vector<uint8_t>* b, uint64_t v) {
+  for (int i = 0; i < 8; ++i) b->push_back(static_cast<uint8_t>(v >> (8 * i)));
+}
+void putF32(std::vector<uint8_t>* b, float v) {
+  uint32_t bits;
+  std::memcpy(&bits, &v, 4);
+  putU32(b, bits);
+}
+void putF64(std::vector<uint8_t>* b, double v) {
+  uint64_t bits;
+  std::memcpy(&bits, &v, 8);
+  putU64(b, bits);
+}
+uint32_t getU32(const uint8_t* p) {
+  uint32_t v = 0;
+  for (int i = 0; i < 4; ++i) v |= uint32_t{p[i]} << (8 * i);
+  return v;
+}
+uint64_t getU64(const uint8_t* p) {
+  uint64_t v = 0;
+  for (int i = 0; i < 8; ++i) v |= uint64_t{p[i]} << (8 * i);
+  return v;
+}
+float getF32(const uint8_t* p) {
+  const uint32_t bits = getU32(p);
+  float v;
+  std::memcpy(&v, &bits, 4);
+  return v;
+}
+double getF64(const uint8_t* p) {
+  const uint64_t bits = getU64(p);
+  double v;
+  std::memcpy(&v, &bits, 8);
+  return v;
+}
+
+std::string number(double v) {
+  std::ostringstream os;
+  os.precision(17);
+  os << v;
+  return os.str();
+}
+
+}  // namespace
+
+std::vector<uint8_t> encodeMapFile(const BlockOctree& map, const MapperConfig& config, uint64_t frames_integrated) {
+  const std::vector<VoxelBlock*> blocks = map.blocksSortedByKey();
+  std::vector<uint8_t> payload;
+  payload.reserve(blocks.size() * kMapFileRecordBytes);
+  for (const VoxelBlock* b : blocks) {
+    putU32(&payload, static_cast<uint32_t>(b->key.x));
+    putU32(&payload, static_cast<uint32_t>(b->key.y));
+    putU32(&payload, static_cast<uint32_t>(b->key.z));
+    putU64(&payload, b->last_update_frame);
+    payload.push_back(static_cast<uint8_t>(b->mesh_level));
+    payload.push_back(static_cast<uint8_t>((b->mesh_has_negative ? 1 : 0) | (b->mesh_has_positive ? 2 : 0)));
+    payload.push_back(0);
+    payload.push_back(0);
+    for (const Voxel& v : b->voxels) {
+      putF32(&payload, v.sdf_m);
+      putF32(&payload, v.weight);
+      payload.insert(payload.end(), {v.r, v.g, v.b, v.reserved});
+    }
+  }
+  std::vector<uint8_t> file(kMagic, kMagic + 8);
+  putU32(&file, kMapFileVersion);
+  putU32(&file, static_cast<uint32_t>(kMapFileHeaderBytes));
+  putF64(&file, config.voxel_size_m);
+  putF64(&file, config.truncation_vox);
+  putF64(&file, config.levels.scale2_min_depth_m);
+  putF64(&file, config.levels.scale4_min_depth_m);
+  putU64(&file, frames_integrated);
+  putU64(&file, blocks.size());
+  putU32(&file, crc32(payload.data(), payload.size()));
+  putU32(&file, crc32(file.data(), file.size()));
+  file.insert(file.end(), payload.begin(), payload.end());
+  return file;
+}
+
+bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config, BlockOctree* out,
+                   MapFileInfo* info, std::string* error) {
+  if (size < 8 || std::memcmp(data, kMagic, 8) != 0) {
+    *error = "not a stereo_fusion map file (bad magic)";
+    return false;
+  }
+  if (size < 12) {
+    *error = "truncated map file: " + std::to_string(size) + " bytes, the header alone has " +
+             std::to_string(kMapFileHeaderBytes);
+    return false;
+  }
+  // The version comes first, so a newer file is named as such whatever its layout.
+  info->version = getU32(data + 8);
+  if (info->version != kMapFileVersion) {
+    *error = "map file version " + std::to_string(info->version) + " is not supported (this build reads version " +
+             std::to_string(kMapFileVersion) + ")";
+    return false;
+  }
+  if (size < kMapFileHeaderBytes) {
+    *error = "truncated map file: " + std::to_string(size) + " bytes, the header alone has " +
+             std::to_string(kMapFileHeaderBytes);
+    return false;
+  }
+  if (getU32(data + 68) != crc32(data, 68) || getU32(data + 12) != kMapFileHeaderBytes) {
+    *error = "corrupted map file: header checksum mismatch";
+    return false;
+  }
+  info->voxel_size_m = getF64(data + 16);
+  info->truncation_vox = getF64(data + 24);
+  info->scale2_min_depth_m = getF64(data + 32);
+  info->scale4_min_depth_m = getF64(data + 40);
+  info->frames_integrated = getU64(data + 48);
+  info->block_count = getU64(data + 56);
+  const size_t payload_bytes = size - kMapFileHeaderBytes;
+  // Compare by division: a corrupted count must not overflow the expected size.
+  if (info->block_count > payload_bytes / kMapFileRecordBytes ||
+      payload_bytes != info->block_count * kMapFileRecordBytes) {
+    const bool short_file = info->block_count > payload_bytes / kMapFileRecordBytes;
+    *error = std::string(short_file ? "truncated" : "corrupted") + " map file: " + std::to_string(size) +
+             " bytes, but the header announces " + std::to_string(info->block_count) + " blocks (" +
+             std::to_string(kMapFileHeaderBytes) + " + " + std::to_string(info->block_count) + " × " +
+             std::to_string(kMapFileRecordBytes) + " bytes)";
+    return false;
+  }
+  const uint8_t* payload = data + kMapFileHeaderBytes;
+  if (getU32(data + 64) != crc32(payload, payload_bytes)) {
+    *error = "corrupted map file: block data checksum mismatch";
+    return false;
+  }
+  if (info->voxel_size_m != config.voxel_size_m || info->truncation_vox != config.truncation_vox) {
+    *error = "map file was built with voxel_size_m = " + number(info->voxel_size_m) + ", truncation_vox = " +
+             number(info->truncation_vox) + " but this mapper uses voxel_size_m = " + number(config.voxel_size_m) +
+             ", truncation_vox = " + number(config.truncation_vox);
+    return false;
+  }
+  if (out->blockCount() != 0 || out->blockSize() != config.blockSizeM()) {
+    *error = "map file must be decoded into an empty octree of the configured block size";
+    return false;
+  }
+  for (uint64_t n = 0; n < info->block_count; ++n) {
+    const uint8_t* r = payload + n * kMapFileRecordBytes;
+    const BlockKey key{static_cast<int32_t>(getU32(r)), static_cast<int32_t>(getU32(r + 4)),
+                       static_cast<int32_t>(getU32(r + 8))};
+    const std::string which = "block " + std::to_string(n) + " (key " + std::to_string(key.x) + ", " +
+                              std::to_string(key.y) + ", " + std::to_string(key.z) + ")";
+    const int level = static_cast<int8_t>(r[20]);
+    if (level < 0 || level >= kNumLevels || r[21] > 3) {
+      *error = "invalid map file: " + which + " has mesh level " + std::to_string(level) + " / flags " +
+               std::to_string(r[21]);
+      return false;
+    }
+    bool allocated = false;
+    VoxelBlock* block = out->findOrAllocate(key, &allocated);
+    if (block == nullptr || !allocated) {
+      *error = "invalid map file: " + which + (block ? " appears twice" : " is beyond the map's range");
+      return false;
+    }
+    block->last_update_frame = getU64(r + 12);
+    block->mesh_level = static_cast<int8_t>(level);
+    block->mesh_has_negative = (r[21] & 1) != 0;
+    block->mesh_has_positive = (r[21] & 2) != 0;
+    const uint8_t* v = r + 24;
+    for (Voxel& voxel : block->voxels) {
+      voxel.sdf_m = getF32(v);
+      voxel.weight = getF32(v + 4);
+      voxel.r = v[8];
+      voxel.g = v[9];
+      voxel.b = v[10];
+      voxel.reserved = v[11];
+      v += 12;
+      if (!std::isfinite(voxel.sdf_m) || !std::isfinite(voxel.weight) || voxel.weight < 0.0f) {
+        *error = "invalid map file: " + which + " holds a non-finite distance or a negative weight";
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
+bool writeMapFile(const std::string& path, const BlockOctree& map, const MapperConfig& config,
+                  uint64_t frames_integrated, std::string* error) {
+  const std::vector<uint8_t> bytes = encodeMapFile(map, config, frames_integrated);
+  const std::string tmp = path + ".tmp-" + std::to_string(getpid());
+  {
+    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+    f.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+    f.flush();
+    if (!f) {
+      std::remove(tmp.c_str());
+      *error = path + ": cannot write the map file";
+      return false;
+    }
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    std::remove(tmp.c_str());
+    *error = path + ": cannot write the map file (rename failed)";
+    return false;
+  }
+  return true;
+}
+
+bool readMapFile(const std::string& path, const MapperConfig& config, BlockOctree* out, MapFileInfo* info,
+                 std::string* error) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) {
+    *error = path + ": cannot open the map file";
+    return false;
+  }
+  const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  if (f.bad()) {
+    *error = path + ": read error";
+    return false;
+  }
+  if (!decodeMapFile(bytes.data(), bytes.size(), config, out, info, error)) {
+    *error = path + ": " + *error;
+    return false;
+  }
+  return true;
+}
+
+}  // namespace stereo_fusion

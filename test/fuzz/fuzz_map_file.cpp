@@ -1,0 +1,27 @@
+// libFuzzer target for the map file decoder (io/MapFile.h): any byte string must either decode
+// into a consistent octree or fail with a message — never crash, hang, or allocate beyond
+// what the input's own size justifies. Built by the fuzz build (clang, -DSTEREO_FUSION_FUZZ=ON).
+#include <cstddef>
+#include <cstdint>
+#include <cstdlib>
+#include <string>
+
+#include "stereo_fusion/io/MapFile.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  using namespace stereo_fusion;
+  const MapperConfig config;  // voxel_size_m and truncation_vox must match the file's
+  BlockOctree map(config.blockSizeM());
+  MapFileInfo info;
+  std::string error;
+  const bool ok = decodeMapFile(data, size, config, &map, &info, &error);
+  if (ok) {
+    // A decoded file is self-consistent: as many blocks as announced, and it re-encodes to
+    // exactly the input (the format has one encoding per map).
+    if (map.blockCount() != info.block_count) std::abort();
+    if (encodeMapFile(map, config, info.frames_integrated).size() != size) std::abort();
+  } else if (error.empty()) {
+    std::abort();  // every failure explains itself
+  }
+  return 0;
+}

@@ -1,0 +1,223 @@
+// The bad-input catalogue (README "Bad input") cases not covered elsewhere: time order,
+// duplicates and pose jumps in the Mapper, degenerate disparity values, CameraInfo and
+// DisparityImage calibration, empty images, and truncated bags in the offline path. Each
+// checks the message, the counter or reason, and that the map and mesh did not change.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cfloat>
+#include <filesystem>
+#include <functional>
+
+#include "MeshTestSupport.h"
+#include "fuser/OfflineFuser.h"
+#include "stereo_fusion/ros/BagSequence.h"
+#include "stereo_fusion/ros/MessageConversions.h"
+#include "stereo_fusion/ros/StereoBagWriter.h"
+
+using namespace stereo_fusion;
+using namespace stereo_fusion::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+sim::AnalyticScene floorAndSphere() {
+  sim::AnalyticScene scene;
+  scene.add(sim::makePlane({0, 0.3, 0}, {0, -1, 0}), {180, 160, 120});
+  scene.add(sim::makeSphere({0.05, 0.1, 1.2}, 0.2), {200, 60, 60});
+  return scene;
+}
+
+StereoFrame frameAt(int i, double timestamp_s) {
+  StereoFrame f = renderFrame(floorAndSphere(), qvgaCamera(),
+                              sim::lookAt({-0.15 + 0.1 * i, -0.2, 0.0}, {0.05, 0.1, 1.2}, -Eigen::Vector3d::UnitY()));
+  f.timestamp_s = timestamp_s;
+  return f;
+}
+
+/// The map and the mesh, for before/after comparisons.
+struct MapState {
+  MapSnapshot map;
+  std::map<BlockKey, std::multiset<std::array<float, 9>>> mesh;
+  bool operator==(const MapState& o) const { return map == o.map && mesh == o.mesh; }
+};
+MapState state(const Mapper& m) { return {snapshot(m.map()), triangleSets(m.mesh())}; }
+
+struct Messages {
+  stereo_msgs::DisparityImage disparity;
+  sensor_msgs::Image image;
+  sensor_msgs::CameraInfo info;
+};
+
+Messages messagesOf(const StereoFrame& f) {
+  Messages m;
+  std_msgs::Header header;
+  header.stamp = ros::Time(5.0);
+  header.frame_id = "left_optical";
+  toMessages(f, header, 128.0f, &m.disparity, &m.image, &m.info);
+  return m;
+}
+
+}  // namespace
+
+TEST(BadInput, TimestampsGoingBackwardsAndDuplicatesAreRejectedByReason) {
+  Mapper mapper(MapperConfig{});
+  ASSERT_TRUE(mapper.integrate(frameAt(0, 10.0)).accepted);
+  ASSERT_TRUE(mapper.integrate(frameAt(1, 10.5)).accepted);
+  const MapState before = state(mapper);
+
+  IntegrationResult r = mapper.integrate(frameAt(2, 10.2));
+  EXPECT_FALSE(r.accepted);
+  EXPECT_EQ(r.reason, RejectReason::kTimestampBackwards);
+  EXPECT_EQ(r.error, "timestamp 10.2 s goes backwards (last fused frame at 10.5 s)");
+  EXPECT_STREQ(rejectReasonName(r.reason), "timestamp_backwards");
+  EXPECT_TRUE(state(mapper) == before);
+
+  r = mapper.integrate(frameAt(1, 10.5));  // the same frame delivered twice
+  EXPECT_FALSE(r.accepted);
+  EXPECT_EQ(r.reason, RejectReason::kDuplicateTimestamp);
+  EXPECT_EQ(r.error, "duplicate frame: timestamp 10.5 s was already fused");
+  EXPECT_STREQ(rejectReasonName(r.reason), "duplicate");
+  EXPECT_TRUE(state(mapper) == before);
+  EXPECT_EQ(mapper.framesIntegrated(), 2u);
+
+  // Time 0 is "unknown" and never ordered; a later stamp is accepted again.
+  EXPECT_TRUE(mapper.integrate(frameAt(2, 0.0)).accepted);
+  EXPECT_TRUE(mapper.integrate(frameAt(3, 11.0)).accepted);
+  // The check can be switched off; reset() forgets the history.
+  MapperConfig lax;
+  lax.require_increasing_timestamps = false;
+  Mapper relaxed(lax);
+  EXPECT_TRUE(relaxed.integrate(frameAt(0, 10.0)).accepted);
+  EXPECT_TRUE(relaxed.integrate(frameAt(1, 9.0)).accepted);
+  mapper.reset();
+  EXPECT_TRUE(mapper.integrate(frameAt(0, 1.0)).accepted);
+}
+
+TEST(BadInput, PoseJumpsOfKilometresAreRejectedAndARelocalisationCostsOneFrame) {
+  Mapper mapper(MapperConfig{});  // max_pose_jump_m = 100
+  ASSERT_TRUE(mapper.integrate(frameAt(0, 1.0)).accepted);
+  const MapState before = state(mapper);
+  StereoFrame glitch = frameAt(1, 2.0);
+  glitch.T_world_camera.translation() += Eigen::Vector3d(3000.0, 0, 0);
+  IntegrationResult r = mapper.integrate(glitch);
+  EXPECT_FALSE(r.accepted);
+  EXPECT_EQ(r.reason, RejectReason::kPoseJump);
+  EXPECT_NE(r.error.find("camera jumped 3000"), std::string::npos) << r.error;
+  EXPECT_NE(r.error.find("max_pose_jump_m = 100"), std::string::npos) << r.error;
+  EXPECT_TRUE(state(mapper) == before);
+  // Back at the old place: a jump from the glitch, rejected too; then fusing resumes.
+  r = mapper.integrate(frameAt(1, 3.0));
+  EXPECT_EQ(r.reason, RejectReason::kPoseJump);
+  EXPECT_TRUE(state(mapper) == before);
+  EXPECT_TRUE(mapper.integrate(frameAt(2, 4.0)).accepted);
+  // A lasting relocalisation: one frame lost, then the new place is fused.
+  StereoFrame moved = frameAt(3, 5.0);
+  moved.T_world_camera.translation() += Eigen::Vector3d(0, 0, 500.0);
+  EXPECT_EQ(mapper.integrate(moved).reason, RejectReason::kPoseJump);
+  moved.timestamp_s = 6.0;
+  EXPECT_TRUE(mapper.integrate(moved).accepted);
+  // 0 disables the check.
+  MapperConfig off;
+  off.max_pose_jump_m = 0;
+  Mapper unchecked(off);
+  EXPECT_TRUE(unchecked.integrate(frameAt(0, 1.0)).accepted);
+  EXPECT_TRUE(unchecked.integrate(glitch).accepted);
+}
+
+TEST(BadInput, DegenerateDisparityValuesLeaveTheMapUnchanged) {
+  Mapper mapper(MapperConfig{});
+  ASSERT_TRUE(mapper.integrate(frameAt(0, 1.0)).accepted);
+  const MapState before = state(mapper);
+  struct Case {
+    const char* name;
+    float value;
+  };
+  // Huge disparities mean a depth below min_depth_m (f·b/d → 0); the rest are invalid.
+  const Case cases[] = {{"NaN", NAN}, {"+inf", INFINITY}, {"-inf", -INFINITY}, {"negative", -5.0f},
+                        {"huge", 1e30f}, {"FLT_MAX", FLT_MAX}, {"all zero (all invalid)", 0.0f}};
+  double t = 2.0;
+  for (const Case& c : cases) {
+    StereoFrame f = frameAt(1, t += 1.0);
+    f.disparity_px.setTo(c.value);
+    const IntegrationResult r = mapper.integrate(f);
+    EXPECT_TRUE(r.accepted) << c.name << ": valid input with nothing in it";
+    EXPECT_EQ(r.lookup.valid_points, 0u) << c.name;
+    EXPECT_TRUE(r.updated_blocks.empty()) << c.name;
+    EXPECT_TRUE(state(mapper) == before) << c.name << " changed the map";
+  }
+}
+
+TEST(BadInput, CameraInfoAndDisparityCalibrationAreChecked) {
+  const Messages good = messagesOf(frameAt(0, 1.0));
+  StereoFrame out;
+  std::string error;
+  ASSERT_TRUE(toStereoFrame(good.disparity, good.image, good.info, Eigen::Isometry3d::Identity(), &out, &error)) << error;
+  struct Case {
+    const char* name;
+    std::function<void(Messages*)> corrupt;
+    const char* message;
+  };
+  const std::vector<Case> cases = {
+      {"CameraInfo fx = 0 (P and K)", [](Messages* m) { m->info.P[0] = 0; m->info.K[0] = 0; }, "disagrees with DisparityImage f"},
+      {"CameraInfo fx < 0", [](Messages* m) { m->info.P[0] = -262.5; }, "disagrees with DisparityImage f"},
+      {"CameraInfo fx NaN", [](Messages* m) { m->info.P[0] = NAN; }, "focal lengths must be finite and > 0"},
+      {"CameraInfo fy = 0", [](Messages* m) { m->info.P[5] = 0; }, "focal lengths must be finite and > 0"},
+      {"CameraInfo fy NaN", [](Messages* m) { m->info.P[5] = NAN; }, "focal lengths must be finite and > 0"},
+      {"CameraInfo cx inf", [](Messages* m) { m->info.P[2] = INFINITY; }, "principal point must be finite"},
+      {"DisparityImage T = 0", [](Messages* m) { m->disparity.T = 0; }, "needs f > 0 and T > 0"},
+      {"DisparityImage T < 0", [](Messages* m) { m->disparity.T = -0.1f; }, "needs f > 0 and T > 0"},
+      {"DisparityImage f = 0", [](Messages* m) { m->disparity.f = 0; }, "needs f > 0 and T > 0"},
+      {"DisparityImage f NaN", [](Messages* m) { m->disparity.f = NAN; }, "needs f > 0 and T > 0"},
+      {"empty disparity image", [](Messages* m) { m->disparity.image.width = 0; m->disparity.image.height = 0;
+                                                  m->disparity.image.data.clear(); }, "disparity image is empty"},
+      {"empty colour image", [](Messages* m) { m->image.width = 0; m->image.height = 0; m->image.data.clear(); },
+       "image is 0x0 but the disparity is 320x240"},
+      {"colour data shorter than step × height", [](Messages* m) { m->image.data.resize(100); }, "image data is shorter than step × height"},
+      {"unsupported encoding bayer", [](Messages* m) { m->image.encoding = "bayer_rggb8"; }, "unsupported image encoding"},
+      {"disparity 16UC1", [](Messages* m) { m->disparity.image.encoding = "16UC1"; }, "must be 32FC1"},
+      {"CameraInfo size differs", [](Messages* m) { m->info.width = 640; }, "CameraInfo is 640x240"},
+  };
+  for (const Case& c : cases) {
+    Messages m = good;
+    c.corrupt(&m);
+    error.clear();
+    EXPECT_FALSE(toStereoFrame(m.disparity, m.image, m.info, Eigen::Isometry3d::Identity(), &out, &error)) << c.name;
+    EXPECT_NE(error.find(c.message), std::string::npos) << c.name << ": " << error;
+  }
+}
+
+TEST(BadInput, TruncatedBagsFailCleanlyInTheOfflinePath) {
+  const std::string path = testing::TempDir() + "stereo_fusion_truncated_" + std::to_string(::getpid()) + ".bag";
+  std::string error;
+  {
+    auto writer = StereoBagWriter::open(path, BagTopics{}, "left_optical", 1.0, &error);
+    ASSERT_TRUE(writer) << error;
+    for (int i = 0; i < 3; ++i) ASSERT_TRUE(writer->write(frameAt(i, 0.1 * i), 128.0f, &error)) << error;
+    writer->close();
+  }
+  const auto full_size = fs::file_size(path);
+  const std::string out_dir = path + ".out";
+  // Cut the bag at several points: every run either refuses the bag with one message or
+  // skips and counts the frames it cannot read; none crashes, none fuses garbage.
+  for (double share : {0.0, 0.01, 0.3, 0.6, 0.95}) {
+    const std::string cut = path + ".cut.bag";
+    fs::copy_file(path, cut, fs::copy_options::overwrite_existing);
+    fs::resize_file(cut, static_cast<uintmax_t>(full_size * share));
+    FuseOptions options;
+    ASSERT_TRUE(parseFuseArguments({cut, out_dir, "--quiet"}, &options, &error)) << error;
+    FuseReport report;
+    const bool ran = runOfflineFusion(options, &report, &error);
+    if (!ran) {
+      EXPECT_NE(error.find(cut), std::string::npos) << share << ": the message names the bag: " << error;
+    } else {
+      size_t skipped = 0;
+      for (const auto& [reason, n] : report.skipped) skipped += n;
+      EXPECT_EQ(report.frames_used + skipped, report.frames_total) << share;
+      EXPECT_LE(report.frames_used, 3u);
+    }
+    fs::remove(cut);
+  }
+  fs::remove(path);
+  fs::remove_all(out_dir);
+}

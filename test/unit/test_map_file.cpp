@@ -1,0 +1,337 @@
+// Map persistence: the versioned, checksummed map file, Mapper::saveMap / loadMap and the
+// offline fuser's --save-map / --load-map.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <nlohmann/json.hpp>
+
+#include "MeshTestSupport.h"
+#include "fuser/OfflineFuser.h"
+#include "simulator/DatasetWriter.h"
+#include "stereo_fusion/io/MapFile.h"
+#include "stereo_fusion/io/PlyWriter.h"
+#include "stereo_fusion/util/Crc32.h"
+
+using namespace stereo_fusion;
+using namespace stereo_fusion::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+sim::AnalyticScene floorAndSphere() {
+  sim::AnalyticScene scene;
+  scene.add(sim::makePlane({0, 0.3, 0}, {0, -1, 0}), {180, 160, 120});
+  scene.add(sim::makeSphere({0.05, 0.1, 1.2}, 0.2), {200, 60, 60});
+  return scene;
+}
+
+Eigen::Isometry3d view(int i) {
+  return sim::lookAt({-0.15 + 0.1 * i, -0.2, 0.0}, {0.05, 0.1, 1.2}, -Eigen::Vector3d::UnitY());
+}
+
+/// A mapper that fused `frames` views of the floor and sphere.
+std::unique_ptr<Mapper> fusedMapper(int frames, MapperConfig config = {}) {
+  auto mapper = std::make_unique<Mapper>(config);
+  const sim::AnalyticScene scene = floorAndSphere();
+  for (int i = 0; i < frames; ++i) {
+    StereoFrame f = renderFrame(scene, qvgaCamera(), view(i), 0.2, i);
+    f.timestamp_s = 1.0 + i;
+    EXPECT_TRUE(mapper->integrate(f).accepted);
+  }
+  return mapper;
+}
+
+std::string tempPath(const std::string& name) {
+  return testing::TempDir() + "stereo_fusion_mapfile_" + std::to_string(::getpid()) + "_" + name;
+}
+
+std::vector<uint8_t> readBytes(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  return std::vector<uint8_t>((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+}
+
+void writeBytes(const std::string& path, const std::vector<uint8_t>& bytes) {
+  std::ofstream f(path, std::ios::binary | std::ios::trunc);
+  f.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+}
+
+/// A tiny hand-made map of three blocks (fast to decode thousands of times).
+std::vector<uint8_t> tinyMapFile(const MapperConfig& config) {
+  BlockOctree map(config.blockSizeM());
+  const BlockKey keys[] = {{0, 0, 0}, {-3, 2, 7}, {1, 0, 0}};
+  int n = 0;
+  for (const BlockKey& k : keys) {
+    VoxelBlock* b = map.findOrAllocate(k);
+    b->last_update_frame = 10 + n;
+    for (int v = 0; v < VoxelBlock::kVoxelCount; ++v) {
+      b->voxels[v].sdf_m = 0.001f * (v - 300) + n;
+      b->voxels[v].weight = static_cast<float>(v % 5);
+      b->voxels[v].r = static_cast<uint8_t>(v);
+    }
+    ++n;
+  }
+  return encodeMapFile(map, config, 12);
+}
+
+/// Re-seals a patched file with correct checksums, so the content checks are what fails.
+void reseal(std::vector<uint8_t>* bytes) {
+  auto put = [&](size_t at, uint32_t v) {
+    for (int i = 0; i < 4; ++i) (*bytes)[at + i] = static_cast<uint8_t>(v >> (8 * i));
+  };
+  put(64, crc32(bytes->data() + kMapFileHeaderBytes, bytes->size() - kMapFileHeaderBytes));
+  put(68, crc32(bytes->data(), 68));
+}
+
+std::string decodeError(const std::vector<uint8_t>& bytes, const MapperConfig& config) {
+  BlockOctree out(config.blockSizeM());
+  MapFileInfo info;
+  std::string error;
+  if (decodeMapFile(bytes.data(), bytes.size(), config, &out, &info, &error)) return "";
+  return error.empty() ? "(empty message)" : error;
+}
+
+}  // namespace
+
+TEST(Crc32, StandardCheckValue) {
+  const std::string text = "123456789";
+  EXPECT_EQ(crc32(reinterpret_cast<const uint8_t*>(text.data()), text.size()), 0xCBF43926u);
+  EXPECT_EQ(crc32(nullptr, 0), 0u);
+  // Continuing over two buffers equals one pass.
+  const uint32_t part = crc32(reinterpret_cast<const uint8_t*>(text.data()), 4);
+  EXPECT_EQ(crc32(reinterpret_cast<const uint8_t*>(text.data()) + 4, 5, part), 0xCBF43926u);
+}
+
+TEST(MapFile, SaveLoadGivesTheIdenticalMapAndByteIdenticalMesh) {
+  MapperConfig config;
+  const auto original = fusedMapper(4, config);
+  ASSERT_GT(original->map().blockCount(), 50u);
+  const std::string map_path = tempPath("roundtrip.sfmap");
+  std::string error;
+  ASSERT_TRUE(original->saveMap(map_path, &error)) << error;
+  EXPECT_EQ(fs::file_size(map_path), kMapFileHeaderBytes + original->map().blockCount() * kMapFileRecordBytes);
+
+  Mapper loaded(config);
+  MeshChanges changes;
+  ASSERT_TRUE(loaded.loadMap(map_path, &changes, &error)) << error;
+  EXPECT_TRUE(snapshot(loaded.map()) == snapshot(original->map()));
+  EXPECT_EQ(loaded.framesIntegrated(), original->framesIntegrated());
+  for (const VoxelBlock* b : original->map().blocks())
+    EXPECT_EQ(loaded.map().find(b->key)->last_update_frame, b->last_update_frame) << b->key;
+  EXPECT_EQ(changes.changed.size(), loaded.mesh().submeshes().size());
+  EXPECT_TRUE(changes.removed.empty());
+
+  const std::string ply_a = tempPath("a.ply"), ply_b = tempPath("b.ply");
+  ASSERT_TRUE(writePly(ply_a, original->extractMesh(), &error)) << error;
+  ASSERT_TRUE(writePly(ply_b, loaded.extractMesh(), &error)) << error;
+  const std::vector<uint8_t> a = readBytes(ply_a), b = readBytes(ply_b);
+  ASSERT_GT(a.size(), 10000u);
+  EXPECT_TRUE(a == b) << "the mesh of the loaded map differs from the original's";
+  // Saving the loaded map again gives the same file.
+  const std::string again = tempPath("again.sfmap");
+  ASSERT_TRUE(loaded.saveMap(again, &error)) << error;
+  EXPECT_TRUE(readBytes(again) == readBytes(map_path));
+  for (const auto& p : {map_path, ply_a, ply_b, again}) fs::remove(p);
+}
+
+TEST(MapFile, FusingOnAfterLoadContinuesTheSameMap) {
+  // Fusing frames 0..3 equals fusing 0..1, saving, loading into a new mapper and fusing 2..3.
+  MapperConfig config;
+  const auto whole = fusedMapper(4, config);
+  const auto first = fusedMapper(2, config);
+  const std::string path = tempPath("continue.sfmap");
+  std::string error;
+  ASSERT_TRUE(first->saveMap(path, &error)) << error;
+  Mapper resumed(config);
+  ASSERT_TRUE(resumed.loadMap(path, nullptr, &error)) << error;
+  const sim::AnalyticScene scene = floorAndSphere();
+  for (int i = 2; i < 4; ++i) {
+    StereoFrame f = renderFrame(scene, qvgaCamera(), view(i), 0.2, i);
+    f.timestamp_s = 1.0 + i;
+    ASSERT_TRUE(resumed.integrate(f).accepted);
+  }
+  EXPECT_TRUE(snapshot(resumed.map()) == snapshot(whole->map()));
+  EXPECT_TRUE(triangleSets(resumed.mesh()) == triangleSets(whole->mesh()));
+  fs::remove(path);
+}
+
+TEST(MapFile, EveryTruncationAndEveryFlippedByteFailsCleanly) {
+  const MapperConfig config;
+  const std::vector<uint8_t> good = tinyMapFile(config);
+  ASSERT_EQ(good.size(), kMapFileHeaderBytes + 3 * kMapFileRecordBytes);
+  ASSERT_EQ(decodeError(good, config), "");
+  for (size_t n = 0; n < good.size(); ++n) {
+    const std::vector<uint8_t> cut(good.begin(), good.begin() + n);
+    const std::string e = decodeError(cut, config);
+    ASSERT_NE(e, "") << "a file truncated to " << n << " bytes was accepted";
+    if (n >= kMapFileHeaderBytes) ASSERT_NE(e.find("truncated map file"), std::string::npos) << n << ": " << e;
+  }
+  for (size_t at = 0; at < good.size(); ++at) {
+    std::vector<uint8_t> bad = good;
+    bad[at] ^= static_cast<uint8_t>(1u << (at % 8));
+    const std::string e = decodeError(bad, config);
+    ASSERT_NE(e, "") << "a flipped bit at byte " << at << " was accepted";
+    if (at >= kMapFileHeaderBytes) ASSERT_NE(e.find("block data checksum mismatch"), std::string::npos) << at << ": " << e;
+  }
+  // Appended bytes are corruption too.
+  std::vector<uint8_t> longer = good;
+  longer.push_back(0);
+  EXPECT_NE(decodeError(longer, config).find("corrupted map file"), std::string::npos);
+}
+
+TEST(MapFile, VersionParametersAndContentAreChecked) {
+  const MapperConfig config;
+  const std::vector<uint8_t> good = tinyMapFile(config);
+  std::vector<uint8_t> bad = good;
+  bad[8] = 2;  // version 2
+  EXPECT_EQ(decodeError(bad, config), "map file version 2 is not supported (this build reads version 1)");
+  bad = good;
+  bad[0] = 'X';
+  EXPECT_EQ(decodeError(bad, config), "not a stereo_fusion map file (bad magic)");
+  EXPECT_EQ(decodeError({}, config), "not a stereo_fusion map file (bad magic)");
+
+  MapperConfig other = config;
+  other.voxel_size_m = 0.04;
+  EXPECT_NE(decodeError(good, other).find("built with voxel_size_m = 0.02"), std::string::npos) << decodeError(good, other);
+  other = config;
+  other.truncation_vox = 3;
+  EXPECT_NE(decodeError(good, other).find("this mapper uses voxel_size_m = 0.02, truncation_vox = 3"), std::string::npos);
+
+  // Well-sealed files with impossible content.
+  bad = good;
+  const size_t second = kMapFileHeaderBytes + kMapFileRecordBytes;
+  std::copy(good.begin() + kMapFileHeaderBytes, good.begin() + kMapFileHeaderBytes + 12, bad.begin() + second);
+  reseal(&bad);
+  EXPECT_NE(decodeError(bad, config).find("appears twice"), std::string::npos) << decodeError(bad, config);
+  bad = good;
+  const float nan = NAN;
+  std::memcpy(bad.data() + kMapFileHeaderBytes + 24 + 12 * 5, &nan, 4);
+  reseal(&bad);
+  EXPECT_NE(decodeError(bad, config).find("non-finite distance or a negative weight"), std::string::npos);
+  bad = good;
+  const float negative = -1.0f;
+  std::memcpy(bad.data() + kMapFileHeaderBytes + 24 + 12 * 5 + 4, &negative, 4);
+  reseal(&bad);
+  EXPECT_NE(decodeError(bad, config).find("negative weight"), std::string::npos);
+  bad = good;
+  bad[kMapFileHeaderBytes + 20] = 7;  // mesh level
+  reseal(&bad);
+  EXPECT_NE(decodeError(bad, config).find("mesh level 7"), std::string::npos);
+  bad = good;
+  const uint32_t far = (1u << 28) + 5;  // beyond kMaxKey
+  std::memcpy(bad.data() + kMapFileHeaderBytes, &far, 4);
+  reseal(&bad);
+  EXPECT_NE(decodeError(bad, config).find("beyond the map's range"), std::string::npos);
+  bad = good;
+  bad[56] = 0xFF;  // block count 255 + ...: more blocks than bytes
+  reseal(&bad);
+  EXPECT_NE(decodeError(bad, config).find("truncated map file"), std::string::npos) << decodeError(bad, config);
+}
+
+TEST(MapFile, AFailedLoadLeavesTheMapAndMeshUntouched) {
+  MapperConfig config;
+  config.voxel_size_m = 0.04;  // fewer blocks: the map is compared after every case
+  const auto mapper = fusedMapper(3, config);
+  const MapSnapshot before = snapshot(mapper->map());
+  const auto mesh_before = triangleSets(mapper->mesh());
+  const std::string path = tempPath("bad.sfmap");
+  std::string error;
+  ASSERT_TRUE(mapper->saveMap(path, &error));
+  const std::vector<uint8_t> good = readBytes(path);
+  struct Case {
+    std::vector<uint8_t> bytes;
+    const char* message;
+  };
+  std::vector<uint8_t> flipped = good;
+  flipped[good.size() / 2] ^= 0x10;
+  const std::vector<Case> cases = {
+      {std::vector<uint8_t>(good.begin(), good.begin() + good.size() / 3), "truncated map file"},
+      {std::vector<uint8_t>(good.begin(), good.begin() + 40), "truncated map file"},
+      {flipped, "checksum mismatch"},
+  };
+  for (const Case& c : cases) {
+    writeBytes(path, c.bytes);
+    EXPECT_FALSE(mapper->loadMap(path, nullptr, &error));
+    EXPECT_NE(error.find(c.message), std::string::npos) << error;
+    EXPECT_NE(error.find(path), std::string::npos) << "the message names the file: " << error;
+    EXPECT_TRUE(snapshot(mapper->map()) == before);
+    EXPECT_TRUE(triangleSets(mapper->mesh()) == mesh_before);
+  }
+  fs::remove(path);
+  EXPECT_FALSE(mapper->loadMap(path, nullptr, &error));
+  EXPECT_NE(error.find("cannot open the map file"), std::string::npos) << error;
+  EXPECT_FALSE(mapper->saveMap("/nonexistent_dir/x.sfmap", &error));
+  EXPECT_NE(error.find("cannot write"), std::string::npos) << error;
+  EXPECT_TRUE(snapshot(mapper->map()) == before);
+}
+
+TEST(MapFile, LoadingReplacesTheMapAndReportsTheOldSubmeshesAsRemoved) {
+  MapperConfig config;
+  config.voxel_size_m = 0.04;
+  const auto small = fusedMapper(1, config);
+  Mapper mapper(config);
+  // A different map first: a plane far away.
+  sim::AnalyticScene elsewhere;
+  elsewhere.add(sim::makePlane({0, 0, 5.0}, {0, 0, -1}));
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = Eigen::Vector3d(30, 0, 0);
+  ASSERT_TRUE(mapper.integrate(renderFrame(elsewhere, qvgaCamera(), T)).accepted);
+  std::vector<BlockKey> old_keys;
+  for (const auto& [k, sub] : mapper.mesh().submeshes()) old_keys.push_back(k);
+  std::sort(old_keys.begin(), old_keys.end());
+  ASSERT_FALSE(old_keys.empty());
+  const std::string path = tempPath("replace.sfmap");
+  std::string error;
+  ASSERT_TRUE(small->saveMap(path, &error));
+  MeshChanges changes;
+  ASSERT_TRUE(mapper.loadMap(path, &changes, &error)) << error;
+  EXPECT_EQ(changes.removed, old_keys);
+  EXPECT_TRUE(triangleSets(mapper.mesh()) == triangleSets(small->mesh()));
+  fs::remove(path);
+}
+
+TEST(OfflineFuser, SaveMapThenLoadMapAloneWritesTheSameMesh) {
+  const fs::path seq = fs::path(testing::TempDir()) / ("stereo_fusion_mapfile_seq_" + std::to_string(::getpid()));
+  fs::remove_all(seq);
+  std::string error;
+  auto writer = sim::DatasetWriter::create(seq.string(), qvgaCamera(), &error);
+  ASSERT_TRUE(writer) << error;
+  const sim::AnalyticScene scene = floorAndSphere();
+  for (int i = 0; i < 3; ++i) {
+    const StereoFrame f = renderFrame(scene, qvgaCamera(), view(i));
+    ASSERT_TRUE(writer->writeFrame(i, 0.1 * (i + 1), view(i), f.disparity_px, f.color, cv::Mat(), &error)) << error;
+  }
+  const std::string out_a = (seq / "out_a").string(), out_b = (seq / "out_b").string();
+  const std::string map_path = (seq / "map.sfmap").string();
+  FuseOptions a;
+  ASSERT_TRUE(parseFuseArguments({seq.string(), out_a, "--quiet", "--save-map", map_path}, &a, &error)) << error;
+  FuseReport report;
+  ASSERT_TRUE(runOfflineFusion(a, &report, &error)) << error;
+  ASSERT_EQ(report.frames_used, 3u);
+  ASSERT_TRUE(fs::exists(map_path));
+
+  FuseOptions b;
+  ASSERT_TRUE(parseFuseArguments({out_b, "--quiet", "--load-map", map_path}, &b, &error)) << error;
+  ASSERT_TRUE(runOfflineFusion(b, &report, &error)) << error;
+  EXPECT_EQ(report.frames_total, 0u);
+  EXPECT_TRUE(readBytes(out_a + "/mesh.ply") == readBytes(out_b + "/mesh.ply"));
+  std::ifstream stats_file(out_b + "/stats.json");
+  const nlohmann::json stats = nlohmann::json::parse(stats_file);
+  EXPECT_EQ(stats["map"]["loaded_blocks"], report.blocks);
+
+  // A corrupted map is one clear error, and nothing is written.
+  std::vector<uint8_t> bytes = readBytes(map_path);
+  bytes.resize(bytes.size() - 1);
+  writeBytes(map_path, bytes);
+  FuseOptions c;
+  ASSERT_TRUE(parseFuseArguments({(seq / "out_c").string(), "--quiet", "--load-map", map_path}, &c, &error));
+  EXPECT_FALSE(runOfflineFusion(c, &report, &error));
+  EXPECT_NE(error.find("truncated map file"), std::string::npos) << error;
+  EXPECT_FALSE(fs::exists(seq / "out_c" / "mesh.ply"));
+  // Without --load-map the input folder stays required.
+  FuseOptions d;
+  EXPECT_FALSE(parseFuseArguments({out_b, "--quiet"}, &d, &error));
+  EXPECT_NE(error.find("or <out-dir> with --load-map"), std::string::npos) << error;
+  fs::remove_all(seq);
+}

@@ -1,0 +1,204 @@
+// The memory bound: block erase in the octree, the eviction policy, and the Mapper keeping its
+// budget with a mesh that stays equal to a rebuild and to what a subscriber reconstructs.
+#include <gtest/gtest.h>
+
+#include <map>
+#include <random>
+#include <set>
+
+#include "MeshTestSupport.h"
+#include "stereo_fusion/map/EvictionPolicy.h"
+
+using namespace stereo_fusion;
+using namespace stereo_fusion::test;
+
+namespace {
+
+/// An endless corridor: floor 0.5 m below the camera, a wall 2 m in front. A camera sliding
+/// along +x keeps seeing new space, so an unbounded map keeps growing.
+sim::AnalyticScene corridor() {
+  sim::AnalyticScene scene;
+  scene.add(sim::makePlane({0, 0.5, 0}, {0, -1, 0}), {180, 160, 120});
+  scene.add(sim::makePlane({0, 0, 2.0}, {0, 0, -1}), {90, 120, 200});
+  return scene;
+}
+
+StereoFrame corridorFrame(const sim::AnalyticScene& scene, double x_m) {
+  Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();  // optical frame: looking along +z
+  T_world_camera.translation() = Eigen::Vector3d(x_m, 0, 0);
+  return renderFrame(scene, qvgaCamera(), T_world_camera);
+}
+
+MapperConfig boundedConfig() {
+  MapperConfig config;
+  config.voxel_size_m = 0.04;
+  config.num_threads = 2;
+  return config;
+}
+
+}  // namespace
+
+TEST(BlockOctreeErase, RemovesBlocksAndPrunesEmptyNodes) {
+  BlockOctree map(0.16);
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> coord(-40, 40);
+  std::set<BlockKey> keys;
+  while (keys.size() < 600) keys.insert({coord(rng), coord(rng), coord(rng)});
+  for (const BlockKey& k : keys) ASSERT_NE(map.findOrAllocate(k), nullptr);
+  const size_t nodes_full = map.nodeCount();
+  const size_t bytes_full = map.memoryBytes();
+
+  std::vector<BlockKey> half, rest;
+  for (const BlockKey& k : keys) (half.size() < 300 ? half : rest).push_back(k);
+  half.push_back({1000, 1000, 1000});  // missing keys are ignored
+  EXPECT_EQ(map.erase(half), 300u);
+  EXPECT_EQ(map.blockCount(), 300u);
+  for (size_t i = 0; i < 300; ++i) EXPECT_EQ(map.find(half[i]), nullptr) << half[i];
+  for (const BlockKey& k : rest) {
+    const VoxelBlock* b = map.find(k);
+    ASSERT_NE(b, nullptr) << k;
+    EXPECT_EQ(b->key, k);
+  }
+  EXPECT_LT(map.nodeCount(), nodes_full);
+  EXPECT_LT(map.memoryBytes(), bytes_full);
+  // Sorted iteration sees exactly the kept blocks.
+  std::vector<BlockKey> listed;
+  for (const VoxelBlock* b : map.blocksSortedByKey()) listed.push_back(b->key);
+  EXPECT_EQ(listed, rest);
+
+  // Erasing everything leaves no node at all, and the tree grows again from scratch.
+  EXPECT_EQ(map.erase(rest), 300u);
+  EXPECT_EQ(map.blockCount(), 0u);
+  EXPECT_EQ(map.nodeCount(), 0u);
+  EXPECT_EQ(map.height(), 0);
+  bool allocated = false;
+  ASSERT_NE(map.findOrAllocate({3, -4, 5}, &allocated), nullptr);
+  EXPECT_TRUE(allocated);
+  EXPECT_EQ(map.blockCount(), 1u);
+  EXPECT_NE(map.find({3, -4, 5}), nullptr);
+}
+
+TEST(BlockOctreeErase, EraseOneOfTwoSiblingsKeepsTheOther) {
+  BlockOctree map(0.16);
+  map.findOrAllocate({0, 0, 0});
+  map.findOrAllocate({1, 0, 0});  // same height-1 node
+  const size_t nodes = map.nodeCount();
+  EXPECT_EQ(map.erase({{0, 0, 0}}), 1u);
+  EXPECT_EQ(map.nodeCount(), nodes) << "the shared node still holds a block";
+  EXPECT_NE(map.find({1, 0, 0}), nullptr);
+  EXPECT_EQ(map.find({0, 0, 0}), nullptr);
+}
+
+TEST(EvictionPolicy, HandWorkedBudgetAndDistance) {
+  BlockOctree map(1.0);  // 1 m blocks: block (x, 0, 0) has its centre at x + 0.5
+  const uint64_t last_update[] = {5, 3, 3, 0, 9};  // blocks x = 0..4
+  for (int x = 0; x < 5; ++x) map.findOrAllocate({x, 0, 0})->last_update_frame = last_update[x];
+  const Eigen::Vector3d camera(0.5, 0.5, 0.5);  // at the centre of block 0
+  // No limit, or a budget not exceeded: nothing.
+  EXPECT_TRUE(selectBlocksToEvict(map, camera, {}).empty());
+  EXPECT_TRUE(selectBlocksToEvict(map, camera, {5, 0.0}).empty());
+  // Budget 3: evict 2. Oldest is x = 3 (never updated); then x = 1 and x = 2 tie at frame 3 and
+  // the farther, x = 2 (2 m away against 1 m), goes.
+  EXPECT_EQ(selectBlocksToEvict(map, camera, {3, 0.0}), (std::vector<BlockKey>{{2, 0, 0}, {3, 0, 0}}));
+  // Distance 2.5 m: centres at 3 m and 4 m are beyond, whatever their age.
+  EXPECT_EQ(selectBlocksToEvict(map, camera, {0, 2.5}), (std::vector<BlockKey>{{3, 0, 0}, {4, 0, 0}}));
+  // Both: 3 and 4 by distance, then among 0, 1, 2 one more for a budget of 2: x = 2 (frame 3, farther).
+  EXPECT_EQ(selectBlocksToEvict(map, camera, {2, 2.5}), (std::vector<BlockKey>{{2, 0, 0}, {3, 0, 0}, {4, 0, 0}}));
+}
+
+TEST(MemoryBound, BudgetHoldsAfterEveryFrameAndEvictsTheLeastRecent) {
+  const sim::AnalyticScene scene = corridor();
+  MapperConfig config = boundedConfig();
+  config.max_blocks = 400;
+  Mapper mapper(config);
+  uint64_t evicted_total = 0;
+  for (int f = 0; f < 40; ++f) {
+    std::map<BlockKey, uint64_t> before;
+    for (const VoxelBlock* b : mapper.map().blocks()) before[b->key] = b->last_update_frame;
+    const IntegrationResult r = mapper.integrate(corridorFrame(scene, 0.15 * f));
+    ASSERT_TRUE(r.accepted) << r.error;
+    EXPECT_LE(mapper.map().blockCount(), 400u) << "frame " << f;
+    evicted_total += r.evicted_blocks.size();
+    uint64_t oldest_kept = UINT64_MAX;
+    for (const VoxelBlock* b : mapper.map().blocks()) oldest_kept = std::min(oldest_kept, b->last_update_frame);
+    for (const BlockKey& k : r.evicted_blocks) {
+      EXPECT_EQ(mapper.map().find(k), nullptr) << k;
+      EXPECT_FALSE(std::binary_search(r.updated_blocks.begin(), r.updated_blocks.end(), k)) << k;
+      auto it = before.find(k);
+      // A block that existed before the frame is only evicted if every kept block is at least as recent.
+      if (it != before.end()) EXPECT_LE(it->second, oldest_kept) << "evicted " << k << " at frame " << f;
+    }
+  }
+  EXPECT_GT(evicted_total, 200u) << "the corridor must outgrow the budget";
+  EXPECT_EQ(mapper.blocksEvicted(), evicted_total);
+  // The kept map is the recent end of the corridor: every block last updated in the first
+  // quarter of the run is gone.
+  for (const VoxelBlock* b : mapper.map().blocks()) EXPECT_GT(b->last_update_frame, 10u) << b->key;
+}
+
+TEST(MemoryBound, DistanceLimitKeepsOnlyNearbyBlocks) {
+  const sim::AnalyticScene scene = corridor();
+  MapperConfig config = boundedConfig();
+  config.max_distance_from_camera_m = 3.0;
+  Mapper mapper(config);
+  Mapper unbounded(boundedConfig());
+  for (int f = 0; f < 30; ++f) {
+    const StereoFrame frame = corridorFrame(scene, 0.2 * f);
+    ASSERT_TRUE(mapper.integrate(frame).accepted);
+    ASSERT_TRUE(unbounded.integrate(frame).accepted);
+    const Eigen::Vector3d camera = frame.T_world_camera.translation();
+    const Eigen::Vector3d half = Eigen::Vector3d::Constant(mapper.map().blockSize() / 2);
+    size_t near_in_unbounded = 0;
+    for (const VoxelBlock* b : unbounded.map().blocks())
+      near_in_unbounded += (unbounded.map().blockOrigin(b->key) + half - camera).norm() <= 3.0;
+    for (const VoxelBlock* b : mapper.map().blocks())
+      ASSERT_LE((mapper.map().blockOrigin(b->key) + half - camera).norm(), 3.0) << b->key << " frame " << f;
+    // Nothing near was evicted: the near part of the unbounded map is all there.
+    EXPECT_EQ(mapper.map().blockCount(), near_in_unbounded) << "frame " << f;
+  }
+  EXPECT_GT(mapper.blocksEvicted(), 100u);
+  EXPECT_LT(mapper.map().blockCount(), unbounded.map().blockCount() / 2);
+}
+
+TEST(MemoryBound, MeshAfterEvictionEqualsARebuildAndTheStreamedCopy) {
+  const sim::AnalyticScene scene = corridor();
+  MapperConfig config = boundedConfig();
+  config.max_blocks = 300;
+  Mapper mapper(config);
+  // A subscriber's copy, kept only from the per-frame changes (what MeshUpdate carries).
+  std::map<BlockKey, SubMesh> streamed;
+  size_t removed_by_eviction = 0;
+  for (int f = 0; f < 30; ++f) {
+    const IntegrationResult r = mapper.integrate(corridorFrame(scene, 0.15 * f));
+    ASSERT_TRUE(r.accepted);
+    for (const BlockKey& k : r.mesh.changed) streamed[k] = mapper.mesh().submeshes().at(k);
+    for (const BlockKey& k : r.mesh.removed) {
+      EXPECT_EQ(mapper.mesh().submeshes().count(k), 0u) << k;
+      streamed.erase(k);
+    }
+    for (const BlockKey& k : r.evicted_blocks) {
+      EXPECT_EQ(mapper.mesh().submeshes().count(k), 0u) << "evicted block " << k << " kept its submesh";
+      removed_by_eviction += std::binary_search(r.mesh.removed.begin(), r.mesh.removed.end(), k);
+    }
+  }
+  EXPECT_GT(removed_by_eviction, 20u);
+  ThreadPool pool(2);
+  MeshStore batch(MeshingParams{config.voxel_size_m, config.truncation_vox, config.mesh_level_min_coverage});
+  batch.rebuild(mapper.map(), &pool);
+  ASSERT_GT(batch.triangleCount(), 1000u);
+  EXPECT_TRUE(triangleSets(mapper.mesh()) == triangleSets(batch)) << "incremental mesh differs from a rebuild";
+  ASSERT_EQ(streamed.size(), mapper.mesh().submeshes().size());
+  for (const auto& [key, sub] : mapper.mesh().submeshes()) {
+    auto it = streamed.find(key);
+    ASSERT_NE(it, streamed.end()) << key;
+    EXPECT_EQ(it->second.positions, sub.positions) << key;
+    EXPECT_EQ(it->second.triangles, sub.triangles) << key;
+  }
+}
+
+TEST(MemoryBound, UnlimitedByDefaultEvictsNothing) {
+  const sim::AnalyticScene scene = corridor();
+  Mapper mapper(boundedConfig());
+  for (int f = 0; f < 10; ++f) EXPECT_TRUE(mapper.integrate(corridorFrame(scene, 0.3 * f)).evicted_blocks.empty());
+  EXPECT_EQ(mapper.blocksEvicted(), 0u);
+}
