@@ -309,6 +309,10 @@ std::vector<std::string> validateMapperConfig(const MapperConfig& config) {
   // Patches are cut from the frame being fused, right after its meshing pass.
   if (config.texture == TextureMode::kPatches && !config.mesh_enabled)
     errors.push_back("texture = patches needs mesh_enabled = true");
+  // A distance bound below the fusion range would evict surfaces in the frame that fused them.
+  if (config.max_distance_from_camera_m > 0.0 && config.max_distance_from_camera_m < config.max_depth_m)
+    errors.push_back("max_distance_from_camera_m must be 0 (off) or >= max_depth_m, else blocks fused "
+                     "from a frame are evicted by the same frame");
   return errors;
 }
 

@@ -181,8 +181,8 @@ void FusionNodelet::processFrame(const QueuedFrame& f) {
         pending_changed_.erase(k);
       }
       unpublished_stamps_.push_back(header.stamp);
-      stage_ms_.push_back({result.lookup_ms, result.fusion_ms, result.mesh.meshing_ms,
-                           result.lookup_ms + result.fusion_ms + result.mesh.meshing_ms});
+      stage_ms_.push_back({result.lookup_ms, result.fusion_ms, result.mesh.meshing_ms, result.texture.texture_ms,
+                           result.lookup_ms + result.fusion_ms + result.mesh.meshing_ms + result.texture.texture_ms});
       if (stage_ms_.size() > 1000) stage_ms_.pop_front();
       if (node_config_.publish_path) {
         geometry_msgs::PoseStamped pose;
@@ -384,13 +384,13 @@ void FusionNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
   const uint64_t dropped = dropped_queue_ + dropped_tf_ + dropped_bad_input_ + dropped_backwards_ +
                            dropped_duplicate_ + dropped_pose_jump_;
   std::vector<double> lat;
-  std::vector<double> stages[4];
+  std::vector<double> stages[5];
   size_t blocks = 0, memory = 0;
   {
     std::lock_guard<std::mutex> lock(map_mutex_);
     lat.assign(latencies_s_.begin(), latencies_s_.end());
     for (const auto& s : stage_ms_)
-      for (int k = 0; k < 4; ++k) stages[k].push_back(s[k]);
+      for (int k = 0; k < 5; ++k) stages[k].push_back(s[k]);
     blocks = mapper_->map().blockCount();
     memory = mapper_->map().memoryBytes();
   }
@@ -412,8 +412,8 @@ void FusionNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
   status.add("dropped: pose jump", dropped_pose_jump_.load());
   status.add("latency p50 (s)", pct(0.5));
   status.add("latency p99 (s)", pct(0.99));
-  const char* names[4] = {"lookup", "fusion", "meshing", "total"};
-  for (int k = 0; k < 4; ++k) {
+  const char* names[5] = {"lookup", "fusion", "meshing", "texture", "total"};
+  for (int k = 0; k < 5; ++k) {
     status.add(std::string(names[k]) + " p50 (ms)", percentile(stages[k], 0.5));
     status.add(std::string(names[k]) + " p99 (ms)", percentile(stages[k], 0.99));
   }

@@ -140,6 +140,7 @@ TEST(MemoryBound, DistanceLimitKeepsOnlyNearbyBlocks) {
   const sim::AnalyticScene scene = corridor();
   MapperConfig config = boundedConfig();
   config.max_distance_from_camera_m = 3.0;
+  config.max_depth_m = 3.0;  // the bound may not be below the fusion range (validateMapperConfig)
   Mapper mapper(config);
   Mapper unbounded(boundedConfig());
   for (int f = 0; f < 30; ++f) {
@@ -201,4 +202,17 @@ TEST(MemoryBound, UnlimitedByDefaultEvictsNothing) {
   Mapper mapper(boundedConfig());
   for (int f = 0; f < 10; ++f) EXPECT_TRUE(mapper.integrate(corridorFrame(scene, 0.3 * f)).evicted_blocks.empty());
   EXPECT_EQ(mapper.blocksEvicted(), 0u);
+}
+
+TEST(MemoryBound, DistanceBoundBelowTheFusionRangeIsRefused) {
+  MapperConfig config = boundedConfig();
+  config.max_depth_m = 8.0;
+  config.max_distance_from_camera_m = 3.0;
+  const std::vector<std::string> errors = validateMapperConfig(config);
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("max_distance_from_camera_m"), std::string::npos);
+  config.max_distance_from_camera_m = 8.0;
+  EXPECT_TRUE(validateMapperConfig(config).empty());
+  config.max_distance_from_camera_m = 0.0;  // off
+  EXPECT_TRUE(validateMapperConfig(config).empty());
 }

@@ -51,7 +51,7 @@ def main():
     print()
     print("per-stage timings over the fused frames (ms)")
     print(f"{'stage':<10} {'p50':>8} {'p99':>8}")
-    for stage in ("lookup", "fusion", "meshing", "total"):
+    for stage in ("lookup", "fusion", "meshing", "texture", "total"):
         print(f"{stage:<10} {number(stage + ' p50 (ms)'):8.1f} {number(stage + ' p99 (ms)'):8.1f}")
     print(f"latency stamp -> publish: p50 {number('latency p50 (s)') * 1000:.0f} ms, "
           f"p99 {number('latency p99 (s)') * 1000:.0f} ms")

@@ -85,7 +85,7 @@ class FusionNodelet : public nodelet::Nodelet {
   uint64_t sequence_ = 0;
   ros::WallTime last_publish_;
   std::deque<double> latencies_s_;  // frame stamp → publish, the last 1000 frames
-  std::deque<std::array<double, 4>> stage_ms_;  // lookup, fusion, meshing, total: last 1000 frames
+  std::deque<std::array<double, 5>> stage_ms_;  // lookup, fusion, meshing, texture, total: last 1000 frames
   static constexpr size_t kMaxPathPoses = 4000;  // ~/camera_path length bound
   nav_msgs::Path path_;
   std::vector<ros::Time> unpublished_stamps_;
