@@ -169,7 +169,20 @@ void FusionNodelet::processFrame(const QueuedFrame& f) {
   IntegrationResult result;
   {
     std::lock_guard<std::mutex> lock(map_mutex_);
-    result = mapper_->integrate(frame);
+    try {
+      result = mapper_->integrate(frame);
+    } catch (const std::exception&) {
+      // A throw mid-frame (e.g. bad_alloc) can leave the fused voxels and the mesh out of step:
+      // re-mesh from the map and send subscribers a full update before the frame is counted.
+      if (mapper_config_.mesh_enabled) {
+        try {
+          publishFullLocked(mapper_->rebuildMesh().removed);
+        } catch (const std::exception& e) {
+          NODELET_ERROR_THROTTLE(5.0, "stereo_fusion: re-meshing after a failed frame failed too: %s", e.what());
+        }
+      }
+      throw;
+    }
     blocks_evicted_ += result.evicted_blocks.size();
     if (result.accepted) {
       for (const BlockKey& k : result.mesh.changed) {
