@@ -30,7 +30,11 @@ if ! "$ROOT/scripts/setup.sh" >"$log" 2>&1; then
 fi
 rm -f "$log"
 
-SEQ="$ROOT/.texture_compare/room_$FRAMES"
+# A path relative to the repository, so the committed texture_compare.json names no machine path.
+mkdir -p "$OUT"
+OUT="$(cd "$OUT" && pwd)"  # before the cd below: --out is relative to the caller's directory
+cd "$ROOT"
+SEQ=".texture_compare/room_$FRAMES"
 if [ ! -f "$SEQ/poses.txt" ]; then
   echo "[texture_compare] simulating the room sequence ($FRAMES frames, SGBM) into $SEQ"
   "$BUILD_DIR/devel/lib/stereo_fusion/stereo_fusion_simulate" --preset room --frames "$FRAMES" \
