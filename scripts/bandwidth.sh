@@ -18,48 +18,22 @@ while [ $# -gt 0 ]; do
 done
 
 "$ROOT/scripts/setup.sh"
-export PYENV_VERSION=system ROS_HOSTNAME=localhost
-set +u
-# shellcheck disable=SC1091
-source "$BUILD_DIR/devel/setup.bash"
-set -u
-
-DEMO="$ROOT/.demo"
-BAG="$DEMO/room_${FRAMES}.bag"
-mkdir -p "$DEMO" "$ROOT/demo_output"
-if [ ! -f "$BAG" ]; then
-  echo "[bandwidth] generating the simulated room ($FRAMES frames, 640x480, SGBM) -> $BAG"
-  "$BUILD_DIR/devel/lib/stereo_fusion/stereo_fusion_simulate" --preset room --trajectory walkthrough \
-    --frames "$FRAMES" --disparity sgbm --seed 1 --out "$DEMO/room_${FRAMES}" --bag "$BAG.part"
-  mv "$BAG.part" "$BAG"
-fi
+# shellcheck source=scripts/lib/ros_session.sh
+source "$ROOT/scripts/lib/ros_session.sh"
+ros_env
+ensure_demo_bag "$FRAMES" bandwidth
+mkdir -p "$ROOT/demo_output"
 RESULTS="$ROOT/demo_output/bandwidth.jsonl"
 rm -f "$RESULTS"
 
 PIDS=()
-cleanup() {
-  for pid in "${PIDS[@]}"; do kill -INT "$pid" 2>/dev/null || true; done
-  sleep 1
-  for pid in "${PIDS[@]}"; do kill -KILL "$pid" 2>/dev/null || true; wait "$pid" 2>/dev/null || true; done
-  PIDS=()
-}
-trap cleanup EXIT
+trap stop_pids EXIT
 
 for encoding in float32 compact; do
   config="$(mktemp --suffix=.yaml)"
   cat "$ROOT/config/default.yaml" >"$config"
   echo "mesh_encoding: $encoding" >>"$config"
-  PORT="$(/usr/bin/python3 -c 'import socket; s = socket.socket(); s.bind(("", 0)); print(s.getsockname()[1])')"
-  export ROS_MASTER_URI="http://localhost:$PORT"
-  roscore -p "$PORT" >"$DEMO/bandwidth_roscore.log" 2>&1 &
-  PIDS+=($!)
-  /usr/bin/python3 -c '
-import sys, time, rosgraph
-for _ in range(100):
-    if rosgraph.is_master_online():
-        sys.exit(0)
-    time.sleep(0.1)
-sys.exit("[bandwidth] the ROS master did not come up")'
+  start_master bandwidth "$DEMO/bandwidth_roscore.log"
   echo "[bandwidth] $encoding: replaying $BAG (log: $DEMO/bandwidth_$encoding.log)"
   roslaunch stereo_fusion replay.launch bag:="$BAG" config:="$config" player_required:=false \
     >"$DEMO/bandwidth_$encoding.log" 2>&1 &
@@ -67,7 +41,7 @@ sys.exit("[bandwidth] the ROS master did not come up")'
   /usr/bin/python3 "$ROOT/tools/demo/bandwidth_monitor.py" --frames "$FRAMES" \
     --duration-s "$(/usr/bin/python3 -c "print($FRAMES / $RATE_HZ)")" --label "$encoding" --json "$RESULTS" \
     /stereo_fusion/mesh_update /stereo_fusion/mesh_markers
-  cleanup
+  stop_pids
   rm -f "$config"
 done
 

@@ -26,43 +26,15 @@ if [ "$RVIZ" = true ] && ! command -v rviz >/dev/null; then
   SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends rviz >/dev/null
 fi
-export PYENV_VERSION=system ROS_HOSTNAME=localhost
-set +u
-# shellcheck disable=SC1091
-source "$BUILD_DIR/devel/setup.bash"
-set -u
+# shellcheck source=scripts/lib/ros_session.sh
+source "$ROOT/scripts/lib/ros_session.sh"
+ros_env
+ensure_demo_bag "$FRAMES" demo
+mkdir -p "$ROOT/demo_output"
 
-DEMO="$ROOT/.demo"
-BAG="$DEMO/room_${FRAMES}.bag"
-mkdir -p "$DEMO" "$ROOT/demo_output"
-if [ ! -f "$BAG" ]; then
-  echo "[demo] generating the simulated room ($FRAMES frames, 640x480, SGBM) -> $BAG"
-  "$BUILD_DIR/devel/lib/stereo_fusion/stereo_fusion_simulate" --preset room --trajectory walkthrough \
-    --frames "$FRAMES" --disparity sgbm --seed 1 --out "$DEMO/room_${FRAMES}" --bag "$BAG.part"
-  mv "$BAG.part" "$BAG"
-fi
-
-PORT="$(/usr/bin/python3 -c 'import socket; s = socket.socket(); s.bind(("", 0)); print(s.getsockname()[1])')"
-export ROS_MASTER_URI="http://localhost:$PORT"
 PIDS=()
-cleanup() {
-  for pid in "${PIDS[@]}"; do kill -INT "$pid" 2>/dev/null || true; done
-  sleep 1
-  for pid in "${PIDS[@]}"; do kill -KILL "$pid" 2>/dev/null || true; done
-}
-trap cleanup EXIT
-echo "[demo] ROS master on port $PORT"
-roscore -p "$PORT" >"$DEMO/roscore.log" 2>&1 &
-PIDS+=($!)
-/usr/bin/python3 - <<PY
-import time, rosgraph
-for _ in range(100):
-    if rosgraph.is_master_online():
-        break
-    time.sleep(0.1)
-else:
-    raise SystemExit("[demo] the ROS master did not come up, see $DEMO/roscore.log")
-PY
+trap stop_pids EXIT
+start_master demo "$DEMO/roscore.log"
 
 echo "[demo] replaying $BAG through stereo_fusion (log: $DEMO/launch.log)"
 roslaunch stereo_fusion replay.launch bag:="$BAG" rate:="$RATE" rviz:="$RVIZ" player_required:=false \

@@ -27,40 +27,16 @@ if [ -z "${INSIDE_XVFB:-}" ]; then
   exec xvfb-run -a -s "-screen 0 1280x800x24" "$0" --frames "$FRAMES" --inside-xvfb
 fi
 
-export PYENV_VERSION=system ROS_HOSTNAME=localhost
-set +u
-# shellcheck disable=SC1091
-source "$BUILD_DIR/devel/setup.bash"
-set -u
-DEMO="$ROOT/.demo"
-BAG="$DEMO/room_${FRAMES}.bag"
+# shellcheck source=scripts/lib/ros_session.sh
+source "$ROOT/scripts/lib/ros_session.sh"
+ros_env
+ensure_demo_bag "$FRAMES" screenshots
 OUT="$ROOT/doc/images"
-mkdir -p "$DEMO" "$OUT"
-if [ ! -f "$BAG" ]; then
-  echo "[screenshots] generating the simulated room ($FRAMES frames) -> $BAG"
-  "$BUILD_DIR/devel/lib/stereo_fusion/stereo_fusion_simulate" --preset room --trajectory walkthrough \
-    --frames "$FRAMES" --disparity sgbm --seed 1 --out "$DEMO/room_${FRAMES}" --bag "$BAG.part"
-  mv "$BAG.part" "$BAG"
-fi
+mkdir -p "$OUT"
 
 PIDS=()
-cleanup() {
-  for pid in "${PIDS[@]}"; do kill -INT "$pid" 2>/dev/null || true; done
-  sleep 1
-  for pid in "${PIDS[@]}"; do kill -KILL "$pid" 2>/dev/null || true; wait "$pid" 2>/dev/null || true; done
-}
-trap cleanup EXIT
-PORT="$(/usr/bin/python3 -c 'import socket; s = socket.socket(); s.bind(("", 0)); print(s.getsockname()[1])')"
-export ROS_MASTER_URI="http://localhost:$PORT"
-roscore -p "$PORT" >"$DEMO/screenshots_roscore.log" 2>&1 &
-PIDS+=($!)
-/usr/bin/python3 -c '
-import sys, time, rosgraph
-for _ in range(100):
-    if rosgraph.is_master_online():
-        sys.exit(0)
-    time.sleep(0.1)
-sys.exit("[screenshots] the ROS master did not come up")'
+trap stop_pids EXIT
+start_master screenshots "$DEMO/screenshots_roscore.log"
 
 config="$DEMO/screenshots_config.yaml"
 cat "$ROOT/config/default.yaml" >"$config"

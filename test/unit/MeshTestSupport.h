@@ -16,6 +16,15 @@ inline StereoCamera qvgaCamera() {
 }
 
 /// Camera poses on a sphere of `radius` around `centre`, looking at it (Fibonacci lattice).
+/// A floor at y = 0.3 (y down) with a sphere 1.2 m ahead: the small scene of the reader, bag,
+/// bad-input and map-file tests.
+inline sim::AnalyticScene floorAndSphere() {
+  sim::AnalyticScene scene;
+  scene.add(sim::makePlane({0, 0.3, 0}, {0, -1, 0}), {180, 160, 120});
+  scene.add(sim::makeSphere({0.05, 0.1, 1.2}, 0.2), {200, 60, 60});
+  return scene;
+}
+
 inline std::vector<Eigen::Isometry3d> viewsAround(const Eigen::Vector3d& centre, double radius, int n) {
   std::vector<Eigen::Isometry3d> poses;
   const double golden = M_PI * (3.0 - std::sqrt(5.0));

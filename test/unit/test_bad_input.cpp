@@ -21,13 +21,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-sim::AnalyticScene floorAndSphere() {
-  sim::AnalyticScene scene;
-  scene.add(sim::makePlane({0, 0.3, 0}, {0, -1, 0}), {180, 160, 120});
-  scene.add(sim::makeSphere({0.05, 0.1, 1.2}, 0.2), {200, 60, 60});
-  return scene;
-}
-
 StereoFrame frameAt(int i, double timestamp_s) {
   StereoFrame f = renderFrame(floorAndSphere(), qvgaCamera(),
                               sim::lookAt({-0.15 + 0.1 * i, -0.2, 0.0}, {0.05, 0.1, 1.2}, -Eigen::Vector3d::UnitY()));

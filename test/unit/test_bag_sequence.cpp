@@ -44,9 +44,7 @@ struct SmallBag {
   SmallBag() {
     // One file per test: ctest runs the tests of this binary in parallel processes.
     path = testing::TempDir() + "stereo_fusion_" + testing::UnitTest::GetInstance()->current_test_info()->name() + ".bag";
-    sim::AnalyticScene scene;
-    scene.add(sim::makePlane({0, 0.3, 0}, {0, -1, 0}), {180, 160, 120});
-    scene.add(sim::makeSphere({0.05, 0.1, 1.2}, 0.2), {200, 60, 60});
+    const sim::AnalyticScene scene = floorAndSphere();
     rosbag::Bag bag(path, rosbag::bagmode::Write);
     for (int i = 0; i < 3; ++i) {
       const ros::Time stamp(100.0 + 0.1 * i);

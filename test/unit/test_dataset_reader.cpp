@@ -42,9 +42,7 @@ struct SmallSequence {
     if (with_right) fs::create_directories(dir / "right");
     const StereoCamera cam = qvgaCamera();
     writeText(dir / "calibration.yaml", "width: 320\nheight: 240\nfx: 262.5\nfy: 262.5\ncx: 159.5\ncy: 119.5\nbaseline: 0.1\n");
-    sim::AnalyticScene scene;
-    scene.add(sim::makePlane({0, 0.3, 0}, {0, -1, 0}), {180, 160, 120});
-    scene.add(sim::makeSphere({0.05, 0.1, 1.2}, 0.2), {200, 60, 60});
+    const sim::AnalyticScene scene = floorAndSphere();
     std::ofstream poses(dir / "poses.txt");
     poses.precision(17);
     poses << "# timestamp tx ty tz qx qy qz qw\n";
