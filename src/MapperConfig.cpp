@@ -243,7 +243,8 @@ const std::vector<Accessor>& accessors() {
                          member(&MapperConfig::max_blocks)));
     t.push_back(doubleParam("max_distance_from_camera_m", "m", 0.0, true, 1e6,
                             "After each frame, blocks whose centre is farther than this from the "
-                            "camera are evicted and their submeshes removed. 0 = unlimited.",
+                            "camera are evicted and their submeshes removed. 0 = unlimited; "
+                            "otherwise at least max_depth_m.",
                             member(&MapperConfig::max_distance_from_camera_m)));
     t.push_back(doubleParam("max_pose_jump_m", "m", 0.0, true, 1e6,
                             "A frame whose camera is farther than this from the previous frame's "
