@@ -74,5 +74,6 @@ for row in "${rows[@]}"; do
     "$(json "$oe" "d['accuracy_m']['median']*1000")" "$(json "$oe" "d['completeness']*100")" \
     "$(json "$oe" "d['f_score']*100")"
   echo "       Open3D final mesh extraction: $(json "$o" "round(d['extract_ms'])") ms once; ours meshes incrementally every frame (in 'total')"
+  echo "       memory: $(json "$s" "round(d['memory']['bytes_per_block'])") B per block incl. octree; a dense grid of 12-byte voxels over the same bounds: $(json "$s" "round(d['memory']['dense_grid_megabytes'])") MB ($(json "$s" "round(d['memory']['dense_grid_ratio'], 1)")× ours)"
 done
 echo "lookN / lookA: octree lookup with Algorithm 1 (naive) / Algorithm 2 (accelerated); tolerance for completeness: max(5 cm, 2 voxels)"

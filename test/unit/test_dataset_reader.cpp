@@ -250,6 +250,11 @@ TEST(OfflineFuser, WritesMeshAndStatsAndCountsSkippedFrames) {
   EXPECT_EQ(stats["blocks"]["meshed_at_8"].get<size_t>() + stats["blocks"]["meshed_at_4"].get<size_t>() +
                 stats["blocks"]["meshed_at_2"].get<size_t>(),
             report.blocks);
+  // The dense comparison grid covers at least the blocks' own voxels (512 finest voxels of 12 B
+  // each per block), and a bounding box of them: at most its volume in blocks.
+  const double dense_bytes = stats["memory"]["dense_grid_megabytes"].get<double>() * 1048576.0;
+  EXPECT_GE(dense_bytes, report.blocks * 512.0 * 12.0 * (1 - 1e-9));
+  EXPECT_NEAR(stats["memory"]["dense_grid_ratio"].get<double>(), dense_bytes / report.memory_bytes, 1e-9);
   fs::remove_all(out);
 }
 

@@ -220,6 +220,16 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
   if (!options.save_map.empty() && !mapper.saveMap(options.save_map, error)) return false;
   report->memory_bytes = mapper.map().memoryBytes();
   report->bytes_per_block = mapper.map().bytesPerBlock();
+  if (!mapper.map().blocks().empty()) {
+    BlockKey lo = mapper.map().blocks().front()->key, hi = lo;
+    for (const VoxelBlock* b : mapper.map().blocks()) {
+      lo = {std::min(lo.x, b->key.x), std::min(lo.y, b->key.y), std::min(lo.z, b->key.z)};
+      hi = {std::max(hi.x, b->key.x), std::max(hi.y, b->key.y), std::max(hi.z, b->key.z)};
+    }
+    const double voxels_per_block = static_cast<double>(kFinestSide) * kFinestSide * kFinestSide;
+    report->dense_grid_bytes = (hi.x - lo.x + 1.0) * (hi.y - lo.y + 1.0) * (hi.z - lo.z + 1.0) *
+                               voxels_per_block * sizeof(Voxel);
+  }
   for (const VoxelBlock* b : mapper.map().blocks()) ++report->blocks_per_level[b->mesh_level];
 
   if (!writePly((fs::path(options.out_dir) / "mesh.ply").string(), mesh, error)) return false;
@@ -260,6 +270,8 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   j["memory"]["bytes"] = report.memory_bytes;
   j["memory"]["megabytes"] = report.memory_bytes / 1048576.0;
   j["memory"]["bytes_per_block"] = report.bytes_per_block;
+  j["memory"]["dense_grid_megabytes"] = report.dense_grid_bytes / 1048576.0;
+  j["memory"]["dense_grid_ratio"] = report.memory_bytes > 0 ? report.dense_grid_bytes / report.memory_bytes : 0.0;
   j["mesh"]["vertices"] = report.mesh_vertices;
   j["mesh"]["triangles"] = report.mesh_triangles;
   j["texture"]["textured_blocks"] = report.textured_blocks;

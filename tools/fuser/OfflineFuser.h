@@ -41,6 +41,9 @@ struct FuseReport {
   size_t blocks_per_level[3] = {0, 0, 0};       ///< by the level each block is meshed at
   size_t memory_bytes = 0;
   double bytes_per_block = 0;
+  /// A dense grid of finest-level voxels (same 12-byte voxel) over the blocks' bounding box:
+  /// what the sparse block octree saves.
+  double dense_grid_bytes = 0;
   size_t mesh_vertices = 0, mesh_triangles = 0;
   size_t textured_blocks = 0;        ///< blocks with a texture patch (texture = patches)
   size_t texture_bytes = 0;          ///< memory held by the texture patches
