@@ -31,11 +31,20 @@ MeshBlock toMeshBlock(const SubMesh& submesh, MeshEncoding encoding = MeshEncodi
                       double block_size_m = 0.0, const TexturePatch* patch = nullptr);
 
 /// A MeshUpdate with the submeshes of `changed` (taken from `submeshes`) and the `removed` keys;
-/// textured blocks carry their patch when `textures` is given.
+/// textured blocks carry their patch when `textures` is given. `session` stays 0: the
+/// publisher sets it.
 MeshUpdate toMeshUpdate(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes,
                         const std::vector<BlockKey>& changed, const std::vector<BlockKey>& removed,
                         const std_msgs::Header& header, double voxel_size_m, uint64_t sequence, bool full,
                         MeshEncoding encoding = MeshEncoding::kFloat32, const TextureStore* textures = nullptr);
+
+/// The same with the patches as a plain key → patch map (a subscriber such as MeshAssembler
+/// holds what applyMeshUpdate decoded, not a TextureStore); null = no textures.
+MeshUpdate toMeshUpdate(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes,
+                        const std::vector<BlockKey>& changed, const std::vector<BlockKey>& removed,
+                        const std_msgs::Header& header, double voxel_size_m, uint64_t sequence, bool full,
+                        MeshEncoding encoding,
+                        const std::unordered_map<BlockKey, TexturePatch, BlockKeyHash>* patches);
 
 /// Applies `update` to `mesh` (key → submesh), as a subscriber would; decodes both encodings.
 /// Returns false when a message is malformed (index out of range, array sizes that do not
@@ -54,6 +63,8 @@ class MeshMarkers {
                                         const std::vector<BlockKey>& removed, const std_msgs::Header& header);
   /// A DELETEALL marker, and forget every id (after ~reset).
   visualization_msgs::MarkerArray clear(const std_msgs::Header& header);
+  /// Blocks that currently have a marker id (drawn and not deleted since).
+  size_t size() const { return ids_.size(); }
 
  private:
   int idOf(const BlockKey& key);
