@@ -35,9 +35,10 @@ void encodeTexture(const TexturePatch& patch, MeshBlock* b) {
 constexpr uint32_t kMaxPatchEdgePx = 1024;
 
 /// Decodes a block's PNG patch to RGB; false for anything that is not a PNG of at most
-/// kMaxPatchEdgePx per edge. The size is read from the IHDR chunk before decoding because the
-/// decoder allocates what the header declares: a 64-byte message claiming 100000² px would
-/// otherwise cost 30 GB (or an exception from OpenCV's own, much larger, pixel limit).
+/// kMaxPatchEdgePx per edge. The size is read from the IHDR chunk before decoding because a
+/// decoder sizes its image from the header: a 64-byte message can claim 100000² px (30 GB).
+/// OpenCV's own limit (2^30 px by default, 3 GB of RGB) is far above any patch, and what it
+/// does near it differs between versions; a patch above the cap is a corrupt message anyway.
 bool decodeTexture(const std::vector<uint8_t>& png, cv::Mat* rgb) {
   static const uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
   // Signature (8), then the first chunk must be IHDR: length (4), "IHDR" (4), width, height (4 + 4).

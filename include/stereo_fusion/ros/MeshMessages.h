@@ -48,7 +48,9 @@ MeshUpdate toMeshUpdate(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash
 
 /// Applies `update` to `mesh` (key → submesh), as a subscriber would; decodes both encodings.
 /// Returns false when a message is malformed (index out of range, array sizes that do not
-/// match, UVs without a texture or outside [0, 1]) and then leaves `mesh` untouched. With
+/// match, UVs without a texture or outside [0, 1], a non-finite block_size, a level above 2, a
+/// texture that is not a PNG or declares more than 1024 px per edge in its header) and then
+/// leaves `mesh` and `textures` untouched. With
 /// `textures`, the blocks' patches are decoded into it too (image and UVs only; a block
 /// without UVs loses its patch).
 bool applyMeshUpdate(const MeshUpdate& update, std::unordered_map<BlockKey, SubMesh, BlockKeyHash>* mesh,
