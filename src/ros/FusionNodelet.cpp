@@ -33,6 +33,7 @@ void FusionNodelet::onInit() {
   }
   mapper_ = std::make_unique<Mapper>(mapper_config_);
   started_ = ros::WallTime::now();
+  session_ = started_.toNSec();
   last_publish_ = ros::WallTime(0, 0);
 
   tf_buffer_ = std::make_unique<tf2_ros::Buffer>(ros::Duration(30.0));
@@ -251,10 +252,13 @@ void FusionNodelet::publishPending(const ros::Time& stamp, bool force) {
   // connected for one sees the gap and asks ~get_full_mesh. Publish only what someone hears.
   if (!changed.empty() || !removed.empty()) {
     ++sequence_;
-    if (mesh_update_pub_.getNumSubscribers() > 0)
-      mesh_update_pub_.publish(toMeshUpdate(mapper_->mesh().submeshes(), changed, removed, header,
-                                            mapper_config_.voxel_size_m, sequence_, false,
-                                            node_config_.mesh_encoding, &mapper_->textures()));
+    if (mesh_update_pub_.getNumSubscribers() > 0) {
+      MeshUpdate update = toMeshUpdate(mapper_->mesh().submeshes(), changed, removed, header,
+                                       mapper_config_.voxel_size_m, sequence_, false, node_config_.mesh_encoding,
+                                       &mapper_->textures());
+      update.session = session_;
+      mesh_update_pub_.publish(update);
+    }
   }
   if (node_config_.publish_markers && markers_pub_.getNumSubscribers() > 0) {
     if (markers_full_pending_) {
@@ -318,6 +322,7 @@ bool FusionNodelet::getFullMesh(GetFullMesh::Request&, GetFullMesh::Response& re
   // The sequence of the last published update: apply updates with a larger sequence on top.
   res.mesh = toMeshUpdate(mapper_->mesh().submeshes(), all, {}, header, mapper_config_.voxel_size_m, sequence_,
                           true, node_config_.mesh_encoding, &mapper_->textures());
+  res.mesh.session = session_;
   return true;
 }
 
@@ -335,6 +340,7 @@ bool FusionNodelet::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&)
   markers_pub_.publish(markers_.clear(header));
   MeshUpdate empty =
       toMeshUpdate(mapper_->mesh().submeshes(), {}, {}, header, mapper_config_.voxel_size_m, ++sequence_, true);
+  empty.session = session_;
   mesh_update_pub_.publish(empty);
   NODELET_INFO("stereo_fusion: map reset");
   return true;
@@ -386,8 +392,10 @@ void FusionNodelet::publishFullLocked(const std::vector<BlockKey>& removed) {
   for (const auto& [key, sub] : mapper_->mesh().submeshes()) all.push_back(key);
   std::sort(all.begin(), all.end());
   // A full update replaces whatever a subscriber held; markers: drop the gone blocks, draw all.
-  mesh_update_pub_.publish(toMeshUpdate(mapper_->mesh().submeshes(), all, {}, header, mapper_config_.voxel_size_m,
-                                        ++sequence_, true, node_config_.mesh_encoding, &mapper_->textures()));
+  MeshUpdate update = toMeshUpdate(mapper_->mesh().submeshes(), all, {}, header, mapper_config_.voxel_size_m,
+                                   ++sequence_, true, node_config_.mesh_encoding, &mapper_->textures());
+  update.session = session_;
+  mesh_update_pub_.publish(update);
   if (node_config_.publish_markers)
     markers_pub_.publish(markers_.build(mapper_->mesh().submeshes(), all, removed, header));
 }

@@ -3,7 +3,9 @@
 #include <pluginlib/class_list_macros.hpp>
 
 #include <algorithm>
+#include <filesystem>
 
+#include "stereo_fusion/io/ObjWriter.h"
 #include "stereo_fusion/io/PlyWriter.h"
 #include "stereo_fusion/mesh/MeshStore.h"
 
@@ -16,6 +18,13 @@ void MeshAssembler::onInit() {
   pnh.param("full_mesh_timeout_s", full_mesh_timeout_s_, full_mesh_timeout_s_);
   if (!(full_mesh_timeout_s_ > 0.0 && full_mesh_timeout_s_ <= 600.0)) {
     const std::string error = "parameter '" + pnh.resolveName("full_mesh_timeout_s") + "' must be in (0, 600] s";
+    NODELET_FATAL("mesh_assembler: %s", error.c_str());
+    throw std::invalid_argument(error);
+  }
+  const std::string encoding = pnh.param<std::string>("mesh_encoding", "float32");
+  if (!parseMeshEncoding(encoding, &encoding_)) {
+    const std::string error = "parameter '" + pnh.resolveName("mesh_encoding") + "' must be float32 or compact, not '" +
+                              encoding + "'";
     NODELET_FATAL("mesh_assembler: %s", error.c_str());
     throw std::invalid_argument(error);
   }
@@ -49,9 +58,20 @@ void MeshAssembler::onInit() {
 
 void MeshAssembler::onUpdate(const MeshUpdate::ConstPtr& update) {
   std::lock_guard<std::mutex> lock(mutex_);
+  if (synced_ && update->session != session_) {
+    // The robot's nodelet restarted: its sequence counts from 1 again and its mesh was rebuilt,
+    // so sequence numbers say nothing about the mesh held. Start over from its full mesh.
+    ++restarts_;
+    NODELET_WARN("mesh_assembler: the robot restarted (session %llu, was %llu): fetching the full mesh",
+                 static_cast<unsigned long long>(update->session), static_cast<unsigned long long>(session_));
+    synced_ = false;
+  }
   if (update->full) {  // the robot was reset (or sends whole meshes): nothing before matters
+    // ... unless it is older than what we hold (a late message of the same session).
+    if (synced_ && update->sequence < last_sequence_) return;
     synced_ = apply(*update);
     last_sequence_ = update->sequence;
+    session_ = update->session;
     return;
   }
   if (synced_ && update->sequence <= last_sequence_) return;  // already in the mesh we hold
@@ -64,6 +84,9 @@ void MeshAssembler::onUpdate(const MeshUpdate::ConstPtr& update) {
                    static_cast<unsigned long long>(update->sequence - last_sequence_ - 1));
     }
     if (!fetchFullMesh()) return;
+    // An update of another run of the robot than the mesh fetched (sent just before or after a
+    // restart): its sequence means nothing here; the next update of the fetched session goes on.
+    if (update->session != session_) return;
     if (update->sequence <= last_sequence_) return;  // the full mesh already holds it
     if (update->sequence != last_sequence_ + 1) {   // still behind: the next update retries
       synced_ = false;
@@ -93,6 +116,7 @@ bool MeshAssembler::fetchFullMesh() {
     return false;
   }
   last_sequence_ = srv.response.mesh.sequence;
+  session_ = srv.response.mesh.session;
   synced_ = true;
   NODELET_INFO("mesh_assembler: full mesh at sequence %llu: %zu blocks",
                static_cast<unsigned long long>(last_sequence_), mesh_.size());
@@ -100,7 +124,7 @@ bool MeshAssembler::fetchFullMesh() {
 }
 
 bool MeshAssembler::apply(const MeshUpdate& update) {
-  if (!applyMeshUpdate(update, &mesh_)) {
+  if (!applyMeshUpdate(update, &mesh_, &textures_)) {
     ++malformed_;
     NODELET_ERROR_THROTTLE(5.0, "mesh_assembler: malformed mesh update %llu ignored (%llu so far)",
                            static_cast<unsigned long long>(update.sequence),
@@ -124,14 +148,25 @@ bool MeshAssembler::apply(const MeshUpdate& update) {
 }
 
 bool MeshAssembler::saveMesh(SaveMesh::Request& req, SaveMesh::Response& res) {
-  TriangleMesh mesh;
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    mesh = weldSubmeshes(mesh_);  // the same welding as the robot's ~save_mesh
-  }
   std::string error;
-  res.success = writePly(req.path, mesh, &error);
-  res.message = res.success ? "wrote " + std::to_string(mesh.triangles.size()) + " triangles to " + req.path : error;
+  if (std::filesystem::path(req.path).extension() == ".obj") {
+    // The robot's format and message (srv/SaveMesh.srv): written under the lock, nothing copied.
+    std::lock_guard<std::mutex> lock(mutex_);
+    ObjExportInfo info;
+    res.success = writeTexturedObj(req.path, mesh_, textures_, ObjExportOptions{}, &info, &error);
+    res.message = res.success ? "wrote " + std::to_string(info.textured_blocks) + " textured and " +
+                                    std::to_string(info.vertex_colour_blocks) + " vertex-coloured blocks to " +
+                                    req.path
+                              : error;
+  } else {
+    TriangleMesh mesh;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      mesh = weldSubmeshes(mesh_);  // the same welding as the robot's ~save_mesh
+    }
+    res.success = writePly(req.path, mesh, &error);
+    res.message = res.success ? "wrote " + std::to_string(mesh.triangles.size()) + " triangles to " + req.path : error;
+  }
   if (res.success) NODELET_INFO("mesh_assembler: save_mesh: %s", res.message.c_str());
   else NODELET_ERROR("mesh_assembler: save_mesh: %s", res.message.c_str());
   return true;
@@ -142,7 +177,8 @@ bool MeshAssembler::getFullMesh(GetFullMesh::Request&, GetFullMesh::Response& re
   std::vector<BlockKey> all;
   for (const auto& [key, sub] : mesh_) all.push_back(key);
   std::sort(all.begin(), all.end());
-  res.mesh = toMeshUpdate(mesh_, all, {}, last_header_, voxel_size_m_, last_sequence_, true);
+  res.mesh = toMeshUpdate(mesh_, all, {}, last_header_, voxel_size_m_, last_sequence_, true, encoding_, &textures_);
+  res.mesh.session = session_;
   return true;
 }
 

@@ -3,6 +3,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -28,6 +29,37 @@ void encodeTexture(const TexturePatch& patch, MeshBlock* b) {
   b->texture.format = kTextureFormat;
   b->uvs.reserve(2 * patch.uvs.size());
   for (const Eigen::Vector2f& uv : patch.uvs) b->uvs.insert(b->uvs.end(), {uv.x(), uv.y()});
+}
+
+/// Largest texture patch edge a subscriber accepts: the maximum of texture_max_patch_px.
+constexpr uint32_t kMaxPatchEdgePx = 1024;
+
+/// Decodes a block's PNG patch to RGB; false for anything that is not a PNG of at most
+/// kMaxPatchEdgePx per edge. The size is read from the IHDR chunk before decoding because a
+/// decoder sizes its image from the header: a 64-byte message can claim 100000² px (30 GB).
+/// OpenCV's own limit (2^30 px by default, 3 GB of RGB) is far above any patch, and what it
+/// does near it differs between versions; a patch above the cap is a corrupt message anyway.
+bool decodeTexture(const std::vector<uint8_t>& png, cv::Mat* rgb) {
+  static const uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  // Signature (8), then the first chunk must be IHDR: length (4), "IHDR" (4), width, height (4 + 4).
+  if (png.size() < 24 || !std::equal(kSignature, kSignature + 8, png.begin()) ||
+      !std::equal(png.begin() + 12, png.begin() + 16, "IHDR"))
+    return false;
+  auto bigEndian = [&](size_t at) {
+    return uint32_t{png[at]} << 24 | uint32_t{png[at + 1]} << 16 | uint32_t{png[at + 2]} << 8 | uint32_t{png[at + 3]};
+  };
+  const uint32_t width = bigEndian(16), height = bigEndian(20);
+  if (width == 0 || height == 0 || width > kMaxPatchEdgePx || height > kMaxPatchEdgePx) return false;
+  cv::Mat bgr;
+  try {
+    bgr = cv::imdecode(png, cv::IMREAD_COLOR);
+  } catch (const cv::Exception&) {
+    return false;  // corrupt data OpenCV refuses by throwing rather than returning an empty image
+  }
+  if (bgr.empty() || bgr.type() != CV_8UC3 || bgr.cols != static_cast<int>(width) || bgr.rows != static_cast<int>(height))
+    return false;
+  cv::cvtColor(bgr, *rgb, cv::COLOR_BGR2RGB);
+  return true;
 }
 
 /// Fills the compact fields of `b` from `s`; false (b's compact fields then unspecified) when a
@@ -61,6 +93,8 @@ MeshBlock toMeshBlock(const SubMesh& s, MeshEncoding encoding, double block_size
   b.key = {s.key.x, s.key.y, s.key.z};
   b.level = static_cast<uint8_t>(s.level);
   b.position_step_m = 0.0f;
+  // The texture is independent of how the geometry is encoded: attached on every path.
+  if (patch && patch->uvs.size() == s.positions.size() && !patch->image_rgb.empty()) encodeTexture(*patch, &b);
   if (encoding == MeshEncoding::kCompact) {
     if (encodeCompact(s, block_size_m, &b)) {
       b.colors.reserve(3 * s.colors.size());
@@ -84,7 +118,6 @@ MeshBlock toMeshBlock(const SubMesh& s, MeshEncoding encoding, double block_size
   }
   b.triangles.reserve(3 * s.triangles.size());
   for (const auto& t : s.triangles) b.triangles.insert(b.triangles.end(), t.begin(), t.end());
-  if (patch && patch->uvs.size() == s.positions.size() && !patch->image_rgb.empty()) encodeTexture(*patch, &b);
   return b;
 }
 
@@ -92,6 +125,15 @@ MeshUpdate toMeshUpdate(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash
                         const std::vector<BlockKey>& changed, const std::vector<BlockKey>& removed,
                         const std_msgs::Header& header, double voxel_size_m, uint64_t sequence, bool full,
                         MeshEncoding encoding, const TextureStore* textures) {
+  return toMeshUpdate(submeshes, changed, removed, header, voxel_size_m, sequence, full, encoding,
+                      textures ? &textures->patches() : nullptr);
+}
+
+MeshUpdate toMeshUpdate(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes,
+                        const std::vector<BlockKey>& changed, const std::vector<BlockKey>& removed,
+                        const std_msgs::Header& header, double voxel_size_m, uint64_t sequence, bool full,
+                        MeshEncoding encoding,
+                        const std::unordered_map<BlockKey, TexturePatch, BlockKeyHash>* patches) {
   MeshUpdate u;
   u.header = header;
   u.sequence = sequence;
@@ -100,8 +142,13 @@ MeshUpdate toMeshUpdate(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash
   u.block_size = static_cast<float>(8.0 * voxel_size_m);
   for (const BlockKey& key : changed) {
     auto it = submeshes.find(key);
-    if (it != submeshes.end())
-      u.blocks.push_back(toMeshBlock(it->second, encoding, u.block_size, textures ? textures->find(key) : nullptr));
+    if (it == submeshes.end()) continue;
+    const TexturePatch* patch = nullptr;
+    if (patches) {
+      auto p = patches->find(key);
+      if (p != patches->end()) patch = &p->second;
+    }
+    u.blocks.push_back(toMeshBlock(it->second, encoding, u.block_size, patch));
   }
   for (const BlockKey& key : removed) u.removed_keys.insert(u.removed_keys.end(), {key.x, key.y, key.z});
   return u;
@@ -110,8 +157,11 @@ MeshUpdate toMeshUpdate(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash
 bool applyMeshUpdate(const MeshUpdate& update, std::unordered_map<BlockKey, SubMesh, BlockKeyHash>* mesh,
                      std::unordered_map<BlockKey, TexturePatch, BlockKeyHash>* textures) {
   // Validate everything first: a malformed message leaves the mesh untouched.
-  if (update.removed_keys.size() % 3 != 0) return false;
+  // block_size places compact vertices; a float32 update does not use it, but a non-finite
+  // one is corrupt either way.
+  if (update.removed_keys.size() % 3 != 0 || !std::isfinite(update.block_size)) return false;
   for (const MeshBlock& b : update.blocks) {
+    if (b.level > 2) return false;  // 8³, 4³, 2³: nothing else is sampled
     size_t n = 0;
     if (b.position_step_m > 0) {
       n = b.vertices_q.size() / 3;
@@ -137,9 +187,7 @@ bool applyMeshUpdate(const MeshUpdate& update, std::unordered_map<BlockKey, SubM
     for (size_t i = 0; i < update.blocks.size(); ++i) {
       const MeshBlock& b = update.blocks[i];
       if (b.uvs.empty()) continue;
-      const cv::Mat bgr = cv::imdecode(b.texture.data, cv::IMREAD_COLOR);
-      if (bgr.empty()) return false;
-      cv::cvtColor(bgr, decoded[i], cv::COLOR_BGR2RGB);
+      if (!decodeTexture(b.texture.data, &decoded[i])) return false;
     }
   }
   if (update.full) {
@@ -252,6 +300,9 @@ visualization_msgs::MarkerArray MeshMarkers::build(
     m.id = it->second;
     m.action = visualization_msgs::Marker::DELETE;
     array.markers.push_back(m);
+    // Forgotten, or every block ever drawn would keep an entry (eviction runs for hours). Ids
+    // are not reused (next_id_ only grows), so a DELETE still in flight cannot hit a newer block.
+    ids_.erase(it);
   }
   return array;
 }

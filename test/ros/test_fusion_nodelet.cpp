@@ -51,6 +51,12 @@ class NodeletFixture : public testing::Test {
     }, 30.0)) << "the nodelet did not connect";
   }
 
+  // The subscriber is declared before the members its callback uses, so it would be destroyed
+  // after them while the spinner threads may still run onUpdate (the nodelet keeps publishing
+  // after a test ends): a use-after-free that crashed the binary now and then. shutdown()
+  // waits for a callback in progress and drops the queued ones.
+  void TearDown() override { update_sub_.shutdown(); }
+
   template <typename F>
   bool waitFor(F&& done, double timeout_s) {
     return test::waitFor(std::forward<F>(done), timeout_s);

@@ -1,7 +1,10 @@
 // A base-station MeshAssembler that joins mid-run (loaded into a running nodelet manager after
 // half of the frames were fused) ends with exactly the robot's mesh, and with the mesh an offline
 // Mapper builds from the same frames (within the stated quantisation step when the robot sends
-// the compact encoding). Its ~save_mesh writes the same PLY as the robot's.
+// the compact encoding). Its ~save_mesh writes the same PLY as the robot's; with texture patches
+// on the robot (mesh_assembler_textured.test) its ~get_full_mesh carries the robot's patches and
+// its ~save_mesh writes the robot's textured OBJ. It repairs its copy after a lost update, after
+// a restart of the robot (a new session) and ignores a stale full update.
 #include <nodelet/NodeletLoad.h>
 #include <stereo_fusion/GetFullMesh.h>
 #include <stereo_fusion/SaveMesh.h>
@@ -10,10 +13,12 @@
 
 #include <fstream>
 #include <iterator>
+#include <map>
 
 #include "../unit/TestSupport.h"
 #include "RosTestSupport.h"
 #include "stereo_fusion/Mapper.h"
+#include "stereo_fusion/io/ObjReader.h"
 #include "stereo_fusion/ros/MeshMessages.h"
 #include "stereo_fusion/ros/MessageConversions.h"
 #include "stereo_fusion/ros/RosParameters.h"
@@ -32,13 +37,21 @@ sim::AnalyticScene scene() {
   return s;
 }
 
-/// The mesh a service returns, decoded; its sequence in `sequence`.
-bool fetch(const std::string& service, SubmeshMap* mesh, uint64_t* sequence) {
+/// The mesh a service returns, decoded; its sequence in `sequence`, the message in `raw`.
+bool fetch(const std::string& service, SubmeshMap* mesh, uint64_t* sequence, MeshUpdate* raw = nullptr) {
   GetFullMesh srv;
   if (!ros::service::call(service, srv)) return false;
   mesh->clear();
   *sequence = srv.response.mesh.sequence;
+  if (raw) *raw = srv.response.mesh;
   return applyMeshUpdate(srv.response.mesh, mesh);
+}
+
+/// Blocks of `update` by key.
+std::map<BlockKey, const MeshBlock*> blocksOf(const MeshUpdate& update) {
+  std::map<BlockKey, const MeshBlock*> blocks;
+  for (const MeshBlock& b : update.blocks) blocks[{b.key[0], b.key[1], b.key[2]}] = &b;
+  return blocks;
 }
 
 std::string readFile(const std::string& path) {
@@ -53,6 +66,7 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   std::string encoding_name;
   ASSERT_TRUE(nh.getParam("/stereo_fusion/mesh_encoding", encoding_name));
   const bool compact = encoding_name == "compact";
+  const bool textured = nh.param<std::string>("/stereo_fusion/texture", "off") == "patches";
   auto disparity_pub = nh.advertise<stereo_msgs::DisparityImage>("/stereo/disparity", 20);
   auto image_pub = nh.advertise<sensor_msgs::Image>("/stereo/left/image_rect_color", 20);
   auto info_pub = nh.advertise<sensor_msgs::CameraInfo>("/stereo/left/camera_info", 20);
@@ -181,6 +195,68 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   std::remove(save_robot.request.path.c_str());
   std::remove(save_base.request.path.c_str());
 
+  if (textured) {
+    // The assembler keeps the patches: its full mesh carries the robot's UVs and PNG bytes.
+    MeshUpdate robot_raw, base_raw;
+    SubmeshMap unused;
+    uint64_t sequence = 0;
+    ASSERT_TRUE(fetch("/stereo_fusion/get_full_mesh", &unused, &sequence, &robot_raw));
+    ASSERT_TRUE(fetch("/mesh_assembler/get_full_mesh", &unused, &sequence, &base_raw));
+    const auto robot_blocks = blocksOf(robot_raw), base_blocks = blocksOf(base_raw);
+    ASSERT_EQ(base_blocks.size(), robot_blocks.size());
+    size_t textured_blocks = 0;
+    for (const auto& [key, b] : robot_blocks) {
+      ASSERT_EQ(base_blocks.count(key), 1u) << key;
+      EXPECT_EQ(base_blocks.at(key)->uvs, b->uvs) << key;
+      EXPECT_TRUE(base_blocks.at(key)->texture.data == b->texture.data) << key;
+      textured_blocks += !b->uvs.empty();
+    }
+    EXPECT_GT(textured_blocks, 3u);
+
+    // ~save_mesh with .obj: OBJ + MTL + atlas, readable, with textured blocks; float32: the
+    // same files as the robot's.
+    save_robot.request.path = stem + "_robot.obj";
+    save_base.request.path = stem + "_base.obj";
+    ASSERT_TRUE(ros::service::call("/stereo_fusion/save_mesh", save_robot));
+    ASSERT_TRUE(ros::service::call("/mesh_assembler/save_mesh", save_base));
+    ASSERT_TRUE(save_robot.response.success) << save_robot.response.message;
+    ASSERT_TRUE(save_base.response.success) << save_base.response.message;
+    ObjMesh obj;
+    ASSERT_TRUE(readObj(save_base.request.path, &obj, &error)) << error;
+    size_t triangles = 0;
+    for (const auto& [key, sub] : assembled) triangles += sub.triangles.size();
+    EXPECT_EQ(obj.faces.size(), triangles);
+    size_t faces_with_uvs = 0;
+    for (const ObjFace& f : obj.faces) faces_with_uvs += f.vt[0] >= 0;
+    EXPECT_EQ(faces_with_uvs, triangles);
+    bool atlas_found = false;
+    for (const ObjMaterial& m : obj.materials) atlas_found |= !m.diffuse_map.empty() && std::ifstream(m.diffuse_map).good();
+    EXPECT_TRUE(atlas_found);
+    // "wrote <N> textured and <M> vertex-coloured blocks to ...", as the robot's.
+    EXPECT_EQ(save_base.response.message.rfind("wrote ", 0), 0u) << save_base.response.message;
+    EXPECT_EQ(std::stoul(save_base.response.message.substr(6)), textured_blocks) << save_base.response.message;
+    if (!compact) {
+      // The OBJs differ only in the name of their MTL file (mtllib line).
+      std::string robot_obj = readFile(save_robot.request.path);
+      const size_t mtllib = robot_obj.find("_robot.mtl");
+      ASSERT_NE(mtllib, std::string::npos);
+      robot_obj.replace(mtllib, 6, "_base");
+      EXPECT_TRUE(robot_obj == readFile(save_base.request.path)) << "the OBJs differ";
+      for (const ObjMaterial& m : obj.materials) {
+        const std::string robot_png = std::string(m.diffuse_map).replace(m.diffuse_map.rfind("_base"), 5, "_robot");
+        EXPECT_TRUE(readFile(robot_png) == readFile(m.diffuse_map)) << m.diffuse_map;
+      }
+    }
+    for (const ObjMaterial& m : obj.materials) {
+      std::remove(m.diffuse_map.c_str());
+      std::remove(std::string(m.diffuse_map).replace(m.diffuse_map.rfind("_base"), 5, "_robot").c_str());
+    }
+    for (const std::string& path : {save_robot.request.path, save_base.request.path}) {
+      std::remove(path.c_str());
+      std::remove((path.substr(0, path.size() - 4) + ".mtl").c_str());
+    }
+  }
+
   // A gap: an update whose sequence skips one (as if the one before it was lost), carrying a
   // block the robot does not have. It must not be applied on top of a mesh that misses the lost
   // update: the assembler asks for the full mesh again and ends, after the next real frame, with
@@ -208,6 +284,50 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
            assembled_sequence == robot_sequence;
   }, 30.0)) << "assembler at sequence " << assembled_sequence << ", robot at " << robot_sequence;
   EXPECT_EQ(assembled.count(stray.key), 0u) << "the update after the gap was applied";
+  ASSERT_EQ(assembled.size(), robot.size());
+  for (const auto& [key, sub] : robot) {
+    auto it = assembled.find(key);
+    ASSERT_NE(it, assembled.end()) << key;
+    EXPECT_EQ(it->second.positions, sub.positions) << key;
+    EXPECT_EQ(it->second.triangles, sub.triangles) << key;
+  }
+
+  // A restart of the robot: its sequence begins again, so a restarted robot's update can carry
+  // exactly the sequence the assembler expects next while its mesh has nothing to do with the
+  // one held. Only the session tells. An update of a new session with the next sequence number
+  // must make the assembler refetch (here it gets the running robot's mesh, of the old session,
+  // and drops the foreign update) instead of applying it on top.
+  MeshUpdate robot_raw, base_raw;
+  ASSERT_TRUE(fetch("/stereo_fusion/get_full_mesh", &robot, &robot_sequence, &robot_raw));
+  ASSERT_NE(robot_raw.session, 0u) << "the robot sends no session";
+  ASSERT_TRUE(fetch("/mesh_assembler/get_full_mesh", &assembled, &assembled_sequence, &base_raw));
+  ASSERT_EQ(assembled_sequence, robot_sequence);
+  EXPECT_EQ(base_raw.session, robot_raw.session);
+  MeshUpdate restarted = after_gap;
+  restarted.session = robot_raw.session + 1;
+  restarted.sequence = robot_sequence + 1;
+  injector.publish(restarted);
+  ros::WallDuration(1.0).sleep();
+  // And a stale full update of the robot's own session (older than what the assembler holds,
+  // e.g. a late reply): ignored, not a replacement of the mesh by an old one.
+  MeshUpdate stale_full = after_gap;
+  stale_full.session = robot_raw.session;
+  stale_full.sequence = robot_sequence - 1;
+  stale_full.full = true;
+  injector.publish(stale_full);
+  ros::WallDuration(1.0).sleep();
+  ASSERT_TRUE(fetch("/mesh_assembler/get_full_mesh", &assembled, &assembled_sequence, &base_raw));
+  EXPECT_EQ(assembled.count(stray.key), 0u) << "an update of another session or a stale full update was applied";
+  EXPECT_EQ(base_raw.session, robot_raw.session);
+  EXPECT_EQ(assembled_sequence, robot_sequence);
+  publishFrame(kFrames + 1);
+  ASSERT_TRUE(test::waitFor([&] { return diagnostics.value("frames fused") >= kFrames + 2; }, 60.0));
+  ASSERT_TRUE(test::waitFor([&] {
+    return fetch("/stereo_fusion/get_full_mesh", &robot, &robot_sequence) &&
+           fetch("/mesh_assembler/get_full_mesh", &assembled, &assembled_sequence) &&
+           assembled_sequence == robot_sequence;
+  }, 30.0)) << "assembler at sequence " << assembled_sequence << ", robot at " << robot_sequence;
+  EXPECT_EQ(assembled.count(stray.key), 0u);
   ASSERT_EQ(assembled.size(), robot.size());
   for (const auto& [key, sub] : robot) {
     auto it = assembled.find(key);

@@ -1,8 +1,13 @@
 // Message builders of the ROS layer, checked with numbers (linked into the fusion_nodelet rostest
-// binary; these cases need no master): the compact MeshBlock encoding and the debug markers.
+// binary; these cases need no master): the compact MeshBlock encoding, textures on both
+// encodings, the decoder's input checks and the markers.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
+#include <opencv2/imgcodecs.hpp>
 #include <random>
+#include <set>
 
 #include "stereo_fusion/ros/DebugMarkers.h"
 #include "stereo_fusion/ros/MeshMessages.h"
@@ -97,6 +102,172 @@ TEST(CompactEncoding, MalformedMessagesLeaveTheMeshUntouched) {
   EXPECT_FALSE(applyMeshUpdate(no_block_size, &mesh));
   ASSERT_EQ(mesh.size(), 1u);
   EXPECT_EQ(mesh.count({9, 9, 9}), 1u);
+}
+
+namespace {
+
+/// A patch for `s`: a w×h gradient and one UV per vertex spread over [0, 1]².
+TexturePatch patchFor(const SubMesh& s, int w = 12, int h = 9) {
+  TexturePatch patch;
+  patch.image_rgb.create(h, w, CV_8UC3);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) patch.image_rgb.at<cv::Vec3b>(y, x) = cv::Vec3b(20 * x, 25 * y, 7 * (x + y));
+  for (size_t v = 0; v < s.positions.size(); ++v)
+    patch.uvs.emplace_back(static_cast<float>(v % 7) / 6.0f, static_cast<float>(v % 5) / 4.0f);
+  return patch;
+}
+
+using SubmeshMap = std::unordered_map<BlockKey, SubMesh, BlockKeyHash>;
+using PatchMap = std::unordered_map<BlockKey, TexturePatch, BlockKeyHash>;
+
+}  // namespace
+
+// texture: patches with mesh_encoding: compact used to publish no patch at all (the compact
+// branch returned before the texture was attached).
+TEST(Textures, CompactBlocksCarryTheirPatch) {
+  const SubMesh s = randomSubmesh({2, -1, 5}, 30, 5);
+  const TexturePatch patch = patchFor(s);
+  const MeshBlock b = toMeshBlock(s, MeshEncoding::kCompact, kBlockM, &patch);
+  EXPECT_GT(b.position_step_m, 0.0f);  // really the compact path
+  EXPECT_EQ(b.uvs.size(), 2 * s.positions.size());
+  EXPECT_FALSE(b.texture.data.empty());
+  EXPECT_EQ(b.texture.format, "rgb8; png compressed bgr8");
+
+  // Round trip through an update: the same texels and UVs come back.
+  MeshUpdate u;
+  u.voxel_size = static_cast<float>(kBlockM / 8.0);
+  u.block_size = static_cast<float>(kBlockM);
+  u.blocks.push_back(b);
+  SubmeshMap mesh;
+  PatchMap textures;
+  ASSERT_TRUE(applyMeshUpdate(u, &mesh, &textures));
+  ASSERT_EQ(textures.count(s.key), 1u);
+  const TexturePatch& got = textures.at(s.key);
+  ASSERT_EQ(got.image_rgb.size(), patch.image_rgb.size());
+  EXPECT_EQ(cv::norm(got.image_rgb, patch.image_rgb, cv::NORM_INF), 0.0);
+  EXPECT_EQ(got.uvs, patch.uvs);
+  EXPECT_EQ(mesh.at(s.key).triangles, s.triangles);
+}
+
+// toMeshUpdate with a plain key → patch map (what the assembler holds, it has no TextureStore)
+// attaches each block's patch exactly as toMeshBlock does, in both encodings.
+TEST(Textures, UpdateFromAPatchMapCarriesThePatches) {
+  const SubMesh s = randomSubmesh({0, 1, 2}, 24, 6);
+  const SubmeshMap store{{s.key, s}};
+  const PatchMap patches{{s.key, patchFor(s)}};
+  for (MeshEncoding encoding : {MeshEncoding::kFloat32, MeshEncoding::kCompact}) {
+    const MeshUpdate u = toMeshUpdate(store, {s.key}, {}, std_msgs::Header(), kBlockM / 8.0, 3, true, encoding, &patches);
+    ASSERT_EQ(u.blocks.size(), 1u);
+    const MeshBlock expected = toMeshBlock(s, encoding, kBlockM, &patches.at(s.key));
+    EXPECT_EQ(u.blocks[0].uvs, expected.uvs);
+    EXPECT_EQ(u.blocks[0].texture.data, expected.texture.data);
+    EXPECT_FALSE(u.blocks[0].texture.data.empty());
+  }
+}
+
+namespace {
+
+/// A PNG signature and IHDR chunk declaring `width`×`height` 8-bit RGB, zero-padded to 64 bytes
+/// (no image data: a decoder that trusts the header allocates width·height·3 bytes first).
+std::vector<uint8_t> pngHeader(uint32_t width, uint32_t height) {
+  std::vector<uint8_t> png = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n', 0, 0, 0, 13, 'I', 'H', 'D', 'R'};
+  for (uint32_t value : {width, height})
+    for (int shift = 24; shift >= 0; shift -= 8) png.push_back(static_cast<uint8_t>(value >> shift));
+  png.insert(png.end(), {8, 2, 0, 0, 0});  // bit depth 8, colour type 2 (RGB), deflate, no filter, no interlace
+  png.resize(64, 0);
+  return png;
+}
+
+/// An update holding `s` whose texture is `png`, with valid UVs.
+MeshUpdate texturedUpdate(const SubMesh& s, const std::vector<uint8_t>& png) {
+  const TexturePatch patch = patchFor(s);
+  MeshUpdate u;
+  u.voxel_size = static_cast<float>(kBlockM / 8.0);
+  u.block_size = static_cast<float>(kBlockM);
+  u.blocks.push_back(toMeshBlock(s, MeshEncoding::kFloat32, kBlockM, &patch));
+  u.blocks[0].texture.data = png;
+  return u;
+}
+
+}  // namespace
+
+// A tiny PNG whose header declares a huge image must be refused before decoding (a decoder that
+// trusts it allocates 30 GB), as must a valid PNG larger than texture_max_patch_px allows and
+// data that is no PNG; the mesh and the patches stay untouched.
+TEST(Textures, OversizedOrForeignImagesAreRefused) {
+  const SubMesh s = randomSubmesh({1, 1, 1}, 30, 7);
+  const SubMesh held = randomSubmesh({4, 4, 4}, 30, 8);
+  SubmeshMap mesh{{held.key, held}};
+  PatchMap textures{{held.key, patchFor(held)}};
+
+  EXPECT_FALSE(applyMeshUpdate(texturedUpdate(s, pngHeader(100000, 100000)), &mesh, &textures));
+  // 30000² px = 2.7 GB: below OpenCV's own limit of 2^30 px, which refuses only the case above.
+  EXPECT_FALSE(applyMeshUpdate(texturedUpdate(s, pngHeader(30000, 30000)), &mesh, &textures));
+  // Valid and small on the wire (a flat image compresses to a few kB), but 1025 px wide.
+  std::vector<uint8_t> wide;
+  ASSERT_TRUE(cv::imencode(".png", cv::Mat(8, 1025, CV_8UC3, cv::Scalar(1, 2, 3)), wide));
+  EXPECT_LT(wide.size(), 1000u);
+  EXPECT_FALSE(applyMeshUpdate(texturedUpdate(s, wide), &mesh, &textures));
+  std::vector<uint8_t> jpeg;
+  ASSERT_TRUE(cv::imencode(".jpg", cv::Mat(8, 8, CV_8UC3, cv::Scalar(1, 2, 3)), jpeg));
+  EXPECT_FALSE(applyMeshUpdate(texturedUpdate(s, jpeg), &mesh, &textures));
+  ASSERT_EQ(mesh.size(), 1u);
+  EXPECT_EQ(mesh.at(held.key).positions, held.positions);
+  ASSERT_EQ(textures.size(), 1u);
+  EXPECT_EQ(textures.at(held.key).image_rgb.cols, 12);
+
+  // The guard lets through what the robot sends: 1024 px per edge at most.
+  std::vector<uint8_t> largest;
+  ASSERT_TRUE(cv::imencode(".png", cv::Mat(1024, 4, CV_8UC3, cv::Scalar(1, 2, 3)), largest));
+  ASSERT_TRUE(applyMeshUpdate(texturedUpdate(s, largest), &mesh, &textures));
+  EXPECT_EQ(textures.at(s.key).image_rgb.rows, 1024);
+}
+
+// A compact block with block_size = inf decodes to infinite positions, NaN to NaN, and a level
+// above 2 does not exist: all refused, in both encodings, without touching the mesh.
+TEST(Validation, NonFiniteBlockSizeAndUnknownLevelsAreRefused) {
+  const SubMesh s = randomSubmesh({0, 0, 0}, 30, 9);
+  const SubMesh held = randomSubmesh({9, 9, 9}, 30, 10);
+  SubmeshMap mesh{{held.key, held}};
+  for (MeshEncoding encoding : {MeshEncoding::kCompact, MeshEncoding::kFloat32}) {
+    for (float block_size : {std::numeric_limits<float>::infinity(), std::numeric_limits<float>::quiet_NaN()}) {
+      MeshUpdate u = updateOf(s, encoding);
+      u.block_size = block_size;
+      EXPECT_FALSE(applyMeshUpdate(u, &mesh)) << static_cast<int>(encoding) << " " << block_size;
+    }
+    MeshUpdate level3 = updateOf(s, encoding);
+    level3.blocks[0].level = 3;
+    EXPECT_FALSE(applyMeshUpdate(level3, &mesh)) << static_cast<int>(encoding);
+    MeshUpdate level2 = updateOf(s, encoding);  // the largest valid level still goes through
+    SubmeshMap other;
+    EXPECT_TRUE(applyMeshUpdate(level2, &other));
+  }
+  ASSERT_EQ(mesh.size(), 1u);
+  EXPECT_EQ(mesh.at(held.key).positions, held.positions);
+}
+
+// Every block ever drawn used to keep its id forever: with eviction over hours the map grew
+// without bound. A DELETE forgets the id.
+TEST(MeshMarkers, IdsOfRemovedBlocksAreForgotten) {
+  SubmeshMap store;
+  MeshMarkers markers;
+  std::set<int> ids;
+  for (int i = 0; i < 5000; ++i) {
+    const BlockKey key{i, -i, 3};
+    store[key] = randomSubmesh(key, 3, i);
+    const auto added = markers.build(store, {key}, {}, std_msgs::Header());
+    ASSERT_EQ(added.markers.size(), 1u);
+    EXPECT_EQ(added.markers[0].action, visualization_msgs::Marker::ADD);
+    ids.insert(added.markers[0].id);
+    ASSERT_EQ(markers.size(), 1u) << i;
+    store.erase(key);
+    const auto removed = markers.build(store, {}, {key}, std_msgs::Header());
+    ASSERT_EQ(removed.markers.size(), 1u);
+    EXPECT_EQ(removed.markers[0].action, visualization_msgs::Marker::DELETE);
+    EXPECT_EQ(removed.markers[0].id, added.markers[0].id);  // deletes what was drawn
+  }
+  EXPECT_EQ(markers.size(), 0u);
+  EXPECT_EQ(ids.size(), 5000u);  // ids are not reused: a late DELETE cannot hit a newer block
 }
 
 TEST(DebugMarkers, FrustumCornersAtTheGivenDepth) {

@@ -83,6 +83,9 @@ class FusionNodelet : public nodelet::Nodelet {
   MeshMarkers markers_;
   bool markers_full_pending_ = false;
   uint64_t sequence_ = 0;
+  /// MeshUpdate::session of this run (wall clock at onInit, ns): tells subscribers that a
+  /// restarted nodelet's sequence numbers begin again.
+  uint64_t session_ = 0;
   ros::WallTime last_publish_;
   std::deque<double> latencies_s_;  // frame stamp → publish, the last 1000 frames
   std::deque<std::array<double, 5>> stage_ms_;  // lookup, fusion, meshing, texture, total: last 1000 frames

@@ -31,15 +31,26 @@ MeshBlock toMeshBlock(const SubMesh& submesh, MeshEncoding encoding = MeshEncodi
                       double block_size_m = 0.0, const TexturePatch* patch = nullptr);
 
 /// A MeshUpdate with the submeshes of `changed` (taken from `submeshes`) and the `removed` keys;
-/// textured blocks carry their patch when `textures` is given.
+/// textured blocks carry their patch when `textures` is given. `session` stays 0: the
+/// publisher sets it.
 MeshUpdate toMeshUpdate(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes,
                         const std::vector<BlockKey>& changed, const std::vector<BlockKey>& removed,
                         const std_msgs::Header& header, double voxel_size_m, uint64_t sequence, bool full,
                         MeshEncoding encoding = MeshEncoding::kFloat32, const TextureStore* textures = nullptr);
 
+/// The same with the patches as a plain key → patch map (a subscriber such as MeshAssembler
+/// holds what applyMeshUpdate decoded, not a TextureStore); null = no textures.
+MeshUpdate toMeshUpdate(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes,
+                        const std::vector<BlockKey>& changed, const std::vector<BlockKey>& removed,
+                        const std_msgs::Header& header, double voxel_size_m, uint64_t sequence, bool full,
+                        MeshEncoding encoding,
+                        const std::unordered_map<BlockKey, TexturePatch, BlockKeyHash>* patches);
+
 /// Applies `update` to `mesh` (key → submesh), as a subscriber would; decodes both encodings.
 /// Returns false when a message is malformed (index out of range, array sizes that do not
-/// match, UVs without a texture or outside [0, 1]) and then leaves `mesh` untouched. With
+/// match, UVs without a texture or outside [0, 1], a non-finite block_size, a level above 2, a
+/// texture that is not a PNG or declares more than 1024 px per edge in its header) and then
+/// leaves `mesh` and `textures` untouched. With
 /// `textures`, the blocks' patches are decoded into it too (image and UVs only; a block
 /// without UVs loses its patch).
 bool applyMeshUpdate(const MeshUpdate& update, std::unordered_map<BlockKey, SubMesh, BlockKeyHash>* mesh,
@@ -54,6 +65,8 @@ class MeshMarkers {
                                         const std::vector<BlockKey>& removed, const std_msgs::Header& header);
   /// A DELETEALL marker, and forget every id (after ~reset).
   visualization_msgs::MarkerArray clear(const std_msgs::Header& header);
+  /// Blocks that currently have a marker id (drawn and not deleted since).
+  size_t size() const { return ids_.size(); }
 
  private:
   int idOf(const BlockKey& key);
