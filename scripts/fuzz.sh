@@ -47,8 +47,13 @@ mkdir -p "$work/corpus"
 seeds="$ROOT/test/fuzz/corpus/$target"
 log="$work/run-$(date +%Y%m%d-%H%M%S).log"
 echo "[fuzz] $target for ${seconds}s; corpus $work/corpus + $seeds; log $log"
-# Scratch files of the file-reading targets go to memory when it can.
-if [ -d /dev/shm ] && [ -w /dev/shm ]; then export TMPDIR=/dev/shm; fi
+# Scratch files of the file-reading targets go to memory when it can, in a folder of this run:
+# libFuzzer ends with _Exit(), so the targets cannot remove their own.
+scratch_base=/tmp
+if [ -d /dev/shm ] && [ -w /dev/shm ]; then scratch_base=/dev/shm; fi
+TMPDIR="$(mktemp -d "$scratch_base/stereo_fusion_fuzz_run.XXXXXX")"
+export TMPDIR
+trap 'rm -rf "$TMPDIR"' EXIT
 touch "$work/.started"
 started=$SECONDS
 # The first corpus folder receives new inputs; the seeds stay untouched.

@@ -49,19 +49,30 @@ class ByteReader {
   size_t pos_ = 0;
 };
 
-/// A private folder for this process (libFuzzer's -jobs/-fork run several), removed at exit.
-inline const std::filesystem::path& scratchDir() {
-  static const std::filesystem::path dir = [] {
+/// A private folder for this process (libFuzzer's -jobs/-fork run several), removed at a normal
+/// exit. libFuzzer itself ends with _Exit(), which skips that: scripts/fuzz.sh points TMPDIR at
+/// a folder of its own and removes it after the run.
+class ScratchDir {
+ public:
+  ScratchDir() {
     const char* base = std::getenv("TMPDIR");
     std::string pattern = std::string(base && *base ? base : "/tmp") + "/stereo_fusion_fuzz_XXXXXX";
     if (!mkdtemp(pattern.data())) std::abort();
-    std::atexit([] {
-      std::error_code ec;
-      std::filesystem::remove_all(scratchDir(), ec);
-    });
-    return std::filesystem::path(pattern);
-  }();
-  return dir;
+    path_ = pattern;
+  }
+  ~ScratchDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+inline const std::filesystem::path& scratchDir() {
+  static const ScratchDir dir;
+  return dir.path();
 }
 
 inline void writeFile(const std::filesystem::path& path, const std::string& bytes) {
