@@ -1,7 +1,8 @@
 // Fuzz target: Mapper::integrate() on fuzzed 32x24 disparity images, intrinsics and poses.
 // Input layout (ByteReader: a short input reads as zeros):
 //   byte 0  flags  bit 0 raw float intrinsics (else scaled from bytes)
-//                  bit 1 raw float pose matrices (else scaled axis-angle + translation)
+//                  bit 1 raw float pose matrices (else scaled axis-angle, translation and
+//                        a power of ten for the translation)
 //                  bit 2 colour image present, bit 3 grey (else RGB)
 //                  bits 4-5 mapper configuration (kConfigs)
 //                  bit 6 raw float disparities (else one byte per pixel, see disparityFromByte)
@@ -88,6 +89,9 @@ Eigen::Isometry3d readPose(fuzz::ByteReader& in, bool raw) {
   const Eigen::Vector3d axis_angle(in.scaled(-M_PI, M_PI), in.scaled(-M_PI, M_PI), in.scaled(-M_PI, M_PI));
   if (axis_angle.norm() > 0) T.linear() = Eigen::AngleAxisd(axis_angle.norm(), axis_angle.normalized()).toRotationMatrix();
   T.translation() = Eigen::Vector3d(in.scaled(-2, 2), in.scaled(-2, 2), in.scaled(-2, 2));
+  // Up to 2e8 m: past the map's range (±2.1e7 m at 2 cm voxels), and everything up to its edge,
+  // where block keys near 2^28 and float voxel offsets are tested.
+  T.translation() *= std::pow(10.0, in.u8() % 9);
   return T;
 }
 

@@ -59,7 +59,7 @@ wide_grey = png(144, 3, [bytes((7 * u * u + 31 * v) % 256 for u in range(144)) f
 write("fuzz_dataset_folder", "sgbm_from_right", b"\x06" + CALIBRATION.replace(b"width: 4", b"width: 144")
       + SEP + POSES + SEP + wide_grey + SEP + wide_grey)
 
-# integrate(): flags, frames-1, 5 intrinsics bytes, a 6-byte pose per frame, 768 disparity bytes
+# integrate(): flags, frames-1, 5 intrinsics bytes, a 7-byte pose per frame, 768 disparity bytes
 def integrate_seed(flags, poses, disparity_byte):
     body = bytes([flags, len(poses) - 1, 128, 128, 128, 100, 128])
     for pose in poses:
@@ -67,14 +67,16 @@ def integrate_seed(flags, poses, disparity_byte):
     body += bytes([disparity_byte]) * (32 * 24)
     return body + b"\x07"  # colour seed
 
-centre = [128, 128, 128, 128, 128, 128]  # identity rotation, zero translation
-turned = [128, 140, 128, 135, 128, 120]
+centre = [128, 128, 128, 128, 128, 128, 0]  # identity rotation, zero translation, x 10^0
+turned = [128, 140, 128, 135, 128, 120, 0]
+far = [128, 140, 128, 255, 128, 120, 7]  # 2e7 m along x: near the edge of the map
 for variant in range(4):
     write("fuzz_integrate", "plane_config%d" % variant, integrate_seed(0x04 | variant << 4, [centre, turned], 40))
 write("fuzz_integrate", "grey_three_frames", integrate_seed(0x0c, [centre, turned, centre], 80))
+write("fuzz_integrate", "far_from_the_origin", integrate_seed(0x04, [far, far], 40))
 special = bytearray(integrate_seed(0x00, [centre], 40))
 for i, b in enumerate([0, 251, 252, 253, 254, 255]):
-    special[13 + i * 97] = b  # invalid and absurd disparities among valid ones
+    special[14 + i * 97] = b  # invalid and absurd disparities among valid ones
 write("fuzz_integrate", "special_disparities", bytes(special))
 raw = struct.pack("<5f", 300.0, 300.0, 16.0, 12.0, 0.1) + struct.pack("<12f", 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0)
 raw += struct.pack("<768f", *([20.0] * 768))
