@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Installs the Debian packages stereo_fusion needs (only the missing ones) and builds the
 # package into .build/. Idempotent; safe to run on a fresh Debian bookworm machine.
-#   scripts/setup.sh [--no-build] [--screenshots]
+#   scripts/setup.sh [--no-build] [--screenshots] [--with sanitizers|fuzz]...
+# --screenshots adds rviz, Xvfb and ImageMagick (scripts/screenshots.sh); --with adds an opt-in
+# package group (scripts/check.sh, scripts/fuzz.sh use them).
 # Environment: BUILD_TYPE (default Release), BUILD_DIR (default <repo>/.build).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -33,13 +35,23 @@ PACKAGES=(
 # rviz under Xvfb with software OpenGL for scripts/screenshots.sh: opt-in (`--screenshots`, which
 # that script passes); CI does not need them.
 SCREENSHOT_PACKAGES=(rviz xvfb xauth imagemagick libgl1-mesa-dri x11-apps)
-BUILD=true
-for arg in "$@"; do
-  case "$arg" in
+NO_BUILD=0
+while (($# > 0)); do
+  case "$1" in
+    --no-build) NO_BUILD=1 ;;
     --screenshots) PACKAGES+=("${SCREENSHOT_PACKAGES[@]}") ;;
-    --no-build) BUILD=false ;;
-    *) echo "setup.sh: unknown option $arg" >&2; exit 2 ;;
+    --with)
+      case "${2:-}" in
+        # g++'s ASan/UBSan/TSan runtimes (g++ pulls them in today; named so that stays true)
+        sanitizers) PACKAGES+=(libasan8 libubsan1 libtsan2) ;;
+        # libFuzzer lives in compiler-rt, which Debian ships apart from the compiler
+        fuzz) PACKAGES+=(clang-14 libclang-rt-14-dev) ;;
+        *) echo "[setup] unknown package group '${2:-}' (sanitizers, fuzz)" >&2; exit 2 ;;
+      esac
+      shift ;;
+    *) echo "usage: scripts/setup.sh [--no-build] [--screenshots] [--with sanitizers|fuzz]..." >&2; exit 2 ;;
   esac
+  shift
 done
 
 missing=()
@@ -59,7 +71,7 @@ else
   echo "[setup] all ${#PACKAGES[@]} Debian packages present"
 fi
 
-if [ "$BUILD" = false ]; then exit 0; fi
+if ((NO_BUILD)); then exit 0; fi
 
 # ROS tooling must run on Debian's Python, not the python3 first on PATH (ros-on-debian.md #1).
 export PYENV_VERSION=system

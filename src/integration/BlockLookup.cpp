@@ -73,7 +73,10 @@ void BlockLookup::gatherHistogram(const StereoFrame& frame, const cv::Rect& regi
       }
     }
   }
-  for (const auto& [box, count] : s->boxes) {
+  // Not a structured binding: lambdas may capture those only from C++20 (clang refuses).
+  for (const auto& box_count : s->boxes) {
+    const auto& box = box_count.first;
+    const auto count = box_count.second;
     forEachKeyInBox(box.lo, box.hi, [&](const BlockKey& key) {
       auto it = std::find_if(s->key_counts.begin(), s->key_counts.end(),
                              [&](const auto& entry) { return entry.first == key; });

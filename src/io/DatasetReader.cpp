@@ -149,7 +149,14 @@ bool readPoses(const fs::path& path, std::vector<DatasetFrameInfo>* frames, std:
 
 /// cv::imread, with the one message every caller gives when the file cannot be decoded.
 cv::Mat readImage(const std::string& path, int flags, std::string* error) {
-  cv::Mat image = cv::imread(path, flags);
+  cv::Mat image;
+  try {
+    image = cv::imread(path, flags);
+  } catch (const cv::Exception&) {
+    // Some decoders throw instead of returning nothing, e.g. a PFM header with width 0 in a
+    // file named .png (imread goes by content); found by fuzz_dataset_folder.
+    image.release();
+  }
   if (image.empty()) *error = path + ": unreadable or truncated image";
   return image;
 }
@@ -228,6 +235,14 @@ std::optional<DatasetReader> DatasetReader::open(const std::string& folder, std:
     if (colors.size() != rights.size()) {
       *error = folder + ": computing disparity needs one color/ (left) image per right/ image, found " +
                std::to_string(colors.size()) + " and " + std::to_string(rights.size());
+      return std::nullopt;
+    }
+    // OpenCV's SGBM needs more columns than disparities: on a narrower image it asks for a
+    // negative-sized buffer or throws from a destructor (std::terminate), found by fuzzing.
+    if (reader.camera_.width() <= sgbm.num_disparities) {
+      *error = (root / "calibration.yaml").string() + ": images " + std::to_string(reader.camera_.width()) +
+               " px wide are too narrow to compute disparity with SGBM (" +
+               std::to_string(sgbm.num_disparities) + " disparities need a wider image)";
       return std::nullopt;
     }
     reader.uses_sgbm_ = true;

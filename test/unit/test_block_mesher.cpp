@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "MeshTestSupport.h"
+#include "QuickMode.h"
 
 using namespace stereo_fusion;
 using namespace stereo_fusion::test;
@@ -232,7 +233,7 @@ TEST(BlockMesher, ThreadCountDoesNotChangeTheMesh) {
     MapperConfig config;
     config.num_threads = threads;
     Mapper mapper(config);
-    for (const auto& pose : viewsAround(kCentre, 1.0, 5))
+    for (const auto& pose : viewsAround(kCentre, 1.0, quickMode() ? 3 : 5))
       ASSERT_TRUE(mapper.integrate(renderFrame(torusScene(), qvgaCamera(), pose)).accepted);
     const auto sets = triangleSets(mapper.mesh());
     if (!reference) reference = sets;

@@ -220,6 +220,37 @@ TEST(DatasetReader, ComputesDisparityWithSgbmFromRightImages) {
   EXPECT_LT(median(errors), 0.5);
 }
 
+// Found by fuzz_dataset_folder: OpenCV's SGBM on an image no wider than its disparity range
+// asked for a negative-sized buffer (or terminated from a destructor) instead of failing.
+TEST(DatasetReader, SgbmRefusesImagesNoWiderThanItsDisparityRange) {
+  SmallSequence seq("sgbm_narrow", 1, /*with_right=*/true, /*with_disparity=*/false);
+  const int width = seq.frames[0].camera.width();
+  SgbmParams sgbm;
+  sgbm.num_disparities = (width + 15) / 16 * 16;  // >= width, a multiple of 16 as SGBM wants
+  std::string error;
+  EXPECT_FALSE(DatasetReader::open(seq.dir.string(), &error, sgbm));
+  EXPECT_NE(error.find("calibration.yaml: images " + std::to_string(width) + " px wide are too narrow"),
+            std::string::npos) << error;
+  sgbm.num_disparities = (width - 1) / 16 * 16;  // the widest range that fits still works
+  ASSERT_TRUE(DatasetReader::open(seq.dir.string(), &error, sgbm)) << error;
+}
+
+// Found by fuzz_dataset_folder: OpenCV's imread throws (instead of returning nothing) for a
+// PFM header of width 0, and imread goes by content, so any image of the folder could do it.
+TEST(DatasetReader, ImagesWhoseDecoderThrowsAreUnreadable) {
+  for (const char* folder : {"color", "disparity"}) {
+    SmallSequence seq(std::string("throwing_decoder_") + folder, 1);
+    writeText(seq.dir / folder / "000000.png", std::string("Pf\n0 3\n-1\n") + std::string(48, '\0'));
+    std::string error;
+    auto reader = DatasetReader::open(seq.dir.string(), &error);
+    ASSERT_TRUE(reader) << error;
+    StereoFrame f;
+    EXPECT_FALSE(reader->load(0, &f, &error));
+    EXPECT_NE(error.find(std::string(folder) + "/000000.png: unreadable or truncated image"), std::string::npos)
+        << error;
+  }
+}
+
 TEST(OfflineFuser, WritesMeshAndStatsAndCountsSkippedFrames) {
   SmallSequence seq("fuse", 4);
   const fs::path truncated = seq.dir / "disparity" / "000002.png";

@@ -1,0 +1,117 @@
+#!/usr/bin/env bash
+# Sanitizer checks: builds the unit tests with sanitizers in their own build folders and runs
+# them; any sanitizer report or test failure makes it exit non-zero. Ends with a summary.
+#   scripts/check.sh [--asan | --tsan | --all]      (default --all)
+#   --asan  AddressSanitizer + UndefinedBehaviorSanitizer (g++), in .build-asan/: every unit
+#           test, and every fuzz target's checked-in corpus and regressions (test/fuzz/)
+#   --tsan  ThreadSanitizer (g++), in .build-tsan/: the tests that run code on several threads
+#           (test/unit/thread_tests.cmake)
+# Both run with STEREO_FUSION_TEST_QUICK=1: the three heaviest thread tests use smaller inputs
+# (test/unit/QuickMode.h); under ASan the mapper's thread-count test alone took 150 s otherwise.
+# Environment: CHECK_JOBS (default 2) parallel compile jobs and test shards.
+set -uo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+JOBS="${CHECK_JOBS:-2}"
+mode="${1:---all}"
+case "$mode" in
+  --asan | --tsan | --all) ;;
+  *) echo "usage: scripts/check.sh [--asan | --tsan | --all]" >&2; exit 2 ;;
+esac
+
+"$ROOT/scripts/setup.sh" --no-build --with sanitizers || { echo "check: setup failed"; exit 1; }
+export PYENV_VERSION=system ROS_HOSTNAME=localhost
+LAUNCHER=()
+if command -v ccache >/dev/null 2>&1; then LAUNCHER=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
+
+results=()  # one summary line per step
+failed=0
+start=$SECONDS
+
+# build <dir> <sanitizers> <targets...>: configure (catkin needs the whole project) and build
+# only the given targets, not the nodelet, tools or ROS tests.
+build() {
+  local dir="$1" sanitize="$2"
+  shift 2
+  local t0=$SECONDS
+  # -O1: a fraction of -O2's compile time, fast enough to run; -g1: line tables, enough for the
+  # reports' stacks and cheaper to compile than -g; no NDEBUG: assertions are checked.
+  if ! cmake -S "$ROOT" -B "$dir" "${LAUNCHER[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+      -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" -DSTEREO_FUSION_SANITIZE="$sanitize" \
+      -DCATKIN_ENABLE_TESTING=ON -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 \
+      >"$dir.configure.log" 2>&1; then
+    cat "$dir.configure.log"
+    return 1
+  fi
+  cmake --build "$dir" -j"$JOBS" $(printf -- '--target %s ' "$@") || return 1
+  echo "[check] built $* with -fsanitize=$sanitize in $((SECONDS - t0)) s"
+}
+
+# run_gtest <name> <binary> <gtest filter>: runs the binary in $JOBS shards in parallel.
+run_gtest() {
+  local name="$1" binary="$2" filter="$3" t0=$SECONDS pids=() status=0 passed=0
+  local logdir="$ROOT/.check-logs"
+  mkdir -p "$logdir"
+  for ((shard = 0; shard < JOBS; ++shard)); do
+    GTEST_TOTAL_SHARDS="$JOBS" GTEST_SHARD_INDEX="$shard" "$binary" --gtest_filter="$filter" \
+      >"$logdir/$name.$shard.log" 2>&1 &
+    pids+=($!)
+  done
+  for ((shard = 0; shard < JOBS; ++shard)); do
+    if ! wait "${pids[$shard]}"; then
+      status=1
+      echo "[check] $name shard $shard FAILED:"
+      grep -E -A40 '^(==[0-9]+==ERROR|WARNING: ThreadSanitizer|SUMMARY: |.*runtime error:)|\[  FAILED  \]' \
+        "$logdir/$name.$shard.log" | head -n 80
+    fi
+    passed=$((passed + $(grep -oE '^\[  PASSED  \] [0-9]+' "$logdir/$name.$shard.log" | grep -oE '[0-9]+$' || echo 0)))
+  done
+  results+=("$name: $passed tests passed, $( ((status)) && echo FAILED || echo clean ) ($((SECONDS - t0)) s; logs .check-logs/$name.*.log)")
+  return $status
+}
+
+# The sanitizers' reports end the process with an error (-fno-sanitize-recover=all, halt_on_error).
+export ASAN_OPTIONS="detect_leaks=1:abort_on_error=0:strict_string_checks=1:detect_stack_use_after_return=1"
+export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+export STEREO_FUSION_TEST_QUICK=1
+export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$ROOT/test/tsan_suppressions.txt"
+
+if [ "$mode" != --tsan ]; then
+  dir="$ROOT/.build-asan"
+  if build "$dir" address,undefined stereo_fusion_unit_tests stereo_fusion_fuzz_replays; then
+    bin="$(find "$dir" -type f -name stereo_fusion_unit_tests -perm -u+x | head -n 1)"
+    run_gtest asan_unit_tests "$bin" '*' || failed=1
+    t0=$SECONDS
+    replay_status=clean
+    for replay in $(find "$dir" -type f -name 'fuzz_*_replay' -perm -u+x | sort); do
+      target="$(basename "$replay" _replay)"
+      if ! "$replay" "$ROOT/test/fuzz/corpus/$target" "$ROOT/test/fuzz/regressions/$target" \
+          >"$ROOT/.check-logs/asan_$target.log" 2>&1; then
+        replay_status=FAILED
+        failed=1
+        tail -n 40 "$ROOT/.check-logs/asan_$target.log"
+      fi
+      results+=("asan $target replay: $(tail -n 1 "$ROOT/.check-logs/asan_$target.log")")
+    done
+    results+=("asan fuzz replays: $replay_status ($((SECONDS - t0)) s)")
+  else
+    results+=("asan build: FAILED"); failed=1
+  fi
+fi
+
+if [ "$mode" != --asan ]; then
+  dir="$ROOT/.build-tsan"
+  if build "$dir" thread stereo_fusion_thread_tests; then
+    bin="$(find "$dir" -type f -name stereo_fusion_thread_tests -perm -u+x | head -n 1)"
+    threaded='ThreadPool.*:BlockOctree.ConcurrentAllocationCreatesEachBlockOnce'
+    threaded+=':BlockLookup.ResultDoesNotDependOnThreadsOrRegionSize:MapperProperties.ThreadCountDoesNotChangeTheMap'
+    threaded+=':BlockMesher.ThreadCountDoesNotChangeTheMesh'
+    run_gtest tsan_thread_tests "$bin" "$threaded" || failed=1
+  else
+    results+=("tsan build: FAILED"); failed=1
+  fi
+fi
+
+echo "[check] summary ($((SECONDS - start)) s):"
+for line in "${results[@]}"; do echo "  $line"; done
+if ((failed)); then echo "check: FAILED"; exit 1; fi
+echo "check: clean"

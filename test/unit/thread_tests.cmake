@@ -1,0 +1,16 @@
+# The unit tests that run code on several threads, in an executable of their own, so that the
+# ThreadSanitizer build (scripts/check.sh --tsan) compiles only them and the core instead of
+# every test, tool and the ROS layer. Not part of the normal build (the same tests are in
+# stereo_fusion_unit_tests). A new threaded test in another file: add the file here.
+if(CATKIN_ENABLE_TESTING)
+  add_executable(stereo_fusion_thread_tests EXCLUDE_FROM_ALL
+    ${PROJECT_SOURCE_DIR}/test/unit/test_thread_pool.cpp
+    ${PROJECT_SOURCE_DIR}/test/unit/test_octree.cpp
+    ${PROJECT_SOURCE_DIR}/test/unit/test_lookup.cpp
+    ${PROJECT_SOURCE_DIR}/test/unit/test_mapper_properties.cpp
+    ${PROJECT_SOURCE_DIR}/test/unit/test_block_mesher.cpp
+    ${PROJECT_SOURCE_DIR}/test/tsan/OpenCvSerial.cpp  # TSan cannot see TBB's synchronisation
+  )
+  target_link_libraries(stereo_fusion_thread_tests stereo_fusion_core stereo_fusion_sim
+                        GTest::gtest GTest::gtest_main)
+endif()
