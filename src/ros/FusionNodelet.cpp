@@ -4,10 +4,8 @@
 #include <tf2_eigen/tf2_eigen.h>
 
 #include <algorithm>
-#include <filesystem>
 
-#include "stereo_fusion/io/ObjWriter.h"
-#include "stereo_fusion/io/PlyWriter.h"
+#include "stereo_fusion/io/MeshExport.h"
 #include "stereo_fusion/util/Percentile.h"
 #include "stereo_fusion/ros/DebugMarkers.h"
 #include "stereo_fusion/ros/MessageConversions.h"
@@ -284,25 +282,10 @@ void FusionNodelet::publishPending(const ros::Time& stamp, bool force) {
 }
 
 bool FusionNodelet::saveMesh(SaveMesh::Request& req, SaveMesh::Response& res) {
-  std::string error;
-  if (std::filesystem::path(req.path).extension() == ".obj") {
-    // OBJ + MTL + atlas PNGs: written under the lock, the patches are not copied.
+  {
+    // Written under the lock: the submeshes and patches are not copied (a rare, manual call).
     std::lock_guard<std::mutex> lock(map_mutex_);
-    ObjExportInfo info;
-    res.success = writeTexturedObj(req.path, mapper_->mesh().submeshes(), mapper_->textures().patches(),
-                                   ObjExportOptions{}, &info, &error);
-    res.message = res.success ? "wrote " + std::to_string(info.textured_blocks) + " textured and " +
-                                    std::to_string(info.vertex_colour_blocks) + " vertex-coloured blocks to " +
-                                    req.path
-                              : error;
-  } else {
-    TriangleMesh mesh;
-    {
-      std::lock_guard<std::mutex> lock(map_mutex_);
-      mesh = mapper_->extractMesh();
-    }
-    res.success = writePly(req.path, mesh, &error);
-    res.message = res.success ? "wrote " + std::to_string(mesh.triangles.size()) + " triangles to " + req.path : error;
+    res.success = exportMesh(req.path, mapper_->mesh().submeshes(), mapper_->textures().patches(), &res.message);
   }
   if (res.success)
     NODELET_INFO("stereo_fusion: save_mesh: %s", res.message.c_str());

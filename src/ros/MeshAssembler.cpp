@@ -3,10 +3,8 @@
 #include <pluginlib/class_list_macros.hpp>
 
 #include <algorithm>
-#include <filesystem>
 
-#include "stereo_fusion/io/ObjWriter.h"
-#include "stereo_fusion/io/PlyWriter.h"
+#include "stereo_fusion/io/MeshExport.h"
 #include "stereo_fusion/mesh/MeshStore.h"
 
 namespace stereo_fusion {
@@ -148,24 +146,10 @@ bool MeshAssembler::apply(const MeshUpdate& update) {
 }
 
 bool MeshAssembler::saveMesh(SaveMesh::Request& req, SaveMesh::Response& res) {
-  std::string error;
-  if (std::filesystem::path(req.path).extension() == ".obj") {
-    // The robot's format and message (srv/SaveMesh.srv): written under the lock, nothing copied.
+  {
+    // The robot's formats and messages (srv/SaveMesh.srv), written under the lock.
     std::lock_guard<std::mutex> lock(mutex_);
-    ObjExportInfo info;
-    res.success = writeTexturedObj(req.path, mesh_, textures_, ObjExportOptions{}, &info, &error);
-    res.message = res.success ? "wrote " + std::to_string(info.textured_blocks) + " textured and " +
-                                    std::to_string(info.vertex_colour_blocks) + " vertex-coloured blocks to " +
-                                    req.path
-                              : error;
-  } else {
-    TriangleMesh mesh;
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      mesh = weldSubmeshes(mesh_);  // the same welding as the robot's ~save_mesh
-    }
-    res.success = writePly(req.path, mesh, &error);
-    res.message = res.success ? "wrote " + std::to_string(mesh.triangles.size()) + " triangles to " + req.path : error;
+    res.success = exportMesh(req.path, mesh_, textures_, &res.message);
   }
   if (res.success) NODELET_INFO("mesh_assembler: save_mesh: %s", res.message.c_str());
   else NODELET_ERROR("mesh_assembler: save_mesh: %s", res.message.c_str());

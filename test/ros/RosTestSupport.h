@@ -49,6 +49,24 @@ bool waitFor(F&& done, double timeout_s) {
 }
 
 /// gtest + a ROS node with a two-thread spinner, then every test.
+/// Which SubMesh fields expectSameSubmeshes() compares besides positions and triangles.
+enum SubmeshFields { kGeometry = 0, kWithColors = 1, kWithNormals = 2 };
+
+/// Expects `got` (key → SubMesh) to hold exactly the blocks of `want`, with bit-identical
+/// positions and triangles (and colours / normals when asked).
+template <typename MapA, typename MapB>
+void expectSameSubmeshes(const MapA& got, const MapB& want, int fields = kGeometry) {
+  ASSERT_EQ(got.size(), want.size());
+  for (const auto& [key, sub] : want) {
+    auto it = got.find(key);
+    ASSERT_NE(it, got.end()) << key;
+    EXPECT_EQ(it->second.positions, sub.positions) << key;
+    EXPECT_EQ(it->second.triangles, sub.triangles) << key;
+    if (fields & kWithColors) EXPECT_EQ(it->second.colors, sub.colors) << key;
+    if (fields & kWithNormals) EXPECT_EQ(it->second.normals, sub.normals) << key;
+  }
+}
+
 inline int runRosTests(int argc, char** argv, const char* node_name) {
   testing::InitGoogleTest(&argc, argv);
   ros::init(argc, argv, node_name);

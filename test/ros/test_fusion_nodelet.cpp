@@ -148,14 +148,7 @@ TEST_F(NodeletFixture, StreamedMeshEqualsFullMeshAndSavedPly) {
   EXPECT_EQ(sequence_gaps_, 0);
   EXPECT_GE(updates_, 4);
   EXPECT_EQ(full.response.mesh.sequence, last_sequence_);
-  ASSERT_EQ(streamed_.size(), reference.size());
-  for (const auto& [key, ref] : reference) {
-    auto it = streamed_.find(key);
-    ASSERT_NE(it, streamed_.end()) << key;
-    EXPECT_EQ(it->second.positions, ref.positions) << key;
-    EXPECT_EQ(it->second.triangles, ref.triangles) << key;
-    EXPECT_EQ(it->second.colors, ref.colors) << key;
-  }
+  test::expectSameSubmeshes(streamed_, reference, test::kWithColors);
   // The streamed textures equal the full mesh's: same blocks, same texels, same UVs.
   ASSERT_EQ(streamed_textures_.size(), reference_textures.size());
   for (const auto& [key, ref] : reference_textures) {

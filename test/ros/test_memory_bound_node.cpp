@@ -81,13 +81,7 @@ TEST(MemoryBoundNode, BudgetHoldsAndTheStreamedMeshFollowsEvictions) {
   EXPECT_EQ(gaps, 0);
   EXPECT_GT(removed_keys, 10u) << "evicted blocks must reach subscribers as removed_keys";
   EXPECT_EQ(full.response.mesh.sequence, last_sequence);
-  ASSERT_EQ(streamed.size(), reference.size());
-  for (const auto& [key, ref] : reference) {
-    auto it = streamed.find(key);
-    ASSERT_NE(it, streamed.end()) << key;
-    EXPECT_EQ(it->second.positions, ref.positions) << key;
-    EXPECT_EQ(it->second.triangles, ref.triangles) << key;
-  }
+  test::expectSameSubmeshes(streamed, reference);
 }
 
 int main(int argc, char** argv) { return test::runRosTests(argc, argv, "stereo_fusion_memory_bound_test"); }

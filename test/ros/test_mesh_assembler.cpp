@@ -141,15 +141,7 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   EXPECT_GT(assembled_sequence, joined_sequence) << "no update was applied after joining";
 
   // Exactly the robot's mesh (in the compact mode both are the same decoded quantised values).
-  ASSERT_EQ(assembled.size(), robot.size());
-  for (const auto& [key, sub] : robot) {
-    auto it = assembled.find(key);
-    ASSERT_NE(it, assembled.end()) << key;
-    EXPECT_EQ(it->second.positions, sub.positions) << key;
-    EXPECT_EQ(it->second.normals, sub.normals) << key;
-    EXPECT_EQ(it->second.colors, sub.colors) << key;
-    EXPECT_EQ(it->second.triangles, sub.triangles) << key;
-  }
+  test::expectSameSubmeshes(assembled, robot, test::kWithColors | test::kWithNormals);
 
   // And the mesh the offline pipeline builds from the same frames: exact in float32, within half
   // a quantisation step per axis in the compact encoding.
@@ -284,13 +276,7 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
            assembled_sequence == robot_sequence;
   }, 30.0)) << "assembler at sequence " << assembled_sequence << ", robot at " << robot_sequence;
   EXPECT_EQ(assembled.count(stray.key), 0u) << "the update after the gap was applied";
-  ASSERT_EQ(assembled.size(), robot.size());
-  for (const auto& [key, sub] : robot) {
-    auto it = assembled.find(key);
-    ASSERT_NE(it, assembled.end()) << key;
-    EXPECT_EQ(it->second.positions, sub.positions) << key;
-    EXPECT_EQ(it->second.triangles, sub.triangles) << key;
-  }
+  test::expectSameSubmeshes(assembled, robot);
 
   // A restart of the robot: its sequence begins again, so a restarted robot's update can carry
   // exactly the sequence the assembler expects next while its mesh has nothing to do with the
@@ -328,13 +314,7 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
            assembled_sequence == robot_sequence;
   }, 30.0)) << "assembler at sequence " << assembled_sequence << ", robot at " << robot_sequence;
   EXPECT_EQ(assembled.count(stray.key), 0u);
-  ASSERT_EQ(assembled.size(), robot.size());
-  for (const auto& [key, sub] : robot) {
-    auto it = assembled.find(key);
-    ASSERT_NE(it, assembled.end()) << key;
-    EXPECT_EQ(it->second.positions, sub.positions) << key;
-    EXPECT_EQ(it->second.triangles, sub.triangles) << key;
-  }
+  test::expectSameSubmeshes(assembled, robot);
 }
 
 int main(int argc, char** argv) { return test::runRosTests(argc, argv, "stereo_fusion_assembler_test"); }

@@ -45,13 +45,7 @@ TEST(Replay, BagThroughTheNodeletEqualsTheOfflinePipeline) {
   ASSERT_TRUE(applyMeshUpdate(full.response.mesh, &live));
   const auto& expected = offline.mesh().submeshes();
   ASSERT_GT(expected.size(), 20u);
-  ASSERT_EQ(live.size(), expected.size());
-  for (const auto& [key, sub] : expected) {
-    auto it = live.find(key);
-    ASSERT_NE(it, live.end()) << key;
-    EXPECT_EQ(it->second.positions, sub.positions) << key;
-    EXPECT_EQ(it->second.triangles, sub.triangles) << key;
-  }
+  test::expectSameSubmeshes(live, expected);
 }
 
 int main(int argc, char** argv) { return test::runRosTests(argc, argv, "stereo_fusion_replay_test"); }
