@@ -1,16 +1,39 @@
 #pragma once
-// Shared by the ROS integration tests: reading the nodelet's counters from /diagnostics, and
-// the main() every rostest gtest node needs.
+// Shared by the ROS integration tests: frames as the nodelet's input messages, reading the
+// nodelet's counters from /diagnostics, and the main() every rostest gtest node needs.
 
 #include <gtest/gtest.h>
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <ros/ros.h>
+#include <tf2_ros/transform_broadcaster.h>
+
+#include "stereo_fusion/ros/MessageConversions.h"
 
 #include <map>
 #include <mutex>
 #include <string>
 
 namespace stereo_fusion::test {
+
+/// One frame as the nodelet's input.
+struct FrameMessages {
+  std_msgs::Header header;
+  stereo_msgs::DisparityImage disparity;
+  sensor_msgs::Image image;
+  sensor_msgs::CameraInfo info;
+};
+
+/// `frame` as messages stamped `stamp` (now when zero) in `frame_id`; with `tf`, its pose
+/// world → frame_id is broadcast first. Publishing (and any delay before it) is the caller's.
+inline FrameMessages frameMessages(const StereoFrame& frame, tf2_ros::TransformBroadcaster* tf,
+                                   const std::string& frame_id = "left_optical", ros::Time stamp = ros::Time()) {
+  FrameMessages m;
+  m.header.stamp = stamp.isZero() ? ros::Time::now() : stamp;
+  m.header.frame_id = frame_id;
+  if (tf) tf->sendTransform(toTransform(frame.T_world_camera, "world", m.header));
+  toMessages(frame, m.header, 128.0f, &m.disparity, &m.image, &m.info);
+  return m;
+}
 
 /// The latest key/value pairs of the "fusion" diagnostics status.
 class DiagnosticsWatcher {
@@ -62,8 +85,12 @@ void expectSameSubmeshes(const MapA& got, const MapB& want, int fields = kGeomet
     ASSERT_NE(it, got.end()) << key;
     EXPECT_EQ(it->second.positions, sub.positions) << key;
     EXPECT_EQ(it->second.triangles, sub.triangles) << key;
-    if (fields & kWithColors) EXPECT_EQ(it->second.colors, sub.colors) << key;
-    if (fields & kWithNormals) EXPECT_EQ(it->second.normals, sub.normals) << key;
+    if (fields & kWithColors) {
+      EXPECT_EQ(it->second.colors, sub.colors) << key;
+    }
+    if (fields & kWithNormals) {
+      EXPECT_EQ(it->second.normals, sub.normals) << key;
+    }
   }
 }
 

@@ -66,19 +66,12 @@ class NodeletFixture : public testing::Test {
   void publish(const StereoFrame& frame, const std::string& frame_id, bool with_tf,
                const std::function<void(stereo_msgs::DisparityImage*, sensor_msgs::Image*)>& corrupt = {},
                ros::Time stamp = ros::Time()) {
-    std_msgs::Header header;
-    header.stamp = stamp.isZero() ? ros::Time::now() : stamp;
-    header.frame_id = frame_id;
-    if (with_tf) tf_.sendTransform(toTransform(frame.T_world_camera, "world", header));
-    stereo_msgs::DisparityImage d;
-    sensor_msgs::Image i;
-    sensor_msgs::CameraInfo c;
-    toMessages(frame, header, 128.0f, &d, &i, &c);
-    if (corrupt) corrupt(&d, &i);
+    test::FrameMessages m = test::frameMessages(frame, with_tf ? &tf_ : nullptr, frame_id, stamp);
+    if (corrupt) corrupt(&m.disparity, &m.image);
     ros::WallDuration(0.05).sleep();  // tf first, as a SLAM stack running ahead would
-    disparity_pub_.publish(d);
-    image_pub_.publish(i);
-    info_pub_.publish(c);
+    disparity_pub_.publish(m.disparity);
+    image_pub_.publish(m.image);
+    info_pub_.publish(m.info);
   }
 
   long diag(const std::string& key) { return diagnostics_.value(key); }

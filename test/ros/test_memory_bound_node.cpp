@@ -50,18 +50,11 @@ TEST(MemoryBoundNode, BudgetHoldsAndTheStreamedMeshFollowsEvictions) {
     Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
     T.translation().x() = 0.3 * k;
     const StereoFrame frame = test::renderFrame(corridor, camera, T);
-    std_msgs::Header header;
-    header.stamp = ros::Time::now();
-    header.frame_id = "left_optical";
-    tf.sendTransform(toTransform(frame.T_world_camera, "world", header));
-    stereo_msgs::DisparityImage d;
-    sensor_msgs::Image i;
-    sensor_msgs::CameraInfo c;
-    toMessages(frame, header, 128.0f, &d, &i, &c);
+    const test::FrameMessages m = test::frameMessages(frame, &tf);
     ros::WallDuration(0.05).sleep();
-    disparity_pub.publish(d);
-    image_pub.publish(i);
-    info_pub.publish(c);
+    disparity_pub.publish(m.disparity);
+    image_pub.publish(m.image);
+    info_pub.publish(m.info);
     // One at a time, so the budget is checked after every frame.
     ASSERT_TRUE(test::waitFor([&] { return diag("frames fused") >= k + 1; }, 30.0)) << "frame " << k;
     EXPECT_LE(diag("blocks"), 300) << "after frame " << k;

@@ -89,22 +89,15 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
     const double angle = -0.5 + 0.1 * f;
     const Eigen::Vector3d eye(0.05 + 1.0 * std::sin(angle), -0.25, 1.2 - 1.0 * std::cos(angle));
     const StereoFrame frame = test::renderFrame(s, camera, sim::lookAt(eye, {0.0, 0.1, 1.1}, -Eigen::Vector3d::UnitY()));
-    std_msgs::Header header;
-    header.stamp = ros::Time::now();
-    header.frame_id = "left_optical";
-    tf.sendTransform(toTransform(frame.T_world_camera, "world", header));
-    stereo_msgs::DisparityImage d;
-    sensor_msgs::Image i;
-    sensor_msgs::CameraInfo c;
-    toMessages(frame, header, 128.0f, &d, &i, &c);
+    const test::FrameMessages m = test::frameMessages(frame, &tf);
     // The offline reference sees exactly what the nodelet sees: the messages, converted back.
     StereoFrame received;
-    ASSERT_TRUE(toStereoFrame(d, i, c, frame.T_world_camera, &received, &error)) << error;
+    ASSERT_TRUE(toStereoFrame(m.disparity, m.image, m.info, frame.T_world_camera, &received, &error)) << error;
     ASSERT_TRUE(offline.integrate(received).accepted);
     ros::WallDuration(0.05).sleep();  // tf first, as a SLAM stack running ahead would
-    disparity_pub.publish(d);
-    image_pub.publish(i);
-    info_pub.publish(c);
+    disparity_pub.publish(m.disparity);
+    image_pub.publish(m.image);
+    info_pub.publish(m.info);
   };
 
   // First half: nobody at the base station yet.

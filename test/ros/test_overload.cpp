@@ -31,17 +31,10 @@ TEST(Overload, QueueStaysBoundedAndEveryFrameIsCounted) {
   const StereoFrame frame = test::renderFrame(scene, test::vgaCamera(), Eigen::Isometry3d::Identity());
   const int sent = 40;
   for (int k = 0; k < sent; ++k) {
-    std_msgs::Header header;
-    header.stamp = ros::Time::now();
-    header.frame_id = "left_optical";
-    tf.sendTransform(toTransform(frame.T_world_camera, "world", header));
-    stereo_msgs::DisparityImage d;
-    sensor_msgs::Image i;
-    sensor_msgs::CameraInfo c;
-    toMessages(frame, header, 128.0f, &d, &i, &c);
-    disparity_pub.publish(d);
-    image_pub.publish(i);
-    info_pub.publish(c);
+    const test::FrameMessages m = test::frameMessages(frame, &tf);
+    disparity_pub.publish(m.disparity);
+    image_pub.publish(m.image);
+    info_pub.publish(m.info);
     ros::WallDuration(0.01).sleep();
   }
   auto accounted = [&] {
