@@ -206,6 +206,10 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
         ++report->frames_used;
         report->timings.push_back(
             {r.lookup_ms, r.fusion_ms, r.mesh.meshing_ms, r.texture.texture_ms, frame_timer.elapsedMs()});
+        report->work.push_back({static_cast<double>(r.lookup.valid_points), static_cast<double>(r.lookup.octree_searches),
+                                static_cast<double>(r.lookup.blocks_queued), static_cast<double>(r.fusion.blocks_updated),
+                                static_cast<double>(r.fusion.voxels_updated), static_cast<double>(r.mesh.blocks_meshed),
+                                static_cast<double>(r.mesh.changed.size())});
       }
     }
     if (options.progress) showProgress(i + 1, total, wall.elapsedMs() / 1000.0, terminal, &last_decile);
@@ -289,6 +293,18 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   j["timings_ms"]["meshing"] = stage(&StageTimings::meshing_ms);
   j["timings_ms"]["texture"] = stage(&StageTimings::texture_ms);
   j["timings_ms"]["total"] = stage(&StageTimings::total_ms);
+  auto work = [&](double StageWork::*field) {
+    std::vector<double> v;
+    for (const StageWork& w : report.work) v.push_back(w.*field);
+    return summarize(v).p50;
+  };
+  j["work_per_frame_p50"]["valid_points"] = work(&StageWork::valid_points);
+  j["work_per_frame_p50"]["octree_searches"] = work(&StageWork::octree_searches);
+  j["work_per_frame_p50"]["blocks_queued"] = work(&StageWork::blocks_queued);
+  j["work_per_frame_p50"]["blocks_updated"] = work(&StageWork::blocks_updated);
+  j["work_per_frame_p50"]["voxels_updated"] = work(&StageWork::voxels_updated);
+  j["work_per_frame_p50"]["blocks_meshed"] = work(&StageWork::blocks_meshed);
+  j["work_per_frame_p50"]["submeshes_changed"] = work(&StageWork::submeshes_changed);
   j["wall_time_s"] = report.wall_time_s;
   for (const ParameterSpec& p : mapperParameterSpecs()) j["config"][p.name] = getMapperParameter(config, p.name);
   return j.dump(2);

@@ -28,6 +28,12 @@ struct StageTimings {
   double lookup_ms = 0, fusion_ms = 0, meshing_ms = 0, texture_ms = 0, total_ms = 0;
 };
 
+/// How much work one frame made each stage do (what the timings above are spent on).
+struct StageWork {
+  double valid_points = 0, octree_searches = 0, blocks_queued = 0, blocks_updated = 0, voxels_updated = 0,
+         blocks_meshed = 0, submeshes_changed = 0;
+};
+
 /// What a run did; stats.json is this, plus the configuration.
 struct FuseReport {
   size_t frames_total = 0;
@@ -35,6 +41,7 @@ struct FuseReport {
   std::map<std::string, size_t> skipped;        ///< reason → count
   std::vector<std::string> skipped_examples;    ///< the first few messages, verbatim
   std::vector<StageTimings> timings;            ///< one per used frame
+  std::vector<StageWork> work;                  ///< one per used frame
   size_t blocks = 0;
   size_t blocks_loaded = 0;                     ///< blocks of the --load-map file
   uint64_t blocks_evicted = 0;                  ///< by the memory bound (max_blocks, max_distance_from_camera_m)
