@@ -21,20 +21,23 @@ BlockLookup::PixelGeometry BlockLookup::pixelGeometry(const StereoFrame& frame,
   g.inv_fx = 1.0 / cam.fx();
   g.inv_fy = 1.0 / cam.fy();
   g.inv_block_size = 1.0 / octree.blockSize();
+  g.min_depth_m = config_.min_depth_m;
+  g.max_depth_m = config_.max_depth_m;
+  g.levels = config_.levels;
   for (int level = 0; level < kNumLevels; ++level)
     g.band_blocks[level] = config_.truncation_vox * levelScale(level) * config_.voxel_size_m * g.inv_block_size;
   return g;
 }
 
-bool BlockLookup::bandBoxOfPixel(const StereoFrame& frame, int u, int v, BandBox* box) const {
+// Inline: called for every pixel (a call per pixel cost a fifth of the lookup).
+inline bool BlockLookup::bandBoxOfPixel(float d, int u, int v, BandBox* box) const {
   const PixelGeometry& g = geometry_;
-  const float d = frame.disparity_px.at<float>(v, u);
   if (!(d > 0.0f) || !std::isfinite(d)) return false;
   const double z = g.fb / d;
-  if (!(z >= config_.min_depth_m && z <= config_.max_depth_m)) return false;
+  if (!(z >= g.min_depth_m && z <= g.max_depth_m)) return false;
   const Eigen::Vector3d p_camera((u - g.cx) * z * g.inv_fx, (v - g.cy) * z * g.inv_fy, z);
   const Eigen::Vector3d p_blocks = (g.R_world_camera * p_camera + g.t_world_camera) * g.inv_block_size;
-  const double band = g.band_blocks[levelForDepth(z, config_.levels)];
+  const double band = g.band_blocks[levelForDepth(z, g.levels)];
   box->lo = BlockOctree::keyForBlockCoordinates(p_blocks.array() - band);
   box->hi = BlockOctree::keyForBlockCoordinates(p_blocks.array() + band);
   return BlockOctree::keyInRange(box->lo) && BlockOctree::keyInRange(box->hi);
@@ -54,9 +57,10 @@ void BlockLookup::gatherHistogram(const StereoFrame& frame, const cv::Rect& regi
   s->key_counts.clear();
   size_t last = 0;
   for (int v = region.y; v < region.y + region.height; ++v) {
+    const float* disparity_row = frame.disparity_px.ptr<float>(v);
     for (int u = region.x; u < region.x + region.width; ++u) {
       BandBox box;
-      if (!bandBoxOfPixel(frame, u, v, &box)) continue;
+      if (!bandBoxOfPixel(disparity_row[u], u, v, &box)) continue;
       ++s->stats.valid_points;
       if (last < s->boxes.size() && s->boxes[last].first == box) {
         ++s->boxes[last].second;
@@ -72,6 +76,34 @@ void BlockLookup::gatherHistogram(const StereoFrame& frame, const cv::Rect& regi
         last = static_cast<size_t>(it - s->boxes.begin());
       }
     }
+  }
+  if (s->boxes.empty()) return;
+  // Expand boxes to per-block counts. Boxes overlap heavily (coarse levels reach 2 blocks
+  // either side), so count on a dense grid over their union when it is small, which it is
+  // unless the region straddles a large depth jump; otherwise merge keys linearly.
+  BlockKey lo = s->boxes.front().first.lo, hi = s->boxes.front().first.hi;
+  for (const auto& box_count : s->boxes) {
+    const BandBox& box = box_count.first;
+    lo = {std::min(lo.x, box.lo.x), std::min(lo.y, box.lo.y), std::min(lo.z, box.lo.z)};
+    hi = {std::max(hi.x, box.hi.x), std::max(hi.y, box.hi.y), std::max(hi.z, box.hi.z)};
+  }
+  const int64_t nx = int64_t{hi.x} - lo.x + 1, ny = int64_t{hi.y} - lo.y + 1, nz = int64_t{hi.z} - lo.z + 1;
+  if (nx * ny * nz <= kMaxDenseHistogramCells) {
+    s->dense_counts.assign(static_cast<size_t>(nx * ny * nz), 0);
+    for (const auto& box_count : s->boxes) {
+      const BandBox& box = box_count.first;
+      for (int32_t z = box.lo.z; z <= box.hi.z; ++z)
+        for (int32_t y = box.lo.y; y <= box.hi.y; ++y) {
+          int* row = &s->dense_counts[static_cast<size_t>(((z - lo.z) * ny + (y - lo.y)) * nx - lo.x)];
+          for (int32_t x = box.lo.x; x <= box.hi.x; ++x) row[x] += box_count.second;
+        }
+    }
+    size_t i = 0;
+    for (int32_t z = lo.z; z <= hi.z; ++z)
+      for (int32_t y = lo.y; y <= hi.y; ++y)
+        for (int32_t x = lo.x; x <= hi.x; ++x, ++i)
+          if (s->dense_counts[i] > 0) s->key_counts.emplace_back(BlockKey{x, y, z}, s->dense_counts[i]);
+    return;
   }
   // Not a structured binding: lambdas may capture those only from C++20 (clang refuses).
   for (const auto& box_count : s->boxes) {
@@ -96,20 +128,49 @@ bool BlockLookup::passesFilter(const RegionScratch& s, const BlockKey& key) cons
 }
 
 void BlockLookup::runRegionAccelerated(const StereoFrame& frame, const cv::Rect& region,
-                                       BlockOctree* octree, RegionScratch* s) const {
+                                       RegionScratch* s) const {
   gatherHistogram(frame, region, s);
+  s->passing.clear();
   for (const auto& [key, count] : s->key_counts) {
     if (config_.histogram_min_points > 0 && count < config_.histogram_min_points) {
       ++s->stats.blocks_filtered;
       continue;
     }
-    bool allocated = false;
-    ++s->stats.octree_searches;
-    if (VoxelBlock* block = octree->findOrAllocate(key, &allocated)) {
-      s->found.push_back(block);
-      s->stats.blocks_allocated += allocated;
-    }
+    s->passing.push_back(key);
   }
+}
+
+void BlockLookup::collectDistinctKeys(size_t num_regions) {
+  // Neighbouring regions share most of their blocks (≈10 regions per block at 1 cm): one
+  // octree search per distinct block of the frame instead of one per (region, block).
+  // Open addressing with a per-slot generation, so the table is never cleared.
+  size_t total = 0;
+  for (size_t r = 0; r < num_regions; ++r) total += scratch_[r].passing.size();
+  size_t capacity = 64;
+  while (capacity < 2 * total) capacity *= 2;
+  if (key_table_.size() < capacity) {
+    key_table_.assign(capacity, KeySlot{});
+    key_table_generation_ = 0;
+  }
+  const size_t mask = key_table_.size() - 1;
+  if (++key_table_generation_ == 0) {  // wrapped: stale slots could look current
+    std::fill(key_table_.begin(), key_table_.end(), KeySlot{});
+    key_table_generation_ = 1;
+  }
+  const uint32_t generation = key_table_generation_;
+  frame_keys_.clear();
+  for (size_t r = 0; r < num_regions; ++r)
+    for (const BlockKey& key : scratch_[r].passing) {
+      for (size_t i = BlockKeyHash{}(key) & mask;; i = (i + 1) & mask) {
+        KeySlot& slot = key_table_[i];
+        if (slot.generation != generation) {
+          slot = {key, generation};
+          frame_keys_.push_back(key);
+          break;
+        }
+        if (slot.key == key) break;
+      }
+    }
 }
 
 void BlockLookup::runRegionNaive(const StereoFrame& frame, const cv::Rect& region,
@@ -122,9 +183,10 @@ void BlockLookup::runRegionNaive(const StereoFrame& frame, const cv::Rect& regio
     s->stats.valid_points = 0;  // counted again below
   }
   for (int v = region.y; v < region.y + region.height; ++v) {
+    const float* disparity_row = frame.disparity_px.ptr<float>(v);
     for (int u = region.x; u < region.x + region.width; ++u) {
       BandBox box;
-      if (!bandBoxOfPixel(frame, u, v, &box)) continue;
+      if (!bandBoxOfPixel(disparity_row[u], u, v, &box)) continue;
       ++s->stats.valid_points;
       forEachKeyInBox(box.lo, box.hi, [&](const BlockKey& key) {
         if (filter && !passesFilter(*s, key)) return;
@@ -148,6 +210,7 @@ LookupStats BlockLookup::run(const StereoFrame& frame, BlockOctree* octree,
   if (scratch_.size() < num_regions) scratch_.resize(num_regions);
   geometry_ = pixelGeometry(frame, *octree);
 
+  const bool accelerated = config_.lookup_mode == LookupMode::kAccelerated;
   pool_->parallelFor(num_regions, 4, [&](size_t begin, size_t end) {
     for (size_t r = begin; r < end; ++r) {
       RegionScratch& s = scratch_[r];
@@ -157,30 +220,49 @@ LookupStats BlockLookup::run(const StereoFrame& frame, BlockOctree* octree,
       const int y = static_cast<int>(r / cols) * region_px;
       const cv::Rect region(x, y, std::min(region_px, frame.disparity_px.cols - x),
                             std::min(region_px, frame.disparity_px.rows - y));
-      if (config_.lookup_mode == LookupMode::kAccelerated)
-        runRegionAccelerated(frame, region, octree, &s);
+      if (accelerated)
+        runRegionAccelerated(frame, region, &s);
       else
         runRegionNaive(frame, region, octree, &s);
     }
   });
 
-  // Regions overlap in blocks: keep each block's first find. Stamps are unique across all
-  // BlockLookup instances, so two lookups on one octree never mistake each other's marks.
-  static std::atomic<uint64_t> last_stamp{0};
-  const uint64_t stamp = ++last_stamp;
   LookupStats total;
-  queue->clear();
   for (size_t r = 0; r < num_regions; ++r) {
-    const RegionScratch& s = scratch_[r];
-    for (VoxelBlock* block : s.found) {
-      if (block->lookup_stamp == stamp) continue;
-      block->lookup_stamp = stamp;
-      queue->push_back(block);
+    const LookupStats& stats = scratch_[r].stats;
+    total.valid_points += stats.valid_points;
+    total.octree_searches += stats.octree_searches;
+    total.blocks_allocated += stats.blocks_allocated;
+    total.blocks_filtered += stats.blocks_filtered;
+  }
+  queue->clear();
+  if (accelerated) {
+    collectDistinctKeys(num_regions);
+    frame_blocks_.resize(frame_keys_.size());
+    frame_allocated_.resize(frame_keys_.size());
+    pool_->parallelFor(frame_keys_.size(), 64, [&](size_t begin, size_t end) {
+      for (size_t i = begin; i < end; ++i) {
+        bool allocated = false;
+        frame_blocks_[i] = octree->findOrAllocate(frame_keys_[i], &allocated);
+        frame_allocated_[i] = allocated;
+      }
+    });
+    total.octree_searches += frame_keys_.size();
+    for (size_t i = 0; i < frame_keys_.size(); ++i) {
+      total.blocks_allocated += frame_allocated_[i];
+      if (frame_blocks_[i] != nullptr) queue->push_back(frame_blocks_[i]);
     }
-    total.valid_points += s.stats.valid_points;
-    total.octree_searches += s.stats.octree_searches;
-    total.blocks_allocated += s.stats.blocks_allocated;
-    total.blocks_filtered += s.stats.blocks_filtered;
+  } else {
+    // Regions overlap in blocks: keep each block's first find. Stamps are unique across all
+    // BlockLookup instances, so two lookups on one octree never mistake each other's marks.
+    static std::atomic<uint64_t> last_stamp{0};
+    const uint64_t stamp = ++last_stamp;
+    for (size_t r = 0; r < num_regions; ++r)
+      for (VoxelBlock* block : scratch_[r].found) {
+        if (block->lookup_stamp == stamp) continue;
+        block->lookup_stamp = stamp;
+        queue->push_back(block);
+      }
   }
   std::sort(queue->begin(), queue->end(),
             [](const VoxelBlock* a, const VoxelBlock* b) { return a->key < b->key; });

@@ -25,7 +25,8 @@ struct LookupStats {
 /// blocks reached by fewer than `histogram_min_points` points.
 ///
 /// Naive (Algorithm 1) searches the octree for every (pixel, band block) pair; accelerated
-/// (Algorithm 2) first gathers the distinct blocks of a region and searches each once.
+/// (Algorithm 2) first gathers the distinct blocks of each region (and its histogram), then
+/// searches each distinct block of the whole frame once.
 /// Both produce the same queue. Regions run in parallel on the pool.
 class BlockLookup {
  public:
@@ -36,6 +37,8 @@ class BlockLookup {
   LookupStats run(const StereoFrame& frame, BlockOctree* octree, std::vector<VoxelBlock*>* queue);
 
  private:
+  /// Largest union of a region's band boxes (in blocks) counted on a dense grid (64 KiB).
+  static constexpr int64_t kMaxDenseHistogramCells = 16384;
   struct BandBox {
     BlockKey lo, hi;  // inclusive key range of the blocks a point's band touches
     bool operator==(const BandBox& o) const { return lo == o.lo && hi == o.hi; }
@@ -47,21 +50,32 @@ class BlockLookup {
     Eigen::Vector3d t_world_camera;
     double fb = 0.0, cx = 0.0, cy = 0.0, inv_fx = 0.0, inv_fy = 0.0;
     double inv_block_size = 0.0;                       ///< 1 / block edge, per metre
+    double min_depth_m = 0.0, max_depth_m = 0.0;       ///< usable depth range
+    LevelThresholds levels;                            ///< eq. 3.2 switch depths
     double band_blocks[kNumLevels] = {};               ///< Φ of each level, in blocks
   };
   struct RegionScratch {
     std::vector<std::pair<BandBox, int>> boxes;      // distinct band boxes and their point counts
     std::vector<std::pair<BlockKey, int>> key_counts;  // histogram: points per block
-    std::vector<VoxelBlock*> found;
+    std::vector<int> dense_counts;                     // points per block over the boxes' union
+    std::vector<BlockKey> passing;  // accelerated: blocks that pass the histogram filter
+    std::vector<VoxelBlock*> found;  // naive: blocks found, in search order (with repeats)
     LookupStats stats;
+  };
+  struct KeySlot {
+    BlockKey key;
+    uint32_t generation = 0;  // slot is in use this frame iff equal to key_table_generation_
   };
 
   PixelGeometry pixelGeometry(const StereoFrame& frame, const BlockOctree& octree) const;
-  bool bandBoxOfPixel(const StereoFrame& frame, int u, int v, BandBox* box) const;
+  /// The band box of pixel (u, v) with disparity `d`; false if the pixel has no usable depth.
+  bool bandBoxOfPixel(float d, int u, int v, BandBox* box) const;
   void gatherHistogram(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const;
   bool passesFilter(const RegionScratch& s, const BlockKey& key) const;
-  void runRegionAccelerated(const StereoFrame& frame, const cv::Rect& region, BlockOctree* octree,
-                            RegionScratch* s) const;
+  void runRegionAccelerated(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const;
+  /// frame_keys_ ← the distinct `passing` keys of the first `num_regions` regions, in order of
+  /// first appearance (deterministic).
+  void collectDistinctKeys(size_t num_regions);
   void runRegionNaive(const StereoFrame& frame, const cv::Rect& region, BlockOctree* octree,
                       RegionScratch* s) const;
 
@@ -69,6 +83,12 @@ class BlockLookup {
   ThreadPool* pool_;
   std::vector<RegionScratch> scratch_;  // one per region, reused across frames
   PixelGeometry geometry_;              // of the frame being looked up
+  // Accelerated mode's frame-wide de-duplication, reused across frames.
+  std::vector<KeySlot> key_table_;
+  uint32_t key_table_generation_ = 0;
+  std::vector<BlockKey> frame_keys_;
+  std::vector<VoxelBlock*> frame_blocks_;
+  std::vector<uint8_t> frame_allocated_;
 };
 
 }  // namespace stereo_fusion
