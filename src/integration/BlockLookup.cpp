@@ -3,11 +3,12 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <immintrin.h>
 
 namespace stereo_fusion {
 
-BlockLookup::BlockLookup(const MapperConfig& config, ThreadPool* pool)
-    : config_(config), pool_(pool) {}
+BlockLookup::BlockLookup(const MapperConfig& config, ThreadPool* pool, bool allow_simd)
+    : config_(config), pool_(pool), use_avx2_(allow_simd && __builtin_cpu_supports("avx2")) {}
 
 BlockLookup::PixelGeometry BlockLookup::pixelGeometry(const StereoFrame& frame,
                                                       const BlockOctree& octree) const {
@@ -50,31 +51,103 @@ static void forEachKeyInBox(const BlockKey& lo, const BlockKey& hi, F&& f) {
       for (int32_t x = lo.x; x <= hi.x; ++x) f(BlockKey{x, y, z});
 }
 
+// Counts one more point in `box`. Neighbouring pixels almost always share a band box, so a
+// comparison with the previous box settles most pixels.
+__attribute__((always_inline)) inline void BlockLookup::countBox(const BandBox& box, RegionScratch* s, size_t* last) const {
+  ++s->stats.valid_points;
+  if (*last < s->boxes.size() && s->boxes[*last].first == box) {
+    ++s->boxes[*last].second;
+    return;
+  }
+  auto it = std::find_if(s->boxes.begin(), s->boxes.end(), [&](const auto& entry) { return entry.first == box; });
+  if (it == s->boxes.end()) {
+    s->boxes.emplace_back(box, 1);
+    *last = s->boxes.size() - 1;
+  } else {
+    ++it->second;
+    *last = static_cast<size_t>(it - s->boxes.begin());
+  }
+}
+
+// Four pixels at a time: the same double operations as bandBoxOfPixel() in the same order
+// (no FMA: the target is AVX2 only), so the boxes are identical. Returns the first pixel
+// left for the scalar loop.
+__attribute__((target("avx2"))) int BlockLookup::countRowBoxesAvx2(const float* disparity_row, int u_begin,
+                                                                   int u_end, int v, RegionScratch* s,
+                                                                   size_t* last) const {
+  const PixelGeometry& g = geometry_;
+  const __m256d zero = _mm256_setzero_pd(), infinity = _mm256_set1_pd(HUGE_VAL);
+  const __m256d fb = _mm256_set1_pd(g.fb), min_z = _mm256_set1_pd(g.min_depth_m), max_z = _mm256_set1_pd(g.max_depth_m);
+  const __m256d y_offset = _mm256_set1_pd(v - g.cy), cx = _mm256_set1_pd(g.cx);
+  const __m256d inv_fx = _mm256_set1_pd(g.inv_fx), inv_fy = _mm256_set1_pd(g.inv_fy);
+  const __m256d scale2 = _mm256_set1_pd(g.levels.scale2_min_depth_m), scale4 = _mm256_set1_pd(g.levels.scale4_min_depth_m);
+  const __m256d band0 = _mm256_set1_pd(g.band_blocks[0]), band1 = _mm256_set1_pd(g.band_blocks[1]),
+                band2 = _mm256_set1_pd(g.band_blocks[2]);
+  const __m256d max_key = _mm256_set1_pd(BlockOctree::kMaxKey);
+  const __m256d sign_mask = _mm256_set1_pd(-0.0);
+  __m256d r[3][3], t[3];
+  for (int i = 0; i < 3; ++i) {
+    for (int k = 0; k < 3; ++k) r[i][k] = _mm256_set1_pd(g.R_world_camera(i, k));
+    t[i] = _mm256_set1_pd(g.t_world_camera[i]);
+  }
+  const __m256d inv_block = _mm256_set1_pd(g.inv_block_size);
+  int u = u_begin;
+  for (; u + 4 <= u_end; u += 4) {
+    const __m256d d = _mm256_cvtps_pd(_mm_loadu_ps(disparity_row + u));
+    // d > 0 and finite (NaN fails both ordered comparisons).
+    __m256d valid = _mm256_and_pd(_mm256_cmp_pd(d, zero, _CMP_GT_OQ), _mm256_cmp_pd(d, infinity, _CMP_LT_OQ));
+    if (_mm256_movemask_pd(valid) == 0) continue;
+    const __m256d z = _mm256_div_pd(fb, d);
+    valid = _mm256_and_pd(valid, _mm256_and_pd(_mm256_cmp_pd(z, min_z, _CMP_GE_OQ), _mm256_cmp_pd(z, max_z, _CMP_LE_OQ)));
+    const __m256d u_px = _mm256_cvtepi32_pd(_mm_add_epi32(_mm_set1_epi32(u), _mm_setr_epi32(0, 1, 2, 3)));
+    const __m256d p[3] = {_mm256_mul_pd(_mm256_mul_pd(_mm256_sub_pd(u_px, cx), z), inv_fx),
+                          _mm256_mul_pd(_mm256_mul_pd(y_offset, z), inv_fy), z};
+    // Level of eq. 3.2 → band, lane by lane.
+    const __m256d at_least_2 = _mm256_cmp_pd(z, scale2, _CMP_GE_OQ), at_least_4 = _mm256_cmp_pd(z, scale4, _CMP_GE_OQ);
+    const __m256d band = _mm256_blendv_pd(_mm256_blendv_pd(band0, band1, at_least_2), band2, at_least_4);
+    __m128i lo[3], hi[3];
+    for (int i = 0; i < 3; ++i) {
+      const __m256d world = _mm256_add_pd(
+          _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r[i][0], p[0]), _mm256_mul_pd(r[i][1], p[1])),
+                        _mm256_mul_pd(r[i][2], p[2])),
+          t[i]);
+      const __m256d blocks = _mm256_mul_pd(world, inv_block);
+      const __m256d lo_d = _mm256_floor_pd(_mm256_sub_pd(blocks, band));
+      const __m256d hi_d = _mm256_floor_pd(_mm256_add_pd(blocks, band));
+      // keyInRange(): |key| ≤ kMaxKey (NaN fails).
+      valid = _mm256_and_pd(valid, _mm256_cmp_pd(_mm256_andnot_pd(sign_mask, lo_d), max_key, _CMP_LE_OQ));
+      valid = _mm256_and_pd(valid, _mm256_cmp_pd(_mm256_andnot_pd(sign_mask, hi_d), max_key, _CMP_LE_OQ));
+      lo[i] = _mm256_cvttpd_epi32(lo_d);
+      hi[i] = _mm256_cvttpd_epi32(hi_d);
+    }
+    const int lanes = _mm256_movemask_pd(valid);
+    if (lanes == 0) continue;
+    alignas(16) int32_t lo_k[3][4], hi_k[3][4];
+    for (int i = 0; i < 3; ++i) {
+      _mm_store_si128(reinterpret_cast<__m128i*>(lo_k[i]), lo[i]);
+      _mm_store_si128(reinterpret_cast<__m128i*>(hi_k[i]), hi[i]);
+    }
+    for (int lane = 0; lane < 4; ++lane) {
+      if (!((lanes >> lane) & 1)) continue;
+      const BandBox box{{lo_k[0][lane], lo_k[1][lane], lo_k[2][lane]}, {hi_k[0][lane], hi_k[1][lane], hi_k[2][lane]}};
+      countBox(box, s, last);
+    }
+  }
+  return u;
+}
+
 void BlockLookup::gatherHistogram(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const {
-  // Neighbouring pixels almost always share a band box, so count points per distinct box
-  // first (a comparison with the previous box per pixel) and expand boxes to blocks after.
+  // Count points per distinct band box first and expand boxes to blocks after.
   s->boxes.clear();
   s->key_counts.clear();
   size_t last = 0;
   for (int v = region.y; v < region.y + region.height; ++v) {
     const float* disparity_row = frame.disparity_px.ptr<float>(v);
-    for (int u = region.x; u < region.x + region.width; ++u) {
+    int u = region.x;
+    if (use_avx2_) u = countRowBoxesAvx2(disparity_row, u, region.x + region.width, v, s, &last);
+    for (; u < region.x + region.width; ++u) {
       BandBox box;
-      if (!bandBoxOfPixel(disparity_row[u], u, v, &box)) continue;
-      ++s->stats.valid_points;
-      if (last < s->boxes.size() && s->boxes[last].first == box) {
-        ++s->boxes[last].second;
-        continue;
-      }
-      auto it = std::find_if(s->boxes.begin(), s->boxes.end(),
-                             [&](const auto& entry) { return entry.first == box; });
-      if (it == s->boxes.end()) {
-        s->boxes.emplace_back(box, 1);
-        last = s->boxes.size() - 1;
-      } else {
-        ++it->second;
-        last = static_cast<size_t>(it - s->boxes.begin());
-      }
+      if (bandBoxOfPixel(disparity_row[u], u, v, &box)) countBox(box, s, &last);
     }
   }
   if (s->boxes.empty()) return;

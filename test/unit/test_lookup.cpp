@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <random>
 #include <set>
 #include <tuple>
 
@@ -218,4 +220,52 @@ TEST(BlockLookup, ResultDoesNotDependOnThreadsOrRegionSize) {
       if (reference.empty()) reference = keys;
       EXPECT_EQ(keys, reference) << threads << " threads, region " << region;
     }
+}
+
+TEST(BlockLookup, VectorPathEqualsScalarPathOnHostileFrames) {
+  // The AVX2 path must produce exactly the scalar path's boxes: same queue, same counts, same
+  // histogram decisions, on frames mixing valid disparities with 0, negative, NaN, ±inf,
+  // depths outside [min, max], all three levels, widths that are not multiples of 4, and a
+  // camera so far out that some bands leave the key range.
+  MapperConfig probe;
+  ThreadPool probe_pool(1);
+  if (!BlockLookup(probe, &probe_pool).usesSimd()) GTEST_SKIP() << "CPU without AVX2: only the scalar path exists";
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> disparity(0.5f, 80.0f);
+  std::uniform_int_distribution<int> special(0, 19);
+  const float specials[] = {0.0f, -3.0f, std::nanf(""), HUGE_VALF, -HUGE_VALF, 1e-30f, 1e30f};
+  for (int trial = 0; trial < 12; ++trial) {
+    const int width = 61 + trial, height = 37 + 2 * trial;
+    const StereoCamera camera = *StereoCamera::create(width, height, 60.0, 62.0, width * 0.45, height * 0.55, 0.12);
+    StereoFrame frame = constantDepthFrame(camera, 0.0f);
+    for (int v = 0; v < height; ++v)
+      for (int u = 0; u < width; ++u) {
+        const int pick = special(rng);
+        frame.disparity_px.at<float>(v, u) = pick < 7 ? specials[pick] : disparity(rng);
+      }
+    Eigen::Vector3d axis = Eigen::Vector3d::Random().normalized();
+    frame.T_world_camera = Eigen::AngleAxisd(0.3 * trial, axis);
+    frame.T_world_camera.translation() = Eigen::Vector3d::Random() * 3.0;
+    // The last trial (1 cm voxels, 8 cm blocks) sits 2 m inside the key range's edge.
+    if (trial == 11) frame.T_world_camera.translation().x() = BlockOctree::kMaxKey * 0.08 - 2.0;
+    for (int histogram : {0, 3}) {
+      MapperConfig config;
+      config.voxel_size_m = trial % 2 ? 0.01 : 0.04;
+      config.histogram_min_points = histogram;
+      config.lookup_region_px = 8 + trial;
+      ThreadPool pool(2);
+      BlockOctree scalar_tree(config.blockSizeM()), vector_tree(config.blockSizeM());
+      BlockLookup scalar(config, &pool, /*allow_simd=*/false), vector(config, &pool);
+      ASSERT_FALSE(scalar.usesSimd());
+      std::vector<VoxelBlock*> scalar_queue, vector_queue;
+      const LookupStats s = scalar.run(frame, &scalar_tree, &scalar_queue);
+      const LookupStats v = vector.run(frame, &vector_tree, &vector_queue);
+      EXPECT_GT(s.valid_points, 0u);
+      EXPECT_EQ(keysOf(scalar_queue), keysOf(vector_queue)) << "trial " << trial;
+      EXPECT_EQ(s.valid_points, v.valid_points);
+      EXPECT_EQ(s.octree_searches, v.octree_searches);
+      EXPECT_EQ(s.blocks_allocated, v.blocks_allocated);
+      EXPECT_EQ(s.blocks_filtered, v.blocks_filtered);
+    }
+  }
 }

@@ -30,7 +30,12 @@ struct LookupStats {
 /// Both produce the same queue. Regions run in parallel on the pool.
 class BlockLookup {
  public:
-  BlockLookup(const MapperConfig& config, ThreadPool* pool);
+  /// `allow_simd` = false keeps to the scalar per-pixel path even where the CPU has AVX2 (the
+  /// vector path gives identical results; tests compare the two).
+  BlockLookup(const MapperConfig& config, ThreadPool* pool, bool allow_simd = true);
+
+  /// Whether this lookup uses the AVX2 per-pixel path.
+  bool usesSimd() const { return use_avx2_; }
 
   /// Fills `queue` with the distinct blocks to update, sorted by key (deterministic).
   /// The frame must have passed validateFrame().
@@ -70,6 +75,9 @@ class BlockLookup {
   PixelGeometry pixelGeometry(const StereoFrame& frame, const BlockOctree& octree) const;
   /// The band box of pixel (u, v) with disparity `d`; false if the pixel has no usable depth.
   bool bandBoxOfPixel(float d, int u, int v, BandBox* box) const;
+  void countBox(const BandBox& box, RegionScratch* s, size_t* last) const;
+  int countRowBoxesAvx2(const float* disparity_row, int u_begin, int u_end, int v, RegionScratch* s,
+                        size_t* last) const;
   void gatherHistogram(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const;
   bool passesFilter(const RegionScratch& s, const BlockKey& key) const;
   void runRegionAccelerated(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const;
@@ -81,6 +89,7 @@ class BlockLookup {
 
   MapperConfig config_;
   ThreadPool* pool_;
+  bool use_avx2_;
   std::vector<RegionScratch> scratch_;  // one per region, reused across frames
   PixelGeometry geometry_;              // of the frame being looked up
   // Accelerated mode's frame-wide de-duplication, reused across frames.
