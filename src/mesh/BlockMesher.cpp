@@ -136,18 +136,82 @@ enum SampleState : uint8_t { kUnknown = 0, kObserved = 1, kUnobserved = 2 };
 /// Bit flags: a box's corner codes OR to 3 iff both signs occur.
 enum CoreCode : uint8_t { kCoreUnobserved = 0, kCoreNegative = 1, kCoreNonNegative = 2, kCoreMixed = 3 };
 
+/// Edge key → vertex index for one owner: open addressing over a power-of-two table. Slots
+/// carry the stamp of the mesh() call that wrote them, so starting the next owner is O(1)
+/// instead of freeing one hash node per vertex as std::unordered_map::clear() did.
+class VertexTable {
+ public:
+  /// Forgets every entry (the next owner starts empty).
+  void reset() {
+    if (slots_.empty()) slots_.resize(kInitialSlots);
+    if (++stamp_ == 0) {  // wrapped: stale stamps could match again
+      for (Slot& slot : slots_) slot.stamp = 0;
+      stamp_ = 1;
+    }
+    used_ = 0;
+  }
+
+  /// The vertex stored for `key`, or `next_vertex` after storing it (`*inserted` tells which).
+  uint32_t findOrInsert(uint64_t key, uint32_t next_vertex, bool* inserted) {
+    if (2 * (used_ + 1) > slots_.size()) grow();
+    const size_t mask = slots_.size() - 1;
+    for (size_t i = slotOf(key);; i = (i + 1) & mask) {
+      Slot& slot = slots_[i];
+      if (slot.stamp != stamp_) {
+        slot = {key, next_vertex, stamp_};
+        ++used_;
+        *inserted = true;
+        return next_vertex;
+      }
+      if (slot.key == key) {
+        *inserted = false;
+        return slot.vertex;
+      }
+    }
+  }
+
+ private:
+  struct Slot {
+    uint64_t key;
+    uint32_t vertex;
+    uint32_t stamp;  // entry is live iff stamp == stamp_
+  };
+  static constexpr size_t kInitialSlots = 1024;
+
+  size_t slotOf(uint64_t key) const {
+    // Fibonacci hashing: the top bits of the product mix all of the key's 36 bits.
+    const int bits = __builtin_ctzll(slots_.size());
+    return static_cast<size_t>((key * 0x9E3779B97F4A7C15ull) >> (64 - bits));
+  }
+
+  void grow() {
+    std::vector<Slot> old(2 * slots_.size(), Slot{0, 0, 0});
+    old.swap(slots_);
+    const size_t mask = slots_.size() - 1;
+    for (const Slot& slot : old) {
+      if (slot.stamp != stamp_) continue;
+      size_t i = slotOf(slot.key);
+      while (slots_[i].stamp == stamp_) i = (i + 1) & mask;
+      slots_[i] = slot;
+    }
+  }
+
+  std::vector<Slot> slots_;
+  uint32_t stamp_ = 0;
+  size_t used_ = 0;
+};
+
 /// Per-thread buffers reused across mesh() calls, so the hot path does not allocate.
 struct MeshScratch {
   std::vector<uint8_t> sample_state;           // SampleState per lattice grid point
-  std::vector<float> sample_sdf;               // per grid point, valid when kObserved
-  std::vector<std::array<float, 3>> sample_rgb;
+  std::vector<BlockMesher::PointSample> samples;  // per grid point, valid when kObserved
   // Generic-box scratch.
   std::vector<std::array<int, 3>> points;
   std::vector<std::vector<int>> polygons;  // only the first `polygon_count` are in use
   std::vector<int> grid_u, grid_v, lines, hanging;
   std::vector<float> values;
   std::vector<std::array<mc::Crossing, 3>> triangles;
-  std::unordered_map<uint64_t, uint32_t> vertex_of;
+  VertexTable vertex_of;
 };
 }  // namespace
 
@@ -156,24 +220,27 @@ struct BlockMesher::Context {
   int level[8] = {};
   int step[8] = {};
   bool uniform = true;  // every present neighbour has the owner's level
+  bool sample_uniform = false;  // uniform, fast paths on: sampleUniformPoint() for samples
   float truncated_abs = 0.0f;  // 0.99 · Φ of the coarsest level present
   int64_t origin[3] = {};
   double unit = 0.0;
   SubMesh* out = nullptr;
   MeshScratch* scratch = nullptr;
-  std::unordered_map<uint64_t, uint32_t>* vertex_of = nullptr;  // edge → vertex, per owner
+  VertexTable* vertex_of = nullptr;                              // edge → vertex, per owner
   std::vector<PointSample>* vertex_samples = nullptr;            // generic-box scratch
   // Sample cache. Every point the mesher samples is a block face coordinate (16) or a voxel
   // centre of a present block on each axis; those coordinates get a dense grid index so
   // that each point is sampled once per owner instead of once per box using it.
-  int8_t grid_index[3][kAxisCoords] = {};  // −1: coordinate not in the grid
-  int grid_coords[3][kAxisCoords] = {};     // grid index → coordinate, ascending
+  // (The arrays below have no initialisers: each is filled before it is read, and zeroing
+  // ~2 KiB per owner showed up in the profile.)
+  int8_t grid_index[3][kAxisCoords];  // −1: coordinate not in the grid
+  int grid_coords[3][kAxisCoords];     // grid index → coordinate, ascending
   int grid_dim[3] = {};
   // Lattice points on lines along each axis, as bit masks over the coordinate u (bit u set:
   // a present block touching the line has a voxel centre at u). Indexed [axis][class of the
   // next axis' coordinate][class of the one after][u ≥ 16], class 0 below the block face
   // (only offset-0 blocks touch), 1 on it (both), 2 above (only offset-1 blocks).
-  uint64_t line_points[3][3][3][2] = {};
+  uint64_t line_points[3][3][3][2];
 
   void buildLinePoints() {
     for (int axis = 0; axis < 3; ++axis)
@@ -207,7 +274,7 @@ struct BlockMesher::Context {
 
   // Sign class of each owner voxel centre's sample (kCoreUnobserved / kCoreNegative /
   // kCoreNonNegative), for the core-box pre-test; indexed like the owner's level.
-  uint8_t core_code[kFinestSide * kFinestSide * kFinestSide] = {};
+  uint8_t core_code[kFinestSide * kFinestSide * kFinestSide];
 
   /// Fills core_code with the sign of exactly the value samplePoint() computes at an owner
   /// centre (one block, weight 1/s: the same float operations in the same order).
@@ -251,9 +318,9 @@ struct BlockMesher::Context {
   // support, two consecutive indices per axis starting at the box's start index (a core box
   // [c_i, c_i+1] starts at i; both skins around the face, [c_side-1, 16] and [16, 16 + s],
   // start at side-1). Bit i of a row mask describes the centre (i, j, k).
-  uint16_t row_negative[kFinestSide + 1][kFinestSide + 1] = {};     // [k][j]
-  uint16_t row_nonnegative[kFinestSide + 1][kFinestSide + 1] = {};  // [k][j]
-  uint16_t row_unobserved[kFinestSide + 1][kFinestSide + 1] = {};   // [k][j], incl. absent blocks
+  uint16_t row_negative[kFinestSide + 1][kFinestSide + 1];     // [k][j]
+  uint16_t row_nonnegative[kFinestSide + 1][kFinestSide + 1];  // [k][j]
+  uint16_t row_unobserved[kFinestSide + 1][kFinestSide + 1];   // [k][j], incl. absent blocks
 
   /// Fills the row masks (uniform neighbourhoods only). A centre counts as negative only when
   /// sdf < −1e-30, so that the weighted sums of samplePoint() cannot underflow to −0 (which
@@ -306,6 +373,40 @@ struct BlockMesher::Context {
     return static_cast<uint16_t>(((pair_neg & pair_nonneg) | pair_unknown) & ~pair_unobserved);
   }
 
+  /// samplePoint() for uniform neighbourhoods, reading the voxels by index. Every point a
+  /// uniform box uses is, per axis, an owner centre (one voxel), the block face (the last
+  /// centre below it and the first above) or the +neighbour's first centre; blockField()
+  /// returns exactly that voxel's value for each touching block (at most +0 instead of −0,
+  /// which `acc`, starting at +0, absorbs either way). The sums below are samplePoint()'s float
+  /// operations in its order (z, y, x outer to inner), so the result is the same bits.
+  bool sampleUniformPoint(const int q[3], PointSample* out) const {
+    const int level = this->level[0];
+    const int shift = level + 1, side = levelSide(level);
+    int first[3], last[3], low_index[3];  // low_index: the voxel index in the offset-0 block
+    for (int a = 0; a < 3; ++a) {
+      incidentRange(q[a], &first[a], &last[a]);
+      low_index[a] = q[a] >= kBlockUnits ? side - 1 : (q[a] - step[0]) >> shift;
+    }
+    const float w = 1.0f / static_cast<float>(step[0]);
+    float weight_sum = 0.0f, acc = 0.0f, acc_rgb[3] = {0, 0, 0};
+    for (int dz = first[2]; dz <= last[2]; ++dz)
+      for (int dy = first[1]; dy <= last[1]; ++dy)
+        for (int dx = first[0]; dx <= last[0]; ++dx) {
+          const VoxelBlock* block = nb[dx + 2 * dy + 4 * dz];
+          if (block == nullptr) return false;
+          const Voxel& v = block->at(level, dx ? 0 : low_index[0], dy ? 0 : low_index[1], dz ? 0 : low_index[2]);
+          if (!(v.weight > 0.0f)) return false;
+          weight_sum += w;
+          acc += w * v.sdf_m;
+          acc_rgb[0] += w * static_cast<float>(v.r);
+          acc_rgb[1] += w * static_cast<float>(v.g);
+          acc_rgb[2] += w * static_cast<float>(v.b);
+        }
+    out->sdf = acc / weight_sum;
+    for (int k = 0; k < 3; ++k) out->rgb[k] = acc_rgb[k] / weight_sum;
+    return true;
+  }
+
   /// Builds the grid's coordinates from the present blocks' levels (call after nb/step).
   void buildSampleGrid() {
     for (int a = 0; a < 3; ++a) {
@@ -325,10 +426,7 @@ struct BlockMesher::Context {
     }
     const size_t n = static_cast<size_t>(grid_dim[0]) * grid_dim[1] * grid_dim[2];
     scratch->sample_state.assign(n, kUnknown);
-    if (scratch->sample_sdf.size() < n) {
-      scratch->sample_sdf.resize(n);
-      scratch->sample_rgb.resize(n);
-    }
+    if (scratch->samples.size() < n) scratch->samples.resize(n);
   }
 };
 
@@ -399,8 +497,9 @@ uint32_t BlockMesher::vertexOnEdge(Context& ctx, const int p[3], const PointSamp
   const PointSample& sa = swap ? sq : sp;
   const PointSample& sb = swap ? sp : sq;
   const uint64_t key = (packPoint(a) << 18) | packPoint(b);
-  auto [it, inserted] = ctx.vertex_of->try_emplace(key, static_cast<uint32_t>(ctx.out->positions.size()));
-  if (!inserted) return it->second;
+  bool inserted = false;
+  const uint32_t vertex = ctx.vertex_of->findOrInsert(key, static_cast<uint32_t>(ctx.out->positions.size()), &inserted);
+  if (!inserted) return vertex;
   // Eq. 2.11–2.12: k = (α − s1)/(s2 − s1) with α = 0. Kept off the end points so distinct
   // edges never produce coincident vertices.
   const float t = std::clamp(sa.sdf / (sa.sdf - sb.sdf), 1e-3f, 1.0f - 1e-3f);
@@ -415,7 +514,7 @@ uint32_t BlockMesher::vertexOnEdge(Context& ctx, const int p[3], const PointSamp
   for (int k = 0; k < 3; ++k)
     rgb[k] = static_cast<uint8_t>(std::clamp(sa.rgb[k] + t * (sb.rgb[k] - sa.rgb[k]) + 0.5f, 0.0f, 255.0f));
   ctx.out->colors.push_back(rgb);
-  return it->second;
+  return vertex;
 }
 
 bool BlockMesher::cachedSample(Context& ctx, const int q[3], PointSample* out) const {
@@ -423,16 +522,14 @@ bool BlockMesher::cachedSample(Context& ctx, const int q[3], PointSample* out) c
   if ((gx | gy | gz) < 0) return samplePoint(ctx, q[0], q[1], q[2], out);  // not expected
   const size_t g = (static_cast<size_t>(gz) * ctx.grid_dim[1] + gy) * ctx.grid_dim[0] + gx;
   MeshScratch& m = *ctx.scratch;
-  if (m.sample_state[g] == kUnknown) {
-    PointSample sample;
-    const bool observed = samplePoint(ctx, q[0], q[1], q[2], &sample);
-    m.sample_state[g] = observed ? kObserved : kUnobserved;
-    m.sample_sdf[g] = sample.sdf;
-    m.sample_rgb[g] = {sample.rgb[0], sample.rgb[1], sample.rgb[2]};
+  uint8_t& state = m.sample_state[g];
+  if (state == kUnknown) {
+    const bool observed = ctx.sample_uniform ? ctx.sampleUniformPoint(q, &m.samples[g])
+                                             : samplePoint(ctx, q[0], q[1], q[2], &m.samples[g]);
+    state = observed ? kObserved : kUnobserved;
   }
-  if (m.sample_state[g] != kObserved) return false;
-  out->sdf = m.sample_sdf[g];
-  for (int k = 0; k < 3; ++k) out->rgb[k] = m.sample_rgb[g][k];
+  if (state != kObserved) return false;
+  *out = m.samples[g];
   return true;
 }
 
@@ -618,7 +715,7 @@ void BlockMesher::mesh(const BlockOctree& map, const VoxelBlock& owner, SubMesh*
   Context ctx;
   ctx.out = out;
   ctx.scratch = &scratch;
-  scratch.vertex_of.clear();
+  scratch.vertex_of.reset();
   ctx.vertex_of = &scratch.vertex_of;
   ctx.vertex_samples = &vertex_samples;
   ctx.unit = params_.voxel_size_m / 2.0;
@@ -652,6 +749,11 @@ void BlockMesher::mesh(const BlockOctree& map, const VoxelBlock& owner, SubMesh*
 }
 
 void BlockMesher::meshUniformBoxes(Context& ctx) const {
+  if (!params_.fast_paths) {
+    meshMixedBoxes(ctx);  // the general path, for tests comparing the two
+    return;
+  }
+  ctx.sample_uniform = true;
   ctx.buildRowMasks();
   const int step = ctx.step[0], side = kFinestSide / step;
   // Box extents per axis by start index; the last start has two boxes (own skin, neighbour skin).

@@ -17,6 +17,10 @@ struct MeshingParams {
   /// A block is sampled at the finest level whose observed area is at least this share of
   /// the largest observed area among its levels (see chooseMeshLevel()).
   double level_min_coverage = 0.8;
+  /// Test switch: false meshes every neighbourhood through the general path (every box
+  /// visited, every point sampled by samplePoint()). The fast paths must produce the same
+  /// bits; test_block_mesher_fast_paths compares the two.
+  bool fast_paths = true;
 };
 
 /// The level a block is meshed at: the finest level whose observed surface area (observed
@@ -70,12 +74,17 @@ class BlockMesher {
 
  private:
   struct Context;
+ public:
+  /// One lattice point's fused value (public only for the per-thread scratch buffers).
   struct PointSample {
     float sdf = 0.0f;
     float rgb[3] = {0, 0, 0};
   };
+
+ private:
   /// Boxes of a neighbourhood whose blocks all share the owner's level: only the boxes whose
-  /// support centres are observed and change sign are visited (row bit masks).
+  /// support centres are observed and change sign are visited (row bit masks), and points
+  /// are sampled by voxel index. With MeshingParams::fast_paths off: meshMixedBoxes().
   void meshUniformBoxes(Context& ctx) const;
   /// Boxes of a neighbourhood with several levels (hanging points on shared faces).
   void meshMixedBoxes(Context& ctx) const;
