@@ -220,7 +220,6 @@ struct BlockMesher::Context {
   int level[8] = {};
   int step[8] = {};
   bool uniform = true;  // every present neighbour has the owner's level
-  bool sample_uniform = false;  // uniform, fast paths on: sampleUniformPoint() for samples
   float truncated_abs = 0.0f;  // 0.99 · Φ of the coarsest level present
   int64_t origin[3] = {};
   double unit = 0.0;
@@ -357,16 +356,19 @@ struct BlockMesher::Context {
   /// support centre is unobserved (some corner is unobserved: meshBox() gives up) or the
   /// support has one sign (every corner, a convex combination of it, has that sign).
   uint16_t candidateStarts(int j, int k) const {
-    uint16_t neg = 0, nonneg = 0, unobserved = 0;
+    // `unknown` per row, then combined: a centre near 0 in one row must not be hidden by a
+    // classified centre of the same column in another row (that skipped boxes with a
+    // corner in (−1e-30, 0) and both signs among their corners).
+    uint16_t neg = 0, nonneg = 0, unobserved = 0, unknown = 0;  // unknown: near 0 (or unobserved)
     for (int dk = 0; dk < 2; ++dk)
       for (int dj = 0; dj < 2; ++dj) {
         neg |= row_negative[k + dk][j + dj];
         nonneg |= row_nonnegative[k + dk][j + dj];
         unobserved |= row_unobserved[k + dk][j + dj];
+        unknown |= static_cast<uint16_t>(~(row_negative[k + dk][j + dj] | row_nonnegative[k + dk][j + dj]));
       }
     // Over pairs (i, i+1): a candidate has no unobserved centre, and both signs or a centre
     // too near 0 to classify.
-    const uint16_t unknown = static_cast<uint16_t>(~(neg | nonneg));  // near 0 (or unobserved)
     const uint16_t pair_neg = neg | (neg >> 1), pair_nonneg = nonneg | (nonneg >> 1);
     const uint16_t pair_unknown = unknown | (unknown >> 1);
     const uint16_t pair_unobserved = unobserved | (unobserved >> 1);
@@ -524,9 +526,7 @@ bool BlockMesher::cachedSample(Context& ctx, const int q[3], PointSample* out) c
   MeshScratch& m = *ctx.scratch;
   uint8_t& state = m.sample_state[g];
   if (state == kUnknown) {
-    const bool observed = ctx.sample_uniform ? ctx.sampleUniformPoint(q, &m.samples[g])
-                                             : samplePoint(ctx, q[0], q[1], q[2], &m.samples[g]);
-    state = observed ? kObserved : kUnobserved;
+    state = samplePoint(ctx, q[0], q[1], q[2], &m.samples[g]) ? kObserved : kUnobserved;
   }
   if (state != kObserved) return false;
   *out = m.samples[g];
@@ -601,6 +601,29 @@ void BlockMesher::meshBox(Context& ctx, const int lo[3], const int hi[3]) const 
   meshGenericBox(ctx, lo, hi);
 }
 
+void BlockMesher::meshUniformBox(Context& ctx, const int lo[3], const int hi[3], const int grid_lo[3]) const {
+  // meshBox() for a uniform neighbourhood (every box plain), with the corners' cache slots
+  // computed from the grid indices instead of looked up per coordinate.
+  MeshScratch& m = *ctx.scratch;
+  const size_t stride_y = ctx.grid_dim[0], stride_z = stride_y * ctx.grid_dim[1];
+  const size_t base = grid_lo[0] + stride_y * grid_lo[1] + stride_z * grid_lo[2];
+  int corner[8][3];
+  PointSample s[8];
+  int case_index = 0;
+  for (int c = 0; c < 8; ++c) {
+    corner[c][0] = (c & 1) ? hi[0] : lo[0];
+    corner[c][1] = (c & 2) ? hi[1] : lo[1];
+    corner[c][2] = (c & 4) ? hi[2] : lo[2];
+    const size_t g = base + (c & 1) + ((c >> 1) & 1) * stride_y + (c >> 2) * stride_z;
+    uint8_t& state = m.sample_state[g];
+    if (state == kUnknown) state = ctx.sampleUniformPoint(corner[c], &m.samples[g]) ? kObserved : kUnobserved;
+    if (state != kObserved) return;
+    s[c] = m.samples[g];
+    case_index |= (s[c].sdf >= 0.0f) << c;
+  }
+  if (case_index != 0 && case_index != 255) meshPlainBox(ctx, corner, s);
+}
+
 void BlockMesher::meshPlainBox(Context& ctx, const int corner[8][3], const PointSample s[8]) const {
   int case_index = 0;
   for (int c = 0; c < 8; ++c) case_index |= (s[c].sdf >= 0.0f) << c;
@@ -610,11 +633,20 @@ void BlockMesher::meshPlainBox(Context& ctx, const int corner[8][3], const Point
     if ((va >= 0.0f) != (vb >= 0.0f) && std::min(std::abs(va), std::abs(vb)) >= ctx.truncated_abs)
       return;  // truncation-band edge, not a surface
   }
+  // Most crossing edges serve two triangles of the box: look each up once. (The first use of
+  // an edge still comes first, so vertices are numbered as before.)
+  constexpr uint32_t kNoVertex = ~uint32_t{0};
+  uint32_t edge_vertex[12];
+  std::fill(std::begin(edge_vertex), std::end(edge_vertex), kNoVertex);
   for (const auto& tri : mc::caseTable().triangles[case_index]) {
     std::array<uint32_t, 3> t;
     for (int v = 0; v < 3; ++v) {
-      const mc::CubeEdge& e = edges[tri[v]];
-      t[v] = vertexOnEdge(ctx, corner[e.corner_a], s[e.corner_a], corner[e.corner_b], s[e.corner_b]);
+      uint32_t& vertex = edge_vertex[tri[v]];
+      if (vertex == kNoVertex) {
+        const mc::CubeEdge& e = edges[tri[v]];
+        vertex = vertexOnEdge(ctx, corner[e.corner_a], s[e.corner_a], corner[e.corner_b], s[e.corner_b]);
+      }
+      t[v] = vertex;
     }
     ctx.out->triangles.push_back(t);
   }
@@ -753,17 +785,20 @@ void BlockMesher::meshUniformBoxes(Context& ctx) const {
     meshMixedBoxes(ctx);  // the general path, for tests comparing the two
     return;
   }
-  ctx.sample_uniform = true;
   ctx.buildRowMasks();
   const int step = ctx.step[0], side = kFinestSide / step;
   // Box extents per axis by start index; the last start has two boxes (own skin, neighbour skin).
-  auto interval = [&](int start, bool neighbour_side, int* lo, int* hi) {
+  // Grid indices (buildSampleGrid() on a uniform neighbourhood): centre i → i, the face →
+  // side, the +neighbour's first centre → side + 1; a box's high index is its low one + 1.
+  auto interval = [&](int start, bool neighbour_side, int* lo, int* hi, int* grid_lo) {
     if (neighbour_side) {
       *lo = kBlockUnits;
       *hi = kBlockUnits + step;
+      *grid_lo = side;
     } else {
       *lo = step * (2 * start + 1);
       *hi = start + 1 < side ? step * (2 * start + 3) : kBlockUnits;
+      *grid_lo = start;
     }
   };
   // Same box order as meshMixedBoxes(): by block d, then z, y, x — the submesh's vertex and
@@ -780,11 +815,11 @@ void BlockMesher::meshUniformBoxes(Context& ctx) const {
       for (int j = first[1]; j <= last[1]; ++j)
         for (uint16_t bits = ctx.candidateStarts(j, k) & x_range; bits != 0; bits &= bits - 1) {
           const int i = __builtin_ctz(bits);
-          int lo[3], hi[3];
-          interval(i, d & 1, &lo[0], &hi[0]);
-          interval(j, (d >> 1) & 1, &lo[1], &hi[1]);
-          interval(k, (d >> 2) & 1, &lo[2], &hi[2]);
-          meshBox(ctx, lo, hi);
+          int lo[3], hi[3], grid_lo[3];
+          interval(i, d & 1, &lo[0], &hi[0], &grid_lo[0]);
+          interval(j, (d >> 1) & 1, &lo[1], &hi[1], &grid_lo[1]);
+          interval(k, (d >> 2) & 1, &lo[2], &hi[2], &grid_lo[2]);
+          meshUniformBox(ctx, lo, hi, grid_lo);
         }
   }
 }

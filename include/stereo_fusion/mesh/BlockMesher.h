@@ -93,6 +93,7 @@ class BlockMesher {
   bool cachedSample(Context& ctx, const int q[3], PointSample* out) const;
   bool boxHasNoSurface(Context& ctx, const int lo[3], const int hi[3]) const;
   bool boxIsPlain(const Context& ctx, const int lo[3], const int hi[3]) const;
+  void meshUniformBox(Context& ctx, const int lo[3], const int hi[3], const int grid_lo[3]) const;
   void meshPlainBox(Context& ctx, const int corner[8][3], const PointSample s[8]) const;
   void meshGenericBox(Context& ctx, const int lo[3], const int hi[3]) const;
   void meshBox(Context& ctx, const int lo[3], const int hi[3]) const;
