@@ -133,6 +133,44 @@ constexpr int kAxisCoords = 2 * kBlockUnits + 1;
 constexpr int kMaxBoxCoord = kBlockUnits + (1 << (kNumLevels - 1));
 
 enum SampleState : uint8_t { kUnknown = 0, kObserved = 1, kUnobserved = 2 };
+
+/// For a block at `level` whose offset on one axis is `offset` (0 or 1), the voxel indices
+/// on that axis that blockField() weighs (non-zero weight) at lattice coordinate q, as a bit
+/// mask; 0 when samplePoint() does not include that block at q (incidentRange()).
+struct SupportIndexTable {
+  uint8_t bits[kNumLevels][kAxisCoords][2] = {};
+
+  SupportIndexTable() {
+    for (int level = 0; level < kNumLevels; ++level) {
+      const int step = 1 << level, side = levelSide(level), den = 2 * step;
+      for (int q = 0; q < kAxisCoords; ++q)
+        for (int offset = 0; offset < 2; ++offset) {
+          int first, last;
+          incidentRange(q, &first, &last);
+          if (offset < first || offset > last) continue;
+          // blockField()'s clamping: the last centre and beyond weigh voxel side-1 alone;
+          // elsewhere a centre weighs one voxel and a point between centres two.
+          const int num = std::clamp(q - kBlockUnits * offset - step, 0, (side - 1) * den);
+          const int i0 = num / den;
+          const bool between = num % den != 0;
+          bits[level][q][offset] = static_cast<uint8_t>((1u << i0) | (between ? 2u << i0 : 0u));
+        }
+    }
+  }
+};
+
+const SupportIndexTable& supportIndexTable() {
+  static const SupportIndexTable table;
+  return table;
+}
+
+/// What the voxel masks tell about one lattice point's sample before it is computed.
+enum PointClass : uint8_t {
+  kPointUnobserved = 0,      // a weighed voxel is unobserved or a touching block is absent
+  kPointUndecided = 1,       // observed, sign not known without summing
+  kPointNegative = 2,        // observed, every weighed voxel < −1e-30: the sum is < 0
+  kPointNonNegative = 3,     // observed, every weighed voxel ≥ 0 (−0 included): the sum is ≥ 0
+};
 /// Bit flags: a box's corner codes OR to 3 iff both signs occur.
 enum CoreCode : uint8_t { kCoreUnobserved = 0, kCoreNegative = 1, kCoreNonNegative = 2, kCoreMixed = 3 };
 
@@ -407,6 +445,63 @@ struct BlockMesher::Context {
     out->sdf = acc / weight_sum;
     for (int k = 0; k < 3; ++k) out->rgb[k] = acc_rgb[k] / weight_sum;
     return true;
+  }
+
+  // Mixed neighbourhoods: per present block, bit masks over i of its own mesh level's row
+  // (j, k), built on first use (rows_ready bit j + 8k); the same classes as the row masks of
+  // uniform neighbourhoods.
+  uint8_t mask_unobserved[8][kFinestSide][kFinestSide];   // [d][k][j]
+  uint8_t mask_negative[8][kFinestSide][kFinestSide];     // [d][k][j], sdf < −1e-30
+  uint8_t mask_nonnegative[8][kFinestSide][kFinestSide];  // [d][k][j], sdf ≥ 0
+  uint64_t rows_ready[8] = {};
+
+  void ensureMaskRow(int d, int j, int k) {
+    const uint64_t row_bit = uint64_t{1} << (j + kFinestSide * k);
+    if (rows_ready[d] & row_bit) return;
+    rows_ready[d] |= row_bit;
+    const int side = levelSide(level[d]);
+    const Voxel* row = &nb[d]->voxels[levelOffset(level[d]) + (j + k * side) * side];
+    uint8_t unobserved = 0, negative = 0, nonnegative = 0;
+    for (int i = 0; i < side; ++i) {
+      const uint8_t bit = static_cast<uint8_t>(1u << i);
+      if (!(row[i].weight > 0.0f))
+        unobserved |= bit;
+      else if (row[i].sdf_m >= 0.0f)
+        nonnegative |= bit;
+      else if (row[i].sdf_m < -1e-30f)
+        negative |= bit;
+    }
+    mask_unobserved[d][k][j] = unobserved;
+    mask_negative[d][k][j] = negative;
+    mask_nonnegative[d][k][j] = nonnegative;
+  }
+
+  /// Classifies the sample samplePoint() would compute at q from the voxel masks alone: every
+  /// touching block's weighed voxels (the product of SupportIndexTable's per-axis sets).
+  PointClass classifyPoint(const int q[3]) {
+    const SupportIndexTable& table = supportIndexTable();
+    int first[3], last[3];
+    for (int a = 0; a < 3; ++a) incidentRange(q[a], &first[a], &last[a]);
+    bool all_negative = true, all_nonnegative = true;
+    for (int dz = first[2]; dz <= last[2]; ++dz)
+      for (int dy = first[1]; dy <= last[1]; ++dy)
+        for (int dx = first[0]; dx <= last[0]; ++dx) {
+          const int d = dx + 2 * dy + 4 * dz;
+          if (nb[d] == nullptr) return kPointUnobserved;
+          const int m = level[d];
+          const uint8_t is = table.bits[m][q[0]][dx];
+          const uint8_t js = table.bits[m][q[1]][dy];
+          const uint8_t ks = table.bits[m][q[2]][dz];
+          for (unsigned kb = ks; kb != 0; kb &= kb - 1)
+            for (unsigned jb = js; jb != 0; jb &= jb - 1) {
+              const int j = __builtin_ctz(jb), k = __builtin_ctz(kb);
+              ensureMaskRow(d, j, k);
+              if (mask_unobserved[d][k][j] & is) return kPointUnobserved;
+              all_negative &= (is & ~mask_negative[d][k][j]) == 0;
+              all_nonnegative &= (is & ~mask_nonnegative[d][k][j]) == 0;
+            }
+        }
+    return all_negative ? kPointNegative : (all_nonnegative ? kPointNonNegative : kPointUndecided);
   }
 
   /// Builds the grid's coordinates from the present blocks' levels (call after nb/step).
@@ -852,9 +947,25 @@ void BlockMesher::meshMixedBoxes(Context& ctx) const {
           const int hi[3] = {intervals[0][ix].second, intervals[1][iy].second, intervals[2][iz].second};
           const bool core = d == 0 && hi[0] < kBlockUnits && hi[1] < kBlockUnits && hi[2] < kBlockUnits;
           if (core && ctx.coreBoxIsEmpty(lo)) continue;  // most boxes: no voxel-level sign change
+          if (params_.fast_paths && mixedBoxIsEmpty(ctx, lo, hi)) continue;
           meshBox(ctx, lo, hi);
         }
   }
+}
+
+bool BlockMesher::mixedBoxIsEmpty(Context& ctx, const int lo[3], const int hi[3]) const {
+  // meshBox() returns without output at an unobserved corner, and on a plain box whose corners
+  // share one sign; both are read off the voxel masks here without summing any sample.
+  bool all_negative = true, all_nonnegative = true;
+  for (int c = 0; c < 8; ++c) {
+    const int q[3] = {(c & 1) ? hi[0] : lo[0], (c & 2) ? hi[1] : lo[1], (c & 4) ? hi[2] : lo[2]};
+    const PointClass point = ctx.classifyPoint(q);
+    if (point == kPointUnobserved) return true;
+    all_negative &= point == kPointNegative;
+    all_nonnegative &= point == kPointNonNegative;
+  }
+  // A box with hanging points can change sign between its corners: meshBox() decides.
+  return (all_negative || all_nonnegative) && boxIsPlain(ctx, lo, hi);
 }
 
 void BlockMesher::computeNormals(SubMesh* out) {

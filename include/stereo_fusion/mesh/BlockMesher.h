@@ -86,8 +86,13 @@ class BlockMesher {
   /// support centres are observed and change sign are visited (row bit masks), and points
   /// are sampled by voxel index. With MeshingParams::fast_paths off: meshMixedBoxes().
   void meshUniformBoxes(Context& ctx) const;
-  /// Boxes of a neighbourhood with several levels (hanging points on shared faces).
+  /// Boxes of a neighbourhood with several levels (hanging points on shared faces). With
+  /// MeshingParams::fast_paths on, boxes are pre-tested on voxel masks (mixedBoxIsEmpty()).
   void meshMixedBoxes(Context& ctx) const;
+  /// True if meshBox() would certainly add nothing for this box of a mixed neighbourhood
+  /// (an unobserved corner, or a plain box with one sign at all corners), decided on voxel
+  /// bit masks without sampling; false when in doubt.
+  bool mixedBoxIsEmpty(Context& ctx, const int lo[3], const int hi[3]) const;
   static void computeNormals(SubMesh* out);
   bool samplePoint(const Context& ctx, int qx, int qy, int qz, PointSample* out) const;
   bool cachedSample(Context& ctx, const int q[3], PointSample* out) const;
