@@ -164,12 +164,12 @@ const SupportIndexTable& supportIndexTable() {
   return table;
 }
 
-/// What the voxel masks tell about one lattice point's sample before it is computed.
+/// What the voxel masks tell about lattice points' samples before they are computed.
 enum PointClass : uint8_t {
-  kPointUnobserved = 0,      // a weighed voxel is unobserved or a touching block is absent
-  kPointUndecided = 1,       // observed, sign not known without summing
-  kPointNegative = 2,        // observed, every weighed voxel < −1e-30: the sum is < 0
-  kPointNonNegative = 3,     // observed, every weighed voxel ≥ 0 (−0 included): the sum is ≥ 0
+  kPointUnobserved = 0,   // a weighed voxel is unobserved or a touching block is absent
+  kPointUndecided = 1,    // observed, sign not known without summing
+  kPointNegative = 2,     // observed, every weighed voxel < −1e-30: each sum is < 0
+  kPointNonNegative = 3,  // observed, every weighed voxel ≥ 0 (−0 included): each sum is ≥ 0
 };
 /// Bit flags: a box's corner codes OR to 3 iff both signs occur.
 enum CoreCode : uint8_t { kCoreUnobserved = 0, kCoreNegative = 1, kCoreNonNegative = 2, kCoreMixed = 3 };
@@ -422,12 +422,23 @@ struct BlockMesher::Context {
   bool sampleUniformPoint(const int q[3], PointSample* out) const {
     const int level = this->level[0];
     const int shift = level + 1, side = levelSide(level);
+    const float w = 1.0f / static_cast<float>(step[0]);
+    if (q[0] < kBlockUnits && q[1] < kBlockUnits && q[2] < kBlockUnits) {
+      // An owner centre, the most common point: one voxel, the loop below unrolled.
+      const Voxel& v = nb[0]->at(level, (q[0] - step[0]) >> shift, (q[1] - step[0]) >> shift, (q[2] - step[0]) >> shift);
+      if (!(v.weight > 0.0f)) return false;
+      const float weight_sum = 0.0f + w;
+      out->sdf = (0.0f + w * v.sdf_m) / weight_sum;
+      out->rgb[0] = (0.0f + w * static_cast<float>(v.r)) / weight_sum;
+      out->rgb[1] = (0.0f + w * static_cast<float>(v.g)) / weight_sum;
+      out->rgb[2] = (0.0f + w * static_cast<float>(v.b)) / weight_sum;
+      return true;
+    }
     int first[3], last[3], low_index[3];  // low_index: the voxel index in the offset-0 block
     for (int a = 0; a < 3; ++a) {
       incidentRange(q[a], &first[a], &last[a]);
       low_index[a] = q[a] >= kBlockUnits ? side - 1 : (q[a] - step[0]) >> shift;
     }
-    const float w = 1.0f / static_cast<float>(step[0]);
     float weight_sum = 0.0f, acc = 0.0f, acc_rgb[3] = {0, 0, 0};
     for (int dz = first[2]; dz <= last[2]; ++dz)
       for (int dy = first[1]; dy <= last[1]; ++dy)
@@ -476,22 +487,23 @@ struct BlockMesher::Context {
     mask_nonnegative[d][k][j] = nonnegative;
   }
 
-  /// Classifies the sample samplePoint() would compute at q from the voxel masks alone: every
-  /// touching block's weighed voxels (the product of SupportIndexTable's per-axis sets).
-  PointClass classifyPoint(const int q[3]) {
+  /// What the voxel masks tell about the 8 corner samples of box [lo, hi] together: some
+  /// corner unobserved, all certainly negative, all certainly non-negative, or undecided.
+  /// Exact set algebra, no sampling: a block touching the box is incident to a product set
+  /// of corners, so the voxels it weighs at them are the product of the per-axis unions of
+  /// SupportIndexTable's index sets at lo and hi.
+  PointClass classifyBoxCorners(const int lo[3], const int hi[3]) {
     const SupportIndexTable& table = supportIndexTable();
-    int first[3], last[3];
-    for (int a = 0; a < 3; ++a) incidentRange(q[a], &first[a], &last[a]);
     bool all_negative = true, all_nonnegative = true;
-    for (int dz = first[2]; dz <= last[2]; ++dz)
-      for (int dy = first[1]; dy <= last[1]; ++dy)
-        for (int dx = first[0]; dx <= last[0]; ++dx) {
+    for (int dz = lo[2] <= kBlockUnits ? 0 : 1; dz <= (hi[2] >= kBlockUnits ? 1 : 0); ++dz)
+      for (int dy = lo[1] <= kBlockUnits ? 0 : 1; dy <= (hi[1] >= kBlockUnits ? 1 : 0); ++dy)
+        for (int dx = lo[0] <= kBlockUnits ? 0 : 1; dx <= (hi[0] >= kBlockUnits ? 1 : 0); ++dx) {
           const int d = dx + 2 * dy + 4 * dz;
           if (nb[d] == nullptr) return kPointUnobserved;
-          const int m = level[d];
-          const uint8_t is = table.bits[m][q[0]][dx];
-          const uint8_t js = table.bits[m][q[1]][dy];
-          const uint8_t ks = table.bits[m][q[2]][dz];
+          const auto& bits = table.bits[level[d]];
+          const uint8_t is = bits[lo[0]][dx] | bits[hi[0]][dx];
+          const uint8_t js = bits[lo[1]][dy] | bits[hi[1]][dy];
+          const uint8_t ks = bits[lo[2]][dz] | bits[hi[2]][dz];
           for (unsigned kb = ks; kb != 0; kb &= kb - 1)
             for (unsigned jb = js; jb != 0; jb &= jb - 1) {
               const int j = __builtin_ctz(jb), k = __builtin_ctz(kb);
@@ -560,11 +572,6 @@ void BlockMesher::collectHangingPoints(const Context& ctx, int axis, const int f
   points->clear();
   for (uint64_t bits = ctx.hangingBits(axis, fixed, u0, u1); bits != 0; bits &= bits - 1)
     points->push_back(__builtin_ctzll(bits));
-}
-
-bool BlockMesher::hasHangingPoints(const Context& ctx, int axis, const int fixed[3], int u0,
-                                   int u1) const {
-  return ctx.hangingBits(axis, fixed, u0, u1) != 0;
 }
 
 void BlockMesher::faceGridLines(const Context& ctx, int normal_axis, int line_axis, const int lo[3],
@@ -658,7 +665,7 @@ bool BlockMesher::boxIsPlain(const Context& ctx, const int lo[3], const int hi[3
       fixed[a] = (c & 1) ? hi[a] : lo[a];
       fixed[b] = (c & 2) ? hi[b] : lo[b];
       fixed[axis] = lo[axis];
-      if (hasHangingPoints(ctx, axis, fixed, lo[axis], hi[axis])) return false;
+      if (ctx.hangingBits(axis, fixed, lo[axis], hi[axis]) != 0) return false;
     }
   for (int axis = 0; axis < 3; ++axis)
     for (int side = 0; side < 2; ++side) {
@@ -667,7 +674,7 @@ bool BlockMesher::boxIsPlain(const Context& ctx, const int lo[3], const int hi[3
         const int line_axis = (axis + k) % 3;
         int fixed[3];
         faceInteriorLine(axis, line_axis, lo, fixed);
-        if (hasHangingPoints(ctx, line_axis, fixed, lo[line_axis], hi[line_axis])) return false;
+        if (ctx.hangingBits(line_axis, fixed, lo[line_axis], hi[line_axis]) != 0) return false;
       }
     }
   return true;
@@ -955,17 +962,14 @@ void BlockMesher::meshMixedBoxes(Context& ctx) const {
 
 bool BlockMesher::mixedBoxIsEmpty(Context& ctx, const int lo[3], const int hi[3]) const {
   // meshBox() returns without output at an unobserved corner, and on a plain box whose corners
-  // share one sign; both are read off the voxel masks here without summing any sample.
-  bool all_negative = true, all_nonnegative = true;
-  for (int c = 0; c < 8; ++c) {
-    const int q[3] = {(c & 1) ? hi[0] : lo[0], (c & 2) ? hi[1] : lo[1], (c & 4) ? hi[2] : lo[2]};
-    const PointClass point = ctx.classifyPoint(q);
-    if (point == kPointUnobserved) return true;
-    all_negative &= point == kPointNegative;
-    all_nonnegative &= point == kPointNonNegative;
+  // share one sign; both are read off the voxel masks here without summing any sample. A box
+  // with hanging points can change sign between its corners: meshBox() decides.
+  switch (ctx.classifyBoxCorners(lo, hi)) {
+    case kPointUnobserved: return true;
+    case kPointNegative:
+    case kPointNonNegative: return boxIsPlain(ctx, lo, hi);
+    default: return false;
   }
-  // A box with hanging points can change sign between its corners: meshBox() decides.
-  return (all_negative || all_nonnegative) && boxIsPlain(ctx, lo, hi);
 }
 
 void BlockMesher::computeNormals(SubMesh* out) {

@@ -104,7 +104,6 @@ class BlockMesher {
   void meshBox(Context& ctx, const int lo[3], const int hi[3]) const;
   void collectHangingPoints(const Context& ctx, int axis, const int fixed[3], int u0, int u1,
                             std::vector<int>* points) const;
-  bool hasHangingPoints(const Context& ctx, int axis, const int fixed[3], int u0, int u1) const;
   void faceGridLines(const Context& ctx, int normal_axis, int line_axis, const int lo[3],
                      const int hi[3], std::vector<int>* lines) const;
   static void faceInteriorLine(int normal_axis, int line_axis, const int lo[3], int fixed[3]);
