@@ -64,6 +64,10 @@ void refreshMeshLevel(VoxelBlock* block, double level_min_coverage);
 /// dense per-owner grid over the coordinates in use); core boxes are pre-tested on the
 /// owner's voxel signs; every box is rejected on its 8 corners before any hanging-point
 /// work; hanging points come from per-owner bit masks; scratch buffers are per thread.
+/// Uniform neighbourhoods visit only boxes whose support changes sign (row bit masks) and
+/// sample voxels by index; mixed ones reject boxes with an unobserved corner or one sign on
+/// per-block voxel masks before sampling; edge → vertex is a flat stamped table. The
+/// general path stays reachable (MeshingParams::fast_paths) and a test compares the two.
 class BlockMesher {
  public:
   explicit BlockMesher(const MeshingParams& params);
