@@ -180,7 +180,7 @@ enum CoreCode : uint8_t { kCoreUnobserved = 0, kCoreNegative = 1, kCoreNonNegati
 class VertexTable {
  public:
   /// Forgets every entry (the next owner starts empty).
-  void reset() {
+  void clear() {
     if (slots_.empty()) slots_.resize(kInitialSlots);
     if (++stamp_ == 0) {  // wrapped: stale stamps could match again
       for (Slot& slot : slots_) slot.stamp = 0;
@@ -849,7 +849,7 @@ void BlockMesher::mesh(const BlockOctree& map, const VoxelBlock& owner, SubMesh*
   Context ctx;
   ctx.out = out;
   ctx.scratch = &scratch;
-  scratch.vertex_of.reset();
+  scratch.vertex_of.clear();
   ctx.vertex_of = &scratch.vertex_of;
   ctx.vertex_samples = &vertex_samples;
   ctx.unit = params_.voxel_size_m / 2.0;
