@@ -133,21 +133,123 @@ constexpr int kAxisCoords = 2 * kBlockUnits + 1;
 constexpr int kMaxBoxCoord = kBlockUnits + (1 << (kNumLevels - 1));
 
 enum SampleState : uint8_t { kUnknown = 0, kObserved = 1, kUnobserved = 2 };
+
+/// For a block at `level` whose offset on one axis is `offset` (0 or 1), the voxel indices
+/// on that axis that blockField() weighs (non-zero weight) at lattice coordinate q, as a bit
+/// mask; 0 when samplePoint() does not include that block at q (incidentRange()).
+struct SupportIndexTable {
+  uint8_t bits[kNumLevels][kAxisCoords][2] = {};
+
+  SupportIndexTable() {
+    for (int level = 0; level < kNumLevels; ++level) {
+      const int step = 1 << level, side = levelSide(level), den = 2 * step;
+      for (int q = 0; q < kAxisCoords; ++q)
+        for (int offset = 0; offset < 2; ++offset) {
+          int first, last;
+          incidentRange(q, &first, &last);
+          if (offset < first || offset > last) continue;
+          // blockField()'s clamping: the last centre and beyond weigh voxel side-1 alone;
+          // elsewhere a centre weighs one voxel and a point between centres two.
+          const int num = std::clamp(q - kBlockUnits * offset - step, 0, (side - 1) * den);
+          const int i0 = num / den;
+          const bool between = num % den != 0;
+          bits[level][q][offset] = static_cast<uint8_t>((1u << i0) | (between ? 2u << i0 : 0u));
+        }
+    }
+  }
+};
+
+const SupportIndexTable& supportIndexTable() {
+  static const SupportIndexTable table;
+  return table;
+}
+
+/// What the voxel masks tell about lattice points' samples before they are computed.
+enum PointClass : uint8_t {
+  kPointUnobserved = 0,   // a weighed voxel is unobserved or a touching block is absent
+  kPointUndecided = 1,    // observed, sign not known without summing
+  kPointNegative = 2,     // observed, every weighed voxel < −1e-30: each sum is < 0
+  kPointNonNegative = 3,  // observed, every weighed voxel ≥ 0 (−0 included): each sum is ≥ 0
+};
 /// Bit flags: a box's corner codes OR to 3 iff both signs occur.
 enum CoreCode : uint8_t { kCoreUnobserved = 0, kCoreNegative = 1, kCoreNonNegative = 2, kCoreMixed = 3 };
+
+/// Edge key → vertex index for one owner: open addressing over a power-of-two table. Slots
+/// carry the stamp of the mesh() call that wrote them, so starting the next owner is O(1)
+/// instead of freeing one hash node per vertex as std::unordered_map::clear() did.
+class VertexTable {
+ public:
+  /// Forgets every entry (the next owner starts empty).
+  void clear() {
+    if (slots_.empty()) slots_.resize(kInitialSlots);
+    if (++stamp_ == 0) {  // wrapped: stale stamps could match again
+      for (Slot& slot : slots_) slot.stamp = 0;
+      stamp_ = 1;
+    }
+    used_ = 0;
+  }
+
+  /// The vertex stored for `key`, or `next_vertex` after storing it (`*inserted` tells which).
+  uint32_t findOrInsert(uint64_t key, uint32_t next_vertex, bool* inserted) {
+    if (2 * (used_ + 1) > slots_.size()) grow();
+    const size_t mask = slots_.size() - 1;
+    for (size_t i = slotOf(key);; i = (i + 1) & mask) {
+      Slot& slot = slots_[i];
+      if (slot.stamp != stamp_) {
+        slot = {key, next_vertex, stamp_};
+        ++used_;
+        *inserted = true;
+        return next_vertex;
+      }
+      if (slot.key == key) {
+        *inserted = false;
+        return slot.vertex;
+      }
+    }
+  }
+
+ private:
+  struct Slot {
+    uint64_t key;
+    uint32_t vertex;
+    uint32_t stamp;  // entry is live iff stamp == stamp_
+  };
+  static constexpr size_t kInitialSlots = 1024;
+
+  size_t slotOf(uint64_t key) const {
+    // Fibonacci hashing: the top bits of the product mix all of the key's 36 bits.
+    const int bits = __builtin_ctzll(slots_.size());
+    return static_cast<size_t>((key * 0x9E3779B97F4A7C15ull) >> (64 - bits));
+  }
+
+  void grow() {
+    std::vector<Slot> old(2 * slots_.size(), Slot{0, 0, 0});
+    old.swap(slots_);
+    const size_t mask = slots_.size() - 1;
+    for (const Slot& slot : old) {
+      if (slot.stamp != stamp_) continue;
+      size_t i = slotOf(slot.key);
+      while (slots_[i].stamp == stamp_) i = (i + 1) & mask;
+      slots_[i] = slot;
+    }
+  }
+
+  std::vector<Slot> slots_;
+  uint32_t stamp_ = 0;
+  size_t used_ = 0;
+};
 
 /// Per-thread buffers reused across mesh() calls, so the hot path does not allocate.
 struct MeshScratch {
   std::vector<uint8_t> sample_state;           // SampleState per lattice grid point
-  std::vector<float> sample_sdf;               // per grid point, valid when kObserved
-  std::vector<std::array<float, 3>> sample_rgb;
+  std::vector<BlockMesher::PointSample> samples;  // per grid point, valid when kObserved
   // Generic-box scratch.
   std::vector<std::array<int, 3>> points;
   std::vector<std::vector<int>> polygons;  // only the first `polygon_count` are in use
   std::vector<int> grid_u, grid_v, lines, hanging;
   std::vector<float> values;
   std::vector<std::array<mc::Crossing, 3>> triangles;
-  std::unordered_map<uint64_t, uint32_t> vertex_of;
+  VertexTable vertex_of;
 };
 }  // namespace
 
@@ -161,19 +263,21 @@ struct BlockMesher::Context {
   double unit = 0.0;
   SubMesh* out = nullptr;
   MeshScratch* scratch = nullptr;
-  std::unordered_map<uint64_t, uint32_t>* vertex_of = nullptr;  // edge → vertex, per owner
+  VertexTable* vertex_of = nullptr;                              // edge → vertex, per owner
   std::vector<PointSample>* vertex_samples = nullptr;            // generic-box scratch
   // Sample cache. Every point the mesher samples is a block face coordinate (16) or a voxel
   // centre of a present block on each axis; those coordinates get a dense grid index so
   // that each point is sampled once per owner instead of once per box using it.
-  int8_t grid_index[3][kAxisCoords] = {};  // −1: coordinate not in the grid
-  int grid_coords[3][kAxisCoords] = {};     // grid index → coordinate, ascending
+  // (The arrays below have no initialisers: each is filled before it is read, and zeroing
+  // ~2 KiB per owner showed up in the profile.)
+  int8_t grid_index[3][kAxisCoords];  // −1: coordinate not in the grid
+  int grid_coords[3][kAxisCoords];     // grid index → coordinate, ascending
   int grid_dim[3] = {};
   // Lattice points on lines along each axis, as bit masks over the coordinate u (bit u set:
   // a present block touching the line has a voxel centre at u). Indexed [axis][class of the
   // next axis' coordinate][class of the one after][u ≥ 16], class 0 below the block face
   // (only offset-0 blocks touch), 1 on it (both), 2 above (only offset-1 blocks).
-  uint64_t line_points[3][3][3][2] = {};
+  uint64_t line_points[3][3][3][2];
 
   void buildLinePoints() {
     for (int axis = 0; axis < 3; ++axis)
@@ -207,7 +311,7 @@ struct BlockMesher::Context {
 
   // Sign class of each owner voxel centre's sample (kCoreUnobserved / kCoreNegative /
   // kCoreNonNegative), for the core-box pre-test; indexed like the owner's level.
-  uint8_t core_code[kFinestSide * kFinestSide * kFinestSide] = {};
+  uint8_t core_code[kFinestSide * kFinestSide * kFinestSide];
 
   /// Fills core_code with the sign of exactly the value samplePoint() computes at an owner
   /// centre (one block, weight 1/s: the same float operations in the same order).
@@ -251,9 +355,9 @@ struct BlockMesher::Context {
   // support, two consecutive indices per axis starting at the box's start index (a core box
   // [c_i, c_i+1] starts at i; both skins around the face, [c_side-1, 16] and [16, 16 + s],
   // start at side-1). Bit i of a row mask describes the centre (i, j, k).
-  uint16_t row_negative[kFinestSide + 1][kFinestSide + 1] = {};     // [k][j]
-  uint16_t row_nonnegative[kFinestSide + 1][kFinestSide + 1] = {};  // [k][j]
-  uint16_t row_unobserved[kFinestSide + 1][kFinestSide + 1] = {};   // [k][j], incl. absent blocks
+  uint16_t row_negative[kFinestSide + 1][kFinestSide + 1];     // [k][j]
+  uint16_t row_nonnegative[kFinestSide + 1][kFinestSide + 1];  // [k][j]
+  uint16_t row_unobserved[kFinestSide + 1][kFinestSide + 1];   // [k][j], incl. absent blocks
 
   /// Fills the row masks (uniform neighbourhoods only). A centre counts as negative only when
   /// sdf < −1e-30, so that the weighted sums of samplePoint() cannot underflow to −0 (which
@@ -290,20 +394,126 @@ struct BlockMesher::Context {
   /// support centre is unobserved (some corner is unobserved: meshBox() gives up) or the
   /// support has one sign (every corner, a convex combination of it, has that sign).
   uint16_t candidateStarts(int j, int k) const {
-    uint16_t neg = 0, nonneg = 0, unobserved = 0;
+    // `unknown` per row, then combined: a centre near 0 in one row must not be hidden by a
+    // classified centre of the same column in another row (that skipped boxes with a
+    // corner in (−1e-30, 0) and both signs among their corners).
+    uint16_t neg = 0, nonneg = 0, unobserved = 0, unknown = 0;  // unknown: near 0 (or unobserved)
     for (int dk = 0; dk < 2; ++dk)
       for (int dj = 0; dj < 2; ++dj) {
         neg |= row_negative[k + dk][j + dj];
         nonneg |= row_nonnegative[k + dk][j + dj];
         unobserved |= row_unobserved[k + dk][j + dj];
+        unknown |= static_cast<uint16_t>(~(row_negative[k + dk][j + dj] | row_nonnegative[k + dk][j + dj]));
       }
     // Over pairs (i, i+1): a candidate has no unobserved centre, and both signs or a centre
     // too near 0 to classify.
-    const uint16_t unknown = static_cast<uint16_t>(~(neg | nonneg));  // near 0 (or unobserved)
     const uint16_t pair_neg = neg | (neg >> 1), pair_nonneg = nonneg | (nonneg >> 1);
     const uint16_t pair_unknown = unknown | (unknown >> 1);
     const uint16_t pair_unobserved = unobserved | (unobserved >> 1);
     return static_cast<uint16_t>(((pair_neg & pair_nonneg) | pair_unknown) & ~pair_unobserved);
+  }
+
+  /// samplePoint() for uniform neighbourhoods, reading the voxels by index. Every point a
+  /// uniform box uses is, per axis, an owner centre (one voxel), the block face (the last
+  /// centre below it and the first above) or the +neighbour's first centre; blockField()
+  /// returns exactly that voxel's value for each touching block (at most +0 instead of −0,
+  /// which `acc`, starting at +0, absorbs either way). The sums below are samplePoint()'s float
+  /// operations in its order (z, y, x outer to inner), so the result is the same bits.
+  bool sampleUniformPoint(const int q[3], PointSample* out) const {
+    const int level = this->level[0];
+    const int shift = level + 1, side = levelSide(level);
+    const float w = 1.0f / static_cast<float>(step[0]);
+    if (q[0] < kBlockUnits && q[1] < kBlockUnits && q[2] < kBlockUnits) {
+      // An owner centre, the most common point: one voxel, the loop below unrolled.
+      const Voxel& v = nb[0]->at(level, (q[0] - step[0]) >> shift, (q[1] - step[0]) >> shift, (q[2] - step[0]) >> shift);
+      if (!(v.weight > 0.0f)) return false;
+      const float weight_sum = 0.0f + w;
+      out->sdf = (0.0f + w * v.sdf_m) / weight_sum;
+      out->rgb[0] = (0.0f + w * static_cast<float>(v.r)) / weight_sum;
+      out->rgb[1] = (0.0f + w * static_cast<float>(v.g)) / weight_sum;
+      out->rgb[2] = (0.0f + w * static_cast<float>(v.b)) / weight_sum;
+      return true;
+    }
+    int first[3], last[3], low_index[3];  // low_index: the voxel index in the offset-0 block
+    for (int a = 0; a < 3; ++a) {
+      incidentRange(q[a], &first[a], &last[a]);
+      low_index[a] = q[a] >= kBlockUnits ? side - 1 : (q[a] - step[0]) >> shift;
+    }
+    float weight_sum = 0.0f, acc = 0.0f, acc_rgb[3] = {0, 0, 0};
+    for (int dz = first[2]; dz <= last[2]; ++dz)
+      for (int dy = first[1]; dy <= last[1]; ++dy)
+        for (int dx = first[0]; dx <= last[0]; ++dx) {
+          const VoxelBlock* block = nb[dx + 2 * dy + 4 * dz];
+          if (block == nullptr) return false;
+          const Voxel& v = block->at(level, dx ? 0 : low_index[0], dy ? 0 : low_index[1], dz ? 0 : low_index[2]);
+          if (!(v.weight > 0.0f)) return false;
+          weight_sum += w;
+          acc += w * v.sdf_m;
+          acc_rgb[0] += w * static_cast<float>(v.r);
+          acc_rgb[1] += w * static_cast<float>(v.g);
+          acc_rgb[2] += w * static_cast<float>(v.b);
+        }
+    out->sdf = acc / weight_sum;
+    for (int k = 0; k < 3; ++k) out->rgb[k] = acc_rgb[k] / weight_sum;
+    return true;
+  }
+
+  // Mixed neighbourhoods: per present block, bit masks over i of its own mesh level's row
+  // (j, k), built on first use (rows_ready bit j + 8k); the same classes as the row masks of
+  // uniform neighbourhoods.
+  uint8_t mask_unobserved[8][kFinestSide][kFinestSide];   // [d][k][j]
+  uint8_t mask_negative[8][kFinestSide][kFinestSide];     // [d][k][j], sdf < −1e-30
+  uint8_t mask_nonnegative[8][kFinestSide][kFinestSide];  // [d][k][j], sdf ≥ 0
+  uint64_t rows_ready[8] = {};
+
+  void ensureMaskRow(int d, int j, int k) {
+    const uint64_t row_bit = uint64_t{1} << (j + kFinestSide * k);
+    if (rows_ready[d] & row_bit) return;
+    rows_ready[d] |= row_bit;
+    const int side = levelSide(level[d]);
+    const Voxel* row = &nb[d]->voxels[levelOffset(level[d]) + (j + k * side) * side];
+    uint8_t unobserved = 0, negative = 0, nonnegative = 0;
+    for (int i = 0; i < side; ++i) {
+      const uint8_t bit = static_cast<uint8_t>(1u << i);
+      if (!(row[i].weight > 0.0f))
+        unobserved |= bit;
+      else if (row[i].sdf_m >= 0.0f)
+        nonnegative |= bit;
+      else if (row[i].sdf_m < -1e-30f)
+        negative |= bit;
+    }
+    mask_unobserved[d][k][j] = unobserved;
+    mask_negative[d][k][j] = negative;
+    mask_nonnegative[d][k][j] = nonnegative;
+  }
+
+  /// What the voxel masks tell about the 8 corner samples of box [lo, hi] together: some
+  /// corner unobserved, all certainly negative, all certainly non-negative, or undecided.
+  /// Exact set algebra, no sampling: a block touching the box is incident to a product set
+  /// of corners, so the voxels it weighs at them are the product of the per-axis unions of
+  /// SupportIndexTable's index sets at lo and hi.
+  PointClass classifyBoxCorners(const int lo[3], const int hi[3]) {
+    const SupportIndexTable& table = supportIndexTable();
+    bool all_negative = true, all_nonnegative = true;
+    for (int dz = lo[2] <= kBlockUnits ? 0 : 1; dz <= (hi[2] >= kBlockUnits ? 1 : 0); ++dz)
+      for (int dy = lo[1] <= kBlockUnits ? 0 : 1; dy <= (hi[1] >= kBlockUnits ? 1 : 0); ++dy)
+        for (int dx = lo[0] <= kBlockUnits ? 0 : 1; dx <= (hi[0] >= kBlockUnits ? 1 : 0); ++dx) {
+          const int d = dx + 2 * dy + 4 * dz;
+          if (nb[d] == nullptr) return kPointUnobserved;
+          const auto& bits = table.bits[level[d]];
+          const uint8_t is = bits[lo[0]][dx] | bits[hi[0]][dx];
+          const uint8_t js = bits[lo[1]][dy] | bits[hi[1]][dy];
+          const uint8_t ks = bits[lo[2]][dz] | bits[hi[2]][dz];
+          for (unsigned kb = ks; kb != 0; kb &= kb - 1)
+            for (unsigned jb = js; jb != 0; jb &= jb - 1) {
+              const int j = __builtin_ctz(jb), k = __builtin_ctz(kb);
+              ensureMaskRow(d, j, k);
+              if (mask_unobserved[d][k][j] & is) return kPointUnobserved;
+              all_negative &= (is & ~mask_negative[d][k][j]) == 0;
+              all_nonnegative &= (is & ~mask_nonnegative[d][k][j]) == 0;
+            }
+        }
+    return all_negative ? kPointNegative : (all_nonnegative ? kPointNonNegative : kPointUndecided);
   }
 
   /// Builds the grid's coordinates from the present blocks' levels (call after nb/step).
@@ -325,10 +535,7 @@ struct BlockMesher::Context {
     }
     const size_t n = static_cast<size_t>(grid_dim[0]) * grid_dim[1] * grid_dim[2];
     scratch->sample_state.assign(n, kUnknown);
-    if (scratch->sample_sdf.size() < n) {
-      scratch->sample_sdf.resize(n);
-      scratch->sample_rgb.resize(n);
-    }
+    if (scratch->samples.size() < n) scratch->samples.resize(n);
   }
 };
 
@@ -367,11 +574,6 @@ void BlockMesher::collectHangingPoints(const Context& ctx, int axis, const int f
     points->push_back(__builtin_ctzll(bits));
 }
 
-bool BlockMesher::hasHangingPoints(const Context& ctx, int axis, const int fixed[3], int u0,
-                                   int u1) const {
-  return ctx.hangingBits(axis, fixed, u0, u1) != 0;
-}
-
 void BlockMesher::faceGridLines(const Context& ctx, int normal_axis, int line_axis, const int lo[3],
                                 const int hi[3], std::vector<int>* lines) const {
   int fixed[3];
@@ -399,8 +601,9 @@ uint32_t BlockMesher::vertexOnEdge(Context& ctx, const int p[3], const PointSamp
   const PointSample& sa = swap ? sq : sp;
   const PointSample& sb = swap ? sp : sq;
   const uint64_t key = (packPoint(a) << 18) | packPoint(b);
-  auto [it, inserted] = ctx.vertex_of->try_emplace(key, static_cast<uint32_t>(ctx.out->positions.size()));
-  if (!inserted) return it->second;
+  bool inserted = false;
+  const uint32_t vertex = ctx.vertex_of->findOrInsert(key, static_cast<uint32_t>(ctx.out->positions.size()), &inserted);
+  if (!inserted) return vertex;
   // Eq. 2.11–2.12: k = (α − s1)/(s2 − s1) with α = 0. Kept off the end points so distinct
   // edges never produce coincident vertices.
   const float t = std::clamp(sa.sdf / (sa.sdf - sb.sdf), 1e-3f, 1.0f - 1e-3f);
@@ -415,7 +618,7 @@ uint32_t BlockMesher::vertexOnEdge(Context& ctx, const int p[3], const PointSamp
   for (int k = 0; k < 3; ++k)
     rgb[k] = static_cast<uint8_t>(std::clamp(sa.rgb[k] + t * (sb.rgb[k] - sa.rgb[k]) + 0.5f, 0.0f, 255.0f));
   ctx.out->colors.push_back(rgb);
-  return it->second;
+  return vertex;
 }
 
 bool BlockMesher::cachedSample(Context& ctx, const int q[3], PointSample* out) const {
@@ -423,16 +626,12 @@ bool BlockMesher::cachedSample(Context& ctx, const int q[3], PointSample* out) c
   if ((gx | gy | gz) < 0) return samplePoint(ctx, q[0], q[1], q[2], out);  // not expected
   const size_t g = (static_cast<size_t>(gz) * ctx.grid_dim[1] + gy) * ctx.grid_dim[0] + gx;
   MeshScratch& m = *ctx.scratch;
-  if (m.sample_state[g] == kUnknown) {
-    PointSample sample;
-    const bool observed = samplePoint(ctx, q[0], q[1], q[2], &sample);
-    m.sample_state[g] = observed ? kObserved : kUnobserved;
-    m.sample_sdf[g] = sample.sdf;
-    m.sample_rgb[g] = {sample.rgb[0], sample.rgb[1], sample.rgb[2]};
+  uint8_t& state = m.sample_state[g];
+  if (state == kUnknown) {
+    state = samplePoint(ctx, q[0], q[1], q[2], &m.samples[g]) ? kObserved : kUnobserved;
   }
-  if (m.sample_state[g] != kObserved) return false;
-  out->sdf = m.sample_sdf[g];
-  for (int k = 0; k < 3; ++k) out->rgb[k] = m.sample_rgb[g][k];
+  if (state != kObserved) return false;
+  *out = m.samples[g];
   return true;
 }
 
@@ -466,7 +665,7 @@ bool BlockMesher::boxIsPlain(const Context& ctx, const int lo[3], const int hi[3
       fixed[a] = (c & 1) ? hi[a] : lo[a];
       fixed[b] = (c & 2) ? hi[b] : lo[b];
       fixed[axis] = lo[axis];
-      if (hasHangingPoints(ctx, axis, fixed, lo[axis], hi[axis])) return false;
+      if (ctx.hangingBits(axis, fixed, lo[axis], hi[axis]) != 0) return false;
     }
   for (int axis = 0; axis < 3; ++axis)
     for (int side = 0; side < 2; ++side) {
@@ -475,7 +674,7 @@ bool BlockMesher::boxIsPlain(const Context& ctx, const int lo[3], const int hi[3
         const int line_axis = (axis + k) % 3;
         int fixed[3];
         faceInteriorLine(axis, line_axis, lo, fixed);
-        if (hasHangingPoints(ctx, line_axis, fixed, lo[line_axis], hi[line_axis])) return false;
+        if (ctx.hangingBits(line_axis, fixed, lo[line_axis], hi[line_axis]) != 0) return false;
       }
     }
   return true;
@@ -504,6 +703,29 @@ void BlockMesher::meshBox(Context& ctx, const int lo[3], const int hi[3]) const 
   meshGenericBox(ctx, lo, hi);
 }
 
+void BlockMesher::meshUniformBox(Context& ctx, const int lo[3], const int hi[3], const int grid_lo[3]) const {
+  // meshBox() for a uniform neighbourhood (every box plain), with the corners' cache slots
+  // computed from the grid indices instead of looked up per coordinate.
+  MeshScratch& m = *ctx.scratch;
+  const size_t stride_y = ctx.grid_dim[0], stride_z = stride_y * ctx.grid_dim[1];
+  const size_t base = grid_lo[0] + stride_y * grid_lo[1] + stride_z * grid_lo[2];
+  int corner[8][3];
+  PointSample s[8];
+  int case_index = 0;
+  for (int c = 0; c < 8; ++c) {
+    corner[c][0] = (c & 1) ? hi[0] : lo[0];
+    corner[c][1] = (c & 2) ? hi[1] : lo[1];
+    corner[c][2] = (c & 4) ? hi[2] : lo[2];
+    const size_t g = base + (c & 1) + ((c >> 1) & 1) * stride_y + (c >> 2) * stride_z;
+    uint8_t& state = m.sample_state[g];
+    if (state == kUnknown) state = ctx.sampleUniformPoint(corner[c], &m.samples[g]) ? kObserved : kUnobserved;
+    if (state != kObserved) return;
+    s[c] = m.samples[g];
+    case_index |= (s[c].sdf >= 0.0f) << c;
+  }
+  if (case_index != 0 && case_index != 255) meshPlainBox(ctx, corner, s);
+}
+
 void BlockMesher::meshPlainBox(Context& ctx, const int corner[8][3], const PointSample s[8]) const {
   int case_index = 0;
   for (int c = 0; c < 8; ++c) case_index |= (s[c].sdf >= 0.0f) << c;
@@ -513,11 +735,20 @@ void BlockMesher::meshPlainBox(Context& ctx, const int corner[8][3], const Point
     if ((va >= 0.0f) != (vb >= 0.0f) && std::min(std::abs(va), std::abs(vb)) >= ctx.truncated_abs)
       return;  // truncation-band edge, not a surface
   }
+  // Most crossing edges serve two triangles of the box: look each up once. (The first use of
+  // an edge still comes first, so vertices are numbered as before.)
+  constexpr uint32_t kNoVertex = ~uint32_t{0};
+  uint32_t edge_vertex[12];
+  std::fill(std::begin(edge_vertex), std::end(edge_vertex), kNoVertex);
   for (const auto& tri : mc::caseTable().triangles[case_index]) {
     std::array<uint32_t, 3> t;
     for (int v = 0; v < 3; ++v) {
-      const mc::CubeEdge& e = edges[tri[v]];
-      t[v] = vertexOnEdge(ctx, corner[e.corner_a], s[e.corner_a], corner[e.corner_b], s[e.corner_b]);
+      uint32_t& vertex = edge_vertex[tri[v]];
+      if (vertex == kNoVertex) {
+        const mc::CubeEdge& e = edges[tri[v]];
+        vertex = vertexOnEdge(ctx, corner[e.corner_a], s[e.corner_a], corner[e.corner_b], s[e.corner_b]);
+      }
+      t[v] = vertex;
     }
     ctx.out->triangles.push_back(t);
   }
@@ -652,16 +883,24 @@ void BlockMesher::mesh(const BlockOctree& map, const VoxelBlock& owner, SubMesh*
 }
 
 void BlockMesher::meshUniformBoxes(Context& ctx) const {
+  if (!params_.fast_paths) {
+    meshMixedBoxes(ctx);  // the general path, for tests comparing the two
+    return;
+  }
   ctx.buildRowMasks();
   const int step = ctx.step[0], side = kFinestSide / step;
   // Box extents per axis by start index; the last start has two boxes (own skin, neighbour skin).
-  auto interval = [&](int start, bool neighbour_side, int* lo, int* hi) {
+  // Grid indices (buildSampleGrid() on a uniform neighbourhood): centre i → i, the face →
+  // side, the +neighbour's first centre → side + 1; a box's high index is its low one + 1.
+  auto interval = [&](int start, bool neighbour_side, int* lo, int* hi, int* grid_lo) {
     if (neighbour_side) {
       *lo = kBlockUnits;
       *hi = kBlockUnits + step;
+      *grid_lo = side;
     } else {
       *lo = step * (2 * start + 1);
       *hi = start + 1 < side ? step * (2 * start + 3) : kBlockUnits;
+      *grid_lo = start;
     }
   };
   // Same box order as meshMixedBoxes(): by block d, then z, y, x — the submesh's vertex and
@@ -678,11 +917,11 @@ void BlockMesher::meshUniformBoxes(Context& ctx) const {
       for (int j = first[1]; j <= last[1]; ++j)
         for (uint16_t bits = ctx.candidateStarts(j, k) & x_range; bits != 0; bits &= bits - 1) {
           const int i = __builtin_ctz(bits);
-          int lo[3], hi[3];
-          interval(i, d & 1, &lo[0], &hi[0]);
-          interval(j, (d >> 1) & 1, &lo[1], &hi[1]);
-          interval(k, (d >> 2) & 1, &lo[2], &hi[2]);
-          meshBox(ctx, lo, hi);
+          int lo[3], hi[3], grid_lo[3];
+          interval(i, d & 1, &lo[0], &hi[0], &grid_lo[0]);
+          interval(j, (d >> 1) & 1, &lo[1], &hi[1], &grid_lo[1]);
+          interval(k, (d >> 2) & 1, &lo[2], &hi[2], &grid_lo[2]);
+          meshUniformBox(ctx, lo, hi, grid_lo);
         }
   }
 }
@@ -715,8 +954,21 @@ void BlockMesher::meshMixedBoxes(Context& ctx) const {
           const int hi[3] = {intervals[0][ix].second, intervals[1][iy].second, intervals[2][iz].second};
           const bool core = d == 0 && hi[0] < kBlockUnits && hi[1] < kBlockUnits && hi[2] < kBlockUnits;
           if (core && ctx.coreBoxIsEmpty(lo)) continue;  // most boxes: no voxel-level sign change
+          if (params_.fast_paths && mixedBoxIsEmpty(ctx, lo, hi)) continue;
           meshBox(ctx, lo, hi);
         }
+  }
+}
+
+bool BlockMesher::mixedBoxIsEmpty(Context& ctx, const int lo[3], const int hi[3]) const {
+  // meshBox() returns without output at an unobserved corner, and on a plain box whose corners
+  // share one sign; both are read off the voxel masks here without summing any sample. A box
+  // with hanging points can change sign between its corners: meshBox() decides.
+  switch (ctx.classifyBoxCorners(lo, hi)) {
+    case kPointUnobserved: return true;
+    case kPointNegative:
+    case kPointNonNegative: return boxIsPlain(ctx, lo, hi);
+    default: return false;
   }
 }
 

@@ -17,6 +17,10 @@ struct MeshingParams {
   /// A block is sampled at the finest level whose observed area is at least this share of
   /// the largest observed area among its levels (see chooseMeshLevel()).
   double level_min_coverage = 0.8;
+  /// Test switch: false meshes every neighbourhood through the general path (every box
+  /// visited, every point sampled by samplePoint()). The fast paths must produce the same
+  /// bits; test_block_mesher_fast_paths compares the two.
+  bool fast_paths = true;
 };
 
 /// The level a block is meshed at: the finest level whose observed surface area (observed
@@ -60,6 +64,10 @@ void refreshMeshLevel(VoxelBlock* block, double level_min_coverage);
 /// dense per-owner grid over the coordinates in use); core boxes are pre-tested on the
 /// owner's voxel signs; every box is rejected on its 8 corners before any hanging-point
 /// work; hanging points come from per-owner bit masks; scratch buffers are per thread.
+/// Uniform neighbourhoods visit only boxes whose support changes sign (row bit masks) and
+/// sample voxels by index; mixed ones reject boxes with an unobserved corner or one sign on
+/// per-block voxel masks before sampling; edge → vertex is a flat stamped table. The
+/// general path stays reachable (MeshingParams::fast_paths) and a test compares the two.
 class BlockMesher {
  public:
   explicit BlockMesher(const MeshingParams& params);
@@ -70,26 +78,36 @@ class BlockMesher {
 
  private:
   struct Context;
+ public:
+  /// One lattice point's fused value (public only for the per-thread scratch buffers).
   struct PointSample {
     float sdf = 0.0f;
     float rgb[3] = {0, 0, 0};
   };
+
+ private:
   /// Boxes of a neighbourhood whose blocks all share the owner's level: only the boxes whose
-  /// support centres are observed and change sign are visited (row bit masks).
+  /// support centres are observed and change sign are visited (row bit masks), and points
+  /// are sampled by voxel index. With MeshingParams::fast_paths off: meshMixedBoxes().
   void meshUniformBoxes(Context& ctx) const;
-  /// Boxes of a neighbourhood with several levels (hanging points on shared faces).
+  /// Boxes of a neighbourhood with several levels (hanging points on shared faces). With
+  /// MeshingParams::fast_paths on, boxes are pre-tested on voxel masks (mixedBoxIsEmpty()).
   void meshMixedBoxes(Context& ctx) const;
+  /// True if meshBox() would certainly add nothing for this box of a mixed neighbourhood
+  /// (an unobserved corner, or a plain box with one sign at all corners), decided on voxel
+  /// bit masks without sampling; false when in doubt.
+  bool mixedBoxIsEmpty(Context& ctx, const int lo[3], const int hi[3]) const;
   static void computeNormals(SubMesh* out);
   bool samplePoint(const Context& ctx, int qx, int qy, int qz, PointSample* out) const;
   bool cachedSample(Context& ctx, const int q[3], PointSample* out) const;
   bool boxHasNoSurface(Context& ctx, const int lo[3], const int hi[3]) const;
   bool boxIsPlain(const Context& ctx, const int lo[3], const int hi[3]) const;
+  void meshUniformBox(Context& ctx, const int lo[3], const int hi[3], const int grid_lo[3]) const;
   void meshPlainBox(Context& ctx, const int corner[8][3], const PointSample s[8]) const;
   void meshGenericBox(Context& ctx, const int lo[3], const int hi[3]) const;
   void meshBox(Context& ctx, const int lo[3], const int hi[3]) const;
   void collectHangingPoints(const Context& ctx, int axis, const int fixed[3], int u0, int u1,
                             std::vector<int>* points) const;
-  bool hasHangingPoints(const Context& ctx, int axis, const int fixed[3], int u0, int u1) const;
   void faceGridLines(const Context& ctx, int normal_axis, int line_axis, const int lo[3],
                      const int hi[3], std::vector<int>* lines) const;
   static void faceInteriorLine(int normal_axis, int line_axis, const int lo[3], int fixed[3]);
