@@ -55,6 +55,10 @@ BlockOctree::Node* BlockOctree::newNode(const std::array<int64_t, 3>& origin, in
 
 VoxelBlock* BlockOctree::find(const BlockKey& key) const {
   searches_.fetch_add(1, std::memory_order_relaxed);
+  return findUncounted(key);
+}
+
+VoxelBlock* BlockOctree::findUncounted(const BlockKey& key) const {
   const Node* node = root_.load(std::memory_order_acquire);
   if (node == nullptr || !contains(node, key)) return nullptr;
   while (true) {
@@ -110,6 +114,7 @@ VoxelBlock* BlockOctree::findOrAllocate(const BlockKey& key, bool* allocated) {
       block_storage_.push_back(std::make_unique<VoxelBlock>());
       VoxelBlock* block = block_storage_.back().get();
       block->key = key;
+      link(block);
       blocks_.push_back(block);
       slot.store(block, std::memory_order_release);
       if (allocated) *allocated = true;
@@ -126,6 +131,27 @@ VoxelBlock* BlockOctree::findOrAllocate(const BlockKey& key, bool* allocated) {
     }
     node = static_cast<Node*>(next);
   }
+}
+
+void BlockOctree::link(VoxelBlock* block) {
+  for (int dz = -1; dz <= 1; ++dz)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        if (dx == 0 && dy == 0 && dz == 0) continue;
+        VoxelBlock* other = findUncounted(block->key.offset(dx, dy, dz));
+        if (other == nullptr) continue;
+        const int slot = NeighbourLinks::slot(dx, dy, dz);
+        block->neighbours.blocks_[slot] = other;
+        other->neighbours.blocks_[NeighbourLinks::opposite(slot)] = block;
+      }
+}
+
+void BlockOctree::unlink(VoxelBlock* block) {
+  for (int slot = 0; slot < NeighbourLinks::kCount; ++slot)
+    if (VoxelBlock* other = block->neighbours.blocks_[slot]) {
+      other->neighbours.blocks_[NeighbourLinks::opposite(slot)] = nullptr;
+      block->neighbours.blocks_[slot] = nullptr;
+    }
 }
 
 int BlockOctree::height() const {
@@ -162,6 +188,7 @@ void BlockOctree::clear() {
 size_t BlockOctree::erase(const std::vector<BlockKey>& keys) {
   std::lock_guard<std::mutex> lock(alloc_mutex_);
   std::unordered_set<const void*> doomed_blocks, doomed_nodes;
+  std::vector<VoxelBlock*> to_unlink;
   for (const BlockKey& key : keys) {
     Node* root = root_.load(std::memory_order_relaxed);
     if (root == nullptr || !keyInRange(key) || !contains(root, key)) continue;
@@ -182,6 +209,7 @@ size_t BlockOctree::erase(const std::vector<BlockKey>& keys) {
     }
     if (leaf == nullptr) continue;
     doomed_blocks.insert(leaf);
+    to_unlink.push_back(static_cast<VoxelBlock*>(leaf));
     for (auto it = path.rbegin(); it != path.rend(); ++it) {
       Node* n = it->first;
       n->child[it->second].store(nullptr, std::memory_order_release);
@@ -193,6 +221,8 @@ size_t BlockOctree::erase(const std::vector<BlockKey>& keys) {
     }
   }
   if (doomed_blocks.empty()) return 0;
+  // All unlinked before any is freed: unlinking writes into neighbours, which may be doomed too.
+  for (VoxelBlock* block : to_unlink) unlink(block);
   blocks_.erase(std::remove_if(blocks_.begin(), blocks_.end(),
                                [&](const VoxelBlock* b) { return doomed_blocks.count(b) > 0; }),
                 blocks_.end());
@@ -208,6 +238,7 @@ size_t BlockOctree::erase(const std::vector<BlockKey>& keys) {
 void BlockOctree::swap(BlockOctree& other) {
   if (this == &other) return;
   std::scoped_lock lock(alloc_mutex_, other.alloc_mutex_);
+  // Neighbour links need no care: they point between blocks that change owner together.
   std::swap(block_size_m_, other.block_size_m_);
   Node* mine = root_.load(std::memory_order_relaxed);
   root_.store(other.root_.load(std::memory_order_relaxed), std::memory_order_release);
