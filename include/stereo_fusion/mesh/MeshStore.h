@@ -37,12 +37,22 @@ class MeshStore {
   void clear() { meshes_.clear(); }
 
   /// The owners a change of `updated` must re-mesh (existing blocks only), sorted by key.
-  /// The searches run on `pool` when given.
+  /// The searches for `updated` run on `pool` when given; their owners are then reached through
+  /// the neighbour links (keys with no block, such as erased ones, through searches).
   static std::vector<BlockKey> affectedOwners(const BlockOctree& map, const std::vector<BlockKey>& updated,
                                               ThreadPool* pool = nullptr);
 
  private:
-  MeshChanges remesh(const BlockOctree& map, const std::vector<BlockKey>& owners, ThreadPool* pool);
+  /// A block to re-mesh with its key beside it, so that sorting reads no block memory.
+  struct Owner {
+    BlockKey key;
+    const VoxelBlock* block;
+  };
+  /// Owners of the seams of `present` blocks (through their links) and of `absent` keys (through
+  /// searches), sorted by key without duplicates.
+  static std::vector<Owner> ownersOf(const BlockOctree& map, const std::vector<const VoxelBlock*>& present,
+                                     const std::vector<BlockKey>& absent);
+  MeshChanges remesh(const BlockOctree& map, const std::vector<Owner>& owners, ThreadPool* pool);
 
   MeshingParams params_;
   BlockMesher mesher_;
