@@ -27,6 +27,8 @@ class MeshStore {
   /// owners K − (0|1, 0|1, 0|1) — in parallel over blocks. `erased` lists blocks just removed
   /// from the map (eviction): their submeshes are dropped (reported in `removed`) and the
   /// owners whose seams reached them are re-meshed, so the result equals a rebuild.
+  /// Owners and seam neighbours are reached through the blocks' neighbour links (one search per
+  /// updated block), so no allocation may run on `map` meanwhile (BlockOctree::neighbour).
   MeshChanges update(const BlockOctree& map, const std::vector<BlockKey>& updated, ThreadPool* pool,
                      const std::vector<BlockKey>& erased = {});
   /// Meshes every block from scratch (the reference for the incremental result).
