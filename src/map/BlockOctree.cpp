@@ -55,12 +55,12 @@ BlockOctree::Node* BlockOctree::newNode(const std::array<int64_t, 3>& origin, in
 
 VoxelBlock* BlockOctree::find(const BlockKey& key) const {
   searches_.fetch_add(1, std::memory_order_relaxed);
-  return findUncounted(key);
+  const Node* root = root_.load(std::memory_order_acquire);
+  if (root == nullptr || !contains(root, key)) return nullptr;
+  return findBelow(root, key);
 }
 
-VoxelBlock* BlockOctree::findUncounted(const BlockKey& key) const {
-  const Node* node = root_.load(std::memory_order_acquire);
-  if (node == nullptr || !contains(node, key)) return nullptr;
+VoxelBlock* BlockOctree::findBelow(const Node* node, const BlockKey& key) {
   while (true) {
     void* next = node->child[node->octantOf(key)].load(std::memory_order_acquire);
     if (next == nullptr) return nullptr;
@@ -134,11 +134,25 @@ VoxelBlock* BlockOctree::findOrAllocate(const BlockKey& key, bool* allocated) {
 }
 
 void BlockOctree::link(VoxelBlock* block) {
+  // The 26 searches share their path down to the deepest node that holds the whole 3×3×3
+  // neighbourhood: start them there instead of at the root. The block's own path exists down
+  // to its height-1 node (only the leaf slot is still empty), and a height-1 node, two blocks
+  // wide, never holds three.
+  const BlockKey& key = block->key;
+  const Node* top = root_.load(std::memory_order_relaxed);
+  while (top->height > 1) {
+    const auto* child = static_cast<const Node*>(top->child[top->octantOf(key)].load(std::memory_order_relaxed));
+    if (!contains(child, key.offset(-1, -1, -1)) || !contains(child, key.offset(1, 1, 1))) break;
+    top = child;
+  }
   for (int dz = -1; dz <= 1; ++dz)
     for (int dy = -1; dy <= 1; ++dy)
       for (int dx = -1; dx <= 1; ++dx) {
         if (dx == 0 && dy == 0 && dz == 0) continue;
-        VoxelBlock* other = findUncounted(block->key.offset(dx, dy, dz));
+        const BlockKey neighbour_key = key.offset(dx, dy, dz);
+        // Outside `top` only when `top` is the root: then the neighbour does not exist.
+        if (!contains(top, neighbour_key)) continue;
+        VoxelBlock* other = findBelow(top, neighbour_key);
         if (other == nullptr) continue;
         const int slot = NeighbourLinks::slot(dx, dy, dz);
         block->neighbours.blocks_[slot] = other;

@@ -110,8 +110,9 @@ class BlockOctree {
   struct Node;
   Node* newNode(const std::array<int64_t, 3>& origin, int height);
   void growToContain(const BlockKey& key);  // caller holds alloc_mutex_
-  /// find() without counting: the octree's own searches are not the callers' work.
-  VoxelBlock* findUncounted(const BlockKey& key) const;
+  /// The block at `key` in the subtree of `node`, which must contain the key. Not counted in
+  /// searchCount(): link() uses it, and the octree's own searches are not the callers' work.
+  static VoxelBlock* findBelow(const Node* node, const BlockKey& key);
   /// Links a block being allocated with its existing neighbours, both ways (caller holds
   /// alloc_mutex_).
   void link(VoxelBlock* block);

@@ -15,7 +15,7 @@ struct VoxelBlock;
 /// search (read them through BlockOctree::neighbour(const VoxelBlock&, ...)).
 ///
 /// All 26 offsets are kept, not only the 7 towards + the mesher reads and the 7 towards − the
-/// re-meshing reads: 96 more bytes per block (1.4 % of a block) buy an accessor with the same
+/// re-meshing reads: 96 more bytes per block (1.3 % of a block) buy an accessor with the same
 /// domain as BlockOctree::neighbour(key, ...), and linking stays symmetric (slot s of a block
 /// pairs with slot kCount − 1 − s of the neighbour), so erase can unlink without searching.
 ///
@@ -99,7 +99,7 @@ static_assert(VoxelBlock::index(1, 0, 0, 0) == 512 && VoxelBlock::index(1, 3, 3,
 static_assert(VoxelBlock::index(2, 0, 0, 0) == 576 && VoxelBlock::index(2, 1, 1, 1) == 583,
               "2³ level occupies 576..583");
 // 7008 B of voxels + 32 B of fields + 208 B of neighbour links = 7248 B; with the octree's
-// nodes and bookkeeping a block costs ~7.3 KiB, inside the 10 KiB per block budget.
+// nodes and bookkeeping a block costs ~7 300 B (7.1 KiB), inside the 10 KiB per block budget.
 static_assert(sizeof(VoxelBlock) <= 584 * 12 + 32 + NeighbourLinks::kCount * sizeof(VoxelBlock*),
               "VoxelBlock must stay ~7 KiB");
 
