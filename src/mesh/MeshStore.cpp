@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <utility>
 
 #include "stereo_fusion/util/Timer.h"
 
@@ -104,6 +105,21 @@ MeshChanges MeshStore::update(const BlockOctree& map, const std::vector<BlockKey
   std::vector<BlockKey> absent;
   present.reserve(updated.size());
   splitByPresence(updated, found, &present, &absent);
+  return remeshAround(map, std::move(present), std::move(absent), pool, erased);
+}
+
+MeshChanges MeshStore::updateBlocks(const BlockOctree& map, const std::vector<VoxelBlock*>& updated_blocks,
+                                    ThreadPool* pool, const std::vector<BlockKey>& erased) {
+  pool->parallelFor(updated_blocks.size(), 16, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) refreshMeshLevel(updated_blocks[i], params_.level_min_coverage);
+  });
+  return remeshAround(map, std::vector<const VoxelBlock*>(updated_blocks.begin(), updated_blocks.end()), {}, pool,
+                      erased);
+}
+
+MeshChanges MeshStore::remeshAround(const BlockOctree& map, std::vector<const VoxelBlock*> present,
+                                    std::vector<BlockKey> absent, ThreadPool* pool,
+                                    const std::vector<BlockKey>& erased) {
   // An erased block's own submesh goes; its owners lose a seam neighbour and are re-meshed.
   std::vector<const VoxelBlock*> erased_found(erased.size());
   for (size_t i = 0; i < erased.size(); ++i) erased_found[i] = map.find(erased[i]);
