@@ -35,7 +35,7 @@ std::vector<MeshStore::Owner> MeshStore::ownersOf(const BlockOctree& map,
   for (const VoxelBlock* block : present)
     for (int d = 0; d < 8; ++d) {
       const int dx = ownerOffset(d, 0), dy = ownerOffset(d, 1), dz = ownerOffset(d, 2);
-      // The key from arithmetic, not from the owner: sorting then reads no owner's memory.
+      // The key by arithmetic: owner->key would touch one more block's memory per owner.
       if (const VoxelBlock* owner = map.neighbour(*block, dx, dy, dz))
         owners.push_back({block->key.offset(dx, dy, dz), owner});
     }
