@@ -103,6 +103,7 @@ if [ "$mode" != --asan ]; then
   if build "$dir" thread stereo_fusion_thread_tests; then
     bin="$(find "$dir" -type f -name stereo_fusion_thread_tests -perm -u+x | head -n 1)"
     threaded='ThreadPool.*:BlockOctree.ConcurrentAllocationCreatesEachBlockOnce'
+    threaded+=':BlockOctreeLinks.EqualSearchesAfterRandomAllocateEraseClearSwap'
     threaded+=':BlockLookup.ResultDoesNotDependOnThreadsOrRegionSize:MapperProperties.ThreadCountDoesNotChangeTheMap'
     threaded+=':BlockMesher.ThreadCountDoesNotChangeTheMesh'
     run_gtest tsan_thread_tests "$bin" "$threaded" || failed=1

@@ -63,7 +63,13 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame) {
   result.evicted_blocks = selectBlocksToEvict(octree_, frame.T_world_camera.translation(), limits);
   if (!result.evicted_blocks.empty()) {
     queue_.clear();  // their pointers dangle after erase
-    updated_.clear();
+    // The updated blocks that stay go on to meshing (checked before erase frees the others).
+    updated_.erase(std::remove_if(updated_.begin(), updated_.end(),
+                                  [&](const VoxelBlock* block) {
+                                    return std::binary_search(result.evicted_blocks.begin(),
+                                                              result.evicted_blocks.end(), block->key);
+                                  }),
+                   updated_.end());
     blocks_evicted_ += octree_.erase(result.evicted_blocks);
     std::vector<BlockKey> kept;
     std::set_difference(result.updated_blocks.begin(), result.updated_blocks.end(), result.evicted_blocks.begin(),
@@ -71,7 +77,7 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame) {
     result.updated_blocks.swap(kept);
   }
   if (config_.mesh_enabled) {
-    result.mesh = mesh_store_.update(octree_, result.updated_blocks, &pool_, result.evicted_blocks);
+    result.mesh = mesh_store_.updateBlocks(octree_, updated_, &pool_, result.evicted_blocks);
     if (config_.texture == TextureMode::kPatches)
       result.texture = texture_store_.update(mesh_store_, result.mesh, frame, frames_integrated_, &pool_);
   }

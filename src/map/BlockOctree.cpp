@@ -55,8 +55,12 @@ BlockOctree::Node* BlockOctree::newNode(const std::array<int64_t, 3>& origin, in
 
 VoxelBlock* BlockOctree::find(const BlockKey& key) const {
   searches_.fetch_add(1, std::memory_order_relaxed);
-  const Node* node = root_.load(std::memory_order_acquire);
-  if (node == nullptr || !contains(node, key)) return nullptr;
+  const Node* root = root_.load(std::memory_order_acquire);
+  if (root == nullptr || !contains(root, key)) return nullptr;
+  return findBelow(root, key);
+}
+
+VoxelBlock* BlockOctree::findBelow(const Node* node, const BlockKey& key) {
   while (true) {
     void* next = node->child[node->octantOf(key)].load(std::memory_order_acquire);
     if (next == nullptr) return nullptr;
@@ -110,6 +114,7 @@ VoxelBlock* BlockOctree::findOrAllocate(const BlockKey& key, bool* allocated) {
       block_storage_.push_back(std::make_unique<VoxelBlock>());
       VoxelBlock* block = block_storage_.back().get();
       block->key = key;
+      link(block);
       blocks_.push_back(block);
       slot.store(block, std::memory_order_release);
       if (allocated) *allocated = true;
@@ -126,6 +131,41 @@ VoxelBlock* BlockOctree::findOrAllocate(const BlockKey& key, bool* allocated) {
     }
     node = static_cast<Node*>(next);
   }
+}
+
+void BlockOctree::link(VoxelBlock* block) {
+  // The 26 searches share their path down to the deepest node that holds the whole 3×3×3
+  // neighbourhood: start them there instead of at the root. The block's own path exists down
+  // to its height-1 node (only the leaf slot is still empty), and a height-1 node, two blocks
+  // wide, never holds three.
+  const BlockKey& key = block->key;
+  const Node* top = root_.load(std::memory_order_relaxed);
+  while (top->height > 1) {
+    const auto* child = static_cast<const Node*>(top->child[top->octantOf(key)].load(std::memory_order_relaxed));
+    if (!contains(child, key.offset(-1, -1, -1)) || !contains(child, key.offset(1, 1, 1))) break;
+    top = child;
+  }
+  for (int dz = -1; dz <= 1; ++dz)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        if (dx == 0 && dy == 0 && dz == 0) continue;
+        const BlockKey neighbour_key = key.offset(dx, dy, dz);
+        // Outside `top` only when `top` is the root: then the neighbour does not exist.
+        if (!contains(top, neighbour_key)) continue;
+        VoxelBlock* other = findBelow(top, neighbour_key);
+        if (other == nullptr) continue;
+        const int slot = NeighbourLinks::slot(dx, dy, dz);
+        block->neighbours.blocks_[slot] = other;
+        other->neighbours.blocks_[NeighbourLinks::opposite(slot)] = block;
+      }
+}
+
+void BlockOctree::unlink(VoxelBlock* block) {
+  for (int slot = 0; slot < NeighbourLinks::kCount; ++slot)
+    if (VoxelBlock* other = block->neighbours.blocks_[slot]) {
+      other->neighbours.blocks_[NeighbourLinks::opposite(slot)] = nullptr;
+      block->neighbours.blocks_[slot] = nullptr;
+    }
 }
 
 int BlockOctree::height() const {
@@ -162,6 +202,7 @@ void BlockOctree::clear() {
 size_t BlockOctree::erase(const std::vector<BlockKey>& keys) {
   std::lock_guard<std::mutex> lock(alloc_mutex_);
   std::unordered_set<const void*> doomed_blocks, doomed_nodes;
+  std::vector<VoxelBlock*> to_unlink;
   for (const BlockKey& key : keys) {
     Node* root = root_.load(std::memory_order_relaxed);
     if (root == nullptr || !keyInRange(key) || !contains(root, key)) continue;
@@ -182,6 +223,7 @@ size_t BlockOctree::erase(const std::vector<BlockKey>& keys) {
     }
     if (leaf == nullptr) continue;
     doomed_blocks.insert(leaf);
+    to_unlink.push_back(static_cast<VoxelBlock*>(leaf));
     for (auto it = path.rbegin(); it != path.rend(); ++it) {
       Node* n = it->first;
       n->child[it->second].store(nullptr, std::memory_order_release);
@@ -193,6 +235,8 @@ size_t BlockOctree::erase(const std::vector<BlockKey>& keys) {
     }
   }
   if (doomed_blocks.empty()) return 0;
+  // All unlinked before any is freed: unlinking writes into neighbours, which may be doomed too.
+  for (VoxelBlock* block : to_unlink) unlink(block);
   blocks_.erase(std::remove_if(blocks_.begin(), blocks_.end(),
                                [&](const VoxelBlock* b) { return doomed_blocks.count(b) > 0; }),
                 blocks_.end());
@@ -208,6 +252,7 @@ size_t BlockOctree::erase(const std::vector<BlockKey>& keys) {
 void BlockOctree::swap(BlockOctree& other) {
   if (this == &other) return;
   std::scoped_lock lock(alloc_mutex_, other.alloc_mutex_);
+  // Neighbour links need no care: they point between blocks that change owner together.
   std::swap(block_size_m_, other.block_size_m_);
   Node* mine = root_.load(std::memory_order_relaxed);
   root_.store(other.root_.load(std::memory_order_relaxed), std::memory_order_release);

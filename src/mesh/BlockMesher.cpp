@@ -858,7 +858,7 @@ void BlockMesher::mesh(const BlockOctree& map, const VoxelBlock& owner, SubMesh*
   ctx.origin[2] = int64_t{owner.key.z} * kBlockUnits;
   bool any_negative = false, any_positive = false;
   for (int d = 0; d < 8; ++d) {
-    ctx.nb[d] = d == 0 ? &owner : map.find(owner.key.offset(d & 1, (d >> 1) & 1, (d >> 2) & 1));
+    ctx.nb[d] = map.neighbour(owner, d & 1, (d >> 1) & 1, (d >> 2) & 1);
     ctx.level[d] = ctx.nb[d] ? ctx.nb[d]->mesh_level : 0;
     ctx.step[d] = 1 << ctx.level[d];
     if (ctx.nb[d] && ctx.level[d] != owner.mesh_level) ctx.uniform = false;

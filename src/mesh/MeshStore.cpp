@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <utility>
 
 #include "stereo_fusion/util/Timer.h"
 
@@ -9,47 +10,79 @@ namespace stereo_fusion {
 
 MeshStore::MeshStore(const MeshingParams& params) : params_(params), mesher_(params) {}
 
+namespace {
+/// Offset from a block to the d-th owner whose seams reach it: −(0|1) per axis, d = 0 the block.
+constexpr int ownerOffset(int d, int axis) { return -((d >> axis) & 1); }
+
+/// Splits `keys`, given the block found at each (or nullptr), into the blocks that exist and the
+/// keys that have none.
+void splitByPresence(const std::vector<BlockKey>& keys, const std::vector<const VoxelBlock*>& found,
+                     std::vector<const VoxelBlock*>* present, std::vector<BlockKey>* absent) {
+  for (size_t i = 0; i < keys.size(); ++i) {
+    if (found[i] != nullptr)
+      present->push_back(found[i]);
+    else
+      absent->push_back(keys[i]);
+  }
+}
+}  // namespace
+
+std::vector<MeshStore::Owner> MeshStore::ownersOf(const BlockOctree& map,
+                                                  const std::vector<const VoxelBlock*>& present,
+                                                  const std::vector<BlockKey>& absent) {
+  std::vector<Owner> owners;
+  owners.reserve(8 * present.size() + 7 * absent.size());
+  for (const VoxelBlock* block : present)
+    for (int d = 0; d < 8; ++d) {
+      const int dx = ownerOffset(d, 0), dy = ownerOffset(d, 1), dz = ownerOffset(d, 2);
+      // The key by arithmetic: owner->key would touch one more block's memory per owner.
+      if (const VoxelBlock* owner = map.neighbour(*block, dx, dy, dz))
+        owners.push_back({block->key.offset(dx, dy, dz), owner});
+    }
+  for (const BlockKey& key : absent)
+    for (int d = 1; d < 8; ++d) {
+      const BlockKey owner_key = key.offset(ownerOffset(d, 0), ownerOffset(d, 1), ownerOffset(d, 2));
+      if (const VoxelBlock* owner = map.find(owner_key)) owners.push_back({owner_key, owner});
+    }
+  std::sort(owners.begin(), owners.end(), [](const Owner& a, const Owner& b) { return a.key < b.key; });
+  owners.erase(std::unique(owners.begin(), owners.end(), [](const Owner& a, const Owner& b) { return a.key == b.key; }),
+               owners.end());
+  return owners;
+}
+
 std::vector<BlockKey> MeshStore::affectedOwners(const BlockOctree& map,
                                                 const std::vector<BlockKey>& updated, ThreadPool* pool) {
-  // The octree searches dominate: run them in parallel, one slot per (block, offset).
-  std::vector<BlockKey> candidates(updated.size() * 8);
-  std::vector<uint8_t> exists(candidates.size(), 0);
+  std::vector<const VoxelBlock*> found(updated.size());
   auto search = [&](size_t begin, size_t end) {
-    for (size_t i = begin; i < end; ++i)
-      for (int d = 0; d < 8; ++d) {
-        const BlockKey owner = updated[i].offset(-(d & 1), -((d >> 1) & 1), -((d >> 2) & 1));
-        candidates[8 * i + d] = owner;
-        exists[8 * i + d] = map.find(owner) != nullptr;
-      }
+    for (size_t i = begin; i < end; ++i) found[i] = map.find(updated[i]);
   };
   if (pool != nullptr)
     pool->parallelFor(updated.size(), 64, search);
   else
     search(0, updated.size());
-  std::vector<BlockKey> owners;
-  owners.reserve(candidates.size());
-  for (size_t i = 0; i < candidates.size(); ++i)
-    if (exists[i]) owners.push_back(candidates[i]);
-  std::sort(owners.begin(), owners.end());
-  owners.erase(std::unique(owners.begin(), owners.end()), owners.end());
-  return owners;
+  std::vector<const VoxelBlock*> present;
+  std::vector<BlockKey> absent;
+  splitByPresence(updated, found, &present, &absent);
+  std::vector<BlockKey> keys;
+  for (const Owner& owner : ownersOf(map, present, absent)) keys.push_back(owner.key);
+  return keys;
 }
 
-MeshChanges MeshStore::remesh(const BlockOctree& map, const std::vector<BlockKey>& owners,
-                             ThreadPool* pool) {
+MeshChanges MeshStore::remesh(const BlockOctree& map, const std::vector<Owner>& owners, ThreadPool* pool) {
   Timer timer;
   if (scratch_.size() < owners.size()) scratch_.resize(owners.size());
   pool->parallelFor(owners.size(), 4, [&](size_t begin, size_t end) {
-    for (size_t i = begin; i < end; ++i) mesher_.mesh(map, *map.find(owners[i]), &scratch_[i]);
+    for (size_t i = begin; i < end; ++i) mesher_.mesh(map, *owners[i].block, &scratch_[i]);
   });
   MeshChanges update;
   update.blocks_meshed = owners.size();
   for (size_t i = 0; i < owners.size(); ++i) {
+    const BlockKey& key = owners[i].key;
     if (!scratch_[i].empty()) {
-      std::swap(meshes_[owners[i]], scratch_[i]);
-      update.changed.push_back(owners[i]);
-    } else if (meshes_.erase(owners[i]) > 0) {
-      update.removed.push_back(owners[i]);
+      std::swap(meshes_[key], scratch_[i]);
+      update.changed.push_back(key);
+    } else if (meshes_.erase(key) > 0) {
+      update.removed.push_back(key);
     }
   }
   update.meshing_ms = timer.elapsedMs();
@@ -58,27 +91,54 @@ MeshChanges MeshStore::remesh(const BlockOctree& map, const std::vector<BlockKey
 
 MeshChanges MeshStore::update(const BlockOctree& map, const std::vector<BlockKey>& updated,
                              ThreadPool* pool, const std::vector<BlockKey>& erased) {
+  // The one search per updated block: owners and neighbours are then reached through links.
+  std::vector<const VoxelBlock*> found(updated.size());
   // Each level choice reads one block's voxels: independent, so in parallel.
   pool->parallelFor(updated.size(), 16, [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i)
-      if (VoxelBlock* block = map.find(updated[i])) refreshMeshLevel(block, params_.level_min_coverage);
+      if (VoxelBlock* block = map.find(updated[i])) {
+        refreshMeshLevel(block, params_.level_min_coverage);
+        found[i] = block;
+      }
   });
-  if (erased.empty()) return remesh(map, affectedOwners(map, updated, pool), pool);
+  std::vector<const VoxelBlock*> present;
+  std::vector<BlockKey> absent;
+  present.reserve(updated.size());
+  splitByPresence(updated, found, &present, &absent);
+  return remeshAround(map, std::move(present), std::move(absent), pool, erased);
+}
+
+MeshChanges MeshStore::updateBlocks(const BlockOctree& map, const std::vector<VoxelBlock*>& updated_blocks,
+                                    ThreadPool* pool, const std::vector<BlockKey>& erased) {
+  pool->parallelFor(updated_blocks.size(), 16, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) refreshMeshLevel(updated_blocks[i], params_.level_min_coverage);
+  });
+  return remeshAround(map, std::vector<const VoxelBlock*>(updated_blocks.begin(), updated_blocks.end()), {}, pool,
+                      erased);
+}
+
+MeshChanges MeshStore::remeshAround(const BlockOctree& map, std::vector<const VoxelBlock*> present,
+                                    std::vector<BlockKey> absent, ThreadPool* pool,
+                                    const std::vector<BlockKey>& erased) {
   // An erased block's own submesh goes; its owners lose a seam neighbour and are re-meshed.
-  std::vector<BlockKey> touched = updated;
-  touched.insert(touched.end(), erased.begin(), erased.end());
-  MeshChanges changes = remesh(map, affectedOwners(map, touched, pool), pool);
-  for (const BlockKey& key : erased)
-    if (map.find(key) == nullptr && meshes_.erase(key) > 0) changes.removed.push_back(key);
+  std::vector<const VoxelBlock*> erased_found(erased.size());
+  for (size_t i = 0; i < erased.size(); ++i) erased_found[i] = map.find(erased[i]);
+  std::vector<BlockKey> erased_absent;
+  splitByPresence(erased, erased_found, &present, &erased_absent);
+  absent.insert(absent.end(), erased_absent.begin(), erased_absent.end());
+  MeshChanges changes = remesh(map, ownersOf(map, present, absent), pool);
+  if (erased.empty()) return changes;
+  for (const BlockKey& key : erased_absent)
+    if (meshes_.erase(key) > 0) changes.removed.push_back(key);
   std::sort(changes.removed.begin(), changes.removed.end());
   return changes;
 }
 
 MeshChanges MeshStore::rebuild(const BlockOctree& map, ThreadPool* pool) {
-  std::vector<BlockKey> all;
+  std::vector<Owner> all;
   for (VoxelBlock* block : map.blocksSortedByKey()) {
     refreshMeshLevel(block, params_.level_min_coverage);
-    all.push_back(block->key);
+    all.push_back({block->key, block});
   }
   std::vector<BlockKey> stale;
   for (const auto& [key, mesh] : meshes_)

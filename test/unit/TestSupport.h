@@ -63,6 +63,29 @@ inline Eigen::Vector3d voxelCentre(const BlockOctree& map, const BlockKey& key, 
   return map.blockOrigin(key) + Eigen::Vector3d(i + 0.5, j + 0.5, k + 0.5) * h;
 }
 
+/// Outcome of comparing every block's neighbour links with searches.
+struct LinkCheck {
+  size_t checked = 0;     ///< (block, offset) pairs compared: 27 per block
+  size_t linked = 0;      ///< pairs whose neighbour exists (the block itself included)
+  size_t mismatched = 0;  ///< pairs where the link differs from find(key.offset(...))
+};
+
+/// For every block and every offset in {-1,0,1}³, BlockOctree::neighbour(block, ...) against
+/// find(key.offset(...)), nullptr included.
+inline LinkCheck checkNeighbourLinks(const BlockOctree& map) {
+  LinkCheck c;
+  for (const VoxelBlock* b : map.blocks())
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const VoxelBlock* linked = map.neighbour(*b, dx, dy, dz);
+          ++c.checked;
+          c.linked += linked != nullptr;
+          c.mismatched += linked != map.find(b->key.offset(dx, dy, dz));
+        }
+  return c;
+}
+
 /// Zero crossings of the SDF at `level` between voxel centres adjacent along `axis`
 /// (0 = x, 1 = y, 2 = z), both observed, linearly interpolated (the marching cubes rule).
 /// Pairs whose values differ by more than two voxel edges are truncation-edge artefacts,

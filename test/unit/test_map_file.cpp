@@ -114,6 +114,13 @@ TEST(MapFile, SaveLoadGivesTheIdenticalMapAndByteIdenticalMesh) {
     EXPECT_EQ(loaded.map().find(b->key)->last_update_frame, b->last_update_frame) << b->key;
   EXPECT_EQ(changes.changed.size(), loaded.mesh().submeshes().size());
   EXPECT_TRUE(changes.removed.empty());
+  // Loading allocates block by block and swaps the octree in: the neighbour links the mesher
+  // reads must come out equal to searches, and as many as the original map has.
+  const LinkCheck links = checkNeighbourLinks(loaded.map()), original_links = checkNeighbourLinks(original->map());
+  EXPECT_EQ(links.mismatched, 0u);
+  EXPECT_EQ(links.checked, 27 * loaded.map().blockCount());
+  EXPECT_EQ(links.linked, original_links.linked);
+  EXPECT_GT(links.linked, 4 * loaded.map().blockCount());
 
   const std::string ply_a = tempPath("a.ply"), ply_b = tempPath("b.ply");
   ASSERT_TRUE(writePly(ply_a, original->extractMesh(), &error)) << error;
@@ -126,6 +133,26 @@ TEST(MapFile, SaveLoadGivesTheIdenticalMapAndByteIdenticalMesh) {
   ASSERT_TRUE(loaded.saveMap(again, &error)) << error;
   EXPECT_TRUE(readBytes(again) == readBytes(map_path));
   for (const auto& p : {map_path, ply_a, ply_b, again}) fs::remove(p);
+}
+
+TEST(MapFile, DecodedBlocksAreLinkedToTheirNeighboursHandWorked) {
+  // The tiny map: (0,0,0) and (1,0,0) touch by a face, (-3,2,7) touches nothing.
+  const MapperConfig config;
+  const std::vector<uint8_t> bytes = tinyMapFile(config);
+  BlockOctree map(config.blockSizeM());
+  MapFileInfo info;
+  std::string error;
+  ASSERT_TRUE(decodeMapFile(bytes.data(), bytes.size(), config, &map, &info, &error)) << error;
+  const VoxelBlock* origin = map.find({0, 0, 0});
+  const VoxelBlock* right = map.find({1, 0, 0});
+  const VoxelBlock* alone = map.find({-3, 2, 7});
+  ASSERT_TRUE(origin && right && alone);
+  EXPECT_EQ(map.neighbour(*origin, 1, 0, 0), right);
+  EXPECT_EQ(map.neighbour(*right, -1, 0, 0), origin);
+  const LinkCheck links = checkNeighbourLinks(map);
+  EXPECT_EQ(links.checked, 3u * 27u);
+  EXPECT_EQ(links.linked, 3u + 2u);  // each block itself, and the one pair both ways
+  EXPECT_EQ(links.mismatched, 0u);
 }
 
 TEST(MapFile, FusingOnAfterLoadContinuesTheSameMap) {

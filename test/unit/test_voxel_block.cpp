@@ -10,7 +10,9 @@ TEST(VoxelBlock, SizesMatchTheReadme) {
   static_assert(sizeof(Voxel) == 12);
   static_assert(VoxelBlock::kVoxelCount == 8 * 8 * 8 + 4 * 4 * 4 + 2 * 2 * 2);
   EXPECT_EQ(VoxelBlock::kVoxelCount, 584);
-  EXPECT_LE(sizeof(VoxelBlock), 584u * 12u + 32u);
+  // README, Memory: 7 248 B = 584 voxels + 32 B of fields + 26 neighbour links.
+  EXPECT_LE(sizeof(VoxelBlock), 584u * 12u + 32u + 26u * sizeof(VoxelBlock*));
+  EXPECT_EQ(NeighbourLinks::kCount, 26);
 }
 
 TEST(VoxelBlock, FlatIndexEq34Eq35HandWorked) {

@@ -6,6 +6,7 @@ if(CATKIN_ENABLE_TESTING)
   add_executable(stereo_fusion_thread_tests EXCLUDE_FROM_ALL
     ${PROJECT_SOURCE_DIR}/test/unit/test_thread_pool.cpp
     ${PROJECT_SOURCE_DIR}/test/unit/test_octree.cpp
+    ${PROJECT_SOURCE_DIR}/test/unit/test_octree_links.cpp
     ${PROJECT_SOURCE_DIR}/test/unit/test_lookup.cpp
     ${PROJECT_SOURCE_DIR}/test/unit/test_mapper_properties.cpp
     ${PROJECT_SOURCE_DIR}/test/unit/test_block_mesher.cpp

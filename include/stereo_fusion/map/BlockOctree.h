@@ -26,6 +26,13 @@ namespace stereo_fusion {
 /// completely before it is published with a release store). Everything else
 /// (iteration, erase, swap, clear) must not overlap with allocation or find(): the Mapper calls
 /// them between frames on the integrating thread.
+///
+/// Every block links to its 26 neighbours (VoxelBlock::neighbours), so the per-frame neighbour
+/// accesses of meshing cost a load instead of a search. Allocation links a new block both ways
+/// under the allocation mutex and erase unlinks, so the links always equal
+/// find(key.offset(...)). Links are plain pointers written while other threads may run find():
+/// read them (neighbour(const VoxelBlock&, ...)) only when no allocation can run, i.e. after
+/// the lookup stage — where fusion and meshing run.
 class BlockOctree {
  public:
   /// Keys beyond ±kMaxKey are refused (2.7e8 blocks, > 20 000 km at 8 cm blocks: far beyond
@@ -58,10 +65,15 @@ class BlockOctree {
   /// Block at `key`, allocated (zero weight everywhere) if missing. nullptr only when the key
   /// is out of range. Thread-safe. `allocated` (optional) tells whether it was created now.
   VoxelBlock* findOrAllocate(const BlockKey& key, bool* allocated = nullptr);
-  /// Neighbour at offset (dx, dy, dz) ∈ {-1,0,1}³ (faces, edges, corners), or nullptr.
+  /// Neighbour at offset (dx, dy, dz) ∈ {-1,0,1}³ (faces, edges, corners), or nullptr. A search;
+  /// works for keys with no block too.
   VoxelBlock* neighbour(const BlockKey& key, int dx, int dy, int dz) const {
     return find(key.offset(dx, dy, dz));
   }
+  /// The same as neighbour(block.key, dx, dy, dz) — `block` itself for (0, 0, 0) — read from the
+  /// block's cached links: no search, not counted in searchCount(). `block` must belong to this
+  /// octree, and no findOrAllocate() may run meanwhile (links are written without atomics).
+  VoxelBlock* neighbour(const VoxelBlock& block, int dx, int dy, int dz) const;
 
   size_t blockCount() const { return blocks_.size(); }
   size_t nodeCount() const { return nodes_.size(); }
@@ -98,6 +110,14 @@ class BlockOctree {
   struct Node;
   Node* newNode(const std::array<int64_t, 3>& origin, int height);
   void growToContain(const BlockKey& key);  // caller holds alloc_mutex_
+  /// The block at `key` in the subtree of `node`, which must contain the key. Not counted in
+  /// searchCount(): link() uses it, and the octree's own searches are not the callers' work.
+  static VoxelBlock* findBelow(const Node* node, const BlockKey& key);
+  /// Links a block being allocated with its existing neighbours, both ways (caller holds
+  /// alloc_mutex_).
+  void link(VoxelBlock* block);
+  /// Clears the links of `block`'s neighbours back to it, before it is freed.
+  static void unlink(VoxelBlock* block);
   static bool contains(const Node* node, const BlockKey& key);
 
   double block_size_m_;
@@ -121,6 +141,12 @@ inline BlockKey BlockOctree::keyForBlockCoordinates(const Eigen::Vector3d& p_blo
     return static_cast<int32_t>(k);
   };
   return {toKey(p_blocks.x()), toKey(p_blocks.y()), toKey(p_blocks.z())};
+}
+
+inline VoxelBlock* BlockOctree::neighbour(const VoxelBlock& block, int dx, int dy, int dz) const {
+  // The octree owns its blocks mutably, so a const octree hands out VoxelBlock* as find() does.
+  if (dx == 0 && dy == 0 && dz == 0) return const_cast<VoxelBlock*>(&block);
+  return block.neighbours.at(NeighbourLinks::slot(dx, dy, dz));
 }
 
 inline bool BlockOctree::keyInRange(const BlockKey& key) {

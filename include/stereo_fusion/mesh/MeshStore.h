@@ -27,8 +27,14 @@ class MeshStore {
   /// owners K − (0|1, 0|1, 0|1) — in parallel over blocks. `erased` lists blocks just removed
   /// from the map (eviction): their submeshes are dropped (reported in `removed`) and the
   /// owners whose seams reached them are re-meshed, so the result equals a rebuild.
+  /// Owners and seam neighbours are reached through the blocks' neighbour links (one search per
+  /// updated block), so no allocation may run on `map` meanwhile (BlockOctree::neighbour).
   MeshChanges update(const BlockOctree& map, const std::vector<BlockKey>& updated, ThreadPool* pool,
                      const std::vector<BlockKey>& erased = {});
+  /// update() for the updated blocks themselves, as fusion hands them over (all in `map`, none
+  /// erased): the same result without the one search per updated block.
+  MeshChanges updateBlocks(const BlockOctree& map, const std::vector<VoxelBlock*>& updated_blocks, ThreadPool* pool,
+                           const std::vector<BlockKey>& erased = {});
   /// Meshes every block from scratch (the reference for the incremental result).
   MeshChanges rebuild(const BlockOctree& map, ThreadPool* pool);
 
@@ -37,12 +43,26 @@ class MeshStore {
   void clear() { meshes_.clear(); }
 
   /// The owners a change of `updated` must re-mesh (existing blocks only), sorted by key.
-  /// The searches run on `pool` when given.
+  /// The searches for `updated` run on `pool` when given; their owners are then reached through
+  /// the neighbour links (keys with no block, such as erased ones, through searches).
   static std::vector<BlockKey> affectedOwners(const BlockOctree& map, const std::vector<BlockKey>& updated,
                                               ThreadPool* pool = nullptr);
 
  private:
-  MeshChanges remesh(const BlockOctree& map, const std::vector<BlockKey>& owners, ThreadPool* pool);
+  /// A block to re-mesh with its key beside it, so that sorting reads no block memory.
+  struct Owner {
+    BlockKey key;
+    const VoxelBlock* block;
+  };
+  /// Owners of the seams of `present` blocks (through their links) and of `absent` keys (through
+  /// searches), sorted by key without duplicates.
+  static std::vector<Owner> ownersOf(const BlockOctree& map, const std::vector<const VoxelBlock*>& present,
+                                     const std::vector<BlockKey>& absent);
+  MeshChanges remesh(const BlockOctree& map, const std::vector<Owner>& owners, ThreadPool* pool);
+  /// The part of update() after the mesh levels are refreshed: `present` updated blocks and
+  /// `absent` updated keys with no block, plus `erased`.
+  MeshChanges remeshAround(const BlockOctree& map, std::vector<const VoxelBlock*> present,
+                           std::vector<BlockKey> absent, ThreadPool* pool, const std::vector<BlockKey>& erased);
 
   MeshingParams params_;
   BlockMesher mesher_;
