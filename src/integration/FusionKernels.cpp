@@ -1,0 +1,362 @@
+#include "stereo_fusion/integration/FusionKernels.h"
+
+#include <immintrin.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "stereo_fusion/integration/FusionMath.h"
+#include "stereo_fusion/integration/SurfaceFuser.h"
+
+// No function in this file may be compiled with FMA enabled: GCC (gnu++17) contracts a*b + c
+// into one fused operation whenever the target has FMA, which rounds once instead of twice and
+// would make the AVX2 kernel disagree with the scalar one. target("avx2") does not enable FMA.
+
+namespace stereo_fusion {
+namespace {
+
+/// Smallest float f with (double)f ≥ t, so that z ≥ f ⇔ (double)z ≥ t for every float z.
+float smallestFloatAtOrAbove(double t) {
+  float f = static_cast<float>(t);
+  if (static_cast<double>(f) < t) f = std::nextafter(f, INFINITY);
+  return f;
+}
+
+/// Block origin in camera coordinates: transformed in double (world coordinates may be large);
+/// the small offsets to the voxel centres are then stepped in float.
+Eigen::Vector3f blockOriginInCamera(const FusionFrame& f, const BlockOctree& octree, const BlockKey& key) {
+  return (f.T_camera_world * octree.blockOrigin(key)).cast<float>();
+}
+
+/// Block-level depth test: a voxel is only updated by a surface at depth ≥ z_voxel − Φ
+/// (eq. 3.15 with sdf ≤ Φ), and a level finer than the measurement's is skipped. When even
+/// the block's nearest corner is so far that every possible measurement is coarser than a
+/// level, none of that level's voxels can change: the kernels start at the returned level.
+int firstLevelToVisit(const FusionFrame& f, const Eigen::Vector3f& origin_c) {
+  const float block_m = f.voxel_m * kFinestSide;
+  float nearest_z = origin_c.z();
+  for (int c = 1; c < 8; ++c)
+    nearest_z = std::min(nearest_z, origin_c.z() + block_m * ((c & 1 ? f.R_cw(2, 0) : 0.0f) +
+                                                            (c & 2 ? f.R_cw(2, 1) : 0.0f) +
+                                                            (c & 4 ? f.R_cw(2, 2) : 0.0f)));
+  // Margin: the voxel loop computes depths with other float roundings.
+  const double nearest_surface_m = static_cast<double>(nearest_z) - f.max_truncation_m - 1e-3;
+  return levelForDepth(nearest_surface_m, f.thresholds);
+}
+
+/// Eq. 3.8–3.9 for one voxel, with the colour of pixel (iu, iv) if colour is fused.
+/// `sdf_m` is the untruncated distance; it is clamped to −Φ here (observed free space).
+inline void updateVoxel(const FusionFrame& f, int iu, int iv, float sdf_m, float truncation_m,
+                        float weight, Voxel* voxel) {
+  const uint8_t* rgb = nullptr;
+  uint8_t grey_rgb[3];
+  if (f.color != nullptr) {
+    const uint8_t* pixel = f.color + static_cast<size_t>(iv) * f.color_step_bytes +
+                           static_cast<size_t>(iu) * f.color_channels;
+    if (f.color_channels == 1) {
+      grey_rgb[0] = grey_rgb[1] = grey_rgb[2] = *pixel;
+      rgb = grey_rgb;
+    } else {
+      rgb = pixel;
+    }
+  }
+  fuseMeasurement(voxel, std::max(sdf_m, -truncation_m), weight, f.max_weight, rgb);
+}
+
+}  // namespace
+
+FusionFrame makeFusionFrame(const StereoFrame& frame, const MapperConfig& config, const DepthImage& depth) {
+  const StereoCamera& cam = frame.camera;
+  FusionFrame f;
+  f.T_camera_world = frame.T_world_camera.inverse();
+  f.R_cw = f.T_camera_world.linear().cast<float>();
+  f.fx_px = static_cast<float>(cam.fx());
+  f.fy_px = static_cast<float>(cam.fy());
+  f.cx_px = static_cast<float>(cam.cx());
+  f.cy_px = static_cast<float>(cam.cy());
+  f.width_px = cam.width();
+  f.height_px = cam.height();
+  f.u_end_px = f.width_px - 0.5f;
+  f.v_end_px = f.height_px - 0.5f;
+  f.voxel_m = static_cast<float>(config.voxel_size_m);
+  const float truncation_vox = static_cast<float>(config.truncation_vox);
+  f.max_truncation_m =
+      std::max(truncation_vox, SurfaceFuser::kMinBandVoxels) * levelScale(kNumLevels - 1) * f.voxel_m;
+  for (int m = 0; m < kNumLevels; ++m) {
+    const float scale = static_cast<float>(levelScale(m));
+    f.delta_m[m] = static_cast<float>(config.weight_falloff_start_vox) * scale * f.voxel_m;
+  }
+  for (int level = 0; level < kNumLevels; ++level) {
+    FusionFrame::Level& l = f.levels[level];
+    const float level_voxel_m = f.voxel_m * levelScale(level);
+    l.ex_m = f.R_cw.col(0) * level_voxel_m;
+    l.ey_m = f.R_cw.col(1) * level_voxel_m;
+    l.ez_m = f.R_cw.col(2) * level_voxel_m;
+    // A coarse level fed by near measurements still needs values on both sides of the
+    // surface at its own spacing: its band is never thinner than kMinBandVoxels of its voxels.
+    const float min_truncation_m = SurfaceFuser::kMinBandVoxels * level_voxel_m;
+    for (int m = 0; m < kNumLevels; ++m) {
+      const float scale = static_cast<float>(levelScale(m));
+      l.truncation_m[m] = std::max(truncation_vox * scale * f.voxel_m, min_truncation_m);
+    }
+  }
+  f.max_weight = static_cast<float>(config.max_weight);
+  f.depth_weight_reference_m = static_cast<float>(config.depth_weight_reference_m);
+  f.weight_mode = config.weight_mode;
+  f.thresholds = config.levels;
+  f.level1_min_depth_m = smallestFloatAtOrAbove(config.levels.scale2_min_depth_m);
+  f.level2_min_depth_m = smallestFloatAtOrAbove(config.levels.scale4_min_depth_m);
+  f.depth_m = depth.data();
+  if (config.use_color && !frame.color.empty()) {
+    f.color = frame.color.data;
+    f.color_step_bytes = frame.color.step[0];
+    f.color_channels = frame.color.channels();
+  }
+  return f;
+}
+
+uint64_t fuseBlockScalar(const FusionFrame& f, const BlockOctree& octree, VoxelBlock* block) {
+  const Eigen::Vector3f origin_c = blockOriginInCamera(f, octree, block->key);
+  uint64_t updates = 0;
+  for (int level = firstLevelToVisit(f, origin_c); level < kNumLevels; ++level) {
+    const FusionFrame::Level& l = f.levels[level];
+    const int side = levelSide(level);
+    const Eigen::Vector3f first = origin_c + 0.5f * (l.ex_m + l.ey_m + l.ez_m);
+    Voxel* voxels = &block->voxels[levelOffset(level)];
+    for (int k = 0; k < side; ++k) {
+      for (int j = 0; j < side; ++j) {
+        for (int i = 0; i < side; ++i) {
+          const Eigen::Vector3f p = first + static_cast<float>(i) * l.ex_m +
+                                    static_cast<float>(j) * l.ey_m + static_cast<float>(k) * l.ez_m;
+          if (!(p.z() > 0.0f)) continue;
+          // Eq. 3.12–3.14: nearest pixel of the voxel centre's projection. Bounds are checked
+          // in float first: u, v can be huge or infinite for z_c near 0.
+          const float u = f.fx_px * p.x() / p.z() + f.cx_px;
+          const float v = f.fy_px * p.y() / p.z() + f.cy_px;
+          if (!(u >= -0.5f && v >= -0.5f && u < f.u_end_px && v < f.v_end_px)) continue;
+          const int iu = static_cast<int>(std::floor(u + 0.5f));
+          const int iv = static_cast<int>(std::floor(v + 0.5f));
+          if (iu < 0 || iv < 0 || iu >= f.width_px || iv >= f.height_px) continue;
+          const float surface_depth = f.depth_m[static_cast<size_t>(iv) * f.width_px + iu];
+          if (std::isnan(surface_depth)) continue;  // no usable measurement
+          const int measurement_level = levelForDepth(surface_depth, f.thresholds);
+          if (level < measurement_level) continue;  // too fine for this measurement
+          const float truncation = l.truncation_m[measurement_level];
+          const float delta = f.delta_m[measurement_level];
+          const float sdf = signedDistanceAlongRay(p.x(), p.y(), p.z(), surface_depth);
+          if (sdf > truncation) continue;  // far behind the surface: unobserved
+          const float w = measurementWeight(f.weight_mode, sdf, delta, truncation, surface_depth,
+                                            f.depth_weight_reference_m);
+          if (!(w > 0.0f)) continue;
+          updateVoxel(f, iu, iv, sdf, truncation, w, &voxels[i + j * side + k * side * side]);
+          ++updates;
+        }
+      }
+    }
+  }
+  return updates;
+}
+
+// ---------------------------------------------------------------------------------------------
+// AVX2 kernel. Lanes are eight consecutive voxels of a level's flat array (eq. 3.4): a row of
+// level 0, two rows of level 1, all of level 2. The voxel centre is computed as in the scalar
+// kernel, ((first + i·ex) + j·ey) + k·ez per coordinate, from per-lane i, j, k terms.
+
+namespace {
+
+#define SF_AVX2 __attribute__((target("avx2"), always_inline)) inline
+
+/// Frame constants broadcast to all lanes, once per block.
+struct Avx2Constants {
+  __m256 fx, fy, cx, cy, u_end, v_end, minus_half, half, zero, one, nan;
+  __m256 level1_min_depth, level2_min_depth, depth_weight_reference;
+  __m256i width, height;
+};
+
+SF_AVX2 Avx2Constants avx2Constants(const FusionFrame& f) {
+  Avx2Constants c;
+  c.fx = _mm256_set1_ps(f.fx_px);
+  c.fy = _mm256_set1_ps(f.fy_px);
+  c.cx = _mm256_set1_ps(f.cx_px);
+  c.cy = _mm256_set1_ps(f.cy_px);
+  c.u_end = _mm256_set1_ps(f.u_end_px);
+  c.v_end = _mm256_set1_ps(f.v_end_px);
+  c.minus_half = _mm256_set1_ps(-0.5f);
+  c.half = _mm256_set1_ps(0.5f);
+  c.zero = _mm256_setzero_ps();
+  c.one = _mm256_set1_ps(1.0f);
+  c.nan = _mm256_set1_ps(NAN);
+  c.level1_min_depth = _mm256_set1_ps(f.level1_min_depth_m);
+  c.level2_min_depth = _mm256_set1_ps(f.level2_min_depth_m);
+  c.depth_weight_reference = _mm256_set1_ps(f.depth_weight_reference_m);
+  c.width = _mm256_set1_epi32(f.width_px);
+  c.height = _mm256_set1_epi32(f.height_px);
+  return c;
+}
+
+/// Measurement-level dependent band half-width and δ for one voxel level.
+struct Avx2Band {
+  __m256 truncation[kNumLevels];
+  __m256 delta[kNumLevels];
+};
+
+SF_AVX2 Avx2Band avx2Band(const FusionFrame& f, int level) {
+  Avx2Band b;
+  for (int m = 0; m < kNumLevels; ++m) {
+    b.truncation[m] = _mm256_set1_ps(f.levels[level].truncation_m[m]);
+    b.delta[m] = _mm256_set1_ps(f.delta_m[m]);
+  }
+  return b;
+}
+
+/// The value of `by_level` for the measurement level of each lane: 2 where z reaches the
+/// level-2 threshold, else 1 where it reaches the level-1 one, else 0 (levelForDepth()).
+SF_AVX2 __m256 selectByLevel(const __m256 by_level[kNumLevels], __m256 reaches1, __m256 reaches2) {
+  return _mm256_blendv_ps(_mm256_blendv_ps(by_level[0], by_level[1], reaches1), by_level[2], reaches2);
+}
+
+/// Eq. 3.11–3.15 and 3.10 for eight voxels at camera points (px, py, pz); fuses the observed
+/// ones into voxels[0..7]. Returns the number of updates.
+SF_AVX2 uint64_t fuseEightAvx2(const FusionFrame& f, const Avx2Constants& c, const Avx2Band& band,
+                               int level, __m256 px, __m256 py, __m256 pz, Voxel* voxels) {
+  const __m256 in_front = _mm256_cmp_ps(pz, c.zero, _CMP_GT_OQ);
+  if (_mm256_testz_ps(in_front, in_front)) return 0;
+  // Eq. 3.12–3.14, as fx·x/z + cx in the scalar order (no reciprocal: x/z ≠ x·(1/z)).
+  const __m256 u = _mm256_add_ps(_mm256_div_ps(_mm256_mul_ps(c.fx, px), pz), c.cx);
+  const __m256 v = _mm256_add_ps(_mm256_div_ps(_mm256_mul_ps(c.fy, py), pz), c.cy);
+  __m256 inside = _mm256_and_ps(in_front, _mm256_cmp_ps(u, c.minus_half, _CMP_GE_OQ));
+  inside = _mm256_and_ps(inside, _mm256_cmp_ps(v, c.minus_half, _CMP_GE_OQ));
+  inside = _mm256_and_ps(inside, _mm256_cmp_ps(u, c.u_end, _CMP_LT_OQ));
+  inside = _mm256_and_ps(inside, _mm256_cmp_ps(v, c.v_end, _CMP_LT_OQ));
+  if (_mm256_testz_ps(inside, inside)) return 0;
+  const __m256i iu = _mm256_cvttps_epi32(_mm256_floor_ps(_mm256_add_ps(u, c.half)));
+  const __m256i iv = _mm256_cvttps_epi32(_mm256_floor_ps(_mm256_add_ps(v, c.half)));
+  // iu ∈ [0, width) and iv ∈ [0, height), in integers as in the scalar kernel.
+  const __m256i minus_one = _mm256_set1_epi32(-1);
+  __m256i in_image = _mm256_castps_si256(inside);
+  in_image = _mm256_and_si256(in_image, _mm256_cmpgt_epi32(iu, minus_one));
+  in_image = _mm256_and_si256(in_image, _mm256_cmpgt_epi32(iv, minus_one));
+  in_image = _mm256_and_si256(in_image, _mm256_cmpgt_epi32(c.width, iu));
+  in_image = _mm256_and_si256(in_image, _mm256_cmpgt_epi32(c.height, iv));
+  const __m256i pixel = _mm256_add_epi32(_mm256_mullo_epi32(iv, c.width), iu);
+  // Lanes outside the image read nothing and get NaN: "no measurement".
+  const __m256 surface_depth =
+      _mm256_mask_i32gather_ps(c.nan, f.depth_m, pixel, _mm256_castsi256_ps(in_image), 4);
+  __m256 keep = _mm256_cmp_ps(surface_depth, surface_depth, _CMP_ORD_Q);
+  const __m256 reaches1 = _mm256_cmp_ps(surface_depth, c.level1_min_depth, _CMP_GE_OQ);
+  const __m256 reaches2 = _mm256_cmp_ps(surface_depth, c.level2_min_depth, _CMP_GE_OQ);
+  // Too fine for the measurement (level < measurement level).
+  if (level == 0) keep = _mm256_andnot_ps(_mm256_or_ps(reaches1, reaches2), keep);
+  if (level == 1) keep = _mm256_andnot_ps(reaches2, keep);
+  if (_mm256_testz_ps(keep, keep)) return 0;
+  const __m256 truncation = selectByLevel(band.truncation, reaches1, reaches2);
+  // Eq. 3.15: sqrt(x² + y² + z²) · (1 − z_s / z), in signedDistanceAlongRay()'s order.
+  const __m256 norm = _mm256_sqrt_ps(
+      _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(px, px), _mm256_mul_ps(py, py)), _mm256_mul_ps(pz, pz)));
+  const __m256 sdf = _mm256_mul_ps(norm, _mm256_sub_ps(c.one, _mm256_div_ps(surface_depth, pz)));
+  // !(sdf > Φ): far behind the surface is unobserved (unordered compares keep NaN lanes, as
+  // the scalar test does; the weight test below drops them).
+  keep = _mm256_and_ps(keep, _mm256_cmp_ps(sdf, truncation, _CMP_NGT_UQ));
+  if (_mm256_testz_ps(keep, keep)) return 0;
+  // measurementWeight() for lanes with !(sdf > Φ).
+  __m256 weight = c.one;
+  if (f.weight_mode != WeightMode::kConstant) {
+    const __m256 delta = selectByLevel(band.delta, reaches1, reaches2);
+    const __m256 falloff =
+        _mm256_div_ps(_mm256_sub_ps(truncation, sdf), _mm256_sub_ps(truncation, delta));
+    weight = _mm256_blendv_ps(falloff, c.one, _mm256_cmp_ps(sdf, delta, _CMP_LT_OQ));
+    if (f.weight_mode == WeightMode::kDepthAware) {
+      const __m256 ratio = _mm256_div_ps(c.depth_weight_reference, surface_depth);
+      weight = _mm256_mul_ps(_mm256_mul_ps(weight, ratio), ratio);
+    }
+  }
+  keep = _mm256_and_ps(keep, _mm256_cmp_ps(weight, c.zero, _CMP_GT_OQ));
+  unsigned lanes = static_cast<unsigned>(_mm256_movemask_ps(keep));
+  if (lanes == 0) return 0;
+  alignas(32) float sdf_m[8], truncation_m[8], weights[8];
+  alignas(32) int iu_px[8], iv_px[8];
+  _mm256_store_ps(sdf_m, sdf);
+  _mm256_store_ps(truncation_m, truncation);
+  _mm256_store_ps(weights, weight);
+  _mm256_store_si256(reinterpret_cast<__m256i*>(iu_px), iu);
+  _mm256_store_si256(reinterpret_cast<__m256i*>(iv_px), iv);
+  uint64_t updates = 0;
+  for (; lanes != 0; lanes &= lanes - 1, ++updates) {
+    const int lane = __builtin_ctz(lanes);
+    updateVoxel(f, iu_px[lane], iv_px[lane], sdf_m[lane], truncation_m[lane], weights[lane], &voxels[lane]);
+  }
+  return updates;
+}
+
+/// Per-level lane terms of the voxel centres: first + i·ex for i = 0..7 (lanes beyond the
+/// level's side are unused), and j·ey, k·ez likewise, each coordinate in one vector.
+struct Avx2Steps {
+  __m256 a[3], b[3], c[3];
+};
+
+SF_AVX2 Avx2Steps avx2Steps(const FusionFrame::Level& l, const Eigen::Vector3f& first) {
+  const __m256 index = _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7);
+  Avx2Steps s;
+  for (int axis = 0; axis < 3; ++axis) {
+    s.a[axis] = _mm256_add_ps(_mm256_set1_ps(first[axis]), _mm256_mul_ps(index, _mm256_set1_ps(l.ex_m[axis])));
+    s.b[axis] = _mm256_mul_ps(index, _mm256_set1_ps(l.ey_m[axis]));
+    s.c[axis] = _mm256_mul_ps(index, _mm256_set1_ps(l.ez_m[axis]));
+  }
+  return s;
+}
+
+}  // namespace
+
+__attribute__((target("avx2"))) uint64_t fuseBlockAvx2(const FusionFrame& f, const BlockOctree& octree,
+                                                       VoxelBlock* block) {
+  const Eigen::Vector3f origin_c = blockOriginInCamera(f, octree, block->key);
+  const Avx2Constants c = avx2Constants(f);
+  uint64_t updates = 0;
+  for (int level = firstLevelToVisit(f, origin_c); level < kNumLevels; ++level) {
+    const FusionFrame::Level& l = f.levels[level];
+    const Eigen::Vector3f first = origin_c + 0.5f * (l.ex_m + l.ey_m + l.ez_m);
+    const Avx2Steps s = avx2Steps(l, first);
+    const Avx2Band band = avx2Band(f, level);
+    Voxel* voxels = &block->voxels[levelOffset(level)];
+    if (level == 0) {
+      // One row (fixed j, k) per step: the j and k terms are the same in every lane.
+      alignas(32) float b[3][8], k_terms[3][8];
+      for (int axis = 0; axis < 3; ++axis) {
+        _mm256_store_ps(b[axis], s.b[axis]);
+        _mm256_store_ps(k_terms[axis], s.c[axis]);
+      }
+      for (int k = 0; k < kFinestSide; ++k) {
+        for (int j = 0; j < kFinestSide; ++j) {
+          __m256 p[3];
+          for (int axis = 0; axis < 3; ++axis)
+            p[axis] = _mm256_add_ps(_mm256_add_ps(s.a[axis], _mm256_set1_ps(b[axis][j])),
+                                    _mm256_set1_ps(k_terms[axis][k]));
+          updates += fuseEightAvx2(f, c, band, level, p[0], p[1], p[2], &voxels[kFinestSide * (j + kFinestSide * k)]);
+        }
+      }
+    } else {
+      // Flat index n = 8g + lane = i + j·side + k·side²: pick each lane's i, j, k term.
+      const int side_bits = level == 1 ? 2 : 1;
+      const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+      const __m256i side_mask = _mm256_set1_epi32(levelSide(level) - 1);
+      const __m128i shift_j = _mm_cvtsi32_si128(side_bits), shift_k = _mm_cvtsi32_si128(2 * side_bits);
+      for (int g = 0; g < levelVoxelCount(level) / 8; ++g) {
+        const __m256i n = _mm256_add_epi32(lane, _mm256_set1_epi32(8 * g));
+        const __m256i i = _mm256_and_si256(n, side_mask);
+        const __m256i j = _mm256_and_si256(_mm256_srl_epi32(n, shift_j), side_mask);
+        const __m256i k = _mm256_srl_epi32(n, shift_k);
+        __m256 p[3];
+        for (int axis = 0; axis < 3; ++axis)
+          p[axis] = _mm256_add_ps(_mm256_add_ps(_mm256_permutevar8x32_ps(s.a[axis], i),
+                                                _mm256_permutevar8x32_ps(s.b[axis], j)),
+                                  _mm256_permutevar8x32_ps(s.c[axis], k));
+        updates += fuseEightAvx2(f, c, band, level, p[0], p[1], p[2], &voxels[8 * g]);
+      }
+    }
+  }
+  return updates;
+}
+
+bool avx2Supported() { return __builtin_cpu_supports("avx2"); }
+
+}  // namespace stereo_fusion
