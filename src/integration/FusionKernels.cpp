@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 
 #include "stereo_fusion/integration/FusionMath.h"
 #include "stereo_fusion/integration/SurfaceFuser.h"
@@ -44,28 +45,19 @@ int firstLevelToVisit(const FusionFrame& f, const Eigen::Vector3f& origin_c) {
   return levelForDepth(nearest_surface_m, f.thresholds);
 }
 
-/// Eq. 3.8–3.9 for one voxel, with the colour of pixel (iu, iv) if colour is fused.
-/// `sdf_m` is the untruncated distance; it is clamped to −Φ here (observed free space).
-inline void updateVoxel(const FusionFrame& f, int iu, int iv, float sdf_m, float truncation_m,
-                        float weight, Voxel* voxel) {
-  const uint8_t* rgb = nullptr;
-  uint8_t grey_rgb[3];
-  if (f.color != nullptr) {
-    const uint8_t* pixel = f.color + static_cast<size_t>(iv) * f.color_step_bytes +
-                           static_cast<size_t>(iu) * f.color_channels;
-    if (f.color_channels == 1) {
-      grey_rgb[0] = grey_rgb[1] = grey_rgb[2] = *pixel;
-      rgb = grey_rgb;
-    } else {
-      rgb = pixel;
-    }
-  }
-  fuseMeasurement(voxel, std::max(sdf_m, -truncation_m), weight, f.max_weight, rgb);
+/// Eq. 3.8–3.9 for one voxel, with the colour of `pixel` if colour is fused. `sdf_m` is the
+/// untruncated distance; it is clamped to −Φ here (observed free space).
+inline void updateVoxel(const FusionFrame& f, size_t pixel, float sdf_m, float truncation_m, float weight,
+                        Voxel* voxel) {
+  uint8_t rgb[3];
+  if (f.rgb != nullptr) MeasurementImage::unpack(f.rgb[pixel], rgb);
+  fuseMeasurement(voxel, std::max(sdf_m, -truncation_m), weight, f.max_weight, f.rgb != nullptr ? rgb : nullptr);
 }
 
 }  // namespace
 
-FusionFrame makeFusionFrame(const StereoFrame& frame, const MapperConfig& config, const DepthImage& depth) {
+FusionFrame makeFusionFrame(const StereoFrame& frame, const MapperConfig& config,
+                            const MeasurementImage& measurements) {
   const StereoCamera& cam = frame.camera;
   FusionFrame f;
   f.T_camera_world = frame.T_world_camera.inverse();
@@ -106,12 +98,8 @@ FusionFrame makeFusionFrame(const StereoFrame& frame, const MapperConfig& config
   f.thresholds = config.levels;
   f.level1_min_depth_m = smallestFloatAtOrAbove(config.levels.scale2_min_depth_m);
   f.level2_min_depth_m = smallestFloatAtOrAbove(config.levels.scale4_min_depth_m);
-  f.depth_m = depth.data();
-  if (config.use_color && !frame.color.empty()) {
-    f.color = frame.color.data;
-    f.color_step_bytes = frame.color.step[0];
-    f.color_channels = frame.color.channels();
-  }
+  f.depth_m = measurements.depths();
+  if (config.use_color && !frame.color.empty()) f.rgb = measurements.colours();
   return f;
 }
 
@@ -137,7 +125,8 @@ uint64_t fuseBlockScalar(const FusionFrame& f, const BlockOctree& octree, VoxelB
           const int iu = static_cast<int>(std::floor(u + 0.5f));
           const int iv = static_cast<int>(std::floor(v + 0.5f));
           if (iu < 0 || iv < 0 || iu >= f.width_px || iv >= f.height_px) continue;
-          const float surface_depth = f.depth_m[static_cast<size_t>(iv) * f.width_px + iu];
+          const size_t pixel = static_cast<size_t>(iv) * f.width_px + iu;
+          const float surface_depth = f.depth_m[pixel];
           if (std::isnan(surface_depth)) continue;  // no usable measurement
           const int measurement_level = levelForDepth(surface_depth, f.thresholds);
           if (level < measurement_level) continue;  // too fine for this measurement
@@ -148,7 +137,7 @@ uint64_t fuseBlockScalar(const FusionFrame& f, const BlockOctree& octree, VoxelB
           const float w = measurementWeight(f.weight_mode, sdf, delta, truncation, surface_depth,
                                             f.depth_weight_reference_m);
           if (!(w > 0.0f)) continue;
-          updateVoxel(f, iu, iv, sdf, truncation, w, &voxels[i + j * side + k * side * side]);
+          updateVoxel(f, pixel, sdf, truncation, w, &voxels[i + j * side + k * side * side]);
           ++updates;
         }
       }
@@ -169,7 +158,7 @@ namespace {
 /// Frame constants broadcast to all lanes, once per block.
 struct Avx2Constants {
   __m256 fx, fy, cx, cy, u_end, v_end, minus_half, half, zero, one, nan;
-  __m256 level1_min_depth, level2_min_depth, depth_weight_reference;
+  __m256 level1_min_depth, level2_min_depth, depth_weight_reference, max_weight, max_channel;
   __m256i width, height;
 };
 
@@ -189,6 +178,8 @@ SF_AVX2 Avx2Constants avx2Constants(const FusionFrame& f) {
   c.level1_min_depth = _mm256_set1_ps(f.level1_min_depth_m);
   c.level2_min_depth = _mm256_set1_ps(f.level2_min_depth_m);
   c.depth_weight_reference = _mm256_set1_ps(f.depth_weight_reference_m);
+  c.max_weight = _mm256_set1_ps(f.max_weight);
+  c.max_channel = _mm256_set1_ps(255.0f);
   c.width = _mm256_set1_epi32(f.width_px);
   c.height = _mm256_set1_epi32(f.height_px);
   return c;
@@ -207,6 +198,90 @@ SF_AVX2 Avx2Band avx2Band(const FusionFrame& f, int level) {
     b.delta[m] = _mm256_set1_ps(f.delta_m[m]);
   }
   return b;
+}
+
+/// Eight consecutive voxels (96 bytes) as one vector per field.
+struct Avx2Voxels {
+  __m256 sdf_m, weight;
+  __m256i rgb;  ///< r | g << 8 | b << 16 | reserved << 24: the Voxel's last four bytes
+};
+
+// The 96 bytes load as three vectors of dwords; dword 3n + q is field q of voxel n, in vector
+// (3n + q) / 8 at lane (3n + q) mod 8. As 3 is invertible modulo 8, every lane position holds
+// each field in exactly one of the three vectors: two blends collect a field, one permutation
+// (n ↦ lane) puts voxel n into lane n. Storing runs the same steps backwards.
+SF_AVX2 Avx2Voxels loadVoxels(const Voxel* voxels) {
+  static_assert(sizeof(Voxel) == 12 && offsetof(Voxel, weight) == 4 && offsetof(Voxel, r) == 8,
+                "the AVX2 kernel reads voxels as {sdf, weight, rgb} dword triples");
+  const float* dwords = reinterpret_cast<const float*>(voxels);
+  const __m256 v0 = _mm256_loadu_ps(dwords), v1 = _mm256_loadu_ps(dwords + 8), v2 = _mm256_loadu_ps(dwords + 16);
+  Avx2Voxels v;
+  v.sdf_m = _mm256_permutevar8x32_ps(_mm256_blend_ps(_mm256_blend_ps(v0, v1, 0b10010010), v2, 0b00100100),
+                                     _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5));
+  v.weight = _mm256_permutevar8x32_ps(_mm256_blend_ps(_mm256_blend_ps(v0, v1, 0b00100100), v2, 0b01001001),
+                                      _mm256_setr_epi32(1, 4, 7, 2, 5, 0, 3, 6));
+  v.rgb = _mm256_castps_si256(
+      _mm256_permutevar8x32_ps(_mm256_blend_ps(_mm256_blend_ps(v0, v1, 0b01001001), v2, 0b10010010),
+                               _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7)));
+  return v;
+}
+
+SF_AVX2 void storeVoxels(const Avx2Voxels& v, Voxel* voxels) {
+  const __m256 sdf = _mm256_permutevar8x32_ps(v.sdf_m, _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5));
+  const __m256 weight = _mm256_permutevar8x32_ps(v.weight, _mm256_setr_epi32(5, 0, 3, 6, 1, 4, 7, 2));
+  const __m256 rgb = _mm256_permutevar8x32_ps(_mm256_castsi256_ps(v.rgb), _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7));
+  float* dwords = reinterpret_cast<float*>(voxels);
+  _mm256_storeu_ps(dwords, _mm256_blend_ps(_mm256_blend_ps(sdf, weight, 0b10010010), rgb, 0b00100100));
+  _mm256_storeu_ps(dwords + 8, _mm256_blend_ps(_mm256_blend_ps(sdf, weight, 0b00100100), rgb, 0b01001001));
+  _mm256_storeu_ps(dwords + 16, _mm256_blend_ps(_mm256_blend_ps(sdf, weight, 0b01001001), rgb, 0b10010010));
+}
+
+/// One colour channel, (w_old·c_old + w·c)/W rounded as fuseMeasurement()'s blend, from and to
+/// byte `kShift` / 8 of each lane.
+template <int kShift>
+SF_AVX2 __m256i blendChannel(const Avx2Constants& c, __m256i old_rgb, __m256i observed_rgb, __m256 old_weight,
+                             __m256 weight, __m256 weight_sum) {
+  const __m256i byte = _mm256_set1_epi32(0xff);
+  const __m256 old_c = _mm256_cvtepi32_ps(_mm256_and_si256(_mm256_srli_epi32(old_rgb, kShift), byte));
+  const __m256 new_c = _mm256_cvtepi32_ps(_mm256_and_si256(_mm256_srli_epi32(observed_rgb, kShift), byte));
+  const __m256 mean =
+      _mm256_div_ps(_mm256_add_ps(_mm256_mul_ps(old_weight, old_c), _mm256_mul_ps(weight, new_c)), weight_sum);
+  // std::clamp(mean + 0.5, 0, 255): max_ps returns its second operand for NaN, giving 0 as the
+  // scalar conversion of NaN does after truncation to a byte.
+  const __m256 clamped = _mm256_min_ps(_mm256_max_ps(_mm256_add_ps(mean, c.half), c.zero), c.max_channel);
+  return _mm256_slli_epi32(_mm256_cvttps_epi32(clamped), kShift);
+}
+
+/// Eq. 3.8–3.9 (fuseMeasurement(), same operation order) for the voxels of the `keep` lanes;
+/// the others are written back unchanged.
+SF_AVX2 void updateEightAvx2(const FusionFrame& f, const Avx2Constants& c, __m256 keep, __m256 sdf,
+                             __m256 truncation, __m256 weight, __m256i pixel, Voxel* voxels) {
+  const Avx2Voxels old = loadVoxels(voxels);
+  // std::max(sdf, −Φ); −Φ flips the sign bit as scalar negation does.
+  const __m256 minus_truncation = _mm256_xor_ps(truncation, _mm256_set1_ps(-0.0f));
+  const __m256 clamped = _mm256_blendv_ps(sdf, minus_truncation, _mm256_cmp_ps(sdf, minus_truncation, _CMP_LT_OQ));
+  const __m256 weight_sum = _mm256_add_ps(old.weight, weight);
+  Avx2Voxels updated;
+  updated.sdf_m = _mm256_div_ps(_mm256_add_ps(_mm256_mul_ps(old.weight, old.sdf_m), _mm256_mul_ps(weight, clamped)),
+                                weight_sum);
+  // std::min(W + w, W_max)
+  updated.weight =
+      _mm256_blendv_ps(weight_sum, c.max_weight, _mm256_cmp_ps(c.max_weight, weight_sum, _CMP_LT_OQ));
+  updated.rgb = old.rgb;
+  if (f.rgb != nullptr) {
+    const __m256i observed = _mm256_mask_i32gather_epi32(_mm256_setzero_si256(), reinterpret_cast<const int*>(f.rgb),
+                                                         pixel, _mm256_castps_si256(keep), 4);
+    __m256i rgb = _mm256_and_si256(old.rgb, _mm256_set1_epi32(static_cast<int>(0xff000000u)));  // reserved byte
+    rgb = _mm256_or_si256(rgb, blendChannel<0>(c, old.rgb, observed, old.weight, weight, weight_sum));
+    rgb = _mm256_or_si256(rgb, blendChannel<8>(c, old.rgb, observed, old.weight, weight, weight_sum));
+    rgb = _mm256_or_si256(rgb, blendChannel<16>(c, old.rgb, observed, old.weight, weight, weight_sum));
+    updated.rgb = rgb;
+  }
+  updated.sdf_m = _mm256_blendv_ps(old.sdf_m, updated.sdf_m, keep);
+  updated.weight = _mm256_blendv_ps(old.weight, updated.weight, keep);
+  updated.rgb = _mm256_castps_si256(
+      _mm256_blendv_ps(_mm256_castsi256_ps(old.rgb), _mm256_castsi256_ps(updated.rgb), keep));
+  storeVoxels(updated, voxels);
 }
 
 /// The value of `by_level` for the measurement level of each lane: 2 where z reaches the
@@ -271,21 +346,10 @@ SF_AVX2 uint64_t fuseEightAvx2(const FusionFrame& f, const Avx2Constants& c, con
     }
   }
   keep = _mm256_and_ps(keep, _mm256_cmp_ps(weight, c.zero, _CMP_GT_OQ));
-  unsigned lanes = static_cast<unsigned>(_mm256_movemask_ps(keep));
+  const int lanes = _mm256_movemask_ps(keep);
   if (lanes == 0) return 0;
-  alignas(32) float sdf_m[8], truncation_m[8], weights[8];
-  alignas(32) int iu_px[8], iv_px[8];
-  _mm256_store_ps(sdf_m, sdf);
-  _mm256_store_ps(truncation_m, truncation);
-  _mm256_store_ps(weights, weight);
-  _mm256_store_si256(reinterpret_cast<__m256i*>(iu_px), iu);
-  _mm256_store_si256(reinterpret_cast<__m256i*>(iv_px), iv);
-  uint64_t updates = 0;
-  for (; lanes != 0; lanes &= lanes - 1, ++updates) {
-    const int lane = __builtin_ctz(lanes);
-    updateVoxel(f, iu_px[lane], iv_px[lane], sdf_m[lane], truncation_m[lane], weights[lane], &voxels[lane]);
-  }
-  return updates;
+  updateEightAvx2(f, c, keep, sdf, truncation, weight, pixel, voxels);
+  return static_cast<uint64_t>(__builtin_popcount(static_cast<unsigned>(lanes)));
 }
 
 /// Per-level lane terms of the voxel centres: first + i·ex for i = 0..7 (lanes beyond the
@@ -334,24 +398,32 @@ __attribute__((target("avx2"))) uint64_t fuseBlockAvx2(const FusionFrame& f, con
           updates += fuseEightAvx2(f, c, band, level, p[0], p[1], p[2], &voxels[kFinestSide * (j + kFinestSide * k)]);
         }
       }
-    } else {
-      // Flat index n = 8g + lane = i + j·side + k·side²: pick each lane's i, j, k term.
-      const int side_bits = level == 1 ? 2 : 1;
-      const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-      const __m256i side_mask = _mm256_set1_epi32(levelSide(level) - 1);
-      const __m128i shift_j = _mm_cvtsi32_si128(side_bits), shift_k = _mm_cvtsi32_si128(2 * side_bits);
-      for (int g = 0; g < levelVoxelCount(level) / 8; ++g) {
-        const __m256i n = _mm256_add_epi32(lane, _mm256_set1_epi32(8 * g));
-        const __m256i i = _mm256_and_si256(n, side_mask);
-        const __m256i j = _mm256_and_si256(_mm256_srl_epi32(n, shift_j), side_mask);
-        const __m256i k = _mm256_srl_epi32(n, shift_k);
-        __m256 p[3];
-        for (int axis = 0; axis < 3; ++axis)
-          p[axis] = _mm256_add_ps(_mm256_add_ps(_mm256_permutevar8x32_ps(s.a[axis], i),
-                                                _mm256_permutevar8x32_ps(s.b[axis], j)),
-                                  _mm256_permutevar8x32_ps(s.c[axis], k));
-        updates += fuseEightAvx2(f, c, band, level, p[0], p[1], p[2], &voxels[8 * g]);
+    } else if (level == 1) {
+      // Two rows per step: lane l is voxel (l mod 4, 2h + l / 4, k) of group g = 2k + h.
+      __m256 a[3], b[2][3];
+      for (int axis = 0; axis < 3; ++axis) {
+        a[axis] = _mm256_permutevar8x32_ps(s.a[axis], _mm256_setr_epi32(0, 1, 2, 3, 0, 1, 2, 3));
+        b[0][axis] = _mm256_permutevar8x32_ps(s.b[axis], _mm256_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1));
+        b[1][axis] = _mm256_permutevar8x32_ps(s.b[axis], _mm256_setr_epi32(2, 2, 2, 2, 3, 3, 3, 3));
       }
+      for (int k = 0; k < levelSide(1); ++k) {
+        for (int h = 0; h < 2; ++h) {
+          __m256 p[3];
+          for (int axis = 0; axis < 3; ++axis)
+            p[axis] = _mm256_add_ps(_mm256_add_ps(a[axis], b[h][axis]),
+                                    _mm256_permutevar8x32_ps(s.c[axis], _mm256_set1_epi32(k)));
+          updates += fuseEightAvx2(f, c, band, level, p[0], p[1], p[2], &voxels[8 * (2 * k + h)]);
+        }
+      }
+    } else {
+      // The whole 2³ level in one step: lane l is voxel (l mod 2, (l / 2) mod 2, l / 4).
+      __m256 p[3];
+      for (int axis = 0; axis < 3; ++axis)
+        p[axis] = _mm256_add_ps(
+            _mm256_add_ps(_mm256_permutevar8x32_ps(s.a[axis], _mm256_setr_epi32(0, 1, 0, 1, 0, 1, 0, 1)),
+                          _mm256_permutevar8x32_ps(s.b[axis], _mm256_setr_epi32(0, 0, 1, 1, 0, 0, 1, 1))),
+            _mm256_permutevar8x32_ps(s.c[axis], _mm256_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1)));
+      updates += fuseEightAvx2(f, c, band, level, p[0], p[1], p[2], voxels);
     }
   }
   return updates;

@@ -22,9 +22,10 @@ FusionStats SurfaceFuser::fuse(const StereoFrame& frame, const BlockOctree& octr
   updated->clear();
   if (blocks.empty()) return stats;
   const StereoCamera& cam = frame.camera;
-  depth_.build(frame.disparity_px, static_cast<float>(cam.fx() * cam.baseline()),
-               static_cast<float>(config_.min_depth_m), static_cast<float>(config_.max_depth_m), pool_);
-  const FusionFrame fusion_frame = makeFusionFrame(frame, config_, depth_);
+  measurements_.build(frame.disparity_px, config_.use_color ? frame.color : cv::Mat(),
+                      static_cast<float>(cam.fx() * cam.baseline()), static_cast<float>(config_.min_depth_m),
+                      static_cast<float>(config_.max_depth_m), pool_);
+  const FusionFrame fusion_frame = makeFusionFrame(frame, config_, measurements_);
   const auto fuse_block = use_avx2_ ? fuseBlockAvx2 : fuseBlockScalar;
   per_block_updates_.assign(blocks.size(), 0);
   pool_->parallelFor(blocks.size(), 8, [&](size_t begin, size_t end) {

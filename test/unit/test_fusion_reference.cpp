@@ -199,6 +199,7 @@ void randomizeVoxels(VoxelBlock* block, float max_weight, std::mt19937* rng) {
     voxel.r = static_cast<uint8_t>((*rng)());
     voxel.g = static_cast<uint8_t>((*rng)());
     voxel.b = static_cast<uint8_t>((*rng)());
+    voxel.reserved = static_cast<uint8_t>((*rng)());  // never written by fusion: must survive
   }
 }
 

@@ -10,7 +10,7 @@
 #include <cstdint>
 
 #include "stereo_fusion/MapperConfig.h"
-#include "stereo_fusion/integration/DepthImage.h"
+#include "stereo_fusion/integration/MeasurementImage.h"
 #include "stereo_fusion/integration/StereoFrame.h"
 #include "stereo_fusion/map/BlockOctree.h"
 #include "stereo_fusion/map/VoxelBlock.h"
@@ -48,15 +48,15 @@ struct FusionFrame {
   /// so a float comparison decides levelForDepth() exactly.
   float level1_min_depth_m = 0, level2_min_depth_m = 0;
   Level levels[kNumLevels];
-  const float* depth_m = nullptr;  ///< DepthImage::data(), width_px per row
-  /// Colour image rows (nullptr: colour is not fused); 3 channels RGB or 1 channel grey.
-  const uint8_t* color = nullptr;
-  size_t color_step_bytes = 0;
-  int color_channels = 0;
+  const float* depth_m = nullptr;  ///< MeasurementImage::depths(), width_px per row
+  /// MeasurementImage::colours(); nullptr: colour is not fused.
+  const uint32_t* rgb = nullptr;
 };
 
-/// Derives the FusionFrame of `frame`; `depth` must already hold the frame's depths.
-FusionFrame makeFusionFrame(const StereoFrame& frame, const MapperConfig& config, const DepthImage& depth);
+/// Derives the FusionFrame of `frame`; `measurements` must already hold the frame's depths and,
+/// if colour is fused, its colours.
+FusionFrame makeFusionFrame(const StereoFrame& frame, const MapperConfig& config,
+                            const MeasurementImage& measurements);
 
 /// Fuses `frame` into every voxel of `block` that it observes; returns the number of voxel
 /// updates. Portable reference path.

@@ -3,7 +3,7 @@
 #include <vector>
 
 #include "stereo_fusion/MapperConfig.h"
-#include "stereo_fusion/integration/DepthImage.h"
+#include "stereo_fusion/integration/MeasurementImage.h"
 #include "stereo_fusion/integration/StereoFrame.h"
 #include "stereo_fusion/map/BlockOctree.h"
 #include "stereo_fusion/util/ThreadPool.h"
@@ -31,7 +31,7 @@ struct FusionStats {
 ///
 /// Blocks are independent, so they run in parallel and the result does not depend on the
 /// number of threads. Each frame's disparities are first converted to depths once
-/// (DepthImage); the voxel loop then runs eight voxels at a time on CPUs with AVX2, with
+/// (MeasurementImage); the voxel loop then runs eight voxels at a time on CPUs with AVX2, with
 /// results bit-identical to the scalar loop (FusionKernels.h).
 class SurfaceFuser {
  public:
@@ -57,7 +57,7 @@ class SurfaceFuser {
   MapperConfig config_;
   ThreadPool* pool_;
   bool use_avx2_;
-  DepthImage depth_;                         // reused across frames
+  MeasurementImage measurements_;            // reused across frames
   std::vector<uint64_t> per_block_updates_;  // reused across frames
 };
 
