@@ -1,13 +1,16 @@
 #include "stereo_fusion/integration/FusionKernels.h"
 
-#include <immintrin.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 
 #include "stereo_fusion/integration/FusionMath.h"
 #include "stereo_fusion/integration/SurfaceFuser.h"
+
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#define STEREO_FUSION_HAVE_AVX2_KERNEL 1
+#endif
 
 // No function in this file may be compiled with FMA enabled: GCC (gnu++17) contracts a*b + c
 // into one fused operation whenever the target has FMA, which rounds once instead of twice and
@@ -146,6 +149,7 @@ uint64_t fuseBlockScalar(const FusionFrame& f, const BlockOctree& octree, VoxelB
   return updates;
 }
 
+#ifdef STEREO_FUSION_HAVE_AVX2_KERNEL
 // ---------------------------------------------------------------------------------------------
 // AVX2 kernel. Lanes are eight consecutive voxels of a level's flat array (eq. 3.4): a row of
 // level 0, two rows of level 1, all of level 2. The voxel centre is computed as in the scalar
@@ -429,6 +433,20 @@ __attribute__((target("avx2"))) uint64_t fuseBlockAvx2(const FusionFrame& f, con
   return updates;
 }
 
-bool avx2Supported() { return __builtin_cpu_supports("avx2"); }
+bool avx2Supported() {
+  // Normally done by libgcc's constructor; repeated in case a static initialiser asks first.
+  __builtin_cpu_init();
+  return __builtin_cpu_supports("avx2");  // also false when the OS does not save YMM state
+}
+
+#else  // not x86: only the scalar kernel
+
+uint64_t fuseBlockAvx2(const FusionFrame& f, const BlockOctree& octree, VoxelBlock* block) {
+  return fuseBlockScalar(f, octree, block);
+}
+
+bool avx2Supported() { return false; }
+
+#endif
 
 }  // namespace stereo_fusion

@@ -6,9 +6,17 @@
 namespace stereo_fusion {
 namespace {
 
+// Both row loops vectorise; an AVX2 clone (picked at load time) converts twice the pixels per
+// instruction. Neither contains a multiply-add, so the clones agree bit for bit.
+#if defined(__x86_64__) && defined(__GNUC__)
+#define SF_ROW_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define SF_ROW_CLONES
+#endif
+
 // Branch-free so that the compiler vectorises it: the division is done for every pixel and
 // its result discarded where the disparity is unusable (no floating-point traps are enabled).
-void convertDepthRow(const float* disparity_px, int width, float fb_px_m, float min_depth_m,
+SF_ROW_CLONES void convertDepthRow(const float* disparity_px, int width, float fb_px_m, float min_depth_m,
                      float max_depth_m, float* depth_m) {
   const float no_measurement = std::numeric_limits<float>::quiet_NaN();
   for (int u = 0; u < width; ++u) {
@@ -21,7 +29,7 @@ void convertDepthRow(const float* disparity_px, int width, float fb_px_m, float 
   }
 }
 
-void packColourRow(const uint8_t* color, int channels, int width, uint32_t* rgb) {
+SF_ROW_CLONES void packColourRow(const uint8_t* color, int channels, int width, uint32_t* rgb) {
   if (channels == 1) {
     for (int u = 0; u < width; ++u) rgb[u] = color[u] * 0x010101u;
     return;
