@@ -82,17 +82,17 @@ FusionFrame makeFusionFrame(const StereoFrame& frame, const MapperConfig& config
     f.delta_m[m] = static_cast<float>(config.weight_falloff_start_vox) * scale * f.voxel_m;
   }
   for (int level = 0; level < kNumLevels; ++level) {
-    FusionFrame::Level& l = f.levels[level];
+    FusionFrame::Level& geometry = f.levels[level];
     const float level_voxel_m = f.voxel_m * levelScale(level);
-    l.ex_m = f.R_cw.col(0) * level_voxel_m;
-    l.ey_m = f.R_cw.col(1) * level_voxel_m;
-    l.ez_m = f.R_cw.col(2) * level_voxel_m;
+    geometry.ex_m = f.R_cw.col(0) * level_voxel_m;
+    geometry.ey_m = f.R_cw.col(1) * level_voxel_m;
+    geometry.ez_m = f.R_cw.col(2) * level_voxel_m;
     // A coarse level fed by near measurements still needs values on both sides of the
     // surface at its own spacing: its band is never thinner than kMinBandVoxels of its voxels.
     const float min_truncation_m = SurfaceFuser::kMinBandVoxels * level_voxel_m;
     for (int m = 0; m < kNumLevels; ++m) {
       const float scale = static_cast<float>(levelScale(m));
-      l.truncation_m[m] = std::max(truncation_vox * scale * f.voxel_m, min_truncation_m);
+      geometry.truncation_m[m] = std::max(truncation_vox * scale * f.voxel_m, min_truncation_m);
     }
   }
   f.max_weight = static_cast<float>(config.max_weight);
@@ -110,15 +110,15 @@ uint64_t fuseBlockScalar(const FusionFrame& f, const BlockOctree& octree, VoxelB
   const Eigen::Vector3f origin_c = blockOriginInCamera(f, octree, block->key);
   uint64_t updates = 0;
   for (int level = firstLevelToVisit(f, origin_c); level < kNumLevels; ++level) {
-    const FusionFrame::Level& l = f.levels[level];
+    const FusionFrame::Level& geometry = f.levels[level];
     const int side = levelSide(level);
-    const Eigen::Vector3f first = origin_c + 0.5f * (l.ex_m + l.ey_m + l.ez_m);
+    const Eigen::Vector3f first = origin_c + 0.5f * (geometry.ex_m + geometry.ey_m + geometry.ez_m);
     Voxel* voxels = &block->voxels[levelOffset(level)];
     for (int k = 0; k < side; ++k) {
       for (int j = 0; j < side; ++j) {
         for (int i = 0; i < side; ++i) {
-          const Eigen::Vector3f p = first + static_cast<float>(i) * l.ex_m +
-                                    static_cast<float>(j) * l.ey_m + static_cast<float>(k) * l.ez_m;
+          const Eigen::Vector3f p = first + static_cast<float>(i) * geometry.ex_m +
+                                    static_cast<float>(j) * geometry.ey_m + static_cast<float>(k) * geometry.ez_m;
           if (!(p.z() > 0.0f)) continue;
           // Eq. 3.12–3.14: nearest pixel of the voxel centre's projection. Bounds are checked
           // in float first: u, v can be huge or infinite for z_c near 0.
@@ -133,7 +133,7 @@ uint64_t fuseBlockScalar(const FusionFrame& f, const BlockOctree& octree, VoxelB
           if (std::isnan(surface_depth)) continue;  // no usable measurement
           const int measurement_level = levelForDepth(surface_depth, f.thresholds);
           if (level < measurement_level) continue;  // too fine for this measurement
-          const float truncation = l.truncation_m[measurement_level];
+          const float truncation = geometry.truncation_m[measurement_level];
           const float delta = f.delta_m[measurement_level];
           const float sdf = signedDistanceAlongRay(p.x(), p.y(), p.z(), surface_depth);
           if (sdf > truncation) continue;  // far behind the surface: unobserved
@@ -362,73 +362,89 @@ struct Avx2Steps {
   __m256 a[3], b[3], c[3];
 };
 
-SF_AVX2 Avx2Steps avx2Steps(const FusionFrame::Level& l, const Eigen::Vector3f& first) {
+SF_AVX2 Avx2Steps avx2Steps(const FusionFrame::Level& geometry, const Eigen::Vector3f& first) {
   const __m256 index = _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7);
   Avx2Steps s;
   for (int axis = 0; axis < 3; ++axis) {
-    s.a[axis] = _mm256_add_ps(_mm256_set1_ps(first[axis]), _mm256_mul_ps(index, _mm256_set1_ps(l.ex_m[axis])));
-    s.b[axis] = _mm256_mul_ps(index, _mm256_set1_ps(l.ey_m[axis]));
-    s.c[axis] = _mm256_mul_ps(index, _mm256_set1_ps(l.ez_m[axis]));
+    s.a[axis] = _mm256_add_ps(_mm256_set1_ps(first[axis]), _mm256_mul_ps(index, _mm256_set1_ps(geometry.ex_m[axis])));
+    s.b[axis] = _mm256_mul_ps(index, _mm256_set1_ps(geometry.ey_m[axis]));
+    s.c[axis] = _mm256_mul_ps(index, _mm256_set1_ps(geometry.ez_m[axis]));
   }
   return s;
+}
+
+/// Level 0, one row (fixed j, k) per step: the j and k terms are the same in every lane.
+__attribute__((target("avx2"), noinline)) uint64_t fuseLevel0Avx2(const FusionFrame& f, const Avx2Constants& c, const Avx2Band& band,
+                                const Avx2Steps& s, Voxel* voxels) {
+  alignas(32) float j_terms[3][8], k_terms[3][8];
+  for (int axis = 0; axis < 3; ++axis) {
+    _mm256_store_ps(j_terms[axis], s.b[axis]);
+    _mm256_store_ps(k_terms[axis], s.c[axis]);
+  }
+  uint64_t updates = 0;
+  for (int k = 0; k < kFinestSide; ++k) {
+    for (int j = 0; j < kFinestSide; ++j) {
+      __m256 p[3];
+      for (int axis = 0; axis < 3; ++axis)
+        p[axis] = _mm256_add_ps(_mm256_add_ps(s.a[axis], _mm256_set1_ps(j_terms[axis][j])),
+                                _mm256_set1_ps(k_terms[axis][k]));
+      updates += fuseEightAvx2(f, c, band, 0, p[0], p[1], p[2], &voxels[kFinestSide * (j + kFinestSide * k)]);
+    }
+  }
+  return updates;
+}
+
+/// Level 1, two rows per step: lane n is voxel (n mod 4, 2h + n / 4, k) of step 2k + h.
+__attribute__((target("avx2"), noinline)) uint64_t fuseLevel1Avx2(const FusionFrame& f, const Avx2Constants& c, const Avx2Band& band,
+                                const Avx2Steps& s, Voxel* voxels) {
+  __m256 i_terms[3], j_terms[2][3];
+  for (int axis = 0; axis < 3; ++axis) {
+    i_terms[axis] = _mm256_permutevar8x32_ps(s.a[axis], _mm256_setr_epi32(0, 1, 2, 3, 0, 1, 2, 3));
+    j_terms[0][axis] = _mm256_permutevar8x32_ps(s.b[axis], _mm256_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1));
+    j_terms[1][axis] = _mm256_permutevar8x32_ps(s.b[axis], _mm256_setr_epi32(2, 2, 2, 2, 3, 3, 3, 3));
+  }
+  uint64_t updates = 0;
+  for (int k = 0; k < levelSide(1); ++k) {
+    for (int h = 0; h < 2; ++h) {
+      __m256 p[3];
+      for (int axis = 0; axis < 3; ++axis)
+        p[axis] = _mm256_add_ps(_mm256_add_ps(i_terms[axis], j_terms[h][axis]),
+                                _mm256_permutevar8x32_ps(s.c[axis], _mm256_set1_epi32(k)));
+      updates += fuseEightAvx2(f, c, band, 1, p[0], p[1], p[2], &voxels[8 * (2 * k + h)]);
+    }
+  }
+  return updates;
+}
+
+/// Level 2 in one step: lane n is voxel (n mod 2, (n / 2) mod 2, n / 4).
+__attribute__((target("avx2"), noinline)) uint64_t fuseLevel2Avx2(const FusionFrame& f, const Avx2Constants& c, const Avx2Band& band,
+                                const Avx2Steps& s, Voxel* voxels) {
+  __m256 p[3];
+  for (int axis = 0; axis < 3; ++axis)
+    p[axis] = _mm256_add_ps(
+        _mm256_add_ps(_mm256_permutevar8x32_ps(s.a[axis], _mm256_setr_epi32(0, 1, 0, 1, 0, 1, 0, 1)),
+                      _mm256_permutevar8x32_ps(s.b[axis], _mm256_setr_epi32(0, 0, 1, 1, 0, 0, 1, 1))),
+        _mm256_permutevar8x32_ps(s.c[axis], _mm256_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1)));
+  return fuseEightAvx2(f, c, band, 2, p[0], p[1], p[2], voxels);
 }
 
 }  // namespace
 
 __attribute__((target("avx2"))) uint64_t fuseBlockAvx2(const FusionFrame& f, const BlockOctree& octree,
                                                        VoxelBlock* block) {
+  static_assert(kNumLevels == 3 && levelVoxelCount(2) == 8, "one step per level-2 block, two rows per level-1 step");
   const Eigen::Vector3f origin_c = blockOriginInCamera(f, octree, block->key);
   const Avx2Constants c = avx2Constants(f);
   uint64_t updates = 0;
   for (int level = firstLevelToVisit(f, origin_c); level < kNumLevels; ++level) {
-    const FusionFrame::Level& l = f.levels[level];
-    const Eigen::Vector3f first = origin_c + 0.5f * (l.ex_m + l.ey_m + l.ez_m);
-    const Avx2Steps s = avx2Steps(l, first);
+    const FusionFrame::Level& geometry = f.levels[level];
+    const Eigen::Vector3f first = origin_c + 0.5f * (geometry.ex_m + geometry.ey_m + geometry.ez_m);
+    const Avx2Steps s = avx2Steps(geometry, first);
     const Avx2Band band = avx2Band(f, level);
     Voxel* voxels = &block->voxels[levelOffset(level)];
-    if (level == 0) {
-      // One row (fixed j, k) per step: the j and k terms are the same in every lane.
-      alignas(32) float b[3][8], k_terms[3][8];
-      for (int axis = 0; axis < 3; ++axis) {
-        _mm256_store_ps(b[axis], s.b[axis]);
-        _mm256_store_ps(k_terms[axis], s.c[axis]);
-      }
-      for (int k = 0; k < kFinestSide; ++k) {
-        for (int j = 0; j < kFinestSide; ++j) {
-          __m256 p[3];
-          for (int axis = 0; axis < 3; ++axis)
-            p[axis] = _mm256_add_ps(_mm256_add_ps(s.a[axis], _mm256_set1_ps(b[axis][j])),
-                                    _mm256_set1_ps(k_terms[axis][k]));
-          updates += fuseEightAvx2(f, c, band, level, p[0], p[1], p[2], &voxels[kFinestSide * (j + kFinestSide * k)]);
-        }
-      }
-    } else if (level == 1) {
-      // Two rows per step: lane l is voxel (l mod 4, 2h + l / 4, k) of group g = 2k + h.
-      __m256 a[3], b[2][3];
-      for (int axis = 0; axis < 3; ++axis) {
-        a[axis] = _mm256_permutevar8x32_ps(s.a[axis], _mm256_setr_epi32(0, 1, 2, 3, 0, 1, 2, 3));
-        b[0][axis] = _mm256_permutevar8x32_ps(s.b[axis], _mm256_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1));
-        b[1][axis] = _mm256_permutevar8x32_ps(s.b[axis], _mm256_setr_epi32(2, 2, 2, 2, 3, 3, 3, 3));
-      }
-      for (int k = 0; k < levelSide(1); ++k) {
-        for (int h = 0; h < 2; ++h) {
-          __m256 p[3];
-          for (int axis = 0; axis < 3; ++axis)
-            p[axis] = _mm256_add_ps(_mm256_add_ps(a[axis], b[h][axis]),
-                                    _mm256_permutevar8x32_ps(s.c[axis], _mm256_set1_epi32(k)));
-          updates += fuseEightAvx2(f, c, band, level, p[0], p[1], p[2], &voxels[8 * (2 * k + h)]);
-        }
-      }
-    } else {
-      // The whole 2³ level in one step: lane l is voxel (l mod 2, (l / 2) mod 2, l / 4).
-      __m256 p[3];
-      for (int axis = 0; axis < 3; ++axis)
-        p[axis] = _mm256_add_ps(
-            _mm256_add_ps(_mm256_permutevar8x32_ps(s.a[axis], _mm256_setr_epi32(0, 1, 0, 1, 0, 1, 0, 1)),
-                          _mm256_permutevar8x32_ps(s.b[axis], _mm256_setr_epi32(0, 0, 1, 1, 0, 0, 1, 1))),
-            _mm256_permutevar8x32_ps(s.c[axis], _mm256_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1)));
-      updates += fuseEightAvx2(f, c, band, level, p[0], p[1], p[2], voxels);
-    }
+    if (level == 0) updates += fuseLevel0Avx2(f, c, band, s, voxels);
+    if (level == 1) updates += fuseLevel1Avx2(f, c, band, s, voxels);
+    if (level == 2) updates += fuseLevel2Avx2(f, c, band, s, voxels);
   }
   return updates;
 }
@@ -438,6 +454,8 @@ bool avx2Supported() {
   __builtin_cpu_init();
   return __builtin_cpu_supports("avx2");  // also false when the OS does not save YMM state
 }
+
+#undef SF_AVX2
 
 #else  // not x86: only the scalar kernel
 
