@@ -87,6 +87,7 @@ std::vector<SurfaceFuser::Kernel> kernelsToTest() {
   return kernels;
 }
 
+/// Three frames of an analytic scene fused with `kernel`, each block compared with the reference.
 void expectFuserEqualsReferenceAcrossAllLevels(SurfaceFuser::Kernel kernel) {
   // A floor and a wall seen obliquely from 0.5 m to beyond 6 m: blocks on both sides of the
   // 2 m and 4 m level switches, and blocks whose nearest corner is just past them.
@@ -137,11 +138,10 @@ TEST(FusionReference, FuserEqualsPerVoxelReferenceAcrossAllLevels) {
   }
 }
 
-
 /// A disparity image of a random plane in front of the camera, with every kind of value the
 /// fuser must reject (0, negative, NaN, ±inf, denormal, huge) sprinkled in, and tiny
-/// disparities whose depths fall beyond any range.
-/// `plane_seed` picks the plane, so frames of one trial can share it.
+/// disparities whose depths fall beyond any range. `plane_seed` picks the plane, so frames of
+/// one trial can share it.
 cv::Mat randomDisparity(const StereoCamera& cam, uint32_t plane_seed, std::mt19937* rng) {
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   std::mt19937 plane_rng(plane_seed);
