@@ -1,0 +1,72 @@
+#pragma once
+// The per-block voxel loops of SurfaceFuser: one portable scalar kernel and one AVX2 kernel
+// that visits eight voxels at a time. Both perform the float operations of eq. 3.11–3.15 in
+// the same order (SSE/AVX add, mul, div and sqrt are correctly rounded, and neither kernel
+// may contract mul+add into FMA), so their results are bit-identical; the tests hold them
+// against each other and against a per-voxel transcription of the equations.
+
+#include <Eigen/Geometry>
+#include <cstddef>
+#include <cstdint>
+
+#include "stereo_fusion/MapperConfig.h"
+#include "stereo_fusion/integration/MeasurementImage.h"
+#include "stereo_fusion/integration/StereoFrame.h"
+#include "stereo_fusion/map/BlockOctree.h"
+#include "stereo_fusion/map/VoxelBlock.h"
+
+namespace stereo_fusion {
+
+/// What the kernels need from one frame and the configuration, derived once per frame and
+/// shared read-only by all blocks (and threads).
+struct FusionFrame {
+  /// Per voxel level: the steps between neighbouring voxel centres in camera coordinates and
+  /// the band half-width Φ for a measurement of each level (eq. 3.15, never below
+  /// SurfaceFuser::kMinBandVoxels of this level's voxels).
+  struct Level {
+    Eigen::Vector3f ex_m, ey_m, ez_m;
+    float truncation_m[kNumLevels];  ///< indexed by the measurement's level
+  };
+
+  Eigen::Isometry3d T_camera_world;
+  Eigen::Matrix3f R_cw;
+  float fx_px = 0, fy_px = 0, cx_px = 0, cy_px = 0;
+  int width_px = 0, height_px = 0;
+  /// width − 0.5, height − 0.5: projections at or beyond round to a pixel outside the image.
+  float u_end_px = 0, v_end_px = 0;
+  float voxel_m = 0;
+  /// Half-width of the widest band of any level: bounds how far in front of its surface a
+  /// voxel can be updated (block-level level skipping).
+  float max_truncation_m = 0;
+  float delta_m[kNumLevels] = {};  ///< δ of eq. 3.10 by measurement level
+  float max_weight = 0;
+  float depth_weight_reference_m = 0;
+  WeightMode weight_mode = WeightMode::kSteinbruecker;
+  LevelThresholds thresholds;
+  /// The thresholds as the smallest floats at or above them: for a float depth z,
+  /// z ≥ level1_min_depth_m ⇔ (double)z ≥ thresholds.scale2_min_depth_m (likewise level 2),
+  /// so a float comparison decides levelForDepth() exactly.
+  float level1_min_depth_m = 0, level2_min_depth_m = 0;
+  Level levels[kNumLevels];
+  const float* depth_m = nullptr;  ///< MeasurementImage::depths(), width_px per row
+  /// MeasurementImage::colours(); nullptr: colour is not fused.
+  const uint32_t* rgb = nullptr;
+};
+
+/// Derives the FusionFrame of `frame`; `measurements` must already hold the frame's depths and,
+/// if colour is fused, its colours.
+FusionFrame makeFusionFrame(const StereoFrame& frame, const MapperConfig& config,
+                            const MeasurementImage& measurements);
+
+/// Fuses `frame` into every voxel of `block` that it observes; returns the number of voxel
+/// updates. Portable reference path.
+uint64_t fuseBlockScalar(const FusionFrame& frame, const BlockOctree& octree, VoxelBlock* block);
+
+/// Same result as fuseBlockScalar(), bit for bit, eight voxels per step. Only call it when
+/// avx2Supported().
+uint64_t fuseBlockAvx2(const FusionFrame& frame, const BlockOctree& octree, VoxelBlock* block);
+
+/// Whether this CPU (and OS) can run fuseBlockAvx2().
+bool avx2Supported();
+
+}  // namespace stereo_fusion

@@ -1,0 +1,470 @@
+#include "stereo_fusion/integration/FusionKernels.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+
+#include "stereo_fusion/integration/FusionMath.h"
+#include "stereo_fusion/integration/SurfaceFuser.h"
+
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#define STEREO_FUSION_HAVE_AVX2_KERNEL 1
+#endif
+
+// No function in this file may be compiled with FMA enabled: GCC (gnu++17) contracts a*b + c
+// into one fused operation whenever the target has FMA, which rounds once instead of twice and
+// would make the AVX2 kernel disagree with the scalar one. target("avx2") does not enable FMA.
+
+namespace stereo_fusion {
+namespace {
+
+/// Smallest float f with (double)f ≥ t, so that z ≥ f ⇔ (double)z ≥ t for every float z.
+float smallestFloatAtOrAbove(double t) {
+  float f = static_cast<float>(t);
+  if (static_cast<double>(f) < t) f = std::nextafter(f, INFINITY);
+  return f;
+}
+
+/// Block origin in camera coordinates: transformed in double (world coordinates may be large);
+/// the small offsets to the voxel centres are then stepped in float.
+Eigen::Vector3f blockOriginInCamera(const FusionFrame& f, const BlockOctree& octree, const BlockKey& key) {
+  return (f.T_camera_world * octree.blockOrigin(key)).cast<float>();
+}
+
+/// Block-level depth test: a voxel is only updated by a surface at depth ≥ z_voxel − Φ
+/// (eq. 3.15 with sdf ≤ Φ), and a level finer than the measurement's is skipped. When even
+/// the block's nearest corner is so far that every possible measurement is coarser than a
+/// level, none of that level's voxels can change: the kernels start at the returned level.
+int firstLevelToVisit(const FusionFrame& f, const Eigen::Vector3f& origin_c) {
+  const float block_m = f.voxel_m * kFinestSide;
+  float nearest_z = origin_c.z();
+  for (int c = 1; c < 8; ++c)
+    nearest_z = std::min(nearest_z, origin_c.z() + block_m * ((c & 1 ? f.R_cw(2, 0) : 0.0f) +
+                                                            (c & 2 ? f.R_cw(2, 1) : 0.0f) +
+                                                            (c & 4 ? f.R_cw(2, 2) : 0.0f)));
+  // Margin: the voxel loop computes depths with other float roundings.
+  const double nearest_surface_m = static_cast<double>(nearest_z) - f.max_truncation_m - 1e-3;
+  return levelForDepth(nearest_surface_m, f.thresholds);
+}
+
+/// Eq. 3.8–3.9 for one voxel, with the colour of `pixel` if colour is fused. `sdf_m` is the
+/// untruncated distance; it is clamped to −Φ here (observed free space).
+inline void updateVoxel(const FusionFrame& f, size_t pixel, float sdf_m, float truncation_m, float weight,
+                        Voxel* voxel) {
+  uint8_t rgb[3];
+  if (f.rgb != nullptr) MeasurementImage::unpack(f.rgb[pixel], rgb);
+  fuseMeasurement(voxel, std::max(sdf_m, -truncation_m), weight, f.max_weight, f.rgb != nullptr ? rgb : nullptr);
+}
+
+}  // namespace
+
+FusionFrame makeFusionFrame(const StereoFrame& frame, const MapperConfig& config,
+                            const MeasurementImage& measurements) {
+  const StereoCamera& cam = frame.camera;
+  FusionFrame f;
+  f.T_camera_world = frame.T_world_camera.inverse();
+  f.R_cw = f.T_camera_world.linear().cast<float>();
+  f.fx_px = static_cast<float>(cam.fx());
+  f.fy_px = static_cast<float>(cam.fy());
+  f.cx_px = static_cast<float>(cam.cx());
+  f.cy_px = static_cast<float>(cam.cy());
+  f.width_px = cam.width();
+  f.height_px = cam.height();
+  f.u_end_px = f.width_px - 0.5f;
+  f.v_end_px = f.height_px - 0.5f;
+  f.voxel_m = static_cast<float>(config.voxel_size_m);
+  const float truncation_vox = static_cast<float>(config.truncation_vox);
+  f.max_truncation_m =
+      std::max(truncation_vox, SurfaceFuser::kMinBandVoxels) * levelScale(kNumLevels - 1) * f.voxel_m;
+  for (int m = 0; m < kNumLevels; ++m) {
+    const float scale = static_cast<float>(levelScale(m));
+    f.delta_m[m] = static_cast<float>(config.weight_falloff_start_vox) * scale * f.voxel_m;
+  }
+  for (int level = 0; level < kNumLevels; ++level) {
+    FusionFrame::Level& geometry = f.levels[level];
+    const float level_voxel_m = f.voxel_m * levelScale(level);
+    geometry.ex_m = f.R_cw.col(0) * level_voxel_m;
+    geometry.ey_m = f.R_cw.col(1) * level_voxel_m;
+    geometry.ez_m = f.R_cw.col(2) * level_voxel_m;
+    // A coarse level fed by near measurements still needs values on both sides of the
+    // surface at its own spacing: its band is never thinner than kMinBandVoxels of its voxels.
+    const float min_truncation_m = SurfaceFuser::kMinBandVoxels * level_voxel_m;
+    for (int m = 0; m < kNumLevels; ++m) {
+      const float scale = static_cast<float>(levelScale(m));
+      geometry.truncation_m[m] = std::max(truncation_vox * scale * f.voxel_m, min_truncation_m);
+    }
+  }
+  f.max_weight = static_cast<float>(config.max_weight);
+  f.depth_weight_reference_m = static_cast<float>(config.depth_weight_reference_m);
+  f.weight_mode = config.weight_mode;
+  f.thresholds = config.levels;
+  f.level1_min_depth_m = smallestFloatAtOrAbove(config.levels.scale2_min_depth_m);
+  f.level2_min_depth_m = smallestFloatAtOrAbove(config.levels.scale4_min_depth_m);
+  f.depth_m = measurements.depths();
+  if (config.use_color && !frame.color.empty()) f.rgb = measurements.colours();
+  return f;
+}
+
+uint64_t fuseBlockScalar(const FusionFrame& f, const BlockOctree& octree, VoxelBlock* block) {
+  const Eigen::Vector3f origin_c = blockOriginInCamera(f, octree, block->key);
+  uint64_t updates = 0;
+  for (int level = firstLevelToVisit(f, origin_c); level < kNumLevels; ++level) {
+    const FusionFrame::Level& geometry = f.levels[level];
+    const int side = levelSide(level);
+    const Eigen::Vector3f first = origin_c + 0.5f * (geometry.ex_m + geometry.ey_m + geometry.ez_m);
+    Voxel* voxels = &block->voxels[levelOffset(level)];
+    for (int k = 0; k < side; ++k) {
+      for (int j = 0; j < side; ++j) {
+        for (int i = 0; i < side; ++i) {
+          const Eigen::Vector3f p = first + static_cast<float>(i) * geometry.ex_m +
+                                    static_cast<float>(j) * geometry.ey_m + static_cast<float>(k) * geometry.ez_m;
+          if (!(p.z() > 0.0f)) continue;
+          // Eq. 3.12–3.14: nearest pixel of the voxel centre's projection. Bounds are checked
+          // in float first: u, v can be huge or infinite for z_c near 0.
+          const float u = f.fx_px * p.x() / p.z() + f.cx_px;
+          const float v = f.fy_px * p.y() / p.z() + f.cy_px;
+          if (!(u >= -0.5f && v >= -0.5f && u < f.u_end_px && v < f.v_end_px)) continue;
+          const int iu = static_cast<int>(std::floor(u + 0.5f));
+          const int iv = static_cast<int>(std::floor(v + 0.5f));
+          if (iu < 0 || iv < 0 || iu >= f.width_px || iv >= f.height_px) continue;
+          const size_t pixel = static_cast<size_t>(iv) * f.width_px + iu;
+          const float surface_depth = f.depth_m[pixel];
+          if (std::isnan(surface_depth)) continue;  // no usable measurement
+          const int measurement_level = levelForDepth(surface_depth, f.thresholds);
+          if (level < measurement_level) continue;  // too fine for this measurement
+          const float truncation = geometry.truncation_m[measurement_level];
+          const float delta = f.delta_m[measurement_level];
+          const float sdf = signedDistanceAlongRay(p.x(), p.y(), p.z(), surface_depth);
+          if (sdf > truncation) continue;  // far behind the surface: unobserved
+          const float w = measurementWeight(f.weight_mode, sdf, delta, truncation, surface_depth,
+                                            f.depth_weight_reference_m);
+          if (!(w > 0.0f)) continue;
+          updateVoxel(f, pixel, sdf, truncation, w, &voxels[i + j * side + k * side * side]);
+          ++updates;
+        }
+      }
+    }
+  }
+  return updates;
+}
+
+#ifdef STEREO_FUSION_HAVE_AVX2_KERNEL
+// ---------------------------------------------------------------------------------------------
+// AVX2 kernel. Lanes are eight consecutive voxels of a level's flat array (eq. 3.4): a row of
+// level 0, two rows of level 1, all of level 2. The voxel centre is computed as in the scalar
+// kernel, ((first + i·ex) + j·ey) + k·ez per coordinate, from per-lane i, j, k terms.
+
+namespace {
+
+#define SF_AVX2 __attribute__((target("avx2"), always_inline)) inline
+
+/// Frame constants broadcast to all lanes, once per block.
+struct Avx2Constants {
+  __m256 fx, fy, cx, cy, u_end, v_end, minus_half, half, zero, one, nan;
+  __m256 level1_min_depth, level2_min_depth, depth_weight_reference, max_weight, max_channel;
+  __m256i width, height;
+};
+
+SF_AVX2 Avx2Constants avx2Constants(const FusionFrame& f) {
+  Avx2Constants c;
+  c.fx = _mm256_set1_ps(f.fx_px);
+  c.fy = _mm256_set1_ps(f.fy_px);
+  c.cx = _mm256_set1_ps(f.cx_px);
+  c.cy = _mm256_set1_ps(f.cy_px);
+  c.u_end = _mm256_set1_ps(f.u_end_px);
+  c.v_end = _mm256_set1_ps(f.v_end_px);
+  c.minus_half = _mm256_set1_ps(-0.5f);
+  c.half = _mm256_set1_ps(0.5f);
+  c.zero = _mm256_setzero_ps();
+  c.one = _mm256_set1_ps(1.0f);
+  c.nan = _mm256_set1_ps(NAN);
+  c.level1_min_depth = _mm256_set1_ps(f.level1_min_depth_m);
+  c.level2_min_depth = _mm256_set1_ps(f.level2_min_depth_m);
+  c.depth_weight_reference = _mm256_set1_ps(f.depth_weight_reference_m);
+  c.max_weight = _mm256_set1_ps(f.max_weight);
+  c.max_channel = _mm256_set1_ps(255.0f);
+  c.width = _mm256_set1_epi32(f.width_px);
+  c.height = _mm256_set1_epi32(f.height_px);
+  return c;
+}
+
+/// Measurement-level dependent band half-width and δ for one voxel level.
+struct Avx2Band {
+  __m256 truncation[kNumLevels];
+  __m256 delta[kNumLevels];
+};
+
+SF_AVX2 Avx2Band avx2Band(const FusionFrame& f, int level) {
+  Avx2Band b;
+  for (int m = 0; m < kNumLevels; ++m) {
+    b.truncation[m] = _mm256_set1_ps(f.levels[level].truncation_m[m]);
+    b.delta[m] = _mm256_set1_ps(f.delta_m[m]);
+  }
+  return b;
+}
+
+/// Eight consecutive voxels (96 bytes) as one vector per field.
+struct Avx2Voxels {
+  __m256 sdf_m, weight;
+  __m256i rgb;  ///< r | g << 8 | b << 16 | reserved << 24: the Voxel's last four bytes
+};
+
+// The 96 bytes load as three vectors of dwords; dword 3n + q is field q of voxel n, in vector
+// (3n + q) / 8 at lane (3n + q) mod 8. As 3 is invertible modulo 8, every lane position holds
+// each field in exactly one of the three vectors: two blends collect a field, one permutation
+// (n ↦ lane) puts voxel n into lane n. Storing runs the same steps backwards.
+SF_AVX2 Avx2Voxels loadVoxels(const Voxel* voxels) {
+  static_assert(sizeof(Voxel) == 12 && offsetof(Voxel, weight) == 4 && offsetof(Voxel, r) == 8,
+                "the AVX2 kernel reads voxels as {sdf, weight, rgb} dword triples");
+  const float* dwords = reinterpret_cast<const float*>(voxels);
+  const __m256 v0 = _mm256_loadu_ps(dwords), v1 = _mm256_loadu_ps(dwords + 8), v2 = _mm256_loadu_ps(dwords + 16);
+  Avx2Voxels v;
+  v.sdf_m = _mm256_permutevar8x32_ps(_mm256_blend_ps(_mm256_blend_ps(v0, v1, 0b10010010), v2, 0b00100100),
+                                     _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5));
+  v.weight = _mm256_permutevar8x32_ps(_mm256_blend_ps(_mm256_blend_ps(v0, v1, 0b00100100), v2, 0b01001001),
+                                      _mm256_setr_epi32(1, 4, 7, 2, 5, 0, 3, 6));
+  v.rgb = _mm256_castps_si256(
+      _mm256_permutevar8x32_ps(_mm256_blend_ps(_mm256_blend_ps(v0, v1, 0b01001001), v2, 0b10010010),
+                               _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7)));
+  return v;
+}
+
+SF_AVX2 void storeVoxels(const Avx2Voxels& v, Voxel* voxels) {
+  const __m256 sdf = _mm256_permutevar8x32_ps(v.sdf_m, _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5));
+  const __m256 weight = _mm256_permutevar8x32_ps(v.weight, _mm256_setr_epi32(5, 0, 3, 6, 1, 4, 7, 2));
+  const __m256 rgb = _mm256_permutevar8x32_ps(_mm256_castsi256_ps(v.rgb), _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7));
+  float* dwords = reinterpret_cast<float*>(voxels);
+  _mm256_storeu_ps(dwords, _mm256_blend_ps(_mm256_blend_ps(sdf, weight, 0b10010010), rgb, 0b00100100));
+  _mm256_storeu_ps(dwords + 8, _mm256_blend_ps(_mm256_blend_ps(sdf, weight, 0b00100100), rgb, 0b01001001));
+  _mm256_storeu_ps(dwords + 16, _mm256_blend_ps(_mm256_blend_ps(sdf, weight, 0b01001001), rgb, 0b10010010));
+}
+
+/// One colour channel, (w_old·c_old + w·c)/W rounded as fuseMeasurement()'s blend, from and to
+/// byte `kShift` / 8 of each lane.
+template <int kShift>
+SF_AVX2 __m256i blendChannel(const Avx2Constants& c, __m256i old_rgb, __m256i observed_rgb, __m256 old_weight,
+                             __m256 weight, __m256 weight_sum) {
+  const __m256i byte = _mm256_set1_epi32(0xff);
+  const __m256 old_c = _mm256_cvtepi32_ps(_mm256_and_si256(_mm256_srli_epi32(old_rgb, kShift), byte));
+  const __m256 new_c = _mm256_cvtepi32_ps(_mm256_and_si256(_mm256_srli_epi32(observed_rgb, kShift), byte));
+  const __m256 mean =
+      _mm256_div_ps(_mm256_add_ps(_mm256_mul_ps(old_weight, old_c), _mm256_mul_ps(weight, new_c)), weight_sum);
+  // std::clamp(mean + 0.5, 0, 255): max_ps returns its second operand for NaN, giving 0 as the
+  // scalar conversion of NaN does after truncation to a byte.
+  const __m256 clamped = _mm256_min_ps(_mm256_max_ps(_mm256_add_ps(mean, c.half), c.zero), c.max_channel);
+  return _mm256_slli_epi32(_mm256_cvttps_epi32(clamped), kShift);
+}
+
+/// Eq. 3.8–3.9 (fuseMeasurement(), same operation order) for the voxels of the `keep` lanes;
+/// the others are written back unchanged.
+SF_AVX2 void updateEightAvx2(const FusionFrame& f, const Avx2Constants& c, __m256 keep, __m256 sdf,
+                             __m256 truncation, __m256 weight, __m256i pixel, Voxel* voxels) {
+  const Avx2Voxels old = loadVoxels(voxels);
+  // std::max(sdf, −Φ); −Φ flips the sign bit as scalar negation does.
+  const __m256 minus_truncation = _mm256_xor_ps(truncation, _mm256_set1_ps(-0.0f));
+  const __m256 clamped = _mm256_blendv_ps(sdf, minus_truncation, _mm256_cmp_ps(sdf, minus_truncation, _CMP_LT_OQ));
+  const __m256 weight_sum = _mm256_add_ps(old.weight, weight);
+  Avx2Voxels updated;
+  updated.sdf_m = _mm256_div_ps(_mm256_add_ps(_mm256_mul_ps(old.weight, old.sdf_m), _mm256_mul_ps(weight, clamped)),
+                                weight_sum);
+  // std::min(W + w, W_max)
+  updated.weight =
+      _mm256_blendv_ps(weight_sum, c.max_weight, _mm256_cmp_ps(c.max_weight, weight_sum, _CMP_LT_OQ));
+  updated.rgb = old.rgb;
+  if (f.rgb != nullptr) {
+    const __m256i observed = _mm256_mask_i32gather_epi32(_mm256_setzero_si256(), reinterpret_cast<const int*>(f.rgb),
+                                                         pixel, _mm256_castps_si256(keep), 4);
+    __m256i rgb = _mm256_and_si256(old.rgb, _mm256_set1_epi32(static_cast<int>(0xff000000u)));  // reserved byte
+    rgb = _mm256_or_si256(rgb, blendChannel<0>(c, old.rgb, observed, old.weight, weight, weight_sum));
+    rgb = _mm256_or_si256(rgb, blendChannel<8>(c, old.rgb, observed, old.weight, weight, weight_sum));
+    rgb = _mm256_or_si256(rgb, blendChannel<16>(c, old.rgb, observed, old.weight, weight, weight_sum));
+    updated.rgb = rgb;
+  }
+  updated.sdf_m = _mm256_blendv_ps(old.sdf_m, updated.sdf_m, keep);
+  updated.weight = _mm256_blendv_ps(old.weight, updated.weight, keep);
+  updated.rgb = _mm256_castps_si256(
+      _mm256_blendv_ps(_mm256_castsi256_ps(old.rgb), _mm256_castsi256_ps(updated.rgb), keep));
+  storeVoxels(updated, voxels);
+}
+
+/// The value of `by_level` for the measurement level of each lane: 2 where z reaches the
+/// level-2 threshold, else 1 where it reaches the level-1 one, else 0 (levelForDepth()).
+SF_AVX2 __m256 selectByLevel(const __m256 by_level[kNumLevels], __m256 reaches1, __m256 reaches2) {
+  return _mm256_blendv_ps(_mm256_blendv_ps(by_level[0], by_level[1], reaches1), by_level[2], reaches2);
+}
+
+/// Eq. 3.11–3.15 and 3.10 for eight voxels at camera points (px, py, pz); fuses the observed
+/// ones into voxels[0..7]. Returns the number of updates.
+SF_AVX2 uint64_t fuseEightAvx2(const FusionFrame& f, const Avx2Constants& c, const Avx2Band& band,
+                               int level, __m256 px, __m256 py, __m256 pz, Voxel* voxels) {
+  const __m256 in_front = _mm256_cmp_ps(pz, c.zero, _CMP_GT_OQ);
+  if (_mm256_testz_ps(in_front, in_front)) return 0;
+  // Eq. 3.12–3.14, as fx·x/z + cx in the scalar order (no reciprocal: x/z ≠ x·(1/z)).
+  const __m256 u = _mm256_add_ps(_mm256_div_ps(_mm256_mul_ps(c.fx, px), pz), c.cx);
+  const __m256 v = _mm256_add_ps(_mm256_div_ps(_mm256_mul_ps(c.fy, py), pz), c.cy);
+  __m256 inside = _mm256_and_ps(in_front, _mm256_cmp_ps(u, c.minus_half, _CMP_GE_OQ));
+  inside = _mm256_and_ps(inside, _mm256_cmp_ps(v, c.minus_half, _CMP_GE_OQ));
+  inside = _mm256_and_ps(inside, _mm256_cmp_ps(u, c.u_end, _CMP_LT_OQ));
+  inside = _mm256_and_ps(inside, _mm256_cmp_ps(v, c.v_end, _CMP_LT_OQ));
+  if (_mm256_testz_ps(inside, inside)) return 0;
+  const __m256i iu = _mm256_cvttps_epi32(_mm256_floor_ps(_mm256_add_ps(u, c.half)));
+  const __m256i iv = _mm256_cvttps_epi32(_mm256_floor_ps(_mm256_add_ps(v, c.half)));
+  // iu ∈ [0, width) and iv ∈ [0, height), in integers as in the scalar kernel.
+  const __m256i minus_one = _mm256_set1_epi32(-1);
+  __m256i in_image = _mm256_castps_si256(inside);
+  in_image = _mm256_and_si256(in_image, _mm256_cmpgt_epi32(iu, minus_one));
+  in_image = _mm256_and_si256(in_image, _mm256_cmpgt_epi32(iv, minus_one));
+  in_image = _mm256_and_si256(in_image, _mm256_cmpgt_epi32(c.width, iu));
+  in_image = _mm256_and_si256(in_image, _mm256_cmpgt_epi32(c.height, iv));
+  const __m256i pixel = _mm256_add_epi32(_mm256_mullo_epi32(iv, c.width), iu);
+  // Lanes outside the image read nothing and get NaN: "no measurement".
+  const __m256 surface_depth =
+      _mm256_mask_i32gather_ps(c.nan, f.depth_m, pixel, _mm256_castsi256_ps(in_image), 4);
+  __m256 keep = _mm256_cmp_ps(surface_depth, surface_depth, _CMP_ORD_Q);
+  const __m256 reaches1 = _mm256_cmp_ps(surface_depth, c.level1_min_depth, _CMP_GE_OQ);
+  const __m256 reaches2 = _mm256_cmp_ps(surface_depth, c.level2_min_depth, _CMP_GE_OQ);
+  // Too fine for the measurement (level < measurement level).
+  if (level == 0) keep = _mm256_andnot_ps(_mm256_or_ps(reaches1, reaches2), keep);
+  if (level == 1) keep = _mm256_andnot_ps(reaches2, keep);
+  if (_mm256_testz_ps(keep, keep)) return 0;
+  const __m256 truncation = selectByLevel(band.truncation, reaches1, reaches2);
+  // Eq. 3.15: sqrt(x² + y² + z²) · (1 − z_s / z), in signedDistanceAlongRay()'s order.
+  const __m256 norm = _mm256_sqrt_ps(
+      _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(px, px), _mm256_mul_ps(py, py)), _mm256_mul_ps(pz, pz)));
+  const __m256 sdf = _mm256_mul_ps(norm, _mm256_sub_ps(c.one, _mm256_div_ps(surface_depth, pz)));
+  // !(sdf > Φ): far behind the surface is unobserved (unordered compares keep NaN lanes, as
+  // the scalar test does; the weight test below drops them).
+  keep = _mm256_and_ps(keep, _mm256_cmp_ps(sdf, truncation, _CMP_NGT_UQ));
+  if (_mm256_testz_ps(keep, keep)) return 0;
+  // measurementWeight() for lanes with !(sdf > Φ).
+  __m256 weight = c.one;
+  if (f.weight_mode != WeightMode::kConstant) {
+    const __m256 delta = selectByLevel(band.delta, reaches1, reaches2);
+    const __m256 falloff =
+        _mm256_div_ps(_mm256_sub_ps(truncation, sdf), _mm256_sub_ps(truncation, delta));
+    weight = _mm256_blendv_ps(falloff, c.one, _mm256_cmp_ps(sdf, delta, _CMP_LT_OQ));
+    if (f.weight_mode == WeightMode::kDepthAware) {
+      const __m256 ratio = _mm256_div_ps(c.depth_weight_reference, surface_depth);
+      weight = _mm256_mul_ps(_mm256_mul_ps(weight, ratio), ratio);
+    }
+  }
+  keep = _mm256_and_ps(keep, _mm256_cmp_ps(weight, c.zero, _CMP_GT_OQ));
+  const int lanes = _mm256_movemask_ps(keep);
+  if (lanes == 0) return 0;
+  updateEightAvx2(f, c, keep, sdf, truncation, weight, pixel, voxels);
+  return static_cast<uint64_t>(__builtin_popcount(static_cast<unsigned>(lanes)));
+}
+
+/// Per-level lane terms of the voxel centres: first + i·ex for i = 0..7 (lanes beyond the
+/// level's side are unused), and j·ey, k·ez likewise, each coordinate in one vector.
+struct Avx2Steps {
+  __m256 a[3], b[3], c[3];
+};
+
+SF_AVX2 Avx2Steps avx2Steps(const FusionFrame::Level& geometry, const Eigen::Vector3f& first) {
+  const __m256 index = _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7);
+  Avx2Steps s;
+  for (int axis = 0; axis < 3; ++axis) {
+    s.a[axis] = _mm256_add_ps(_mm256_set1_ps(first[axis]), _mm256_mul_ps(index, _mm256_set1_ps(geometry.ex_m[axis])));
+    s.b[axis] = _mm256_mul_ps(index, _mm256_set1_ps(geometry.ey_m[axis]));
+    s.c[axis] = _mm256_mul_ps(index, _mm256_set1_ps(geometry.ez_m[axis]));
+  }
+  return s;
+}
+
+/// Level 0, one row (fixed j, k) per step: the j and k terms are the same in every lane.
+__attribute__((target("avx2"), noinline)) uint64_t fuseLevel0Avx2(const FusionFrame& f, const Avx2Constants& c, const Avx2Band& band,
+                                const Avx2Steps& s, Voxel* voxels) {
+  alignas(32) float j_terms[3][8], k_terms[3][8];
+  for (int axis = 0; axis < 3; ++axis) {
+    _mm256_store_ps(j_terms[axis], s.b[axis]);
+    _mm256_store_ps(k_terms[axis], s.c[axis]);
+  }
+  uint64_t updates = 0;
+  for (int k = 0; k < kFinestSide; ++k) {
+    for (int j = 0; j < kFinestSide; ++j) {
+      __m256 p[3];
+      for (int axis = 0; axis < 3; ++axis)
+        p[axis] = _mm256_add_ps(_mm256_add_ps(s.a[axis], _mm256_set1_ps(j_terms[axis][j])),
+                                _mm256_set1_ps(k_terms[axis][k]));
+      updates += fuseEightAvx2(f, c, band, 0, p[0], p[1], p[2], &voxels[kFinestSide * (j + kFinestSide * k)]);
+    }
+  }
+  return updates;
+}
+
+/// Level 1, two rows per step: lane n is voxel (n mod 4, 2h + n / 4, k) of step 2k + h.
+__attribute__((target("avx2"), noinline)) uint64_t fuseLevel1Avx2(const FusionFrame& f, const Avx2Constants& c, const Avx2Band& band,
+                                const Avx2Steps& s, Voxel* voxels) {
+  __m256 i_terms[3], j_terms[2][3];
+  for (int axis = 0; axis < 3; ++axis) {
+    i_terms[axis] = _mm256_permutevar8x32_ps(s.a[axis], _mm256_setr_epi32(0, 1, 2, 3, 0, 1, 2, 3));
+    j_terms[0][axis] = _mm256_permutevar8x32_ps(s.b[axis], _mm256_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1));
+    j_terms[1][axis] = _mm256_permutevar8x32_ps(s.b[axis], _mm256_setr_epi32(2, 2, 2, 2, 3, 3, 3, 3));
+  }
+  uint64_t updates = 0;
+  for (int k = 0; k < levelSide(1); ++k) {
+    for (int h = 0; h < 2; ++h) {
+      __m256 p[3];
+      for (int axis = 0; axis < 3; ++axis)
+        p[axis] = _mm256_add_ps(_mm256_add_ps(i_terms[axis], j_terms[h][axis]),
+                                _mm256_permutevar8x32_ps(s.c[axis], _mm256_set1_epi32(k)));
+      updates += fuseEightAvx2(f, c, band, 1, p[0], p[1], p[2], &voxels[8 * (2 * k + h)]);
+    }
+  }
+  return updates;
+}
+
+/// Level 2 in one step: lane n is voxel (n mod 2, (n / 2) mod 2, n / 4).
+__attribute__((target("avx2"), noinline)) uint64_t fuseLevel2Avx2(const FusionFrame& f, const Avx2Constants& c, const Avx2Band& band,
+                                const Avx2Steps& s, Voxel* voxels) {
+  __m256 p[3];
+  for (int axis = 0; axis < 3; ++axis)
+    p[axis] = _mm256_add_ps(
+        _mm256_add_ps(_mm256_permutevar8x32_ps(s.a[axis], _mm256_setr_epi32(0, 1, 0, 1, 0, 1, 0, 1)),
+                      _mm256_permutevar8x32_ps(s.b[axis], _mm256_setr_epi32(0, 0, 1, 1, 0, 0, 1, 1))),
+        _mm256_permutevar8x32_ps(s.c[axis], _mm256_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1)));
+  return fuseEightAvx2(f, c, band, 2, p[0], p[1], p[2], voxels);
+}
+
+}  // namespace
+
+__attribute__((target("avx2"))) uint64_t fuseBlockAvx2(const FusionFrame& f, const BlockOctree& octree,
+                                                       VoxelBlock* block) {
+  static_assert(kNumLevels == 3 && levelVoxelCount(2) == 8, "one step per level-2 block, two rows per level-1 step");
+  const Eigen::Vector3f origin_c = blockOriginInCamera(f, octree, block->key);
+  const Avx2Constants c = avx2Constants(f);
+  uint64_t updates = 0;
+  for (int level = firstLevelToVisit(f, origin_c); level < kNumLevels; ++level) {
+    const FusionFrame::Level& geometry = f.levels[level];
+    const Eigen::Vector3f first = origin_c + 0.5f * (geometry.ex_m + geometry.ey_m + geometry.ez_m);
+    const Avx2Steps s = avx2Steps(geometry, first);
+    const Avx2Band band = avx2Band(f, level);
+    Voxel* voxels = &block->voxels[levelOffset(level)];
+    if (level == 0) updates += fuseLevel0Avx2(f, c, band, s, voxels);
+    if (level == 1) updates += fuseLevel1Avx2(f, c, band, s, voxels);
+    if (level == 2) updates += fuseLevel2Avx2(f, c, band, s, voxels);
+  }
+  return updates;
+}
+
+bool avx2Supported() {
+  // Normally done by libgcc's constructor; repeated in case a static initialiser asks first.
+  __builtin_cpu_init();
+  return __builtin_cpu_supports("avx2");  // also false when the OS does not save YMM state
+}
+
+#undef SF_AVX2
+
+#else  // not x86: only the scalar kernel
+
+uint64_t fuseBlockAvx2(const FusionFrame& f, const BlockOctree& octree, VoxelBlock* block) {
+  return fuseBlockScalar(f, octree, block);
+}
+
+bool avx2Supported() { return false; }
+
+#endif
+
+}  // namespace stereo_fusion
