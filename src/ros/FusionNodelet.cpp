@@ -94,7 +94,7 @@ void FusionNodelet::onFrame(const DisparityMsg::ConstPtr& d, const ImageMsg::Con
       if (!node_config_.drop_oldest) return;
       queue_.pop_front();
     }
-    queue_.push_back({d, i, c});
+    queue_.push_back({d, i, c, map_epoch_.load()});
   }
   queue_cv_.notify_one();
 }
@@ -168,6 +168,10 @@ void FusionNodelet::processFrame(const QueuedFrame& f) {
   IntegrationResult result;
   {
     std::lock_guard<std::mutex> lock(map_mutex_);
+    if (f.map_epoch != map_epoch_.load()) {  // a reset or load_map came in while it waited for tf
+      ++dropped_superseded_;
+      return;
+    }
     try {
       result = mapper_->integrate(frame);
     } catch (const std::exception&) {
@@ -309,8 +313,16 @@ bool FusionNodelet::getFullMesh(GetFullMesh::Request&, GetFullMesh::Response& re
   return true;
 }
 
+void FusionNodelet::startMapEpochLocked() {
+  std::lock_guard<std::mutex> lock(queue_mutex_);
+  ++map_epoch_;
+  dropped_superseded_ += queue_.size();
+  queue_.clear();
+}
+
 bool FusionNodelet::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
   std::lock_guard<std::mutex> lock(map_mutex_);
+  startMapEpochLocked();
   mapper_->reset();
   path_.poses.clear();
   stage_ms_.clear();
@@ -356,6 +368,7 @@ bool FusionNodelet::loadMap(LoadMap::Request& req, LoadMap::Response& res) {
     NODELET_ERROR("stereo_fusion: load_map: %s", res.message.c_str());
     return true;
   }
+  startMapEpochLocked();
   path_.poses.clear();
   stage_ms_.clear();
   publishFullLocked(changes.removed);
@@ -414,6 +427,7 @@ void FusionNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
   status.add("dropped: timestamp backwards", dropped_backwards_.load());
   status.add("dropped: duplicate frame", dropped_duplicate_.load());
   status.add("dropped: pose jump", dropped_pose_jump_.load());
+  status.add("dropped: superseded by reset/load", dropped_superseded_.load());
   status.add("latency p50 (s)", pct(0.5));
   status.add("latency p99 (s)", pct(0.99));
   const char* names[5] = {"lookup", "fusion", "meshing", "texture", "total"};

@@ -40,6 +40,26 @@ class DiagnosticsWatcher {
  public:
   DiagnosticsWatcher() { sub_ = ros::NodeHandle().subscribe("/diagnostics", 10, &DiagnosticsWatcher::onMessage, this); }
 
+  /// Waits for the next report after this call. Counters only grow, so values read after it are
+  /// at least what the node had counted when this was called: a stale, lower reading taken as
+  /// a baseline would make later "count ≥ baseline + n" waits pass too early.
+  bool waitForNextReport(double timeout_s) {
+    uint64_t seen;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      seen = reports_;
+    }
+    const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(timeout_s);
+    while (ros::ok() && ros::WallTime::now() < end) {
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (reports_ > seen) return true;
+      }
+      ros::WallDuration(0.02).sleep();
+    }
+    return false;
+  }
+
   /// The value of `key` as an integer, or -1 when it has not been reported yet.
   long value(const std::string& key) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -50,6 +70,7 @@ class DiagnosticsWatcher {
  private:
   void onMessage(const diagnostic_msgs::DiagnosticArray::ConstPtr& a) {
     std::lock_guard<std::mutex> lock(mutex_);
+    ++reports_;
     for (const auto& status : a->status)
       if (status.name.find("fusion") != std::string::npos)
         for (const auto& kv : status.values) values_[kv.key] = kv.value;
@@ -57,6 +78,7 @@ class DiagnosticsWatcher {
   ros::Subscriber sub_;
   std::mutex mutex_;
   std::map<std::string, std::string> values_;
+  uint64_t reports_ = 0;
 };
 
 /// Polls `done` every 50 ms (callbacks run on the spinner threads) until it holds or

@@ -182,6 +182,7 @@ TEST_F(NodeletFixture, StreamedMeshEqualsFullMeshAndSavedPly) {
 TEST_F(NodeletFixture, MissingTfAndBadInputAreDroppedCountedAndSurvived) {
   const sim::AnalyticScene s = scene();
   const StereoFrame frame = test::renderFrame(s, qvga(), Eigen::Isometry3d::Identity());
+  ASSERT_TRUE(diagnostics_.waitForNextReport(10.0));
   const long fused_before = std::max(0L, diag("frames fused"));
   GetFullMesh before;
   ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", before));
@@ -219,6 +220,7 @@ TEST_F(NodeletFixture, MissingTfAndBadInputAreDroppedCountedAndSurvived) {
   EXPECT_TRUE(waitFor([&] { return diag("frames fused") >= fused_before + 2; }, 30.0));
   EXPECT_EQ(diag("dropped: tf timeout"), 1);
   EXPECT_EQ(diag("dropped: bad input"), 4);
+  EXPECT_EQ(diag("dropped: superseded by reset/load"), 0);
   std_srvs::Empty reset;
   EXPECT_TRUE(ros::service::call("/stereo_fusion/reset", reset));
   GetFullMesh full;

@@ -57,6 +57,7 @@ class FusionNodelet : public nodelet::Nodelet {
     DisparityMsg::ConstPtr disparity;
     ImageMsg::ConstPtr image;
     InfoMsg::ConstPtr info;
+    uint64_t map_epoch = 0;  ///< map_epoch_ when the frame arrived
   };
 
   void onInit() override;
@@ -68,6 +69,8 @@ class FusionNodelet : public nodelet::Nodelet {
   bool getFullMesh(GetFullMesh::Request& req, GetFullMesh::Response& res);
   bool reset(std_srvs::Empty::Request& req, std_srvs::Empty::Response& res);
   bool saveMap(SaveMap::Request& req, SaveMap::Response& res);
+  /// Starts a new map epoch: drops (and counts) the queued frames. Caller holds map_mutex_.
+  void startMapEpochLocked();
   bool loadMap(LoadMap::Request& req, LoadMap::Response& res);
   /// Publishes the whole mesh as a `full` update and redraws the markers (after reset / load).
   /// Caller holds map_mutex_.
@@ -113,6 +116,10 @@ class FusionNodelet : public nodelet::Nodelet {
 
   std::atomic<uint64_t> received_{0}, fused_{0}, dropped_queue_{0}, dropped_tf_{0}, dropped_bad_input_{0};
   std::atomic<uint64_t> dropped_backwards_{0}, dropped_duplicate_{0}, dropped_pose_jump_{0};
+  std::atomic<uint64_t> dropped_superseded_{0};  // arrived before a reset / load_map: not fused into the new map
+  /// Bumped (under both queue_mutex_ and map_mutex_) by reset and load_map: a frame that arrived
+  /// earlier belongs to the map those replaced.
+  std::atomic<uint64_t> map_epoch_{0};
   std::atomic<uint64_t> blocks_evicted_{0};  // by the memory bound, since start (reset and load included)
   ros::WallTime started_;
 };
