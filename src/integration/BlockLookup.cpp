@@ -3,12 +3,18 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+
+#include "stereo_fusion/util/CpuFeatures.h"
+
+#if defined(__x86_64__) || defined(__i386__)
 #include <immintrin.h>
+#define STEREO_FUSION_HAVE_AVX2_LOOKUP 1
+#endif
 
 namespace stereo_fusion {
 
 BlockLookup::BlockLookup(const MapperConfig& config, ThreadPool* pool, bool allow_simd)
-    : config_(config), pool_(pool), use_avx2_(allow_simd && __builtin_cpu_supports("avx2")) {}
+    : config_(config), pool_(pool), use_avx2_(allow_simd && avx2Supported()) {}
 
 BlockLookup::PixelGeometry BlockLookup::pixelGeometry(const StereoFrame& frame,
                                                       const BlockOctree& octree) const {
@@ -69,6 +75,7 @@ __attribute__((always_inline)) inline void BlockLookup::countBox(const BandBox& 
   }
 }
 
+#ifdef STEREO_FUSION_HAVE_AVX2_LOOKUP
 // Four pixels at a time: the same double operations as bandBoxOfPixel() in the same order
 // (no FMA: the target is AVX2 only), so the boxes are identical. Returns the first pixel
 // left for the scalar loop.
@@ -135,6 +142,12 @@ __attribute__((target("avx2"))) int BlockLookup::countRowBoxesAvx2(const float* 
   }
   return u;
 }
+
+#else
+int BlockLookup::countRowBoxesAvx2(const float*, int u_begin, int, int, RegionScratch*, size_t*) const {
+  return u_begin;  // not x86: the scalar loop does every pixel
+}
+#endif
 
 void BlockLookup::gatherHistogram(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const {
   // Count points per distinct band box first and expand boxes to blocks after.

@@ -449,12 +449,6 @@ __attribute__((target("avx2"))) uint64_t fuseBlockAvx2(const FusionFrame& f, con
   return updates;
 }
 
-bool avx2Supported() {
-  // Normally done by libgcc's constructor; repeated in case a static initialiser asks first.
-  __builtin_cpu_init();
-  return __builtin_cpu_supports("avx2");  // also false when the OS does not save YMM state
-}
-
 #undef SF_AVX2
 
 #else  // not x86: only the scalar kernel
@@ -462,8 +456,6 @@ bool avx2Supported() {
 uint64_t fuseBlockAvx2(const FusionFrame& f, const BlockOctree& octree, VoxelBlock* block) {
   return fuseBlockScalar(f, octree, block);
 }
-
-bool avx2Supported() { return false; }
 
 #endif
 

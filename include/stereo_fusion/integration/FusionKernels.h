@@ -14,6 +14,7 @@
 #include "stereo_fusion/integration/StereoFrame.h"
 #include "stereo_fusion/map/BlockOctree.h"
 #include "stereo_fusion/map/VoxelBlock.h"
+#include "stereo_fusion/util/CpuFeatures.h"
 
 namespace stereo_fusion {
 
@@ -65,8 +66,5 @@ uint64_t fuseBlockScalar(const FusionFrame& frame, const BlockOctree& octree, Vo
 /// Same result as fuseBlockScalar(), bit for bit, eight voxels per step. Only call it when
 /// avx2Supported().
 uint64_t fuseBlockAvx2(const FusionFrame& frame, const BlockOctree& octree, VoxelBlock* block);
-
-/// Whether this CPU (and OS) can run fuseBlockAvx2().
-bool avx2Supported();
 
 }  // namespace stereo_fusion
