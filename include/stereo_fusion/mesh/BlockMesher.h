@@ -113,6 +113,9 @@ class BlockMesher {
   static void faceInteriorLine(int normal_axis, int line_axis, const int lo[3], int fixed[3]);
   uint32_t vertexOnEdge(Context& ctx, const int p[3], const PointSample& sp, const int q[3],
                         const PointSample& sq) const;
+  /// Appends the surface vertex on edge a → b (a before b lexicographically) to the submesh.
+  static void appendVertex(Context& ctx, const int a[3], const PointSample& sa, const int b[3],
+                           const PointSample& sb);
 
   MeshingParams params_;
 };
