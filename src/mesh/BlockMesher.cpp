@@ -132,6 +132,26 @@ constexpr int kAxisCoords = 2 * kBlockUnits + 1;
 /// centre, 16 + step ≤ 16 + 4.
 constexpr int kMaxBoxCoord = kBlockUnits + (1 << (kNumLevels - 1));
 
+/// Bit c set: a block meshed with voxel step `step` has a voxel centre at local coordinate c.
+inline uint64_t centreBits(int step) {
+  uint64_t bits = 0;
+  for (int c = step; c < kBlockUnits; c += 2 * step) bits |= uint64_t{1} << c;
+  return bits;
+}
+
+/// centreBits() per level, computed once (the mesher asks for them per owner and axis).
+struct CentreBitsTable {
+  uint64_t bits[kNumLevels];
+  CentreBitsTable() {
+    for (int level = 0; level < kNumLevels; ++level) bits[level] = centreBits(1 << level);
+  }
+};
+
+inline uint64_t levelCentreBits(int level) {
+  static const CentreBitsTable table;
+  return table.bits[level];
+}
+
 enum SampleState : uint8_t { kUnknown = 0, kObserved = 1, kUnobserved = 2 };
 
 /// For a block at `level` whose offset on one axis is `offset` (0 or 1), the voxel indices
@@ -330,8 +350,7 @@ struct BlockMesher::Context {
                 off[(axis + 2) % 3] = ob;
                 const int d = off[0] + 2 * off[1] + 4 * off[2];
                 if (nb[d] == nullptr) continue;
-                for (int c = step[d]; c < kBlockUnits; c += 2 * step[d])
-                  bits |= uint64_t{1} << (kBlockUnits * du + c);
+                bits |= levelCentreBits(level[d]) << (kBlockUnits * du);
               }
             line_points[axis][ca][cb][du] = bits;
           }
@@ -556,18 +575,16 @@ struct BlockMesher::Context {
   /// Builds the grid's coordinates from the present blocks' levels (call after nb/step).
   void buildSampleGrid() {
     for (int a = 0; a < 3; ++a) {
-      bool used[kAxisCoords] = {};
-      used[kBlockUnits] = true;
-      for (int d = 0; d < 8; ++d) {
-        if (nb[d] == nullptr) continue;
-        const int base = ((d >> a) & 1) * kBlockUnits;
-        for (int c = step[d]; c < kBlockUnits; c += 2 * step[d])
-          if (base + c <= kMaxBoxCoord) used[base + c] = true;
-      }
+      uint64_t used = uint64_t{1} << kBlockUnits;  // bit q: coordinate q is in the grid
+      for (int d = 0; d < 8; ++d)
+        if (nb[d] != nullptr) used |= levelCentreBits(level[d]) << (((d >> a) & 1) * kBlockUnits);
+      used &= (uint64_t{2} << kMaxBoxCoord) - 1;
+      std::fill(std::begin(grid_index[a]), std::end(grid_index[a]), int8_t{-1});
       grid_dim[a] = 0;
-      for (int q = 0; q < kAxisCoords; ++q) {
-        grid_index[a][q] = static_cast<int8_t>(used[q] ? grid_dim[a] : -1);
-        if (used[q]) grid_coords[a][grid_dim[a]++] = q;
+      for (; used != 0; used &= used - 1) {
+        const int q = __builtin_ctzll(used);
+        grid_index[a][q] = static_cast<int8_t>(grid_dim[a]);
+        grid_coords[a][grid_dim[a]++] = q;
       }
     }
     const size_t n = static_cast<size_t>(grid_dim[0]) * grid_dim[1] * grid_dim[2];
@@ -1020,8 +1037,13 @@ void BlockMesher::meshMixedBoxes(Context& ctx) const {
           const int lo[3] = {intervals[0][ix].first, intervals[1][iy].first, intervals[2][iz].first};
           const int hi[3] = {intervals[0][ix].second, intervals[1][iy].second, intervals[2][iz].second};
           const bool core = d == 0 && hi[0] < kBlockUnits && hi[1] < kBlockUnits && hi[2] < kBlockUnits;
-          if (core && ctx.coreBoxIsEmpty(lo)) continue;  // most boxes: no voxel-level sign change
-          if (params_.fast_paths && mixedBoxIsEmpty(ctx, lo, hi)) continue;
+          if (core) {
+            // Most boxes: no voxel-level sign change. The exact corner signs decide here, so
+            // the mask pre-test below could not reject a box that passes.
+            if (ctx.coreBoxIsEmpty(lo)) continue;
+          } else if (params_.fast_paths && mixedBoxIsEmpty(ctx, lo, hi)) {
+            continue;
+          }
           meshBox(ctx, lo, hi);
         }
   }
