@@ -422,28 +422,41 @@ struct BlockMesher::Context {
   void buildRowMasks() {
     const int level = this->level[0];
     const int side = levelSide(level);
+    const uint16_t row_bits = static_cast<uint16_t>((1u << side) - 1), face_bit = static_cast<uint16_t>(1u << side);
     for (int k = 0; k <= side; ++k)
       for (int j = 0; j <= side; ++j) {
+        // Centres 0..side-1 of the row come from one block, centre `side` from its +x neighbour.
+        const int d = 2 * (j == side) + 4 * (k == side);
+        const int block_j = j == side ? 0 : j, block_k = k == side ? 0 : k;
         uint16_t neg = 0, nonneg = 0, unobserved = 0;
-        for (int i = 0; i <= side; ++i) {
-          const int d = (i == side) + 2 * (j == side) + 4 * (k == side);
-          const uint16_t bit = static_cast<uint16_t>(1u << i);
-          if (nb[d] == nullptr) {
-            unobserved |= bit;
-            continue;
-          }
-          const Voxel& v = nb[d]->at(level, i == side ? 0 : i, j == side ? 0 : j, k == side ? 0 : k);
-          if (!(v.weight > 0.0f))
-            unobserved |= bit;
-          else if (v.sdf_m >= 0.0f)
-            nonneg |= bit;
-          else if (v.sdf_m < -1e-30f)
-            neg |= bit;
-        }
+        if (nb[d] != nullptr)
+          classifyVoxelRun(&nb[d]->at(level, 0, block_j, block_k), side, 0, &neg, &nonneg, &unobserved);
+        else
+          unobserved |= row_bits;
+        if (nb[d + 1] != nullptr)
+          classifyVoxelRun(&nb[d + 1]->at(level, 0, block_j, block_k), 1, side, &neg, &nonneg, &unobserved);
+        else
+          unobserved |= face_bit;
         row_negative[k][j] = neg;
         row_nonnegative[k][j] = nonneg;
         row_unobserved[k][j] = unobserved;
       }
+  }
+
+  /// ORs the classes of `count` consecutive voxels into the row masks at bits first_bit...:
+  /// unobserved, sdf ≥ 0, sdf < −1e-30 (near-zero negatives in neither).
+  static void classifyVoxelRun(const Voxel* voxels, int count, int first_bit, uint16_t* negative,
+                               uint16_t* nonnegative, uint16_t* unobserved) {
+    unsigned neg = 0, nonneg = 0, unobs = 0;
+    for (int i = 0; i < count; ++i) {
+      const bool observed = voxels[i].weight > 0.0f;
+      unobs |= static_cast<unsigned>(!observed) << i;
+      nonneg |= static_cast<unsigned>(observed && voxels[i].sdf_m >= 0.0f) << i;
+      neg |= static_cast<unsigned>(observed && voxels[i].sdf_m < -1e-30f) << i;
+    }
+    *negative |= static_cast<uint16_t>(neg << first_bit);
+    *nonnegative |= static_cast<uint16_t>(nonneg << first_bit);
+    *unobserved |= static_cast<uint16_t>(unobs << first_bit);
   }
 
   /// Bit i set: the boxes starting at (i, j, k) may yield triangles. A clear bit means a
