@@ -585,55 +585,6 @@ struct BlockMesher::Context {
     return all_negative ? kPointNegative : (all_nonnegative ? kPointNonNegative : kPointUndecided);
   }
 
-  /// classifyBoxCorners() for a whole row of boxes along x at once: the boxes of a block at
-  /// `box_level` with x offset 0 (box ix spans that level's centres ix and ix+1; the last one
-  /// ends at the block face), with the y/z extents of lo/hi. Bit ix of the results: box ix has
-  /// an unobserved corner / all corners certainly negative / all certainly non-negative.
-  /// Each touching block's voxel rows are combined once for the row instead of once per box.
-  void classifyBoxRow(int box_level, const int lo[3], const int hi[3], uint8_t* unobserved,
-                      uint8_t* negative, uint8_t* nonnegative) {
-    const SupportIndexTable& table = supportIndexTable();
-    const int box_step = 1 << box_level, boxes = levelSide(box_level);
-    int box_lo[kFinestSide], box_hi[kFinestSide];
-    for (int ix = 0; ix < boxes; ++ix) {
-      box_lo[ix] = box_step * (2 * ix + 1);
-      box_hi[ix] = ix + 1 < boxes ? box_step * (2 * ix + 3) : kBlockUnits;
-    }
-    uint8_t any_unobserved = 0, not_negative = 0, not_nonnegative = 0;
-    for (int dz = lo[2] <= kBlockUnits ? 0 : 1; dz <= (hi[2] >= kBlockUnits ? 1 : 0); ++dz)
-      for (int dy = lo[1] <= kBlockUnits ? 0 : 1; dy <= (hi[1] >= kBlockUnits ? 1 : 0); ++dy)
-        for (int dx = 0; dx < 2; ++dx) {  // x offset 1 touches only the last box (empty index sets)
-          const int d = dx + 2 * dy + 4 * dz;
-          const auto& bits = table.bits[level[d]];
-          uint8_t is[kFinestSide];
-          for (int ix = 0; ix < boxes; ++ix) is[ix] = bits[box_lo[ix]][dx] | bits[box_hi[ix]][dx];
-          if (nb[d] == nullptr) {
-            for (int ix = 0; ix < boxes; ++ix) any_unobserved |= static_cast<uint8_t>((is[ix] != 0) << ix);
-            continue;
-          }
-          const uint8_t js = bits[lo[1]][dy] | bits[hi[1]][dy];
-          const uint8_t ks = bits[lo[2]][dz] | bits[hi[2]][dz];
-          uint8_t row_unobserved = 0, row_negative = 0xFF, row_nonnegative = 0xFF;
-          for (unsigned kb = ks; kb != 0; kb &= kb - 1)
-            for (unsigned jb = js; jb != 0; jb &= jb - 1) {
-              const int j = __builtin_ctz(jb), k = __builtin_ctz(kb);
-              ensureMaskRow(d, j, k);
-              row_unobserved |= mask_unobserved[d][k][j];
-              row_negative &= mask_negative[d][k][j];
-              row_nonnegative &= mask_nonnegative[d][k][j];
-            }
-          for (int ix = 0; ix < boxes; ++ix) {
-            any_unobserved |= static_cast<uint8_t>(((is[ix] & row_unobserved) != 0) << ix);
-            not_negative |= static_cast<uint8_t>(((is[ix] & ~row_negative) != 0) << ix);
-            not_nonnegative |= static_cast<uint8_t>(((is[ix] & ~row_nonnegative) != 0) << ix);
-          }
-        }
-    const uint8_t row_boxes = static_cast<uint8_t>((1u << boxes) - 1);
-    *unobserved = any_unobserved;
-    *negative = static_cast<uint8_t>(~not_negative & row_boxes);
-    *nonnegative = static_cast<uint8_t>(~not_nonnegative & row_boxes);
-  }
-
   /// Builds the grid's coordinates from the present blocks' levels (call after nb/step).
   void buildSampleGrid() {
     for (int a = 0; a < 3; ++a) {
@@ -1094,32 +1045,20 @@ void BlockMesher::meshMixedBoxes(Context& ctx) const {
       }
     }
     for (int iz = 0; iz < interval_count[2]; ++iz)
-      for (int iy = 0; iy < interval_count[1]; ++iy) {
-        const bool core_row = d == 0 && intervals[1][iy].second < kBlockUnits && intervals[2][iz].second < kBlockUnits;
-        // Rows of several skin boxes are pre-tested together; a core row has one skin box.
-        const bool row_test = params_.fast_paths && (d & 1) == 0 && !core_row;
-        uint8_t empty_in_row = 0;
-        if (row_test) {
-          const int row_lo[3] = {0, intervals[1][iy].first, intervals[2][iz].first};
-          const int row_hi[3] = {0, intervals[1][iy].second, intervals[2][iz].second};
-          empty_in_row = mixedRowEmptyBoxes(ctx, ctx.level[d], row_lo, row_hi);
-        }
+      for (int iy = 0; iy < interval_count[1]; ++iy)
         for (int ix = 0; ix < interval_count[0]; ++ix) {
           const int lo[3] = {intervals[0][ix].first, intervals[1][iy].first, intervals[2][iz].first};
           const int hi[3] = {intervals[0][ix].second, intervals[1][iy].second, intervals[2][iz].second};
-          const bool core = core_row && hi[0] < kBlockUnits;
+          const bool core = d == 0 && hi[0] < kBlockUnits && hi[1] < kBlockUnits && hi[2] < kBlockUnits;
           if (core) {
             // Most boxes: no voxel-level sign change. The exact corner signs decide here, so
             // the mask pre-test below could not reject a box that passes.
             if (ctx.coreBoxIsEmpty(lo)) continue;
-          } else if (row_test) {
-            if ((empty_in_row >> ix) & 1) continue;
           } else if (params_.fast_paths && mixedBoxIsEmpty(ctx, lo, hi)) {
             continue;
           }
           meshBox(ctx, lo, hi);
         }
-      }
   }
 }
 
@@ -1133,20 +1072,6 @@ bool BlockMesher::mixedBoxIsEmpty(Context& ctx, const int lo[3], const int hi[3]
     case kPointNonNegative: return boxIsPlain(ctx, lo, hi);
     default: return false;
   }
-}
-
-uint8_t BlockMesher::mixedRowEmptyBoxes(Context& ctx, int box_level, const int lo[3], const int hi[3]) const {
-  uint8_t unobserved, negative, nonnegative;
-  ctx.classifyBoxRow(box_level, lo, hi, &unobserved, &negative, &nonnegative);
-  uint8_t empty = unobserved;
-  const int box_step = 1 << box_level, boxes = levelSide(box_level);
-  for (unsigned bits = (negative | nonnegative) & ~unobserved; bits != 0; bits &= bits - 1) {
-    const int ix = __builtin_ctz(bits);
-    const int box_lo[3] = {box_step * (2 * ix + 1), lo[1], lo[2]};
-    const int box_hi[3] = {ix + 1 < boxes ? box_step * (2 * ix + 3) : kBlockUnits, hi[1], hi[2]};
-    if (boxIsPlain(ctx, box_lo, box_hi)) empty |= static_cast<uint8_t>(1u << ix);
-  }
-  return empty;
 }
 
 void BlockMesher::computeNormals(SubMesh* out) {

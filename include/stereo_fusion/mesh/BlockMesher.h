@@ -97,9 +97,6 @@ class BlockMesher {
   /// (an unobserved corner, or a plain box with one sign at all corners), decided on voxel
   /// bit masks without sampling; false when in doubt.
   bool mixedBoxIsEmpty(Context& ctx, const int lo[3], const int hi[3]) const;
-  /// mixedBoxIsEmpty() for a row of boxes along x (the boxes of a block at `box_level` with x
-  /// offset 0, y/z extents from lo/hi): bit ix set when box ix would be found empty.
-  uint8_t mixedRowEmptyBoxes(Context& ctx, int box_level, const int lo[3], const int hi[3]) const;
   static void computeNormals(SubMesh* out);
   bool samplePoint(const Context& ctx, int qx, int qy, int qz, PointSample* out) const;
   bool cachedSample(Context& ctx, const int q[3], PointSample* out) const;
