@@ -66,8 +66,9 @@ void refreshMeshLevel(VoxelBlock* block, double level_min_coverage);
 /// work; hanging points come from per-owner bit masks; scratch buffers are per thread.
 /// Uniform neighbourhoods visit only boxes whose support changes sign (row bit masks) and
 /// sample voxels by index; mixed ones reject boxes with an unobserved corner or one sign on
-/// per-block voxel masks before sampling; edge → vertex is a flat stamped table. The
-/// general path stays reachable (MeshingParams::fast_paths) and a test compares the two.
+/// per-block voxel masks before sampling; edge → vertex is a flat stamped table (in uniform
+/// neighbourhoods a direct one indexed by grid point and axis, and only the crossing edges
+/// are tested for the truncation band). The general path stays reachable (MeshingParams::fast_paths) and a test compares the two.
 class BlockMesher {
  public:
   explicit BlockMesher(const MeshingParams& params);
