@@ -132,6 +132,26 @@ constexpr int kAxisCoords = 2 * kBlockUnits + 1;
 /// centre, 16 + step ≤ 16 + 4.
 constexpr int kMaxBoxCoord = kBlockUnits + (1 << (kNumLevels - 1));
 
+/// Bit c set: a block meshed with voxel step `step` has a voxel centre at local coordinate c.
+inline uint64_t centreBits(int step) {
+  uint64_t bits = 0;
+  for (int c = step; c < kBlockUnits; c += 2 * step) bits |= uint64_t{1} << c;
+  return bits;
+}
+
+/// centreBits() per level, computed once (the mesher asks for them per owner and axis).
+struct CentreBitsTable {
+  uint64_t bits[kNumLevels];
+  CentreBitsTable() {
+    for (int level = 0; level < kNumLevels; ++level) bits[level] = centreBits(1 << level);
+  }
+};
+
+inline uint64_t levelCentreBits(int level) {
+  static const CentreBitsTable table;
+  return table.bits[level];
+}
+
 enum SampleState : uint8_t { kUnknown = 0, kObserved = 1, kUnobserved = 2 };
 
 /// For a block at `level` whose offset on one axis is `offset` (0 or 1), the voxel indices
@@ -250,7 +270,43 @@ struct MeshScratch {
   std::vector<float> values;
   std::vector<std::array<mc::Crossing, 3>> triangles;
   VertexTable vertex_of;
+  // Uniform neighbourhoods: every box edge joins grid points one index apart on one axis, so
+  // edge (grid point g, axis a) → slot 3g + a replaces hashing. A slot is live iff its stamp
+  // is `uniform_edge_stamp` (bumped per owner, so no clearing).
+  struct EdgeVertex {
+    uint32_t stamp;
+    uint32_t vertex;
+  };
+  std::vector<EdgeVertex> uniform_edge_vertex;
+  uint32_t uniform_edge_stamp = 0;
+
+  /// Readies uniform_edge_vertex for an owner whose sample grid has `points` points.
+  void startUniformEdges(size_t points) {
+    if (uniform_edge_vertex.size() < 3 * points) uniform_edge_vertex.resize(3 * points, EdgeVertex{0, 0});
+    if (++uniform_edge_stamp == 0) {  // wrapped: stale stamps could match again
+      for (EdgeVertex& slot : uniform_edge_vertex) slot.stamp = 0;
+      uniform_edge_stamp = 1;
+    }
+  }
 };
+
+/// For each marching-cubes case, the cube edges whose corners differ in sign (bit e: edge e).
+struct CrossingEdgeTable {
+  uint16_t edges[256] = {};
+
+  CrossingEdgeTable() {
+    for (int case_index = 0; case_index < 256; ++case_index)
+      for (int e = 0; e < 12; ++e) {
+        const mc::CubeEdge& edge = mc::cubeEdges()[e];
+        if (((case_index >> edge.corner_a) ^ (case_index >> edge.corner_b)) & 1) edges[case_index] |= 1u << e;
+      }
+  }
+};
+
+const CrossingEdgeTable& crossingEdgeTable() {
+  static const CrossingEdgeTable table;
+  return table;
+}
 }  // namespace
 
 struct BlockMesher::Context {
@@ -273,6 +329,7 @@ struct BlockMesher::Context {
   int8_t grid_index[3][kAxisCoords];  // −1: coordinate not in the grid
   int grid_coords[3][kAxisCoords];     // grid index → coordinate, ascending
   int grid_dim[3] = {};
+  size_t uniform_corner_offset[8];  // uniform neighbourhoods: box corner c's slot − its low corner's
   // Lattice points on lines along each axis, as bit masks over the coordinate u (bit u set:
   // a present block touching the line has a voxel centre at u). Indexed [axis][class of the
   // next axis' coordinate][class of the one after][u ≥ 16], class 0 below the block face
@@ -293,8 +350,7 @@ struct BlockMesher::Context {
                 off[(axis + 2) % 3] = ob;
                 const int d = off[0] + 2 * off[1] + 4 * off[2];
                 if (nb[d] == nullptr) continue;
-                for (int c = step[d]; c < kBlockUnits; c += 2 * step[d])
-                  bits |= uint64_t{1} << (kBlockUnits * du + c);
+                bits |= levelCentreBits(level[d]) << (kBlockUnits * du);
               }
             line_points[axis][ca][cb][du] = bits;
           }
@@ -366,28 +422,41 @@ struct BlockMesher::Context {
   void buildRowMasks() {
     const int level = this->level[0];
     const int side = levelSide(level);
+    const uint16_t row_bits = static_cast<uint16_t>((1u << side) - 1), face_bit = static_cast<uint16_t>(1u << side);
     for (int k = 0; k <= side; ++k)
       for (int j = 0; j <= side; ++j) {
+        // Centres 0..side-1 of the row come from one block, centre `side` from its +x neighbour.
+        const int d = 2 * (j == side) + 4 * (k == side);
+        const int block_j = j == side ? 0 : j, block_k = k == side ? 0 : k;
         uint16_t neg = 0, nonneg = 0, unobserved = 0;
-        for (int i = 0; i <= side; ++i) {
-          const int d = (i == side) + 2 * (j == side) + 4 * (k == side);
-          const uint16_t bit = static_cast<uint16_t>(1u << i);
-          if (nb[d] == nullptr) {
-            unobserved |= bit;
-            continue;
-          }
-          const Voxel& v = nb[d]->at(level, i == side ? 0 : i, j == side ? 0 : j, k == side ? 0 : k);
-          if (!(v.weight > 0.0f))
-            unobserved |= bit;
-          else if (v.sdf_m >= 0.0f)
-            nonneg |= bit;
-          else if (v.sdf_m < -1e-30f)
-            neg |= bit;
-        }
+        if (nb[d] != nullptr)
+          classifyVoxelRun(&nb[d]->at(level, 0, block_j, block_k), side, 0, &neg, &nonneg, &unobserved);
+        else
+          unobserved |= row_bits;
+        if (nb[d + 1] != nullptr)
+          classifyVoxelRun(&nb[d + 1]->at(level, 0, block_j, block_k), 1, side, &neg, &nonneg, &unobserved);
+        else
+          unobserved |= face_bit;
         row_negative[k][j] = neg;
         row_nonnegative[k][j] = nonneg;
         row_unobserved[k][j] = unobserved;
       }
+  }
+
+  /// ORs the classes of `count` consecutive voxels into the row masks at bits first_bit...:
+  /// unobserved, sdf ≥ 0, sdf < −1e-30 (near-zero negatives in neither).
+  static void classifyVoxelRun(const Voxel* voxels, int count, int first_bit, uint16_t* negative,
+                               uint16_t* nonnegative, uint16_t* unobserved) {
+    unsigned neg = 0, nonneg = 0, unobs = 0;
+    for (int i = 0; i < count; ++i) {
+      const bool observed = voxels[i].weight > 0.0f;
+      unobs |= static_cast<unsigned>(!observed) << i;
+      nonneg |= static_cast<unsigned>(observed && voxels[i].sdf_m >= 0.0f) << i;
+      neg |= static_cast<unsigned>(observed && voxels[i].sdf_m < -1e-30f) << i;
+    }
+    *negative |= static_cast<uint16_t>(neg << first_bit);
+    *nonnegative |= static_cast<uint16_t>(nonneg << first_bit);
+    *unobserved |= static_cast<uint16_t>(unobs << first_bit);
   }
 
   /// Bit i set: the boxes starting at (i, j, k) may yield triangles. A clear bit means a
@@ -519,18 +588,16 @@ struct BlockMesher::Context {
   /// Builds the grid's coordinates from the present blocks' levels (call after nb/step).
   void buildSampleGrid() {
     for (int a = 0; a < 3; ++a) {
-      bool used[kAxisCoords] = {};
-      used[kBlockUnits] = true;
-      for (int d = 0; d < 8; ++d) {
-        if (nb[d] == nullptr) continue;
-        const int base = ((d >> a) & 1) * kBlockUnits;
-        for (int c = step[d]; c < kBlockUnits; c += 2 * step[d])
-          if (base + c <= kMaxBoxCoord) used[base + c] = true;
-      }
+      uint64_t used = uint64_t{1} << kBlockUnits;  // bit q: coordinate q is in the grid
+      for (int d = 0; d < 8; ++d)
+        if (nb[d] != nullptr) used |= levelCentreBits(level[d]) << (((d >> a) & 1) * kBlockUnits);
+      used &= (uint64_t{2} << kMaxBoxCoord) - 1;
+      std::fill(std::begin(grid_index[a]), std::end(grid_index[a]), int8_t{-1});
       grid_dim[a] = 0;
-      for (int q = 0; q < kAxisCoords; ++q) {
-        grid_index[a][q] = static_cast<int8_t>(used[q] ? grid_dim[a] : -1);
-        if (used[q]) grid_coords[a][grid_dim[a]++] = q;
+      for (; used != 0; used &= used - 1) {
+        const int q = __builtin_ctzll(used);
+        grid_index[a][q] = static_cast<int8_t>(grid_dim[a]);
+        grid_coords[a][grid_dim[a]++] = q;
       }
     }
     const size_t n = static_cast<size_t>(grid_dim[0]) * grid_dim[1] * grid_dim[2];
@@ -603,7 +670,12 @@ uint32_t BlockMesher::vertexOnEdge(Context& ctx, const int p[3], const PointSamp
   const uint64_t key = (packPoint(a) << 18) | packPoint(b);
   bool inserted = false;
   const uint32_t vertex = ctx.vertex_of->findOrInsert(key, static_cast<uint32_t>(ctx.out->positions.size()), &inserted);
-  if (!inserted) return vertex;
+  if (inserted) appendVertex(ctx, a, sa, b, sb);
+  return vertex;
+}
+
+void BlockMesher::appendVertex(Context& ctx, const int a[3], const PointSample& sa, const int b[3],
+                               const PointSample& sb) {
   // Eq. 2.11–2.12: k = (α − s1)/(s2 − s1) with α = 0. Kept off the end points so distinct
   // edges never produce coincident vertices.
   const float t = std::clamp(sa.sdf / (sa.sdf - sb.sdf), 1e-3f, 1.0f - 1e-3f);
@@ -618,7 +690,6 @@ uint32_t BlockMesher::vertexOnEdge(Context& ctx, const int p[3], const PointSamp
   for (int k = 0; k < 3; ++k)
     rgb[k] = static_cast<uint8_t>(std::clamp(sa.rgb[k] + t * (sb.rgb[k] - sa.rgb[k]) + 0.5f, 0.0f, 255.0f));
   ctx.out->colors.push_back(rgb);
-  return vertex;
 }
 
 bool BlockMesher::cachedSample(Context& ctx, const int q[3], PointSample* out) const {
@@ -704,26 +775,48 @@ void BlockMesher::meshBox(Context& ctx, const int lo[3], const int hi[3]) const 
 }
 
 void BlockMesher::meshUniformBox(Context& ctx, const int lo[3], const int hi[3], const int grid_lo[3]) const {
-  // meshBox() for a uniform neighbourhood (every box plain), with the corners' cache slots
-  // computed from the grid indices instead of looked up per coordinate.
+  // meshBox() + meshPlainBox() for a uniform neighbourhood (every box plain): corners by cache
+  // slot, only the crossing edges tested for the truncation band, edges → vertices by slot.
   MeshScratch& m = *ctx.scratch;
-  const size_t stride_y = ctx.grid_dim[0], stride_z = stride_y * ctx.grid_dim[1];
-  const size_t base = grid_lo[0] + stride_y * grid_lo[1] + stride_z * grid_lo[2];
-  int corner[8][3];
-  PointSample s[8];
+  const size_t base = grid_lo[0] + ctx.grid_dim[0] * (grid_lo[1] + static_cast<size_t>(ctx.grid_dim[1]) * grid_lo[2]);
+  size_t slot[8];
   int case_index = 0;
   for (int c = 0; c < 8; ++c) {
-    corner[c][0] = (c & 1) ? hi[0] : lo[0];
-    corner[c][1] = (c & 2) ? hi[1] : lo[1];
-    corner[c][2] = (c & 4) ? hi[2] : lo[2];
-    const size_t g = base + (c & 1) + ((c >> 1) & 1) * stride_y + (c >> 2) * stride_z;
+    const size_t g = base + ctx.uniform_corner_offset[c];
     uint8_t& state = m.sample_state[g];
-    if (state == kUnknown) state = ctx.sampleUniformPoint(corner[c], &m.samples[g]) ? kObserved : kUnobserved;
+    if (state == kUnknown) {
+      const int q[3] = {(c & 1) ? hi[0] : lo[0], (c & 2) ? hi[1] : lo[1], (c & 4) ? hi[2] : lo[2]};
+      state = ctx.sampleUniformPoint(q, &m.samples[g]) ? kObserved : kUnobserved;
+    }
     if (state != kObserved) return;
-    s[c] = m.samples[g];
-    case_index |= (s[c].sdf >= 0.0f) << c;
+    slot[c] = g;
+    case_index |= (m.samples[g].sdf >= 0.0f) << c;
   }
-  if (case_index != 0 && case_index != 255) meshPlainBox(ctx, corner, s);
+  if (case_index == 0 || case_index == 255) return;
+  const auto& edges = mc::cubeEdges();
+  for (unsigned bits = crossingEdgeTable().edges[case_index]; bits != 0; bits &= bits - 1) {
+    const mc::CubeEdge& e = edges[__builtin_ctz(bits)];
+    const float va = m.samples[slot[e.corner_a]].sdf, vb = m.samples[slot[e.corner_b]].sdf;
+    if (std::min(std::abs(va), std::abs(vb)) >= ctx.truncated_abs) return;  // truncation-band edge
+  }
+  // First use of an edge comes first, as in meshPlainBox(): vertices are numbered alike.
+  for (const auto& tri : mc::caseTable().triangles[case_index]) {
+    std::array<uint32_t, 3> t;
+    for (int v = 0; v < 3; ++v) {
+      const mc::CubeEdge& e = edges[tri[v]];
+      const int axis = __builtin_ctz(static_cast<unsigned>(e.corner_a ^ e.corner_b));
+      MeshScratch::EdgeVertex& entry = m.uniform_edge_vertex[3 * slot[e.corner_a] + axis];
+      if (entry.stamp != m.uniform_edge_stamp) {
+        // corner_a is the low end on `axis`: the canonical direction vertexOnEdge() uses.
+        const int a[3] = {(e.corner_a & 1) ? hi[0] : lo[0], (e.corner_a & 2) ? hi[1] : lo[1], (e.corner_a & 4) ? hi[2] : lo[2]};
+        const int b[3] = {(e.corner_b & 1) ? hi[0] : lo[0], (e.corner_b & 2) ? hi[1] : lo[1], (e.corner_b & 4) ? hi[2] : lo[2]};
+        entry = {m.uniform_edge_stamp, static_cast<uint32_t>(ctx.out->positions.size())};
+        appendVertex(ctx, a, m.samples[slot[e.corner_a]], b, m.samples[slot[e.corner_b]]);
+      }
+      t[v] = entry.vertex;
+    }
+    ctx.out->triangles.push_back(t);
+  }
 }
 
 void BlockMesher::meshPlainBox(Context& ctx, const int corner[8][3], const PointSample s[8]) const {
@@ -888,6 +981,10 @@ void BlockMesher::meshUniformBoxes(Context& ctx) const {
     return;
   }
   ctx.buildRowMasks();
+  const size_t stride_y = ctx.grid_dim[0], stride_z = stride_y * ctx.grid_dim[1];
+  for (int c = 0; c < 8; ++c)
+    ctx.uniform_corner_offset[c] = (c & 1) + ((c >> 1) & 1) * stride_y + (c >> 2) * stride_z;
+  ctx.scratch->startUniformEdges(stride_z * ctx.grid_dim[2]);
   const int step = ctx.step[0], side = kFinestSide / step;
   // Box extents per axis by start index; the last start has two boxes (own skin, neighbour skin).
   // Grid indices (buildSampleGrid() on a uniform neighbourhood): centre i → i, the face →
@@ -953,8 +1050,13 @@ void BlockMesher::meshMixedBoxes(Context& ctx) const {
           const int lo[3] = {intervals[0][ix].first, intervals[1][iy].first, intervals[2][iz].first};
           const int hi[3] = {intervals[0][ix].second, intervals[1][iy].second, intervals[2][iz].second};
           const bool core = d == 0 && hi[0] < kBlockUnits && hi[1] < kBlockUnits && hi[2] < kBlockUnits;
-          if (core && ctx.coreBoxIsEmpty(lo)) continue;  // most boxes: no voxel-level sign change
-          if (params_.fast_paths && mixedBoxIsEmpty(ctx, lo, hi)) continue;
+          if (core) {
+            // Most boxes: no voxel-level sign change. The exact corner signs decide here, so
+            // the mask pre-test below could not reject a box that passes.
+            if (ctx.coreBoxIsEmpty(lo)) continue;
+          } else if (params_.fast_paths && mixedBoxIsEmpty(ctx, lo, hi)) {
+            continue;
+          }
           meshBox(ctx, lo, hi);
         }
   }

@@ -7,6 +7,7 @@
 
 #include <cstring>
 #include <Eigen/Geometry>
+#include <limits>
 #include <random>
 
 #include "QuickMode.h"
@@ -38,7 +39,10 @@ float voxelValue(std::mt19937& rng, const Eigen::Vector3d& centre, const Eigen::
                               2 * band,   -2 * band,   4 * band,    -4 * band,   phi,
                               -phi,       4 * phi,     -4 * phi,    std::nextafter(band, 0.0f),
                               std::nextafter(-band, 0.0f), std::nextafter(2 * band, 1.0f),
-                              std::nextafter(-4 * band, -1.0f)};
+                              std::nextafter(-4 * band, -1.0f),
+                              // Negative, yet the 1/s-weighted sums of coarse levels round them to −0.
+                              -std::numeric_limits<float>::denorm_min(),
+                              -3 * std::numeric_limits<float>::denorm_min()};
     return specials[std::uniform_int_distribution<size_t>(0, std::size(specials) - 1)(rng)];
   }
   std::normal_distribution<double> noise(0.0, 0.3 * kVoxel);

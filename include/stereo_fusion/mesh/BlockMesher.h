@@ -66,8 +66,9 @@ void refreshMeshLevel(VoxelBlock* block, double level_min_coverage);
 /// work; hanging points come from per-owner bit masks; scratch buffers are per thread.
 /// Uniform neighbourhoods visit only boxes whose support changes sign (row bit masks) and
 /// sample voxels by index; mixed ones reject boxes with an unobserved corner or one sign on
-/// per-block voxel masks before sampling; edge → vertex is a flat stamped table. The
-/// general path stays reachable (MeshingParams::fast_paths) and a test compares the two.
+/// per-block voxel masks before sampling; edge → vertex is a flat stamped table (in uniform
+/// neighbourhoods a direct one indexed by grid point and axis, and only the crossing edges
+/// are tested for the truncation band). The general path stays reachable (MeshingParams::fast_paths) and a test compares the two.
 class BlockMesher {
  public:
   explicit BlockMesher(const MeshingParams& params);
@@ -113,6 +114,9 @@ class BlockMesher {
   static void faceInteriorLine(int normal_axis, int line_axis, const int lo[3], int fixed[3]);
   uint32_t vertexOnEdge(Context& ctx, const int p[3], const PointSample& sp, const int q[3],
                         const PointSample& sq) const;
+  /// Appends the surface vertex on edge a → b (a before b lexicographically) to the submesh.
+  static void appendVertex(Context& ctx, const int a[3], const PointSample& sa, const int b[3],
+                           const PointSample& sb);
 
   MeshingParams params_;
 };
