@@ -1,6 +1,7 @@
 #include "stereo_fusion/Mapper.h"
 
 #include <algorithm>
+#include <functional>
 #include <iterator>
 #include <stdexcept>
 
@@ -52,7 +53,11 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame) {
   result.lookup_ms = lookup_timer.elapsedMs();
 
   Timer fusion_timer;
-  result.fusion = fuser_.fuse(frame, octree_, queue_, frames_integrated_, &updated_);
+  // Mesh levels are refreshed by the fusion workers while each block is still in cache.
+  std::function<void(VoxelBlock*)> refresh_level;
+  if (config_.mesh_enabled)
+    refresh_level = [coverage = config_.mesh_level_min_coverage](VoxelBlock* b) { refreshMeshLevel(b, coverage); };
+  result.fusion = fuser_.fuse(frame, octree_, queue_, frames_integrated_, &updated_, refresh_level);
   result.fusion_ms = fusion_timer.elapsedMs();
 
   result.updated_blocks.reserve(updated_.size());
@@ -77,7 +82,7 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame) {
     result.updated_blocks.swap(kept);
   }
   if (config_.mesh_enabled) {
-    result.mesh = mesh_store_.updateBlocks(octree_, updated_, &pool_, result.evicted_blocks);
+    result.mesh = mesh_store_.remeshUpdatedBlocks(octree_, updated_, &pool_, result.evicted_blocks);
     if (config_.texture == TextureMode::kPatches)
       result.texture = texture_store_.update(mesh_store_, result.mesh, frame, frames_integrated_, &pool_);
   }

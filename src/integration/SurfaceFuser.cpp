@@ -17,7 +17,8 @@ void SurfaceFuser::setKernel(Kernel kernel) {
 
 FusionStats SurfaceFuser::fuse(const StereoFrame& frame, const BlockOctree& octree,
                                const std::vector<VoxelBlock*>& blocks, uint64_t frame_index,
-                               std::vector<VoxelBlock*>* updated) {
+                               std::vector<VoxelBlock*>* updated,
+                               const std::function<void(VoxelBlock*)>& after_update) {
   FusionStats stats;
   updated->clear();
   if (blocks.empty()) return stats;
@@ -29,7 +30,10 @@ FusionStats SurfaceFuser::fuse(const StereoFrame& frame, const BlockOctree& octr
   const auto fuse_block = use_avx2_ ? fuseBlockAvx2 : fuseBlockScalar;
   per_block_updates_.assign(blocks.size(), 0);
   pool_->parallelFor(blocks.size(), 8, [&](size_t begin, size_t end) {
-    for (size_t b = begin; b < end; ++b) per_block_updates_[b] = fuse_block(fusion_frame, octree, blocks[b]);
+    for (size_t b = begin; b < end; ++b) {
+      per_block_updates_[b] = fuse_block(fusion_frame, octree, blocks[b]);
+      if (after_update && per_block_updates_[b] > 0) after_update(blocks[b]);
+    }
   });
   for (size_t b = 0; b < blocks.size(); ++b) {
     if (per_block_updates_[b] == 0) continue;

@@ -35,6 +35,10 @@ class MeshStore {
   /// erased): the same result without the one search per updated block.
   MeshChanges updateBlocks(const BlockOctree& map, const std::vector<VoxelBlock*>& updated_blocks, ThreadPool* pool,
                            const std::vector<BlockKey>& erased = {});
+  /// updateBlocks() for blocks whose mesh levels are already current (refreshMeshLevel() was
+  /// called on each after its fusion).
+  MeshChanges remeshUpdatedBlocks(const BlockOctree& map, const std::vector<VoxelBlock*>& updated_blocks,
+                                  ThreadPool* pool, const std::vector<BlockKey>& erased = {});
   /// Meshes every block from scratch (the reference for the incremental result).
   MeshChanges rebuild(const BlockOctree& map, ThreadPool* pool);
 
