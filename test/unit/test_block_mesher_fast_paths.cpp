@@ -127,8 +127,9 @@ TEST(BlockMesherFastPaths, SameBitsAsTheGeneralPathOnRandomNeighbourhoods) {
   }
   std::printf("[ fast paths ] %d uniform and %d mixed neighbourhoods, %zu triangles: identical\n",
               totals.owners_uniform, totals.owners_mixed, totals.triangles);
-  // The comparison means something only if both kinds of neighbourhood produced triangles.
-  EXPECT_GT(totals.owners_uniform, 1000);
-  EXPECT_GT(totals.owners_mixed, 1000);
-  EXPECT_GT(totals.triangles, 10000u);
+  // The comparison means something only if both kinds of neighbourhood produced triangles
+  // (per trial ≈ 30 uniform and 24 mixed owners and 2 000+ triangles; quick mode runs fewer).
+  EXPECT_GT(totals.owners_uniform, 20 * trials);
+  EXPECT_GT(totals.owners_mixed, 15 * trials);
+  EXPECT_GT(totals.triangles, 1000u * trials);
 }
