@@ -180,8 +180,8 @@ void BlockLookup::gatherHistogram(const StereoFrame& frame, const cv::Rect& regi
       const BandBox& box = box_count.first;
       for (int32_t z = box.lo.z; z <= box.hi.z; ++z)
         for (int32_t y = box.lo.y; y <= box.hi.y; ++y) {
-          int* row = &s->dense_counts[static_cast<size_t>(((z - lo.z) * ny + (y - lo.y)) * nx - lo.x)];
-          for (int32_t x = box.lo.x; x <= box.hi.x; ++x) row[x] += box_count.second;
+          int* row = &s->dense_counts[static_cast<size_t>(((z - lo.z) * ny + (y - lo.y)) * nx)];
+          for (int32_t x = box.lo.x; x <= box.hi.x; ++x) row[x - lo.x] += box_count.second;
         }
     }
     size_t i = 0;
