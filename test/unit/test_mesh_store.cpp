@@ -1,5 +1,6 @@
 // MeshStore's two entries for a frame's changes: by keys (update) and by the blocks fusion hands
-// over (updateBlocks, the Mapper's). Both reach owners through the neighbour links and must give
+// over (updateBlocks; the Mapper calls its second half, remeshUpdatedBlocks, after refreshing mesh
+// levels during fusion). Both reach owners through the neighbour links and must give
 // the same submeshes and changes, before and after blocks are erased.
 #include <gtest/gtest.h>
 

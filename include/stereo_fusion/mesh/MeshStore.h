@@ -36,7 +36,7 @@ class MeshStore {
   MeshChanges updateBlocks(const BlockOctree& map, const std::vector<VoxelBlock*>& updated_blocks, ThreadPool* pool,
                            const std::vector<BlockKey>& erased = {});
   /// updateBlocks() for blocks whose mesh levels are already current (refreshMeshLevel() was
-  /// called on each after its fusion).
+  /// called on each after its fusion): what the Mapper calls.
   MeshChanges remeshUpdatedBlocks(const BlockOctree& map, const std::vector<VoxelBlock*>& updated_blocks,
                                   ThreadPool* pool, const std::vector<BlockKey>& erased = {});
   /// Meshes every block from scratch (the reference for the incremental result).
