@@ -157,8 +157,11 @@ enum SampleState : uint8_t { kUnknown = 0, kObserved = 1, kUnobserved = 2 };
 /// For a block at `level` whose offset on one axis is `offset` (0 or 1), the voxel indices
 /// on that axis that blockField() weighs (non-zero weight) at lattice coordinate q, as a bit
 /// mask; 0 when samplePoint() does not include that block at q (incidentRange()).
+/// `range` is the union of `bits` over every coordinate of [lo, hi]: the voxels on that axis
+/// that any point of a box spanning [lo, hi] may weigh.
 struct SupportIndexTable {
   uint8_t bits[kNumLevels][kAxisCoords][2] = {};
+  uint8_t range[kNumLevels][kAxisCoords][kAxisCoords][2] = {};  // [level][lo][hi][offset], lo ≤ hi
 
   SupportIndexTable() {
     for (int level = 0; level < kNumLevels; ++level) {
@@ -174,6 +177,14 @@ struct SupportIndexTable {
           const int i0 = num / den;
           const bool between = num % den != 0;
           bits[level][q][offset] = static_cast<uint8_t>((1u << i0) | (between ? 2u << i0 : 0u));
+        }
+      for (int offset = 0; offset < 2; ++offset)
+        for (int lo = 0; lo < kAxisCoords; ++lo) {
+          uint8_t acc = 0;
+          for (int hi = lo; hi < kAxisCoords; ++hi) {
+            acc |= bits[level][hi][offset];
+            range[level][lo][hi][offset] = acc;
+          }
         }
     }
   }
@@ -583,6 +594,36 @@ struct BlockMesher::Context {
             }
         }
     return all_negative ? kPointNegative : (all_nonnegative ? kPointNonNegative : kPointUndecided);
+  }
+
+  /// True if the observed voxels that any point of the closed box [lo, hi] may weigh all
+  /// share one sign (all < −1e-30, or all ≥ 0). Every sample meshBox() takes for the box —
+  /// corners, hanging points, face-grid crossings — lies in the closed box and is a convex
+  /// combination of such voxels, or unobserved; so the box yields nothing. This decides the
+  /// boxes whose corners share one sign but which carry hanging points, without sampling.
+  bool boxSupportHasOneSign(const int lo[3], const int hi[3]) {
+    const SupportIndexTable& table = supportIndexTable();
+    bool all_negative = true, all_nonnegative = true;
+    for (int dz = lo[2] <= kBlockUnits ? 0 : 1; dz <= (hi[2] >= kBlockUnits ? 1 : 0); ++dz)
+      for (int dy = lo[1] <= kBlockUnits ? 0 : 1; dy <= (hi[1] >= kBlockUnits ? 1 : 0); ++dy)
+        for (int dx = lo[0] <= kBlockUnits ? 0 : 1; dx <= (hi[0] >= kBlockUnits ? 1 : 0); ++dx) {
+          const int d = dx + 2 * dy + 4 * dz;
+          if (nb[d] == nullptr) continue;  // every point weighing an absent block is unobserved
+          const auto& range = table.range[level[d]];
+          const uint8_t is = range[lo[0]][hi[0]][dx];
+          const uint8_t js = range[lo[1]][hi[1]][dy];
+          const uint8_t ks = range[lo[2]][hi[2]][dz];
+          for (unsigned kb = ks; kb != 0; kb &= kb - 1)
+            for (unsigned jb = js; jb != 0; jb &= jb - 1) {
+              const int j = __builtin_ctz(jb), k = __builtin_ctz(kb);
+              ensureMaskRow(d, j, k);
+              const uint8_t observed = is & ~mask_unobserved[d][k][j];
+              all_negative &= (observed & ~mask_negative[d][k][j]) == 0;
+              all_nonnegative &= (observed & ~mask_nonnegative[d][k][j]) == 0;
+              if (!all_negative && !all_nonnegative) return false;
+            }
+        }
+    return true;
   }
 
   /// Builds the grid's coordinates from the present blocks' levels (call after nb/step).
@@ -1065,11 +1106,12 @@ void BlockMesher::meshMixedBoxes(Context& ctx) const {
 bool BlockMesher::mixedBoxIsEmpty(Context& ctx, const int lo[3], const int hi[3]) const {
   // meshBox() returns without output at an unobserved corner, and on a plain box whose corners
   // share one sign; both are read off the voxel masks here without summing any sample. A box
-  // with hanging points can change sign between its corners: meshBox() decides.
+  // with hanging points can change sign between its corners, unless every voxel its points
+  // may weigh has the corners' sign (boxSupportHasOneSign()); otherwise meshBox() decides.
   switch (ctx.classifyBoxCorners(lo, hi)) {
     case kPointUnobserved: return true;
     case kPointNegative:
-    case kPointNonNegative: return boxIsPlain(ctx, lo, hi);
+    case kPointNonNegative: return boxIsPlain(ctx, lo, hi) || ctx.boxSupportHasOneSign(lo, hi);
     default: return false;
   }
 }

@@ -95,8 +95,9 @@ class BlockMesher {
   /// MeshingParams::fast_paths on, boxes are pre-tested on voxel masks (mixedBoxIsEmpty()).
   void meshMixedBoxes(Context& ctx) const;
   /// True if meshBox() would certainly add nothing for this box of a mixed neighbourhood
-  /// (an unobserved corner, or a plain box with one sign at all corners), decided on voxel
-  /// bit masks without sampling; false when in doubt.
+  /// (an unobserved corner, a plain box with one sign at all corners, or a box whose corners
+  /// and every voxel its points may weigh share one sign), decided on voxel bit masks
+  /// without sampling; false when in doubt.
   bool mixedBoxIsEmpty(Context& ctx, const int lo[3], const int hi[3]) const;
   static void computeNormals(SubMesh* out);
   bool samplePoint(const Context& ctx, int qx, int qy, int qz, PointSample* out) const;
