@@ -9,6 +9,7 @@
 #include <iterator>
 #include <sstream>
 
+#include "stereo_fusion/mesh/BlockMesher.h"
 #include "stereo_fusion/util/Crc32.h"
 
 namespace stereo_fusion {
@@ -76,7 +77,8 @@ std::vector<uint8_t> encodeMapFile(const BlockOctree& map, const MapperConfig& c
     putU32(&payload, static_cast<uint32_t>(b->key.z));
     putU64(&payload, b->last_update_frame);
     payload.push_back(static_cast<uint8_t>(b->mesh_level));
-    payload.push_back(static_cast<uint8_t>((b->mesh_has_negative ? 1 : 0) | (b->mesh_has_positive ? 2 : 0)));
+    // Whole-block signs (bit 0: a voxel < 0, bit 1: one ≥ 0); derived, recomputed on load.
+    payload.push_back(static_cast<uint8_t>(b->mesh_sign_bits & (meshSignBit(0, false) | meshSignBit(0, true))));
     payload.push_back(0);
     payload.push_back(0);
     for (const Voxel& v : b->voxels) {
@@ -179,8 +181,6 @@ bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config,
     }
     block->last_update_frame = getU64(r + 12);
     block->mesh_level = static_cast<int8_t>(level);
-    block->mesh_has_negative = (r[21] & 1) != 0;
-    block->mesh_has_positive = (r[21] & 2) != 0;
     const uint8_t* v = r + 24;
     for (Voxel& voxel : block->voxels) {
       voxel.sdf_m = getF32(v);
@@ -195,6 +195,7 @@ bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config,
         return false;
       }
     }
+    refreshMeshSigns(block);  // derived from the voxels, so a file cannot make the mesher skip a surface
   }
   return true;
 }

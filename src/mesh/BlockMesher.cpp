@@ -114,15 +114,37 @@ int chooseMeshLevel(const VoxelBlock& block, double level_min_coverage) {
   return kNumLevels - 1;
 }
 
+void refreshMeshSigns(VoxelBlock* block) {
+  const int level = block->mesh_level;
+  const int side = levelSide(level), step = levelScale(level);
+  // The owners below reach at most 4 half-voxel units into this block (the coarsest level's
+  // first centre), where blockField() weighs up to the next centre beyond: every voxel they
+  // can read has its centre below 8 units, i.e. within 4 finest voxels of the face.
+  auto near_low_face = [step](int i) { return step * (2 * i + 1) < 8 ? 1 : 0; };
+  uint16_t seen[8] = {};  // by the axes a voxel is near the low face on: its signs (region-0 bits)
+  for (int k = 0; k < side; ++k)
+    for (int j = 0; j < side; ++j)
+      for (int i = 0; i < side; ++i) {
+        const Voxel& v = block->at(level, i, j, k);
+        if (!(v.weight > 0.0f)) continue;
+        // A value in [−1e-30, 0) counts as both signs: the mesher's weighted sums can round it
+        // to −0, which compares as non-negative.
+        const uint16_t sign = v.sdf_m >= 0.0f ? meshSignBit(0, true)
+                              : v.sdf_m < -1e-30f ? meshSignBit(0, false)
+                                                  : static_cast<uint16_t>(meshSignBit(0, false) | meshSignBit(0, true));
+        seen[near_low_face(i) | 2 * near_low_face(j) | 4 * near_low_face(k)] |= sign;
+      }
+  // Region r holds the voxels near the low face on every axis of r.
+  uint16_t bits = 0;
+  for (int region = 0; region < 8; ++region)
+    for (int near = 0; near < 8; ++near)
+      if ((region & near) == region) bits |= static_cast<uint16_t>(seen[near] << (2 * region));
+  block->mesh_sign_bits = bits;
+}
+
 void refreshMeshLevel(VoxelBlock* block, double level_min_coverage) {
-  const int level = chooseMeshLevel(*block, level_min_coverage);
-  block->mesh_level = static_cast<int8_t>(level);
-  block->mesh_has_negative = block->mesh_has_positive = false;
-  for (int n = 0; n < levelVoxelCount(level); ++n) {
-    const Voxel& v = block->voxels[levelOffset(level) + n];
-    if (!(v.weight > 0.0f)) continue;
-    (v.sdf_m < 0.0f ? block->mesh_has_negative : block->mesh_has_positive) = true;
-  }
+  block->mesh_level = static_cast<int8_t>(chooseMeshLevel(*block, level_min_coverage));
+  refreshMeshSigns(block);
 }
 
 namespace {
@@ -997,17 +1019,18 @@ void BlockMesher::mesh(const BlockOctree& map, const VoxelBlock& owner, SubMesh*
     ctx.step[d] = 1 << ctx.level[d];
     if (ctx.nb[d] && ctx.level[d] != owner.mesh_level) ctx.uniform = false;
     if (ctx.nb[d]) {
-      any_negative |= ctx.nb[d]->mesh_has_negative;
-      any_positive |= ctx.nb[d]->mesh_has_positive;
+      // Of the +neighbour d the owner reads only what lies near its faces towards the owner.
+      any_negative |= (ctx.nb[d]->mesh_sign_bits & meshSignBit(d, false)) != 0;
+      any_positive |= (ctx.nb[d]->mesh_sign_bits & meshSignBit(d, true)) != 0;
     }
   }
   int coarsest_step = 1;
   for (int d = 0; d < 8; ++d)
     if (ctx.nb[d]) coarsest_step = std::max(coarsest_step, ctx.step[d]);
   ctx.truncated_abs = static_cast<float>(0.99 * params_.truncation_vox * coarsest_step * params_.voxel_size_m);
-  // Every value the mesher uses is a convex combination of these blocks' observed samples:
+  // Every value the mesher uses is a convex combination of observed voxels in these regions:
   // with one sign only, no cell can change sign.
-  if (!any_negative || !any_positive) return;
+  if (params_.fast_paths && (!any_negative || !any_positive)) return;
   ctx.buildSampleGrid();
   if (ctx.uniform)
     meshUniformBoxes(ctx);

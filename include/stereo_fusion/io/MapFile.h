@@ -19,7 +19,8 @@ namespace stereo_fusion {
 ///     64 u32 CRC-32 of the payload      68 u32 CRC-32 of header bytes 0..67
 ///   payload: block count records of kMapFileRecordBytes, sorted by key:
 ///     i32 x, y, z; u64 last_update_frame; i8 mesh_level; u8 flags (1 = has negative,
-///     2 = has positive); u16 0; then the 584 voxels of VoxelBlock in index order, each
+///     2 = has positive; checked ≤ 3, otherwise ignored: the reader derives the mesher's sign
+///     bits from the voxels); u16 0; then the 584 voxels of VoxelBlock in index order, each
 ///     f32 sdf_m, f32 weight, u8 r, g, b, reserved.
 ///
 /// voxel_size_m and truncation_vox must equal the loading mapper's: they fix the block grid

@@ -78,10 +78,13 @@ struct VoxelBlock {
   BlockKey key;
   /// Level the mesher samples this block at (see chooseMeshLevel()); refreshed after fusion.
   int8_t mesh_level = kNumLevels - 1;
-  /// Whether the observed voxels of mesh_level include negative / non-negative distances:
-  /// an owner whose whole neighbourhood has one sign cannot contain a surface.
-  bool mesh_has_negative = false;
-  bool mesh_has_positive = false;
+  /// Which signs the observed voxels of mesh_level hold, per region of the block: an owner
+  /// whose neighbourhood has one sign cannot contain a surface. Region 0 is the whole block;
+  /// region r = 1..7 is what the mesher may read of this block for the owner at offset −r
+  /// (bit a of r set: x/y/z towards −): the voxels whose centres lie within 4 finest voxels of
+  /// the faces towards that owner. Bit 2r: some voxel < 0; bit 2r+1: some voxel ≥ 0
+  /// (see meshSignBit()). Set by refreshMeshSigns().
+  uint16_t mesh_sign_bits = 0;
   // (The 8-byte fields last: the small ones above fill the padding after `key`.)
   /// Frame counter of the last fusion that changed this block (0 = never).
   uint64_t last_update_frame = 0;
@@ -92,6 +95,12 @@ struct VoxelBlock {
   /// lookup touch keep their place next to the voxels.)
   NeighbourLinks neighbours;
 };
+
+/// The bit of VoxelBlock::mesh_sign_bits saying that region `region` (0..7) holds an observed
+/// voxel < 0 (`non_negative` false) or ≥ 0 (true).
+constexpr uint16_t meshSignBit(int region, bool non_negative) {
+  return static_cast<uint16_t>(1u << (2 * region + (non_negative ? 1 : 0)));
+}
 
 static_assert(VoxelBlock::index(0, 7, 7, 7) == 511, "8³ level ends at 511");
 static_assert(VoxelBlock::index(1, 0, 0, 0) == 512 && VoxelBlock::index(1, 3, 3, 3) == 575,

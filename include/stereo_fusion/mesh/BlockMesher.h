@@ -18,7 +18,7 @@ struct MeshingParams {
   /// the largest observed area among its levels (see chooseMeshLevel()).
   double level_min_coverage = 0.8;
   /// Test switch: false meshes every neighbourhood through the general path (every box
-  /// visited, every point sampled by samplePoint()). The fast paths must produce the same
+  /// visited, every point sampled by samplePoint(); no owner skipped on its sign bits). The fast paths must produce the same
   /// bits; test_block_mesher_fast_paths compares the two.
   bool fast_paths = true;
 };
@@ -30,7 +30,10 @@ struct MeshingParams {
 /// opening holes.
 int chooseMeshLevel(const VoxelBlock& block, double level_min_coverage);
 
-/// Sets block.mesh_level (chooseMeshLevel) and the sign flags of that level's observed voxels.
+/// Sets block.mesh_sign_bits from the observed voxels of block.mesh_level.
+void refreshMeshSigns(VoxelBlock* block);
+
+/// Sets block.mesh_level (chooseMeshLevel) and then its sign bits (refreshMeshSigns()).
 void refreshMeshLevel(VoxelBlock* block, double level_min_coverage);
 
 /// Marching cubes for one block (thesis §3.6, Algorithm 3), crack-free across blocks of any
