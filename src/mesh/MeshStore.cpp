@@ -29,24 +29,27 @@ void splitByPresence(const std::vector<BlockKey>& keys, const std::vector<const 
 
 std::vector<MeshStore::Owner> MeshStore::ownersOf(const BlockOctree& map,
                                                   const std::vector<const VoxelBlock*>& present,
-                                                  const std::vector<BlockKey>& absent) {
+                                                  const std::vector<BlockKey>& absent, BlockKeySet* seen) {
+  // Up to 8 candidates per updated block but ~1.4 distinct owners each: de-duplicate on the
+  // way, then sort only the distinct ones.
+  seen->reset(8 * present.size() + 7 * absent.size());
   std::vector<Owner> owners;
-  owners.reserve(8 * present.size() + 7 * absent.size());
+  owners.reserve(2 * present.size() + absent.size());
   for (const VoxelBlock* block : present)
     for (int d = 0; d < 8; ++d) {
       const int dx = ownerOffset(d, 0), dy = ownerOffset(d, 1), dz = ownerOffset(d, 2);
       // The key by arithmetic: owner->key would touch one more block's memory per owner.
-      if (const VoxelBlock* owner = map.neighbour(*block, dx, dy, dz))
-        owners.push_back({block->key.offset(dx, dy, dz), owner});
+      const BlockKey owner_key = block->key.offset(dx, dy, dz);
+      if (!seen->insert(owner_key)) continue;
+      if (const VoxelBlock* owner = map.neighbour(*block, dx, dy, dz)) owners.push_back({owner_key, owner});
     }
   for (const BlockKey& key : absent)
     for (int d = 1; d < 8; ++d) {
       const BlockKey owner_key = key.offset(ownerOffset(d, 0), ownerOffset(d, 1), ownerOffset(d, 2));
+      if (!seen->insert(owner_key)) continue;
       if (const VoxelBlock* owner = map.find(owner_key)) owners.push_back({owner_key, owner});
     }
   std::sort(owners.begin(), owners.end(), [](const Owner& a, const Owner& b) { return a.key < b.key; });
-  owners.erase(std::unique(owners.begin(), owners.end(), [](const Owner& a, const Owner& b) { return a.key == b.key; }),
-               owners.end());
   return owners;
 }
 
@@ -64,7 +67,8 @@ std::vector<BlockKey> MeshStore::affectedOwners(const BlockOctree& map,
   std::vector<BlockKey> absent;
   splitByPresence(updated, found, &present, &absent);
   std::vector<BlockKey> keys;
-  for (const Owner& owner : ownersOf(map, present, absent)) keys.push_back(owner.key);
+  BlockKeySet seen;
+  for (const Owner& owner : ownersOf(map, present, absent, &seen)) keys.push_back(owner.key);
   return keys;
 }
 
@@ -131,7 +135,7 @@ MeshChanges MeshStore::remeshAround(const BlockOctree& map, std::vector<const Vo
   std::vector<BlockKey> erased_absent;
   splitByPresence(erased, erased_found, &present, &erased_absent);
   absent.insert(absent.end(), erased_absent.begin(), erased_absent.end());
-  MeshChanges changes = remesh(map, ownersOf(map, present, absent), pool);
+  MeshChanges changes = remesh(map, ownersOf(map, present, absent, &owner_keys_), pool);
   if (erased.empty()) return changes;
   for (const BlockKey& key : erased_absent)
     if (meshes_.erase(key) > 0) changes.removed.push_back(key);

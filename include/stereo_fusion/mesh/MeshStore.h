@@ -2,6 +2,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "stereo_fusion/map/BlockKeySet.h"
 #include "stereo_fusion/map/BlockOctree.h"
 #include "stereo_fusion/mesh/BlockMesher.h"
 #include "stereo_fusion/mesh/SubMesh.h"
@@ -59,9 +60,9 @@ class MeshStore {
     const VoxelBlock* block;
   };
   /// Owners of the seams of `present` blocks (through their links) and of `absent` keys (through
-  /// searches), sorted by key without duplicates.
+  /// searches), sorted by key without duplicates (`seen`: scratch for the de-duplication).
   static std::vector<Owner> ownersOf(const BlockOctree& map, const std::vector<const VoxelBlock*>& present,
-                                     const std::vector<BlockKey>& absent);
+                                     const std::vector<BlockKey>& absent, BlockKeySet* seen);
   MeshChanges remesh(const BlockOctree& map, const std::vector<Owner>& owners, ThreadPool* pool);
   /// The part of update() after the mesh levels are refreshed: `present` updated blocks and
   /// `absent` updated keys with no block, plus `erased`.
@@ -72,6 +73,7 @@ class MeshStore {
   BlockMesher mesher_;
   std::unordered_map<BlockKey, SubMesh, BlockKeyHash> meshes_;
   std::vector<SubMesh> scratch_;
+  BlockKeySet owner_keys_;  // ownersOf()'s de-duplication, reused frame after frame
 };
 
 /// All submeshes as one mesh, vertices shared between submeshes welded (they are computed
