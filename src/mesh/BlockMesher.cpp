@@ -414,10 +414,9 @@ struct BlockMesher::Context {
         core_code[i] = kCoreUnobserved;
         continue;
       }
-      float weight_sum = 0.0f, acc = 0.0f;
-      weight_sum += w;
-      acc += w * v.sdf_m;
-      core_code[i] = acc / weight_sum >= 0.0f ? kCoreNonNegative : kCoreNegative;
+      // samplePoint() yields (0 + w·sdf) / w; dividing by w > 0 (≤ 1) keeps the sign and
+      // cannot underflow, and 0 + x ≥ 0 iff x ≥ 0: the sign of w·sdf is the sign of the sample.
+      core_code[i] = w * v.sdf_m >= 0.0f ? kCoreNonNegative : kCoreNegative;
     }
   }
 
@@ -520,7 +519,9 @@ struct BlockMesher::Context {
   /// centre below it and the first above) or the +neighbour's first centre; blockField()
   /// returns exactly that voxel's value for each touching block (at most +0 instead of −0,
   /// which `acc`, starting at +0, absorbs either way). The sums below are samplePoint()'s float
-  /// operations in its order (z, y, x outer to inner), so the result is the same bits.
+  /// operations in its order (z, y, x outer to inner), so the result is the same bits. Here
+  /// every weight is w = 1/s and their sum n·w (n = 1, 2, 4, 8) is a power of two, so dividing
+  /// by it equals multiplying by its exact reciprocal (both round the same real number once).
   bool sampleUniformPoint(const int q[3], PointSample* out) const {
     const int level = this->level[0];
     const int shift = level + 1, side = levelSide(level);
@@ -529,11 +530,11 @@ struct BlockMesher::Context {
       // An owner centre, the most common point: one voxel, the loop below unrolled.
       const Voxel& v = nb[0]->at(level, (q[0] - step[0]) >> shift, (q[1] - step[0]) >> shift, (q[2] - step[0]) >> shift);
       if (!(v.weight > 0.0f)) return false;
-      const float weight_sum = 0.0f + w;
-      out->sdf = (0.0f + w * v.sdf_m) / weight_sum;
-      out->rgb[0] = (0.0f + w * static_cast<float>(v.r)) / weight_sum;
-      out->rgb[1] = (0.0f + w * static_cast<float>(v.g)) / weight_sum;
-      out->rgb[2] = (0.0f + w * static_cast<float>(v.b)) / weight_sum;
+      // (0 + w·sdf) / w, as a product with 1/w = s; w·c / w for a colour byte c is c exactly.
+      out->sdf = (0.0f + w * v.sdf_m) * static_cast<float>(step[0]);
+      out->rgb[0] = static_cast<float>(v.r);
+      out->rgb[1] = static_cast<float>(v.g);
+      out->rgb[2] = static_cast<float>(v.b);
       return true;
     }
     int first[3], last[3], low_index[3];  // low_index: the voxel index in the offset-0 block
@@ -555,8 +556,9 @@ struct BlockMesher::Context {
           acc_rgb[1] += w * static_cast<float>(v.g);
           acc_rgb[2] += w * static_cast<float>(v.b);
         }
-    out->sdf = acc / weight_sum;
-    for (int k = 0; k < 3; ++k) out->rgb[k] = acc_rgb[k] / weight_sum;
+    const float inverse_weight_sum = 1.0f / weight_sum;  // exact: weight_sum is a power of two
+    out->sdf = acc * inverse_weight_sum;
+    for (int k = 0; k < 3; ++k) out->rgb[k] = acc_rgb[k] * inverse_weight_sum;
     return true;
   }
 
