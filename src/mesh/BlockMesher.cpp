@@ -1093,6 +1093,11 @@ void BlockMesher::meshUniformBoxes(Context& ctx) const {
       *grid_lo = start;
     }
   };
+  // Candidate starts per row, once: the blocks d below revisit the same rows (d = 0 and the
+  // +x neighbour every row, the others the last rows).
+  uint16_t candidates[kFinestSide][kFinestSide];  // [k][j]
+  for (int k = 0; k < side; ++k)
+    for (int j = 0; j < side; ++j) candidates[k][j] = ctx.candidateStarts(j, k);
   // Same box order as meshMixedBoxes(): by block d, then z, y, x — the submesh's vertex and
   // triangle order does not depend on which path ran.
   for (int d = 0; d < 8; ++d) {
@@ -1105,7 +1110,7 @@ void BlockMesher::meshUniformBoxes(Context& ctx) const {
     const uint16_t x_range = static_cast<uint16_t>(((1u << (last[0] + 1)) - 1) & ~((1u << first[0]) - 1));
     for (int k = first[2]; k <= last[2]; ++k)
       for (int j = first[1]; j <= last[1]; ++j)
-        for (uint16_t bits = ctx.candidateStarts(j, k) & x_range; bits != 0; bits &= bits - 1) {
+        for (uint16_t bits = candidates[k][j] & x_range; bits != 0; bits &= bits - 1) {
           const int i = __builtin_ctz(bits);
           int lo[3], hi[3], grid_lo[3];
           interval(i, d & 1, &lo[0], &hi[0], &grid_lo[0]);
