@@ -618,6 +618,19 @@ struct BlockMesher::Context {
     mask_nonnegative[d][k][j] = static_cast<uint8_t>(classes.nonnegative);
   }
 
+  /// The blocks d (bit d) that points of the closed box [lo, hi] touch (incidentRange() per
+  /// axis), in increasing d: samplePoint()'s z, y, x order.
+  static unsigned incidentBlocks(const int lo[3], const int hi[3]) {
+    unsigned blocks = 0xFFu;
+    for (int a = 0; a < 3; ++a) {
+      if (lo[a] > kBlockUnits) blocks &= kOffsetOne[a];   // only offset 1 on this axis
+      if (hi[a] < kBlockUnits) blocks &= ~kOffsetOne[a];  // only offset 0
+    }
+    return blocks;
+  }
+  /// Bit d set where block d has offset 1 on axis a.
+  static constexpr unsigned kOffsetOne[3] = {0xAAu, 0xCCu, 0xF0u};
+
   /// What the voxel masks tell about the 8 corner samples of box [lo, hi] together: some
   /// corner unobserved, all certainly negative, all certainly non-negative, or undecided.
   /// Exact set algebra, no sampling: a block touching the box is incident to a product set
@@ -626,24 +639,22 @@ struct BlockMesher::Context {
   PointClass classifyBoxCorners(const int lo[3], const int hi[3]) {
     const SupportIndexTable& table = supportIndexTable();
     bool all_negative = true, all_nonnegative = true;
-    for (int dz = lo[2] <= kBlockUnits ? 0 : 1; dz <= (hi[2] >= kBlockUnits ? 1 : 0); ++dz)
-      for (int dy = lo[1] <= kBlockUnits ? 0 : 1; dy <= (hi[1] >= kBlockUnits ? 1 : 0); ++dy)
-        for (int dx = lo[0] <= kBlockUnits ? 0 : 1; dx <= (hi[0] >= kBlockUnits ? 1 : 0); ++dx) {
-          const int d = dx + 2 * dy + 4 * dz;
-          if (nb[d] == nullptr) return kPointUnobserved;
-          const auto& bits = table.bits[level[d]];
-          const uint8_t is = bits[lo[0]][dx] | bits[hi[0]][dx];
-          const uint8_t js = bits[lo[1]][dy] | bits[hi[1]][dy];
-          const uint8_t ks = bits[lo[2]][dz] | bits[hi[2]][dz];
-          for (unsigned kb = ks; kb != 0; kb &= kb - 1)
-            for (unsigned jb = js; jb != 0; jb &= jb - 1) {
-              const int j = __builtin_ctz(jb), k = __builtin_ctz(kb);
-              ensureMaskRow(d, j, k);
-              if (mask_unobserved[d][k][j] & is) return kPointUnobserved;
-              all_negative &= (is & ~mask_negative[d][k][j]) == 0;
-              all_nonnegative &= (is & ~mask_nonnegative[d][k][j]) == 0;
-            }
+    for (unsigned blocks = incidentBlocks(lo, hi); blocks != 0; blocks &= blocks - 1) {
+      const int d = __builtin_ctz(blocks), dx = d & 1, dy = (d >> 1) & 1, dz = d >> 2;
+      if (nb[d] == nullptr) return kPointUnobserved;
+      const auto& bits = table.bits[level[d]];
+      const uint8_t is = bits[lo[0]][dx] | bits[hi[0]][dx];
+      const uint8_t js = bits[lo[1]][dy] | bits[hi[1]][dy];
+      const uint8_t ks = bits[lo[2]][dz] | bits[hi[2]][dz];
+      for (unsigned kb = ks; kb != 0; kb &= kb - 1)
+        for (unsigned jb = js; jb != 0; jb &= jb - 1) {
+          const int j = __builtin_ctz(jb), k = __builtin_ctz(kb);
+          ensureMaskRow(d, j, k);
+          if (mask_unobserved[d][k][j] & is) return kPointUnobserved;
+          all_negative &= (is & ~mask_negative[d][k][j]) == 0;
+          all_nonnegative &= (is & ~mask_nonnegative[d][k][j]) == 0;
         }
+    }
     return all_negative ? kPointNegative : (all_nonnegative ? kPointNonNegative : kPointUndecided);
   }
 
@@ -655,25 +666,23 @@ struct BlockMesher::Context {
   bool boxSupportHasOneSign(const int lo[3], const int hi[3]) {
     const SupportIndexTable& table = supportIndexTable();
     bool all_negative = true, all_nonnegative = true;
-    for (int dz = lo[2] <= kBlockUnits ? 0 : 1; dz <= (hi[2] >= kBlockUnits ? 1 : 0); ++dz)
-      for (int dy = lo[1] <= kBlockUnits ? 0 : 1; dy <= (hi[1] >= kBlockUnits ? 1 : 0); ++dy)
-        for (int dx = lo[0] <= kBlockUnits ? 0 : 1; dx <= (hi[0] >= kBlockUnits ? 1 : 0); ++dx) {
-          const int d = dx + 2 * dy + 4 * dz;
-          if (nb[d] == nullptr) continue;  // every point weighing an absent block is unobserved
-          const auto& range = table.range[level[d]];
-          const uint8_t is = range[lo[0]][hi[0]][dx];
-          const uint8_t js = range[lo[1]][hi[1]][dy];
-          const uint8_t ks = range[lo[2]][hi[2]][dz];
-          for (unsigned kb = ks; kb != 0; kb &= kb - 1)
-            for (unsigned jb = js; jb != 0; jb &= jb - 1) {
-              const int j = __builtin_ctz(jb), k = __builtin_ctz(kb);
-              ensureMaskRow(d, j, k);
-              const uint8_t observed = is & ~mask_unobserved[d][k][j];
-              all_negative &= (observed & ~mask_negative[d][k][j]) == 0;
-              all_nonnegative &= (observed & ~mask_nonnegative[d][k][j]) == 0;
-              if (!all_negative && !all_nonnegative) return false;
-            }
+    for (unsigned blocks = incidentBlocks(lo, hi); blocks != 0; blocks &= blocks - 1) {
+      const int d = __builtin_ctz(blocks), dx = d & 1, dy = (d >> 1) & 1, dz = d >> 2;
+      if (nb[d] == nullptr) continue;  // every point weighing an absent block is unobserved
+      const auto& range = table.range[level[d]];
+      const uint8_t is = range[lo[0]][hi[0]][dx];
+      const uint8_t js = range[lo[1]][hi[1]][dy];
+      const uint8_t ks = range[lo[2]][hi[2]][dz];
+      for (unsigned kb = ks; kb != 0; kb &= kb - 1)
+        for (unsigned jb = js; jb != 0; jb &= jb - 1) {
+          const int j = __builtin_ctz(jb), k = __builtin_ctz(kb);
+          ensureMaskRow(d, j, k);
+          const uint8_t observed = is & ~mask_unobserved[d][k][j];
+          all_negative &= (observed & ~mask_negative[d][k][j]) == 0;
+          all_nonnegative &= (observed & ~mask_nonnegative[d][k][j]) == 0;
+          if (!all_negative && !all_nonnegative) return false;
         }
+    }
     return true;
   }
 
