@@ -276,8 +276,6 @@ enum PointClass : uint8_t {
   kPointNegative = 2,     // observed, every weighed voxel < −1e-30: each sum is < 0
   kPointNonNegative = 3,  // observed, every weighed voxel ≥ 0 (−0 included): each sum is ≥ 0
 };
-/// Bit flags: a box's corner codes OR to 3 iff both signs occur.
-enum CoreCode : uint8_t { kCoreUnobserved = 0, kCoreNegative = 1, kCoreNonNegative = 2, kCoreMixed = 3 };
 
 /// Edge key → vertex index for one owner: open addressing over a power-of-two table. Slots
 /// carry the stamp of the mesh() call that wrote them, so starting the next owner is O(1)
@@ -450,42 +448,38 @@ struct BlockMesher::Context {
     return line & inside;
   }
 
-  // Sign class of each owner voxel centre's sample (kCoreUnobserved / kCoreNegative /
-  // kCoreNonNegative), for the core-box pre-test; indexed like the owner's level.
-  uint8_t core_code[kFinestSide * kFinestSide * kFinestSide];
-
-  /// Fills core_code with the sign of exactly the value samplePoint() computes at an owner
-  /// centre (one block, weight 1/s: the same float operations in the same order).
-  void buildCoreCodes() {
-    const int level = this->level[0];
-    const int n = levelVoxelCount(level);
+  bool coreBoxIsEmpty(const int lo[3]) const {
+    const int level = this->level[0], shift = level + 1;
+    const int i = (lo[0] - step[0]) >> shift, j = (lo[1] - step[0]) >> shift, k = (lo[2] - step[0]) >> shift;
     const float w = 1.0f / static_cast<float>(step[0]);
-    for (int i = 0; i < n; ++i) {
-      const Voxel& v = nb[0]->voxels[levelOffset(level) + i];
-      if (!(v.weight > 0.0f)) {
-        core_code[i] = kCoreUnobserved;
-        continue;
-      }
+    bool any_negative = false, any_nonnegative = false;
+    for (int c = 0; c < 8; ++c) {
+      const Voxel& v = nb[0]->at(level, i + (c & 1), j + ((c >> 1) & 1), k + (c >> 2));
+      if (!(v.weight > 0.0f)) return true;
       // samplePoint() yields (0 + w·sdf) / w; dividing by w > 0 (≤ 1) keeps the sign and
-      // cannot underflow, and 0 + x ≥ 0 iff x ≥ 0: the sign of w·sdf is the sign of the sample.
-      core_code[i] = w * v.sdf_m >= 0.0f ? kCoreNonNegative : kCoreNegative;
+      // cannot underflow, and 0 + x ≥ 0 iff x ≥ 0: the sign of w·sdf is the sample's.
+      (w * v.sdf_m >= 0.0f ? any_nonnegative : any_negative) = true;
     }
+    return !(any_negative && any_nonnegative);
   }
 
-  /// For a core box (all corners are owner centres): true if it certainly yields nothing —
-  /// an unobserved corner, or one sign at all 8 corners. Such a box is plain (it touches no
-  /// block face), so meshBox() would return without output too.
-  bool coreBoxIsEmpty(const int lo[3]) const {
-    const int shift = level[0] + 1, side = levelSide(level[0]);
-    const int i = (lo[0] - step[0]) >> shift, j = (lo[1] - step[0]) >> shift, k = (lo[2] - step[0]) >> shift;
-    bool unobserved = false;
-    uint8_t any = 0;
-    for (int c = 0; c < 8; ++c) {
-      const uint8_t code = core_code[(i + (c & 1)) + (j + ((c >> 1) & 1)) * side + (k + (c >> 2)) * side * side];
-      unobserved |= code == kCoreUnobserved;
-      any |= code;
-    }
-    return unobserved || any != (kCoreNegative | kCoreNonNegative);
+  /// Bit i: the core box starting at owner centre (i, j, k) may yield triangles — its corner
+  /// voxels are observed and change sign or lie too near 0 to classify (the owner's mask
+  /// rows, as candidateStarts() does for uniform neighbourhoods). A superset of the boxes
+  /// coreBoxIsEmpty() keeps.
+  unsigned coreCandidates(int j, int k) {
+    unsigned neg = 0, nonneg = 0, unobserved = 0, unknown = 0;
+    for (int dk = 0; dk < 2; ++dk)
+      for (int dj = 0; dj < 2; ++dj) {
+        ensureMaskRow(0, j + dj, k + dk);
+        neg |= mask_negative[0][k + dk][j + dj];
+        nonneg |= mask_nonnegative[0][k + dk][j + dj];
+        unobserved |= mask_unobserved[0][k + dk][j + dj];
+        unknown |= ~(mask_negative[0][k + dk][j + dj] | mask_nonnegative[0][k + dk][j + dj]) & 0xFFu;
+      }
+    const unsigned pairs = (((neg | (neg >> 1)) & (nonneg | (nonneg >> 1))) | unknown | (unknown >> 1)) &
+                           ~(unobserved | (unobserved >> 1));
+    return pairs & ((1u << (levelSide(level[0]) - 1)) - 1);  // core boxes start at 0..side-2
   }
 
   // Uniform neighbourhoods (every present block at the owner's level): the voxel centres of
@@ -1131,7 +1125,6 @@ void BlockMesher::meshUniformBoxes(Context& ctx) const {
 }
 
 void BlockMesher::meshMixedBoxes(Context& ctx) const {
-  ctx.buildCoreCodes();
   ctx.buildLinePoints();
 
   // Box extents per axis: at most kFinestSide intervals (fixed arrays: no allocation).
@@ -1151,21 +1144,30 @@ void BlockMesher::meshMixedBoxes(Context& ctx) const {
         intervals[a][n++] = {step * (2 * side - 1), kBlockUnits};  // own high skin
       }
     }
+    auto visit = [&](int ix, int iy, int iz) {
+      const int lo[3] = {intervals[0][ix].first, intervals[1][iy].first, intervals[2][iz].first};
+      const int hi[3] = {intervals[0][ix].second, intervals[1][iy].second, intervals[2][iz].second};
+      const bool core = d == 0 && hi[0] < kBlockUnits && hi[1] < kBlockUnits && hi[2] < kBlockUnits;
+      if (core) {
+        // Most boxes: no voxel-level sign change. The exact corner signs decide here, so
+        // the mask pre-test below could not reject a box that passes.
+        if (ctx.coreBoxIsEmpty(lo)) return;
+      } else if (params_.fast_paths && mixedBoxIsEmpty(ctx, lo, hi)) {
+        return;
+      }
+      meshBox(ctx, lo, hi);
+    };
     for (int iz = 0; iz < interval_count[2]; ++iz)
-      for (int iy = 0; iy < interval_count[1]; ++iy)
-        for (int ix = 0; ix < interval_count[0]; ++ix) {
-          const int lo[3] = {intervals[0][ix].first, intervals[1][iy].first, intervals[2][iz].first};
-          const int hi[3] = {intervals[0][ix].second, intervals[1][iy].second, intervals[2][iz].second};
-          const bool core = d == 0 && hi[0] < kBlockUnits && hi[1] < kBlockUnits && hi[2] < kBlockUnits;
-          if (core) {
-            // Most boxes: no voxel-level sign change. The exact corner signs decide here, so
-            // the mask pre-test below could not reject a box that passes.
-            if (ctx.coreBoxIsEmpty(lo)) continue;
-          } else if (params_.fast_paths && mixedBoxIsEmpty(ctx, lo, hi)) {
-            continue;
-          }
-          meshBox(ctx, lo, hi);
+      for (int iy = 0; iy < interval_count[1]; ++iy) {
+        if (d == 0 && params_.fast_paths && iy + 1 < interval_count[1] && iz + 1 < interval_count[2]) {
+          // A row of core boxes and the skin box ending it: only the core boxes whose corners'
+          // voxel masks allow a surface (coreCandidates()), in the same x order.
+          for (unsigned bits = ctx.coreCandidates(iy, iz); bits != 0; bits &= bits - 1) visit(__builtin_ctz(bits), iy, iz);
+          visit(interval_count[0] - 1, iy, iz);
+          continue;
         }
+        for (int ix = 0; ix < interval_count[0]; ++ix) visit(ix, iy, iz);
+      }
   }
 }
 
