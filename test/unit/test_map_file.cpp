@@ -185,14 +185,18 @@ TEST(MapFile, EveryTruncationAndEveryFlippedByteFailsCleanly) {
     const std::vector<uint8_t> cut(good.begin(), good.begin() + n);
     const std::string e = decodeError(cut, config);
     ASSERT_NE(e, "") << "a file truncated to " << n << " bytes was accepted";
-    if (n >= kMapFileHeaderBytes) ASSERT_NE(e.find("truncated map file"), std::string::npos) << n << ": " << e;
+    if (n >= kMapFileHeaderBytes) {
+      ASSERT_NE(e.find("truncated map file"), std::string::npos) << n << ": " << e;
+    }
   }
   for (size_t at = 0; at < good.size(); ++at) {
     std::vector<uint8_t> bad = good;
     bad[at] ^= static_cast<uint8_t>(1u << (at % 8));
     const std::string e = decodeError(bad, config);
     ASSERT_NE(e, "") << "a flipped bit at byte " << at << " was accepted";
-    if (at >= kMapFileHeaderBytes) ASSERT_NE(e.find("block data checksum mismatch"), std::string::npos) << at << ": " << e;
+    if (at >= kMapFileHeaderBytes) {
+      ASSERT_NE(e.find("block data checksum mismatch"), std::string::npos) << at << ": " << e;
+    }
   }
   // Appended bytes are corruption too.
   std::vector<uint8_t> longer = good;

@@ -126,7 +126,9 @@ TEST(MemoryBound, BudgetHoldsAfterEveryFrameAndEvictsTheLeastRecent) {
       EXPECT_FALSE(std::binary_search(r.updated_blocks.begin(), r.updated_blocks.end(), k)) << k;
       auto it = before.find(k);
       // A block that existed before the frame is only evicted if every kept block is at least as recent.
-      if (it != before.end()) EXPECT_LE(it->second, oldest_kept) << "evicted " << k << " at frame " << f;
+      if (it != before.end()) {
+        EXPECT_LE(it->second, oldest_kept) << "evicted " << k << " at frame " << f;
+      }
     }
   }
   EXPECT_GT(evicted_total, 200u) << "the corridor must outgrow the budget";
