@@ -1,7 +1,10 @@
 #include "stereo_fusion/io/MapFile.h"
 
+#include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -200,38 +203,91 @@ bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config,
   return true;
 }
 
-bool writeMapFile(const std::string& path, const BlockOctree& map, const MapperConfig& config,
-                  uint64_t frames_integrated, std::string* error) {
-  const std::vector<uint8_t> bytes = encodeMapFile(map, config, frames_integrated);
-  const std::string tmp = path + ".tmp-" + std::to_string(getpid());
-  {
-    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-    f.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-    f.flush();
-    if (!f) {
-      std::remove(tmp.c_str());
-      *error = path + ": cannot write the map file";
+namespace {
+/// Writes all of `bytes` to a new file at `path` and flushes it to the disk (fsync), so that a
+/// rename over the old map never leaves an empty or partial file after a power cut.
+bool writeDurably(const std::string& path, const std::vector<uint8_t>& bytes, std::string* reason) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) {
+    *reason = std::strerror(errno);
+    return false;
+  }
+  size_t written = 0;
+  while (written < bytes.size()) {
+    const ssize_t n = ::write(fd, bytes.data() + written, bytes.size() - written);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      *reason = n < 0 ? std::strerror(errno) : "short write";
+      ::close(fd);
       return false;
     }
+    written += static_cast<size_t>(n);
   }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    *error = path + ": cannot write the map file (rename failed)";
+  if (::fsync(fd) != 0) {
+    *reason = std::string("fsync: ") + std::strerror(errno);
+    ::close(fd);
+    return false;
+  }
+  if (::close(fd) != 0) {
+    *reason = std::strerror(errno);
     return false;
   }
   return true;
 }
 
+/// Flushes the directory holding `path`, so that a rename into it is on the disk too (best
+/// effort: some file systems refuse fsync on directories, and the file itself is already safe).
+void syncParentDirectory(const std::string& path) {
+  const size_t slash = path.find_last_of('/');
+  const std::string dir = slash == std::string::npos ? "." : (slash == 0 ? "/" : path.substr(0, slash));
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return;
+  ::fsync(fd);
+  ::close(fd);
+}
+}  // namespace
+
+bool writeMapFile(const std::string& path, const BlockOctree& map, const MapperConfig& config,
+                  uint64_t frames_integrated, std::string* error) {
+  const std::vector<uint8_t> bytes = encodeMapFile(map, config, frames_integrated);
+  const std::string tmp = path + ".tmp-" + std::to_string(getpid());
+  std::string reason;
+  if (!writeDurably(tmp, bytes, &reason)) {
+    std::remove(tmp.c_str());
+    *error = path + ": cannot write the map file (" + reason + ")";
+    return false;
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    reason = std::strerror(errno);
+    std::remove(tmp.c_str());
+    *error = path + ": cannot write the map file (rename failed: " + reason + ")";
+    return false;
+  }
+  syncParentDirectory(path);
+  return true;
+}
+
 bool readMapFile(const std::string& path, const MapperConfig& config, BlockOctree* out, MapFileInfo* info,
                  std::string* error) {
+  // Only regular files: a device such as /dev/zero would be read without end.
+  struct stat st;
+  if (::stat(path.c_str(), &st) != 0) {
+    *error = path + ": cannot open the map file (" + std::strerror(errno) + ")";
+    return false;
+  }
+  if (!S_ISREG(st.st_mode)) {
+    *error = path + ": not a regular file, so not a map file";
+    return false;
+  }
   std::ifstream f(path, std::ios::binary);
   if (!f) {
     *error = path + ": cannot open the map file";
     return false;
   }
-  const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-  if (f.bad()) {
-    *error = path + ": read error";
+  std::vector<uint8_t> bytes(static_cast<size_t>(st.st_size));
+  f.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  if (f.gcount() != static_cast<std::streamsize>(bytes.size())) {
+    *error = path + ": read error (the file changed while it was read?)";
     return false;
   }
   if (!decodeMapFile(bytes.data(), bytes.size(), config, out, info, error)) {

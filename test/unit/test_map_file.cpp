@@ -287,7 +287,14 @@ TEST(MapFile, AFailedLoadLeavesTheMapAndMeshUntouched) {
   EXPECT_NE(error.find("cannot open the map file"), std::string::npos) << error;
   EXPECT_FALSE(mapper->saveMap("/nonexistent_dir/x.sfmap", &error));
   EXPECT_NE(error.find("cannot write"), std::string::npos) << error;
+  EXPECT_NE(error.find("No such file or directory"), std::string::npos) << "the message says why: " << error;
+  // A device is refused before reading (/dev/zero would never end), a directory likewise.
+  for (const std::string& not_a_file : {std::string("/dev/zero"), testing::TempDir()}) {
+    EXPECT_FALSE(mapper->loadMap(not_a_file, nullptr, &error));
+    EXPECT_NE(error.find("not a regular file"), std::string::npos) << error;
+  }
   EXPECT_TRUE(snapshot(mapper->map()) == before);
+  EXPECT_TRUE(triangleSets(mapper->mesh()) == mesh_before);
 }
 
 TEST(MapFile, LoadingReplacesTheMapAndReportsTheOldSubmeshesAsRemoved) {
