@@ -1045,24 +1045,34 @@ void BlockMesher::mesh(const BlockOctree& map, const VoxelBlock& owner, SubMesh*
   ctx.origin[1] = int64_t{owner.key.y} * kBlockUnits;
   ctx.origin[2] = int64_t{owner.key.z} * kBlockUnits;
   bool any_negative = false, any_positive = false;
+  int coarsest_step = 1;
   for (int d = 0; d < 8; ++d) {
     ctx.nb[d] = map.neighbour(owner, d & 1, (d >> 1) & 1, (d >> 2) & 1);
     ctx.level[d] = ctx.nb[d] ? ctx.nb[d]->mesh_level : 0;
     ctx.step[d] = 1 << ctx.level[d];
-    if (ctx.nb[d] && ctx.level[d] != owner.mesh_level) ctx.uniform = false;
-    if (ctx.nb[d]) {
-      // Of the +neighbour d the owner reads only what lies near its faces towards the owner.
-      any_negative |= (ctx.nb[d]->mesh_sign_bits & meshSignBit(d, false)) != 0;
-      any_positive |= (ctx.nb[d]->mesh_sign_bits & meshSignBit(d, true)) != 0;
-    }
+    if (ctx.nb[d] == nullptr) continue;
+    coarsest_step = std::max(coarsest_step, ctx.step[d]);
+    // Of the +neighbour d the owner reads only what lies near its faces towards the owner.
+    any_negative |= (ctx.nb[d]->mesh_sign_bits & meshSignBit(d, false)) != 0;
+    any_positive |= (ctx.nb[d]->mesh_sign_bits & meshSignBit(d, true)) != 0;
   }
-  int coarsest_step = 1;
-  for (int d = 0; d < 8; ++d)
-    if (ctx.nb[d]) coarsest_step = std::max(coarsest_step, ctx.step[d]);
   ctx.truncated_abs = static_cast<float>(0.99 * params_.truncation_vox * coarsest_step * params_.voxel_size_m);
   // Every value the mesher uses is a convex combination of observed voxels in these regions:
   // with one sign only, no cell can change sign.
   if (params_.fast_paths && (!any_negative || !any_positive)) return;
+  if (params_.fast_paths) {
+    // A +neighbour with nothing observed where the owner reads it adds only points that are
+    // unobserved, present or not: every box with such a point — its own boxes, and any box
+    // whose edges or faces it would tile with hanging points (their corners on the shared line
+    // weigh it) — gives up either way. Meshing as if it were absent gives the same bits, and a
+    // neighbourhood that differed only by it takes the uniform path. (truncated_abs above still
+    // counts it: that is what the general path uses.)
+    for (int d = 1; d < 8; ++d)
+      if (ctx.nb[d] && (ctx.nb[d]->mesh_sign_bits & (meshSignBit(d, false) | meshSignBit(d, true))) == 0)
+        ctx.nb[d] = nullptr;
+  }
+  for (int d = 1; d < 8; ++d)
+    if (ctx.nb[d] && ctx.level[d] != owner.mesh_level) ctx.uniform = false;
   ctx.buildSampleGrid();
   if (ctx.uniform)
     meshUniformBoxes(ctx);
