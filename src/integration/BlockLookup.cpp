@@ -33,6 +33,8 @@ BlockLookup::PixelGeometry BlockLookup::pixelGeometry(const StereoFrame& frame,
   g.levels = config_.levels;
   for (int level = 0; level < kNumLevels; ++level)
     g.band_blocks[level] = config_.truncation_vox * levelScale(level) * config_.voxel_size_m * g.inv_block_size;
+  g.bands_non_negative = true;
+  for (double band : g.band_blocks) g.bands_non_negative = g.bands_non_negative && band >= 0.0;
   return g;
 }
 
@@ -78,7 +80,7 @@ __attribute__((always_inline)) inline void BlockLookup::countBox(const BandBox& 
 #ifdef STEREO_FUSION_HAVE_AVX2_LOOKUP
 // Four pixels at a time: the same double operations as bandBoxOfPixel() in the same order
 // (no FMA: the target is AVX2 only), so the boxes are identical. Returns the first pixel
-// left for the scalar loop.
+// left for the scalar loop. Needs geometry_.bands_non_negative (see keyInRange below).
 __attribute__((target("avx2"))) int BlockLookup::countRowBoxesAvx2(const float* disparity_row, int u_begin,
                                                                    int u_end, int v, RegionScratch* s,
                                                                    size_t* last) const {
@@ -90,29 +92,43 @@ __attribute__((target("avx2"))) int BlockLookup::countRowBoxesAvx2(const float* 
   const __m256d scale2 = _mm256_set1_pd(g.levels.scale2_min_depth_m), scale4 = _mm256_set1_pd(g.levels.scale4_min_depth_m);
   const __m256d band0 = _mm256_set1_pd(g.band_blocks[0]), band1 = _mm256_set1_pd(g.band_blocks[1]),
                 band2 = _mm256_set1_pd(g.band_blocks[2]);
-  const __m256d max_key = _mm256_set1_pd(BlockOctree::kMaxKey);
-  const __m256d sign_mask = _mm256_set1_pd(-0.0);
+  const __m256d max_key = _mm256_set1_pd(BlockOctree::kMaxKey), min_key = _mm256_set1_pd(-BlockOctree::kMaxKey);
   __m256d r[3][3], t[3];
   for (int i = 0; i < 3; ++i) {
     for (int k = 0; k < 3; ++k) r[i][k] = _mm256_set1_pd(g.R_world_camera(i, k));
     t[i] = _mm256_set1_pd(g.t_world_camera[i]);
   }
   const __m256d inv_block = _mm256_set1_pd(g.inv_block_size);
+  // Small integers are exact in double, so stepping u by 4.0 gives the converted int exactly.
+  const __m256d four = _mm256_set1_pd(4.0);
+  __m256d u_px = _mm256_add_pd(_mm256_set1_pd(u_begin), _mm256_setr_pd(0.0, 1.0, 2.0, 3.0));
+  // The previous box broadcast to all lanes, refreshed only when countBox() moves `last`.
+  __m128i last_key[6] = {_mm_setzero_si128(), _mm_setzero_si128(), _mm_setzero_si128(),
+                         _mm_setzero_si128(), _mm_setzero_si128(), _mm_setzero_si128()};
+  int* last_count = nullptr;
+  auto load_last = [&] {
+    if (*last >= s->boxes.size()) return;
+    std::pair<BandBox, int>& entry = s->boxes[*last];
+    const BandBox& b = entry.first;
+    last_key[0] = _mm_set1_epi32(b.lo.x), last_key[1] = _mm_set1_epi32(b.lo.y), last_key[2] = _mm_set1_epi32(b.lo.z);
+    last_key[3] = _mm_set1_epi32(b.hi.x), last_key[4] = _mm_set1_epi32(b.hi.y), last_key[5] = _mm_set1_epi32(b.hi.z);
+    last_count = &entry.second;
+  };
+  load_last();
   int u = u_begin;
-  for (; u + 4 <= u_end; u += 4) {
+  for (; u + 4 <= u_end; u += 4, u_px = _mm256_add_pd(u_px, four)) {
     const __m256d d = _mm256_cvtps_pd(_mm_loadu_ps(disparity_row + u));
     // d > 0 and finite (NaN fails both ordered comparisons).
     __m256d valid = _mm256_and_pd(_mm256_cmp_pd(d, zero, _CMP_GT_OQ), _mm256_cmp_pd(d, infinity, _CMP_LT_OQ));
     if (_mm256_movemask_pd(valid) == 0) continue;
     const __m256d z = _mm256_div_pd(fb, d);
     valid = _mm256_and_pd(valid, _mm256_and_pd(_mm256_cmp_pd(z, min_z, _CMP_GE_OQ), _mm256_cmp_pd(z, max_z, _CMP_LE_OQ)));
-    const __m256d u_px = _mm256_cvtepi32_pd(_mm_add_epi32(_mm_set1_epi32(u), _mm_setr_epi32(0, 1, 2, 3)));
     const __m256d p[3] = {_mm256_mul_pd(_mm256_mul_pd(_mm256_sub_pd(u_px, cx), z), inv_fx),
                           _mm256_mul_pd(_mm256_mul_pd(y_offset, z), inv_fy), z};
     // Level of eq. 3.2 → band, lane by lane.
     const __m256d at_least_2 = _mm256_cmp_pd(z, scale2, _CMP_GE_OQ), at_least_4 = _mm256_cmp_pd(z, scale4, _CMP_GE_OQ);
     const __m256d band = _mm256_blendv_pd(_mm256_blendv_pd(band0, band1, at_least_2), band2, at_least_4);
-    __m128i lo[3], hi[3];
+    __m128i key[6];  // lo x, y, z, hi x, y, z of the four lanes
     for (int i = 0; i < 3; ++i) {
       const __m256d world = _mm256_add_pd(
           _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r[i][0], p[0]), _mm256_mul_pd(r[i][1], p[1])),
@@ -121,42 +137,37 @@ __attribute__((target("avx2"))) int BlockLookup::countRowBoxesAvx2(const float* 
       const __m256d blocks = _mm256_mul_pd(world, inv_block);
       const __m256d lo_d = _mm256_floor_pd(_mm256_sub_pd(blocks, band));
       const __m256d hi_d = _mm256_floor_pd(_mm256_add_pd(blocks, band));
-      // keyInRange(): |key| ≤ kMaxKey (NaN fails).
-      valid = _mm256_and_pd(valid, _mm256_cmp_pd(_mm256_andnot_pd(sign_mask, lo_d), max_key, _CMP_LE_OQ));
-      valid = _mm256_and_pd(valid, _mm256_cmp_pd(_mm256_andnot_pd(sign_mask, hi_d), max_key, _CMP_LE_OQ));
-      lo[i] = _mm256_cvttpd_epi32(lo_d);
-      hi[i] = _mm256_cvttpd_epi32(hi_d);
+      // keyInRange() of lo and hi, i.e. |key| ≤ kMaxKey with NaN failing: with band ≥ 0,
+      // lo ≤ hi whenever neither is NaN, so lo ≥ -kMaxKey and hi ≤ kMaxKey cover all four bounds.
+      valid = _mm256_and_pd(valid, _mm256_and_pd(_mm256_cmp_pd(lo_d, min_key, _CMP_GE_OQ),
+                                                 _mm256_cmp_pd(hi_d, max_key, _CMP_LE_OQ)));
+      key[i] = _mm256_cvttpd_epi32(lo_d);
+      key[3 + i] = _mm256_cvttpd_epi32(hi_d);
     }
     const int lanes = _mm256_movemask_pd(valid);
     if (lanes == 0) continue;
     // Most groups repeat the previous box in every valid lane: then countBox() would take its
     // first branch lane after lane, so counting them at once gives the same counts.
-    if (*last < s->boxes.size()) {
-      std::pair<BandBox, int>& previous = s->boxes[*last];
-      const BandBox& b = previous.first;
+    if (last_count != nullptr) {
       const __m128i same = _mm_and_si128(
-          _mm_and_si128(_mm_and_si128(_mm_cmpeq_epi32(lo[0], _mm_set1_epi32(b.lo.x)),
-                                      _mm_cmpeq_epi32(lo[1], _mm_set1_epi32(b.lo.y))),
-                        _mm_and_si128(_mm_cmpeq_epi32(lo[2], _mm_set1_epi32(b.lo.z)),
-                                      _mm_cmpeq_epi32(hi[0], _mm_set1_epi32(b.hi.x)))),
-          _mm_and_si128(_mm_cmpeq_epi32(hi[1], _mm_set1_epi32(b.hi.y)), _mm_cmpeq_epi32(hi[2], _mm_set1_epi32(b.hi.z))));
+          _mm_and_si128(_mm_and_si128(_mm_cmpeq_epi32(key[0], last_key[0]), _mm_cmpeq_epi32(key[1], last_key[1])),
+                        _mm_and_si128(_mm_cmpeq_epi32(key[2], last_key[2]), _mm_cmpeq_epi32(key[3], last_key[3]))),
+          _mm_and_si128(_mm_cmpeq_epi32(key[4], last_key[4]), _mm_cmpeq_epi32(key[5], last_key[5])));
       if ((_mm_movemask_ps(_mm_castsi128_ps(same)) & lanes) == lanes) {
         static constexpr int kLaneCount[16] = {0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4};
-        previous.second += kLaneCount[lanes];
+        *last_count += kLaneCount[lanes];
         s->stats.valid_points += kLaneCount[lanes];
         continue;
       }
     }
-    alignas(16) int32_t lo_k[3][4], hi_k[3][4];
-    for (int i = 0; i < 3; ++i) {
-      _mm_store_si128(reinterpret_cast<__m128i*>(lo_k[i]), lo[i]);
-      _mm_store_si128(reinterpret_cast<__m128i*>(hi_k[i]), hi[i]);
-    }
+    alignas(16) int32_t keys[6][4];
+    for (int i = 0; i < 6; ++i) _mm_store_si128(reinterpret_cast<__m128i*>(keys[i]), key[i]);
     for (int lane = 0; lane < 4; ++lane) {
       if (!((lanes >> lane) & 1)) continue;
-      const BandBox box{{lo_k[0][lane], lo_k[1][lane], lo_k[2][lane]}, {hi_k[0][lane], hi_k[1][lane], hi_k[2][lane]}};
+      const BandBox box{{keys[0][lane], keys[1][lane], keys[2][lane]}, {keys[3][lane], keys[4][lane], keys[5][lane]}};
       countBox(box, s, last);
     }
+    load_last();  // countBox() may have moved `last` or reallocated the boxes
   }
   return u;
 }
@@ -175,7 +186,7 @@ void BlockLookup::gatherHistogram(const StereoFrame& frame, const cv::Rect& regi
   for (int v = region.y; v < region.y + region.height; ++v) {
     const float* disparity_row = frame.disparity_px.ptr<float>(v);
     int u = region.x;
-    if (use_avx2_) u = countRowBoxesAvx2(disparity_row, u, region.x + region.width, v, s, &last);
+    if (use_avx2_ && geometry_.bands_non_negative) u = countRowBoxesAvx2(disparity_row, u, region.x + region.width, v, s, &last);
     for (; u < region.x + region.width; ++u) {
       BandBox box;
       if (bandBoxOfPixel(disparity_row[u], u, v, &box)) countBox(box, s, &last);

@@ -58,6 +58,9 @@ class BlockLookup {
     double min_depth_m = 0.0, max_depth_m = 0.0;       ///< usable depth range
     LevelThresholds levels;                            ///< eq. 3.2 switch depths
     double band_blocks[kNumLevels] = {};               ///< Φ of each level, in blocks
+    /// Every Φ ≥ 0 (so lo ≤ hi in each box), which the AVX2 path's key range test relies on;
+    /// a config without it keeps to the scalar path.
+    bool bands_non_negative = false;
   };
   struct RegionScratch {
     std::vector<std::pair<BandBox, int>> boxes;      // distinct band boxes and their point counts
