@@ -77,17 +77,31 @@ __attribute__((always_inline)) inline void BlockLookup::countBox(const BandBox& 
   }
 }
 
+// The reference per-pixel path: every pixel through bandBoxOfPixel().
+void BlockLookup::countRegionBoxesScalar(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const {
+  size_t last = 0;
+  for (int v = region.y; v < region.y + region.height; ++v) {
+    const float* disparity_row = frame.disparity_px.ptr<float>(v);
+    for (int u = region.x; u < region.x + region.width; ++u) {
+      BandBox box;
+      if (bandBoxOfPixel(disparity_row[u], u, v, &box)) countBox(box, s, &last);
+    }
+  }
+}
+
 #ifdef STEREO_FUSION_HAVE_AVX2_LOOKUP
 // Four pixels at a time: the same double operations as bandBoxOfPixel() in the same order
-// (no FMA: the target is AVX2 only), so the boxes are identical. Returns the first pixel
-// left for the scalar loop. Needs geometry_.bands_non_negative (see keyInRange below).
-__attribute__((target("avx2"))) int BlockLookup::countRowBoxesAvx2(const float* disparity_row, int u_begin,
-                                                                   int u_end, int v, RegionScratch* s,
-                                                                   size_t* last) const {
+// (no FMA: the target is AVX2 only), so the boxes are identical; a row's last width % 4
+// pixels go through bandBoxOfPixel(). The whole region in one call: a region row is only a
+// few groups, too few to pay for setting the constants up per row.
+// Needs geometry_.bands_non_negative (see the key range test below).
+__attribute__((target("avx2"))) void BlockLookup::countRegionBoxesAvx2(const StereoFrame& frame,
+                                                                       const cv::Rect& region,
+                                                                       RegionScratch* s) const {
   const PixelGeometry& g = geometry_;
   const __m256d zero = _mm256_setzero_pd(), infinity = _mm256_set1_pd(HUGE_VAL);
   const __m256d fb = _mm256_set1_pd(g.fb), min_z = _mm256_set1_pd(g.min_depth_m), max_z = _mm256_set1_pd(g.max_depth_m);
-  const __m256d y_offset = _mm256_set1_pd(v - g.cy), cx = _mm256_set1_pd(g.cx);
+  const __m256d cx = _mm256_set1_pd(g.cx);
   const __m256d inv_fx = _mm256_set1_pd(g.inv_fx), inv_fy = _mm256_set1_pd(g.inv_fy);
   const __m256d scale2 = _mm256_set1_pd(g.levels.scale2_min_depth_m), scale4 = _mm256_set1_pd(g.levels.scale4_min_depth_m);
   const __m256d band0 = _mm256_set1_pd(g.band_blocks[0]), band1 = _mm256_set1_pd(g.band_blocks[1]),
@@ -101,80 +115,109 @@ __attribute__((target("avx2"))) int BlockLookup::countRowBoxesAvx2(const float* 
   const __m256d inv_block = _mm256_set1_pd(g.inv_block_size);
   // Small integers are exact in double, so stepping u by 4.0 gives the converted int exactly.
   const __m256d four = _mm256_set1_pd(4.0);
-  __m256d u_px = _mm256_add_pd(_mm256_set1_pd(u_begin), _mm256_setr_pd(0.0, 1.0, 2.0, 3.0));
-  // The previous box broadcast to all lanes, refreshed only when countBox() moves `last`.
+  const __m256d u_first = _mm256_add_pd(_mm256_set1_pd(region.x), _mm256_setr_pd(0.0, 1.0, 2.0, 3.0));
+  const int u_end = region.x + region.width, u_vector_end = region.x + (region.width & ~3);
+
+  // countBox()'s previous box, broadcast to all lanes; refreshed whenever countBox() runs.
+  size_t last = 0;
   __m128i last_key[6] = {_mm_setzero_si128(), _mm_setzero_si128(), _mm_setzero_si128(),
                          _mm_setzero_si128(), _mm_setzero_si128(), _mm_setzero_si128()};
-  int* last_count = nullptr;
-  auto load_last = [&] {
-    if (*last >= s->boxes.size()) return;
-    std::pair<BandBox, int>& entry = s->boxes[*last];
+  int* last_count = nullptr;  // nullptr until the region has a box
+  auto count_box = [&](const BandBox& box) {
+    countBox(box, s, &last);
+    std::pair<BandBox, int>& entry = s->boxes[last];  // may have moved: boxes can grow
     const BandBox& b = entry.first;
     last_key[0] = _mm_set1_epi32(b.lo.x), last_key[1] = _mm_set1_epi32(b.lo.y), last_key[2] = _mm_set1_epi32(b.lo.z);
     last_key[3] = _mm_set1_epi32(b.hi.x), last_key[4] = _mm_set1_epi32(b.hi.y), last_key[5] = _mm_set1_epi32(b.hi.z);
     last_count = &entry.second;
   };
-  load_last();
-  int u = u_begin;
-  for (; u + 4 <= u_end; u += 4, u_px = _mm256_add_pd(u_px, four)) {
-    const __m256d d = _mm256_cvtps_pd(_mm_loadu_ps(disparity_row + u));
-    // d > 0 and finite (NaN fails both ordered comparisons).
-    __m256d valid = _mm256_and_pd(_mm256_cmp_pd(d, zero, _CMP_GT_OQ), _mm256_cmp_pd(d, infinity, _CMP_LT_OQ));
-    if (_mm256_movemask_pd(valid) == 0) continue;
-    const __m256d z = _mm256_div_pd(fb, d);
-    valid = _mm256_and_pd(valid, _mm256_and_pd(_mm256_cmp_pd(z, min_z, _CMP_GE_OQ), _mm256_cmp_pd(z, max_z, _CMP_LE_OQ)));
-    const __m256d p[3] = {_mm256_mul_pd(_mm256_mul_pd(_mm256_sub_pd(u_px, cx), z), inv_fx),
-                          _mm256_mul_pd(_mm256_mul_pd(y_offset, z), inv_fy), z};
-    // Level of eq. 3.2 → band, lane by lane.
-    const __m256d at_least_2 = _mm256_cmp_pd(z, scale2, _CMP_GE_OQ), at_least_4 = _mm256_cmp_pd(z, scale4, _CMP_GE_OQ);
-    const __m256d band = _mm256_blendv_pd(_mm256_blendv_pd(band0, band1, at_least_2), band2, at_least_4);
-    __m128i key[6];  // lo x, y, z, hi x, y, z of the four lanes
-    for (int i = 0; i < 3; ++i) {
-      const __m256d world = _mm256_add_pd(
-          _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r[i][0], p[0]), _mm256_mul_pd(r[i][1], p[1])),
-                        _mm256_mul_pd(r[i][2], p[2])),
-          t[i]);
-      const __m256d blocks = _mm256_mul_pd(world, inv_block);
-      const __m256d lo_d = _mm256_floor_pd(_mm256_sub_pd(blocks, band));
-      const __m256d hi_d = _mm256_floor_pd(_mm256_add_pd(blocks, band));
-      // keyInRange() of lo and hi, i.e. |key| ≤ kMaxKey with NaN failing: with band ≥ 0,
-      // lo ≤ hi whenever neither is NaN, so lo ≥ -kMaxKey and hi ≤ kMaxKey cover all four bounds.
-      valid = _mm256_and_pd(valid, _mm256_and_pd(_mm256_cmp_pd(lo_d, min_key, _CMP_GE_OQ),
-                                                 _mm256_cmp_pd(hi_d, max_key, _CMP_LE_OQ)));
-      key[i] = _mm256_cvttpd_epi32(lo_d);
-      key[3 + i] = _mm256_cvttpd_epi32(hi_d);
-    }
-    const int lanes = _mm256_movemask_pd(valid);
-    if (lanes == 0) continue;
-    // Most groups repeat the previous box in every valid lane: then countBox() would take its
-    // first branch lane after lane, so counting them at once gives the same counts.
-    if (last_count != nullptr) {
-      const __m128i same = _mm_and_si128(
-          _mm_and_si128(_mm_and_si128(_mm_cmpeq_epi32(key[0], last_key[0]), _mm_cmpeq_epi32(key[1], last_key[1])),
-                        _mm_and_si128(_mm_cmpeq_epi32(key[2], last_key[2]), _mm_cmpeq_epi32(key[3], last_key[3]))),
-          _mm_and_si128(_mm_cmpeq_epi32(key[4], last_key[4]), _mm_cmpeq_epi32(key[5], last_key[5])));
-      if ((_mm_movemask_ps(_mm_castsi128_ps(same)) & lanes) == lanes) {
-        static constexpr int kLaneCount[16] = {0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4};
-        *last_count += kLaneCount[lanes];
-        s->stats.valid_points += kLaneCount[lanes];
+  // `n` more points in the previous box: what n countBox() calls would do when each box
+  // equals the previous one.
+  auto repeat_box = [&](int n) {
+    *last_count += n;
+    s->stats.valid_points += n;
+  };
+
+  for (int v = region.y; v < region.y + region.height; ++v) {
+    const float* disparity_row = frame.disparity_px.ptr<float>(v);
+    const __m256d y_offset = _mm256_set1_pd(v - g.cy);
+    __m256d u_px = u_first;
+    int u = region.x;
+    for (; u < u_vector_end; u += 4, u_px = _mm256_add_pd(u_px, four)) {
+      const __m256d d = _mm256_cvtps_pd(_mm_loadu_ps(disparity_row + u));
+      // d > 0 and finite (NaN fails both ordered comparisons).
+      __m256d valid = _mm256_and_pd(_mm256_cmp_pd(d, zero, _CMP_GT_OQ), _mm256_cmp_pd(d, infinity, _CMP_LT_OQ));
+      if (_mm256_movemask_pd(valid) == 0) continue;
+      const __m256d z = _mm256_div_pd(fb, d);
+      valid = _mm256_and_pd(valid, _mm256_and_pd(_mm256_cmp_pd(z, min_z, _CMP_GE_OQ), _mm256_cmp_pd(z, max_z, _CMP_LE_OQ)));
+      const __m256d p[3] = {_mm256_mul_pd(_mm256_mul_pd(_mm256_sub_pd(u_px, cx), z), inv_fx),
+                            _mm256_mul_pd(_mm256_mul_pd(y_offset, z), inv_fy), z};
+      // Level of eq. 3.2 → band, lane by lane.
+      const __m256d at_least_2 = _mm256_cmp_pd(z, scale2, _CMP_GE_OQ), at_least_4 = _mm256_cmp_pd(z, scale4, _CMP_GE_OQ);
+      const __m256d band = _mm256_blendv_pd(_mm256_blendv_pd(band0, band1, at_least_2), band2, at_least_4);
+      __m128i key[6];  // lo x, y, z, hi x, y, z of the four lanes
+      for (int i = 0; i < 3; ++i) {
+        const __m256d world = _mm256_add_pd(
+            _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r[i][0], p[0]), _mm256_mul_pd(r[i][1], p[1])),
+                          _mm256_mul_pd(r[i][2], p[2])),
+            t[i]);
+        const __m256d blocks = _mm256_mul_pd(world, inv_block);
+        const __m256d lo_d = _mm256_floor_pd(_mm256_sub_pd(blocks, band));
+        const __m256d hi_d = _mm256_floor_pd(_mm256_add_pd(blocks, band));
+        // keyInRange() of lo and hi, i.e. |key| ≤ kMaxKey with NaN failing: with band ≥ 0,
+        // lo ≤ hi whenever neither is NaN, so lo ≥ -kMaxKey and hi ≤ kMaxKey cover all four bounds.
+        valid = _mm256_and_pd(valid, _mm256_and_pd(_mm256_cmp_pd(lo_d, min_key, _CMP_GE_OQ),
+                                                   _mm256_cmp_pd(hi_d, max_key, _CMP_LE_OQ)));
+        key[i] = _mm256_cvttpd_epi32(lo_d);
+        key[3 + i] = _mm256_cvttpd_epi32(hi_d);
+      }
+      const int lanes = _mm256_movemask_pd(valid);
+      if (lanes == 0) continue;
+      // Bit i: lane i's box equals lane i-1's (lane 0: the previous box's). Neighbouring
+      // pixels almost always share a box, so most groups are counted at once and most others
+      // call countBox() only where the box changes.
+      __m128i same = _mm_set1_epi32(-1);
+      for (int k = 0; k < 6; ++k)
+        same = _mm_and_si128(same, _mm_cmpeq_epi32(key[k], _mm_alignr_epi8(key[k], last_key[k], 12)));
+      int repeats = _mm_movemask_ps(_mm_castsi128_ps(same));
+      if (last_count == nullptr) repeats &= ~1;  // lane 0 has no previous box to repeat
+      if (lanes == 15 && repeats == 15) {
+        repeat_box(4);
         continue;
       }
+      alignas(16) int32_t keys[6][4];
+      for (int k = 0; k < 6; ++k) _mm_store_si128(reinterpret_cast<__m128i*>(keys[k]), key[k]);
+      auto box_of_lane = [&](int lane) {
+        return BandBox{{keys[0][lane], keys[1][lane], keys[2][lane]}, {keys[3][lane], keys[4][lane], keys[5][lane]}};
+      };
+      if (lanes == 15) {
+        // Runs of repeats between the changes; lane 0 repeats only if there is a previous box.
+        int run = 0;
+        for (int lane = 0; lane < 4; ++lane) {
+          if ((repeats >> lane) & 1) {
+            ++run;
+            continue;
+          }
+          if (run > 0) repeat_box(run), run = 0;
+          count_box(box_of_lane(lane));
+        }
+        if (run > 0) repeat_box(run);
+        continue;
+      }
+      // Some lanes invalid: a lane's predecessor is the previous valid lane, so compare lane by lane.
+      for (int lane = 0; lane < 4; ++lane)
+        if ((lanes >> lane) & 1) count_box(box_of_lane(lane));
     }
-    alignas(16) int32_t keys[6][4];
-    for (int i = 0; i < 6; ++i) _mm_store_si128(reinterpret_cast<__m128i*>(keys[i]), key[i]);
-    for (int lane = 0; lane < 4; ++lane) {
-      if (!((lanes >> lane) & 1)) continue;
-      const BandBox box{{keys[0][lane], keys[1][lane], keys[2][lane]}, {keys[3][lane], keys[4][lane], keys[5][lane]}};
-      countBox(box, s, last);
+    for (; u < u_end; ++u) {
+      BandBox box;
+      if (bandBoxOfPixel(disparity_row[u], u, v, &box)) count_box(box);
     }
-    load_last();  // countBox() may have moved `last` or reallocated the boxes
   }
-  return u;
 }
 
 #else
-int BlockLookup::countRowBoxesAvx2(const float*, int u_begin, int, int, RegionScratch*, size_t*) const {
-  return u_begin;  // not x86: the scalar loop does every pixel
+void BlockLookup::countRegionBoxesAvx2(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const {
+  countRegionBoxesScalar(frame, region, s);  // not x86: no vector path
 }
 #endif
 
@@ -182,16 +225,10 @@ void BlockLookup::gatherHistogram(const StereoFrame& frame, const cv::Rect& regi
   // Count points per distinct band box first and expand boxes to blocks after.
   s->boxes.clear();
   s->key_counts.clear();
-  size_t last = 0;
-  for (int v = region.y; v < region.y + region.height; ++v) {
-    const float* disparity_row = frame.disparity_px.ptr<float>(v);
-    int u = region.x;
-    if (use_avx2_ && geometry_.bands_non_negative) u = countRowBoxesAvx2(disparity_row, u, region.x + region.width, v, s, &last);
-    for (; u < region.x + region.width; ++u) {
-      BandBox box;
-      if (bandBoxOfPixel(disparity_row[u], u, v, &box)) countBox(box, s, &last);
-    }
-  }
+  if (use_avx2_ && geometry_.bands_non_negative)
+    countRegionBoxesAvx2(frame, region, s);
+  else
+    countRegionBoxesScalar(frame, region, s);
   if (s->boxes.empty()) return;
   // Expand boxes to per-block counts. Boxes overlap heavily (coarse levels reach 2 blocks
   // either side), so count on a dense grid over their union when it is small, which it is

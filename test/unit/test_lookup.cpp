@@ -320,3 +320,28 @@ TEST(BlockLookup, VectorPathEqualsScalarPathOnSmoothFrames) {
     }
   }
 }
+
+TEST(BlockLookup, VectorPathEqualsScalarPathWhenEveryBoxIsTheOriginBlock) {
+  // The AVX2 path compares each group's first lane with the region's previous box; before a
+  // region has one, a box of all-zero keys must not pass for a repeat of it. A narrow camera
+  // 1 m in front of block (0, 0, 0) with Φ far below a block puts every box there.
+  MapperConfig config;
+  ThreadPool pool(1);
+  if (!BlockLookup(config, &pool).usesSimd()) GTEST_SKIP() << "CPU without AVX2: only the scalar path exists";
+  config.voxel_size_m = 0.01;  // 8 cm blocks
+  config.truncation_vox = 0.5;
+  config.weight_falloff_start_vox = 0.25;
+  config.histogram_min_points = 0;
+  const StereoCamera camera = *StereoCamera::create(64, 48, 2000.0, 2000.0, 32.0, 24.0, 0.12);
+  StereoFrame frame = constantDepthFrame(camera, static_cast<float>(2000.0 * 0.12 / 1.0));
+  frame.T_world_camera.translation() = Eigen::Vector3d(0.04, 0.04, 0.04 - 1.0);
+  BlockOctree scalar_tree(config.blockSizeM()), vector_tree(config.blockSizeM());
+  BlockLookup scalar(config, &pool, /*allow_simd=*/false), vector(config, &pool);
+  std::vector<VoxelBlock*> scalar_queue, vector_queue;
+  const LookupStats s = scalar.run(frame, &scalar_tree, &scalar_queue);
+  const LookupStats v = vector.run(frame, &vector_tree, &vector_queue);
+  EXPECT_EQ(s.valid_points, 64u * 48u);
+  EXPECT_EQ(keysOf(scalar_queue), (std::vector<std::tuple<int, int, int>>{{0, 0, 0}}));
+  EXPECT_EQ(keysOf(scalar_queue), keysOf(vector_queue));
+  EXPECT_EQ(s.valid_points, v.valid_points);
+}

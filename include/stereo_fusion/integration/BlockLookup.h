@@ -79,8 +79,10 @@ class BlockLookup {
   /// The band box of pixel (u, v) with disparity `d`; false if the pixel has no usable depth.
   bool bandBoxOfPixel(float d, int u, int v, BandBox* box) const;
   void countBox(const BandBox& box, RegionScratch* s, size_t* last) const;
-  int countRowBoxesAvx2(const float* disparity_row, int u_begin, int u_end, int v, RegionScratch* s,
-                        size_t* last) const;
+  /// Fill s->boxes and s->stats.valid_points from the region's pixels (the AVX2 path gives
+  /// exactly the scalar path's boxes and counts).
+  void countRegionBoxesScalar(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const;
+  void countRegionBoxesAvx2(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const;
   void gatherHistogram(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const;
   bool passesFilter(const RegionScratch& s, const BlockKey& key) const;
   void runRegionAccelerated(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const;
