@@ -67,14 +67,17 @@ __attribute__((always_inline)) inline void BlockLookup::countBox(const BandBox& 
     ++s->boxes[*last].second;
     return;
   }
-  auto it = std::find_if(s->boxes.begin(), s->boxes.end(), [&](const auto& entry) { return entry.first == box; });
-  if (it == s->boxes.end()) {
-    s->boxes.emplace_back(box, 1);
-    *last = s->boxes.size() - 1;
-  } else {
-    ++it->second;
-    *last = static_cast<size_t>(it - s->boxes.begin());
+  // Boxes are distinct, so the search order does not matter; from the newest, since a
+  // changed box is most often one just seen (a neighbour in the row or the row above).
+  for (size_t i = s->boxes.size(); i-- > 0;) {
+    if (s->boxes[i].first == box) {
+      ++s->boxes[i].second;
+      *last = i;
+      return;
+    }
   }
+  s->boxes.emplace_back(box, 1);
+  *last = s->boxes.size() - 1;
 }
 
 // The reference per-pixel path: every pixel through bandBoxOfPixel().
