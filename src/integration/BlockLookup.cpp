@@ -224,18 +224,20 @@ void BlockLookup::countRegionBoxesAvx2(const StereoFrame& frame, const cv::Rect&
 }
 #endif
 
-void BlockLookup::gatherHistogram(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const {
-  // Count points per distinct band box first and expand boxes to blocks after.
+void BlockLookup::countRegionBoxes(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const {
   s->boxes.clear();
-  s->key_counts.clear();
   if (use_avx2_ && geometry_.bands_non_negative)
     countRegionBoxesAvx2(frame, region, s);
   else
     countRegionBoxesScalar(frame, region, s);
+}
+
+template <typename Visit>
+void BlockLookup::forEachBlockCount(RegionScratch* s, Visit&& visit) const {
   if (s->boxes.empty()) return;
-  // Expand boxes to per-block counts. Boxes overlap heavily (coarse levels reach 2 blocks
-  // either side), so count on a dense grid over their union when it is small, which it is
-  // unless the region straddles a large depth jump; otherwise merge keys linearly.
+  // Boxes overlap heavily (coarse levels reach 2 blocks either side), so count on a dense
+  // grid over their union when it is small, which it is unless the region straddles a large
+  // depth jump; otherwise merge keys linearly.
   BlockKey lo = s->boxes.front().first.lo, hi = s->boxes.front().first.hi;
   for (const auto& box_count : s->boxes) {
     const BandBox& box = box_count.first;
@@ -253,26 +255,35 @@ void BlockLookup::gatherHistogram(const StereoFrame& frame, const cv::Rect& regi
           for (int32_t x = box.lo.x; x <= box.hi.x; ++x) row[x - lo.x] += box_count.second;
         }
     }
-    size_t i = 0;
+    const int* count = s->dense_counts.data();
     for (int32_t z = lo.z; z <= hi.z; ++z)
       for (int32_t y = lo.y; y <= hi.y; ++y)
-        for (int32_t x = lo.x; x <= hi.x; ++x, ++i)
-          if (s->dense_counts[i] > 0) s->key_counts.emplace_back(BlockKey{x, y, z}, s->dense_counts[i]);
+        for (int32_t x = lo.x; x <= hi.x; ++x, ++count)
+          if (*count > 0) visit(BlockKey{x, y, z}, *count);
     return;
   }
+  s->sparse_counts.clear();
   // Not a structured binding: lambdas may capture those only from C++20 (clang refuses).
   for (const auto& box_count : s->boxes) {
     const auto& box = box_count.first;
     const auto count = box_count.second;
     forEachKeyInBox(box.lo, box.hi, [&](const BlockKey& key) {
-      auto it = std::find_if(s->key_counts.begin(), s->key_counts.end(),
+      auto it = std::find_if(s->sparse_counts.begin(), s->sparse_counts.end(),
                              [&](const auto& entry) { return entry.first == key; });
-      if (it == s->key_counts.end())
-        s->key_counts.emplace_back(key, count);
+      if (it == s->sparse_counts.end())
+        s->sparse_counts.emplace_back(key, count);
       else
         it->second += count;
     });
   }
+  for (const auto& [key, count] : s->sparse_counts) visit(key, count);
+}
+
+void BlockLookup::gatherHistogram(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const {
+  // Count points per distinct band box first and expand boxes to blocks after.
+  countRegionBoxes(frame, region, s);
+  s->key_counts.clear();
+  forEachBlockCount(s, [s](const BlockKey& key, int count) { s->key_counts.emplace_back(key, count); });
 }
 
 bool BlockLookup::passesFilter(const RegionScratch& s, const BlockKey& key) const {
@@ -284,15 +295,17 @@ bool BlockLookup::passesFilter(const RegionScratch& s, const BlockKey& key) cons
 
 void BlockLookup::runRegionAccelerated(const StereoFrame& frame, const cv::Rect& region,
                                        RegionScratch* s) const {
-  gatherHistogram(frame, region, s);
+  // The histogram straight into the filter: no per-block list in between.
+  countRegionBoxes(frame, region, s);
   s->passing.clear();
-  for (const auto& [key, count] : s->key_counts) {
-    if (config_.histogram_min_points > 0 && count < config_.histogram_min_points) {
+  const int min_points = config_.histogram_min_points;
+  forEachBlockCount(s, [s, min_points](const BlockKey& key, int count) {
+    if (min_points > 0 && count < min_points) {
       ++s->stats.blocks_filtered;
-      continue;
+      return;
     }
     s->passing.push_back(key);
-  }
+  });
 }
 
 void BlockLookup::collectDistinctKeys(size_t num_regions) {
