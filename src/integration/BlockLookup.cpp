@@ -45,7 +45,14 @@ inline bool BlockLookup::bandBoxOfPixel(float d, int u, int v, BandBox* box) con
   const double z = g.fb / d;
   if (!(z >= g.min_depth_m && z <= g.max_depth_m)) return false;
   const Eigen::Vector3d p_camera((u - g.cx) * z * g.inv_fx, (v - g.cy) * z * g.inv_fy, z);
-  const Eigen::Vector3d p_blocks = (g.R_world_camera * p_camera + g.t_world_camera) * g.inv_block_size;
+  // The sums spelled out in the AVX2 path's order: Eigen's R·p adds the z row as
+  // a0 + (a1 + a2) but the x and y rows as (a0 + a1) + a2, and a point within an ulp of a
+  // block face would land in a different block on each path.
+  const Eigen::Matrix3d& R = g.R_world_camera;
+  auto world = [&](int i) {
+    return ((R(i, 0) * p_camera[0] + R(i, 1) * p_camera[1]) + R(i, 2) * p_camera[2]) + g.t_world_camera[i];
+  };
+  const Eigen::Vector3d p_blocks = Eigen::Vector3d(world(0), world(1), world(2)) * g.inv_block_size;
   const double band = g.band_blocks[levelForDepth(z, g.levels)];
   box->lo = BlockOctree::keyForBlockCoordinates(p_blocks.array() - band);
   box->hi = BlockOctree::keyForBlockCoordinates(p_blocks.array() + band);

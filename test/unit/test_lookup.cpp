@@ -345,3 +345,51 @@ TEST(BlockLookup, VectorPathEqualsScalarPathWhenEveryBoxIsTheOriginBlock) {
   EXPECT_EQ(keysOf(scalar_queue), keysOf(vector_queue));
   EXPECT_EQ(s.valid_points, v.valid_points);
 }
+
+TEST(BlockLookup, VectorPathEqualsScalarPathWhereTheSumOrderDecidesTheBlock) {
+  // Each world coordinate is a sum of three products and the translation; double addition
+  // is not associative, so both paths must add in the same order or a point within an ulp of
+  // a block face lands in different blocks. Builds such a point: a rotation for which
+  // ((a0 + a1) + a2) and (a0 + (a1 + a2)) differ in z, and a translation putting the lower
+  // band face exactly on a block face for one order only.
+  MapperConfig config;
+  ThreadPool pool(1);
+  if (!BlockLookup(config, &pool).usesSimd()) GTEST_SKIP() << "CPU without AVX2: only the scalar path exists";
+  config.voxel_size_m = 0.125;  // 1 m blocks: the key is the floor of the world coordinate
+  config.truncation_vox = 4.0;  // Φ = 0.5 m at level 0
+  config.histogram_min_points = 0;
+  const StereoCamera camera = *StereoCamera::create(8, 4, 100.0, 100.0, 3.7, 2.1, 0.1);
+  const int u = 2, v = 1;
+  const float disparity = 20.0f;  // z = 0.5 m: level 0
+  const double z = camera.fx() * camera.baseline() / disparity;
+  const double p[3] = {(u - camera.cx()) * z * (1.0 / camera.fx()), (v - camera.cy()) * z * (1.0 / camera.fy()), z};
+  const double band = 0.5;
+  std::mt19937 rng(3);
+  bool found = false;
+  for (int attempt = 0; attempt < 10000 && !found; ++attempt) {
+    const Eigen::Matrix3d R =
+        Eigen::AngleAxisd(std::uniform_real_distribution<double>(0.0, 6.0)(rng), Eigen::Vector3d::Random().normalized())
+            .toRotationMatrix();
+    const double a0 = R(2, 0) * p[0], a1 = R(2, 1) * p[1], a2 = R(2, 2) * p[2];
+    const double left = (a0 + a1) + a2, right = a0 + (a1 + a2);
+    if (left == right) continue;
+    for (int face = -3; face <= 3 && !found; ++face) {
+      const double t_z = (face + band) - left;
+      if (std::floor((left + t_z) - band) == std::floor((right + t_z) - band)) continue;
+      found = true;
+      StereoFrame frame = constantDepthFrame(camera, 0.0f);
+      frame.disparity_px.at<float>(v, u) = disparity;
+      frame.T_world_camera.linear() = R;
+      frame.T_world_camera.translation() = Eigen::Vector3d(0.3, -0.2, t_z);
+      BlockOctree scalar_tree(config.blockSizeM()), vector_tree(config.blockSizeM());
+      BlockLookup scalar(config, &pool, /*allow_simd=*/false), vector(config, &pool);
+      std::vector<VoxelBlock*> scalar_queue, vector_queue;
+      const LookupStats s = scalar.run(frame, &scalar_tree, &scalar_queue);
+      const LookupStats w = vector.run(frame, &vector_tree, &vector_queue);
+      EXPECT_EQ(s.valid_points, 1u);
+      EXPECT_EQ(w.valid_points, 1u);
+      EXPECT_EQ(keysOf(scalar_queue), keysOf(vector_queue)) << "attempt " << attempt;
+    }
+  }
+  EXPECT_TRUE(found) << "no point found whose block depends on the order of the sum";
+}
