@@ -74,17 +74,20 @@ __attribute__((always_inline)) inline void BlockLookup::countBox(const BandBox& 
     ++s->boxes[*last].second;
     return;
   }
+  *last = countInBoxes(box, s);
+}
+
+__attribute__((always_inline)) inline size_t BlockLookup::countInBoxes(const BandBox& box, RegionScratch* s) const {
   // Boxes are distinct, so the search order does not matter; from the newest, since a
   // changed box is most often one just seen (a neighbour in the row or the row above).
   for (size_t i = s->boxes.size(); i-- > 0;) {
     if (s->boxes[i].first == box) {
       ++s->boxes[i].second;
-      *last = i;
-      return;
+      return i;
     }
   }
   s->boxes.emplace_back(box, 1);
-  *last = s->boxes.size() - 1;
+  return s->boxes.size() - 1;
 }
 
 // The reference per-pixel path: every pixel through bandBoxOfPixel().
@@ -133,13 +136,16 @@ __attribute__((target("avx2"))) void BlockLookup::countRegionBoxesAvx2(const Ste
   __m128i last_key[6] = {_mm_setzero_si128(), _mm_setzero_si128(), _mm_setzero_si128(),
                          _mm_setzero_si128(), _mm_setzero_si128(), _mm_setzero_si128()};
   int* last_count = nullptr;  // nullptr until the region has a box
-  auto count_box = [&](const BandBox& box) {
-    countBox(box, s, &last);
+  auto track_last = [&] {
     std::pair<BandBox, int>& entry = s->boxes[last];  // may have moved: boxes can grow
     const BandBox& b = entry.first;
     last_key[0] = _mm_set1_epi32(b.lo.x), last_key[1] = _mm_set1_epi32(b.lo.y), last_key[2] = _mm_set1_epi32(b.lo.z);
     last_key[3] = _mm_set1_epi32(b.hi.x), last_key[4] = _mm_set1_epi32(b.hi.y), last_key[5] = _mm_set1_epi32(b.hi.z);
     last_count = &entry.second;
+  };
+  auto count_box = [&](const BandBox& box) {
+    countBox(box, s, &last);
+    track_last();
   };
   // `n` more points in the previous box: what n countBox() calls would do when each box
   // equals the previous one.
@@ -201,17 +207,20 @@ __attribute__((target("avx2"))) void BlockLookup::countRegionBoxesAvx2(const Ste
         return BandBox{{keys[0][lane], keys[1][lane], keys[2][lane]}, {keys[3][lane], keys[4][lane], keys[5][lane]}};
       };
       if (lanes == 15) {
-        // Runs of repeats between the changes; lane 0 repeats only if there is a previous box.
-        int run = 0;
-        for (int lane = 0; lane < 4; ++lane) {
-          if ((repeats >> lane) & 1) {
-            ++run;
-            continue;
-          }
-          if (run > 0) repeat_box(run), run = 0;
-          count_box(box_of_lane(lane));
+        // Only the lanes where the box changes search the boxes; the runs between them
+        // repeat the previous box (lane 0 only if there is one: see above).
+        int counted = 0;  // lanes before this one are counted
+        for (int changes = ~repeats & 15; changes != 0; changes &= changes - 1) {
+          const int lane = __builtin_ctz(changes);
+          if (lane > counted) repeat_box(lane - counted);
+          // The box differs from its predecessor, boxes[last]: countBox() would search.
+          ++s->stats.valid_points;
+          last = countInBoxes(box_of_lane(lane), s);
+          last_count = &s->boxes[last].second;
+          counted = lane + 1;
         }
-        if (run > 0) repeat_box(run);
+        if (counted < 4) repeat_box(4 - counted);
+        track_last();
         continue;
       }
       // Some lanes invalid: a lane's predecessor is the previous valid lane, so compare lane by lane.

@@ -80,6 +80,8 @@ class BlockLookup {
   /// The band box of pixel (u, v) with disparity `d`; false if the pixel has no usable depth.
   bool bandBoxOfPixel(float d, int u, int v, BandBox* box) const;
   void countBox(const BandBox& box, RegionScratch* s, size_t* last) const;
+  /// One more point in `box`, found among s->boxes or added; returns its index.
+  size_t countInBoxes(const BandBox& box, RegionScratch* s) const;
   /// Fill s->boxes and s->stats.valid_points from the region's pixels (the AVX2 path gives
   /// exactly the scalar path's boxes and counts).
   void countRegionBoxesScalar(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const;
