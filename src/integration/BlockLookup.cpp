@@ -6,6 +6,10 @@
 
 #include "stereo_fusion/util/CpuFeatures.h"
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #if defined(__x86_64__) || defined(__i386__)
 #include <immintrin.h>
 #define STEREO_FUSION_HAVE_AVX2_LOOKUP 1
@@ -262,13 +266,34 @@ void BlockLookup::forEachBlockCount(RegionScratch* s, Visit&& visit) const {
   }
   const int64_t nx = int64_t{hi.x} - lo.x + 1, ny = int64_t{hi.y} - lo.y + 1, nz = int64_t{hi.z} - lo.z + 1;
   if (nx * ny * nz <= kMaxDenseHistogramCells) {
-    s->dense_counts.assign(static_cast<size_t>(nx * ny * nz), 0);
+    // + kDenseRowPadding: a box row of up to 8 cells is added as two runs of four, the cells
+    // past its end (the next row's, or this padding) getting + 0.
+    constexpr size_t kDenseRowPadding = 8;
+    s->dense_counts.assign(static_cast<size_t>(nx * ny * nz) + kDenseRowPadding, 0);
     for (const auto& box_count : s->boxes) {
       const BandBox& box = box_count.first;
+      const int32_t width = box.hi.x - box.lo.x + 1;
+      auto row_of = [&](int32_t y, int32_t z) {
+        return &s->dense_counts[static_cast<size_t>(((z - lo.z) * ny + (y - lo.y)) * nx + (box.lo.x - lo.x))];
+      };
+#if defined(__SSE2__)
+      if (width <= 8) {  // always, unless Φ is over 3.5 blocks
+        const __m128i lane = _mm_setr_epi32(0, 1, 2, 3), count = _mm_set1_epi32(box_count.second);
+        const __m128i add_first = _mm_and_si128(count, _mm_cmplt_epi32(lane, _mm_set1_epi32(width)));
+        const __m128i add_second = _mm_and_si128(count, _mm_cmplt_epi32(lane, _mm_set1_epi32(width - 4)));
+        for (int32_t z = box.lo.z; z <= box.hi.z; ++z)
+          for (int32_t y = box.lo.y; y <= box.hi.y; ++y) {
+            __m128i* cells = reinterpret_cast<__m128i*>(row_of(y, z));
+            _mm_storeu_si128(cells, _mm_add_epi32(_mm_loadu_si128(cells), add_first));
+            if (width > 4) _mm_storeu_si128(cells + 1, _mm_add_epi32(_mm_loadu_si128(cells + 1), add_second));
+          }
+        continue;
+      }
+#endif
       for (int32_t z = box.lo.z; z <= box.hi.z; ++z)
         for (int32_t y = box.lo.y; y <= box.hi.y; ++y) {
-          int* row = &s->dense_counts[static_cast<size_t>(((z - lo.z) * ny + (y - lo.y)) * nx)];
-          for (int32_t x = box.lo.x; x <= box.hi.x; ++x) row[x - lo.x] += box_count.second;
+          int* row = row_of(y, z);
+          for (int32_t x = 0; x < width; ++x) row[x] += box_count.second;
         }
     }
     const int* count = s->dense_counts.data();

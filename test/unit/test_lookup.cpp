@@ -53,18 +53,27 @@ TEST(BlockLookup, NaiveAndAcceleratedQueueTheSameBlocks) {
   const StereoCamera camera = vgaCamera();
   const sim::AnalyticScene scene = planeAndSphere();
   const StereoFrame frame = renderFrame(scene, camera, sim::lookAt({0.2, -0.3, -0.5}, {0, 0, 2.0}, -Eigen::Vector3d::UnitY()));
-  for (int histogram : {0, 4}) {
+  // Φ of 16 voxels makes the boxes of levels 1 and 2 (2 m on) 9 or more blocks wide, past
+  // the histogram's 8-cell box rows; one pixel in 16 keeps the naive search short there.
+  StereoFrame sparse_frame = frame;
+  sparse_frame.disparity_px = frame.disparity_px.clone();
+  for (int v = 0; v < sparse_frame.disparity_px.rows; ++v)
+    for (int u = 0; u < sparse_frame.disparity_px.cols; ++u)
+      if (u % 4 != 0 || v % 4 != 0) sparse_frame.disparity_px.at<float>(v, u) = 0.0f;
+  for (const auto& [histogram, truncation_vox] : {std::pair{0, 4.0}, std::pair{4, 4.0}, std::pair{0, 16.0}}) {
+    const StereoFrame& frame_used = truncation_vox > 4.0 ? sparse_frame : frame;
     MapperConfig config;
     config.histogram_min_points = histogram;
+    config.truncation_vox = truncation_vox;
     config.lookup_mode = LookupMode::kNaive;
     BlockOctree naive_tree(config.blockSizeM());
-    const LookupRun naive = runLookup(config, frame, &naive_tree);
+    const LookupRun naive = runLookup(config, frame_used, &naive_tree);
     config.lookup_mode = LookupMode::kAccelerated;
     BlockOctree accel_tree(config.blockSizeM());
-    const LookupRun accel = runLookup(config, frame, &accel_tree);
+    const LookupRun accel = runLookup(config, frame_used, &accel_tree);
 
     EXPECT_GT(naive.queue.size(), 100u);
-    EXPECT_EQ(keysOf(naive.queue), keysOf(accel.queue)) << "histogram " << histogram;
+    EXPECT_EQ(keysOf(naive.queue), keysOf(accel.queue)) << "histogram " << histogram << ", Φ " << truncation_vox;
     EXPECT_EQ(naive.stats.valid_points, accel.stats.valid_points);
     EXPECT_EQ(naive_tree.blockCount(), accel_tree.blockCount());
     EXPECT_EQ(accel.stats.blocks_allocated, accel_tree.blockCount());
