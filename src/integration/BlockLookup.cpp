@@ -6,6 +6,10 @@
 
 #include "stereo_fusion/util/CpuFeatures.h"
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #if defined(__x86_64__) || defined(__i386__)
 #include <immintrin.h>
 #define STEREO_FUSION_HAVE_AVX2_LOOKUP 1
@@ -33,6 +37,8 @@ BlockLookup::PixelGeometry BlockLookup::pixelGeometry(const StereoFrame& frame,
   g.levels = config_.levels;
   for (int level = 0; level < kNumLevels; ++level)
     g.band_blocks[level] = config_.truncation_vox * levelScale(level) * config_.voxel_size_m * g.inv_block_size;
+  g.bands_non_negative = true;
+  for (double band : g.band_blocks) g.bands_non_negative = g.bands_non_negative && band >= 0.0;
   return g;
 }
 
@@ -43,7 +49,14 @@ inline bool BlockLookup::bandBoxOfPixel(float d, int u, int v, BandBox* box) con
   const double z = g.fb / d;
   if (!(z >= g.min_depth_m && z <= g.max_depth_m)) return false;
   const Eigen::Vector3d p_camera((u - g.cx) * z * g.inv_fx, (v - g.cy) * z * g.inv_fy, z);
-  const Eigen::Vector3d p_blocks = (g.R_world_camera * p_camera + g.t_world_camera) * g.inv_block_size;
+  // The sums spelled out in the AVX2 path's order: Eigen's R·p adds the z row as
+  // a0 + (a1 + a2) but the x and y rows as (a0 + a1) + a2, and a point within an ulp of a
+  // block face would land in a different block on each path.
+  const Eigen::Matrix3d& R = g.R_world_camera;
+  auto world = [&](int i) {
+    return ((R(i, 0) * p_camera[0] + R(i, 1) * p_camera[1]) + R(i, 2) * p_camera[2]) + g.t_world_camera[i];
+  };
+  const Eigen::Vector3d p_blocks = Eigen::Vector3d(world(0), world(1), world(2)) * g.inv_block_size;
   const double band = g.band_blocks[levelForDepth(z, g.levels)];
   box->lo = BlockOctree::keyForBlockCoordinates(p_blocks.array() - band);
   box->hi = BlockOctree::keyForBlockCoordinates(p_blocks.array() + band);
@@ -65,108 +78,186 @@ __attribute__((always_inline)) inline void BlockLookup::countBox(const BandBox& 
     ++s->boxes[*last].second;
     return;
   }
-  auto it = std::find_if(s->boxes.begin(), s->boxes.end(), [&](const auto& entry) { return entry.first == box; });
-  if (it == s->boxes.end()) {
-    s->boxes.emplace_back(box, 1);
-    *last = s->boxes.size() - 1;
-  } else {
-    ++it->second;
-    *last = static_cast<size_t>(it - s->boxes.begin());
+  *last = countInBoxes(box, s);
+}
+
+__attribute__((always_inline)) inline size_t BlockLookup::countInBoxes(const BandBox& box, RegionScratch* s) const {
+  // Boxes are distinct, so the search order does not matter; from the newest, since a
+  // changed box is most often one just seen (a neighbour in the row or the row above).
+  for (size_t i = s->boxes.size(); i-- > 0;) {
+    if (s->boxes[i].first == box) {
+      ++s->boxes[i].second;
+      return i;
+    }
+  }
+  s->boxes.emplace_back(box, 1);
+  return s->boxes.size() - 1;
+}
+
+// The reference per-pixel path: every pixel through bandBoxOfPixel().
+void BlockLookup::countRegionBoxesScalar(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const {
+  size_t last = 0;
+  for (int v = region.y; v < region.y + region.height; ++v) {
+    const float* disparity_row = frame.disparity_px.ptr<float>(v);
+    for (int u = region.x; u < region.x + region.width; ++u) {
+      BandBox box;
+      if (bandBoxOfPixel(disparity_row[u], u, v, &box)) countBox(box, s, &last);
+    }
   }
 }
 
 #ifdef STEREO_FUSION_HAVE_AVX2_LOOKUP
 // Four pixels at a time: the same double operations as bandBoxOfPixel() in the same order
-// (no FMA: the target is AVX2 only), so the boxes are identical. Returns the first pixel
-// left for the scalar loop.
-__attribute__((target("avx2"))) int BlockLookup::countRowBoxesAvx2(const float* disparity_row, int u_begin,
-                                                                   int u_end, int v, RegionScratch* s,
-                                                                   size_t* last) const {
+// (no FMA: the target is AVX2 only), so the boxes are identical; a row's last width % 4
+// pixels go through bandBoxOfPixel(). The whole region in one call: a region row is only a
+// few groups, too few to pay for setting the constants up per row.
+// Needs geometry_.bands_non_negative (see the key range test below).
+__attribute__((target("avx2"))) void BlockLookup::countRegionBoxesAvx2(const StereoFrame& frame,
+                                                                       const cv::Rect& region,
+                                                                       RegionScratch* s) const {
   const PixelGeometry& g = geometry_;
   const __m256d zero = _mm256_setzero_pd(), infinity = _mm256_set1_pd(HUGE_VAL);
   const __m256d fb = _mm256_set1_pd(g.fb), min_z = _mm256_set1_pd(g.min_depth_m), max_z = _mm256_set1_pd(g.max_depth_m);
-  const __m256d y_offset = _mm256_set1_pd(v - g.cy), cx = _mm256_set1_pd(g.cx);
+  const __m256d cx = _mm256_set1_pd(g.cx);
   const __m256d inv_fx = _mm256_set1_pd(g.inv_fx), inv_fy = _mm256_set1_pd(g.inv_fy);
   const __m256d scale2 = _mm256_set1_pd(g.levels.scale2_min_depth_m), scale4 = _mm256_set1_pd(g.levels.scale4_min_depth_m);
   const __m256d band0 = _mm256_set1_pd(g.band_blocks[0]), band1 = _mm256_set1_pd(g.band_blocks[1]),
                 band2 = _mm256_set1_pd(g.band_blocks[2]);
-  const __m256d max_key = _mm256_set1_pd(BlockOctree::kMaxKey);
-  const __m256d sign_mask = _mm256_set1_pd(-0.0);
+  const __m256d max_key = _mm256_set1_pd(BlockOctree::kMaxKey), min_key = _mm256_set1_pd(-BlockOctree::kMaxKey);
   __m256d r[3][3], t[3];
   for (int i = 0; i < 3; ++i) {
     for (int k = 0; k < 3; ++k) r[i][k] = _mm256_set1_pd(g.R_world_camera(i, k));
     t[i] = _mm256_set1_pd(g.t_world_camera[i]);
   }
   const __m256d inv_block = _mm256_set1_pd(g.inv_block_size);
-  int u = u_begin;
-  for (; u + 4 <= u_end; u += 4) {
-    const __m256d d = _mm256_cvtps_pd(_mm_loadu_ps(disparity_row + u));
-    // d > 0 and finite (NaN fails both ordered comparisons).
-    __m256d valid = _mm256_and_pd(_mm256_cmp_pd(d, zero, _CMP_GT_OQ), _mm256_cmp_pd(d, infinity, _CMP_LT_OQ));
-    if (_mm256_movemask_pd(valid) == 0) continue;
-    const __m256d z = _mm256_div_pd(fb, d);
-    valid = _mm256_and_pd(valid, _mm256_and_pd(_mm256_cmp_pd(z, min_z, _CMP_GE_OQ), _mm256_cmp_pd(z, max_z, _CMP_LE_OQ)));
-    const __m256d u_px = _mm256_cvtepi32_pd(_mm_add_epi32(_mm_set1_epi32(u), _mm_setr_epi32(0, 1, 2, 3)));
-    const __m256d p[3] = {_mm256_mul_pd(_mm256_mul_pd(_mm256_sub_pd(u_px, cx), z), inv_fx),
-                          _mm256_mul_pd(_mm256_mul_pd(y_offset, z), inv_fy), z};
-    // Level of eq. 3.2 → band, lane by lane.
-    const __m256d at_least_2 = _mm256_cmp_pd(z, scale2, _CMP_GE_OQ), at_least_4 = _mm256_cmp_pd(z, scale4, _CMP_GE_OQ);
-    const __m256d band = _mm256_blendv_pd(_mm256_blendv_pd(band0, band1, at_least_2), band2, at_least_4);
-    __m128i lo[3], hi[3];
-    for (int i = 0; i < 3; ++i) {
-      const __m256d world = _mm256_add_pd(
-          _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r[i][0], p[0]), _mm256_mul_pd(r[i][1], p[1])),
-                        _mm256_mul_pd(r[i][2], p[2])),
-          t[i]);
-      const __m256d blocks = _mm256_mul_pd(world, inv_block);
-      const __m256d lo_d = _mm256_floor_pd(_mm256_sub_pd(blocks, band));
-      const __m256d hi_d = _mm256_floor_pd(_mm256_add_pd(blocks, band));
-      // keyInRange(): |key| ≤ kMaxKey (NaN fails).
-      valid = _mm256_and_pd(valid, _mm256_cmp_pd(_mm256_andnot_pd(sign_mask, lo_d), max_key, _CMP_LE_OQ));
-      valid = _mm256_and_pd(valid, _mm256_cmp_pd(_mm256_andnot_pd(sign_mask, hi_d), max_key, _CMP_LE_OQ));
-      lo[i] = _mm256_cvttpd_epi32(lo_d);
-      hi[i] = _mm256_cvttpd_epi32(hi_d);
+  // Small integers are exact in double, so stepping u by 4.0 gives the converted int exactly.
+  const __m256d four = _mm256_set1_pd(4.0);
+  const __m256d u_first = _mm256_add_pd(_mm256_set1_pd(region.x), _mm256_setr_pd(0.0, 1.0, 2.0, 3.0));
+  const int u_end = region.x + region.width, u_vector_end = region.x + (region.width & ~3);
+
+  // countBox()'s previous box, broadcast to all lanes; refreshed whenever countBox() runs.
+  size_t last = 0;
+  __m128i last_key[6] = {_mm_setzero_si128(), _mm_setzero_si128(), _mm_setzero_si128(),
+                         _mm_setzero_si128(), _mm_setzero_si128(), _mm_setzero_si128()};
+  int* last_count = nullptr;  // nullptr until the region has a box
+  auto track_last = [&] {
+    std::pair<BandBox, int>& entry = s->boxes[last];  // may have moved: boxes can grow
+    const BandBox& b = entry.first;
+    last_key[0] = _mm_set1_epi32(b.lo.x), last_key[1] = _mm_set1_epi32(b.lo.y), last_key[2] = _mm_set1_epi32(b.lo.z);
+    last_key[3] = _mm_set1_epi32(b.hi.x), last_key[4] = _mm_set1_epi32(b.hi.y), last_key[5] = _mm_set1_epi32(b.hi.z);
+    last_count = &entry.second;
+  };
+  auto count_box = [&](const BandBox& box) {
+    countBox(box, s, &last);
+    track_last();
+  };
+  // `n` more points in the previous box: what n countBox() calls would do when each box
+  // equals the previous one.
+  auto repeat_box = [&](int n) {
+    *last_count += n;
+    s->stats.valid_points += n;
+  };
+
+  for (int v = region.y; v < region.y + region.height; ++v) {
+    const float* disparity_row = frame.disparity_px.ptr<float>(v);
+    const __m256d y_offset = _mm256_set1_pd(v - g.cy);
+    __m256d u_px = u_first;
+    int u = region.x;
+    for (; u < u_vector_end; u += 4, u_px = _mm256_add_pd(u_px, four)) {
+      const __m256d d = _mm256_cvtps_pd(_mm_loadu_ps(disparity_row + u));
+      // d > 0 and finite (NaN fails both ordered comparisons).
+      __m256d valid = _mm256_and_pd(_mm256_cmp_pd(d, zero, _CMP_GT_OQ), _mm256_cmp_pd(d, infinity, _CMP_LT_OQ));
+      if (_mm256_movemask_pd(valid) == 0) continue;
+      const __m256d z = _mm256_div_pd(fb, d);
+      valid = _mm256_and_pd(valid, _mm256_and_pd(_mm256_cmp_pd(z, min_z, _CMP_GE_OQ), _mm256_cmp_pd(z, max_z, _CMP_LE_OQ)));
+      const __m256d p[3] = {_mm256_mul_pd(_mm256_mul_pd(_mm256_sub_pd(u_px, cx), z), inv_fx),
+                            _mm256_mul_pd(_mm256_mul_pd(y_offset, z), inv_fy), z};
+      // Level of eq. 3.2 → band, lane by lane.
+      const __m256d at_least_2 = _mm256_cmp_pd(z, scale2, _CMP_GE_OQ), at_least_4 = _mm256_cmp_pd(z, scale4, _CMP_GE_OQ);
+      const __m256d band = _mm256_blendv_pd(_mm256_blendv_pd(band0, band1, at_least_2), band2, at_least_4);
+      __m128i key[6];  // lo x, y, z, hi x, y, z of the four lanes
+      for (int i = 0; i < 3; ++i) {
+        const __m256d world = _mm256_add_pd(
+            _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r[i][0], p[0]), _mm256_mul_pd(r[i][1], p[1])),
+                          _mm256_mul_pd(r[i][2], p[2])),
+            t[i]);
+        const __m256d blocks = _mm256_mul_pd(world, inv_block);
+        const __m256d lo_d = _mm256_floor_pd(_mm256_sub_pd(blocks, band));
+        const __m256d hi_d = _mm256_floor_pd(_mm256_add_pd(blocks, band));
+        // keyInRange() of lo and hi, i.e. |key| ≤ kMaxKey with NaN failing: with band ≥ 0,
+        // lo ≤ hi whenever neither is NaN, so lo ≥ -kMaxKey and hi ≤ kMaxKey cover all four bounds.
+        valid = _mm256_and_pd(valid, _mm256_and_pd(_mm256_cmp_pd(lo_d, min_key, _CMP_GE_OQ),
+                                                   _mm256_cmp_pd(hi_d, max_key, _CMP_LE_OQ)));
+        key[i] = _mm256_cvttpd_epi32(lo_d);
+        key[3 + i] = _mm256_cvttpd_epi32(hi_d);
+      }
+      const int lanes = _mm256_movemask_pd(valid);
+      if (lanes == 0) continue;
+      // Bit i: lane i's box equals lane i-1's (lane 0: the previous box's). Neighbouring
+      // pixels almost always share a box, so most groups are counted at once and most others
+      // call countBox() only where the box changes.
+      __m128i same = _mm_set1_epi32(-1);
+      for (int k = 0; k < 6; ++k)
+        same = _mm_and_si128(same, _mm_cmpeq_epi32(key[k], _mm_alignr_epi8(key[k], last_key[k], 12)));
+      int repeats = _mm_movemask_ps(_mm_castsi128_ps(same));
+      if (last_count == nullptr) repeats &= ~1;  // lane 0 has no previous box to repeat
+      if (lanes == 15 && repeats == 15) {
+        repeat_box(4);
+        continue;
+      }
+      alignas(16) int32_t keys[6][4];
+      for (int k = 0; k < 6; ++k) _mm_store_si128(reinterpret_cast<__m128i*>(keys[k]), key[k]);
+      auto box_of_lane = [&](int lane) {
+        return BandBox{{keys[0][lane], keys[1][lane], keys[2][lane]}, {keys[3][lane], keys[4][lane], keys[5][lane]}};
+      };
+      if (lanes == 15) {
+        // Only the lanes where the box changes search the boxes; the runs between them
+        // repeat the previous box (lane 0 only if there is one: see above).
+        int counted = 0;  // lanes before this one are counted
+        for (int changes = ~repeats & 15; changes != 0; changes &= changes - 1) {
+          const int lane = __builtin_ctz(changes);
+          if (lane > counted) repeat_box(lane - counted);
+          // The box differs from its predecessor, boxes[last]: countBox() would search.
+          ++s->stats.valid_points;
+          last = countInBoxes(box_of_lane(lane), s);
+          last_count = &s->boxes[last].second;
+          counted = lane + 1;
+        }
+        if (counted < 4) repeat_box(4 - counted);
+        track_last();
+        continue;
+      }
+      // Some lanes invalid: a lane's predecessor is the previous valid lane, so compare lane by lane.
+      for (int lane = 0; lane < 4; ++lane)
+        if ((lanes >> lane) & 1) count_box(box_of_lane(lane));
     }
-    const int lanes = _mm256_movemask_pd(valid);
-    if (lanes == 0) continue;
-    alignas(16) int32_t lo_k[3][4], hi_k[3][4];
-    for (int i = 0; i < 3; ++i) {
-      _mm_store_si128(reinterpret_cast<__m128i*>(lo_k[i]), lo[i]);
-      _mm_store_si128(reinterpret_cast<__m128i*>(hi_k[i]), hi[i]);
-    }
-    for (int lane = 0; lane < 4; ++lane) {
-      if (!((lanes >> lane) & 1)) continue;
-      const BandBox box{{lo_k[0][lane], lo_k[1][lane], lo_k[2][lane]}, {hi_k[0][lane], hi_k[1][lane], hi_k[2][lane]}};
-      countBox(box, s, last);
+    for (; u < u_end; ++u) {
+      BandBox box;
+      if (bandBoxOfPixel(disparity_row[u], u, v, &box)) count_box(box);
     }
   }
-  return u;
 }
 
 #else
-int BlockLookup::countRowBoxesAvx2(const float*, int u_begin, int, int, RegionScratch*, size_t*) const {
-  return u_begin;  // not x86: the scalar loop does every pixel
+void BlockLookup::countRegionBoxesAvx2(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const {
+  countRegionBoxesScalar(frame, region, s);  // not x86: no vector path
 }
 #endif
 
-void BlockLookup::gatherHistogram(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const {
-  // Count points per distinct band box first and expand boxes to blocks after.
+void BlockLookup::countRegionBoxes(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const {
   s->boxes.clear();
-  s->key_counts.clear();
-  size_t last = 0;
-  for (int v = region.y; v < region.y + region.height; ++v) {
-    const float* disparity_row = frame.disparity_px.ptr<float>(v);
-    int u = region.x;
-    if (use_avx2_) u = countRowBoxesAvx2(disparity_row, u, region.x + region.width, v, s, &last);
-    for (; u < region.x + region.width; ++u) {
-      BandBox box;
-      if (bandBoxOfPixel(disparity_row[u], u, v, &box)) countBox(box, s, &last);
-    }
-  }
+  if (use_avx2_ && geometry_.bands_non_negative)
+    countRegionBoxesAvx2(frame, region, s);
+  else
+    countRegionBoxesScalar(frame, region, s);
+}
+
+template <typename Visit>
+void BlockLookup::forEachBlockCount(RegionScratch* s, Visit&& visit) const {
   if (s->boxes.empty()) return;
-  // Expand boxes to per-block counts. Boxes overlap heavily (coarse levels reach 2 blocks
-  // either side), so count on a dense grid over their union when it is small, which it is
-  // unless the region straddles a large depth jump; otherwise merge keys linearly.
+  // Boxes overlap heavily (coarse levels reach 2 blocks either side), so count on a dense
+  // grid over their union when it is small, which it is unless the region straddles a large
+  // depth jump; otherwise merge keys linearly.
   BlockKey lo = s->boxes.front().first.lo, hi = s->boxes.front().first.hi;
   for (const auto& box_count : s->boxes) {
     const BandBox& box = box_count.first;
@@ -175,35 +266,65 @@ void BlockLookup::gatherHistogram(const StereoFrame& frame, const cv::Rect& regi
   }
   const int64_t nx = int64_t{hi.x} - lo.x + 1, ny = int64_t{hi.y} - lo.y + 1, nz = int64_t{hi.z} - lo.z + 1;
   if (nx * ny * nz <= kMaxDenseHistogramCells) {
-    s->dense_counts.assign(static_cast<size_t>(nx * ny * nz), 0);
+    // + kDenseRowPadding: a box row of up to 8 cells is added as two runs of four, the cells
+    // past its end (the next row's, or this padding) getting + 0.
+    constexpr size_t kDenseRowPadding = 8;
+    s->dense_counts.assign(static_cast<size_t>(nx * ny * nz) + kDenseRowPadding, 0);
     for (const auto& box_count : s->boxes) {
       const BandBox& box = box_count.first;
+      const int32_t width = box.hi.x - box.lo.x + 1;
+      auto row_of = [&](int32_t y, int32_t z) {
+        return &s->dense_counts[static_cast<size_t>(((z - lo.z) * ny + (y - lo.y)) * nx + (box.lo.x - lo.x))];
+      };
+#if defined(__SSE2__)
+      if (width <= 8) {  // always, unless Φ is over 3.5 blocks
+        const __m128i lane = _mm_setr_epi32(0, 1, 2, 3), count = _mm_set1_epi32(box_count.second);
+        const __m128i add_first = _mm_and_si128(count, _mm_cmplt_epi32(lane, _mm_set1_epi32(width)));
+        const __m128i add_second = _mm_and_si128(count, _mm_cmplt_epi32(lane, _mm_set1_epi32(width - 4)));
+        for (int32_t z = box.lo.z; z <= box.hi.z; ++z)
+          for (int32_t y = box.lo.y; y <= box.hi.y; ++y) {
+            __m128i* cells = reinterpret_cast<__m128i*>(row_of(y, z));
+            _mm_storeu_si128(cells, _mm_add_epi32(_mm_loadu_si128(cells), add_first));
+            if (width > 4) _mm_storeu_si128(cells + 1, _mm_add_epi32(_mm_loadu_si128(cells + 1), add_second));
+          }
+        continue;
+      }
+#endif
       for (int32_t z = box.lo.z; z <= box.hi.z; ++z)
         for (int32_t y = box.lo.y; y <= box.hi.y; ++y) {
-          int* row = &s->dense_counts[static_cast<size_t>(((z - lo.z) * ny + (y - lo.y)) * nx)];
-          for (int32_t x = box.lo.x; x <= box.hi.x; ++x) row[x - lo.x] += box_count.second;
+          int* row = row_of(y, z);
+          for (int32_t x = 0; x < width; ++x) row[x] += box_count.second;
         }
     }
-    size_t i = 0;
+    const int* count = s->dense_counts.data();
     for (int32_t z = lo.z; z <= hi.z; ++z)
       for (int32_t y = lo.y; y <= hi.y; ++y)
-        for (int32_t x = lo.x; x <= hi.x; ++x, ++i)
-          if (s->dense_counts[i] > 0) s->key_counts.emplace_back(BlockKey{x, y, z}, s->dense_counts[i]);
+        for (int32_t x = lo.x; x <= hi.x; ++x, ++count)
+          if (*count > 0) visit(BlockKey{x, y, z}, *count);
     return;
   }
+  s->sparse_counts.clear();
   // Not a structured binding: lambdas may capture those only from C++20 (clang refuses).
   for (const auto& box_count : s->boxes) {
     const auto& box = box_count.first;
     const auto count = box_count.second;
     forEachKeyInBox(box.lo, box.hi, [&](const BlockKey& key) {
-      auto it = std::find_if(s->key_counts.begin(), s->key_counts.end(),
+      auto it = std::find_if(s->sparse_counts.begin(), s->sparse_counts.end(),
                              [&](const auto& entry) { return entry.first == key; });
-      if (it == s->key_counts.end())
-        s->key_counts.emplace_back(key, count);
+      if (it == s->sparse_counts.end())
+        s->sparse_counts.emplace_back(key, count);
       else
         it->second += count;
     });
   }
+  for (const auto& [key, count] : s->sparse_counts) visit(key, count);
+}
+
+void BlockLookup::gatherHistogram(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const {
+  // Count points per distinct band box first and expand boxes to blocks after.
+  countRegionBoxes(frame, region, s);
+  s->key_counts.clear();
+  forEachBlockCount(s, [s](const BlockKey& key, int count) { s->key_counts.emplace_back(key, count); });
 }
 
 bool BlockLookup::passesFilter(const RegionScratch& s, const BlockKey& key) const {
@@ -215,15 +336,17 @@ bool BlockLookup::passesFilter(const RegionScratch& s, const BlockKey& key) cons
 
 void BlockLookup::runRegionAccelerated(const StereoFrame& frame, const cv::Rect& region,
                                        RegionScratch* s) const {
-  gatherHistogram(frame, region, s);
+  // The histogram straight into the filter: no per-block list in between.
+  countRegionBoxes(frame, region, s);
   s->passing.clear();
-  for (const auto& [key, count] : s->key_counts) {
-    if (config_.histogram_min_points > 0 && count < config_.histogram_min_points) {
+  const int min_points = config_.histogram_min_points;
+  forEachBlockCount(s, [s, min_points](const BlockKey& key, int count) {
+    if (min_points > 0 && count < min_points) {
       ++s->stats.blocks_filtered;
-      continue;
+      return;
     }
     s->passing.push_back(key);
-  }
+  });
 }
 
 void BlockLookup::collectDistinctKeys(size_t num_regions) {

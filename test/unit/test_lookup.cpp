@@ -53,18 +53,27 @@ TEST(BlockLookup, NaiveAndAcceleratedQueueTheSameBlocks) {
   const StereoCamera camera = vgaCamera();
   const sim::AnalyticScene scene = planeAndSphere();
   const StereoFrame frame = renderFrame(scene, camera, sim::lookAt({0.2, -0.3, -0.5}, {0, 0, 2.0}, -Eigen::Vector3d::UnitY()));
-  for (int histogram : {0, 4}) {
+  // Φ of 16 voxels makes the boxes of levels 1 and 2 (2 m on) 9 or more blocks wide, past
+  // the histogram's 8-cell box rows; one pixel in 16 keeps the naive search short there.
+  StereoFrame sparse_frame = frame;
+  sparse_frame.disparity_px = frame.disparity_px.clone();
+  for (int v = 0; v < sparse_frame.disparity_px.rows; ++v)
+    for (int u = 0; u < sparse_frame.disparity_px.cols; ++u)
+      if (u % 4 != 0 || v % 4 != 0) sparse_frame.disparity_px.at<float>(v, u) = 0.0f;
+  for (const auto& [histogram, truncation_vox] : {std::pair{0, 4.0}, std::pair{4, 4.0}, std::pair{0, 16.0}}) {
+    const StereoFrame& frame_used = truncation_vox > 4.0 ? sparse_frame : frame;
     MapperConfig config;
     config.histogram_min_points = histogram;
+    config.truncation_vox = truncation_vox;
     config.lookup_mode = LookupMode::kNaive;
     BlockOctree naive_tree(config.blockSizeM());
-    const LookupRun naive = runLookup(config, frame, &naive_tree);
+    const LookupRun naive = runLookup(config, frame_used, &naive_tree);
     config.lookup_mode = LookupMode::kAccelerated;
     BlockOctree accel_tree(config.blockSizeM());
-    const LookupRun accel = runLookup(config, frame, &accel_tree);
+    const LookupRun accel = runLookup(config, frame_used, &accel_tree);
 
     EXPECT_GT(naive.queue.size(), 100u);
-    EXPECT_EQ(keysOf(naive.queue), keysOf(accel.queue)) << "histogram " << histogram;
+    EXPECT_EQ(keysOf(naive.queue), keysOf(accel.queue)) << "histogram " << histogram << ", Φ " << truncation_vox;
     EXPECT_EQ(naive.stats.valid_points, accel.stats.valid_points);
     EXPECT_EQ(naive_tree.blockCount(), accel_tree.blockCount());
     EXPECT_EQ(accel.stats.blocks_allocated, accel_tree.blockCount());
@@ -268,4 +277,128 @@ TEST(BlockLookup, VectorPathEqualsScalarPathOnHostileFrames) {
       EXPECT_EQ(s.blocks_filtered, v.blocks_filtered);
     }
   }
+}
+
+TEST(BlockLookup, VectorPathEqualsScalarPathOnSmoothFrames) {
+  // Smooth surfaces give long runs of pixels sharing one band box, which the AVX2 path counts
+  // a group of four at a time; runs broken by invalid pixels, box changes at any lane and
+  // boxes alternating between neighbours must still give the scalar path's per-box counts.
+  // Many histogram thresholds make a count that is off by one change which blocks pass.
+  MapperConfig probe;
+  ThreadPool probe_pool(1);
+  if (!BlockLookup(probe, &probe_pool).usesSimd()) GTEST_SKIP() << "CPU without AVX2: only the scalar path exists";
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> special(0, 99);
+  std::normal_distribution<float> noise(0.0f, 0.02f);
+  const float specials[] = {0.0f, -3.0f, std::nanf(""), HUGE_VALF, 1e-30f, 1e30f};
+  for (int trial = 0; trial < 8; ++trial) {
+    const int width = 90 + 3 * trial, height = 50 + trial;
+    const StereoCamera camera = *StereoCamera::create(width, height, 70.0, 70.0, width * 0.5, height * 0.5, 0.12);
+    StereoFrame frame = constantDepthFrame(camera, 0.0f);
+    // A tilted plane (disparity linear in u and v) spanning all three levels; odd trials add
+    // noise so that pixels near a box edge alternate between two boxes.
+    const float d0 = 2.0f + 3.0f * trial, du = 0.05f * (trial % 3 - 1), dv = 0.08f;
+    const int special_per_100 = trial < 4 ? 3 : 30;
+    for (int v = 0; v < height; ++v)
+      for (int u = 0; u < width; ++u) {
+        float d = d0 + du * u + dv * v + (trial % 2 ? noise(rng) : 0.0f);
+        const int pick = special(rng);
+        if (pick < special_per_100) d = specials[pick % 6];
+        frame.disparity_px.at<float>(v, u) = d;
+      }
+    frame.T_world_camera = Eigen::AngleAxisd(0.2 * trial, Eigen::Vector3d(0.3, -1.0, 0.5).normalized());
+    frame.T_world_camera.translation() = Eigen::Vector3d(0.1 * trial, -0.7, 0.4);
+    for (int histogram : {0, 2, 3, 5, 9, 16, 33, 64}) {
+      MapperConfig config;
+      config.voxel_size_m = trial % 3 == 0 ? 0.04 : (trial % 3 == 1 ? 0.02 : 0.01);
+      config.histogram_min_points = histogram;
+      config.lookup_region_px = 13 + 5 * trial;
+      // Φ of 4 voxels is half an 8-voxel block, so lo and hi of a box change together; with
+      // 3 voxels a box can change in its hi corner alone.
+      config.truncation_vox = trial % 2 ? 3.0 : 4.0;
+      ThreadPool pool(2);
+      BlockOctree scalar_tree(config.blockSizeM()), vector_tree(config.blockSizeM());
+      BlockLookup scalar(config, &pool, /*allow_simd=*/false), vector(config, &pool);
+      std::vector<VoxelBlock*> scalar_queue, vector_queue;
+      const LookupStats s = scalar.run(frame, &scalar_tree, &scalar_queue);
+      const LookupStats v = vector.run(frame, &vector_tree, &vector_queue);
+      EXPECT_GT(s.valid_points, 0u);
+      EXPECT_EQ(keysOf(scalar_queue), keysOf(vector_queue)) << "trial " << trial << ", histogram " << histogram;
+      EXPECT_EQ(s.valid_points, v.valid_points);
+      EXPECT_EQ(s.blocks_filtered, v.blocks_filtered) << "trial " << trial << ", histogram " << histogram;
+    }
+  }
+}
+
+TEST(BlockLookup, VectorPathEqualsScalarPathWhenEveryBoxIsTheOriginBlock) {
+  // The AVX2 path compares each group's first lane with the region's previous box; before a
+  // region has one, a box of all-zero keys must not pass for a repeat of it. A narrow camera
+  // 1 m in front of block (0, 0, 0) with Φ far below a block puts every box there.
+  MapperConfig config;
+  ThreadPool pool(1);
+  if (!BlockLookup(config, &pool).usesSimd()) GTEST_SKIP() << "CPU without AVX2: only the scalar path exists";
+  config.voxel_size_m = 0.01;  // 8 cm blocks
+  config.truncation_vox = 0.5;
+  config.weight_falloff_start_vox = 0.25;
+  config.histogram_min_points = 0;
+  const StereoCamera camera = *StereoCamera::create(64, 48, 2000.0, 2000.0, 32.0, 24.0, 0.12);
+  StereoFrame frame = constantDepthFrame(camera, static_cast<float>(2000.0 * 0.12 / 1.0));
+  frame.T_world_camera.translation() = Eigen::Vector3d(0.04, 0.04, 0.04 - 1.0);
+  BlockOctree scalar_tree(config.blockSizeM()), vector_tree(config.blockSizeM());
+  BlockLookup scalar(config, &pool, /*allow_simd=*/false), vector(config, &pool);
+  std::vector<VoxelBlock*> scalar_queue, vector_queue;
+  const LookupStats s = scalar.run(frame, &scalar_tree, &scalar_queue);
+  const LookupStats v = vector.run(frame, &vector_tree, &vector_queue);
+  EXPECT_EQ(s.valid_points, 64u * 48u);
+  EXPECT_EQ(keysOf(scalar_queue), (std::vector<std::tuple<int, int, int>>{{0, 0, 0}}));
+  EXPECT_EQ(keysOf(scalar_queue), keysOf(vector_queue));
+  EXPECT_EQ(s.valid_points, v.valid_points);
+}
+
+TEST(BlockLookup, VectorPathEqualsScalarPathWhereTheSumOrderDecidesTheBlock) {
+  // Each world coordinate is a sum of three products and the translation; double addition
+  // is not associative, so both paths must add in the same order or a point within an ulp of
+  // a block face lands in different blocks. Builds such a point: a rotation for which
+  // ((a0 + a1) + a2) and (a0 + (a1 + a2)) differ in z, and a translation putting the lower
+  // band face exactly on a block face for one order only.
+  MapperConfig config;
+  ThreadPool pool(1);
+  if (!BlockLookup(config, &pool).usesSimd()) GTEST_SKIP() << "CPU without AVX2: only the scalar path exists";
+  config.voxel_size_m = 0.125;  // 1 m blocks: the key is the floor of the world coordinate
+  config.truncation_vox = 4.0;  // Φ = 0.5 m at level 0
+  config.histogram_min_points = 0;
+  const StereoCamera camera = *StereoCamera::create(8, 4, 100.0, 100.0, 3.7, 2.1, 0.1);
+  const int u = 2, v = 1;
+  const float disparity = 20.0f;  // z = 0.5 m: level 0
+  const double z = camera.fx() * camera.baseline() / disparity;
+  const double p[3] = {(u - camera.cx()) * z * (1.0 / camera.fx()), (v - camera.cy()) * z * (1.0 / camera.fy()), z};
+  const double band = 0.5;
+  std::mt19937 rng(3);
+  bool found = false;
+  for (int attempt = 0; attempt < 10000 && !found; ++attempt) {
+    const Eigen::Matrix3d R =
+        Eigen::AngleAxisd(std::uniform_real_distribution<double>(0.0, 6.0)(rng), Eigen::Vector3d::Random().normalized())
+            .toRotationMatrix();
+    const double a0 = R(2, 0) * p[0], a1 = R(2, 1) * p[1], a2 = R(2, 2) * p[2];
+    const double left = (a0 + a1) + a2, right = a0 + (a1 + a2);
+    if (left == right) continue;
+    for (int face = -3; face <= 3 && !found; ++face) {
+      const double t_z = (face + band) - left;
+      if (std::floor((left + t_z) - band) == std::floor((right + t_z) - band)) continue;
+      found = true;
+      StereoFrame frame = constantDepthFrame(camera, 0.0f);
+      frame.disparity_px.at<float>(v, u) = disparity;
+      frame.T_world_camera.linear() = R;
+      frame.T_world_camera.translation() = Eigen::Vector3d(0.3, -0.2, t_z);
+      BlockOctree scalar_tree(config.blockSizeM()), vector_tree(config.blockSizeM());
+      BlockLookup scalar(config, &pool, /*allow_simd=*/false), vector(config, &pool);
+      std::vector<VoxelBlock*> scalar_queue, vector_queue;
+      const LookupStats s = scalar.run(frame, &scalar_tree, &scalar_queue);
+      const LookupStats w = vector.run(frame, &vector_tree, &vector_queue);
+      EXPECT_EQ(s.valid_points, 1u);
+      EXPECT_EQ(w.valid_points, 1u);
+      EXPECT_EQ(keysOf(scalar_queue), keysOf(vector_queue)) << "attempt " << attempt;
+    }
+  }
+  EXPECT_TRUE(found) << "no point found whose block depends on the order of the sum";
 }

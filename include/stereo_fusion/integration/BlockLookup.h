@@ -58,10 +58,14 @@ class BlockLookup {
     double min_depth_m = 0.0, max_depth_m = 0.0;       ///< usable depth range
     LevelThresholds levels;                            ///< eq. 3.2 switch depths
     double band_blocks[kNumLevels] = {};               ///< Φ of each level, in blocks
+    /// Every Φ ≥ 0 (so lo ≤ hi in each box), which the AVX2 path's key range test relies on;
+    /// a config without it keeps to the scalar path.
+    bool bands_non_negative = false;
   };
   struct RegionScratch {
     std::vector<std::pair<BandBox, int>> boxes;      // distinct band boxes and their point counts
-    std::vector<std::pair<BlockKey, int>> key_counts;  // histogram: points per block
+    std::vector<std::pair<BlockKey, int>> key_counts;  // naive: histogram, points per block
+    std::vector<std::pair<BlockKey, int>> sparse_counts;  // points per block off the dense grid
     std::vector<int> dense_counts;                     // points per block over the boxes' union
     std::vector<BlockKey> passing;  // accelerated: blocks that pass the histogram filter
     std::vector<VoxelBlock*> found;  // naive: blocks found, in search order (with repeats)
@@ -76,8 +80,19 @@ class BlockLookup {
   /// The band box of pixel (u, v) with disparity `d`; false if the pixel has no usable depth.
   bool bandBoxOfPixel(float d, int u, int v, BandBox* box) const;
   void countBox(const BandBox& box, RegionScratch* s, size_t* last) const;
-  int countRowBoxesAvx2(const float* disparity_row, int u_begin, int u_end, int v, RegionScratch* s,
-                        size_t* last) const;
+  /// One more point in `box`, found among s->boxes or added; returns its index.
+  size_t countInBoxes(const BandBox& box, RegionScratch* s) const;
+  /// Fill s->boxes and s->stats.valid_points from the region's pixels (the AVX2 path gives
+  /// exactly the scalar path's boxes and counts).
+  void countRegionBoxesScalar(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const;
+  void countRegionBoxesAvx2(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const;
+  /// s->boxes and s->stats.valid_points of the region.
+  void countRegionBoxes(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const;
+  /// Calls visit(key, count) for each block the region's boxes reach, with its number of
+  /// points, in z, y, x order (or the boxes' order when the union is too large for the grid).
+  template <typename Visit>
+  void forEachBlockCount(RegionScratch* s, Visit&& visit) const;
+  /// s->boxes, then s->key_counts: the region's histogram.
   void gatherHistogram(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const;
   bool passesFilter(const RegionScratch& s, const BlockKey& key) const;
   void runRegionAccelerated(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const;
