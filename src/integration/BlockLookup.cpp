@@ -352,34 +352,13 @@ void BlockLookup::runRegionAccelerated(const StereoFrame& frame, const cv::Rect&
 void BlockLookup::collectDistinctKeys(size_t num_regions) {
   // Neighbouring regions share most of their blocks (≈10 regions per block at 1 cm): one
   // octree search per distinct block of the frame instead of one per (region, block).
-  // Open addressing with a per-slot generation, so the table is never cleared.
   size_t total = 0;
   for (size_t r = 0; r < num_regions; ++r) total += scratch_[r].passing.size();
-  size_t capacity = 64;
-  while (capacity < 2 * total) capacity *= 2;
-  if (key_table_.size() < capacity) {
-    key_table_.assign(capacity, KeySlot{});
-    key_table_generation_ = 0;
-  }
-  const size_t mask = key_table_.size() - 1;
-  if (++key_table_generation_ == 0) {  // wrapped: stale slots could look current
-    std::fill(key_table_.begin(), key_table_.end(), KeySlot{});
-    key_table_generation_ = 1;
-  }
-  const uint32_t generation = key_table_generation_;
+  frame_key_set_.reset(total);
   frame_keys_.clear();
   for (size_t r = 0; r < num_regions; ++r)
-    for (const BlockKey& key : scratch_[r].passing) {
-      for (size_t i = BlockKeyHash{}(key) & mask;; i = (i + 1) & mask) {
-        KeySlot& slot = key_table_[i];
-        if (slot.generation != generation) {
-          slot = {key, generation};
-          frame_keys_.push_back(key);
-          break;
-        }
-        if (slot.key == key) break;
-      }
-    }
+    for (const BlockKey& key : scratch_[r].passing)
+      if (frame_key_set_.insert(key)) frame_keys_.push_back(key);
 }
 
 void BlockLookup::runRegionNaive(const StereoFrame& frame, const cv::Rect& region,

@@ -4,6 +4,7 @@
 
 #include "stereo_fusion/MapperConfig.h"
 #include "stereo_fusion/integration/StereoFrame.h"
+#include "stereo_fusion/map/BlockKeySet.h"
 #include "stereo_fusion/map/BlockOctree.h"
 #include "stereo_fusion/util/ThreadPool.h"
 
@@ -71,10 +72,6 @@ class BlockLookup {
     std::vector<VoxelBlock*> found;  // naive: blocks found, in search order (with repeats)
     LookupStats stats;
   };
-  struct KeySlot {
-    BlockKey key;
-    uint32_t generation = 0;  // slot is in use this frame iff equal to key_table_generation_
-  };
 
   PixelGeometry pixelGeometry(const StereoFrame& frame, const BlockOctree& octree) const;
   /// The band box of pixel (u, v) with disparity `d`; false if the pixel has no usable depth.
@@ -108,8 +105,7 @@ class BlockLookup {
   std::vector<RegionScratch> scratch_;  // one per region, reused across frames
   PixelGeometry geometry_;              // of the frame being looked up
   // Accelerated mode's frame-wide de-duplication, reused across frames.
-  std::vector<KeySlot> key_table_;
-  uint32_t key_table_generation_ = 0;
+  BlockKeySet frame_key_set_;
   std::vector<BlockKey> frame_keys_;
   std::vector<VoxelBlock*> frame_blocks_;
   std::vector<uint8_t> frame_allocated_;
