@@ -413,6 +413,7 @@ struct BlockMesher::Context {
   int grid_coords[3][kAxisCoords];     // grid index → coordinate, ascending
   int grid_dim[3] = {};
   size_t uniform_corner_offset[8];  // uniform neighbourhoods: box corner c's slot − its low corner's
+  float uniform_weight = 0.0f;      // uniform neighbourhoods: every block's weight 1/s
   // Lattice points on lines along each axis, as bit masks over the coordinate u (bit u set:
   // a present block touching the line has a voxel centre at u). Indexed [axis][class of the
   // next axis' coordinate][class of the one after][u ≥ 16], class 0 below the block face
@@ -555,7 +556,7 @@ struct BlockMesher::Context {
   bool sampleUniformPoint(const int q[3], PointSample* out) const {
     const int level = this->level[0];
     const int shift = level + 1, side = levelSide(level);
-    const float w = 1.0f / static_cast<float>(step[0]);
+    const float w = uniform_weight;
     if (q[0] < kBlockUnits && q[1] < kBlockUnits && q[2] < kBlockUnits) {
       // An owner centre, the most common point: one voxel, the loop below unrolled.
       const Voxel& v = nb[0]->at(level, (q[0] - step[0]) >> shift, (q[1] - step[0]) >> shift, (q[2] - step[0]) >> shift);
@@ -567,25 +568,26 @@ struct BlockMesher::Context {
       out->rgb[2] = static_cast<float>(v.b);
       return true;
     }
-    int first[3], last[3], low_index[3];  // low_index: the voxel index in the offset-0 block
-    for (int a = 0; a < 3; ++a) {
-      incidentRange(q[a], &first[a], &last[a]);
-      low_index[a] = q[a] >= kBlockUnits ? side - 1 : (q[a] - step[0]) >> shift;
-    }
+    // The blocks touching q in increasing d (samplePoint()'s z, y, x order), and per axis the
+    // voxel index in the offset-0 block (offset-1 blocks are read at index 0).
+    int low_index[3];
+    for (int a = 0; a < 3; ++a) low_index[a] = q[a] >= kBlockUnits ? side - 1 : (q[a] - step[0]) >> shift;
+    const int offset_index[2][3] = {{low_index[0], low_index[1] * side, low_index[2] * side * side}, {0, 0, 0}};
+    const int base = levelOffset(level);
     float weight_sum = 0.0f, acc = 0.0f, acc_rgb[3] = {0, 0, 0};
-    for (int dz = first[2]; dz <= last[2]; ++dz)
-      for (int dy = first[1]; dy <= last[1]; ++dy)
-        for (int dx = first[0]; dx <= last[0]; ++dx) {
-          const VoxelBlock* block = nb[dx + 2 * dy + 4 * dz];
-          if (block == nullptr) return false;
-          const Voxel& v = block->at(level, dx ? 0 : low_index[0], dy ? 0 : low_index[1], dz ? 0 : low_index[2]);
-          if (!(v.weight > 0.0f)) return false;
-          weight_sum += w;
-          acc += w * v.sdf_m;
-          acc_rgb[0] += w * static_cast<float>(v.r);
-          acc_rgb[1] += w * static_cast<float>(v.g);
-          acc_rgb[2] += w * static_cast<float>(v.b);
-        }
+    for (unsigned blocks = incidentBlocks(q, q); blocks != 0; blocks &= blocks - 1) {
+      const int d = __builtin_ctz(blocks);
+      const VoxelBlock* block = nb[d];
+      if (block == nullptr) return false;
+      const Voxel& v = block->voxels[base + offset_index[d & 1][0] + offset_index[(d >> 1) & 1][1] +
+                                     offset_index[d >> 2][2]];
+      if (!(v.weight > 0.0f)) return false;
+      weight_sum += w;
+      acc += w * v.sdf_m;
+      acc_rgb[0] += w * static_cast<float>(v.r);
+      acc_rgb[1] += w * static_cast<float>(v.g);
+      acc_rgb[2] += w * static_cast<float>(v.b);
+    }
     const float inverse_weight_sum = 1.0f / weight_sum;  // exact: weight_sum is a power of two
     out->sdf = acc * inverse_weight_sum;
     for (int k = 0; k < 3; ++k) out->rgb[k] = acc_rgb[k] * inverse_weight_sum;
@@ -1087,6 +1089,7 @@ void BlockMesher::meshUniformBoxes(Context& ctx) const {
     return;
   }
   ctx.buildRowMasks();
+  ctx.uniform_weight = 1.0f / static_cast<float>(ctx.step[0]);
   const size_t stride_y = ctx.grid_dim[0], stride_z = stride_y * ctx.grid_dim[1];
   for (int c = 0; c < 8; ++c)
     ctx.uniform_corner_offset[c] = (c & 1) + ((c >> 1) & 1) * stride_y + (c >> 2) * stride_z;
