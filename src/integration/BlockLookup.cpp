@@ -426,6 +426,9 @@ LookupStats BlockLookup::run(const StereoFrame& frame, BlockOctree* octree,
   queue->clear();
   if (accelerated) {
     collectDistinctKeys(num_regions);
+    // The queue goes out in key order: sort the keys here, contiguous, rather than the blocks
+    // afterwards through a pointer per comparison.
+    std::sort(frame_keys_.begin(), frame_keys_.end());
     frame_blocks_.resize(frame_keys_.size());
     frame_allocated_.resize(frame_keys_.size());
     pool_->parallelFor(frame_keys_.size(), 64, [&](size_t begin, size_t end) {
@@ -451,9 +454,9 @@ LookupStats BlockLookup::run(const StereoFrame& frame, BlockOctree* octree,
         block->lookup_stamp = stamp;
         queue->push_back(block);
       }
+    std::sort(queue->begin(), queue->end(),
+              [](const VoxelBlock* a, const VoxelBlock* b) { return a->key < b->key; });
   }
-  std::sort(queue->begin(), queue->end(),
-            [](const VoxelBlock* a, const VoxelBlock* b) { return a->key < b->key; });
   total.blocks_queued = queue->size();
   return total;
 }

@@ -103,6 +103,9 @@ VoxelBlock* BlockOctree::findOrAllocate(const BlockKey& key, bool* allocated) {
   if (!keyInRange(key)) return nullptr;
   if (VoxelBlock* existing = find(key)) return existing;
 
+  // Zeroing the 7 KB block needs no lock: only inserting it does (other threads allocating
+  // in the same frame wait for the insert, not for the memset).
+  auto fresh = std::make_unique<VoxelBlock>();
   std::lock_guard<std::mutex> lock(alloc_mutex_);
   growToContain(key);
   Node* node = root_.load(std::memory_order_relaxed);
@@ -111,7 +114,7 @@ VoxelBlock* BlockOctree::findOrAllocate(const BlockKey& key, bool* allocated) {
     void* next = slot.load(std::memory_order_relaxed);
     if (node->height == 1) {
       if (next != nullptr) return static_cast<VoxelBlock*>(next);  // another thread won
-      block_storage_.push_back(std::make_unique<VoxelBlock>());
+      block_storage_.push_back(std::move(fresh));
       VoxelBlock* block = block_storage_.back().get();
       block->key = key;
       link(block);
