@@ -34,7 +34,17 @@ int chooseMeshLevel(const VoxelBlock& block, double level_min_coverage);
 void refreshMeshSigns(VoxelBlock* block);
 
 /// Sets block.mesh_level (chooseMeshLevel) and then its sign bits (refreshMeshSigns()).
+/// Runs for every updated block of every frame, so on CPUs with AVX2 it takes the AVX2 path.
 void refreshMeshLevel(VoxelBlock* block, double level_min_coverage);
+
+/// refreshMeshLevel() as written: chooseMeshLevel(), then refreshMeshSigns(). The reference
+/// the AVX2 path is tested against.
+void refreshMeshLevelScalar(VoxelBlock* block, double level_min_coverage);
+
+/// Same mesh_level and mesh_sign_bits as refreshMeshLevelScalar(), eight voxels per step,
+/// counting each level once and reading signs of the chosen level only. Only call it when
+/// avx2Supported().
+void refreshMeshLevelAvx2(VoxelBlock* block, double level_min_coverage);
 
 /// Marching cubes for one block (thesis §3.6, Algorithm 3), crack-free across blocks of any
 /// levels.

@@ -1,0 +1,246 @@
+// The per-block mesh level and sign bits (declared in BlockMesher.h). They run on the fusion
+// workers for every updated block, apart from the mesher itself.
+
+#include <algorithm>
+#include <cstddef>
+
+#include "stereo_fusion/mesh/BlockMesher.h"
+#include "stereo_fusion/util/CpuFeatures.h"
+
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#define STEREO_FUSION_HAVE_AVX2_REFRESH 1
+#endif
+
+namespace stereo_fusion {
+namespace {
+
+/// chooseMeshLevel()'s decision from the number of observed voxels of each level.
+int levelFromObservedCounts(const int observed[kNumLevels], double level_min_coverage) {
+  // Observed surface area of each level, in finest-voxel units: a level's band is
+  // truncation_vox of its own voxels thick, so area ≈ observed volume / thickness ∝ n · s².
+  // Areas, not voxel shares: a coarse centre can miss the band that finer centres near the
+  // block's faces catch, so no level is assumed to contain another.
+  double area[kNumLevels];
+  double largest = 0.0;
+  for (int level = 0; level < kNumLevels; ++level) {
+    const double scale = levelScale(level);
+    area[level] = observed[level] * scale * scale;
+    largest = std::max(largest, area[level]);
+  }
+  for (int level = 0; level < kNumLevels; ++level)
+    if (largest > 0.0 && area[level] >= level_min_coverage * largest) return level;
+  return kNumLevels - 1;
+}
+
+}  // namespace
+
+int chooseMeshLevel(const VoxelBlock& block, double level_min_coverage) {
+  int observed[kNumLevels] = {};
+  for (int level = 0; level < kNumLevels; ++level)
+    for (int n = 0; n < levelVoxelCount(level); ++n)
+      observed[level] += block.voxels[levelOffset(level) + n].weight > 0.0f;
+  return levelFromObservedCounts(observed, level_min_coverage);
+}
+
+void refreshMeshSigns(VoxelBlock* block) {
+  const int level = block->mesh_level;
+  const int side = levelSide(level), step = levelScale(level);
+  // The owners below reach at most 4 half-voxel units into this block (the coarsest level's
+  // first centre), where blockField() weighs up to the next centre beyond: every voxel they
+  // can read has its centre below 8 units, i.e. within 4 finest voxels of the face.
+  auto near_low_face = [step](int i) { return step * (2 * i + 1) < 8 ? 1 : 0; };
+  uint16_t seen[8] = {};  // by the axes a voxel is near the low face on: its signs (region-0 bits)
+  for (int k = 0; k < side; ++k)
+    for (int j = 0; j < side; ++j)
+      for (int i = 0; i < side; ++i) {
+        const Voxel& v = block->at(level, i, j, k);
+        if (!(v.weight > 0.0f)) continue;
+        // A value in [−1e-30, 0) counts as both signs: the mesher's weighted sums can round it
+        // to −0, which compares as non-negative.
+        const uint16_t sign = v.sdf_m >= 0.0f ? meshSignBit(0, true)
+                              : v.sdf_m < -1e-30f ? meshSignBit(0, false)
+                                                  : static_cast<uint16_t>(meshSignBit(0, false) | meshSignBit(0, true));
+        seen[near_low_face(i) | 2 * near_low_face(j) | 4 * near_low_face(k)] |= sign;
+      }
+  // Region r holds the voxels near the low face on every axis of r.
+  uint16_t bits = 0;
+  for (int region = 0; region < 8; ++region)
+    for (int near = 0; near < 8; ++near)
+      if ((region & near) == region) bits |= static_cast<uint16_t>(seen[near] << (2 * region));
+  block->mesh_sign_bits = bits;
+}
+
+void refreshMeshLevel(VoxelBlock* block, double level_min_coverage) {
+  static const bool use_avx2 = avx2Supported();
+  if (use_avx2)
+    refreshMeshLevelAvx2(block, level_min_coverage);
+  else
+    refreshMeshLevelScalar(block, level_min_coverage);
+}
+
+void refreshMeshLevelScalar(VoxelBlock* block, double level_min_coverage) {
+  block->mesh_level = static_cast<int8_t>(chooseMeshLevel(*block, level_min_coverage));
+  refreshMeshSigns(block);
+}
+
+#ifdef STEREO_FUSION_HAVE_AVX2_REFRESH
+// ---------------------------------------------------------------------------------------------
+// AVX2 path: eight consecutive voxels of a level per step (levels start at multiples of 8).
+
+namespace {
+
+#define SF_AVX2 __attribute__((target("avx2"), always_inline)) inline
+
+/// The 96 bytes of eight voxels as three vectors of {sdf, weight, rgb} dword triples.
+struct EightVoxels {
+  __m256 v0, v1, v2;
+};
+
+SF_AVX2 EightVoxels loadEight(const Voxel* voxels) {
+  static_assert(sizeof(Voxel) == 12 && offsetof(Voxel, weight) == 4, "voxels are {sdf, weight, rgb} dword triples");
+  const float* dwords = reinterpret_cast<const float*>(voxels);
+  return {_mm256_loadu_ps(dwords), _mm256_loadu_ps(dwords + 8), _mm256_loadu_ps(dwords + 16)};
+}
+
+// Dword 3n + q is field q of voxel n, in vector (3n + q) / 8 at lane (3n + q) mod 8: two blends
+// collect one field of all eight voxels (voxel n in lane 3n + q mod 8), a permutation puts
+// voxel n into lane n (as the fusion kernel's loadVoxels()).
+SF_AVX2 __m256 sdfLanes(const EightVoxels& e) {
+  return _mm256_permutevar8x32_ps(_mm256_blend_ps(_mm256_blend_ps(e.v0, e.v1, 0b10010010), e.v2, 0b00100100),
+                                  _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5));
+}
+/// The weights, voxel n in lane 3n + 1 mod 8: enough for counting.
+SF_AVX2 __m256 weightsUnordered(const EightVoxels& e) {
+  return _mm256_blend_ps(_mm256_blend_ps(e.v0, e.v1, 0b00100100), e.v2, 0b01001001);
+}
+SF_AVX2 __m256 weightLanes(const EightVoxels& e) {
+  return _mm256_permutevar8x32_ps(weightsUnordered(e), _mm256_setr_epi32(1, 4, 7, 2, 5, 0, 3, 6));
+}
+
+/// −1 in the lanes of eight voxels (in some order) that are observed (weight > 0), else 0.
+SF_AVX2 __m256i observedLanes(const Voxel* voxels) {
+  return _mm256_castps_si256(_mm256_cmp_ps(weightsUnordered(loadEight(voxels)), _mm256_setzero_ps(), _CMP_GT_OQ));
+}
+
+/// Observed voxels (weight > 0) of `kLevel`, whose voxels start at `voxels`.
+template <int kLevel>
+SF_AVX2 int countObservedAvx2(const Voxel* voxels) {
+  // Subtracting the −1 masks counts per lane; one horizontal sum at the end.
+  __m256i counts = _mm256_setzero_si256();
+  int n = 0;
+  // Sixteen voxels per step: half the loop overhead, and GCC's extra register copy per step.
+  for (; n + 16 <= levelVoxelCount(kLevel); n += 16)
+    counts = _mm256_sub_epi32(counts, _mm256_add_epi32(observedLanes(voxels + n), observedLanes(voxels + n + 8)));
+  if (n < levelVoxelCount(kLevel)) counts = _mm256_sub_epi32(counts, observedLanes(voxels + n));
+  __m128i sum = _mm_add_epi32(_mm256_castsi256_si128(counts), _mm256_extracti128_si256(counts, 1));
+  sum = _mm_add_epi32(sum, _mm_shuffle_epi32(sum, 0x4E));
+  sum = _mm_add_epi32(sum, _mm_shuffle_epi32(sum, 0xB1));
+  return _mm_cvtsi128_si32(sum);
+}
+
+/// Bit n: voxel n of the eight is observed and holds a value refreshMeshSigns() counts as
+/// < 0 (`negative`) or as ≥ 0 (`non_negative`); [−1e-30, 0) and NaN are in both.
+struct SignLanes {
+  unsigned negative, non_negative;
+};
+
+SF_AVX2 SignLanes signLanesAvx2(const Voxel* voxels) {
+  const EightVoxels e = loadEight(voxels);
+  const __m256 sdf = sdfLanes(e);
+  const unsigned observed =
+      static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(weightLanes(e), _mm256_setzero_ps(), _CMP_GT_OQ)));
+  // !(sdf ≥ 0) and !(sdf < −1e-30): the complements of the scalar tests, NaN included.
+  const unsigned negative =
+      static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(sdf, _mm256_setzero_ps(), _CMP_NGE_UQ)));
+  const unsigned non_negative =
+      static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(sdf, _mm256_set1_ps(-1e-30f), _CMP_NLT_UQ)));
+  return {negative & observed, non_negative & observed};
+}
+
+// Which voxels of a group of eight lie in the low half of the block on each axis (what
+// refreshMeshSigns() calls near the low face): on x by lane alone; on y and z by group, except
+// in level 2, whose single group holds both halves. Level 0: group j + 8k, lane i. Level 1:
+// group 2k + h, lane i + 4(j − 2h). Level 2: lane i + 2j + 4k.
+constexpr unsigned kLowHalfLanes[kNumLevels][3] = {{0x0F, 0xFF, 0xFF}, {0x33, 0xFF, 0xFF}, {0x55, 0x33, 0x0F}};
+constexpr bool groupInLowHalf(int level, int group, int axis) {
+  if (level == 0) return (axis == 1 ? group % 8 : group / 8) < 4;
+  if (level == 1) return axis == 1 ? group % 2 == 0 : group / 2 < 2;
+  return true;
+}
+
+/// The tables above against the voxel indices (eq. 3.4): voxel n of group g is index 8g + n.
+constexpr bool lowHalfTablesMatchIndices() {
+  for (int level = 0; level < kNumLevels; ++level) {
+    const int side = levelSide(level);
+    for (int index = 0; index < levelVoxelCount(level); ++index) {
+      const int ijk[3] = {index % side, index / side % side, index / (side * side)};
+      for (int axis = 0; axis < 3; ++axis) {
+        const bool lane_low = (kLowHalfLanes[level][axis] >> (index % 8)) & 1;
+        const bool group_low = axis == 0 || groupInLowHalf(level, index / 8, axis);
+        if ((ijk[axis] < side / 2) != (lane_low && group_low)) return false;
+      }
+    }
+  }
+  return true;
+}
+static_assert(lowHalfTablesMatchIndices(), "low-half lane and group tables disagree with VoxelBlock::index()");
+
+/// refreshMeshSigns() for the voxels of `kLevel` starting at `voxels`. (Not inlined: GCC would
+/// keep the counting pass's loads of this level for it, spilled to the stack.)
+template <int kLevel>
+__attribute__((target("avx2"), noinline)) uint16_t meshSignBitsAvx2(const Voxel* voxels) {
+  // Signs by group half: bit 0 low half on y, bit 1 on z.
+  unsigned negative[4] = {}, non_negative[4] = {};
+  for (int group = 0; group < levelVoxelCount(kLevel) / 8; ++group) {
+    const SignLanes s = signLanesAvx2(voxels + 8 * group);
+    const int half = groupInLowHalf(kLevel, group, 1) | 2 * groupInLowHalf(kLevel, group, 2);
+    negative[half] |= s.negative;
+    non_negative[half] |= s.non_negative;
+  }
+  // Region r holds the voxels in the low half on every axis of r (bit 0 x, 1 y, 2 z).
+  uint16_t bits = 0;
+  for (int region = 0; region < 8; ++region) {
+    const int region_yz = region >> 1;
+    unsigned region_negative = 0, region_non_negative = 0;
+    for (int half = 0; half < 4; ++half) {
+      if ((half & region_yz) != region_yz) continue;
+      region_negative |= negative[half];
+      region_non_negative |= non_negative[half];
+    }
+    unsigned lanes = 0xFF;
+    for (int axis = 0; axis < 3; ++axis)
+      if (region & (1 << axis)) lanes &= kLowHalfLanes[kLevel][axis];
+    if (region_negative & lanes) bits |= meshSignBit(region, false);
+    if (region_non_negative & lanes) bits |= meshSignBit(region, true);
+  }
+  return bits;
+}
+
+#undef SF_AVX2
+
+}  // namespace
+
+__attribute__((target("avx2"))) void refreshMeshLevelAvx2(VoxelBlock* block, double level_min_coverage) {
+  static_assert(levelOffset(1) % 8 == 0 && levelOffset(2) % 8 == 0 && levelVoxelCount(2) == 8,
+                "every level is whole groups of eight voxels");
+  const int observed[kNumLevels] = {countObservedAvx2<0>(&block->voxels[levelOffset(0)]),
+                                     countObservedAvx2<1>(&block->voxels[levelOffset(1)]),
+                                     countObservedAvx2<2>(&block->voxels[levelOffset(2)])};
+  const int level = levelFromObservedCounts(observed, level_min_coverage);
+  block->mesh_level = static_cast<int8_t>(level);
+  const Voxel* voxels = &block->voxels[levelOffset(level)];
+  if (level == 0) block->mesh_sign_bits = meshSignBitsAvx2<0>(voxels);
+  if (level == 1) block->mesh_sign_bits = meshSignBitsAvx2<1>(voxels);
+  if (level == 2) block->mesh_sign_bits = meshSignBitsAvx2<2>(voxels);
+}
+
+#else  // not x86: only the scalar path
+
+void refreshMeshLevelAvx2(VoxelBlock* block, double level_min_coverage) {
+  refreshMeshLevelScalar(block, level_min_coverage);
+}
+
+#endif
+
+}  // namespace stereo_fusion
