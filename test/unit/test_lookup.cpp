@@ -47,6 +47,31 @@ StereoFrame constantDepthFrame(const StereoCamera& camera, float disparity) {
   return frame;
 }
 
+/// True if this CPU runs the AVX2 lookup (the scalar one is then its reference).
+bool lookupUsesSimd() {
+  MapperConfig config;
+  ThreadPool pool(1);
+  return BlockLookup(config, &pool).usesSimd();
+}
+
+/// The scalar and the AVX2 lookup on the same frame, each into its own octree.
+struct ScalarAndVector {
+  LookupStats scalar, vector;
+  std::vector<std::tuple<int, int, int>> scalar_keys, vector_keys;
+};
+
+ScalarAndVector runScalarAndVector(const MapperConfig& config, const StereoFrame& frame, ThreadPool* pool) {
+  BlockOctree scalar_tree(config.blockSizeM()), vector_tree(config.blockSizeM());
+  BlockLookup scalar(config, pool, /*allow_simd=*/false), vector(config, pool);
+  EXPECT_FALSE(scalar.usesSimd());
+  std::vector<VoxelBlock*> scalar_queue, vector_queue;
+  ScalarAndVector r;
+  r.scalar = scalar.run(frame, &scalar_tree, &scalar_queue);
+  r.vector = vector.run(frame, &vector_tree, &vector_queue);
+  r.scalar_keys = keysOf(scalar_queue);
+  r.vector_keys = keysOf(vector_queue);
+  return r;
+}
 }  // namespace
 
 TEST(BlockLookup, NaiveAndAcceleratedQueueTheSameBlocks) {
@@ -236,9 +261,7 @@ TEST(BlockLookup, VectorPathEqualsScalarPathOnHostileFrames) {
   // histogram decisions, on frames mixing valid disparities with 0, negative, NaN, ±inf,
   // depths outside [min, max], all three levels, widths that are not multiples of 4, and a
   // camera so far out that some bands leave the key range.
-  MapperConfig probe;
-  ThreadPool probe_pool(1);
-  if (!BlockLookup(probe, &probe_pool).usesSimd()) GTEST_SKIP() << "CPU without AVX2: only the scalar path exists";
+  if (!lookupUsesSimd()) GTEST_SKIP() << "CPU without AVX2: only the scalar path exists";
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> disparity(0.5f, 80.0f);
   std::uniform_int_distribution<int> special(0, 19);
@@ -263,14 +286,11 @@ TEST(BlockLookup, VectorPathEqualsScalarPathOnHostileFrames) {
       config.histogram_min_points = histogram;
       config.lookup_region_px = 8 + trial;
       ThreadPool pool(2);
-      BlockOctree scalar_tree(config.blockSizeM()), vector_tree(config.blockSizeM());
-      BlockLookup scalar(config, &pool, /*allow_simd=*/false), vector(config, &pool);
-      ASSERT_FALSE(scalar.usesSimd());
-      std::vector<VoxelBlock*> scalar_queue, vector_queue;
-      const LookupStats s = scalar.run(frame, &scalar_tree, &scalar_queue);
-      const LookupStats v = vector.run(frame, &vector_tree, &vector_queue);
+      const ScalarAndVector r = runScalarAndVector(config, frame, &pool);
+      const LookupStats& s = r.scalar;
+      const LookupStats& v = r.vector;
       EXPECT_GT(s.valid_points, 0u);
-      EXPECT_EQ(keysOf(scalar_queue), keysOf(vector_queue)) << "trial " << trial;
+      EXPECT_EQ(r.scalar_keys, r.vector_keys) << "trial " << trial;
       EXPECT_EQ(s.valid_points, v.valid_points);
       EXPECT_EQ(s.octree_searches, v.octree_searches);
       EXPECT_EQ(s.blocks_allocated, v.blocks_allocated);
@@ -284,9 +304,7 @@ TEST(BlockLookup, VectorPathEqualsScalarPathOnSmoothFrames) {
   // a group of four at a time; runs broken by invalid pixels, box changes at any lane and
   // boxes alternating between neighbours must still give the scalar path's per-box counts.
   // Many histogram thresholds make a count that is off by one change which blocks pass.
-  MapperConfig probe;
-  ThreadPool probe_pool(1);
-  if (!BlockLookup(probe, &probe_pool).usesSimd()) GTEST_SKIP() << "CPU without AVX2: only the scalar path exists";
+  if (!lookupUsesSimd()) GTEST_SKIP() << "CPU without AVX2: only the scalar path exists";
   std::mt19937 rng(11);
   std::uniform_int_distribution<int> special(0, 99);
   std::normal_distribution<float> noise(0.0f, 0.02f);
@@ -317,13 +335,11 @@ TEST(BlockLookup, VectorPathEqualsScalarPathOnSmoothFrames) {
       // 3 voxels a box can change in its hi corner alone.
       config.truncation_vox = trial % 2 ? 3.0 : 4.0;
       ThreadPool pool(2);
-      BlockOctree scalar_tree(config.blockSizeM()), vector_tree(config.blockSizeM());
-      BlockLookup scalar(config, &pool, /*allow_simd=*/false), vector(config, &pool);
-      std::vector<VoxelBlock*> scalar_queue, vector_queue;
-      const LookupStats s = scalar.run(frame, &scalar_tree, &scalar_queue);
-      const LookupStats v = vector.run(frame, &vector_tree, &vector_queue);
+      const ScalarAndVector r = runScalarAndVector(config, frame, &pool);
+      const LookupStats& s = r.scalar;
+      const LookupStats& v = r.vector;
       EXPECT_GT(s.valid_points, 0u);
-      EXPECT_EQ(keysOf(scalar_queue), keysOf(vector_queue)) << "trial " << trial << ", histogram " << histogram;
+      EXPECT_EQ(r.scalar_keys, r.vector_keys) << "trial " << trial << ", histogram " << histogram;
       EXPECT_EQ(s.valid_points, v.valid_points);
       EXPECT_EQ(s.blocks_filtered, v.blocks_filtered) << "trial " << trial << ", histogram " << histogram;
     }
@@ -334,9 +350,9 @@ TEST(BlockLookup, VectorPathEqualsScalarPathWhenEveryBoxIsTheOriginBlock) {
   // The AVX2 path compares each group's first lane with the region's previous box; before a
   // region has one, a box of all-zero keys must not pass for a repeat of it. A narrow camera
   // 1 m in front of block (0, 0, 0) with Φ far below a block puts every box there.
+  if (!lookupUsesSimd()) GTEST_SKIP() << "CPU without AVX2: only the scalar path exists";
   MapperConfig config;
   ThreadPool pool(1);
-  if (!BlockLookup(config, &pool).usesSimd()) GTEST_SKIP() << "CPU without AVX2: only the scalar path exists";
   config.voxel_size_m = 0.01;  // 8 cm blocks
   config.truncation_vox = 0.5;
   config.weight_falloff_start_vox = 0.25;
@@ -344,15 +360,11 @@ TEST(BlockLookup, VectorPathEqualsScalarPathWhenEveryBoxIsTheOriginBlock) {
   const StereoCamera camera = *StereoCamera::create(64, 48, 2000.0, 2000.0, 32.0, 24.0, 0.12);
   StereoFrame frame = constantDepthFrame(camera, static_cast<float>(2000.0 * 0.12 / 1.0));
   frame.T_world_camera.translation() = Eigen::Vector3d(0.04, 0.04, 0.04 - 1.0);
-  BlockOctree scalar_tree(config.blockSizeM()), vector_tree(config.blockSizeM());
-  BlockLookup scalar(config, &pool, /*allow_simd=*/false), vector(config, &pool);
-  std::vector<VoxelBlock*> scalar_queue, vector_queue;
-  const LookupStats s = scalar.run(frame, &scalar_tree, &scalar_queue);
-  const LookupStats v = vector.run(frame, &vector_tree, &vector_queue);
-  EXPECT_EQ(s.valid_points, 64u * 48u);
-  EXPECT_EQ(keysOf(scalar_queue), (std::vector<std::tuple<int, int, int>>{{0, 0, 0}}));
-  EXPECT_EQ(keysOf(scalar_queue), keysOf(vector_queue));
-  EXPECT_EQ(s.valid_points, v.valid_points);
+  const ScalarAndVector r = runScalarAndVector(config, frame, &pool);
+  EXPECT_EQ(r.scalar.valid_points, 64u * 48u);
+  EXPECT_EQ(r.scalar_keys, (std::vector<std::tuple<int, int, int>>{{0, 0, 0}}));
+  EXPECT_EQ(r.scalar_keys, r.vector_keys);
+  EXPECT_EQ(r.scalar.valid_points, r.vector.valid_points);
 }
 
 TEST(BlockLookup, VectorPathEqualsScalarPathWhereTheSumOrderDecidesTheBlock) {
@@ -361,9 +373,9 @@ TEST(BlockLookup, VectorPathEqualsScalarPathWhereTheSumOrderDecidesTheBlock) {
   // a block face lands in different blocks. Builds such a point: a rotation for which
   // ((a0 + a1) + a2) and (a0 + (a1 + a2)) differ in z, and a translation putting the lower
   // band face exactly on a block face for one order only.
+  if (!lookupUsesSimd()) GTEST_SKIP() << "CPU without AVX2: only the scalar path exists";
   MapperConfig config;
   ThreadPool pool(1);
-  if (!BlockLookup(config, &pool).usesSimd()) GTEST_SKIP() << "CPU without AVX2: only the scalar path exists";
   config.voxel_size_m = 0.125;  // 1 m blocks: the key is the floor of the world coordinate
   config.truncation_vox = 4.0;  // Φ = 0.5 m at level 0
   config.histogram_min_points = 0;
@@ -390,14 +402,10 @@ TEST(BlockLookup, VectorPathEqualsScalarPathWhereTheSumOrderDecidesTheBlock) {
       frame.disparity_px.at<float>(v, u) = disparity;
       frame.T_world_camera.linear() = R;
       frame.T_world_camera.translation() = Eigen::Vector3d(0.3, -0.2, t_z);
-      BlockOctree scalar_tree(config.blockSizeM()), vector_tree(config.blockSizeM());
-      BlockLookup scalar(config, &pool, /*allow_simd=*/false), vector(config, &pool);
-      std::vector<VoxelBlock*> scalar_queue, vector_queue;
-      const LookupStats s = scalar.run(frame, &scalar_tree, &scalar_queue);
-      const LookupStats w = vector.run(frame, &vector_tree, &vector_queue);
-      EXPECT_EQ(s.valid_points, 1u);
-      EXPECT_EQ(w.valid_points, 1u);
-      EXPECT_EQ(keysOf(scalar_queue), keysOf(vector_queue)) << "attempt " << attempt;
+      const ScalarAndVector r = runScalarAndVector(config, frame, &pool);
+      EXPECT_EQ(r.scalar.valid_points, 1u);
+      EXPECT_EQ(r.vector.valid_points, 1u);
+      EXPECT_EQ(r.scalar_keys, r.vector_keys) << "attempt " << attempt;
     }
   }
   EXPECT_TRUE(found) << "no point found whose block depends on the order of the sum";
