@@ -50,6 +50,12 @@ void MeshAssembler::onInit() {
     }
     if (full_client_.exists()) fetchFullMesh();
   });
+  // Nothing lost silently: gaps, restarts and malformed updates are repaired, and counted here.
+  diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
+  diagnostics_->setHardwareID("stereo_fusion");
+  diagnostics_->add("mesh assembler", this, &MeshAssembler::diagnose);
+  diagnostics_timer_ =
+      nh.createWallTimer(ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) { diagnostics_->force_update(); });
   NODELET_INFO("mesh_assembler: assembling %s (full mesh from %s)", update_sub_.getTopic().c_str(),
                full_client_.getService().c_str());
 }
@@ -93,6 +99,24 @@ void MeshAssembler::onUpdate(const MeshUpdate::ConstPtr& update) {
   }
   if (apply(*update)) last_sequence_ = update->sequence;
   else synced_ = false;  // our copy may now differ: repair from the next update
+}
+
+void MeshAssembler::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!synced_)
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "not in sync with the robot's mesh (fetching it)");
+  else if (gaps_ > 0 || malformed_ > 0)
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "in sync; updates were lost or malformed, see the counters");
+  else
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "in sync");
+  status.add("in sync", synced_);
+  status.add("session", session_);
+  status.add("last sequence", last_sequence_);
+  status.add("blocks", mesh_.size());
+  status.add("full mesh requests", full_requests_);
+  status.add("sequence gaps", gaps_);
+  status.add("robot restarts", restarts_);
+  status.add("malformed updates", malformed_);
 }
 
 bool MeshAssembler::fetchFullMesh() {

@@ -12,6 +12,7 @@
 #include <map>
 #include <mutex>
 #include <string>
+#include <utility>
 
 namespace stereo_fusion::test {
 
@@ -38,7 +39,10 @@ inline FrameMessages frameMessages(const StereoFrame& frame, tf2_ros::TransformB
 /// The latest key/value pairs of the "fusion" diagnostics status.
 class DiagnosticsWatcher {
  public:
-  DiagnosticsWatcher() { sub_ = ros::NodeHandle().subscribe("/diagnostics", 10, &DiagnosticsWatcher::onMessage, this); }
+  /// Watches the statuses whose name contains `name_part` (the fusion nodelet's by default).
+  explicit DiagnosticsWatcher(std::string name_part = "fusion") : name_part_(std::move(name_part)) {
+    sub_ = ros::NodeHandle().subscribe("/diagnostics", 10, &DiagnosticsWatcher::onMessage, this);
+  }
 
   /// Waits for the next report after this call. Counters only grow, so values read after it are
   /// at least what the node had counted when this was called: a stale, lower reading taken as
@@ -72,9 +76,10 @@ class DiagnosticsWatcher {
     std::lock_guard<std::mutex> lock(mutex_);
     ++reports_;
     for (const auto& status : a->status)
-      if (status.name.find("fusion") != std::string::npos)
+      if (status.name.find(name_part_) != std::string::npos)
         for (const auto& kv : status.values) values_[kv.key] = kv.value;
   }
+  std::string name_part_;
   ros::Subscriber sub_;
   std::mutex mutex_;
   std::map<std::string, std::string> values_;

@@ -72,6 +72,7 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   auto info_pub = nh.advertise<sensor_msgs::CameraInfo>("/stereo/left/camera_info", 20);
   tf2_ros::TransformBroadcaster tf;
   test::DiagnosticsWatcher diagnostics;
+  test::DiagnosticsWatcher assembler_diagnostics("mesh assembler");
   ASSERT_TRUE(test::waitFor([&] {
     return disparity_pub.getNumSubscribers() > 0 && image_pub.getNumSubscribers() > 0 && info_pub.getNumSubscribers() > 0;
   }, 30.0)) << "the fusion nodelet did not connect";
@@ -247,7 +248,10 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   // update: the assembler asks for the full mesh again and ends, after the next real frame, with
   // exactly the robot's mesh, without that block.
   ros::Publisher injector = nh.advertise<MeshUpdate>("/stereo_fusion/mesh_update", 1, true);
+  MeshUpdate session_probe;
+  ASSERT_TRUE(fetch("/stereo_fusion/get_full_mesh", &robot, &robot_sequence, &session_probe));
   MeshUpdate after_gap;
+  after_gap.session = session_probe.session;  // the robot's own run: a gap, not a restart
   after_gap.sequence = robot_sequence + 2;
   after_gap.voxel_size = static_cast<float>(config.voxel_size_m);
   after_gap.block_size = static_cast<float>(8.0 * config.voxel_size_m);
@@ -270,6 +274,9 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   }, 30.0)) << "assembler at sequence " << assembled_sequence << ", robot at " << robot_sequence;
   EXPECT_EQ(assembled.count(stray.key), 0u) << "the update after the gap was applied";
   test::expectSameSubmeshes(assembled, robot);
+  // Repaired, and not silently: the gap is counted on /diagnostics.
+  EXPECT_TRUE(test::waitFor([&] { return assembler_diagnostics.value("sequence gaps") >= 1; }, 10.0))
+      << "sequence gaps reported: " << assembler_diagnostics.value("sequence gaps");
 
   // A restart of the robot: its sequence begins again, so a restarted robot's update can carry
   // exactly the sequence the assembler expects next while its mesh has nothing to do with the
@@ -308,6 +315,10 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   }, 30.0)) << "assembler at sequence " << assembled_sequence << ", robot at " << robot_sequence;
   EXPECT_EQ(assembled.count(stray.key), 0u);
   test::expectSameSubmeshes(assembled, robot);
+  EXPECT_TRUE(test::waitFor([&] { return assembler_diagnostics.value("robot restarts") >= 1; }, 10.0))
+      << "robot restarts reported: " << assembler_diagnostics.value("robot restarts");
+  EXPECT_GE(assembler_diagnostics.value("full mesh requests"), 3) << "the join, the gap and the restart each fetch";
+  EXPECT_EQ(assembler_diagnostics.value("malformed updates"), 0);
 }
 
 int main(int argc, char** argv) { return test::runRosTests(argc, argv, "stereo_fusion_assembler_test"); }

@@ -2,6 +2,7 @@
 // The base-station side of ~mesh_update: keeps a copy of the robot's global mesh, repairs it
 // from ~get_full_mesh after a late join or a missed update, saves it and draws it locally.
 
+#include <diagnostic_updater/diagnostic_updater.h>
 #include <nodelet/nodelet.h>
 #include <ros/ros.h>
 #include <stereo_fusion/GetFullMesh.h>
@@ -9,6 +10,7 @@
 #include <stereo_fusion/SaveMesh.h>
 
 #include <cstdint>
+#include <memory>
 #include <mutex>
 #include <unordered_map>
 
@@ -32,6 +34,9 @@ namespace stereo_fusion {
 /// Parameters: `~publish_markers` (bool, default true), `~full_mesh_timeout_s` (double, default 5),
 /// `~mesh_encoding` ("float32" | "compact", default float32: encoding of its own ~get_full_mesh;
 /// float32 re-sends exactly what it holds, compact would quantise the decoded normals again).
+/// Diagnostics: `/diagnostics`, task "mesh assembler", once a second: whether it is in sync, the
+/// session and sequence held, blocks, and the counters of full-mesh requests, sequence gaps,
+/// robot restarts and malformed updates (WARN while not in sync or once an update was lost).
 class MeshAssembler : public nodelet::Nodelet {
  private:
   void onInit() override;
@@ -43,6 +48,7 @@ class MeshAssembler : public nodelet::Nodelet {
   bool apply(const MeshUpdate& update);
   bool saveMesh(SaveMesh::Request& req, SaveMesh::Response& res);
   bool getFullMesh(GetFullMesh::Request& req, GetFullMesh::Response& res);
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
 
   std::mutex mutex_;  // the node handle is single-threaded; this guards against the timer anyway
   std::unordered_map<BlockKey, SubMesh, BlockKeyHash> mesh_;
@@ -64,6 +70,8 @@ class MeshAssembler : public nodelet::Nodelet {
   ros::Publisher markers_pub_;
   ros::ServiceServer save_srv_, full_srv_;
   ros::WallTimer join_timer_;
+  std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
+  ros::WallTimer diagnostics_timer_;
 };
 
 }  // namespace stereo_fusion
