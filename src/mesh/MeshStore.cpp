@@ -112,14 +112,6 @@ MeshChanges MeshStore::update(const BlockOctree& map, const std::vector<BlockKey
   return remeshAround(map, std::move(present), std::move(absent), pool, erased);
 }
 
-MeshChanges MeshStore::updateBlocks(const BlockOctree& map, const std::vector<VoxelBlock*>& updated_blocks,
-                                    ThreadPool* pool, const std::vector<BlockKey>& erased) {
-  pool->parallelFor(updated_blocks.size(), 16, [&](size_t begin, size_t end) {
-    for (size_t i = begin; i < end; ++i) refreshMeshLevel(updated_blocks[i], params_.level_min_coverage);
-  });
-  return remeshUpdatedBlocks(map, updated_blocks, pool, erased);
-}
-
 MeshChanges MeshStore::remeshUpdatedBlocks(const BlockOctree& map, const std::vector<VoxelBlock*>& updated_blocks,
                                            ThreadPool* pool, const std::vector<BlockKey>& erased) {
   return remeshAround(map, std::vector<const VoxelBlock*>(updated_blocks.begin(), updated_blocks.end()), {}, pool,

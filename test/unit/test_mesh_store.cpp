@@ -1,7 +1,7 @@
-// MeshStore's two entries for a frame's changes: by keys (update) and by the blocks fusion hands
-// over (updateBlocks; the Mapper calls its second half, remeshUpdatedBlocks, after refreshing mesh
-// levels during fusion). Both reach owners through the neighbour links and must give
-// the same submeshes and changes, before and after blocks are erased.
+// MeshStore's two entries for a frame's changes: by keys (update, which refreshes the mesh
+// levels itself) and by the blocks fusion hands over (remeshUpdatedBlocks, after the levels were
+// refreshed as the Mapper's fusion workers do). Both reach owners through the neighbour links and
+// must give the same submeshes and changes, before and after blocks are erased.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -42,7 +42,8 @@ TEST(MeshStore, UpdateByKeysAndByBlocksAgreeAndEqualARebuildAfterErase) {
   }
   keys.push_back({100, 100, 100});  // no block there, nor at its owners: changes nothing
   const MeshChanges first_by_key = by_key.update(map, keys, &pool);
-  const MeshChanges first_by_block = by_block.updateBlocks(map, blocks, &pool);
+  for (VoxelBlock* b : blocks) refreshMeshLevel(b, params.level_min_coverage);  // as fusion does
+  const MeshChanges first_by_block = by_block.remeshUpdatedBlocks(map, blocks, &pool);
   expectSameChanges(first_by_key, first_by_block);
   EXPECT_EQ(first_by_key.blocks_meshed, map.blockCount());  // every block owns its own cells
   EXPECT_GT(first_by_key.changed.size(), 40u);
@@ -54,7 +55,7 @@ TEST(MeshStore, UpdateByKeysAndByBlocksAgreeAndEqualARebuildAfterErase) {
   for (size_t i = 0; i < first_by_key.changed.size(); i += 3) erased.push_back(first_by_key.changed[i]);
   ASSERT_EQ(map.erase(erased), erased.size());
   const MeshChanges second_by_key = by_key.update(map, {}, &pool, erased);
-  const MeshChanges second_by_block = by_block.updateBlocks(map, {}, &pool, erased);
+  const MeshChanges second_by_block = by_block.remeshUpdatedBlocks(map, {}, &pool, erased);
   expectSameChanges(second_by_key, second_by_block);
   for (const BlockKey& k : erased)
     EXPECT_TRUE(std::binary_search(second_by_key.removed.begin(), second_by_key.removed.end(), k)) << k;

@@ -33,11 +33,8 @@ class MeshStore {
   MeshChanges update(const BlockOctree& map, const std::vector<BlockKey>& updated, ThreadPool* pool,
                      const std::vector<BlockKey>& erased = {});
   /// update() for the updated blocks themselves, as fusion hands them over (all in `map`, none
-  /// erased): the same result without the one search per updated block.
-  MeshChanges updateBlocks(const BlockOctree& map, const std::vector<VoxelBlock*>& updated_blocks, ThreadPool* pool,
-                           const std::vector<BlockKey>& erased = {});
-  /// updateBlocks() for blocks whose mesh levels are already current (refreshMeshLevel() was
-  /// called on each after its fusion): what the Mapper calls.
+  /// erased), whose mesh levels are already current (refreshMeshLevel() was called on each after
+  /// its fusion): the same result without the one search per updated block. What the Mapper calls.
   MeshChanges remeshUpdatedBlocks(const BlockOctree& map, const std::vector<VoxelBlock*>& updated_blocks,
                                   ThreadPool* pool, const std::vector<BlockKey>& erased = {});
   /// Meshes every block from scratch (the reference for the incremental result).
