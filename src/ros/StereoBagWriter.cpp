@@ -5,9 +5,30 @@
 #include <sensor_msgs/image_encodings.h>
 #include <tf2_msgs/TFMessage.h>
 
+#include <opencv2/imgproc.hpp>
+
 #include "stereo_fusion/ros/MessageConversions.h"
 
 namespace stereo_fusion {
+
+PairTopics PairTopics::rectified() {
+  PairTopics topics;
+  topics.left_image = "/stereo/left/image_rect";
+  topics.right_image = "/stereo/right/image_rect";
+  topics.left_image_color = "/stereo/left/image_rect_color";
+  return topics;
+}
+
+namespace {
+
+/// What image_proc/rectify publishes as image_rect: mono8.
+sensor_msgs::Image monoImage(const std_msgs::Header& header, const cv::Mat& rgb_or_grey) {
+  cv::Mat grey = rgb_or_grey;
+  if (rgb_or_grey.channels() == 3) cv::cvtColor(rgb_or_grey, grey, cv::COLOR_RGB2GRAY);
+  return *cv_bridge::CvImage(header, sensor_msgs::image_encodings::MONO8, grey).toImageMsg();
+}
+
+}  // namespace
 
 std::unique_ptr<StereoBagWriter> StereoBagWriter::open(const std::string& path, const BagTopics& topics,
                                                        const std::string& camera_frame, double stamp_offset_s,
@@ -58,8 +79,10 @@ bool StereoBagWriter::writePair(const StereoFrame& frame, const cv::Mat& right_r
   sensor_msgs::Image left;
   sensor_msgs::CameraInfo left_info;
   toMessages(frame, header, 0.0f, &unused_disparity, &left, &left_info);
+  const bool rectified = !topics.left_image_color.empty();
   const sensor_msgs::Image right =
-      *cv_bridge::CvImage(header, sensor_msgs::image_encodings::RGB8, right_rgb).toImageMsg();
+      rectified ? monoImage(header, right_rgb)
+                : *cv_bridge::CvImage(header, sensor_msgs::image_encodings::RGB8, right_rgb).toImageMsg();
   sensor_msgs::CameraInfo right_info = left_info;
   // The right camera's projection: x_right = fx * (X - baseline) / Z + cx (ROS stereo convention).
   right_info.P[3] = -frame.camera.fx() * frame.camera.baseline();
@@ -67,7 +90,12 @@ bool StereoBagWriter::writePair(const StereoFrame& frame, const cv::Mat& right_r
   tf.transforms.push_back(toTransform(frame.T_world_camera, topics_.world_frame, header));
   try {
     bag_->write("/tf", header.stamp, tf);
-    bag_->write(topics.left_image, header.stamp, left);
+    if (rectified) {
+      bag_->write(topics.left_image, header.stamp, monoImage(header, frame.color));
+      bag_->write(topics.left_image_color, header.stamp, left);
+    } else {
+      bag_->write(topics.left_image, header.stamp, left);
+    }
     bag_->write(topics.right_image, header.stamp, right);
     bag_->write(topics.left_info, header.stamp, left_info);
     bag_->write(topics.right_info, header.stamp, right_info);

@@ -1,5 +1,5 @@
 // A stereo camera's image pair stream through image_proc + stereo_image_proc + stereo_fusion
-// (launch/stereo_pipeline.launch) gives a mesh of the simulated scene: every frame fused, many
+// (launch/stereo_pipeline.launch; raw or, with rectified:=true, already rectified) gives a mesh of the simulated scene: every frame fused, many
 // triangles, and the vertices on the scene's true surface.
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
@@ -15,15 +15,16 @@ using namespace stereo_fusion;
 
 TEST(StereoPipeline, ImagePairsGiveAMeshOfTheScene) {
   ros::NodeHandle pnh("~");
-  std::string bag_path, preset_name;
+  std::string bag_path, preset_name, right_image_topic;
   int seed = 0;
   ASSERT_TRUE(pnh.getParam("bag", bag_path));
+  ASSERT_TRUE(pnh.getParam("right_image_topic", right_image_topic));
   ASSERT_TRUE(pnh.getParam("preset", preset_name));
   ASSERT_TRUE(pnh.getParam("seed", seed));
   long frames = 0;
   {
     rosbag::Bag bag(bag_path, rosbag::bagmode::Read);
-    rosbag::View right(bag, rosbag::TopicQuery("/stereo/right/image_raw"));
+    rosbag::View right(bag, rosbag::TopicQuery(right_image_topic));
     rosbag::View disparity(bag, rosbag::TopicQuery("/stereo/disparity"));
     frames = static_cast<long>(right.size());
     ASSERT_EQ(disparity.size(), 0u) << "the bag must hold image pairs only";

@@ -42,7 +42,8 @@ struct Options {
   uint32_t seed = 0;
   double rate_hz = 10.0;
   std::string bag;  ///< also write the frames as a rosbag here (empty: no bag)
-  std::string bag_content = "disparity";  ///< disparity (matched) | pair (left/right images only)
+  /// disparity (matched) | pair (left/right raw images only) | rectified-pair (rectified images only)
+  std::string bag_content = "disparity";
   double gt_max_edge_m = 0.03;
   SgbmParams sgbm;
   std::string out;
@@ -72,10 +73,15 @@ calibration.yaml, poses.txt, disparity/ color/ right/ NNNNNN.png, gt_mesh.ply.
   --bag FILE                      also write a rosbag: DisparityImage, Image, CameraInfo on
                                   the nodelet's default topics and /tf (world -> left_optical);
                                   stamps = timestamps + 1 s (ROS time 0 means "latest" to tf)
-  --bag-content disparity|pair    disparity (default): what the nodelet subscribes to;
+  --bag-content disparity|pair|rectified-pair
+                                  disparity (default): what the nodelet subscribes to;
                                   pair: what a stereo camera driver publishes, for
                                   launch/stereo_pipeline.launch: /stereo/{left,right}/image_raw
-                                  (rgb8, already rectified), both camera_info, /tf; no disparity
+                                  (rgb8, already rectified), both camera_info, /tf; no disparity;
+                                  rectified-pair: the same as a rectifying driver publishes it,
+                                  for stereo_pipeline.launch rectified:=true:
+                                  /stereo/{left,right}/image_rect (mono8),
+                                  /stereo/left/image_rect_color (rgb8), both camera_info, /tf
   --help                          this text
 
 Exit codes: 0 done, 1 generation or write failure, 2 bad arguments.
@@ -157,7 +163,7 @@ bool parseArguments(int argc, char** argv, Options* o) {
          if (v.empty()) throw UsageError{f + ": expected a file name"};
          o->bag = v;
        }},
-      {"--bag-content", [&](auto& f, auto& v) { o->bag_content = parseChoice(f, v, {"disparity", "pair"}); }},
+      {"--bag-content", [&](auto& f, auto& v) { o->bag_content = parseChoice(f, v, {"disparity", "pair", "rectified-pair"}); }},
       {"--out", [&](auto& f, auto& v) {
          if (v.empty()) throw UsageError{f + ": expected a folder"};
          o->out = v;
@@ -280,6 +286,8 @@ int main(int argc, char** argv) {
       frame.disparity_px = view.disparity_px;
       frame.color = view.left_rgb;
       if (o.bag_content == "pair") return bag->writePair(frame, view.right_rgb, PairTopics{}, &write_error);
+      if (o.bag_content == "rectified-pair")
+        return bag->writePair(frame, view.right_rgb, PairTopics::rectified(), &write_error);
       return bag->write(frame, static_cast<float>(o.sgbm.num_disparities), &write_error);
     });
     progress(k + 1, o.frames, elapsed());

@@ -20,6 +20,14 @@ struct PairTopics {
   std::string right_image = "/stereo/right/image_raw";
   std::string left_info = "/stereo/left/camera_info";
   std::string right_info = "/stereo/right/camera_info";
+  /// Empty: both images are colour (rgb8) raw images. Otherwise the pair is already rectified,
+  /// as image_proc/rectify publishes it: `left_image` and `right_image` are mono8 and the left
+  /// colour image goes here.
+  std::string left_image_color;
+
+  /// The topics of an already rectified pair (stereo_pipeline.launch rectified:=true):
+  /// /stereo/{left,right}/image_rect (mono8) and /stereo/left/image_rect_color.
+  static PairTopics rectified();
 };
 
 /// Records stereo frames as a rosbag a stereo camera pipeline would produce: DisparityImage,
@@ -35,7 +43,7 @@ class StereoBagWriter {
   /// Writes one frame; false with a message on I/O failure.
   bool write(const StereoFrame& frame, float max_disparity_px, std::string* error);
   /// Writes one frame as a stereo camera driver publishes it (no disparity): the left colour
-  /// image, `right_rgb` (CV_8UC3 RGB, rectified right camera), both CameraInfos (distortion
+  /// image, `right_rgb` (CV_8UC3 RGB, rectified right camera), as PairTopics describes, both CameraInfos (distortion
   /// zero, R = I, the right P with Tx = -fx * baseline as stereo_image_proc needs it) on
   /// `topics`, and the left pose on /tf. Both images carry the left camera's frame_id:
   /// stereo_image_proc requires one frame for the pair (the baseline is in the right P). False with a message on I/O failure.
