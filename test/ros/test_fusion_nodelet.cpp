@@ -361,6 +361,85 @@ TEST_F(NodeletFixture, SaveMapAndLoadMapRoundTripAndABadFileChangesNothing) {
   std::filesystem::remove(truncated);
 }
 
+namespace {
+/// Run by fusion_nodelet_epoch.test, whose tf_timeout_s of 10 s lets a frame wait for its tf
+/// across a reset or load_map however slow the machine is.
+class NodeletEpoch : public NodeletFixture {
+ protected:
+  /// Publishes `frame` without its tf and waits until the worker has surely taken it up and
+  /// is waiting for the transform; returns the stamp.
+  ros::Time publishHeldForTf(const StereoFrame& frame, const std::string& frame_id) {
+    const ros::Time stamp = ros::Time::now();
+    publish(frame, frame_id, false, {}, stamp);
+    ros::WallDuration(1.0).sleep();
+    return stamp;
+  }
+  /// The held frame's transform (and a later one, so `stamp` is interpolated).
+  void releaseTf(const StereoFrame& frame, const std::string& frame_id, const ros::Time& stamp) {
+    std_msgs::Header header;
+    header.frame_id = frame_id;
+    header.stamp = stamp;
+    tf_.sendTransform(toTransform(frame.T_world_camera, "world", header));
+    header.stamp = stamp + ros::Duration(0.5);
+    tf_.sendTransform(toTransform(frame.T_world_camera, "world", header));
+  }
+};
+}  // namespace
+
+// A frame that arrived before a reset or load_map belongs to the old map: whether it still
+// waits in the queue or already waits for its tf, it is dropped as superseded, never fused into
+// the new map.
+TEST_F(NodeletEpoch, AFrameWaitingForTfAcrossResetOrLoadMapIsDroppedAsSuperseded) {
+  const sim::AnalyticScene s = scene();
+  auto frame_at = [&](double x) {
+    return test::renderFrame(s, qvga(), sim::lookAt({x, -0.25, 0.0}, {0.05, 0.1, 1.2}, -Eigen::Vector3d::UnitY()));
+  };
+  for (int f = 0; f < 2; ++f) publish(frame_at(-0.1 + 0.1 * f), "left_optical", true);
+  ASSERT_TRUE(waitFor([&] { return diag("frames fused") >= 2; }, 60.0)) << diag("frames fused");
+  const std::string path = testing::TempDir() + "stereo_fusion_epoch_" + std::to_string(::getpid()) + ".sfmap";
+  SaveMap save;
+  save.request.path = path;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/save_map", save));
+  ASSERT_TRUE(save.response.success) << save.response.message;
+  GetFullMesh saved;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", saved));
+  ASSERT_GT(saved.response.mesh.blocks.size(), 10u);
+  const long fused = diag("frames fused");
+  EXPECT_EQ(diag("dropped: superseded by reset/load"), 0);
+
+  // Reset while a frame waits for its tf: the map stays empty.
+  const StereoFrame held = frame_at(0.15);
+  const ros::Time held_stamp = publishHeldForTf(held, "held_optical");
+  std_srvs::Empty reset;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/reset", reset));
+  releaseTf(held, "held_optical", held_stamp);
+  ASSERT_TRUE(waitFor([&] { return diag("dropped: superseded by reset/load") >= 1; }, 30.0));
+  GetFullMesh after_reset;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", after_reset));
+  EXPECT_TRUE(after_reset.response.mesh.blocks.empty()) << "a frame from before the reset was fused";
+
+  // load_map while a frame waits for its tf: exactly the saved map.
+  const StereoFrame held_again = frame_at(0.2);
+  const ros::Time held_again_stamp = publishHeldForTf(held_again, "held_again_optical");
+  LoadMap load;
+  load.request.path = path;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/load_map", load));
+  ASSERT_TRUE(load.response.success) << load.response.message;
+  releaseTf(held_again, "held_again_optical", held_again_stamp);
+  ASSERT_TRUE(waitFor([&] { return diag("dropped: superseded by reset/load") >= 2; }, 30.0));
+  GetFullMesh after_load;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", after_load));
+  expectSameMesh(saved.response.mesh, after_load.response.mesh);
+
+  EXPECT_EQ(diag("dropped: superseded by reset/load"), 2);
+  EXPECT_EQ(diag("frames fused"), fused);
+  EXPECT_EQ(diag("dropped: tf timeout"), 0);
+  // Frames arriving after the load are fused into the loaded map.
+  publish(frame_at(0.0), "left_optical", true);
+  EXPECT_TRUE(waitFor([&] { return diag("frames fused") >= fused + 1; }, 30.0));
+  std::filesystem::remove(path);
+}
+
 TEST(NodeParameters, OutOfRangeValuesAtStartUpNameTheParameter) {
   // loadParameters() is what FusionNodelet::onInit() runs before anything else; it throws with
   // this message. Parameters go through a real master, with the types YAML would give them.
