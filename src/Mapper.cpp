@@ -97,14 +97,22 @@ MeshChanges Mapper::rebuildMesh() {
 }
 
 bool Mapper::saveMap(const std::string& path, std::string* error) const {
-  return writeMapFile(path, octree_, config_, frames_integrated_, error);
+  return writeMapFileBytes(path, encodeMap(), error);
 }
+
+std::vector<uint8_t> Mapper::encodeMap() const { return encodeMapFile(octree_, config_, frames_integrated_); }
 
 bool Mapper::loadMap(const std::string& path, MeshChanges* changes, std::string* error) {
   BlockOctree loaded(config_.blockSizeM());
   MapFileInfo info;
   if (!readMapFile(path, config_, &loaded, &info, error)) return false;
-  octree_.swap(loaded);  // the old map now lives in `loaded` and is freed on return
+  MeshChanges adopted = adoptMap(&loaded, info);  // the old map now lives in `loaded`, freed on return
+  if (changes) *changes = std::move(adopted);
+  return true;
+}
+
+MeshChanges Mapper::adoptMap(BlockOctree* loaded, const MapFileInfo& info) {
+  octree_.swap(*loaded);
   queue_.clear();
   updated_.clear();
   // Later frames must count on from the saved ones, so last_update_frame keeps its LRU order.
@@ -117,8 +125,7 @@ bool Mapper::loadMap(const std::string& path, MeshChanges* changes, std::string*
   // A rebuild over the kept store reports the old map's vanished submeshes as removed.
   MeshChanges rebuilt = config_.mesh_enabled ? mesh_store_.rebuild(octree_, &pool_) : MeshChanges{};
   if (!config_.mesh_enabled) mesh_store_.clear();
-  if (changes) *changes = std::move(rebuilt);
-  return true;
+  return rebuilt;
 }
 
 void Mapper::reset() {

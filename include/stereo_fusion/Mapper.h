@@ -9,6 +9,7 @@
 #include "stereo_fusion/integration/FrameGate.h"
 #include "stereo_fusion/integration/StereoFrame.h"
 #include "stereo_fusion/integration/SurfaceFuser.h"
+#include "stereo_fusion/io/MapFile.h"
 #include "stereo_fusion/map/BlockOctree.h"
 #include "stereo_fusion/mesh/MeshStore.h"
 #include "stereo_fusion/mesh/TextureStore.h"
@@ -65,12 +66,19 @@ class Mapper {
 
   /// Writes the map to `path` (io/MapFile.h format, via a temporary file renamed into place).
   bool saveMap(const std::string& path, std::string* error) const;
+  /// The bytes saveMap() writes (encodeMapFile()): a copy, so that a caller holding a lock
+  /// around the map can release it before writing them with writeMapFileBytes().
+  std::vector<uint8_t> encodeMap() const;
   /// Replaces the map by the one in `path` and re-meshes it (the returned changes list every
   /// submesh of the new map as changed and every old one that is gone as removed). The file
   /// is read and checked completely into a fresh octree first: on any error (missing,
   /// truncated, corrupted, other version or voxel size) false with a message, and the current
   /// map and mesh are untouched.
   bool loadMap(const std::string& path, MeshChanges* changes, std::string* error);
+  /// The second half of loadMap(): replaces the map by `loaded`, a map readMapFile() accepted
+  /// for this mapper's config() (`loaded` then holds the old map), and re-meshes it. A caller
+  /// holding a lock around the map can so read the file before taking it.
+  MeshChanges adoptMap(BlockOctree* loaded, const MapFileInfo& info);
 
  private:
   MapperConfig config_;

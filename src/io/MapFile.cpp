@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstddef>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -22,21 +23,21 @@ namespace {
 constexpr char kMagic[8] = {'S', 'F', 'U', 'S', 'E', 'M', 'A', 'P'};
 
 // Explicit little-endian encoding: the file must read the same on any host.
-void putU32(std::vector<uint8_t>* b, uint32_t v) {
-  for (int i = 0; i < 4; ++i) b->push_back(static_cast<uint8_t>(v >> (8 * i)));
+void storeU32(uint8_t* p, uint32_t v) {
+  for (int i = 0; i < 4; ++i) p[i] = static_cast<uint8_t>(v >> (8 * i));
 }
-void putU64(std::vector<uint8_t>* b, uint64_t v) {
-  for (int i = 0; i < 8; ++i) b->push_back(static_cast<uint8_t>(v >> (8 * i)));
+void storeU64(uint8_t* p, uint64_t v) {
+  for (int i = 0; i < 8; ++i) p[i] = static_cast<uint8_t>(v >> (8 * i));
 }
-void putF32(std::vector<uint8_t>* b, float v) {
+void storeF32(uint8_t* p, float v) {
   uint32_t bits;
   std::memcpy(&bits, &v, 4);
-  putU32(b, bits);
+  storeU32(p, bits);
 }
-void putF64(std::vector<uint8_t>* b, double v) {
+void storeF64(uint8_t* p, double v) {
   uint64_t bits;
   std::memcpy(&bits, &v, 8);
-  putU64(b, bits);
+  storeU64(p, bits);
 }
 uint32_t getU32(const uint8_t* p) {
   uint32_t v = 0;
@@ -61,6 +62,41 @@ double getF64(const uint8_t* p) {
   return v;
 }
 
+// A voxel's 12 file bytes are f32 sdf, f32 weight, u8 r, g, b, reserved, little-endian: the
+// in-memory Voxel itself on a little-endian host, where whole blocks are copied at memory speed
+// (the map is locked while it is encoded).
+constexpr bool kVoxelIsFileRecord = __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__;
+static_assert(sizeof(Voxel) == 12 && offsetof(Voxel, weight) == 4 && offsetof(Voxel, r) == 8 &&
+                  offsetof(Voxel, g) == 9 && offsetof(Voxel, b) == 10 && offsetof(Voxel, reserved) == 11,
+              "the map file's voxel record is the Voxel's layout");
+constexpr size_t kVoxelRecordBytes = 12;
+
+void storeVoxels(const VoxelBlock& block, uint8_t* out) {
+  if (kVoxelIsFileRecord) {
+    std::memcpy(out, block.voxels.data(), block.voxels.size() * kVoxelRecordBytes);
+    return;
+  }
+  for (const Voxel& v : block.voxels) {
+    storeF32(out, v.sdf_m);
+    storeF32(out + 4, v.weight);
+    out[8] = v.r, out[9] = v.g, out[10] = v.b, out[11] = v.reserved;
+    out += kVoxelRecordBytes;
+  }
+}
+
+void loadVoxels(const uint8_t* in, VoxelBlock* block) {
+  if (kVoxelIsFileRecord) {
+    std::memcpy(block->voxels.data(), in, block->voxels.size() * kVoxelRecordBytes);
+    return;
+  }
+  for (Voxel& v : block->voxels) {
+    v.sdf_m = getF32(in);
+    v.weight = getF32(in + 4);
+    v.r = in[8], v.g = in[9], v.b = in[10], v.reserved = in[11];
+    in += kVoxelRecordBytes;
+  }
+}
+
 std::string number(double v) {
   std::ostringstream os;
   os.precision(17);
@@ -71,37 +107,34 @@ std::string number(double v) {
 }  // namespace
 
 std::vector<uint8_t> encodeMapFile(const BlockOctree& map, const MapperConfig& config, uint64_t frames_integrated) {
+  static_assert(kMapFileRecordBytes == 24 + VoxelBlock::kVoxelCount * kVoxelRecordBytes, "record layout");
   const std::vector<VoxelBlock*> blocks = map.blocksSortedByKey();
-  std::vector<uint8_t> payload;
-  payload.reserve(blocks.size() * kMapFileRecordBytes);
+  std::vector<uint8_t> file(kMapFileHeaderBytes + blocks.size() * kMapFileRecordBytes);
+  uint8_t* record = file.data() + kMapFileHeaderBytes;
   for (const VoxelBlock* b : blocks) {
-    putU32(&payload, static_cast<uint32_t>(b->key.x));
-    putU32(&payload, static_cast<uint32_t>(b->key.y));
-    putU32(&payload, static_cast<uint32_t>(b->key.z));
-    putU64(&payload, b->last_update_frame);
-    payload.push_back(static_cast<uint8_t>(b->mesh_level));
+    storeU32(record, static_cast<uint32_t>(b->key.x));
+    storeU32(record + 4, static_cast<uint32_t>(b->key.y));
+    storeU32(record + 8, static_cast<uint32_t>(b->key.z));
+    storeU64(record + 12, b->last_update_frame);
+    record[20] = static_cast<uint8_t>(b->mesh_level);
     // Whole-block signs (bit 0: a voxel < 0, bit 1: one ≥ 0); derived, recomputed on load.
-    payload.push_back(static_cast<uint8_t>(b->mesh_sign_bits & (meshSignBit(0, false) | meshSignBit(0, true))));
-    payload.push_back(0);
-    payload.push_back(0);
-    for (const Voxel& v : b->voxels) {
-      putF32(&payload, v.sdf_m);
-      putF32(&payload, v.weight);
-      payload.insert(payload.end(), {v.r, v.g, v.b, v.reserved});
-    }
+    record[21] = static_cast<uint8_t>(b->mesh_sign_bits & (meshSignBit(0, false) | meshSignBit(0, true)));
+    record[22] = record[23] = 0;
+    storeVoxels(*b, record + 24);
+    record += kMapFileRecordBytes;
   }
-  std::vector<uint8_t> file(kMagic, kMagic + 8);
-  putU32(&file, kMapFileVersion);
-  putU32(&file, static_cast<uint32_t>(kMapFileHeaderBytes));
-  putF64(&file, config.voxel_size_m);
-  putF64(&file, config.truncation_vox);
-  putF64(&file, config.levels.scale2_min_depth_m);
-  putF64(&file, config.levels.scale4_min_depth_m);
-  putU64(&file, frames_integrated);
-  putU64(&file, blocks.size());
-  putU32(&file, crc32(payload.data(), payload.size()));
-  putU32(&file, crc32(file.data(), file.size()));
-  file.insert(file.end(), payload.begin(), payload.end());
+  uint8_t* header = file.data();
+  std::memcpy(header, kMagic, 8);
+  storeU32(header + 8, kMapFileVersion);
+  storeU32(header + 12, static_cast<uint32_t>(kMapFileHeaderBytes));
+  storeF64(header + 16, config.voxel_size_m);
+  storeF64(header + 24, config.truncation_vox);
+  storeF64(header + 32, config.levels.scale2_min_depth_m);
+  storeF64(header + 40, config.levels.scale4_min_depth_m);
+  storeU64(header + 48, frames_integrated);
+  storeU64(header + 56, blocks.size());
+  storeU32(header + 64, crc32(header + kMapFileHeaderBytes, file.size() - kMapFileHeaderBytes));
+  storeU32(header + 68, crc32(header, 68));
   return file;
 }
 
@@ -168,33 +201,28 @@ bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config,
     const uint8_t* r = payload + n * kMapFileRecordBytes;
     const BlockKey key{static_cast<int32_t>(getU32(r)), static_cast<int32_t>(getU32(r + 4)),
                        static_cast<int32_t>(getU32(r + 8))};
-    const std::string which = "block " + std::to_string(n) + " (key " + std::to_string(key.x) + ", " +
-                              std::to_string(key.y) + ", " + std::to_string(key.z) + ")";
+    auto which = [&] {  // only built for an error message
+      return "block " + std::to_string(n) + " (key " + std::to_string(key.x) + ", " + std::to_string(key.y) + ", " +
+             std::to_string(key.z) + ")";
+    };
     const int level = static_cast<int8_t>(r[20]);
     if (level < 0 || level >= kNumLevels || r[21] > 3) {
-      *error = "invalid map file: " + which + " has mesh level " + std::to_string(level) + " / flags " +
+      *error = "invalid map file: " + which() + " has mesh level " + std::to_string(level) + " / flags " +
                std::to_string(r[21]);
       return false;
     }
     bool allocated = false;
     VoxelBlock* block = out->findOrAllocate(key, &allocated);
     if (block == nullptr || !allocated) {
-      *error = "invalid map file: " + which + (block ? " appears twice" : " is beyond the map's range");
+      *error = "invalid map file: " + which() + (block ? " appears twice" : " is beyond the map's range");
       return false;
     }
     block->last_update_frame = getU64(r + 12);
     block->mesh_level = static_cast<int8_t>(level);
-    const uint8_t* v = r + 24;
-    for (Voxel& voxel : block->voxels) {
-      voxel.sdf_m = getF32(v);
-      voxel.weight = getF32(v + 4);
-      voxel.r = v[8];
-      voxel.g = v[9];
-      voxel.b = v[10];
-      voxel.reserved = v[11];
-      v += 12;
+    loadVoxels(r + 24, block);
+    for (const Voxel& voxel : block->voxels) {
       if (!std::isfinite(voxel.sdf_m) || !std::isfinite(voxel.weight) || voxel.weight < 0.0f) {
-        *error = "invalid map file: " + which + " holds a non-finite distance or a negative weight";
+        *error = "invalid map file: " + which() + " holds a non-finite distance or a negative weight";
         return false;
       }
     }
@@ -249,7 +277,10 @@ void syncParentDirectory(const std::string& path) {
 
 bool writeMapFile(const std::string& path, const BlockOctree& map, const MapperConfig& config,
                   uint64_t frames_integrated, std::string* error) {
-  const std::vector<uint8_t> bytes = encodeMapFile(map, config, frames_integrated);
+  return writeMapFileBytes(path, encodeMapFile(map, config, frames_integrated), error);
+}
+
+bool writeMapFileBytes(const std::string& path, const std::vector<uint8_t>& bytes, std::string* error) {
   const std::string tmp = path + ".tmp-" + std::to_string(getpid());
   std::string reason;
   if (!writeDurably(tmp, bytes, &reason)) {

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 
+#include "stereo_fusion/io/MapFile.h"
 #include "stereo_fusion/io/MeshExport.h"
 #include "stereo_fusion/util/Percentile.h"
 #include "stereo_fusion/ros/DebugMarkers.h"
@@ -342,14 +343,24 @@ bool FusionNodelet::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&)
 }
 
 bool FusionNodelet::saveMap(SaveMap::Request& req, SaveMap::Response& res) {
-  std::string error;
+  std::lock_guard<std::mutex> save_lock(save_map_mutex_);
+  const ros::WallTime start = ros::WallTime::now();
+  std::vector<uint8_t> bytes;
   {
-    // Held while writing: the map must not change under the encoder (a few ms per 1000 blocks).
+    // Only the encoding holds the map (a copy at memory speed, ~7 KB per block); the write and
+    // fsync, seconds for a large map on a robot's flash, run while frames are fused.
     std::lock_guard<std::mutex> lock(map_mutex_);
-    res.success = mapper_->saveMap(req.path, &error);
+    bytes = mapper_->encodeMap();
     res.blocks = mapper_->map().blockCount();
   }
-  res.message = res.success ? "saved " + std::to_string(res.blocks) + " blocks to " + req.path : error;
+  const double locked_ms = (ros::WallTime::now() - start).toSec() * 1e3;
+  std::string error;
+  res.success = writeMapFileBytes(req.path, bytes, &error);
+  const double total_ms = (ros::WallTime::now() - start).toSec() * 1e3;
+  res.message = res.success ? "saved " + std::to_string(res.blocks) + " blocks to " + req.path + " (map held " +
+                                  std::to_string(static_cast<long>(locked_ms)) + " ms, " +
+                                  std::to_string(static_cast<long>(total_ms)) + " ms in all)"
+                            : error;
   if (res.success)
     NODELET_INFO("stereo_fusion: save_map: %s", res.message.c_str());
   else
@@ -358,16 +369,22 @@ bool FusionNodelet::saveMap(SaveMap::Request& req, SaveMap::Response& res) {
 }
 
 bool FusionNodelet::loadMap(LoadMap::Request& req, LoadMap::Response& res) {
-  std::lock_guard<std::mutex> lock(map_mutex_);
-  MeshChanges changes;
+  // Read and check the file while frames are still fused into the current map; only the swap
+  // and the re-meshing hold it.
+  const MapperConfig& config = mapper_->config();  // fixed at start-up: safe to read unlocked
+  BlockOctree loaded(config.blockSizeM());
+  MapFileInfo info;
   std::string error;
-  res.success = mapper_->loadMap(req.path, &changes, &error);
-  res.blocks = mapper_->map().blockCount();
+  res.success = readMapFile(req.path, config, &loaded, &info, &error);
+  std::lock_guard<std::mutex> lock(map_mutex_);
   if (!res.success) {
+    res.blocks = mapper_->map().blockCount();
     res.message = error + " (the current map is unchanged)";
     NODELET_ERROR("stereo_fusion: load_map: %s", res.message.c_str());
     return true;
   }
+  const MeshChanges changes = mapper_->adoptMap(&loaded, info);
+  res.blocks = mapper_->map().blockCount();
   startMapEpochLocked();
   path_.poses.clear();
   stage_ms_.clear();

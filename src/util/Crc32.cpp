@@ -1,26 +1,22 @@
 #include "stereo_fusion/util/Crc32.h"
 
-#include <array>
+#include <zlib.h>
+
+#include <algorithm>
 
 namespace stereo_fusion {
 
-namespace {
-std::array<uint32_t, 256> makeTable() {
-  std::array<uint32_t, 256> table{};
-  for (uint32_t n = 0; n < 256; ++n) {
-    uint32_t c = n;
-    for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-    table[n] = c;
-  }
-  return table;
-}
-}  // namespace
-
 uint32_t crc32(const uint8_t* data, size_t size, uint32_t crc) {
-  static const std::array<uint32_t, 256> table = makeTable();
-  crc = ~crc;
-  for (size_t i = 0; i < size; ++i) crc = table[(crc ^ data[i]) & 0xFFu] ^ (crc >> 8);
-  return ~crc;
+  // zlib's table-sliced CRC runs at GB/s; a byte-wise loop took 260 ms per 67 MB map file.
+  // Its length is a uInt: feed large buffers in pieces.
+  uLong value = crc;
+  while (size > 0) {
+    const uInt piece = static_cast<uInt>(std::min<size_t>(size, 1u << 30));
+    value = ::crc32(value, data, piece);
+    data += piece;
+    size -= piece;
+  }
+  return static_cast<uint32_t>(value);
 }
 
 }  // namespace stereo_fusion

@@ -135,6 +135,37 @@ TEST(MapFile, SaveLoadGivesTheIdenticalMapAndByteIdenticalMesh) {
   for (const auto& p : {map_path, ply_a, ply_b, again}) fs::remove(p);
 }
 
+// The nodelet's split of save_map and load_map (encode under its lock, write after; read
+// first, adopt under its lock) gives the same file and the same map as saveMap / loadMap.
+TEST(MapFile, EncodeThenWriteAndReadThenAdoptEqualSaveAndLoad) {
+  MapperConfig config;
+  const auto original = fusedMapper(3, config);
+  const std::string saved = tempPath("saved.sfmap"), written = tempPath("written.sfmap");
+  std::string error;
+  ASSERT_TRUE(original->saveMap(saved, &error)) << error;
+  const std::vector<uint8_t> bytes = original->encodeMap();
+  ASSERT_TRUE(writeMapFileBytes(written, bytes, &error)) << error;
+  EXPECT_TRUE(readBytes(written) == readBytes(saved));
+  EXPECT_TRUE(bytes == readBytes(saved));
+
+  Mapper by_load(config), by_adopt(config);
+  MeshChanges load_changes;
+  ASSERT_TRUE(by_load.loadMap(saved, &load_changes, &error)) << error;
+  BlockOctree read(config.blockSizeM());
+  MapFileInfo info;
+  ASSERT_TRUE(readMapFile(written, by_adopt.config(), &read, &info, &error)) << error;
+  const MeshChanges adopt_changes = by_adopt.adoptMap(&read, info);
+  EXPECT_EQ(read.blockCount(), 0u) << "adoptMap leaves the mapper's old (empty) map in its argument";
+  EXPECT_TRUE(snapshot(by_adopt.map()) == snapshot(by_load.map()));
+  EXPECT_EQ(by_adopt.framesIntegrated(), by_load.framesIntegrated());
+  EXPECT_EQ(adopt_changes.changed.size(), load_changes.changed.size());
+  EXPECT_EQ(by_adopt.mesh().submeshes().size(), by_load.mesh().submeshes().size());
+  // A failed write names the path and leaves no temporary behind.
+  EXPECT_FALSE(writeMapFileBytes("/nonexistent_dir/x.sfmap", bytes, &error));
+  EXPECT_NE(error.find("/nonexistent_dir/x.sfmap"), std::string::npos) << error;
+  for (const auto& p : {saved, written}) fs::remove(p);
+}
+
 TEST(MapFile, DecodedBlocksAreLinkedToTheirNeighboursHandWorked) {
   // The tiny map: (0,0,0) and (1,0,0) touch by a face, (-3,2,7) touches nothing.
   const MapperConfig config;
