@@ -63,6 +63,23 @@ inline bool BlockLookup::bandBoxOfPixel(float d, int u, int v, BandBox* box) con
   return BlockOctree::keyInRange(box->lo) && BlockOctree::keyInRange(box->hi);
 }
 
+static BlockKey minKey(const BlockKey& a, const BlockKey& b) {
+  return {std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)};
+}
+
+static BlockKey maxKey(const BlockKey& a, const BlockKey& b) {
+  return {std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)};
+}
+
+/// The smallest box holding every key of the non-empty `keys`.
+static void boundsOfKeys(const std::vector<BlockKey>& keys, BlockKey* lo, BlockKey* hi) {
+  *lo = *hi = keys.front();
+  for (const BlockKey& key : keys) {
+    *lo = minKey(*lo, key);
+    *hi = maxKey(*hi, key);
+  }
+}
+
 template <typename F>
 static void forEachKeyInBox(const BlockKey& lo, const BlockKey& hi, F&& f) {
   for (int32_t z = lo.z; z <= hi.z; ++z)
@@ -347,18 +364,38 @@ void BlockLookup::runRegionAccelerated(const StereoFrame& frame, const cv::Rect&
     }
     s->passing.push_back(key);
   });
+  if (!s->passing.empty()) boundsOfKeys(s->passing, &s->passing_lo, &s->passing_hi);
 }
 
-void BlockLookup::collectDistinctKeys(size_t num_regions) {
+void BlockLookup::collectSortedDistinctKeys(size_t num_regions) {
   // Neighbouring regions share most of their blocks (≈10 regions per block at 1 cm): one
   // octree search per distinct block of the frame instead of one per (region, block).
+  frame_keys_.clear();
+  bool any = false;
+  BlockKey lo, hi;
+  for (size_t r = 0; r < num_regions; ++r) {
+    const RegionScratch& s = scratch_[r];
+    if (s.passing.empty()) continue;
+    lo = any ? minKey(lo, s.passing_lo) : s.passing_lo;
+    hi = any ? maxKey(hi, s.passing_hi) : s.passing_hi;
+    any = true;
+  }
+  if (!any) return;
+  // The frame's blocks lie in the camera frustum, a small box: a bit per block of it
+  // de-duplicates with no hashing and reads back sorted with no sort.
+  if (frame_key_bitmap_.reset(lo, hi)) {
+    for (size_t r = 0; r < num_regions; ++r)
+      for (const BlockKey& key : scratch_[r].passing) frame_key_bitmap_.insert(key);
+    frame_key_bitmap_.appendSorted(&frame_keys_);
+    return;
+  }
   size_t total = 0;
   for (size_t r = 0; r < num_regions; ++r) total += scratch_[r].passing.size();
   frame_key_set_.reset(total);
-  frame_keys_.clear();
   for (size_t r = 0; r < num_regions; ++r)
     for (const BlockKey& key : scratch_[r].passing)
       if (frame_key_set_.insert(key)) frame_keys_.push_back(key);
+  std::sort(frame_keys_.begin(), frame_keys_.end());
 }
 
 void BlockLookup::runRegionNaive(const StereoFrame& frame, const cv::Rect& region,
@@ -425,10 +462,9 @@ LookupStats BlockLookup::run(const StereoFrame& frame, BlockOctree* octree,
   }
   queue->clear();
   if (accelerated) {
-    collectDistinctKeys(num_regions);
-    // The queue goes out in key order: sort the keys here, contiguous, rather than the blocks
+    // The queue goes out in key order: order the keys here, contiguous, rather than the blocks
     // afterwards through a pointer per comparison.
-    std::sort(frame_keys_.begin(), frame_keys_.end());
+    collectSortedDistinctKeys(num_regions);
     frame_blocks_.resize(frame_keys_.size());
     frame_allocated_.resize(frame_keys_.size());
     pool_->parallelFor(frame_keys_.size(), 64, [&](size_t begin, size_t end) {

@@ -410,3 +410,45 @@ TEST(BlockLookup, VectorPathEqualsScalarPathWhereTheSumOrderDecidesTheBlock) {
   }
   EXPECT_TRUE(found) << "no point found whose block depends on the order of the sum";
 }
+
+TEST(BlockLookup, NaiveAndAcceleratedAgreeWhenTheFrameSpansTooManyBlocksForTheBitmap) {
+  // The accelerated lookup de-duplicates the frame's blocks on a bitmap over their box, or,
+  // when that box is too large, in a hash set followed by a sort. 2 mm voxels (1.6 cm
+  // blocks) and depths of 0.3 m (left half, every 8th pixel) and 7 m (right half, every 64th:
+  // a few points spread wide keep the far blocks, 7 KB each, few) make the box about
+  // 280 × 400 × 420 blocks, past the bitmap's cap.
+  const StereoCamera camera = vgaCamera();
+  StereoFrame frame = constantDepthFrame(camera, 0.0f);
+  const double fb = camera.fx() * camera.baseline();
+  for (int v = 0; v < frame.disparity_px.rows; v += 8)
+    for (int u = 0; u < frame.disparity_px.cols; u += 8) {
+      const bool near = u < camera.width() / 2;
+      if (near || (u % 64 == 0 && v % 64 == 0))
+        frame.disparity_px.at<float>(v, u) = static_cast<float>(fb / (near ? 0.3 : 7.0));
+    }
+  // No histogram filter: 8 px apart at 7 m, the far points share no block, and the filter
+  // would drop them all (it is tested above; here only the de-duplication matters).
+  {
+    MapperConfig config;
+    config.voxel_size_m = 0.002;
+    config.histogram_min_points = 0;
+    config.lookup_mode = LookupMode::kNaive;
+    BlockOctree naive_tree(config.blockSizeM());
+    const LookupRun naive = runLookup(config, frame, &naive_tree);
+    config.lookup_mode = LookupMode::kAccelerated;
+    BlockOctree accel_tree(config.blockSizeM());
+    const LookupRun accel = runLookup(config, frame, &accel_tree);
+
+    ASSERT_GT(naive.queue.size(), 100u);
+    EXPECT_EQ(keysOf(naive.queue), keysOf(accel.queue));
+    EXPECT_EQ(accel.stats.blocks_allocated, accel_tree.blockCount());
+    // The queued blocks alone span a box too large for the bitmap: the fallback ran.
+    BlockKey lo = naive.queue.front()->key, hi = lo;
+    for (const VoxelBlock* b : naive.queue) {
+      lo = {std::min(lo.x, b->key.x), std::min(lo.y, b->key.y), std::min(lo.z, b->key.z)};
+      hi = {std::max(hi.x, b->key.x), std::max(hi.y, b->key.y), std::max(hi.z, b->key.z)};
+    }
+    BlockKeyBitmap bitmap;
+    EXPECT_FALSE(bitmap.reset(lo, hi)) << "box " << lo << " – " << hi;
+  }
+}

@@ -4,6 +4,7 @@
 
 #include "stereo_fusion/MapperConfig.h"
 #include "stereo_fusion/integration/StereoFrame.h"
+#include "stereo_fusion/map/BlockKeyBitmap.h"
 #include "stereo_fusion/map/BlockKeySet.h"
 #include "stereo_fusion/map/BlockOctree.h"
 #include "stereo_fusion/util/ThreadPool.h"
@@ -69,6 +70,7 @@ class BlockLookup {
     std::vector<std::pair<BlockKey, int>> sparse_counts;  // points per block off the dense grid
     std::vector<int> dense_counts;                     // points per block over the boxes' union
     std::vector<BlockKey> passing;  // accelerated: blocks that pass the histogram filter
+    BlockKey passing_lo, passing_hi;  // accelerated: bounds of `passing`, if not empty
     std::vector<VoxelBlock*> found;  // naive: blocks found, in search order (with repeats)
     LookupStats stats;
   };
@@ -93,9 +95,8 @@ class BlockLookup {
   void gatherHistogram(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const;
   bool passesFilter(const RegionScratch& s, const BlockKey& key) const;
   void runRegionAccelerated(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const;
-  /// frame_keys_ ← the distinct `passing` keys of the first `num_regions` regions, in order of
-  /// first appearance (deterministic).
-  void collectDistinctKeys(size_t num_regions);
+  /// frame_keys_ ← the distinct `passing` keys of the first `num_regions` regions, sorted.
+  void collectSortedDistinctKeys(size_t num_regions);
   void runRegionNaive(const StereoFrame& frame, const cv::Rect& region, BlockOctree* octree,
                       RegionScratch* s) const;
 
@@ -105,7 +106,8 @@ class BlockLookup {
   std::vector<RegionScratch> scratch_;  // one per region, reused across frames
   PixelGeometry geometry_;              // of the frame being looked up
   // Accelerated mode's frame-wide de-duplication, reused across frames.
-  BlockKeySet frame_key_set_;
+  BlockKeyBitmap frame_key_bitmap_;  // when the frame's blocks span a small enough box
+  BlockKeySet frame_key_set_;        // otherwise
   std::vector<BlockKey> frame_keys_;
   std::vector<VoxelBlock*> frame_blocks_;
   std::vector<uint8_t> frame_allocated_;
