@@ -71,15 +71,6 @@ static BlockKey maxKey(const BlockKey& a, const BlockKey& b) {
   return {std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)};
 }
 
-/// The smallest box holding every key of the non-empty `keys`.
-static void boundsOfKeys(const std::vector<BlockKey>& keys, BlockKey* lo, BlockKey* hi) {
-  *lo = *hi = keys.front();
-  for (const BlockKey& key : keys) {
-    *lo = minKey(*lo, key);
-    *hi = maxKey(*hi, key);
-  }
-}
-
 template <typename F>
 static void forEachKeyInBox(const BlockKey& lo, const BlockKey& hi, F&& f) {
   for (int32_t z = lo.z; z <= hi.z; ++z)
@@ -267,6 +258,13 @@ void BlockLookup::countRegionBoxes(const StereoFrame& frame, const cv::Rect& reg
     countRegionBoxesAvx2(frame, region, s);
   else
     countRegionBoxesScalar(frame, region, s);
+  if (s->boxes.empty()) return;
+  s->boxes_lo = s->boxes.front().first.lo;
+  s->boxes_hi = s->boxes.front().first.hi;
+  for (const auto& box_count : s->boxes) {
+    s->boxes_lo = minKey(s->boxes_lo, box_count.first.lo);
+    s->boxes_hi = maxKey(s->boxes_hi, box_count.first.hi);
+  }
 }
 
 template <typename Visit>
@@ -275,12 +273,7 @@ void BlockLookup::forEachBlockCount(RegionScratch* s, Visit&& visit) const {
   // Boxes overlap heavily (coarse levels reach 2 blocks either side), so count on a dense
   // grid over their union when it is small, which it is unless the region straddles a large
   // depth jump; otherwise merge keys linearly.
-  BlockKey lo = s->boxes.front().first.lo, hi = s->boxes.front().first.hi;
-  for (const auto& box_count : s->boxes) {
-    const BandBox& box = box_count.first;
-    lo = {std::min(lo.x, box.lo.x), std::min(lo.y, box.lo.y), std::min(lo.z, box.lo.z)};
-    hi = {std::max(hi.x, box.hi.x), std::max(hi.y, box.hi.y), std::max(hi.z, box.hi.z)};
-  }
+  const BlockKey lo = s->boxes_lo, hi = s->boxes_hi;
   const int64_t nx = int64_t{hi.x} - lo.x + 1, ny = int64_t{hi.y} - lo.y + 1, nz = int64_t{hi.z} - lo.z + 1;
   if (nx * ny * nz <= kMaxDenseHistogramCells) {
     // + kDenseRowPadding: a box row of up to 8 cells is added as two runs of four, the cells
@@ -364,7 +357,6 @@ void BlockLookup::runRegionAccelerated(const StereoFrame& frame, const cv::Rect&
     }
     s->passing.push_back(key);
   });
-  if (!s->passing.empty()) boundsOfKeys(s->passing, &s->passing_lo, &s->passing_hi);
 }
 
 void BlockLookup::collectSortedDistinctKeys(size_t num_regions) {
@@ -375,9 +367,9 @@ void BlockLookup::collectSortedDistinctKeys(size_t num_regions) {
   BlockKey lo, hi;
   for (size_t r = 0; r < num_regions; ++r) {
     const RegionScratch& s = scratch_[r];
-    if (s.passing.empty()) continue;
-    lo = any ? minKey(lo, s.passing_lo) : s.passing_lo;
-    hi = any ? maxKey(hi, s.passing_hi) : s.passing_hi;
+    if (s.passing.empty()) continue;  // else it has boxes, and they hold its keys
+    lo = any ? minKey(lo, s.boxes_lo) : s.boxes_lo;
+    hi = any ? maxKey(hi, s.boxes_hi) : s.boxes_hi;
     any = true;
   }
   if (!any) return;
@@ -467,12 +459,9 @@ LookupStats BlockLookup::run(const StereoFrame& frame, BlockOctree* octree,
     collectSortedDistinctKeys(num_regions);
     frame_blocks_.resize(frame_keys_.size());
     frame_allocated_.resize(frame_keys_.size());
+    // Sorted keys in batches: neighbouring keys share most of their octree path.
     pool_->parallelFor(frame_keys_.size(), 64, [&](size_t begin, size_t end) {
-      for (size_t i = begin; i < end; ++i) {
-        bool allocated = false;
-        frame_blocks_[i] = octree->findOrAllocate(frame_keys_[i], &allocated);
-        frame_allocated_[i] = allocated;
-      }
+      octree->findOrAllocateBatch(&frame_keys_[begin], end - begin, &frame_blocks_[begin], &frame_allocated_[begin]);
     });
     total.octree_searches += frame_keys_.size();
     for (size_t i = 0; i < frame_keys_.size(); ++i) {

@@ -102,7 +102,49 @@ VoxelBlock* BlockOctree::findOrAllocate(const BlockKey& key, bool* allocated) {
   if (allocated) *allocated = false;
   if (!keyInRange(key)) return nullptr;
   if (VoxelBlock* existing = find(key)) return existing;
+  return allocate(key, allocated);
+}
 
+void BlockOctree::findOrAllocateBatch(const BlockKey* keys, size_t n, VoxelBlock** blocks, uint8_t* allocated) {
+  searches_.fetch_add(n, std::memory_order_relaxed);
+  // path[0] is a root (the current one, or one since grown over: it still holds the same
+  // subtree), path[i + 1] a child of path[i]. Nodes are never freed while searches may run,
+  // so the path of the previous key stays valid across allocations, ours or other threads'.
+  constexpr int kMaxPath = 64;  // > any height: the root stays ≤ 31 levels high
+  const Node* path[kMaxPath];
+  int depth = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const BlockKey& key = keys[i];
+    blocks[i] = nullptr;
+    allocated[i] = 0;
+    if (!keyInRange(key)) continue;
+    while (depth > 0 && !contains(path[depth - 1], key)) --depth;
+    if (depth == 0) {
+      const Node* root = root_.load(std::memory_order_acquire);
+      if (root != nullptr && contains(root, key)) path[depth++] = root;
+    }
+    // The same descent as findBelow(), recording the path.
+    void* found = nullptr;
+    for (const Node* node = depth > 0 ? path[depth - 1] : nullptr; node != nullptr;) {
+      void* next = node->child[node->octantOf(key)].load(std::memory_order_acquire);
+      if (next == nullptr || node->height == 1) {
+        found = next;
+        break;
+      }
+      node = static_cast<const Node*>(next);
+      path[depth++] = node;
+    }
+    if (found != nullptr) {
+      blocks[i] = static_cast<VoxelBlock*>(found);
+      continue;
+    }
+    bool created = false;
+    blocks[i] = allocate(key, &created);
+    allocated[i] = created;
+  }
+}
+
+VoxelBlock* BlockOctree::allocate(const BlockKey& key, bool* allocated) {
   // Zeroing the 7 KB block needs no lock: only inserting it does (other threads allocating
   // in the same frame wait for the insert, not for the memset).
   auto fresh = std::make_unique<VoxelBlock>();

@@ -204,3 +204,45 @@ TEST(BlockOctree, ExtremeKeysOnEveryAxisStayBalancedAndExact) {
   EXPECT_LE(tree.height(), 31);
   EXPECT_EQ(tree.find({K, K, K - 1}), nullptr);
 }
+
+TEST(BlockOctree, BatchFindOrAllocateEqualsOneAtATime) {
+  // Three batches into a growing tree: sorted neighbourhoods (the lookup's case, where each
+  // search resumes from the previous key's path), then unsorted keys that force the root to
+  // grow mid-batch, with repeats and out-of-range keys. Each must give what findOrAllocate()
+  // gives key by key on a twin tree: the same blocks, the same "allocated" flags, the same
+  // search count.
+  std::mt19937 rng(11);
+  std::vector<std::vector<BlockKey>> batches(3);
+  for (int z = -3; z <= 3; ++z)
+    for (int y = 5; y <= 9; ++y)
+      for (int x = -40; x <= 40; x += 3) batches[0].push_back({x, y, z});
+  std::uniform_int_distribution<int> near(-20, 20), far(-5000, 5000);
+  for (int n = 0; n < 500; ++n) batches[1].push_back({near(rng), near(rng), near(rng)});
+  std::sort(batches[1].begin(), batches[1].end());
+  for (int n = 0; n < 500; ++n) batches[2].push_back({far(rng), near(rng), far(rng) / 10});
+  batches[2].insert(batches[2].end(), batches[1].begin(), batches[1].begin() + 50);  // found now
+  batches[2].push_back({BlockOctree::kMaxKey + 1, 0, 0});
+  batches[2].push_back({0, -BlockOctree::kMaxKey - 1, 0});
+
+  BlockOctree batched(0.16), single(0.16);
+  for (const std::vector<BlockKey>& keys : batches) {
+    batched.resetSearchCount();
+    single.resetSearchCount();
+    std::vector<VoxelBlock*> blocks(keys.size());
+    std::vector<uint8_t> allocated(keys.size(), 7);
+    batched.findOrAllocateBatch(keys.data(), keys.size(), blocks.data(), allocated.data());
+    EXPECT_EQ(batched.searchCount(), keys.size());
+    for (size_t i = 0; i < keys.size(); ++i) {
+      bool single_allocated = true;
+      const VoxelBlock* single_block = single.findOrAllocate(keys[i], &single_allocated);
+      ASSERT_EQ(blocks[i] == nullptr, single_block == nullptr) << keys[i];
+      EXPECT_EQ(allocated[i], single_allocated ? 1 : 0) << keys[i];
+      if (blocks[i] != nullptr) {
+        EXPECT_EQ(blocks[i]->key, keys[i]);
+        EXPECT_EQ(batched.find(keys[i]), blocks[i]);
+      }
+    }
+    EXPECT_EQ(batched.blockCount(), single.blockCount());
+    EXPECT_EQ(batched.height(), single.height());
+  }
+}

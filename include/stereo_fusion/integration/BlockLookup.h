@@ -66,11 +66,11 @@ class BlockLookup {
   };
   struct RegionScratch {
     std::vector<std::pair<BandBox, int>> boxes;      // distinct band boxes and their point counts
+    BlockKey boxes_lo, boxes_hi;                       // the boxes' union, if there are boxes
     std::vector<std::pair<BlockKey, int>> key_counts;  // naive: histogram, points per block
     std::vector<std::pair<BlockKey, int>> sparse_counts;  // points per block off the dense grid
     std::vector<int> dense_counts;                     // points per block over the boxes' union
     std::vector<BlockKey> passing;  // accelerated: blocks that pass the histogram filter
-    BlockKey passing_lo, passing_hi;  // accelerated: bounds of `passing`, if not empty
     std::vector<VoxelBlock*> found;  // naive: blocks found, in search order (with repeats)
     LookupStats stats;
   };
@@ -85,7 +85,7 @@ class BlockLookup {
   /// exactly the scalar path's boxes and counts).
   void countRegionBoxesScalar(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const;
   void countRegionBoxesAvx2(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const;
-  /// s->boxes and s->stats.valid_points of the region.
+  /// s->boxes, their union and s->stats.valid_points of the region.
   void countRegionBoxes(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const;
   /// Calls visit(key, count) for each block the region's boxes reach, with its number of
   /// points, in z, y, x order (or the boxes' order when the union is too large for the grid).

@@ -65,6 +65,11 @@ class BlockOctree {
   /// Block at `key`, allocated (zero weight everywhere) if missing. nullptr only when the key
   /// is out of range. Thread-safe. `allocated` (optional) tells whether it was created now.
   VoxelBlock* findOrAllocate(const BlockKey& key, bool* allocated = nullptr);
+  /// findOrAllocate() of each of keys[0, n): blocks[i] and allocated[i] (1 if created now) for
+  /// keys[i]. Counts n searches. Thread-safe as findOrAllocate(). Fastest on sorted keys: each
+  /// search starts from the deepest node of the previous key's path that holds the key, which
+  /// for neighbouring keys is a few levels up rather than the root.
+  void findOrAllocateBatch(const BlockKey* keys, size_t n, VoxelBlock** blocks, uint8_t* allocated);
   /// Neighbour at offset (dx, dy, dz) ∈ {-1,0,1}³ (faces, edges, corners), or nullptr. A search;
   /// works for keys with no block too.
   VoxelBlock* neighbour(const BlockKey& key, int dx, int dy, int dz) const {
@@ -110,6 +115,9 @@ class BlockOctree {
   struct Node;
   Node* newNode(const std::array<int64_t, 3>& origin, int height);
   void growToContain(const BlockKey& key);  // caller holds alloc_mutex_
+  /// The block at the in-range `key`, allocated if still missing: the locked half of
+  /// findOrAllocate(), after its search found nothing. Not counted in searchCount().
+  VoxelBlock* allocate(const BlockKey& key, bool* allocated);
   /// The block at `key` in the subtree of `node`, which must contain the key. Not counted in
   /// searchCount(): link() uses it, and the octree's own searches are not the callers' work.
   static VoxelBlock* findBelow(const Node* node, const BlockKey& key);
