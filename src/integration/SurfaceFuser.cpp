@@ -26,7 +26,12 @@ FusionStats SurfaceFuser::fuse(const StereoFrame& frame, const BlockOctree& octr
   measurements_.build(frame.disparity_px, config_.use_color ? frame.color : cv::Mat(),
                       static_cast<float>(cam.fx() * cam.baseline()), static_cast<float>(config_.min_depth_m),
                       static_cast<float>(config_.max_depth_m), pool_);
-  const FusionFrame fusion_frame = makeFusionFrame(frame, config_, measurements_);
+  FusionFrame fusion_frame = makeFusionFrame(frame, config_, measurements_);
+  if (use_avx2_) {  // only the AVX2 kernel uses the tiles; the scalar one stays the plain reference
+    tiles_.build(measurements_.depths(), measurements_.width(), measurements_.height(),
+                 fusion_frame.level1_min_depth_m, fusion_frame.level2_min_depth_m, pool_);
+    fusion_frame.tiles = &tiles_;
+  }
   const auto fuse_block = use_avx2_ ? fuseBlockAvx2 : fuseBlockScalar;
   per_block_updates_.assign(blocks.size(), 0);
   pool_->parallelFor(blocks.size(), 8, [&](size_t begin, size_t end) {

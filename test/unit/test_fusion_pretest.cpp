@@ -1,13 +1,21 @@
-// DepthTiles against a per-pixel transcription of their rule.
+// The AVX2 kernel skips whole groups of voxels (a level of a block, a k-slice) when the
+// frame's DepthTiles prove that none of them can be updated. These tests check the tiles
+// against a per-pixel transcription of their rule, and put voxels right at the limits of the
+// proof (the band Φ behind the surface, the image borders, the level thresholds), holding the
+// AVX2 kernel against the scalar one, which has no pre-test: a pre-test that skipped a single
+// voxel it should not have fails here.
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <random>
 
 #include "stereo_fusion/integration/DepthTiles.h"
+#include "stereo_fusion/integration/FusionKernels.h"
+#include "stereo_fusion/integration/SurfaceFuser.h"
 
 namespace stereo_fusion {
 namespace {
@@ -68,6 +76,167 @@ TEST(DepthTiles, MaxUpdatingDepthFollowsThePerPixelRule) {
       EXPECT_EQ(tiles.maxUpdatingDepth(1, 0, 0, tiles.tilesX() - 1, tiles.tilesY() - 1), want);
     }
   }
+}
+
+/// A small camera (fast to fuse thousands of times) whose 8-pixel tiles each cover a few
+/// voxels of a block 1.5 m away.
+StereoCamera smallCamera() { return *StereoCamera::create(96, 72, 300.0, 310.0, 47.3, 35.6, 0.1); }
+
+/// A frame seeing one surface at `depth_m` everywhere (a fronto-parallel plane).
+StereoFrame planeFrame(const StereoCamera& cam, const Eigen::Isometry3d& T_world_camera, float disparity_px) {
+  StereoFrame frame;
+  frame.camera = cam;
+  frame.T_world_camera = T_world_camera;
+  frame.disparity_px = cv::Mat(cam.height(), cam.width(), CV_32FC1, cv::Scalar(disparity_px));
+  return frame;
+}
+
+float disparityForDepth(const StereoCamera& cam, double depth_m) {
+  return static_cast<float>(cam.fx() * cam.baseline() / depth_m);
+}
+
+/// Runs the scalar kernel (no pre-test) and the AVX2 kernel (with it) on fresh copies of block
+/// `key`; expects identical voxels and update counts. Returns the number of updates.
+class KernelPair {
+ public:
+  explicit KernelPair(const MapperConfig& config)
+      : config_(config), octree_(config.blockSizeM()), scalar_(config, &pool_), avx2_(config, &pool_) {
+    scalar_.setKernel(SurfaceFuser::Kernel::kScalar);
+    if (avx2Supported()) avx2_.setKernel(SurfaceFuser::Kernel::kAvx2);
+  }
+
+  const BlockOctree& octree() const { return octree_; }
+
+  uint64_t expectAgree(const StereoFrame& frame, const BlockKey& key) {
+    VoxelBlock want, got;
+    want.key = got.key = key;
+    std::vector<VoxelBlock*> updated;
+    const uint64_t want_updates = scalar_.fuse(frame, octree_, {&want}, 1, &updated).voxels_updated;
+    const uint64_t got_updates = avx2_.fuse(frame, octree_, {&got}, 1, &updated).voxels_updated;
+    EXPECT_EQ(got_updates, want_updates);
+    for (size_t v = 0; v < std::size(want.voxels); ++v)
+      if (std::memcmp(&got.voxels[v], &want.voxels[v], sizeof(Voxel)) != 0) {
+        ADD_FAILURE() << "voxel " << v << ": weight " << got.voxels[v].weight << " vs " << want.voxels[v].weight;
+        break;
+      }
+    return want_updates;
+  }
+
+ private:
+  MapperConfig config_;
+  ThreadPool pool_{1};
+  BlockOctree octree_;
+  SurfaceFuser scalar_, avx2_;
+};
+
+/// Camera poses: looking along the world z axis, and turned so that no block axis is aligned
+/// with the camera's.
+std::vector<Eigen::Isometry3d> testPoses() {
+  Eigen::Isometry3d turned = Eigen::Isometry3d::Identity();
+  turned.linear() = (Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(-0.2, Eigen::Vector3d::UnitX()) *
+                     Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitZ()))
+                        .toRotationMatrix();
+  turned.translation() = Eigen::Vector3d(0.013, -0.007, 0.004);
+  return {Eigen::Isometry3d::Identity(), turned};
+}
+
+TEST(FusionPreTest, NeverSkipsVoxelsAtTheBackOfTheBand) {
+  // The surface sweeps through z_c − Φ of every slice and level of a block: each voxel goes
+  // from "behind by more than Φ" (not updated) to updated, a few µm either side of its
+  // boundary, where the pre-test's margin must keep it.
+  if (!avx2Supported()) GTEST_SKIP() << "no AVX2 kernel on this CPU";
+  MapperConfig config;
+  KernelPair kernels(config);
+  const StereoCamera cam = smallCamera();
+  uint64_t total_updates = 0;
+  int sweeps_with_partial_updates = 0;
+  for (const Eigen::Isometry3d& T_world_camera : testPoses()) {
+    const BlockKey key = kernels.octree().keyForPoint(T_world_camera * Eigen::Vector3d(0.12, -0.05, 1.5));
+    const Eigen::Isometry3d T_camera_world = T_world_camera.inverse();
+    const double voxel_m = config.voxel_size_m;
+    for (int level = 0; level < kNumLevels; ++level) {
+      const double level_voxel_m = voxel_m * levelScale(level);
+      const double truncation_m = std::max(config.truncation_vox * voxel_m, SurfaceFuser::kMinBandVoxels * level_voxel_m);
+      for (int k = 0; k < levelSide(level); ++k) {
+        // Depth of the slice's nearest voxel centre (the pre-test bounds by the nearest).
+        double z_near_m = INFINITY;
+        for (int c = 0; c < 4; ++c) {
+          const Eigen::Vector3d centre = kernels.octree().blockOrigin(key) +
+                                         level_voxel_m * Eigen::Vector3d((c & 1) * (levelSide(level) - 1) + 0.5,
+                                                                         (c >> 1) * (levelSide(level) - 1) + 0.5, k + 0.5);
+          z_near_m = std::min(z_near_m, (T_camera_world * centre).z());
+        }
+        uint64_t previous = 0;
+        bool partial = false;
+        for (double offset_m : {-2e-3, -3e-4, -1e-4, -3e-5, -1e-5, -1e-6, 0.0, 1e-6, 1e-5, 3e-5, 1e-4, 3e-4, 2e-3}) {
+          const double surface_m = z_near_m - truncation_m + offset_m;
+          const uint64_t updates =
+              kernels.expectAgree(planeFrame(cam, T_world_camera, disparityForDepth(cam, surface_m)), key);
+          partial |= updates != previous && previous != 0;
+          previous = updates;
+          total_updates += updates;
+        }
+        sweeps_with_partial_updates += partial;
+        if (HasFailure()) return;
+      }
+    }
+  }
+  EXPECT_GT(total_updates, 1000u);
+  EXPECT_GT(sweeps_with_partial_updates, 0);  // the sweeps do cross voxel boundaries
+}
+
+TEST(FusionPreTest, NeverSkipsVoxelsAtTheImageBorders) {
+  // A block slides across each image border in steps of a fifth of a pixel, with the surface
+  // through its middle: its columns and rows leave the image one by one.
+  if (!avx2Supported()) GTEST_SKIP() << "no AVX2 kernel on this CPU";
+  MapperConfig config;
+  KernelPair kernels(config);
+  const StereoCamera cam = smallCamera();
+  const double depth_m = 1.5, block_m = config.blockSizeM();
+  uint64_t total_updates = 0;
+  for (const Eigen::Isometry3d& T_world_camera : testPoses()) {
+    // Corners of the image as rays at 1.5 m; the block starts fully inside and ends outside.
+    const Eigen::Vector2d borders_px[] = {{-0.5, cam.cy()}, {cam.width() - 0.5, cam.cy()}, {cam.cx(), -0.5},
+                                          {cam.cx(), cam.height() - 0.5}};
+    for (const Eigen::Vector2d& border : borders_px) {
+      const Eigen::Vector3d on_border((border.x() - cam.cx()) / cam.fx() * depth_m,
+                                      (border.y() - cam.cy()) / cam.fy() * depth_m, depth_m);
+      const Eigen::Vector3d outward = Eigen::Vector3d(border.x() - cam.cx(), border.y() - cam.cy(), 0).normalized();
+      const double step_m = 0.2 * depth_m / cam.fx();
+      for (double shift_m = -1.5 * block_m; shift_m <= 1.5 * block_m; shift_m += step_m) {
+        const Eigen::Vector3d centre_c = on_border + shift_m * outward;
+        const BlockKey key = kernels.octree().keyForPoint(T_world_camera * centre_c);
+        total_updates += kernels.expectAgree(planeFrame(cam, T_world_camera, disparityForDepth(cam, depth_m)), key);
+        if (HasFailure()) return;
+      }
+    }
+  }
+  EXPECT_GT(total_updates, 1000u);
+}
+
+TEST(FusionPreTest, NeverSkipsAtTheLevelThresholds) {
+  // Surfaces on consecutive floats around the level switches at 2 m and 4 m, seen by blocks
+  // straddling them: a measurement one ulp nearer than a threshold still updates the finer
+  // level, one at the threshold does not.
+  if (!avx2Supported()) GTEST_SKIP() << "no AVX2 kernel on this CPU";
+  MapperConfig config;
+  KernelPair kernels(config);
+  const StereoCamera cam = smallCamera();
+  uint64_t total_updates = 0;
+  for (const Eigen::Isometry3d& T_world_camera : testPoses()) {
+    for (double threshold_m : {config.levels.scale2_min_depth_m, config.levels.scale4_min_depth_m}) {
+      for (double block_offset_m : {-0.1, -0.03, 0.0, 0.03, 0.1}) {
+        const BlockKey key =
+            kernels.octree().keyForPoint(T_world_camera * Eigen::Vector3d(0.05, 0.02, threshold_m + block_offset_m));
+        float disparity = disparityForDepth(cam, threshold_m);
+        for (int n = 0; n < 6; ++n) disparity = std::nextafter(disparity, INFINITY);
+        for (int n = 0; n < 12; ++n, disparity = std::nextafter(disparity, 0.0f))
+          total_updates += kernels.expectAgree(planeFrame(cam, T_world_camera, disparity), key);
+        if (HasFailure()) return;
+      }
+    }
+  }
+  EXPECT_GT(total_updates, 1000u);
 }
 
 }  // namespace

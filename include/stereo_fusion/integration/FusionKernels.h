@@ -10,6 +10,7 @@
 #include <cstdint>
 
 #include "stereo_fusion/MapperConfig.h"
+#include "stereo_fusion/integration/DepthTiles.h"
 #include "stereo_fusion/integration/MeasurementImage.h"
 #include "stereo_fusion/integration/StereoFrame.h"
 #include "stereo_fusion/map/BlockOctree.h"
@@ -52,6 +53,9 @@ struct FusionFrame {
   const float* depth_m = nullptr;  ///< MeasurementImage::depths(), width_px per row
   /// MeasurementImage::colours(); nullptr: colour is not fused.
   const uint32_t* rgb = nullptr;
+  /// Tile summary of depth_m built with level1/level2_min_depth_m; lets the AVX2 kernel skip
+  /// groups of voxels that provably get no update. nullptr: every voxel is visited.
+  const DepthTiles* tiles = nullptr;
 };
 
 /// Derives the FusionFrame of `frame`; `measurements` must already hold the frame's depths and,

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "stereo_fusion/MapperConfig.h"
+#include "stereo_fusion/integration/DepthTiles.h"
 #include "stereo_fusion/integration/MeasurementImage.h"
 #include "stereo_fusion/integration/StereoFrame.h"
 #include "stereo_fusion/map/BlockOctree.h"
@@ -33,7 +34,9 @@ struct FusionStats {
 /// Blocks are independent, so they run in parallel and the result does not depend on the
 /// number of threads. Each frame's disparities are first converted to depths once
 /// (MeasurementImage); the voxel loop then runs eight voxels at a time on CPUs with AVX2, with
-/// results bit-identical to the scalar loop (FusionKernels.h).
+/// results bit-identical to the scalar loop (FusionKernels.h). The AVX2 loop first puts whole
+/// groups of level-0 voxels to a conservative test against an 8×8-pixel summary of the depths
+/// (DepthTiles) and skips those that provably get no update.
 class SurfaceFuser {
  public:
   /// Minimum band half-width, in voxels of the level being updated.
@@ -63,6 +66,7 @@ class SurfaceFuser {
   ThreadPool* pool_;
   bool use_avx2_;
   MeasurementImage measurements_;            // reused across frames
+  DepthTiles tiles_;                         // reused across frames
   std::vector<uint64_t> per_block_updates_;  // reused across frames
 };
 
