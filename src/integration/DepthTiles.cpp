@@ -39,21 +39,22 @@ __attribute__((target("avx2"))) float horizontalMax(__m256 v) {
   return _mm_cvtss_f32(m);
 }
 
-/// tileMaxScalar() for an 8-pixel-wide tile, one vector per row (kTilePx == 8).
+/// tileMaxScalar() for an 8-pixel-wide tile, one vector per row (kTilePx == 8). max_ps returns
+/// its second operand when either is NaN, so NaN depths, and the depths of measurements too
+/// coarse for a level (set to NaN by OR-ing in their all-ones comparison mask), leave the
+/// running maxima unchanged without a blend.
 __attribute__((target("avx2"))) void tileMaxAvx2(const float* depth_m, int width_px, int rows, int u0,
                                                  float level1_min_depth_m, float level2_min_depth_m,
                                                  float out_m[kNumLevels]) {
-  const __m256 minus_inf = _mm256_set1_ps(-INFINITY);
   const __m256 t1 = _mm256_set1_ps(level1_min_depth_m), t2 = _mm256_set1_ps(level2_min_depth_m);
-  __m256 max0 = minus_inf, max1 = minus_inf, max2 = minus_inf;
+  __m256 max0 = _mm256_set1_ps(-INFINITY), max1 = max0, max2 = max0;
   for (int r = 0; r < rows; ++r) {
     const __m256 z = _mm256_loadu_ps(depth_m + static_cast<size_t>(r) * width_px + u0);
-    const __m256 valid = _mm256_cmp_ps(z, z, _CMP_ORD_Q);
     const __m256 reaches2 = _mm256_cmp_ps(z, t2, _CMP_GE_OQ);
     const __m256 coarser_than_0 = _mm256_or_ps(_mm256_cmp_ps(z, t1, _CMP_GE_OQ), reaches2);
-    max2 = _mm256_max_ps(max2, _mm256_blendv_ps(minus_inf, z, valid));
-    max1 = _mm256_max_ps(max1, _mm256_blendv_ps(minus_inf, z, _mm256_andnot_ps(reaches2, valid)));
-    max0 = _mm256_max_ps(max0, _mm256_blendv_ps(minus_inf, z, _mm256_andnot_ps(coarser_than_0, valid)));
+    max2 = _mm256_max_ps(z, max2);
+    max1 = _mm256_max_ps(_mm256_or_ps(z, reaches2), max1);
+    max0 = _mm256_max_ps(_mm256_or_ps(z, coarser_than_0), max0);
   }
   out_m[0] = horizontalMax(max0);
   out_m[1] = horizontalMax(max1);
