@@ -9,6 +9,8 @@
 
 #if defined(__x86_64__) || defined(__i386__)
 #include <immintrin.h>
+
+#include "stereo_fusion/util/Avx2Reduce.h"
 #define STEREO_FUSION_HAVE_AVX2_KERNEL 1
 #endif
 
@@ -356,18 +358,6 @@ SF_AVX2 uint64_t fuseEightAvx2(const FusionFrame& f, const Avx2Constants& c, con
   return static_cast<uint64_t>(__builtin_popcount(static_cast<unsigned>(lanes)));
 }
 
-SF_AVX2 float horizontalMin(__m256 x) {
-  __m128 m = _mm_min_ps(_mm256_castps256_ps128(x), _mm256_extractf128_ps(x, 1));
-  m = _mm_min_ps(m, _mm_movehl_ps(m, m));
-  return _mm_cvtss_f32(_mm_min_ss(m, _mm_shuffle_ps(m, m, 1)));
-}
-
-SF_AVX2 float horizontalMax(__m256 x) {
-  __m128 m = _mm_max_ps(_mm256_castps256_ps128(x), _mm256_extractf128_ps(x, 1));
-  m = _mm_max_ps(m, _mm_movehl_ps(m, m));
-  return _mm_cvtss_f32(_mm_max_ss(m, _mm_shuffle_ps(m, m, 1)));
-}
-
 /// Per-coordinate bound on the float error of a voxel centre of `level` in a block whose first
 /// centre is `first`: the kernel rounds ≤ 6 times (first + i·ex, j·ey, k·ez, two sums), and so
 /// do the group corners of groupMayBeUpdated() (edge = 7·ex, first + k·ez, three sums), each
@@ -380,10 +370,10 @@ double positionErrorBound(const FusionFrame::Level& geometry, const Eigen::Vecto
   return 4e-6 * magnitude_m + 1e-6;
 }
 
-/// Conservative pre-test for a group of voxels at `level` whose centres span the
-/// parallelepiped first + [0, 1]·edge_a + [0, 1]·edge_b + [0, 1]·edge_c: false only if the
-/// frame provably updates none of them, i.e. every voxel projects outside the image, or onto
-/// a pixel with no measurement, one coarser than `level`, or one farther than Φ in front of it
+/// Conservative pre-test for a group of level-0 voxels whose centres span the parallelepiped
+/// first + [0, 1]·edge_a + [0, 1]·edge_b + [0, 1]·edge_c: false only if the frame provably
+/// updates none of them, i.e. every voxel projects outside the image, or onto a pixel with no
+/// measurement, one coarser than level 0, or one farther than Φ in front of it
 /// (sdf > Φ, eq. 3.15; sufficient: z_c − z > Φ since ‖x_c‖ ≥ z_c). The projection of a convex
 /// set with z_c > 0 has its extreme x/z, y/z at the corners, so eight corners bound the
 /// footprint; the margins below cover the float roundings of both the corners and the
@@ -392,7 +382,7 @@ double positionErrorBound(const FusionFrame::Level& geometry, const Eigen::Vecto
 /// `position_error_m` bounds, per coordinate, how far any voxel centre of the group as the
 /// kernel computes it, and any corner as computed here, are from the exact points
 /// (positionErrorBound()).
-SF_AVX2 bool groupMayBeUpdated(const FusionFrame& f, int level, const Eigen::Vector3f& first,
+SF_AVX2 bool groupMayBeUpdated(const FusionFrame& f, const Eigen::Vector3f& first,
                                const Eigen::Vector3f& edge_a, const Eigen::Vector3f& edge_b,
                                const Eigen::Vector3f& edge_c, double position_error_m) {
   const __m256 in_a = _mm256_castsi256_ps(_mm256_setr_epi32(0, -1, 0, -1, 0, -1, 0, -1));
@@ -413,6 +403,7 @@ SF_AVX2 bool groupMayBeUpdated(const FusionFrame& f, int level, const Eigen::Vec
   // x/z of any voxel lies in [qx_min, qx_max] widened by its position error and roundings.
   const double q_abs = std::max(std::max(std::fabs(qx_min), std::fabs(qx_max)),
                                 std::max(std::fabs(qy_min), std::fabs(qy_max)));
+  if (!std::isfinite(q_abs)) return true;  // no bound from a non-finite point: visit all
   const double q_error = position_error_m * (1.0 + q_abs) / z_min_m + 1e-6 * q_abs;
   // Pixel range that any voxel's nearest pixel floor(u + 0.5) (u = fx·x/z + cx) can take.
   auto pixel_range = [&](double focal_px, double centre_px, double q_lo, double q_hi, int size_px, int* lo, int* hi) {
@@ -428,15 +419,14 @@ SF_AVX2 bool groupMayBeUpdated(const FusionFrame& f, int level, const Eigen::Vec
   int u0, u1, v0, v1;
   if (!pixel_range(f.fx_px, f.cx_px, qx_min, qx_max, f.width_px, &u0, &u1)) return false;  // outside
   if (!pixel_range(f.fy_px, f.cy_px, qy_min, qy_max, f.height_px, &v0, &v1)) return false;
-  // Widest band among the measurement levels that may update this level.
-  double truncation_m = 0.0;
-  for (int m = 0; m <= level; ++m) truncation_m = std::max<double>(truncation_m, f.levels[level].truncation_m[m]);
+  // Only level-0 measurements update level-0 voxels: their band.
+  const double truncation_m = f.levels[0].truncation_m[0];
   // sdf as the kernel rounds it is ≥ (z_c − z)(1 − 1e-6) − 1e-7·z_c: a margin of 1e-4 m plus
   // 1e-5 of the depths covers that many times over.
   const double limit_m = z_min_m - truncation_m - (1e-4 + 1e-5 * (truncation_m + z_max_m));
   const float limit_f = std::nextafter(static_cast<float>(limit_m), -INFINITY);  // ≤ limit_m
   const int tile = DepthTiles::kTilePx;
-  return !f.tiles->allBelow(level, u0 / tile, v0 / tile, u1 / tile, v1 / tile, limit_f);
+  return !f.tiles->allBelow(u0 / tile, v0 / tile, u1 / tile, v1 / tile, limit_f);
 }
 
 /// Per-level lane terms of the voxel centres: first + i·ex for i = 0..7 (lanes beyond the
@@ -469,7 +459,7 @@ __attribute__((target("avx2"), noinline)) uint64_t fuseLevel0Avx2(const FusionFr
   const Eigen::Vector3f slice_edge = static_cast<float>(kFinestSide - 1) * geometry.ey_m;
   const Eigen::Vector3f depth_edge = static_cast<float>(kFinestSide - 1) * geometry.ez_m;
   const double position_error_m = pre_test ? positionErrorBound(geometry, first, 0) : 0.0;
-  if (pre_test && !groupMayBeUpdated(f, 0, first, row_edge, slice_edge, depth_edge, position_error_m))
+  if (pre_test && !groupMayBeUpdated(f, first, row_edge, slice_edge, depth_edge, position_error_m))
     return 0;  // no voxel of level 0 can change
   alignas(32) float j_terms[3][8], k_terms[3][8];
   for (int axis = 0; axis < 3; ++axis) {
@@ -478,8 +468,8 @@ __attribute__((target("avx2"), noinline)) uint64_t fuseLevel0Avx2(const FusionFr
   }
   uint64_t updates = 0;
   for (int k = 0; k < kFinestSide; ++k) {
-    if (pre_test && !groupMayBeUpdated(f, 0, first + static_cast<float>(k) * geometry.ez_m, row_edge, slice_edge,
-                                         Eigen::Vector3f::Zero(), position_error_m))
+    if (pre_test && !groupMayBeUpdated(f, first + static_cast<float>(k) * geometry.ez_m, row_edge, slice_edge,
+                                       Eigen::Vector3f::Zero(), position_error_m))
       continue;  // no voxel of this k-slice (eight steps) can change
     for (int j = 0; j < kFinestSide; ++j) {
       __m256 p[3];

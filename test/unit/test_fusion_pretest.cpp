@@ -20,22 +20,22 @@
 namespace stereo_fusion {
 namespace {
 
-/// The largest depth among pixels [u0, u1) × [v0, v1) whose measurement level is ≤ `level`
+/// The largest depth among pixels [u0, u1) × [v0, v1) whose measurement level is 0
 /// (levelForDepth() with float thresholds); −inf if none.
-float bruteForceMax(const std::vector<float>& depth_m, int width, int u0, int v0, int u1, int v1, int level,
-                    float t1, float t2) {
+float bruteForceMax(const std::vector<float>& depth_m, int width, int u0, int v0, int u1, int v1, float t1,
+                    float t2) {
   float max_m = -std::numeric_limits<float>::infinity();
   for (int v = v0; v < v1; ++v)
     for (int u = u0; u < u1; ++u) {
       const float z = depth_m[static_cast<size_t>(v) * width + u];
       if (std::isnan(z)) continue;
       const int m = z >= t2 ? 2 : (z >= t1 ? 1 : 0);
-      if (m <= level) max_m = std::max(max_m, z);
+      if (m == 0) max_m = std::max(max_m, z);
     }
   return max_m;
 }
 
-TEST(DepthTiles, MaxUpdatingDepthFollowsThePerPixelRule) {
+TEST(DepthTiles, MaxLevel0DepthFollowsThePerPixelRule) {
   // Sizes that are no multiple of the tile, depths on and around the thresholds, NaN, and a
   // level-2 threshold below the level-1 one (allowed by the configuration).
   std::mt19937 rng(7);
@@ -61,19 +61,17 @@ TEST(DepthTiles, MaxUpdatingDepthFollowsThePerPixelRule) {
       tiles.build(depth_m.data(), width, height, t1, t2, &pool);
       ASSERT_EQ(tiles.tilesX(), (width + 7) / 8);
       ASSERT_EQ(tiles.tilesY(), (height + 7) / 8);
-      for (int level = 0; level < kNumLevels; ++level)
-        for (int ty = 0; ty < tiles.tilesY(); ++ty)
-          for (int tx = 0; tx < tiles.tilesX(); ++tx) {
-            const float want = bruteForceMax(depth_m, width, 8 * tx, 8 * ty, std::min(8 * tx + 8, width),
-                                             std::min(8 * ty + 8, height), level, t1, t2);
-            ASSERT_EQ(tiles.maxUpdatingDepth(level, tx, ty, tx, ty), want)
-                << width << "x" << height << " level " << level << " tile " << tx << "," << ty;
-            EXPECT_EQ(tiles.allBelow(level, tx, ty, tx, ty, std::nextafter(want, INFINITY)), true);
-            EXPECT_EQ(tiles.allBelow(level, tx, ty, tx, ty, want), false);
-          }
+      for (int ty = 0; ty < tiles.tilesY(); ++ty)
+        for (int tx = 0; tx < tiles.tilesX(); ++tx) {
+          const float want = bruteForceMax(depth_m, width, 8 * tx, 8 * ty, std::min(8 * tx + 8, width),
+                                           std::min(8 * ty + 8, height), t1, t2);
+          ASSERT_EQ(tiles.maxLevel0Depth(tx, ty, tx, ty), want) << width << "x" << height << " tile " << tx << "," << ty;
+          EXPECT_EQ(tiles.allBelow(tx, ty, tx, ty, std::nextafter(want, INFINITY)), true);
+          EXPECT_EQ(tiles.allBelow(tx, ty, tx, ty, want), false);
+        }
       // A query over several tiles is the maximum over their pixels.
-      const float want = bruteForceMax(depth_m, width, 0, 0, width, height, 1, t1, t2);
-      EXPECT_EQ(tiles.maxUpdatingDepth(1, 0, 0, tiles.tilesX() - 1, tiles.tilesY() - 1), want);
+      const float want = bruteForceMax(depth_m, width, 0, 0, width, height, t1, t2);
+      EXPECT_EQ(tiles.maxLevel0Depth(0, 0, tiles.tilesX() - 1, tiles.tilesY() - 1), want);
     }
   }
 }

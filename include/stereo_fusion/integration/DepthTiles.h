@@ -2,42 +2,43 @@
 #include <cstddef>
 #include <vector>
 
-#include "stereo_fusion/map/ResolutionLevel.h"
 #include "stereo_fusion/util/ThreadPool.h"
 
 namespace stereo_fusion {
 
-/// A coarse summary of a frame's depths that lets the fuser prove, for a whole group of voxels
-/// at once, that none of them can be updated (and skip their per-voxel projections).
+/// A coarse summary of a frame's depths that lets the fuser prove, for a whole group of
+/// finest-level voxels at once, that none of them can be updated (and skip their per-voxel
+/// projections).
 ///
 /// The image is cut into kTilePx × kTilePx tiles (the last row and column may be smaller). For
-/// each tile and voxel level L it keeps the largest depth among the tile's measurements that
-/// may update level L, i.e. whose measurement level is ≤ L (levelForDepth(), decided with the
-/// same float thresholds as the kernels); −inf if there is none (all NaN or all coarser).
-/// A voxel at depth z_c can only be updated by a surface at depth ≥ z_c − Φ (eq. 3.15), so if
-/// every tile under a voxel group's footprint stays below z_min − Φ, the group is untouched.
+/// each tile it keeps the largest depth among the tile's measurements that may update the
+/// finest level (level 0), i.e. below both level switches (levelForDepth(), decided with the
+/// kernels' own float thresholds); −inf if there is none (all NaN or all coarser). A voxel
+/// at depth z_c can only be updated by a surface at depth ≥ z_c − Φ (eq. 3.15), so if every
+/// tile under a voxel group's footprint stays below z_min − Φ, the group is untouched. (The
+/// same test at level 1 was measured to cost more than it saved, so coarser levels have none.)
 class DepthTiles {
  public:
   static constexpr int kTilePx = 8;
 
   /// Summarises `depth_m` (width_px per row, NaN = no measurement) with the float thresholds
-  /// of FusionFrame (z ≥ level1_min_depth_m: level ≥ 1; z ≥ level2_min_depth_m: level 2).
+  /// of FusionFrame: a depth z may update level 0 iff !(z ≥ level1_min_depth_m) and
+  /// !(z ≥ level2_min_depth_m) (the configuration allows the level-2 switch below the level-1 one).
   void build(const float* depth_m, int width_px, int height_px, float level1_min_depth_m,
              float level2_min_depth_m, ThreadPool* pool);
 
   int tilesX() const { return tiles_x_; }
   int tilesY() const { return tiles_y_; }
 
-  /// Largest depth that may update voxel level `level` among the pixels of tiles
-  /// [tx0, tx1] × [ty0, ty1] (inclusive); −inf if none.
-  float maxUpdatingDepth(int level, int tx0, int ty0, int tx1, int ty1) const;
+  /// Largest depth that may update level 0 among the pixels of tiles [tx0, tx1] × [ty0, ty1]
+  /// (inclusive); −inf if none.
+  float maxLevel0Depth(int tx0, int ty0, int tx1, int ty1) const;
 
-  /// Whether every tile of [tx0, tx1] × [ty0, ty1] has its maxUpdatingDepth() below `limit_m`;
+  /// Whether every tile of [tx0, tx1] × [ty0, ty1] has its maxLevel0Depth() below `limit_m`;
   /// stops at the first that has not.
-  bool allBelow(int level, int tx0, int ty0, int tx1, int ty1, float limit_m) const {
-    const float* tiles = max_depth_m_[level].data();
+  bool allBelow(int tx0, int ty0, int tx1, int ty1, float limit_m) const {
     for (int ty = ty0; ty <= ty1; ++ty) {
-      const float* row = tiles + static_cast<size_t>(ty) * tiles_x_;
+      const float* row = max_depth_m_.data() + static_cast<size_t>(ty) * tiles_x_;
       for (int tx = tx0; tx <= tx1; ++tx)
         if (!(row[tx] < limit_m)) return false;
     }
@@ -45,7 +46,7 @@ class DepthTiles {
   }
 
  private:
-  std::vector<float> max_depth_m_[kNumLevels];  ///< per level, tiles_x_ per row
+  std::vector<float> max_depth_m_;  ///< tiles_x_ per row
   int tiles_x_ = 0;
   int tiles_y_ = 0;
 };
