@@ -106,7 +106,7 @@ VoxelBlock* BlockOctree::findOrAllocate(const BlockKey& key, bool* allocated) {
 }
 
 void BlockOctree::findOrAllocateBatch(const BlockKey* keys, size_t n, VoxelBlock** blocks, uint8_t* allocated) {
-  searches_.fetch_add(n, std::memory_order_relaxed);
+  size_t searched = 0;  // as findOrAllocate(): keys out of range are no search
   // path[0] is a root (the current one, or one since grown over: it still holds the same
   // subtree), path[i + 1] a child of path[i]. Nodes are never freed while searches may run,
   // so the path of the previous key stays valid across allocations, ours or other threads'.
@@ -118,6 +118,7 @@ void BlockOctree::findOrAllocateBatch(const BlockKey* keys, size_t n, VoxelBlock
     blocks[i] = nullptr;
     allocated[i] = 0;
     if (!keyInRange(key)) continue;
+    ++searched;
     while (depth > 0 && !contains(path[depth - 1], key)) --depth;
     if (depth == 0) {
       const Node* root = root_.load(std::memory_order_acquire);
@@ -142,6 +143,7 @@ void BlockOctree::findOrAllocateBatch(const BlockKey* keys, size_t n, VoxelBlock
     blocks[i] = allocate(key, &created);
     allocated[i] = created;
   }
+  searches_.fetch_add(searched, std::memory_order_relaxed);
 }
 
 VoxelBlock* BlockOctree::allocate(const BlockKey& key, bool* allocated) {
