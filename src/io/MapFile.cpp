@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
 #include <cstddef>
 #include <cmath>
@@ -281,7 +282,10 @@ bool writeMapFile(const std::string& path, const BlockOctree& map, const MapperC
 }
 
 bool writeMapFileBytes(const std::string& path, const std::vector<uint8_t>& bytes, std::string* error) {
-  const std::string tmp = path + ".tmp-" + std::to_string(getpid());
+  // Unique per process and per call, so that saves to one path from several threads (or
+  // nodelets of one manager) never share a temporary; the last rename wins, whole.
+  static std::atomic<uint64_t> save_count{0};
+  const std::string tmp = path + ".tmp-" + std::to_string(getpid()) + "-" + std::to_string(save_count++);
   std::string reason;
   if (!writeDurably(tmp, bytes, &reason)) {
     std::remove(tmp.c_str());

@@ -50,11 +50,15 @@ void FusionNodelet::onInit() {
   if (node_config_.publish_frustum) frustum_pub_ = pnh.advertise<visualization_msgs::Marker>("frustum", 1, true);
   if (node_config_.publish_block_bounds)
     block_bounds_pub_ = pnh.advertise<visualization_msgs::Marker>("block_bounds", 1, true);
-  save_srv_ = pnh.advertiseService("save_mesh", &FusionNodelet::saveMesh, this);
-  full_srv_ = pnh.advertiseService("get_full_mesh", &FusionNodelet::getFullMesh, this);
-  reset_srv_ = pnh.advertiseService("reset", &FusionNodelet::reset, this);
-  save_map_srv_ = pnh.advertiseService("save_map", &FusionNodelet::saveMap, this);
-  load_map_srv_ = pnh.advertiseService("load_map", &FusionNodelet::loadMap, this);
+  // Services run on the manager's multi-threaded queue, not on the single-threaded one of the
+  // frame subscribers: writing a large map or mesh (seconds on a robot's flash) must not stop
+  // frames from arriving. Each service locks what it touches.
+  ros::NodeHandle& service_nh = getMTPrivateNodeHandle();
+  save_srv_ = service_nh.advertiseService("save_mesh", &FusionNodelet::saveMesh, this);
+  full_srv_ = service_nh.advertiseService("get_full_mesh", &FusionNodelet::getFullMesh, this);
+  reset_srv_ = service_nh.advertiseService("reset", &FusionNodelet::reset, this);
+  save_map_srv_ = service_nh.advertiseService("save_map", &FusionNodelet::saveMap, this);
+  load_map_srv_ = service_nh.advertiseService("load_map", &FusionNodelet::loadMap, this);
 
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
   diagnostics_->setHardwareID("stereo_fusion");
@@ -343,17 +347,18 @@ bool FusionNodelet::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&)
 }
 
 bool FusionNodelet::saveMap(SaveMap::Request& req, SaveMap::Response& res) {
-  std::lock_guard<std::mutex> save_lock(save_map_mutex_);
   const ros::WallTime start = ros::WallTime::now();
   std::vector<uint8_t> bytes;
+  double locked_ms = 0.0;
   {
     // Only the encoding holds the map (a copy at memory speed, ~7 KB per block); the write and
     // fsync, seconds for a large map on a robot's flash, run while frames are fused.
     std::lock_guard<std::mutex> lock(map_mutex_);
+    const ros::WallTime locked = ros::WallTime::now();
     bytes = mapper_->encodeMap();
     res.blocks = mapper_->map().blockCount();
+    locked_ms = (ros::WallTime::now() - locked).toSec() * 1e3;
   }
-  const double locked_ms = (ros::WallTime::now() - start).toSec() * 1e3;
   std::string error;
   res.success = writeMapFileBytes(req.path, bytes, &error);
   const double total_ms = (ros::WallTime::now() - start).toSec() * 1e3;

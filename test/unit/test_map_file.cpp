@@ -96,6 +96,38 @@ TEST(Crc32, StandardCheckValue) {
   EXPECT_EQ(crc32(reinterpret_cast<const uint8_t*>(text.data()) + 4, 5, part), 0xCBF43926u);
 }
 
+// The file layout of io/MapFile.h, byte by byte, for one block: holds the encoder (which copies
+// whole voxel arrays on little-endian hosts) to the documented little-endian records.
+TEST(MapFile, OneBlockEncodesToTheDocumentedBytesHandWorked) {
+  const MapperConfig config;
+  BlockOctree map(config.blockSizeM());
+  VoxelBlock* block = map.findOrAllocate({1, -2, 3});
+  ASSERT_NE(block, nullptr);
+  block->last_update_frame = 0x0102030405060708ull;
+  block->mesh_level = 1;
+  block->voxels.front() = Voxel{0.5f, 2.0f, 10, 20, 30, 0};   // 0x3f000000, 0x40000000
+  block->voxels.back() = Voxel{-0.25f, 1.0f, 1, 2, 3, 0};     // 0xbe800000, 0x3f800000
+  const std::vector<uint8_t> file = encodeMapFile(map, config, 12);
+  ASSERT_EQ(file.size(), kMapFileHeaderBytes + kMapFileRecordBytes);
+  auto bytes = [&](size_t offset, std::initializer_list<int> want) {
+    size_t k = offset;
+    for (int b : want) EXPECT_EQ(file[k++], b) << "byte " << k - 1;
+  };
+  bytes(0, {'S', 'F', 'U', 'S', 'E', 'M', 'A', 'P', 1, 0, 0, 0, 72, 0, 0, 0});
+  bytes(48, {12, 0, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0});  // frames, block count
+  const size_t record = kMapFileHeaderBytes;
+  bytes(record, {1, 0, 0, 0, 0xfe, 0xff, 0xff, 0xff, 3, 0, 0, 0});    // key
+  bytes(record + 12, {8, 7, 6, 5, 4, 3, 2, 1, 1, 0, 0, 0});           // frame, level, flags, 0
+  bytes(record + 24, {0, 0, 0, 0x3f, 0, 0, 0, 0x40, 10, 20, 30, 0});  // first voxel
+  bytes(record + 24 + 583 * 12, {0, 0, 0x80, 0xbe, 0, 0, 0x80, 0x3f, 1, 2, 3, 0});  // last voxel
+  bytes(record + 36, {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0});  // an untouched voxel
+  // Both checksums as documented: payload at 64, header bytes 0..67 at 68.
+  const uint32_t payload_crc = crc32(file.data() + record, kMapFileRecordBytes);
+  const uint32_t header_crc = crc32(file.data(), 68);
+  bytes(64, {int(payload_crc & 0xff), int(payload_crc >> 8 & 0xff), int(payload_crc >> 16 & 0xff), int(payload_crc >> 24)});
+  bytes(68, {int(header_crc & 0xff), int(header_crc >> 8 & 0xff), int(header_crc >> 16 & 0xff), int(header_crc >> 24)});
+}
+
 TEST(MapFile, SaveLoadGivesTheIdenticalMapAndByteIdenticalMesh) {
   MapperConfig config;
   const auto original = fusedMapper(4, config);

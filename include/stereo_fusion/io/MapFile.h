@@ -50,12 +50,12 @@ std::vector<uint8_t> encodeMapFile(const BlockOctree& map, const MapperConfig& c
 bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config, BlockOctree* out,
                    MapFileInfo* info, std::string* error);
 
-/// Writes encodeMapFile() to `path` through `path`.tmp-<pid> renamed into place, so a crash
-/// never leaves a half-written file under the final name.
+/// Writes encodeMapFile() to `path` through a temporary `path`.tmp-<pid>-<n> renamed into
+/// place, so a crash never leaves a half-written file under the final name.
 bool writeMapFile(const std::string& path, const BlockOctree& map, const MapperConfig& config,
                   uint64_t frames_integrated, std::string* error);
 /// writeMapFile() of bytes encoded earlier: the map need not stay unchanged (or locked) while
-/// they reach the disk. Two writes to one path must not run at the same time (same temporary).
+/// they reach the disk.
 bool writeMapFileBytes(const std::string& path, const std::vector<uint8_t>& bytes, std::string* error);
 /// Reads `path` and decodeMapFile()s it; errors are prefixed with the path.
 bool readMapFile(const std::string& path, const MapperConfig& config, BlockOctree* out, MapFileInfo* info,

@@ -80,8 +80,6 @@ class FusionNodelet : public nodelet::Nodelet {
   NodeConfig node_config_;
   MapperConfig mapper_config_;
 
-  /// Serialises save_map calls: they write outside map_mutex_ through one temporary file name.
-  std::mutex save_map_mutex_;
   std::mutex map_mutex_;  // guards everything below it up to the queue
   std::unique_ptr<Mapper> mapper_;
   std::set<BlockKey> pending_changed_, pending_removed_;
