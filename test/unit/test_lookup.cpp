@@ -39,6 +39,20 @@ LookupRun runLookup(const MapperConfig& config, const StereoFrame& frame, BlockO
   return run;
 }
 
+/// `frame` through the naive lookup into `naive_tree` and the accelerated one into `accel_tree`.
+struct NaiveAndAccelerated {
+  LookupRun naive, accel;
+};
+NaiveAndAccelerated runNaiveAndAccelerated(MapperConfig config, const StereoFrame& frame, BlockOctree* naive_tree,
+                                           BlockOctree* accel_tree) {
+  NaiveAndAccelerated runs;
+  config.lookup_mode = LookupMode::kNaive;
+  runs.naive = runLookup(config, frame, naive_tree);
+  config.lookup_mode = LookupMode::kAccelerated;
+  runs.accel = runLookup(config, frame, accel_tree);
+  return runs;
+}
+
 /// A frame in which every pixel sees the same depth (a fronto-parallel plane).
 StereoFrame constantDepthFrame(const StereoCamera& camera, float disparity) {
   StereoFrame frame;
@@ -90,12 +104,8 @@ TEST(BlockLookup, NaiveAndAcceleratedQueueTheSameBlocks) {
     MapperConfig config;
     config.histogram_min_points = histogram;
     config.truncation_vox = truncation_vox;
-    config.lookup_mode = LookupMode::kNaive;
-    BlockOctree naive_tree(config.blockSizeM());
-    const LookupRun naive = runLookup(config, frame_used, &naive_tree);
-    config.lookup_mode = LookupMode::kAccelerated;
-    BlockOctree accel_tree(config.blockSizeM());
-    const LookupRun accel = runLookup(config, frame_used, &accel_tree);
+    BlockOctree naive_tree(config.blockSizeM()), accel_tree(config.blockSizeM());
+    const auto [naive, accel] = runNaiveAndAccelerated(config, frame_used, &naive_tree, &accel_tree);
 
     EXPECT_GT(naive.queue.size(), 100u);
     EXPECT_EQ(keysOf(naive.queue), keysOf(accel.queue)) << "histogram " << histogram << ", Φ " << truncation_vox;
@@ -432,12 +442,8 @@ TEST(BlockLookup, NaiveAndAcceleratedAgreeWhenTheFrameSpansTooManyBlocksForTheBi
     MapperConfig config;
     config.voxel_size_m = 0.002;
     config.histogram_min_points = 0;
-    config.lookup_mode = LookupMode::kNaive;
-    BlockOctree naive_tree(config.blockSizeM());
-    const LookupRun naive = runLookup(config, frame, &naive_tree);
-    config.lookup_mode = LookupMode::kAccelerated;
-    BlockOctree accel_tree(config.blockSizeM());
-    const LookupRun accel = runLookup(config, frame, &accel_tree);
+    BlockOctree naive_tree(config.blockSizeM()), accel_tree(config.blockSizeM());
+    const auto [naive, accel] = runNaiveAndAccelerated(config, frame, &naive_tree, &accel_tree);
 
     ASSERT_GT(naive.queue.size(), 100u);
     EXPECT_EQ(keysOf(naive.queue), keysOf(accel.queue));
