@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <ros/ros.h>
+#include <tf2_msgs/TFMessage.h>
 #include <tf2_ros/transform_broadcaster.h>
 
 #include "stereo_fusion/ros/MessageConversions.h"
@@ -96,6 +97,14 @@ bool waitFor(F&& done, double timeout_s) {
     ros::WallDuration(0.05).sleep();
   }
   return done();
+}
+
+/// Waits until a node (the fusion nodelet's tf listener) is connected to this process's /tf
+/// publication, which a TransformBroadcaster shares: a transform sent before that connection
+/// is up is lost, and its frame then dropped for want of tf, however long the test waits.
+inline bool waitForTfSubscriber(double timeout_s) {
+  const ros::Publisher tf_pub = ros::NodeHandle().advertise<tf2_msgs::TFMessage>("/tf", 100);
+  return waitFor([&] { return tf_pub.getNumSubscribers() > 0; }, timeout_s);
 }
 
 /// gtest + a ROS node with a two-thread spinner, then every test.

@@ -49,6 +49,7 @@ class NodeletFixture : public testing::Test {
       return disparity_pub_.getNumSubscribers() > 0 && image_pub_.getNumSubscribers() > 0 &&
              info_pub_.getNumSubscribers() > 0 && update_sub_.getNumPublishers() > 0;
     }, 30.0)) << "the nodelet did not connect";
+    ASSERT_TRUE(test::waitForTfSubscriber(30.0)) << "the nodelet's tf listener did not connect";
   }
 
   // The subscriber is declared before the members its callback uses, so it would be destroyed

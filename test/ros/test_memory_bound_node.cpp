@@ -39,6 +39,7 @@ TEST(MemoryBoundNode, BudgetHoldsAndTheStreamedMeshFollowsEvictions) {
     return disparity_pub.getNumSubscribers() > 0 && image_pub.getNumSubscribers() > 0 &&
            info_pub.getNumSubscribers() > 0 && sub.getNumPublishers() > 0;
   }, 30.0));
+  ASSERT_TRUE(test::waitForTfSubscriber(30.0)) << "the nodelet's tf listener did not connect";
 
   // A corridor: floor 0.5 m below, wall 2 m ahead; the camera slides 30 cm along it per frame.
   sim::AnalyticScene corridor;

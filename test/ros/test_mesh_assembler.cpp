@@ -76,6 +76,7 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   ASSERT_TRUE(test::waitFor([&] {
     return disparity_pub.getNumSubscribers() > 0 && image_pub.getNumSubscribers() > 0 && info_pub.getNumSubscribers() > 0;
   }, 30.0)) << "the fusion nodelet did not connect";
+  ASSERT_TRUE(test::waitForTfSubscriber(30.0)) << "the nodelet's tf listener did not connect";
 
   MapperConfig config;
   NodeConfig node;

@@ -27,6 +27,7 @@ TEST(Overload, QueueStaysBoundedAndEveryFrameIsCounted) {
   };
   for (int i = 0; i < 300 && !connected(); ++i) ros::WallDuration(0.1).sleep();
   ASSERT_TRUE(connected());
+  ASSERT_TRUE(test::waitForTfSubscriber(30.0)) << "the nodelet's tf listener did not connect";
 
   // 640×480 frames published back to back, their tf held back until all are sent.
   sim::AnalyticScene scene;
