@@ -104,7 +104,10 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
 
   // First half: nobody at the base station yet.
   for (int f = 0; f < kFrames / 2; ++f) publishFrame(f);
-  ASSERT_TRUE(test::waitFor([&] { return diagnostics.value("frames fused") >= kFrames / 2; }, 60.0));
+  ASSERT_TRUE(test::waitFor([&] { return diagnostics.value("frames fused") >= kFrames / 2; }, 60.0))
+      << "fused " << diagnostics.value("frames fused") << " of " << diagnostics.value("frames received")
+      << " received; dropped: tf " << diagnostics.value("dropped: tf timeout") << ", queue "
+      << diagnostics.value("dropped: queue full");
 
   // The base station joins: MeshAssembler loaded into the running manager, remapped to the robot.
   nodelet::NodeletLoad load;
