@@ -97,10 +97,13 @@ MeshChanges Mapper::rebuildMesh() {
 }
 
 bool Mapper::saveMap(const std::string& path, std::string* error) const {
-  return writeMapFileBytes(path, encodeMap(), error);
+  std::vector<uint8_t> bytes = encodeMap();
+  return writeMapFileBytes(path, &bytes, error);
 }
 
-std::vector<uint8_t> Mapper::encodeMap() const { return encodeMapFile(octree_, config_, frames_integrated_); }
+std::vector<uint8_t> Mapper::encodeMap() const {
+  return encodeMapFileUnsealed(octree_, config_, frames_integrated_);
+}
 
 bool Mapper::loadMap(const std::string& path, MeshChanges* changes, std::string* error) {
   BlockOctree loaded(config_.blockSizeM());

@@ -66,8 +66,9 @@ class Mapper {
 
   /// Writes the map to `path` (io/MapFile.h format, via a temporary file renamed into place).
   bool saveMap(const std::string& path, std::string* error) const;
-  /// The bytes saveMap() writes (encodeMapFile()): a copy, so that a caller holding a lock
-  /// around the map can release it before writing them with writeMapFileBytes().
+  /// The bytes saveMap() writes, before their checksums (encodeMapFileUnsealed()): a copy, so
+  /// that a caller holding a lock around the map can release it before writeMapFileBytes()
+  /// checksums and writes them.
   std::vector<uint8_t> encodeMap() const;
   /// Replaces the map by the one in `path` and re-meshes it (the returned changes list every
   /// submesh of the new map as changed and every old one that is gone as removed). The file

@@ -108,6 +108,13 @@ std::string number(double v) {
 }  // namespace
 
 std::vector<uint8_t> encodeMapFile(const BlockOctree& map, const MapperConfig& config, uint64_t frames_integrated) {
+  std::vector<uint8_t> file = encodeMapFileUnsealed(map, config, frames_integrated);
+  sealMapFile(&file);
+  return file;
+}
+
+std::vector<uint8_t> encodeMapFileUnsealed(const BlockOctree& map, const MapperConfig& config,
+                                           uint64_t frames_integrated) {
   static_assert(kMapFileRecordBytes == 24 + VoxelBlock::kVoxelCount * kVoxelRecordBytes, "record layout");
   const std::vector<VoxelBlock*> blocks = map.blocksSortedByKey();
   std::vector<uint8_t> file(kMapFileHeaderBytes + blocks.size() * kMapFileRecordBytes);
@@ -134,9 +141,14 @@ std::vector<uint8_t> encodeMapFile(const BlockOctree& map, const MapperConfig& c
   storeF64(header + 40, config.levels.scale4_min_depth_m);
   storeU64(header + 48, frames_integrated);
   storeU64(header + 56, blocks.size());
-  storeU32(header + 64, crc32(header + kMapFileHeaderBytes, file.size() - kMapFileHeaderBytes));
+  return file;  // checksums at 64 and 68 still zero
+}
+
+void sealMapFile(std::vector<uint8_t>* file) {
+  if (file->size() < kMapFileHeaderBytes) return;  // not from encodeMapFileUnsealed(): nothing to seal
+  uint8_t* header = file->data();
+  storeU32(header + 64, crc32(header + kMapFileHeaderBytes, file->size() - kMapFileHeaderBytes));
   storeU32(header + 68, crc32(header, 68));
-  return file;
 }
 
 bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config, BlockOctree* out,
@@ -278,16 +290,18 @@ void syncParentDirectory(const std::string& path) {
 
 bool writeMapFile(const std::string& path, const BlockOctree& map, const MapperConfig& config,
                   uint64_t frames_integrated, std::string* error) {
-  return writeMapFileBytes(path, encodeMapFile(map, config, frames_integrated), error);
+  std::vector<uint8_t> bytes = encodeMapFileUnsealed(map, config, frames_integrated);
+  return writeMapFileBytes(path, &bytes, error);
 }
 
-bool writeMapFileBytes(const std::string& path, const std::vector<uint8_t>& bytes, std::string* error) {
+bool writeMapFileBytes(const std::string& path, std::vector<uint8_t>* bytes, std::string* error) {
+  sealMapFile(bytes);
   // Unique per process and per call, so that saves to one path from several threads (or
   // nodelets of one manager) never share a temporary; the last rename wins, whole.
   static std::atomic<uint64_t> save_count{0};
   const std::string tmp = path + ".tmp-" + std::to_string(getpid()) + "-" + std::to_string(save_count++);
   std::string reason;
-  if (!writeDurably(tmp, bytes, &reason)) {
+  if (!writeDurably(tmp, *bytes, &reason)) {
     std::remove(tmp.c_str());
     *error = path + ": cannot write the map file (" + reason + ")";
     return false;

@@ -351,8 +351,9 @@ bool FusionNodelet::saveMap(SaveMap::Request& req, SaveMap::Response& res) {
   std::vector<uint8_t> bytes;
   double locked_ms = 0.0;
   {
-    // Only the encoding holds the map (a copy at memory speed, ~7 KB per block); the write and
-    // fsync, seconds for a large map on a robot's flash, run while frames are fused.
+    // Only the copy of the blocks holds the map (at memory speed, ~7 KB per block); the
+    // checksums, the write and the fsync (seconds for a large map on a robot's flash) run while
+    // frames are fused.
     std::lock_guard<std::mutex> lock(map_mutex_);
     const ros::WallTime locked = ros::WallTime::now();
     bytes = mapper_->encodeMap();
@@ -360,7 +361,7 @@ bool FusionNodelet::saveMap(SaveMap::Request& req, SaveMap::Response& res) {
     locked_ms = (ros::WallTime::now() - locked).toSec() * 1e3;
   }
   std::string error;
-  res.success = writeMapFileBytes(req.path, bytes, &error);
+  res.success = writeMapFileBytes(req.path, &bytes, &error);
   const double total_ms = (ros::WallTime::now() - start).toSec() * 1e3;
   res.message = res.success ? "saved " + std::to_string(res.blocks) + " blocks to " + req.path + " (map held " +
                                   std::to_string(static_cast<long>(locked_ms)) + " ms, " +

@@ -2,6 +2,7 @@
 // offline fuser's --save-map / --load-map.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -175,10 +176,17 @@ TEST(MapFile, EncodeThenWriteAndReadThenAdoptEqualSaveAndLoad) {
   const std::string saved = tempPath("saved.sfmap"), written = tempPath("written.sfmap");
   std::string error;
   ASSERT_TRUE(original->saveMap(saved, &error)) << error;
-  const std::vector<uint8_t> bytes = original->encodeMap();
-  ASSERT_TRUE(writeMapFileBytes(written, bytes, &error)) << error;
+  // encodeMap() leaves the checksums to writeMapFileBytes(), which fills them in place.
+  std::vector<uint8_t> bytes = original->encodeMap();
+  const std::vector<uint8_t> sealed = encodeMapFile(original->map(), config, original->framesIntegrated());
+  ASSERT_EQ(bytes.size(), sealed.size());
+  EXPECT_TRUE(std::equal(bytes.begin(), bytes.begin() + 64, sealed.begin()));  // header before the checksums
+  EXPECT_TRUE(std::equal(bytes.begin() + kMapFileHeaderBytes, bytes.end(), sealed.begin() + kMapFileHeaderBytes));
+  EXPECT_TRUE(std::all_of(bytes.begin() + 64, bytes.begin() + 72, [](uint8_t b) { return b == 0; }));
+  ASSERT_TRUE(writeMapFileBytes(written, &bytes, &error)) << error;
+  EXPECT_TRUE(bytes == sealed);
   EXPECT_TRUE(readBytes(written) == readBytes(saved));
-  EXPECT_TRUE(bytes == readBytes(saved));
+  EXPECT_TRUE(sealed == readBytes(saved));
 
   Mapper by_load(config), by_adopt(config);
   MeshChanges load_changes;
@@ -193,7 +201,7 @@ TEST(MapFile, EncodeThenWriteAndReadThenAdoptEqualSaveAndLoad) {
   EXPECT_EQ(adopt_changes.changed.size(), load_changes.changed.size());
   EXPECT_EQ(by_adopt.mesh().submeshes().size(), by_load.mesh().submeshes().size());
   // A failed write names the path and leaves no temporary behind.
-  EXPECT_FALSE(writeMapFileBytes("/nonexistent_dir/x.sfmap", bytes, &error));
+  EXPECT_FALSE(writeMapFileBytes("/nonexistent_dir/x.sfmap", &bytes, &error));
   EXPECT_NE(error.find("/nonexistent_dir/x.sfmap"), std::string::npos) << error;
   for (const auto& p : {saved, written}) fs::remove(p);
 }

@@ -42,6 +42,13 @@ struct MapFileInfo {
 
 /// The file bytes for `map`, built with `config`, after `frames_integrated` frames.
 std::vector<uint8_t> encodeMapFile(const BlockOctree& map, const MapperConfig& config, uint64_t frames_integrated);
+/// encodeMapFile() without its two checksums (left zero): the part that reads the map, so a
+/// caller that locks the map holds the lock only for it. sealMapFile() completes the bytes.
+std::vector<uint8_t> encodeMapFileUnsealed(const BlockOctree& map, const MapperConfig& config,
+                                           uint64_t frames_integrated);
+/// Fills in both checksums of bytes from encodeMapFileUnsealed() (again, on sealed bytes: the
+/// same values).
+void sealMapFile(std::vector<uint8_t>* file);
 
 /// Parses and checks file bytes completely (magic, version, sizes, both checksums, parameters
 /// against `config`, keys in range and unique, finite voxels with weight ≥ 0) into `out`, which
@@ -54,9 +61,10 @@ bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config,
 /// place, so a crash never leaves a half-written file under the final name.
 bool writeMapFile(const std::string& path, const BlockOctree& map, const MapperConfig& config,
                   uint64_t frames_integrated, std::string* error);
-/// writeMapFile() of bytes encoded earlier: the map need not stay unchanged (or locked) while
-/// they reach the disk.
-bool writeMapFileBytes(const std::string& path, const std::vector<uint8_t>& bytes, std::string* error);
+/// writeMapFile() of bytes encoded earlier by encodeMapFileUnsealed(), sealed here
+/// (sealMapFile()): the map need not stay unchanged (or locked) while they are checksummed and
+/// reach the disk.
+bool writeMapFileBytes(const std::string& path, std::vector<uint8_t>* bytes, std::string* error);
 /// Reads `path` and decodeMapFile()s it; errors are prefixed with the path.
 bool readMapFile(const std::string& path, const MapperConfig& config, BlockOctree* out, MapFileInfo* info,
                  std::string* error);
