@@ -288,12 +288,6 @@ void syncParentDirectory(const std::string& path) {
 }
 }  // namespace
 
-bool writeMapFile(const std::string& path, const BlockOctree& map, const MapperConfig& config,
-                  uint64_t frames_integrated, std::string* error) {
-  std::vector<uint8_t> bytes = encodeMapFileUnsealed(map, config, frames_integrated);
-  return writeMapFileBytes(path, &bytes, error);
-}
-
 bool writeMapFileBytes(const std::string& path, std::vector<uint8_t>* bytes, std::string* error) {
   sealMapFile(bytes);
   // Unique per process and per call, so that saves to one path from several threads (or

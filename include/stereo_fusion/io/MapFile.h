@@ -57,13 +57,10 @@ void sealMapFile(std::vector<uint8_t>* file);
 bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config, BlockOctree* out,
                    MapFileInfo* info, std::string* error);
 
-/// Writes encodeMapFile() to `path` through a temporary `path`.tmp-<pid>-<n> renamed into
-/// place, so a crash never leaves a half-written file under the final name.
-bool writeMapFile(const std::string& path, const BlockOctree& map, const MapperConfig& config,
-                  uint64_t frames_integrated, std::string* error);
-/// writeMapFile() of bytes encoded earlier by encodeMapFileUnsealed(), sealed here
-/// (sealMapFile()): the map need not stay unchanged (or locked) while they are checksummed and
-/// reach the disk.
+/// Seals (sealMapFile()) bytes encoded earlier by encodeMapFileUnsealed() and writes them to
+/// `path` through a temporary `path`.tmp-<pid>-<n> renamed into place, so a crash never leaves
+/// a half-written file under the final name. The map need not stay unchanged (or locked) while
+/// they are checksummed and reach the disk.
 bool writeMapFileBytes(const std::string& path, std::vector<uint8_t>* bytes, std::string* error);
 /// Reads `path` and decodeMapFile()s it; errors are prefixed with the path.
 bool readMapFile(const std::string& path, const MapperConfig& config, BlockOctree* out, MapFileInfo* info,
