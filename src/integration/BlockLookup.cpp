@@ -63,14 +63,6 @@ inline bool BlockLookup::bandBoxOfPixel(float d, int u, int v, BandBox* box) con
   return BlockOctree::keyInRange(box->lo) && BlockOctree::keyInRange(box->hi);
 }
 
-static BlockKey minKey(const BlockKey& a, const BlockKey& b) {
-  return {std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)};
-}
-
-static BlockKey maxKey(const BlockKey& a, const BlockKey& b) {
-  return {std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)};
-}
-
 template <typename F>
 static void forEachKeyInBox(const BlockKey& lo, const BlockKey& hi, F&& f) {
   for (int32_t z = lo.z; z <= hi.z; ++z)
@@ -262,8 +254,8 @@ void BlockLookup::countRegionBoxes(const StereoFrame& frame, const cv::Rect& reg
   s->boxes_lo = s->boxes.front().first.lo;
   s->boxes_hi = s->boxes.front().first.hi;
   for (const auto& box_count : s->boxes) {
-    s->boxes_lo = minKey(s->boxes_lo, box_count.first.lo);
-    s->boxes_hi = maxKey(s->boxes_hi, box_count.first.hi);
+    s->boxes_lo = componentMin(s->boxes_lo, box_count.first.lo);
+    s->boxes_hi = componentMax(s->boxes_hi, box_count.first.hi);
   }
 }
 
@@ -368,8 +360,8 @@ void BlockLookup::collectSortedDistinctKeys(size_t num_regions) {
   for (size_t r = 0; r < num_regions; ++r) {
     const RegionScratch& s = scratch_[r];
     if (s.passing.empty()) continue;  // else it has boxes, and they hold its keys
-    lo = any ? minKey(lo, s.boxes_lo) : s.boxes_lo;
-    hi = any ? maxKey(hi, s.boxes_hi) : s.boxes_hi;
+    lo = any ? componentMin(lo, s.boxes_lo) : s.boxes_lo;
+    hi = any ? componentMax(hi, s.boxes_hi) : s.boxes_hi;
     any = true;
   }
   if (!any) return;

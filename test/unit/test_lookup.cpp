@@ -451,8 +451,8 @@ TEST(BlockLookup, NaiveAndAcceleratedAgreeWhenTheFrameSpansTooManyBlocksForTheBi
     // The queued blocks alone span a box too large for the bitmap: the fallback ran.
     BlockKey lo = naive.queue.front()->key, hi = lo;
     for (const VoxelBlock* b : naive.queue) {
-      lo = {std::min(lo.x, b->key.x), std::min(lo.y, b->key.y), std::min(lo.z, b->key.z)};
-      hi = {std::max(hi.x, b->key.x), std::max(hi.y, b->key.y), std::max(hi.z, b->key.z)};
+      lo = componentMin(lo, b->key);
+      hi = componentMax(hi, b->key);
     }
     BlockKeyBitmap bitmap;
     EXPECT_FALSE(bitmap.reset(lo, hi)) << "box " << lo << " – " << hi;

@@ -227,8 +227,8 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
   if (!mapper.map().blocks().empty()) {
     BlockKey lo = mapper.map().blocks().front()->key, hi = lo;
     for (const VoxelBlock* b : mapper.map().blocks()) {
-      lo = {std::min(lo.x, b->key.x), std::min(lo.y, b->key.y), std::min(lo.z, b->key.z)};
-      hi = {std::max(hi.x, b->key.x), std::max(hi.y, b->key.y), std::max(hi.z, b->key.z)};
+      lo = componentMin(lo, b->key);
+      hi = componentMax(hi, b->key);
     }
     const double voxels_per_block = static_cast<double>(kFinestSide) * kFinestSide * kFinestSide;
     report->dense_grid_bytes = (hi.x - lo.x + 1.0) * (hi.y - lo.y + 1.0) * (hi.z - lo.z + 1.0) *

@@ -27,6 +27,14 @@ struct BlockKey {
   }
 };
 
+/// Component-wise minimum and maximum: the corners of the box around two keys.
+inline BlockKey componentMin(const BlockKey& a, const BlockKey& b) {
+  return {a.x < b.x ? a.x : b.x, a.y < b.y ? a.y : b.y, a.z < b.z ? a.z : b.z};
+}
+inline BlockKey componentMax(const BlockKey& a, const BlockKey& b) {
+  return {a.x > b.x ? a.x : b.x, a.y > b.y ? a.y : b.y, a.z > b.z ? a.z : b.z};
+}
+
 struct BlockKeyHash {
   size_t operator()(const BlockKey& k) const {
     // Large primes (Teschner et al. spatial hashing) spread neighbouring keys.
