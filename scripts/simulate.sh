@@ -2,7 +2,7 @@
 # Renders a simulated stereo sequence (analytic room or tabletop scene) into a dataset folder:
 # calibration.yaml, poses.txt, disparity/ color/ right/ NNNNNN.png and gt_mesh.ply.
 # Installs what is missing and builds first (quiet unless that fails).
-#   scripts/simulate.sh --out DIR [--preset room|tabletop] [--trajectory orbit|walkthrough]
+#   scripts/simulate.sh --out DIR [--preset room|tabletop|hall] [--trajectory orbit|walkthrough]
 #                       [--frames N] [--disparity exact|noisy|sgbm] [--seed K] ...   (--help: all)
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"

@@ -226,7 +226,7 @@ TEST(SimulatorTessellation, VerticesLieOnThePrimitivesAndTheMeshCoversThem) {
 }
 
 TEST(SimulatorTessellation, PresetMeshesLieOnTheScenesSurfaces) {
-  for (const char* name : {"room", "tabletop"}) {
+  for (const char* name : {"room", "tabletop", "hall"}) {
     const ScenePreset preset = *makePreset(name, 5);
     TriangleMesh mesh;
     preset.scene.tessellate(&mesh, 0.1);
@@ -246,7 +246,7 @@ TEST(SimulatorTessellation, PresetMeshesLieOnTheScenesSurfaces) {
 
 TEST(SimulatorScenes, SameSeedSameSceneOtherSeedOtherScene) {
   const StereoCamera camera = smallCamera();
-  for (const char* name : {"room", "tabletop"}) {
+  for (const char* name : {"room", "tabletop", "hall"}) {
     SCOPED_TRACE(name);
     const ScenePreset a = *makePreset(name, 11), b = *makePreset(name, 11), c = *makePreset(name, 12);
     const Eigen::Isometry3d pose = lookAt(a.focus_m + Eigen::Vector3d(a.orbit_radius_m, 0, a.orbit_height_m), a.focus_m);
@@ -324,7 +324,7 @@ TEST(SimulatorTrajectory, PresetPathsStayInsideTheRoomAndSeeTheScene) {
   // The disparity limit of the default SGBM range: nothing visible may be nearer than this.
   const StereoCamera camera = smallCamera(80, 60, 65.625, 0.1);
   const double min_depth_m = 525.0 * 0.1 / 128.0;
-  for (const char* preset_name : {"room", "tabletop"}) {
+  for (const char* preset_name : {"room", "tabletop", "hall"}) {
     const ScenePreset preset = *makePreset(preset_name, 2);
     for (const char* traj : {"orbit", "walkthrough"}) {
       SCOPED_TRACE(std::string(preset_name) + " " + traj);
@@ -363,6 +363,31 @@ TEST(SimulatorTrajectory, PresetPathsStayInsideTheRoomAndSeeTheScene) {
       EXPECT_TRUE((*again)[30].T_world_camera.isApprox((*poses)[30].T_world_camera, 0));
       EXPECT_FALSE((*other)[30].T_world_camera.isApprox((*poses)[30].T_world_camera, 1e-6));
     }
+  }
+}
+
+TEST(SimulatorScenes, HallOrbitSeesMostlyFarSurfaces) {
+  // The far-range class: from the hall's default orbit, most of what the camera sees lies
+  // 3–4.5 m away, for any seed (a 640×480, f = 576 px camera scaled down by 8).
+  const StereoCamera camera = smallCamera(80, 60, 72.0, 0.12);
+  for (uint32_t seed = 0; seed < 5; ++seed) {
+    SCOPED_TRACE(seed);
+    const ScenePreset preset = *makePreset("hall", seed);
+    std::string error;
+    const auto poses = makeTrajectory("orbit", preset, 12, 10.0, seed, &error);
+    ASSERT_TRUE(poses.has_value()) << error;
+    std::vector<float> depths;
+    for (const TimedPose& pose : *poses) {
+      cv::Mat depth;
+      renderDepthAndColor(preset.scene, camera, pose.T_world_camera, &depth, nullptr);
+      for (int v = 0; v < depth.rows; ++v)
+        for (int u = 0; u < depth.cols; ++u) depths.push_back(depth.at<float>(v, u));
+    }
+    std::sort(depths.begin(), depths.end());
+    const float p20 = depths[depths.size() / 5], median = depths[depths.size() / 2];
+    EXPECT_GT(p20, 2.5f);
+    EXPECT_GT(median, 3.0f);
+    EXPECT_LT(median, 4.5f);
   }
 }
 

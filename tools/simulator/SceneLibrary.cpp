@@ -64,11 +64,12 @@ void addTable(AnalyticScene* scene, const Eigen::Vector2d& centre_xy, double yaw
 
 }  // namespace
 
-std::vector<std::string> presetNames() { return {"room", "tabletop"}; }
+std::vector<std::string> presetNames() { return {"room", "tabletop", "hall"}; }
 
 std::optional<ScenePreset> makePreset(const std::string& name, uint32_t seed) {
   if (name == "room") return makeRoomPreset(seed);
   if (name == "tabletop") return makeTabletopPreset(seed);
+  if (name == "hall") return makeHallPreset(seed);
   return std::nullopt;
 }
 
@@ -193,6 +194,49 @@ ScenePreset makeTabletopPreset(uint32_t seed) {
   preset.focus_m = Eigen::Vector3d(0, 0, kTopZ + 0.05);
   preset.orbit_radius_m = 1.1;
   preset.orbit_height_m = 0.6;
+  return preset;
+}
+
+ScenePreset makeHallPreset(uint32_t seed) {
+  Draw draw(seed);
+  ScenePreset preset;
+  preset.name = "hall";
+  AnalyticScene& scene = preset.scene;
+  // 6 × 6 m (± 0.5 m by seed) and 2.6 m high: from near the middle, walls are 3–4.5 m away.
+  const double hx = draw.uniform(2.75, 3.25), hy = draw.uniform(2.75, 3.25), height = 2.6;
+  preset.room_interior = addRoom(&scene, hx, hy, height, draw.color({205, 200, 190}, 20));
+
+  // Furniture against the walls only, so what the camera sees is mostly far: shelves and
+  // cabinets (boxes), a column in a corner, a table with a ball on it, a crate on the floor.
+  for (int wall = 0; wall < 4; ++wall) {
+    const bool along_x = wall % 2 == 0;
+    const double sign = wall < 2 ? 1.0 : -1.0;
+    const double half_len = along_x ? hx : hy;
+    const int pieces = draw.integer(1, 2);
+    for (int p = 0; p < pieces; ++p) {
+      const double centre = draw.uniform(-half_len + 0.8, half_len - 0.8);
+      const double depth = draw.uniform(0.2, 0.45), width = draw.uniform(0.3, 0.7), tall = draw.uniform(0.4, 1.0);
+      const Eigen::Vector3d at_wall = along_x ? Eigen::Vector3d(centre, sign * (hy - depth), tall)
+                                              : Eigen::Vector3d(sign * (hx - depth), centre, tall);
+      const Eigen::Vector3d half = along_x ? Eigen::Vector3d(width, depth, tall) : Eigen::Vector3d(depth, width, tall);
+      scene.add(makeBox(at(at_wall), half), draw.color({130, 110, 90}, 40));
+    }
+  }
+  const double column_r = draw.uniform(0.15, 0.25);
+  scene.add(makeCylinder(at({-hx + 0.6, hy - 0.6, height / 2}), column_r, height / 2), draw.color({200, 200, 205}));
+  const Eigen::Vector2d table_xy(draw.uniform(0.5, hx - 1.2), -hy + 1.0);
+  addTable(&scene, table_xy, draw.uniform(-0.3, 0.3), {0.6, 0.4}, 0.75, 0.03, draw.color({165, 115, 75}),
+           draw.color({80, 60, 45}));
+  const double ball_r = draw.uniform(0.1, 0.18);
+  scene.add(makeSphere({table_xy.x(), table_xy.y(), 0.75 + ball_r}, ball_r), draw.color({60, 90, 200}));
+  scene.add(makeBox(at({-hx + 1.2, -hy + 1.0, 0.25}, draw.uniform(-0.5, 0.5)), {0.3, 0.3, 0.25}),
+            draw.color({180, 150, 60}));
+
+  // A small orbit near the middle looking out level: the floor enters the view only beyond
+  // ~3 m (camera 1.4 m up, 22.6° half vertical field of view at f = 576 px, 480 rows).
+  preset.focus_m = Eigen::Vector3d(0, 0, 1.3);
+  preset.orbit_radius_m = 0.6;
+  preset.orbit_height_m = 0.1;
   return preset;
 }
 

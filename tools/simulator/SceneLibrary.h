@@ -30,7 +30,7 @@ struct ScenePreset {
 /// Names accepted by makePreset().
 std::vector<std::string> presetNames();
 
-/// Builds preset `name` ("room" or "tabletop"); the seed varies object placement, sizes and
+/// Builds preset `name` ("room", "tabletop" or "hall"); the seed varies object placement, sizes and
 /// colours (same seed, same scene). Returns std::nullopt for an unknown name.
 std::optional<ScenePreset> makePreset(const std::string& name, uint32_t seed);
 
@@ -42,5 +42,10 @@ ScenePreset makeRoomPreset(uint32_t seed);
 /// A table (box top on four cylinder legs) in the middle of a 6 × 6 × 3 m room with 4–6 objects
 /// on it (spheres, boxes, cylinders, a torus), placed without overlapping.
 ScenePreset makeTabletopPreset(uint32_t seed);
+
+/// The far-range class: a ~6 × 6 × 2.6 m hall with sparse furniture against its walls, orbited
+/// from near its middle, so most surfaces are 3–4.5 m from the camera (where stereo is coarse
+/// and the truncation band is wide). Seeds vary the hall's size and the furniture.
+ScenePreset makeHallPreset(uint32_t seed);
 
 }  // namespace stereo_fusion::sim

@@ -54,7 +54,7 @@ const char* const kUsage = R"(Usage: stereo_fusion_simulate --out DIR [options]
 Renders a rectified stereo sequence of an analytic scene and writes it as a dataset folder:
 calibration.yaml, poses.txt, disparity/ color/ right/ NNNNNN.png, gt_mesh.ply.
 
-  --preset room|tabletop          scene (default room)
+  --preset room|tabletop|hall     scene (default room; hall: far-range, walls 3–4.5 m away)
   --trajectory orbit|walkthrough  camera path (default walkthrough)
   --frames N                      number of frames (default 100)
   --width W --height H            image size in pixels (default 640 x 480)
