@@ -49,7 +49,7 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame) {
   ++frames_integrated_;
 
   Timer lookup_timer;
-  result.lookup = lookup_.run(frame, &octree_, &queue_);
+  result.lookup = lookup_.run(frame, &octree_, &queue_, &missing_);
   result.lookup_ms = lookup_timer.elapsedMs();
 
   Timer fusion_timer;
@@ -57,7 +57,18 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame) {
   std::function<void(VoxelBlock*)> refresh_level;
   if (config_.mesh_enabled)
     refresh_level = [coverage = config_.mesh_level_min_coverage](VoxelBlock* b) { refreshMeshLevel(b, coverage); };
-  result.fusion = fuser_.fuse(frame, octree_, queue_, frames_integrated_, &updated_, refresh_level);
+  result.fusion =
+      fuser_.fuse(frame, octree_, queue_, missing_, frames_integrated_, &updated_, &created_, refresh_level);
+  // The blocks the frame created join the map now, in key order (allocation kept apart from the
+  // update: only blocks that hold an update are ever allocated).
+  if (!created_.empty()) {
+    const size_t existing = updated_.size();
+    for (std::unique_ptr<VoxelBlock>& block : created_)
+      if (VoxelBlock* placed = octree_.insert(std::move(block))) updated_.push_back(placed);
+    std::inplace_merge(updated_.begin(), updated_.begin() + existing, updated_.end(),
+                       [](const VoxelBlock* a, const VoxelBlock* b) { return a->key < b->key; });
+  }
+  result.lookup.blocks_allocated = result.fusion.blocks_created;
   result.fusion_ms = fusion_timer.elapsedMs();
 
   result.updated_blocks.reserve(updated_.size());
@@ -117,6 +128,7 @@ bool Mapper::loadMap(const std::string& path, MeshChanges* changes, std::string*
 MeshChanges Mapper::adoptMap(BlockOctree* loaded, const MapFileInfo& info) {
   octree_.swap(*loaded);
   queue_.clear();
+  missing_.clear();
   updated_.clear();
   // Later frames must count on from the saved ones, so last_update_frame keeps its LRU order.
   frames_integrated_ = info.frames_integrated;

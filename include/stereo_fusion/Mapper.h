@@ -93,7 +93,9 @@ class Mapper {
   uint64_t blocks_evicted_ = 0;
   FrameGate gate_;
   std::vector<VoxelBlock*> queue_;    // reused across frames
+  std::vector<BlockKey> missing_;     // reused across frames
   std::vector<VoxelBlock*> updated_;  // reused across frames
+  std::vector<std::unique_ptr<VoxelBlock>> created_;  // reused across frames
 };
 
 }  // namespace stereo_fusion

@@ -3,6 +3,7 @@
 #include <vector>
 
 #include "stereo_fusion/map/ResolutionLevel.h"
+#include "stereo_fusion/map/TruncationBand.h"
 
 namespace stereo_fusion {
 
@@ -53,6 +54,8 @@ struct MapperConfig {
 
   /// Block edge length in metres.
   double blockSizeM() const { return 8.0 * voxel_size_m; }
+  /// Φ by level, as every stage applies it.
+  TruncationBand truncationBand() const { return TruncationBand(voxel_size_m, truncation_vox); }
 };
 
 /// Description of one parameter, for validation, --set, YAML loading and the README table.

@@ -35,10 +35,16 @@ BlockLookup::PixelGeometry BlockLookup::pixelGeometry(const StereoFrame& frame,
   g.min_depth_m = config_.min_depth_m;
   g.max_depth_m = config_.max_depth_m;
   g.levels = config_.levels;
-  for (int level = 0; level < kNumLevels; ++level)
-    g.band_blocks[level] = config_.truncation_vox * levelScale(level) * config_.voxel_size_m * g.inv_block_size;
+  const TruncationBand band = config_.truncationBand();
+  for (int level = 0; level < kNumLevels; ++level) {
+    g.band_m[level] = band.measurementM(level);
+    g.band_blocks[level] = g.band_m[level] * g.inv_block_size;
+  }
+  // A voxel centre that fusion reads at a pixel projects within half a pixel of its centre on
+  // each image axis: within 0.5·√2 pixel footprints of the pixel's ray (0.75 for margin).
+  g.lateral_blocks_per_m = kLateralMarginPx / std::min(cam.fx(), cam.fy()) * g.inv_block_size;
   g.bands_non_negative = true;
-  for (double band : g.band_blocks) g.bands_non_negative = g.bands_non_negative && band >= 0.0;
+  for (double b : g.band_blocks) g.bands_non_negative = g.bands_non_negative && b >= 0.0;
   return g;
 }
 
@@ -48,18 +54,26 @@ inline bool BlockLookup::bandBoxOfPixel(float d, int u, int v, BandBox* box) con
   if (!(d > 0.0f) || !std::isfinite(d)) return false;
   const double z = g.fb / d;
   if (!(z >= g.min_depth_m && z <= g.max_depth_m)) return false;
-  const Eigen::Vector3d p_camera((u - g.cx) * z * g.inv_fx, (v - g.cy) * z * g.inv_fy, z);
-  // The sums spelled out in the AVX2 path's order: Eigen's R·p adds the z row as
-  // a0 + (a1 + a2) but the x and y rows as (a0 + a1) + a2, and a point within an ulp of a
-  // block face would land in a different block on each path.
+  const double p_camera[3] = {(u - g.cx) * z * g.inv_fx, (v - g.cy) * z * g.inv_fy, z};
+  // The band along the ray: the surface point ± Φ in the ray's direction, widened by the
+  // lateral margin (bandBoxHalfWidth()). All sums spelled out in the AVX2 path's order:
+  // Eigen's R·p adds the z row as a0 + (a1 + a2) but the x and y rows as (a0 + a1) + a2, and
+  // a point within an ulp of a block face would land in a different block on each path.
+  const int level = levelForDepth(z, g.levels);
+  const double range_m = std::sqrt((p_camera[0] * p_camera[0] + p_camera[1] * p_camera[1]) + p_camera[2] * p_camera[2]);
+  const double along = g.band_blocks[level] / range_m;             // blocks per metre of the ray
+  const double lateral = (z + g.band_m[level]) * g.lateral_blocks_per_m;  // blocks
   const Eigen::Matrix3d& R = g.R_world_camera;
-  auto world = [&](int i) {
-    return ((R(i, 0) * p_camera[0] + R(i, 1) * p_camera[1]) + R(i, 2) * p_camera[2]) + g.t_world_camera[i];
-  };
-  const Eigen::Vector3d p_blocks = Eigen::Vector3d(world(0), world(1), world(2)) * g.inv_block_size;
-  const double band = g.band_blocks[levelForDepth(z, g.levels)];
-  box->lo = BlockOctree::keyForBlockCoordinates(p_blocks.array() - band);
-  box->hi = BlockOctree::keyForBlockCoordinates(p_blocks.array() + band);
+  Eigen::Vector3d lo, hi;
+  for (int i = 0; i < 3; ++i) {
+    const double ray = (R(i, 0) * p_camera[0] + R(i, 1) * p_camera[1]) + R(i, 2) * p_camera[2];  // world − camera centre
+    const double centre = (ray + g.t_world_camera[i]) * g.inv_block_size;
+    const double half = std::fabs(ray * along) + lateral;
+    lo[i] = centre - half;
+    hi[i] = centre + half;
+  }
+  box->lo = BlockOctree::keyForBlockCoordinates(lo);
+  box->hi = BlockOctree::keyForBlockCoordinates(hi);
   return BlockOctree::keyInRange(box->lo) && BlockOctree::keyInRange(box->hi);
 }
 
@@ -123,6 +137,10 @@ __attribute__((target("avx2"))) void BlockLookup::countRegionBoxesAvx2(const Ste
   const __m256d scale2 = _mm256_set1_pd(g.levels.scale2_min_depth_m), scale4 = _mm256_set1_pd(g.levels.scale4_min_depth_m);
   const __m256d band0 = _mm256_set1_pd(g.band_blocks[0]), band1 = _mm256_set1_pd(g.band_blocks[1]),
                 band2 = _mm256_set1_pd(g.band_blocks[2]);
+  const __m256d band0_m = _mm256_set1_pd(g.band_m[0]), band1_m = _mm256_set1_pd(g.band_m[1]),
+                band2_m = _mm256_set1_pd(g.band_m[2]);
+  const __m256d lateral_per_m = _mm256_set1_pd(g.lateral_blocks_per_m);
+  const __m256d sign_bit = _mm256_set1_pd(-0.0);
   const __m256d max_key = _mm256_set1_pd(BlockOctree::kMaxKey), min_key = _mm256_set1_pd(-BlockOctree::kMaxKey);
   __m256d r[3][3], t[3];
   for (int i = 0; i < 3; ++i) {
@@ -175,16 +193,21 @@ __attribute__((target("avx2"))) void BlockLookup::countRegionBoxesAvx2(const Ste
       // Level of eq. 3.2 → band, lane by lane.
       const __m256d at_least_2 = _mm256_cmp_pd(z, scale2, _CMP_GE_OQ), at_least_4 = _mm256_cmp_pd(z, scale4, _CMP_GE_OQ);
       const __m256d band = _mm256_blendv_pd(_mm256_blendv_pd(band0, band1, at_least_2), band2, at_least_4);
+      const __m256d band_m = _mm256_blendv_pd(_mm256_blendv_pd(band0_m, band1_m, at_least_2), band2_m, at_least_4);
+      // bandBoxOfPixel()'s ray segment ± Φ and lateral margin, in its operation order.
+      const __m256d range = _mm256_sqrt_pd(
+          _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(p[0], p[0]), _mm256_mul_pd(p[1], p[1])), _mm256_mul_pd(p[2], p[2])));
+      const __m256d along = _mm256_div_pd(band, range);
+      const __m256d lateral = _mm256_mul_pd(_mm256_add_pd(z, band_m), lateral_per_m);
       __m128i key[6];  // lo x, y, z, hi x, y, z of the four lanes
       for (int i = 0; i < 3; ++i) {
-        const __m256d world = _mm256_add_pd(
-            _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r[i][0], p[0]), _mm256_mul_pd(r[i][1], p[1])),
-                          _mm256_mul_pd(r[i][2], p[2])),
-            t[i]);
-        const __m256d blocks = _mm256_mul_pd(world, inv_block);
-        const __m256d lo_d = _mm256_floor_pd(_mm256_sub_pd(blocks, band));
-        const __m256d hi_d = _mm256_floor_pd(_mm256_add_pd(blocks, band));
-        // keyInRange() of lo and hi, i.e. |key| ≤ kMaxKey with NaN failing: with band ≥ 0,
+        const __m256d ray = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r[i][0], p[0]), _mm256_mul_pd(r[i][1], p[1])),
+                                          _mm256_mul_pd(r[i][2], p[2]));
+        const __m256d centre = _mm256_mul_pd(_mm256_add_pd(ray, t[i]), inv_block);
+        const __m256d half = _mm256_add_pd(_mm256_andnot_pd(sign_bit, _mm256_mul_pd(ray, along)), lateral);
+        const __m256d lo_d = _mm256_floor_pd(_mm256_sub_pd(centre, half));
+        const __m256d hi_d = _mm256_floor_pd(_mm256_add_pd(centre, half));
+        // keyInRange() of lo and hi, i.e. |key| ≤ kMaxKey with NaN failing: with half ≥ 0,
         // lo ≤ hi whenever neither is NaN, so lo ≥ -kMaxKey and hi ≤ kMaxKey cover all four bounds.
         valid = _mm256_and_pd(valid, _mm256_and_pd(_mm256_cmp_pd(lo_d, min_key, _CMP_GE_OQ),
                                                    _mm256_cmp_pd(hi_d, max_key, _CMP_LE_OQ)));
@@ -382,8 +405,8 @@ void BlockLookup::collectSortedDistinctKeys(size_t num_regions) {
   std::sort(frame_keys_.begin(), frame_keys_.end());
 }
 
-void BlockLookup::runRegionNaive(const StereoFrame& frame, const cv::Rect& region,
-                                 BlockOctree* octree, RegionScratch* s) const {
+void BlockLookup::runRegionNaive(const StereoFrame& frame, const cv::Rect& region, BlockOctree* octree,
+                                 bool allocate, RegionScratch* s) const {
   const bool filter = config_.histogram_min_points > 0;
   if (filter) {
     gatherHistogram(frame, region, s);
@@ -401,17 +424,21 @@ void BlockLookup::runRegionNaive(const StereoFrame& frame, const cv::Rect& regio
         if (filter && !passesFilter(*s, key)) return;
         bool allocated = false;
         ++s->stats.octree_searches;
-        VoxelBlock* block = octree->findOrAllocate(key, &allocated);
+        VoxelBlock* block = allocate ? octree->findOrAllocate(key, &allocated) : octree->find(key);
         s->stats.blocks_allocated += allocated;
-        if (block != nullptr && (s->found.empty() || s->found.back() != block))
-          s->found.push_back(block);
+        if (block != nullptr && (s->found.empty() || s->found.back() != block)) s->found.push_back(block);
+        if (block == nullptr && !allocate && BlockOctree::keyInRange(key) &&
+            (s->not_found.empty() || s->not_found.back() != key))
+          s->not_found.push_back(key);
       });
     }
   }
 }
 
-LookupStats BlockLookup::run(const StereoFrame& frame, BlockOctree* octree,
-                             std::vector<VoxelBlock*>* queue) {
+LookupStats BlockLookup::run(const StereoFrame& frame, BlockOctree* octree, std::vector<VoxelBlock*>* queue,
+                             std::vector<BlockKey>* missing) {
+  const bool allocate = missing == nullptr;
+  if (missing) missing->clear();
   const int region_px = config_.lookup_region_px;
   const int cols = (frame.disparity_px.cols + region_px - 1) / region_px;
   const int rows = (frame.disparity_px.rows + region_px - 1) / region_px;
@@ -424,6 +451,7 @@ LookupStats BlockLookup::run(const StereoFrame& frame, BlockOctree* octree,
     for (size_t r = begin; r < end; ++r) {
       RegionScratch& s = scratch_[r];
       s.found.clear();
+      s.not_found.clear();
       s.stats = LookupStats{};
       const int x = static_cast<int>(r % cols) * region_px;
       const int y = static_cast<int>(r / cols) * region_px;
@@ -432,7 +460,7 @@ LookupStats BlockLookup::run(const StereoFrame& frame, BlockOctree* octree,
       if (accelerated)
         runRegionAccelerated(frame, region, &s);
       else
-        runRegionNaive(frame, region, octree, &s);
+        runRegionNaive(frame, region, octree, allocate, &s);
     }
   });
 
@@ -453,12 +481,18 @@ LookupStats BlockLookup::run(const StereoFrame& frame, BlockOctree* octree,
     frame_allocated_.resize(frame_keys_.size());
     // Sorted keys in batches: neighbouring keys share most of their octree path.
     pool_->parallelFor(frame_keys_.size(), 64, [&](size_t begin, size_t end) {
-      octree->findOrAllocateBatch(&frame_keys_[begin], end - begin, &frame_blocks_[begin], &frame_allocated_[begin]);
+      if (allocate)
+        octree->findOrAllocateBatch(&frame_keys_[begin], end - begin, &frame_blocks_[begin], &frame_allocated_[begin]);
+      else
+        octree->findBatch(&frame_keys_[begin], end - begin, &frame_blocks_[begin]);
     });
     total.octree_searches += frame_keys_.size();
     for (size_t i = 0; i < frame_keys_.size(); ++i) {
-      total.blocks_allocated += frame_allocated_[i];
-      if (frame_blocks_[i] != nullptr) queue->push_back(frame_blocks_[i]);
+      if (allocate) total.blocks_allocated += frame_allocated_[i];
+      if (frame_blocks_[i] != nullptr)
+        queue->push_back(frame_blocks_[i]);
+      else if (!allocate && BlockOctree::keyInRange(frame_keys_[i]))
+        missing->push_back(frame_keys_[i]);  // in key order, as frame_keys_
     }
   } else {
     // Regions overlap in blocks: keep each block's first find. Stamps are unique across all
@@ -473,8 +507,15 @@ LookupStats BlockLookup::run(const StereoFrame& frame, BlockOctree* octree,
       }
     std::sort(queue->begin(), queue->end(),
               [](const VoxelBlock* a, const VoxelBlock* b) { return a->key < b->key; });
+    if (missing) {
+      for (size_t r = 0; r < num_regions; ++r)
+        missing->insert(missing->end(), scratch_[r].not_found.begin(), scratch_[r].not_found.end());
+      std::sort(missing->begin(), missing->end());
+      missing->erase(std::unique(missing->begin(), missing->end()), missing->end());
+    }
   }
-  total.blocks_queued = queue->size();
+  total.blocks_missing = missing ? missing->size() : 0;
+  total.blocks_queued = queue->size() + total.blocks_missing;
   return total;
 }
 

@@ -59,6 +59,35 @@ inline void updateVoxel(const FusionFrame& f, size_t pixel, float sdf_m, float t
   fuseMeasurement(voxel, std::max(sdf_m, -truncation_m), weight, f.max_weight, f.rgb != nullptr ? rgb : nullptr);
 }
 
+/// Where a kernel fuses one level of `block`: the level's storage when allocated, else this
+/// thread's scratch level, which is all unobserved (a kernel writes voxels only when it
+/// updates them). commit() adopts the scratch into the block only if the level was updated,
+/// and leaves the scratch unobserved again, so a visit that updates nothing allocates nothing.
+class LevelTarget {
+ public:
+  LevelTarget(VoxelBlock* block, int level) : block_(block), level_(level), voxels_(block->levelIfAllocated(level)) {
+    if (voxels_ == nullptr) {
+      static thread_local Voxel scratch[levelVoxelCount(0)];
+      voxels_ = scratch;
+      scratch_ = true;
+    }
+  }
+  Voxel* voxels() const { return voxels_; }
+  uint64_t commit(uint64_t updates) {
+    if (scratch_ && updates > 0) {
+      block_->adoptLevel(level_, voxels_);
+      std::fill(voxels_, voxels_ + levelVoxelCount(level_), Voxel{});
+    }
+    return updates;
+  }
+
+ private:
+  VoxelBlock* block_;
+  int level_;
+  Voxel* voxels_;
+  bool scratch_ = false;
+};
+
 }  // namespace
 
 FusionFrame makeFusionFrame(const StereoFrame& frame, const MapperConfig& config,
@@ -76,9 +105,8 @@ FusionFrame makeFusionFrame(const StereoFrame& frame, const MapperConfig& config
   f.u_end_px = f.width_px - 0.5f;
   f.v_end_px = f.height_px - 0.5f;
   f.voxel_m = static_cast<float>(config.voxel_size_m);
-  const float truncation_vox = static_cast<float>(config.truncation_vox);
-  f.max_truncation_m =
-      std::max(truncation_vox, SurfaceFuser::kMinBandVoxels) * levelScale(kNumLevels - 1) * f.voxel_m;
+  const TruncationBand band = config.truncationBand();
+  f.max_truncation_m = band.maxM<float>();
   for (int m = 0; m < kNumLevels; ++m) {
     const float scale = static_cast<float>(levelScale(m));
     f.delta_m[m] = static_cast<float>(config.weight_falloff_start_vox) * scale * f.voxel_m;
@@ -89,13 +117,7 @@ FusionFrame makeFusionFrame(const StereoFrame& frame, const MapperConfig& config
     geometry.ex_m = f.R_cw.col(0) * level_voxel_m;
     geometry.ey_m = f.R_cw.col(1) * level_voxel_m;
     geometry.ez_m = f.R_cw.col(2) * level_voxel_m;
-    // A coarse level fed by near measurements still needs values on both sides of the
-    // surface at its own spacing: its band is never thinner than kMinBandVoxels of its voxels.
-    const float min_truncation_m = SurfaceFuser::kMinBandVoxels * level_voxel_m;
-    for (int m = 0; m < kNumLevels; ++m) {
-      const float scale = static_cast<float>(levelScale(m));
-      geometry.truncation_m[m] = std::max(truncation_vox * scale * f.voxel_m, min_truncation_m);
-    }
+    for (int m = 0; m < kNumLevels; ++m) geometry.truncation_m[m] = band.updateM<float>(m, level);
   }
   f.max_weight = static_cast<float>(config.max_weight);
   f.depth_weight_reference_m = static_cast<float>(config.depth_weight_reference_m);
@@ -115,7 +137,9 @@ uint64_t fuseBlockScalar(const FusionFrame& f, const BlockOctree& octree, VoxelB
     const FusionFrame::Level& geometry = f.levels[level];
     const int side = levelSide(level);
     const Eigen::Vector3f first = origin_c + 0.5f * (geometry.ex_m + geometry.ey_m + geometry.ez_m);
-    Voxel* voxels = &block->voxels[levelOffset(level)];
+    LevelTarget target(block, level);
+    Voxel* voxels = target.voxels();
+    uint64_t level_updates = 0;
     for (int k = 0; k < side; ++k) {
       for (int j = 0; j < side; ++j) {
         for (int i = 0; i < side; ++i) {
@@ -143,10 +167,11 @@ uint64_t fuseBlockScalar(const FusionFrame& f, const BlockOctree& octree, VoxelB
                                             f.depth_weight_reference_m);
           if (!(w > 0.0f)) continue;
           updateVoxel(f, pixel, sdf, truncation, w, &voxels[i + j * side + k * side * side]);
-          ++updates;
+          ++level_updates;
         }
       }
     }
+    updates += target.commit(level_updates);
   }
   return updates;
 }
@@ -529,10 +554,11 @@ __attribute__((target("avx2"))) uint64_t fuseBlockAvx2(const FusionFrame& f, con
     const Eigen::Vector3f first = origin_c + 0.5f * (geometry.ex_m + geometry.ey_m + geometry.ez_m);
     const Avx2Steps s = avx2Steps(geometry, first);
     const Avx2Band band = avx2Band(f, level);
-    Voxel* voxels = &block->voxels[levelOffset(level)];
-    if (level == 0) updates += fuseLevel0Avx2(f, c, band, s, geometry, first, voxels);
-    if (level == 1) updates += fuseLevel1Avx2(f, c, band, s, voxels);
-    if (level == 2) updates += fuseLevel2Avx2(f, c, band, s, voxels);
+    LevelTarget target(block, level);
+    Voxel* voxels = target.voxels();
+    if (level == 0) updates += target.commit(fuseLevel0Avx2(f, c, band, s, geometry, first, voxels));
+    if (level == 1) updates += target.commit(fuseLevel1Avx2(f, c, band, s, voxels));
+    if (level == 2) updates += target.commit(fuseLevel2Avx2(f, c, band, s, voxels));
   }
   return updates;
 }

@@ -19,9 +19,19 @@ FusionStats SurfaceFuser::fuse(const StereoFrame& frame, const BlockOctree& octr
                                const std::vector<VoxelBlock*>& blocks, uint64_t frame_index,
                                std::vector<VoxelBlock*>* updated,
                                const std::function<void(VoxelBlock*)>& after_update) {
+  return fuse(frame, octree, blocks, {}, frame_index, updated, nullptr, after_update);
+}
+
+FusionStats SurfaceFuser::fuse(const StereoFrame& frame, const BlockOctree& octree,
+                               const std::vector<VoxelBlock*>& blocks, const std::vector<BlockKey>& missing,
+                               uint64_t frame_index, std::vector<VoxelBlock*>* updated,
+                               std::vector<std::unique_ptr<VoxelBlock>>* created,
+                               const std::function<void(VoxelBlock*)>& after_update) {
   FusionStats stats;
   updated->clear();
-  if (blocks.empty()) return stats;
+  if (created) created->clear();
+  const size_t total = blocks.size() + (created ? missing.size() : 0);
+  if (total == 0) return stats;
   const StereoCamera& cam = frame.camera;
   measurements_.build(frame.disparity_px, config_.use_color ? frame.color : cv::Mat(),
                       static_cast<float>(cam.fx() * cam.baseline()), static_cast<float>(config_.min_depth_m),
@@ -33,20 +43,39 @@ FusionStats SurfaceFuser::fuse(const StereoFrame& frame, const BlockOctree& octr
     fusion_frame.tiles = &tiles_;
   }
   const auto fuse_block = use_avx2_ ? fuseBlockAvx2 : fuseBlockScalar;
-  per_block_updates_.assign(blocks.size(), 0);
-  pool_->parallelFor(blocks.size(), 8, [&](size_t begin, size_t end) {
+  per_block_updates_.assign(total, 0);
+  candidates_.resize(total - blocks.size());
+  pool_->parallelFor(total, 8, [&](size_t begin, size_t end) {
     for (size_t b = begin; b < end; ++b) {
-      per_block_updates_[b] = fuse_block(fusion_frame, octree, blocks[b]);
-      if (after_update && per_block_updates_[b] > 0) after_update(blocks[b]);
+      VoxelBlock* block = b < blocks.size() ? blocks[b] : nullptr;
+      std::unique_ptr<VoxelBlock>* candidate = nullptr;
+      if (block == nullptr) {  // a missing key: a block of its own, kept only if updated
+        candidate = &candidates_[b - blocks.size()];
+        if (!*candidate) *candidate = std::make_unique<VoxelBlock>();
+        (*candidate)->key = missing[b - blocks.size()];
+        block = candidate->get();
+      }
+      per_block_updates_[b] = fuse_block(fusion_frame, octree, block);
+      if (after_update && per_block_updates_[b] > 0) after_update(block);
     }
   });
-  for (size_t b = 0; b < blocks.size(); ++b) {
-    if (per_block_updates_[b] == 0) continue;
-    blocks[b]->last_update_frame = frame_index;
-    updated->push_back(blocks[b]);
+  for (size_t b = 0; b < total; ++b) {
+    if (per_block_updates_[b] == 0) {
+      stats.blocks_not_created += b >= blocks.size();
+      continue;  // a candidate not updated holds no level: it is reused as it is next frame
+    }
     stats.voxels_updated += per_block_updates_[b];
+    ++stats.blocks_updated;
+    if (b < blocks.size()) {
+      blocks[b]->last_update_frame = frame_index;
+      updated->push_back(blocks[b]);
+    } else {
+      std::unique_ptr<VoxelBlock>& candidate = candidates_[b - blocks.size()];
+      candidate->last_update_frame = frame_index;
+      created->push_back(std::move(candidate));
+    }
   }
-  stats.blocks_updated = updated->size();
+  stats.blocks_created = created ? created->size() : 0;
   return stats;
 }
 

@@ -72,30 +72,44 @@ static_assert(sizeof(Voxel) == 12 && offsetof(Voxel, weight) == 4 && offsetof(Vo
               "the map file's voxel record is the Voxel's layout");
 constexpr size_t kVoxelRecordBytes = 12;
 
-void storeVoxels(const VoxelBlock& block, uint8_t* out) {
+void storeVoxels(const Voxel* voxels, int count, uint8_t* out) {
   if (kVoxelIsFileRecord) {
-    std::memcpy(out, block.voxels.data(), block.voxels.size() * kVoxelRecordBytes);
+    std::memcpy(out, voxels, count * kVoxelRecordBytes);
     return;
   }
-  for (const Voxel& v : block.voxels) {
+  for (int n = 0; n < count; ++n, out += kVoxelRecordBytes) {
+    const Voxel& v = voxels[n];
     storeF32(out, v.sdf_m);
     storeF32(out + 4, v.weight);
     out[8] = v.r, out[9] = v.g, out[10] = v.b, out[11] = v.reserved;
-    out += kVoxelRecordBytes;
   }
 }
 
-void loadVoxels(const uint8_t* in, VoxelBlock* block) {
+void loadVoxels(const uint8_t* in, int count, Voxel* voxels) {
   if (kVoxelIsFileRecord) {
-    std::memcpy(block->voxels.data(), in, block->voxels.size() * kVoxelRecordBytes);
+    std::memcpy(voxels, in, count * kVoxelRecordBytes);
     return;
   }
-  for (Voxel& v : block->voxels) {
+  for (int n = 0; n < count; ++n, in += kVoxelRecordBytes) {
+    Voxel& v = voxels[n];
     v.sdf_m = getF32(in);
     v.weight = getF32(in + 4);
     v.r = in[8], v.g = in[9], v.b = in[10], v.reserved = in[11];
-    in += kVoxelRecordBytes;
   }
+}
+
+/// Bit l set: level l of the block is stored (allocated).
+uint8_t levelMask(const VoxelBlock& block) {
+  uint8_t mask = 0;
+  for (int l = 0; l < kNumLevels; ++l) mask |= static_cast<uint8_t>(block.hasLevel(l) << l);
+  return mask;
+}
+
+size_t levelBytes(uint8_t mask) {
+  size_t bytes = 0;
+  for (int l = 0; l < kNumLevels; ++l)
+    if (mask & (1u << l)) bytes += levelVoxelCount(l) * kVoxelRecordBytes;
+  return bytes;
 }
 
 std::string number(double v) {
@@ -115,9 +129,12 @@ std::vector<uint8_t> encodeMapFile(const BlockOctree& map, const MapperConfig& c
 
 std::vector<uint8_t> encodeMapFileUnsealed(const BlockOctree& map, const MapperConfig& config,
                                            uint64_t frames_integrated) {
-  static_assert(kMapFileRecordBytes == 24 + VoxelBlock::kVoxelCount * kVoxelRecordBytes, "record layout");
+  static_assert(kMapFileV1RecordBytes == kMapFileRecordHeadBytes + VoxelBlock::kVoxelCount * kVoxelRecordBytes,
+                "record layout");
   const std::vector<VoxelBlock*> blocks = map.blocksSortedByKey();
-  std::vector<uint8_t> file(kMapFileHeaderBytes + blocks.size() * kMapFileRecordBytes);
+  size_t payload_bytes = 0;
+  for (const VoxelBlock* b : blocks) payload_bytes += kMapFileRecordHeadBytes + levelBytes(levelMask(*b));
+  std::vector<uint8_t> file(kMapFileHeaderBytes + payload_bytes);
   uint8_t* record = file.data() + kMapFileHeaderBytes;
   for (const VoxelBlock* b : blocks) {
     storeU32(record, static_cast<uint32_t>(b->key.x));
@@ -127,9 +144,14 @@ std::vector<uint8_t> encodeMapFileUnsealed(const BlockOctree& map, const MapperC
     record[20] = static_cast<uint8_t>(b->mesh_level);
     // Whole-block signs (bit 0: a voxel < 0, bit 1: one ≥ 0); derived, recomputed on load.
     record[21] = static_cast<uint8_t>(b->mesh_sign_bits & (meshSignBit(0, false) | meshSignBit(0, true)));
-    record[22] = record[23] = 0;
-    storeVoxels(*b, record + 24);
-    record += kMapFileRecordBytes;
+    record[22] = levelMask(*b);
+    record[23] = 0;
+    record += kMapFileRecordHeadBytes;
+    for (int l = 0; l < kNumLevels; ++l) {
+      if (!b->hasLevel(l)) continue;
+      storeVoxels(b->level(l), levelVoxelCount(l), record);
+      record += levelVoxelCount(l) * kVoxelRecordBytes;
+    }
   }
   uint8_t* header = file.data();
   std::memcpy(header, kMagic, 8);
@@ -141,14 +163,15 @@ std::vector<uint8_t> encodeMapFileUnsealed(const BlockOctree& map, const MapperC
   storeF64(header + 40, config.levels.scale4_min_depth_m);
   storeU64(header + 48, frames_integrated);
   storeU64(header + 56, blocks.size());
-  return file;  // checksums at 64 and 68 still zero
+  storeU64(header + 64, payload_bytes);
+  return file;  // checksums at 72 and 76 still zero
 }
 
 void sealMapFile(std::vector<uint8_t>* file) {
   if (file->size() < kMapFileHeaderBytes) return;  // not from encodeMapFileUnsealed(): nothing to seal
   uint8_t* header = file->data();
-  storeU32(header + 64, crc32(header + kMapFileHeaderBytes, file->size() - kMapFileHeaderBytes));
-  storeU32(header + 68, crc32(header, 68));
+  storeU32(header + 72, crc32(header + kMapFileHeaderBytes, file->size() - kMapFileHeaderBytes));
+  storeU32(header + 76, crc32(header, 76));
 }
 
 bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config, BlockOctree* out,
@@ -164,17 +187,21 @@ bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config,
   }
   // The version comes first, so a newer file is named as such whatever its layout.
   info->version = getU32(data + 8);
-  if (info->version != kMapFileVersion) {
-    *error = "map file version " + std::to_string(info->version) + " is not supported (this build reads version " +
+  if (info->version != kMapFileVersion && info->version != 1) {
+    *error = "map file version " + std::to_string(info->version) + " is not supported (this build reads versions 1 and " +
              std::to_string(kMapFileVersion) + ")";
     return false;
   }
-  if (size < kMapFileHeaderBytes) {
+  const bool v1 = info->version == 1;
+  // Where the header of this version keeps its size and checksums.
+  const size_t header_bytes = v1 ? kMapFileV1HeaderBytes : kMapFileHeaderBytes;
+  const size_t payload_crc_at = v1 ? 64 : 72, header_crc_at = v1 ? 68 : 76;
+  if (size < header_bytes) {
     *error = "truncated map file: " + std::to_string(size) + " bytes, the header alone has " +
-             std::to_string(kMapFileHeaderBytes);
+             std::to_string(header_bytes);
     return false;
   }
-  if (getU32(data + 68) != crc32(data, 68) || getU32(data + 12) != kMapFileHeaderBytes) {
+  if (getU32(data + header_crc_at) != crc32(data, header_crc_at) || getU32(data + 12) != header_bytes) {
     *error = "corrupted map file: header checksum mismatch";
     return false;
   }
@@ -184,19 +211,26 @@ bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config,
   info->scale4_min_depth_m = getF64(data + 40);
   info->frames_integrated = getU64(data + 48);
   info->block_count = getU64(data + 56);
-  const size_t payload_bytes = size - kMapFileHeaderBytes;
-  // Compare by division: a corrupted count must not overflow the expected size.
-  if (info->block_count > payload_bytes / kMapFileRecordBytes ||
-      payload_bytes != info->block_count * kMapFileRecordBytes) {
-    const bool short_file = info->block_count > payload_bytes / kMapFileRecordBytes;
+  const size_t payload_bytes = size - header_bytes;
+  // The sizes the header announces, compared by division: a corrupted count must not overflow.
+  // Version 1 records have one size; version 2 gives the payload's size (records are checked
+  // against it one by one below).
+  const uint64_t announced_payload_bytes = v1 ? 0 : getU64(data + 64);
+  const bool short_file = v1 ? info->block_count > payload_bytes / kMapFileV1RecordBytes
+                             : announced_payload_bytes > payload_bytes;
+  const bool wrong_size = v1 ? payload_bytes != info->block_count * kMapFileV1RecordBytes
+                             : announced_payload_bytes != payload_bytes ||
+                                   info->block_count > payload_bytes / kMapFileRecordHeadBytes;
+  if (short_file || wrong_size) {
     *error = std::string(short_file ? "truncated" : "corrupted") + " map file: " + std::to_string(size) +
-             " bytes, but the header announces " + std::to_string(info->block_count) + " blocks (" +
-             std::to_string(kMapFileHeaderBytes) + " + " + std::to_string(info->block_count) + " × " +
-             std::to_string(kMapFileRecordBytes) + " bytes)";
+             " bytes, but the header announces " + std::to_string(info->block_count) + " blocks in " +
+             (v1 ? std::to_string(info->block_count) + " × " + std::to_string(kMapFileV1RecordBytes)
+                 : std::to_string(announced_payload_bytes)) +
+             " bytes after a header of " + std::to_string(header_bytes);
     return false;
   }
-  const uint8_t* payload = data + kMapFileHeaderBytes;
-  if (getU32(data + 64) != crc32(payload, payload_bytes)) {
+  const uint8_t* payload = data + header_bytes;
+  if (getU32(data + payload_crc_at) != crc32(payload, payload_bytes)) {
     *error = "corrupted map file: block data checksum mismatch";
     return false;
   }
@@ -210,8 +244,14 @@ bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config,
     *error = "map file must be decoded into an empty octree of the configured block size";
     return false;
   }
+  const uint8_t* r = payload;
+  const uint8_t* const payload_end = payload + payload_bytes;
   for (uint64_t n = 0; n < info->block_count; ++n) {
-    const uint8_t* r = payload + n * kMapFileRecordBytes;
+    if (static_cast<size_t>(payload_end - r) < kMapFileRecordHeadBytes) {
+      *error = "invalid map file: block " + std::to_string(n) + " of " + std::to_string(info->block_count) +
+               " runs past the end of the file";
+      return false;
+    }
     const BlockKey key{static_cast<int32_t>(getU32(r)), static_cast<int32_t>(getU32(r + 4)),
                        static_cast<int32_t>(getU32(r + 8))};
     auto which = [&] {  // only built for an error message
@@ -219,9 +259,15 @@ bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config,
              std::to_string(key.z) + ")";
     };
     const int level = static_cast<int8_t>(r[20]);
-    if (level < 0 || level >= kNumLevels || r[21] > 3) {
+    const uint8_t mask = v1 ? 0b111 : r[22];
+    if (level < 0 || level >= kNumLevels || r[21] > 3 || mask > 0b111) {
       *error = "invalid map file: " + which() + " has mesh level " + std::to_string(level) + " / flags " +
-               std::to_string(r[21]);
+               std::to_string(r[21]) + " / levels " + std::to_string(r[22]);
+      return false;
+    }
+    const size_t record_bytes = kMapFileRecordHeadBytes + levelBytes(mask);
+    if (static_cast<size_t>(payload_end - r) < record_bytes) {
+      *error = "invalid map file: " + which() + " runs past the end of the file";
       return false;
     }
     bool allocated = false;
@@ -232,14 +278,32 @@ bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config,
     }
     block->last_update_frame = getU64(r + 12);
     block->mesh_level = static_cast<int8_t>(level);
-    loadVoxels(r + 24, block);
-    for (const Voxel& voxel : block->voxels) {
-      if (!std::isfinite(voxel.sdf_m) || !std::isfinite(voxel.weight) || voxel.weight < 0.0f) {
-        *error = "invalid map file: " + which() + " holds a non-finite distance or a negative weight";
-        return false;
+    const uint8_t* in = r + kMapFileRecordHeadBytes;
+    for (int l = 0; l < kNumLevels; ++l) {
+      if (!(mask & (1u << l))) continue;
+      Voxel voxels[levelVoxelCount(0)];
+      loadVoxels(in, levelVoxelCount(l), voxels);
+      in += levelVoxelCount(l) * kVoxelRecordBytes;
+      bool observed = false;
+      for (int v = 0; v < levelVoxelCount(l); ++v) {
+        const Voxel& voxel = voxels[v];
+        if (!std::isfinite(voxel.sdf_m) || !std::isfinite(voxel.weight) || voxel.weight < 0.0f) {
+          *error = "invalid map file: " + which() + " holds a non-finite distance or a negative weight";
+          return false;
+        }
+        observed = observed || voxel.weight > 0.0f;
       }
+      // A version-1 file stores all three levels: only those holding observations are kept
+      // (a level that no measurement reached reads the same whether stored or not).
+      if (observed || !v1) block->adoptLevel(l, voxels);
     }
+    r += record_bytes;
     refreshMeshSigns(block);  // derived from the voxels, so a file cannot make the mesher skip a surface
+  }
+  if (r != payload_end) {
+    *error = "invalid map file: " + std::to_string(payload_end - r) + " bytes after the last of " +
+             std::to_string(info->block_count) + " blocks";
+    return false;
   }
   return true;
 }

@@ -102,10 +102,27 @@ VoxelBlock* BlockOctree::findOrAllocate(const BlockKey& key, bool* allocated) {
   if (allocated) *allocated = false;
   if (!keyInRange(key)) return nullptr;
   if (VoxelBlock* existing = find(key)) return existing;
-  return allocate(key, allocated);
+  return allocate(key, std::make_unique<VoxelBlock>(), allocated);
+}
+
+VoxelBlock* BlockOctree::insert(std::unique_ptr<VoxelBlock> block) {
+  if (!block || !keyInRange(block->key)) return nullptr;
+  const BlockKey key = block->key;
+  bool created = false;
+  VoxelBlock* placed = allocate(key, std::move(block), &created);
+  return created ? placed : nullptr;
 }
 
 void BlockOctree::findOrAllocateBatch(const BlockKey* keys, size_t n, VoxelBlock** blocks, uint8_t* allocated) {
+  searchBatch(keys, n, blocks, allocated);
+}
+
+void BlockOctree::findBatch(const BlockKey* keys, size_t n, VoxelBlock** blocks) const {
+  // Without `allocated` nothing is allocated: the search alone, which is const.
+  const_cast<BlockOctree*>(this)->searchBatch(keys, n, blocks, nullptr);
+}
+
+void BlockOctree::searchBatch(const BlockKey* keys, size_t n, VoxelBlock** blocks, uint8_t* allocated) {
   size_t searched = 0;  // as findOrAllocate(): keys out of range are no search
   // path[0] is a root (the current one, or one since grown over: it still holds the same
   // subtree), path[i + 1] a child of path[i]. Nodes are never freed while searches may run,
@@ -116,7 +133,7 @@ void BlockOctree::findOrAllocateBatch(const BlockKey* keys, size_t n, VoxelBlock
   for (size_t i = 0; i < n; ++i) {
     const BlockKey& key = keys[i];
     blocks[i] = nullptr;
-    allocated[i] = 0;
+    if (allocated) allocated[i] = 0;
     if (!keyInRange(key)) continue;
     ++searched;
     while (depth > 0 && !contains(path[depth - 1], key)) --depth;
@@ -139,17 +156,16 @@ void BlockOctree::findOrAllocateBatch(const BlockKey* keys, size_t n, VoxelBlock
       blocks[i] = static_cast<VoxelBlock*>(found);
       continue;
     }
+    if (!allocated) continue;
     bool created = false;
-    blocks[i] = allocate(key, &created);
+    blocks[i] = allocate(key, std::make_unique<VoxelBlock>(), &created);
     allocated[i] = created;
   }
   searches_.fetch_add(searched, std::memory_order_relaxed);
 }
 
-VoxelBlock* BlockOctree::allocate(const BlockKey& key, bool* allocated) {
-  // Zeroing the 7 KB block needs no lock: only inserting it does (other threads allocating
-  // in the same frame wait for the insert, not for the memset).
-  auto fresh = std::make_unique<VoxelBlock>();
+VoxelBlock* BlockOctree::allocate(const BlockKey& key, std::unique_ptr<VoxelBlock> fresh, bool* allocated) {
+  // `fresh` is built before the lock: only inserting it needs it.
   std::lock_guard<std::mutex> lock(alloc_mutex_);
   growToContain(key);
   Node* node = root_.load(std::memory_order_relaxed);
@@ -220,11 +236,20 @@ int BlockOctree::height() const {
   return root ? root->height : 0;
 }
 
-size_t BlockOctree::memoryBytes() const {
-  return block_storage_.size() * sizeof(VoxelBlock) + nodes_.size() * sizeof(Node) +
-         blocks_.capacity() * sizeof(VoxelBlock*) +
-         block_storage_.capacity() * sizeof(std::unique_ptr<VoxelBlock>) +
-         nodes_.capacity() * sizeof(std::unique_ptr<Node>);
+BlockOctree::MemoryUse BlockOctree::memoryUse() const {
+  MemoryUse use;
+  use.block_bytes = block_storage_.size() * sizeof(VoxelBlock);
+  for (const VoxelBlock* b : blocks_)
+    for (int level = 0; level < kNumLevels; ++level)
+      if (b->hasLevel(level)) {
+        use.level_bytes[level] += levelVoxelCount(level) * sizeof(Voxel);
+        ++use.level_blocks[level];
+      }
+  use.node_bytes = nodes_.size() * sizeof(Node);
+  use.bookkeeping_bytes = blocks_.capacity() * sizeof(VoxelBlock*) +
+                          block_storage_.capacity() * sizeof(std::unique_ptr<VoxelBlock>) +
+                          nodes_.capacity() * sizeof(std::unique_ptr<Node>);
+  return use;
 }
 
 double BlockOctree::bytesPerBlock() const {

@@ -1,4 +1,5 @@
 #include "stereo_fusion/mesh/BlockMesher.h"
+#include "stereo_fusion/map/TruncationBand.h"
 
 #include <algorithm>
 #include <Eigen/Geometry>
@@ -518,14 +519,13 @@ struct BlockMesher::Context {
     int low_index[3];
     for (int a = 0; a < 3; ++a) low_index[a] = q[a] >= kBlockUnits ? side - 1 : (q[a] - step[0]) >> shift;
     const int offset_index[2][3] = {{low_index[0], low_index[1] * side, low_index[2] * side * side}, {0, 0, 0}};
-    const int base = levelOffset(level);
     float weight_sum = 0.0f, acc = 0.0f, acc_rgb[3] = {0, 0, 0};
     for (unsigned blocks = incidentBlocks(q, q); blocks != 0; blocks &= blocks - 1) {
       const int d = __builtin_ctz(blocks);
       const VoxelBlock* block = nb[d];
       if (block == nullptr) return false;
-      const Voxel& v = block->voxels[base + offset_index[d & 1][0] + offset_index[(d >> 1) & 1][1] +
-                                     offset_index[d >> 2][2]];
+      const Voxel& v = block->level(level)[offset_index[d & 1][0] + offset_index[(d >> 1) & 1][1] +
+                                           offset_index[d >> 2][2]];
       if (!(v.weight > 0.0f)) return false;
       weight_sum += w;
       acc += w * v.sdf_m;
@@ -552,7 +552,7 @@ struct BlockMesher::Context {
     if (rows_ready[d] & row_bit) return;
     rows_ready[d] |= row_bit;
     const int side = levelSide(level[d]);
-    const Voxel* row = &nb[d]->voxels[levelOffset(level[d]) + (j + k * side) * side];
+    const Voxel* row = nb[d]->level(level[d]) + (j + k * side) * side;
     const VoxelClasses classes = classifyVoxels(row, side);
     mask_unobserved[d][k][j] = static_cast<uint8_t>(classes.unobserved);
     mask_negative[d][k][j] = static_cast<uint8_t>(classes.negative);
@@ -992,18 +992,19 @@ void BlockMesher::mesh(const BlockOctree& map, const VoxelBlock& owner, SubMesh*
   ctx.origin[1] = int64_t{owner.key.y} * kBlockUnits;
   ctx.origin[2] = int64_t{owner.key.z} * kBlockUnits;
   bool any_negative = false, any_positive = false;
-  int coarsest_step = 1;
+  int coarsest_level = 0;
   for (int d = 0; d < 8; ++d) {
     ctx.nb[d] = map.neighbour(owner, d & 1, (d >> 1) & 1, (d >> 2) & 1);
     ctx.level[d] = ctx.nb[d] ? ctx.nb[d]->mesh_level : 0;
     ctx.step[d] = 1 << ctx.level[d];
     if (ctx.nb[d] == nullptr) continue;
-    coarsest_step = std::max(coarsest_step, ctx.step[d]);
+    coarsest_level = std::max(coarsest_level, ctx.level[d]);
     // Of the +neighbour d the owner reads only what lies near its faces towards the owner.
     any_negative |= (ctx.nb[d]->mesh_sign_bits & meshSignBit(d, false)) != 0;
     any_positive |= (ctx.nb[d]->mesh_sign_bits & meshSignBit(d, true)) != 0;
   }
-  ctx.truncated_abs = static_cast<float>(0.99 * params_.truncation_vox * coarsest_step * params_.voxel_size_m);
+  ctx.truncated_abs = static_cast<float>(0.99 * TruncationBand(params_.voxel_size_m, params_.truncation_vox)
+                                                     .measurementM(coarsest_level));
   // Every value the mesher uses is a convex combination of observed voxels in these regions:
   // with one sign only, no cell can change sign.
   if (params_.fast_paths && (!any_negative || !any_positive)) return;

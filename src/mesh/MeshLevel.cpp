@@ -37,9 +37,11 @@ int levelFromObservedCounts(const int observed[kNumLevels], double level_min_cov
 
 int chooseMeshLevel(const VoxelBlock& block, double level_min_coverage) {
   int observed[kNumLevels] = {};
-  for (int level = 0; level < kNumLevels; ++level)
-    for (int n = 0; n < levelVoxelCount(level); ++n)
-      observed[level] += block.voxels[levelOffset(level) + n].weight > 0.0f;
+  for (int level = 0; level < kNumLevels; ++level) {
+    if (!block.hasLevel(level)) continue;  // never updated: nothing observed
+    const Voxel* voxels = block.level(level);
+    for (int n = 0; n < levelVoxelCount(level); ++n) observed[level] += voxels[n].weight > 0.0f;
+  }
   return levelFromObservedCounts(observed, level_min_coverage);
 }
 
@@ -224,12 +226,13 @@ __attribute__((target("avx2"), noinline)) uint16_t meshSignBitsAvx2(const Voxel*
 __attribute__((target("avx2"))) void refreshMeshLevelAvx2(VoxelBlock* block, double level_min_coverage) {
   static_assert(levelOffset(1) % 8 == 0 && levelOffset(2) % 8 == 0 && levelVoxelCount(2) == 8,
                 "every level is whole groups of eight voxels");
-  const int observed[kNumLevels] = {countObservedAvx2<0>(&block->voxels[levelOffset(0)]),
-                                     countObservedAvx2<1>(&block->voxels[levelOffset(1)]),
-                                     countObservedAvx2<2>(&block->voxels[levelOffset(2)])};
+  // A level never updated has nothing observed: no need to count it.
+  const int observed[kNumLevels] = {block->hasLevel(0) ? countObservedAvx2<0>(block->level(0)) : 0,
+                                     block->hasLevel(1) ? countObservedAvx2<1>(block->level(1)) : 0,
+                                     block->hasLevel(2) ? countObservedAvx2<2>(block->level(2)) : 0};
   const int level = levelFromObservedCounts(observed, level_min_coverage);
   block->mesh_level = static_cast<int8_t>(level);
-  const Voxel* voxels = &block->voxels[levelOffset(level)];
+  const Voxel* voxels = block->level(level);
   if (level == 0) block->mesh_sign_bits = meshSignBitsAvx2<0>(voxels);
   if (level == 1) block->mesh_sign_bits = meshSignBitsAvx2<1>(voxels);
   if (level == 2) block->mesh_sign_bits = meshSignBitsAvx2<2>(voxels);

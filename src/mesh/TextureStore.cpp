@@ -4,6 +4,7 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
+#include "stereo_fusion/map/TruncationBand.h"
 #include "stereo_fusion/util/Timer.h"
 
 namespace stereo_fusion {
@@ -77,7 +78,7 @@ Candidate evaluateFrame(const SubMesh& mesh, const StereoFrame& frame, const Eig
   const size_t n = mesh.positions.size();
   s->uv_px.resize(n);
   s->p_camera.resize(n);
-  const double tolerance_m = params.truncation_vox * (1 << mesh.level) * params.voxel_size_m;
+  const double tolerance_m = TruncationBand(params.voxel_size_m, params.truncation_vox).measurementM(mesh.level);
   Eigen::Vector2d lo(INFINITY, INFINITY), hi(-INFINITY, -INFINITY);
   for (size_t v = 0; v < n; ++v) {
     const Eigen::Vector3d p = T_camera_world * mesh.positions[v].cast<double>();

@@ -74,7 +74,7 @@ inline void fillAnalytic(BlockOctree* map, const sim::AnalyticScene& scene, cons
               const Eigen::Vector3d p = map->blockOrigin(key) + Eigen::Vector3d(i + 0.5, j + 0.5, k + 0.5) * h;
               double inside = INFINITY;  // most negative primitive SDF = deepest inside
               for (size_t s = 0; s < scene.size(); ++s) inside = std::min(inside, scene.primitive(static_cast<int>(s)).signedDistance(p));
-              Voxel& v = b->at(level, i, j, k);
+              Voxel& v = b->writableAt(level, i, j, k);
               v.sdf_m = static_cast<float>(-inside);
               v.weight = 1.0f;
             }

@@ -39,19 +39,26 @@ inline StereoFrame renderFrame(const sim::AnalyticScene& scene, const StereoCame
   return frame;
 }
 
-/// Every block's key and raw voxel bytes, sorted by key: equal snapshots ⇔ identical maps.
+/// Every block's key, which levels it has allocated and the raw bytes of all its 584 voxels
+/// (unallocated levels read as unobserved), sorted by key: equal snapshots ⇔ identical maps.
 struct MapSnapshot {
   std::vector<BlockKey> keys;
-  std::vector<uint8_t> bytes;
-  bool operator==(const MapSnapshot& o) const { return keys == o.keys && bytes == o.bytes; }
+  std::vector<uint8_t> level_masks;  ///< per block, bit l: level l allocated
+  std::vector<Voxel> voxels;         ///< VoxelBlock::kVoxelCount per block
+  bool operator==(const MapSnapshot& o) const {
+    return keys == o.keys && level_masks == o.level_masks && voxels.size() == o.voxels.size() &&
+           std::memcmp(voxels.data(), o.voxels.data(), voxels.size() * sizeof(Voxel)) == 0;
+  }
 };
 
 inline MapSnapshot snapshot(const BlockOctree& map) {
   MapSnapshot s;
   for (const VoxelBlock* b : map.blocksSortedByKey()) {
     s.keys.push_back(b->key);
-    const auto* p = reinterpret_cast<const uint8_t*>(b->voxels.data());
-    s.bytes.insert(s.bytes.end(), p, p + sizeof(b->voxels));
+    uint8_t mask = 0;
+    for (int level = 0; level < kNumLevels; ++level) mask |= static_cast<uint8_t>(b->hasLevel(level) << level);
+    s.level_masks.push_back(mask);
+    for (int n = 0; n < VoxelBlock::kVoxelCount; ++n) s.voxels.push_back(b->voxel(n));
   }
   return s;
 }

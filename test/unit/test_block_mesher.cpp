@@ -42,8 +42,7 @@ sim::AnalyticScene torusScene() {
 void forgetFineLevels(const Mapper& mapper, const std::function<int(const BlockKey&)>& coarse_level) {
   for (VoxelBlock* b : mapper.map().blocks()) {
     const int keep_from = coarse_level(b->key);
-    for (int level = 0; level < keep_from; ++level)
-      for (int n = 0; n < levelVoxelCount(level); ++n) b->voxels[levelOffset(level) + n] = Voxel{};
+    for (int level = 0; level < keep_from; ++level) b->releaseLevel(level);
   }
 }
 
@@ -192,6 +191,9 @@ TEST(BlockMesher, IncrementalEqualsBatchAfterRandomPartialViews) {
 TEST(BlockMesher, RemeshingTouchesExactlyTheOwnersOfTheUpdatedBlocks) {
   sim::AnalyticScene scene;
   scene.add(sim::makeSphere({0.0, 0.0, 1.2}, 0.2));
+  // A wall behind that the second view sees only in part: blocks it does not update border
+  // blocks it does.
+  scene.add(sim::makePlane({0.0, 0.0, 1.8}, {0.0, 0.0, -1.0}));
   Mapper mapper(MapperConfig{});
   ASSERT_TRUE(mapper.integrate(renderFrame(scene, qvgaCamera(), Eigen::Isometry3d::Identity())).accepted);
   const IntegrationResult r = mapper.integrate(
@@ -266,8 +268,8 @@ TEST(BlockMesher, SignBitsPerRegionHandWorked) {
   VoxelBlock block;
   block.mesh_level = 0;
   auto set = [&](int i, int j, int k, float sdf, float weight) {
-    block.at(0, i, j, k).sdf_m = sdf;
-    block.at(0, i, j, k).weight = weight;
+    block.writableAt(0, i, j, k).sdf_m = sdf;
+    block.writableAt(0, i, j, k).weight = weight;
   };
   set(0, 0, 0, -0.1f, 1.0f);
   set(3, 7, 0, 0.2f, 1.0f);
@@ -288,14 +290,14 @@ TEST(BlockMesher, SignBitsPerRegionHandWorked) {
 
   // Level 2 (step 4): only index 0 (centre 4) is near; the block reads the other level only.
   block.mesh_level = 2;
-  block.at(2, 0, 0, 0) = Voxel{};
-  block.at(2, 1, 0, 0).sdf_m = -1.0f;
-  block.at(2, 1, 0, 0).weight = 1.0f;
+  block.writableAt(2, 0, 0, 0) = Voxel{};
+  block.writableAt(2, 1, 0, 0).sdf_m = -1.0f;
+  block.writableAt(2, 1, 0, 0).weight = 1.0f;
   refreshMeshSigns(&block);
   EXPECT_EQ(block.mesh_sign_bits, meshSignBit(0, false) | meshSignBit(2, false) | meshSignBit(4, false) |
                                       meshSignBit(6, false));
   // A negative too near 0 to keep its sign through the mesher's weighted sums counts as both.
-  block.at(2, 1, 0, 0).sdf_m = -1e-31f;
+  block.writableAt(2, 1, 0, 0).sdf_m = -1e-31f;
   refreshMeshSigns(&block);
   uint16_t both = 0;
   for (int region : {0, 2, 4, 6}) both |= meshSignBit(region, false) | meshSignBit(region, true);

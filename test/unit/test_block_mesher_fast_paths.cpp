@@ -83,7 +83,7 @@ void runTrial(uint32_t seed, bool uniform_levels, Trial* totals, double noise_vo
             for (int i = 0; i < side; ++i) {
               if (unit(rng) > observed_share) continue;
               const Eigen::Vector3d centre = map.blockOrigin(block->key) + Eigen::Vector3d(i + 0.5, j + 0.5, k + 0.5) * h;
-              Voxel& v = block->at(level, i, j, k);
+              Voxel& v = block->writableAt(level, i, j, k);
               v.sdf_m = voxelValue(rng, centre, normal, offset, noise_vox);
               v.weight = 1.0f;
               v.r = static_cast<uint8_t>(rng());

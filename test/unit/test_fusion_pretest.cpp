@@ -112,9 +112,11 @@ class KernelPair {
     const uint64_t want_updates = scalar_.fuse(frame, octree_, {&want}, 1, &updated).voxels_updated;
     const uint64_t got_updates = avx2_.fuse(frame, octree_, {&got}, 1, &updated).voxels_updated;
     EXPECT_EQ(got_updates, want_updates);
-    for (size_t v = 0; v < std::size(want.voxels); ++v)
-      if (std::memcmp(&got.voxels[v], &want.voxels[v], sizeof(Voxel)) != 0) {
-        ADD_FAILURE() << "voxel " << v << ": weight " << got.voxels[v].weight << " vs " << want.voxels[v].weight;
+    for (int level = 0; level < kNumLevels; ++level)
+      EXPECT_EQ(got.hasLevel(level), want.hasLevel(level)) << "level " << level << " allocated";
+    for (int v = 0; v < VoxelBlock::kVoxelCount; ++v)
+      if (std::memcmp(&got.voxel(v), &want.voxel(v), sizeof(Voxel)) != 0) {
+        ADD_FAILURE() << "voxel " << v << ": weight " << got.voxel(v).weight << " vs " << want.voxel(v).weight;
         break;
       }
     return want_updates;

@@ -74,7 +74,7 @@ void referenceFuseBlock(const StereoFrame& frame, const BlockOctree& octree, con
             grey[0] = grey[1] = grey[2] = frame.color.at<uint8_t>(iv, iu);
             rgb = grey;
           }
-          fuseMeasurement(&block->voxels[levelOffset(level) + i + j * side + k * side * side],
+          fuseMeasurement(&block->writableAt(level, i, j, k),
                           std::max(sdf, -truncation), w, static_cast<float>(config.max_weight), rgb);
         }
   }
@@ -118,9 +118,11 @@ void expectFuserEqualsReferenceAcrossAllLevels(SurfaceFuser::Kernel kernel) {
     fuser.fuse(frame, octree, queue, f + 1, &updated);
     for (size_t n = 0; n < queue.size(); ++n) {
       ++compared_blocks;
-      for (size_t v = 0; v < std::size(queue[n]->voxels); ++v) {
-        const Voxel& got = queue[n]->voxels[v];
-        const Voxel& want = expected[n].voxels[v];
+      for (int level = 0; level < kNumLevels; ++level)
+        ASSERT_EQ(queue[n]->hasLevel(level), expected[n].hasLevel(level)) << "level " << level << " allocated";
+      for (int v = 0; v < VoxelBlock::kVoxelCount; ++v) {
+        const Voxel& got = queue[n]->voxel(v);
+        const Voxel& want = expected[n].voxel(v);
         ASSERT_EQ(std::memcmp(&got, &want, sizeof(Voxel)), 0)
             << "block " << queue[n]->key.x << "," << queue[n]->key.y << "," << queue[n]->key.z << " voxel " << v
             << ": sdf " << got.sdf_m << " vs " << want.sdf_m << ", weight " << got.weight << " vs " << want.weight;
@@ -192,8 +194,9 @@ std::vector<BlockKey> randomBlockKeys(const StereoFrame& frame, const BlockOctre
 void randomizeVoxels(VoxelBlock* block, float max_weight, std::mt19937* rng) {
   std::uniform_real_distribution<float> unit(0.0f, 1.0f);
   if (unit(*rng) < 0.3f) return;
-  for (Voxel& voxel : block->voxels) {
+  for (int n = 0; n < VoxelBlock::kVoxelCount; ++n) {
     if (unit(*rng) < 0.3f) continue;
+    Voxel& voxel = block->writableVoxel(n);
     voxel.weight = max_weight * unit(*rng);
     voxel.sdf_m = 0.2f * (unit(*rng) - 0.5f);
     voxel.r = static_cast<uint8_t>((*rng)());
@@ -285,9 +288,12 @@ TEST(FusionReference, KernelsEqualReferenceOnRandomFramesAndBlocks) {
       updates += voxels_updated[0];
       for (size_t n = 0; n < fusers.size(); ++n)
         for (size_t b = 0; b < expected.size(); ++b)
-          for (size_t v = 0; v < std::size(expected[b].voxels); ++v) {
-            const Voxel& got = blocks[n][b].voxels[v];
-            const Voxel& want = expected[b].voxels[v];
+          for (int v = 0; v < VoxelBlock::kVoxelCount; ++v) {
+            if (v == 0)
+              for (int level = 0; level < kNumLevels; ++level)
+                ASSERT_EQ(blocks[n][b].hasLevel(level), expected[b].hasLevel(level)) << "kernel " << n << " level " << level;
+            const Voxel& got = blocks[n][b].voxel(v);
+            const Voxel& want = expected[b].voxel(v);
             ASSERT_EQ(std::memcmp(&got, &want, sizeof(Voxel)), 0)
                 << "kernel " << n << " block " << b << " voxel " << v << ": sdf " << got.sdf_m << " vs "
                 << want.sdf_m << ", weight " << got.weight << " vs " << want.weight;

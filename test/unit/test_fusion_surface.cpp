@@ -208,10 +208,15 @@ TEST(FusionSurface, FarMeasurementsOnlyReachCoarseLevels) {
   for (const VoxelBlock* b : mapper.map().blocks())
     for (int level = 0; level < kNumLevels; ++level)
       for (int n = 0; n < levelVoxelCount(level); ++n)
-        observed[level] += b->voxels[levelOffset(level) + n].weight > 0;
+        observed[level] += b->level(level)[n].weight > 0;
   EXPECT_EQ(observed[0], 0u);
   EXPECT_EQ(observed[1], 0u);
   EXPECT_GT(observed[2], 100u);
+  // Far measurements allocate only the level they update: 96 bytes of voxels per block.
+  for (const VoxelBlock* b : mapper.map().blocks()) {
+    EXPECT_FALSE(b->hasLevel(0) || b->hasLevel(1)) << b->key;
+    EXPECT_EQ(b->voxelBytes(), 8 * sizeof(Voxel)) << b->key;
+  }
   // The coarse surface is still accurate to a tenth of its voxel.
   PlaneScene far_plane;
   far_plane.point = {0, 0, 5.0};

@@ -7,6 +7,7 @@
 
 #include "TestSupport.h"
 #include "stereo_fusion/integration/BlockLookup.h"
+#include "stereo_fusion/integration/SurfaceFuser.h"
 
 using namespace stereo_fusion;
 using namespace stereo_fusion::test;
@@ -182,8 +183,10 @@ TEST(BlockLookup, QueuesTheWholeTruncationBand) {
 }
 
 TEST(BlockLookup, BandGrowsWithTheMeasurementLevel) {
-  // Same pixel at z = 2.5 m (level 1, s = 2): Φ = 4·2·2 cm = 16 cm → z ∈ [2.34, 2.66]
-  // → blocks 14 ([2.24, 2.40)), 15, 16 ([2.56, 2.72)); x, y ∈ [−0.16, 0.16] → blocks −1, 0, 1.
+  // Same pixel at z = 2.5 m (level 1, s = 2): Φ = 4·2·2 cm = 16 cm along the ray (the optical
+  // axis: the pixel is the principal point) → z ∈ [2.34, 2.66] → blocks 14 ([2.24, 2.40)), 15,
+  // 16 ([2.56, 2.72)). Laterally only the voxels that project onto the pixel: 0.75 px at the
+  // far end, 0.75 · 2.66 / 500 = 4.0 mm → x, y ∈ [−0.004, 0.004] → blocks −1 and 0.
   const StereoCamera camera = *StereoCamera::create(5, 5, 500, 500, 2, 2, 0.1);
   StereoFrame frame = constantDepthFrame(camera, 0.0f);
   frame.disparity_px.at<float>(2, 2) = 20.0f;  // z = 50/20 = 2.5
@@ -194,7 +197,74 @@ TEST(BlockLookup, BandGrowsWithTheMeasurementLevel) {
   std::set<int> zs;
   for (const VoxelBlock* b : run.queue) zs.insert(b->key.z);
   EXPECT_EQ(zs, (std::set<int>{14, 15, 16}));
-  EXPECT_EQ(run.queue.size(), 3u * 3u * 3u);
+  std::set<int> xs;
+  for (const VoxelBlock* b : run.queue) xs.insert(b->key.x);
+  EXPECT_EQ(xs, (std::set<int>{-1, 0}));
+  EXPECT_EQ(run.queue.size(), 2u * 2u * 3u);
+}
+
+// The ray band must reach every block in which fusion puts a voxel within the band of its
+// measurement: fuse the frame into every block of a box around the queue (a superset of
+// anything a band could reach); each voxel that then holds a distance within Φ of its
+// measurement's level (the surface depth recovered from the voxel's own distance, eq. 3.15)
+// must lie in a queued block. (Voxels farther in front are fused, clamped to −Φ, only where a
+// band brings their block.) At near range (level 0) and far range (levels 1 and 2, whose Φ
+// spans several blocks), from an oblique pose, with noise.
+TEST(BlockLookup, EveryBlockFusionCanUpdateIsQueued) {
+  MapperConfig config;
+  config.histogram_min_points = 0;  // the filter drops sparse blocks on purpose
+  config.voxel_size_m = 0.01;
+  const StereoCamera camera = *StereoCamera::create(160, 120, 131.25, 131.25, 79.5, 59.5, 0.1);
+  sim::AnalyticScene scene;
+  scene.add(sim::makePlane({0, 0, 6.0}, {0.3, -0.2, -1.0}));
+  scene.add(sim::makeSphere({0.4, 0.1, 1.2}, 0.3));
+  scene.add(sim::makeSphere({-1.0, -0.3, 3.0}, 0.5));
+  const Eigen::Isometry3d pose = sim::lookAt({0.2, -0.1, -0.3}, {0.1, 0.0, 3.0}, -Eigen::Vector3d::UnitY());
+  const StereoFrame frame = renderFrame(scene, camera, pose, 0.3, 7);
+  ThreadPool pool(2);
+  BlockOctree tree(config.blockSizeM());
+  const LookupRun run = runLookup(config, frame, &tree);
+  ASSERT_GT(run.queue.size(), 200u);
+  std::set<BlockKey> queued;
+  BlockKey lo = run.queue.front()->key, hi = lo;
+  for (const VoxelBlock* b : run.queue) {
+    queued.insert(b->key);
+    lo = componentMin(lo, b->key);
+    hi = componentMax(hi, b->key);
+  }
+  BlockOctree all(config.blockSizeM());
+  std::vector<VoxelBlock*> every;
+  for (int32_t z = lo.z - 2; z <= hi.z + 2; ++z)
+    for (int32_t y = lo.y - 2; y <= hi.y + 2; ++y)
+      for (int32_t x = lo.x - 2; x <= hi.x + 2; ++x) every.push_back(all.findOrAllocate({x, y, z}));
+  SurfaceFuser fuser(config, &pool);
+  std::vector<VoxelBlock*> updated;
+  const FusionStats stats = fuser.fuse(frame, all, every, 1, &updated);
+  ASSERT_GT(stats.blocks_updated, 100u);
+  const TruncationBand band = config.truncationBand();
+  const Eigen::Isometry3d T_camera_world = frame.T_world_camera.inverse();
+  size_t in_band[kNumLevels] = {}, missed = 0;
+  for (const VoxelBlock* b : updated)
+    for (int level = 0; level < kNumLevels; ++level) {
+      const int side = levelSide(level);
+      for (int k = 0; k < side; ++k)
+        for (int j = 0; j < side; ++j)
+          for (int i = 0; i < side; ++i) {
+            const Voxel& v = b->at(level, i, j, k);
+            if (!(v.weight > 0.0f)) continue;
+            const Eigen::Vector3d x_c = T_camera_world * voxelCentre(all, b->key, level, i, j, k);
+            const double surface_depth_m = x_c.z() * (1.0 - v.sdf_m / x_c.norm());  // eq. 3.15 solved for z
+            const double phi_m = band.measurementM(levelForDepth(surface_depth_m, config.levels));
+            if (std::abs(v.sdf_m) > 0.999 * phi_m) continue;
+            ++in_band[level];
+            if (!queued.count(b->key)) {
+              ++missed;
+              ADD_FAILURE() << "block " << b->key << " level " << level << " sdf " << v.sdf_m << " not queued";
+            }
+          }
+    }
+  EXPECT_EQ(missed, 0u);
+  for (int level = 0; level < kNumLevels; ++level) EXPECT_GT(in_band[level], 100u) << "level " << level;
 }
 
 TEST(BlockLookup, InvalidDisparitiesAreSkipped) {

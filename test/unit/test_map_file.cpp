@@ -60,9 +60,9 @@ std::vector<uint8_t> tinyMapFile(const MapperConfig& config) {
     VoxelBlock* b = map.findOrAllocate(k);
     b->last_update_frame = 10 + n;
     for (int v = 0; v < VoxelBlock::kVoxelCount; ++v) {
-      b->voxels[v].sdf_m = 0.001f * (v - 300) + n;
-      b->voxels[v].weight = static_cast<float>(v % 5);
-      b->voxels[v].r = static_cast<uint8_t>(v);
+      b->writableVoxel(v).sdf_m = 0.001f * (v - 300) + n;
+      b->writableVoxel(v).weight = static_cast<float>(v % 5);
+      b->writableVoxel(v).r = static_cast<uint8_t>(v);
     }
     ++n;
   }
@@ -74,8 +74,10 @@ void reseal(std::vector<uint8_t>* bytes) {
   auto put = [&](size_t at, uint32_t v) {
     for (int i = 0; i < 4; ++i) (*bytes)[at + i] = static_cast<uint8_t>(v >> (8 * i));
   };
-  put(64, crc32(bytes->data() + kMapFileHeaderBytes, bytes->size() - kMapFileHeaderBytes));
-  put(68, crc32(bytes->data(), 68));
+  const bool v1 = (*bytes)[8] == 1;
+  const size_t header_bytes = v1 ? kMapFileV1HeaderBytes : kMapFileHeaderBytes;
+  put(v1 ? 64 : 72, crc32(bytes->data() + header_bytes, bytes->size() - header_bytes));
+  put(v1 ? 68 : 76, crc32(bytes->data(), v1 ? 68 : 76));
 }
 
 std::string decodeError(const std::vector<uint8_t>& bytes, const MapperConfig& config) {
@@ -85,6 +87,9 @@ std::string decodeError(const std::vector<uint8_t>& bytes, const MapperConfig& c
   if (decodeMapFile(bytes.data(), bytes.size(), config, &out, &info, &error)) return "";
   return error.empty() ? "(empty message)" : error;
 }
+
+/// A record of a block with all three levels stored (tinyMapFile()'s blocks).
+constexpr size_t kAllLevelsRecordBytes = kMapFileRecordHeadBytes + VoxelBlock::kVoxelCount * 12;
 
 }  // namespace
 
@@ -106,27 +111,82 @@ TEST(MapFile, OneBlockEncodesToTheDocumentedBytesHandWorked) {
   ASSERT_NE(block, nullptr);
   block->last_update_frame = 0x0102030405060708ull;
   block->mesh_level = 1;
-  block->voxels.front() = Voxel{0.5f, 2.0f, 10, 20, 30, 0};   // 0x3f000000, 0x40000000
-  block->voxels.back() = Voxel{-0.25f, 1.0f, 1, 2, 3, 0};     // 0xbe800000, 0x3f800000
+  // Levels 0 and 2 allocated, level 1 not: the record holds 512 + 8 voxels.
+  block->writableVoxel(0) = Voxel{0.5f, 2.0f, 10, 20, 30, 0};     // 0x3f000000, 0x40000000
+  block->writableVoxel(583) = Voxel{-0.25f, 1.0f, 1, 2, 3, 0};    // 0xbe800000, 0x3f800000
   const std::vector<uint8_t> file = encodeMapFile(map, config, 12);
-  ASSERT_EQ(file.size(), kMapFileHeaderBytes + kMapFileRecordBytes);
+  const size_t record_bytes = 24 + (512 + 8) * 12;
+  ASSERT_EQ(file.size(), kMapFileHeaderBytes + record_bytes);
   auto bytes = [&](size_t offset, std::initializer_list<int> want) {
     size_t k = offset;
     for (int b : want) EXPECT_EQ(file[k++], b) << "byte " << k - 1;
   };
-  bytes(0, {'S', 'F', 'U', 'S', 'E', 'M', 'A', 'P', 1, 0, 0, 0, 72, 0, 0, 0});
+  bytes(0, {'S', 'F', 'U', 'S', 'E', 'M', 'A', 'P', 2, 0, 0, 0, 80, 0, 0, 0});
   bytes(48, {12, 0, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0});  // frames, block count
+  bytes(64, {int(record_bytes & 0xff), int(record_bytes >> 8), 0, 0, 0, 0, 0, 0});  // payload bytes
   const size_t record = kMapFileHeaderBytes;
   bytes(record, {1, 0, 0, 0, 0xfe, 0xff, 0xff, 0xff, 3, 0, 0, 0});    // key
-  bytes(record + 12, {8, 7, 6, 5, 4, 3, 2, 1, 1, 0, 0, 0});           // frame, level, flags, 0
-  bytes(record + 24, {0, 0, 0, 0x3f, 0, 0, 0, 0x40, 10, 20, 30, 0});  // first voxel
-  bytes(record + 24 + 583 * 12, {0, 0, 0x80, 0xbe, 0, 0, 0x80, 0x3f, 1, 2, 3, 0});  // last voxel
+  bytes(record + 12, {8, 7, 6, 5, 4, 3, 2, 1, 1, 0, 5, 0});           // frame, level, flags, levels 0 and 2, 0
+  bytes(record + 24, {0, 0, 0, 0x3f, 0, 0, 0, 0x40, 10, 20, 30, 0});  // first voxel of level 0
+  bytes(record + 24 + 512 * 12 + 7 * 12, {0, 0, 0x80, 0xbe, 0, 0, 0x80, 0x3f, 1, 2, 3, 0});  // last of level 2
   bytes(record + 36, {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0});  // an untouched voxel
-  // Both checksums as documented: payload at 64, header bytes 0..67 at 68.
-  const uint32_t payload_crc = crc32(file.data() + record, kMapFileRecordBytes);
-  const uint32_t header_crc = crc32(file.data(), 68);
-  bytes(64, {int(payload_crc & 0xff), int(payload_crc >> 8 & 0xff), int(payload_crc >> 16 & 0xff), int(payload_crc >> 24)});
-  bytes(68, {int(header_crc & 0xff), int(header_crc >> 8 & 0xff), int(header_crc >> 16 & 0xff), int(header_crc >> 24)});
+  // Both checksums as documented: payload at 72, header bytes 0..75 at 76.
+  const uint32_t payload_crc = crc32(file.data() + record, record_bytes);
+  const uint32_t header_crc = crc32(file.data(), 76);
+  bytes(72, {int(payload_crc & 0xff), int(payload_crc >> 8 & 0xff), int(payload_crc >> 16 & 0xff), int(payload_crc >> 24)});
+  bytes(76, {int(header_crc & 0xff), int(header_crc >> 8 & 0xff), int(header_crc >> 16 & 0xff), int(header_crc >> 24)});
+}
+
+// A version-1 file (72-byte header, all 584 voxels per block) as the previous release wrote it.
+std::vector<uint8_t> versionOneFile(const BlockOctree& map, const MapperConfig& config, uint64_t frames) {
+  const std::vector<VoxelBlock*> blocks = map.blocksSortedByKey();
+  std::vector<uint8_t> file(kMapFileV1HeaderBytes + blocks.size() * kMapFileV1RecordBytes, 0);
+  auto put = [&](size_t at, const void* value, size_t n) { std::memcpy(file.data() + at, value, n); };
+  const uint32_t version = 1, header_bytes = 72;
+  const uint64_t count = blocks.size();
+  put(0, "SFUSEMAP", 8);
+  put(8, &version, 4);
+  put(12, &header_bytes, 4);
+  put(16, &config.voxel_size_m, 8);
+  put(24, &config.truncation_vox, 8);
+  put(32, &config.levels.scale2_min_depth_m, 8);
+  put(40, &config.levels.scale4_min_depth_m, 8);
+  put(48, &frames, 8);
+  put(56, &count, 8);
+  size_t at = kMapFileV1HeaderBytes;
+  for (const VoxelBlock* b : blocks) {
+    put(at, &b->key, 12);
+    put(at + 12, &b->last_update_frame, 8);
+    file[at + 20] = static_cast<uint8_t>(b->mesh_level);
+    for (int v = 0; v < VoxelBlock::kVoxelCount; ++v) put(at + 24 + 12 * v, &b->voxel(v), 12);
+    at += kMapFileV1RecordBytes;
+  }
+  reseal(&file);
+  return file;
+}
+
+TEST(MapFile, VersionOneFilesStillLoadWithOnlyTheirObservedLevels) {
+  MapperConfig config;
+  const auto original = fusedMapper(3, config);
+  const std::vector<uint8_t> old_file = versionOneFile(original->map(), config, original->framesIntegrated());
+  BlockOctree loaded(config.blockSizeM());
+  MapFileInfo info;
+  std::string error;
+  ASSERT_TRUE(decodeMapFile(old_file.data(), old_file.size(), config, &loaded, &info, &error)) << error;
+  EXPECT_EQ(info.version, 1u);
+  // The same blocks and voxels, and a level is allocated exactly where it holds observations
+  // (which is where fusion allocated it).
+  EXPECT_TRUE(snapshot(loaded) == snapshot(original->map()));
+  size_t blocks_without_level0 = 0;
+  for (const VoxelBlock* b : loaded.blocks()) blocks_without_level0 += !b->hasLevel(0);
+  EXPECT_GT(blocks_without_level0, 0u);
+  // Saved again, it is a version-2 file of the same map.
+  BlockOctree again(config.blockSizeM());
+  const std::vector<uint8_t> new_file = encodeMapFile(loaded, config, info.frames_integrated);
+  ASSERT_TRUE(decodeMapFile(new_file.data(), new_file.size(), config, &again, &info, &error)) << error;
+  EXPECT_EQ(info.version, 2u);
+  EXPECT_TRUE(snapshot(again) == snapshot(original->map()));
+  EXPECT_LT(new_file.size(), old_file.size());
 }
 
 TEST(MapFile, SaveLoadGivesTheIdenticalMapAndByteIdenticalMesh) {
@@ -136,7 +196,9 @@ TEST(MapFile, SaveLoadGivesTheIdenticalMapAndByteIdenticalMesh) {
   const std::string map_path = tempPath("roundtrip.sfmap");
   std::string error;
   ASSERT_TRUE(original->saveMap(map_path, &error)) << error;
-  EXPECT_EQ(fs::file_size(map_path), kMapFileHeaderBytes + original->map().blockCount() * kMapFileRecordBytes);
+  size_t voxel_bytes = 0;
+  for (const VoxelBlock* b : original->map().blocks()) voxel_bytes += b->voxelBytes();
+  EXPECT_EQ(fs::file_size(map_path), kMapFileHeaderBytes + original->map().blockCount() * kMapFileRecordHeadBytes + voxel_bytes);
 
   Mapper loaded(config);
   MeshChanges changes;
@@ -180,9 +242,9 @@ TEST(MapFile, EncodeThenWriteAndReadThenAdoptEqualSaveAndLoad) {
   std::vector<uint8_t> bytes = original->encodeMap();
   const std::vector<uint8_t> sealed = encodeMapFile(original->map(), config, original->framesIntegrated());
   ASSERT_EQ(bytes.size(), sealed.size());
-  EXPECT_TRUE(std::equal(bytes.begin(), bytes.begin() + 64, sealed.begin()));  // header before the checksums
+  EXPECT_TRUE(std::equal(bytes.begin(), bytes.begin() + 72, sealed.begin()));  // header before the checksums
   EXPECT_TRUE(std::equal(bytes.begin() + kMapFileHeaderBytes, bytes.end(), sealed.begin() + kMapFileHeaderBytes));
-  EXPECT_TRUE(std::all_of(bytes.begin() + 64, bytes.begin() + 72, [](uint8_t b) { return b == 0; }));
+  EXPECT_TRUE(std::all_of(bytes.begin() + 72, bytes.begin() + 80, [](uint8_t b) { return b == 0; }));
   ASSERT_TRUE(writeMapFileBytes(written, &bytes, &error)) << error;
   EXPECT_TRUE(bytes == sealed);
   EXPECT_TRUE(readBytes(written) == readBytes(saved));
@@ -250,7 +312,7 @@ TEST(MapFile, FusingOnAfterLoadContinuesTheSameMap) {
 TEST(MapFile, EveryTruncationAndEveryFlippedByteFailsCleanly) {
   const MapperConfig config;
   const std::vector<uint8_t> good = tinyMapFile(config);
-  ASSERT_EQ(good.size(), kMapFileHeaderBytes + 3 * kMapFileRecordBytes);
+  ASSERT_EQ(good.size(), kMapFileHeaderBytes + 3 * kAllLevelsRecordBytes);
   ASSERT_EQ(decodeError(good, config), "");
   for (size_t n = 0; n < good.size(); ++n) {
     const std::vector<uint8_t> cut(good.begin(), good.begin() + n);
@@ -279,8 +341,8 @@ TEST(MapFile, VersionParametersAndContentAreChecked) {
   const MapperConfig config;
   const std::vector<uint8_t> good = tinyMapFile(config);
   std::vector<uint8_t> bad = good;
-  bad[8] = 2;  // version 2
-  EXPECT_EQ(decodeError(bad, config), "map file version 2 is not supported (this build reads version 1)");
+  bad[8] = 3;  // version 3
+  EXPECT_EQ(decodeError(bad, config), "map file version 3 is not supported (this build reads versions 1 and 2)");
   bad = good;
   bad[0] = 'X';
   EXPECT_EQ(decodeError(bad, config), "not a stereo_fusion map file (bad magic)");
@@ -295,7 +357,7 @@ TEST(MapFile, VersionParametersAndContentAreChecked) {
 
   // Well-sealed files with impossible content.
   bad = good;
-  const size_t second = kMapFileHeaderBytes + kMapFileRecordBytes;
+  const size_t second = kMapFileHeaderBytes + kAllLevelsRecordBytes;
   std::copy(good.begin() + kMapFileHeaderBytes, good.begin() + kMapFileHeaderBytes + 12, bad.begin() + second);
   reseal(&bad);
   EXPECT_NE(decodeError(bad, config).find("appears twice"), std::string::npos) << decodeError(bad, config);
@@ -319,9 +381,17 @@ TEST(MapFile, VersionParametersAndContentAreChecked) {
   reseal(&bad);
   EXPECT_NE(decodeError(bad, config).find("beyond the map's range"), std::string::npos);
   bad = good;
-  bad[56] = 0xFF;  // block count 255 + ...: more blocks than bytes
+  bad[56] = 0xFF;  // block count 255 + ...: more blocks than the payload holds
   reseal(&bad);
-  EXPECT_NE(decodeError(bad, config).find("truncated map file"), std::string::npos) << decodeError(bad, config);
+  EXPECT_NE(decodeError(bad, config).find("block 3 of 255 runs past the end"), std::string::npos) << decodeError(bad, config);
+  bad = good;
+  bad[64] = 0;  // a payload size other than the file's
+  reseal(&bad);
+  EXPECT_NE(decodeError(bad, config).find("corrupted map file"), std::string::npos) << decodeError(bad, config);
+  bad = good;
+  bad[kMapFileHeaderBytes + 22] = 3;  // the first block without its level 2: the records no longer add up
+  reseal(&bad);
+  EXPECT_NE(decodeError(bad, config).find("invalid map file"), std::string::npos) << decodeError(bad, config);
 }
 
 TEST(MapFile, AFailedLoadLeavesTheMapAndMeshUntouched) {

@@ -53,10 +53,11 @@ TEST(MapperProperties, FusingTheSameFrameTwiceKeepsTheSurface) {
   // Same blocks, and every observed voxel's weight has grown (none exceeds the cap here).
   const MapSnapshot twice = snapshot(mapper.map());
   ASSERT_EQ(twice.keys, once.keys);
-  const auto* before = reinterpret_cast<const Voxel*>(once.bytes.data());
-  const auto* after = reinterpret_cast<const Voxel*>(twice.bytes.data());
+  EXPECT_EQ(twice.level_masks, once.level_masks);
+  const std::vector<Voxel>& before = once.voxels;
+  const std::vector<Voxel>& after = twice.voxels;
   size_t observed = 0;
-  for (size_t i = 0; i < once.bytes.size() / sizeof(Voxel); ++i) {
+  for (size_t i = 0; i < before.size(); ++i) {
     if (before[i].weight <= 0) continue;
     ++observed;
     EXPECT_GT(after[i].weight, before[i].weight);
@@ -173,8 +174,8 @@ TEST(MapperProperties, GreyImagesAndMissingColourAreAccepted) {
   Mapper mapper(MapperConfig{});
   ASSERT_TRUE(mapper.integrate(frame).accepted);
   for (const VoxelBlock* b : mapper.map().blocks())
-    for (const Voxel& v : b->voxels)
-      if (v.weight > 0) {
+    for (int n = 0; n < VoxelBlock::kVoxelCount; ++n)
+      if (const Voxel& v = b->voxel(n); v.weight > 0) {
         ASSERT_TRUE(v.r == 77 && v.g == 77 && v.b == 77);
       }
   frame.color = cv::Mat();

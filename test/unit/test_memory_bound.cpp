@@ -109,7 +109,7 @@ TEST(EvictionPolicy, HandWorkedBudgetAndDistance) {
 TEST(MemoryBound, BudgetHoldsAfterEveryFrameAndEvictsTheLeastRecent) {
   const sim::AnalyticScene scene = corridor();
   MapperConfig config = boundedConfig();
-  config.max_blocks = 400;
+  config.max_blocks = 250;
   Mapper mapper(config);
   uint64_t evicted_total = 0;
   for (int f = 0; f < 40; ++f) {
@@ -117,7 +117,7 @@ TEST(MemoryBound, BudgetHoldsAfterEveryFrameAndEvictsTheLeastRecent) {
     for (const VoxelBlock* b : mapper.map().blocks()) before[b->key] = b->last_update_frame;
     const IntegrationResult r = mapper.integrate(corridorFrame(scene, 0.15 * f));
     ASSERT_TRUE(r.accepted) << r.error;
-    EXPECT_LE(mapper.map().blockCount(), 400u) << "frame " << f;
+    EXPECT_LE(mapper.map().blockCount(), 250u) << "frame " << f;
     evicted_total += r.evicted_blocks.size();
     uint64_t oldest_kept = UINT64_MAX;
     for (const VoxelBlock* b : mapper.map().blocks()) oldest_kept = std::min(oldest_kept, b->last_update_frame);

@@ -41,7 +41,7 @@ VoxelBlock randomBlock(std::mt19937& rng) {
     const float r = unit(rng);
     const float share = r < 0.2f ? 0.0f : r < 0.35f ? 1.0f : unit(rng);
     for (int n = 0; n < levelVoxelCount(level); ++n) {
-      Voxel& v = block.voxels[levelOffset(level) + n];
+      Voxel& v = block.writableLevel(level)[n];
       v.sdf_m = randomSdf(rng);
       v.weight = randomWeight(rng, share);
       v.r = static_cast<uint8_t>(n);
@@ -85,8 +85,8 @@ TEST(MeshLevelRefresh, Avx2MatchesPlainForEverySingleVoxel) {
   for (int index = 0; index < VoxelBlock::kVoxelCount; ++index) {
     for (float sdf : {-0.25f, 0.25f, -1e-31f, -0.0f}) {
       VoxelBlock block;
-      block.voxels[index].sdf_m = sdf;
-      block.voxels[index].weight = 1.0f;
+      block.writableVoxel(index).sdf_m = sdf;
+      block.writableVoxel(index).weight = 1.0f;
       // The only observed voxel decides the level: its sign bits come from that voxel alone.
       ASSERT_NO_FATAL_FAILURE(expectSameRefresh(block, 0.8)) << "voxel " << index << " sdf " << sdf;
     }

@@ -111,15 +111,15 @@ TEST(BlockOctreeLinks, ACopiedBlockIsUnlinkedAndAssignmentKeepsTheTargetsLinks) 
   BlockOctree map(0.16);
   allocateCube(&map, {0, 0, 0});
   VoxelBlock* centre = map.find({0, 0, 0});
-  centre->voxels[7].weight = 2.0f;
+  centre->writableVoxel(7).weight = 2.0f;
   const VoxelBlock copy = *centre;
-  EXPECT_EQ(copy.voxels[7].weight, 2.0f);
+  EXPECT_EQ(copy.voxel(7).weight, 2.0f);
   EXPECT_EQ(linkCount(copy), 0);
   VoxelBlock* corner = map.find({1, 1, 1});
   const BlockKey corner_key = corner->key;
   *corner = copy;  // restoring contents: the corner stays where it is in the octree
   corner->key = corner_key;
-  EXPECT_EQ(corner->voxels[7].weight, 2.0f);
+  EXPECT_EQ(corner->voxel(7).weight, 2.0f);
   EXPECT_EQ(linkCount(*corner), 7);
   EXPECT_EQ(checkNeighbourLinks(map).mismatched, 0u);
 }

@@ -74,5 +74,30 @@ TEST(VoxelBlock, ThresholdsAreParameters) {
 
 TEST(VoxelBlock, NewBlockIsUnobserved) {
   VoxelBlock block;
-  for (const Voxel& v : block.voxels) EXPECT_EQ(v.weight, 0.0f);
+  for (int n = 0; n < VoxelBlock::kVoxelCount; ++n) EXPECT_EQ(block.voxel(n).weight, 0.0f);
+  for (int level = 0; level < kNumLevels; ++level) EXPECT_FALSE(block.hasLevel(level));
+  EXPECT_EQ(block.voxelBytes(), 0u);
+}
+
+TEST(VoxelBlock, WritingAVoxelAllocatesItsLevelOnly) {
+  VoxelBlock block;
+  block.writableAt(2, 1, 0, 1).weight = 3.0f;  // flat index 576 + 1 + 4 = 581
+  EXPECT_TRUE(block.hasLevel(2));
+  EXPECT_FALSE(block.hasLevel(0) || block.hasLevel(1));
+  EXPECT_EQ(block.voxelBytes(), 8u * 12u);
+  EXPECT_EQ(block.voxel(581).weight, 3.0f);
+  EXPECT_EQ(block.voxel(580).weight, 0.0f);
+  block.writableVoxel(0).sdf_m = -0.5f;
+  EXPECT_EQ(block.voxelBytes(), (512u + 8u) * 12u);
+  // A deep copy: the copy's voxels are its own.
+  VoxelBlock copy = block;
+  copy.writableVoxel(581).weight = 1.0f;
+  EXPECT_EQ(block.voxel(581).weight, 3.0f);
+  EXPECT_EQ(copy.voxel(0).sdf_m, -0.5f);
+  EXPECT_FALSE(copy.hasLevel(1));
+  block.releaseLevel(0);
+  EXPECT_FALSE(block.hasLevel(0));
+  EXPECT_EQ(block.voxel(0).sdf_m, 0.0f);
+  block.clearLevels();
+  EXPECT_EQ(block.voxelBytes(), 0u);
 }

@@ -1,5 +1,6 @@
 #include "fuser/OfflineFuser.h"
 
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -224,6 +225,9 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
   if (!options.save_map.empty() && !mapper.saveMap(options.save_map, error)) return false;
   report->memory_bytes = mapper.map().memoryBytes();
   report->bytes_per_block = mapper.map().bytesPerBlock();
+  report->memory = mapper.map().memoryUse();
+  struct rusage usage {};
+  if (getrusage(RUSAGE_SELF, &usage) == 0) report->peak_rss_bytes = usage.ru_maxrss * 1024.0;  // KiB on Linux
   if (!mapper.map().blocks().empty()) {
     BlockKey lo = mapper.map().blocks().front()->key, hi = lo;
     for (const VoxelBlock* b : mapper.map().blocks()) {
@@ -274,6 +278,17 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   j["memory"]["bytes"] = report.memory_bytes;
   j["memory"]["megabytes"] = report.memory_bytes / 1048576.0;
   j["memory"]["bytes_per_block"] = report.bytes_per_block;
+  // Bytes by part, and per level the blocks holding it and its bytes per such block.
+  j["memory"]["block_fixed_bytes"] = report.memory.block_bytes;
+  j["memory"]["octree_node_bytes"] = report.memory.node_bytes + report.memory.bookkeeping_bytes;
+  const char* level_names[kNumLevels] = {"8", "4", "2"};
+  for (int level = 0; level < kNumLevels; ++level) {
+    auto& l = j["memory"]["levels"][level_names[level]];
+    l["blocks"] = report.memory.level_blocks[level];
+    l["bytes"] = report.memory.level_bytes[level];
+    l["bytes_per_block"] = levelVoxelCount(level) * sizeof(Voxel);
+  }
+  j["memory"]["peak_rss_megabytes"] = report.peak_rss_bytes / 1048576.0;
   j["memory"]["dense_grid_megabytes"] = report.dense_grid_bytes / 1048576.0;
   j["memory"]["dense_grid_ratio"] = report.memory_bytes > 0 ? report.dense_grid_bytes / report.memory_bytes : 0.0;
   j["mesh"]["vertices"] = report.mesh_vertices;

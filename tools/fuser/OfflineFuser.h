@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "stereo_fusion/MapperConfig.h"
+#include "stereo_fusion/map/BlockOctree.h"
 #include "stereo_fusion/ros/BagSequence.h"
 
 namespace stereo_fusion {
@@ -48,6 +49,8 @@ struct FuseReport {
   size_t blocks_per_level[3] = {0, 0, 0};       ///< by the level each block is meshed at
   size_t memory_bytes = 0;
   double bytes_per_block = 0;
+  BlockOctree::MemoryUse memory;  ///< memory_bytes by part: blocks, voxel levels, nodes
+  double peak_rss_bytes = 0;      ///< the whole process's peak resident set (getrusage)
   /// A dense grid of finest-level voxels (same 12-byte voxel) over the blocks' bounding box:
   /// what the sparse block octree saves.
   double dense_grid_bytes = 0;

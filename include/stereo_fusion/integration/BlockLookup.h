@@ -15,15 +15,19 @@ namespace stereo_fusion {
 struct LookupStats {
   uint64_t valid_points = 0;      ///< pixels with a usable disparity
   uint64_t octree_searches = 0;   ///< find/findOrAllocate calls made by the lookup
-  uint64_t blocks_queued = 0;     ///< distinct blocks in the update queue
-  uint64_t blocks_allocated = 0;  ///< of those, newly created this frame
+  uint64_t blocks_queued = 0;     ///< distinct blocks the frame's bands reach (queued or missing)
+  uint64_t blocks_allocated = 0;  ///< of those, allocated by the lookup (only when run() allocates)
+  uint64_t blocks_missing = 0;    ///< of those, not in the map and left to fusion to create
   uint64_t blocks_filtered = 0;   ///< (region, block) pairs dropped by the histogram filter
 };
 
 /// Stage 1 of the pipeline (thesis §3.4): turns a disparity map into the queue of voxel blocks
-/// to update, allocating missing blocks. Each valid pixel contributes the blocks that
-/// intersect the cube of ±Φ around its 3D point (Φ of the level its depth selects, eq. 3.2),
-/// so that level's whole truncation band is covered. The histogram filter, when on, drops per image region the
+/// to update. Each valid pixel contributes the blocks that its truncation band reaches: the
+/// segment of its ray within ±Φ of the measured surface (Φ of the level its depth selects,
+/// eq. 3.2, TruncationBand), widened by the voxels that project onto the pixel
+/// (kLateralMarginPx). Those are exactly the blocks holding a voxel that fusion can update
+/// from this pixel, so the queue follows the surface, not the volume of a ±Φ cube around each
+/// point (a cube queues ~25× the blocks at far range, where Φ spans several blocks). The histogram filter, when on, drops per image region the
 /// blocks reached by fewer than `histogram_min_points` points.
 ///
 /// Naive (Algorithm 1) searches the octree for every (pixel, band block) pair; accelerated
@@ -40,10 +44,17 @@ class BlockLookup {
   bool usesSimd() const { return use_avx2_; }
 
   /// Fills `queue` with the distinct blocks to update, sorted by key (deterministic).
-  /// The frame must have passed validateFrame().
-  LookupStats run(const StereoFrame& frame, BlockOctree* octree, std::vector<VoxelBlock*>* queue);
+  /// The frame must have passed validateFrame(). With `missing`, blocks not yet in the octree
+  /// are not allocated: their keys go to *missing (sorted), for fusion to create only those it
+  /// really updates (SurfaceFuser::fuse); without, they are allocated and queued.
+  LookupStats run(const StereoFrame& frame, BlockOctree* octree, std::vector<VoxelBlock*>* queue,
+                  std::vector<BlockKey>* missing = nullptr);
 
  private:
+  /// How far (in pixels) from a pixel's ray a voxel centre that fusion reads at that pixel can
+  /// lie: its projection rounds to the pixel, so it is within 0.5 px on each image axis,
+  /// ≤ 0.71 px in all; 0.75 leaves room for the roundings of both paths.
+  static constexpr double kLateralMarginPx = 0.75;
   /// Largest union of a region's band boxes (in blocks) counted on a dense grid (64 KiB).
   static constexpr int64_t kMaxDenseHistogramCells = 16384;
   struct BandBox {
@@ -59,7 +70,10 @@ class BlockLookup {
     double inv_block_size = 0.0;                       ///< 1 / block edge, per metre
     double min_depth_m = 0.0, max_depth_m = 0.0;       ///< usable depth range
     LevelThresholds levels;                            ///< eq. 3.2 switch depths
-    double band_blocks[kNumLevels] = {};               ///< Φ of each level, in blocks
+    double band_m[kNumLevels] = {};                    ///< Φ of each measurement level
+    double band_blocks[kNumLevels] = {};               ///< the same in blocks
+    /// Lateral margin around a pixel's ray, in blocks per metre of depth (kLateralMarginPx).
+    double lateral_blocks_per_m = 0.0;
     /// Every Φ ≥ 0 (so lo ≤ hi in each box), which the AVX2 path's key range test relies on;
     /// a config without it keeps to the scalar path.
     bool bands_non_negative = false;
@@ -72,6 +86,7 @@ class BlockLookup {
     std::vector<int> dense_counts;                     // points per block over the boxes' union
     std::vector<BlockKey> passing;  // accelerated: blocks that pass the histogram filter
     std::vector<VoxelBlock*> found;  // naive: blocks found, in search order (with repeats)
+    std::vector<BlockKey> not_found;  // naive without allocation: keys of missing blocks (with repeats)
     LookupStats stats;
   };
 
@@ -97,7 +112,7 @@ class BlockLookup {
   void runRegionAccelerated(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const;
   /// frame_keys_ ← the distinct `passing` keys of the first `num_regions` regions, sorted.
   void collectSortedDistinctKeys(size_t num_regions);
-  void runRegionNaive(const StereoFrame& frame, const cv::Rect& region, BlockOctree* octree,
+  void runRegionNaive(const StereoFrame& frame, const cv::Rect& region, BlockOctree* octree, bool allocate,
                       RegionScratch* s) const;
 
   MapperConfig config_;

@@ -1,6 +1,7 @@
 #pragma once
-#include <functional>
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <vector>
 
 #include "stereo_fusion/MapperConfig.h"
@@ -14,7 +15,9 @@ namespace stereo_fusion {
 
 struct FusionStats {
   uint64_t voxels_updated = 0;  ///< voxel updates over all levels
-  uint64_t blocks_updated = 0;  ///< queued blocks in which at least one voxel changed
+  uint64_t blocks_updated = 0;  ///< queued blocks in which at least one voxel changed (created ones included)
+  uint64_t blocks_created = 0;  ///< of the missing blocks, those the frame updated: new in the map
+  uint64_t blocks_not_created = 0;  ///< missing blocks the frame reached but did not update: never allocated
 };
 
 /// Stage 2 of the pipeline (thesis §3.5): for every voxel of every queued block, at every
@@ -40,7 +43,7 @@ struct FusionStats {
 class SurfaceFuser {
  public:
   /// Minimum band half-width, in voxels of the level being updated.
-  static constexpr float kMinBandVoxels = 2.0f;
+  static constexpr float kMinBandVoxels = TruncationBand::kMinVoxelsOfUpdatedLevel;
 
   /// Which voxel loop fuse() runs. All give identical voxels; kAuto takes the fastest this CPU
   /// supports. The others let tests hold the paths against each other.
@@ -61,6 +64,17 @@ class SurfaceFuser {
                    std::vector<VoxelBlock*>* updated,
                    const std::function<void(VoxelBlock*)>& after_update = {});
 
+  /// fuse(), and the blocks at `missing` (keys the lookup found no block for): each is fused
+  /// into a block of its own outside the map, which goes to `created` (in key order) only if
+  /// the frame updated it, for the caller to insert (BlockOctree::insert()). So a block that
+  /// the band reaches but no voxel of which is updated (behind the surface, outside the image,
+  /// too coarse a measurement) is never allocated. `updated` holds the updated queued blocks
+  /// only; `after_update` runs for created blocks too.
+  FusionStats fuse(const StereoFrame& frame, const BlockOctree& octree, const std::vector<VoxelBlock*>& blocks,
+                   const std::vector<BlockKey>& missing, uint64_t frame_index, std::vector<VoxelBlock*>* updated,
+                   std::vector<std::unique_ptr<VoxelBlock>>* created,
+                   const std::function<void(VoxelBlock*)>& after_update = {});
+
  private:
   MapperConfig config_;
   ThreadPool* pool_;
@@ -68,6 +82,7 @@ class SurfaceFuser {
   MeasurementImage measurements_;            // reused across frames
   DepthTiles tiles_;                         // reused across frames
   std::vector<uint64_t> per_block_updates_;  // reused across frames
+  std::vector<std::unique_ptr<VoxelBlock>> candidates_;  // one per missing key, reused across frames
 };
 
 }  // namespace stereo_fusion

@@ -9,25 +9,34 @@
 
 namespace stereo_fusion {
 
-/// Map file format (all numbers little-endian):
+/// Map file format, version 2 (all numbers little-endian):
 ///
-///   header, 72 bytes:
-///     0  char[8] magic "SFUSEMAP"       8  u32 version (kMapFileVersion)   12 u32 header bytes (72)
+///   header, 80 bytes:
+///     0  char[8] magic "SFUSEMAP"       8  u32 version (kMapFileVersion)   12 u32 header bytes (80)
 ///     16 f64 voxel_size_m               24 f64 truncation_vox
 ///     32 f64 scale2_min_depth_m         40 f64 scale4_min_depth_m
 ///     48 u64 frames integrated          56 u64 block count
-///     64 u32 CRC-32 of the payload      68 u32 CRC-32 of header bytes 0..67
-///   payload: block count records of kMapFileRecordBytes, sorted by key:
+///     64 u64 payload bytes              72 u32 CRC-32 of the payload      76 u32 CRC-32 of header bytes 0..75
+///   payload: block count records, sorted by key, each a 24-byte head:
 ///     i32 x, y, z; u64 last_update_frame; i8 mesh_level; u8 flags (1 = has negative,
 ///     2 = has positive; checked ≤ 3, otherwise ignored: the reader derives the mesher's sign
-///     bits from the voxels); u16 0; then the 584 voxels of VoxelBlock in index order, each
+///     bits from the voxels); u8 levels (bit l: level l is stored); u8 0;
+///   then the voxels of each stored level, level 0 first, in index order (eq. 3.4), each
 ///     f32 sdf_m, f32 weight, u8 r, g, b, reserved.
+///   So a block seen only at 2³ takes 24 + 96 bytes.
+///
+/// Version 1 (still read): a 72-byte header without the payload size (payload CRC at 64,
+/// header CRC of bytes 0..67 at 68), and records of all 584 voxels (u8 at offset 22 was 0).
+/// Its levels without any observed voxel are not allocated on load.
 ///
 /// voxel_size_m and truncation_vox must equal the loading mapper's: they fix the block grid
 /// and the SDF's clamp. The level thresholds are recorded for information only.
-constexpr uint32_t kMapFileVersion = 1;
-constexpr size_t kMapFileHeaderBytes = 72;
-constexpr size_t kMapFileRecordBytes = 24 + 584 * 12;
+constexpr uint32_t kMapFileVersion = 2;
+constexpr size_t kMapFileHeaderBytes = 80;
+constexpr size_t kMapFileRecordHeadBytes = 24;
+constexpr size_t kMapFileV1HeaderBytes = 72;
+/// A version-1 record: the head and all 584 voxels.
+constexpr size_t kMapFileV1RecordBytes = kMapFileRecordHeadBytes + 584 * 12;
 
 /// What a map file says about itself besides its blocks.
 struct MapFileInfo {

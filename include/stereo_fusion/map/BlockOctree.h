@@ -70,6 +70,13 @@ class BlockOctree {
   /// search starts from the deepest node of the previous key's path that holds the key, which
   /// for neighbouring keys is a few levels up rather than the root.
   void findOrAllocateBatch(const BlockKey* keys, size_t n, VoxelBlock** blocks, uint8_t* allocated);
+  /// find() of each of keys[0, n) into blocks[i] (nullptr where missing), as findOrAllocateBatch()
+  /// searches but allocating nothing. Counts one search per key in range.
+  void findBatch(const BlockKey* keys, size_t n, VoxelBlock** blocks) const;
+  /// Puts a block built outside the octree (fused into before it had a place, see SurfaceFuser)
+  /// at its key, linked to its neighbours. nullptr (and the block freed) if the key is out of
+  /// range or already taken. Thread-safe as findOrAllocate().
+  VoxelBlock* insert(std::unique_ptr<VoxelBlock> block);
   /// Neighbour at offset (dx, dy, dz) ∈ {-1,0,1}³ (faces, edges, corners), or nullptr. A search;
   /// works for keys with no block too.
   VoxelBlock* neighbour(const BlockKey& key, int dx, int dy, int dz) const {
@@ -84,8 +91,24 @@ class BlockOctree {
   size_t nodeCount() const { return nodes_.size(); }
   /// Height of the root above the leaves (a tree with one root holding 8 blocks has height 1).
   int height() const;
-  /// Bytes held by blocks, inner nodes and the bookkeeping arrays.
-  size_t memoryBytes() const;
+  /// Where the map's bytes are: the blocks' fixed parts (key, fields, links), their allocated
+  /// voxel levels (and how many blocks hold each level), the inner nodes and bookkeeping arrays.
+  /// Heap allocations are counted at their requested size (the allocator adds ~16 B to each).
+  struct MemoryUse {
+    size_t block_bytes = 0;
+    size_t level_bytes[kNumLevels] = {};
+    size_t level_blocks[kNumLevels] = {};
+    size_t node_bytes = 0;
+    size_t bookkeeping_bytes = 0;
+    size_t total() const {
+      size_t t = block_bytes + node_bytes + bookkeeping_bytes;
+      for (size_t b : level_bytes) t += b;
+      return t;
+    }
+  };
+  MemoryUse memoryUse() const;
+  /// memoryUse().total(): bytes held by blocks, their voxels, inner nodes and bookkeeping.
+  size_t memoryBytes() const { return memoryUse().total(); }
   /// memoryBytes() / blockCount(): the per-block cost including octree overhead.
   double bytesPerBlock() const;
 
@@ -117,7 +140,9 @@ class BlockOctree {
   void growToContain(const BlockKey& key);  // caller holds alloc_mutex_
   /// The block at the in-range `key`, allocated if still missing: the locked half of
   /// findOrAllocate(), after its search found nothing. Not counted in searchCount().
-  VoxelBlock* allocate(const BlockKey& key, bool* allocated);
+  VoxelBlock* allocate(const BlockKey& key, std::unique_ptr<VoxelBlock> fresh, bool* allocated);
+  /// findOrAllocateBatch() (`allocated` non-null) or findBatch() (null).
+  void searchBatch(const BlockKey* keys, size_t n, VoxelBlock** blocks, uint8_t* allocated);
   /// The block at `key` in the subtree of `node`, which must contain the key. Not counted in
   /// searchCount(): link() uses it, and the octree's own searches are not the callers' work.
   static VoxelBlock* findBelow(const Node* node, const BlockKey& key);

@@ -1,6 +1,8 @@
 #pragma once
 #include <array>
+#include <cstddef>
 #include <cstdint>
+#include <memory>
 
 #include "stereo_fusion/map/BlockKey.h"
 #include "stereo_fusion/map/ResolutionLevel.h"
@@ -53,7 +55,14 @@ static_assert(NeighbourLinks::opposite(NeighbourLinks::slot(1, -1, 0)) == Neighb
               "opposite() negates the offset");
 
 /// A leaf of the BlockOctree: one cube of the world holding the same volume at three
-/// resolutions, 8³ + 4³ + 2³ = 584 voxels in one flat array (thesis eq. 3.4–3.5).
+/// resolutions, 8³ + 4³ + 2³ = 584 voxels addressed by one flat index (thesis eq. 3.4–3.5).
+///
+/// Levels are stored only once used: a level's voxels are allocated when a measurement first
+/// updates one of them (level consistency below makes that "a measurement at this level or a
+/// finer one"). A far wall seen only at 2³ holds 8 voxels (96 B), not 584 (7 KB). A level that
+/// is not allocated reads as all unobserved (weight 0), exactly like an allocated one that no
+/// measurement reached, so readers need not tell the two apart; writers go through the
+/// writable*() accessors, which allocate.
 ///
 /// Level consistency rule: a measurement whose depth selects level L (eq. 3.2) is fused
 /// into level L *and every coarser level* of the block. So the coarsest level holds every
@@ -64,17 +73,50 @@ static_assert(NeighbourLinks::opposite(NeighbourLinks::slot(1, -1, 0)) == Neighb
 struct VoxelBlock {
   static constexpr int kVoxelCount = 584;
 
+  VoxelBlock() = default;
+  /// A deep copy of the voxels and fields (a test's snapshot); links stay the target's own.
+  VoxelBlock(const VoxelBlock& other);
+  VoxelBlock& operator=(const VoxelBlock& other);
+
   /// Flat index I_B(i, j, k) = i + j·B + k·B² + O (eq. 3.4–3.5); (0,0,0) is the voxel at the
   /// block's minimum corner (the thesis' "left-top-front" in the camera-aligned view).
   static constexpr int index(int level, int i, int j, int k) {
     const int side = levelSide(level);
     return i + j * side + k * side * side + levelOffset(level);
   }
+  /// The level a flat index lies in.
+  static constexpr int levelOfIndex(int flat_index) {
+    return flat_index < levelOffset(1) ? 0 : (flat_index < levelOffset(2) ? 1 : 2);
+  }
 
-  Voxel& at(int level, int i, int j, int k) { return voxels[index(level, i, j, k)]; }
-  const Voxel& at(int level, int i, int j, int k) const { return voxels[index(level, i, j, k)]; }
+  /// The voxels of `level` (levelVoxelCount(level) of them, eq. 3.4 order): its storage, or a
+  /// shared all-unobserved level when it is not allocated.
+  const Voxel* level(int level) const { return levels_[level] ? levels_[level].get() : unobservedLevel(); }
+  /// The level's storage, or nullptr when it is not allocated.
+  Voxel* levelIfAllocated(int level) { return levels_[level].get(); }
+  bool hasLevel(int level) const { return levels_[level] != nullptr; }
+  /// The level's storage, allocated (all unobserved) first if missing.
+  Voxel* writableLevel(int level);
+  /// Allocates `level` as a copy of `voxels` (levelVoxelCount(level) of them); it must be missing.
+  void adoptLevel(int level, const Voxel* voxels);
+  /// Frees `level`: it reads as never observed.
+  void releaseLevel(int level) { levels_[level].reset(); }
+  /// Frees every level: the block reads as never observed.
+  void clearLevels();
+  /// Bytes of allocated voxel storage.
+  size_t voxelBytes() const;
 
-  std::array<Voxel, kVoxelCount> voxels{};
+  const Voxel& at(int level, int i, int j, int k) const { return voxel(index(level, i, j, k)); }
+  Voxel& writableAt(int level, int i, int j, int k) { return writableVoxel(index(level, i, j, k)); }
+  const Voxel& voxel(int flat_index) const {
+    const int l = levelOfIndex(flat_index);
+    return level(l)[flat_index - levelOffset(l)];
+  }
+  Voxel& writableVoxel(int flat_index) {
+    const int l = levelOfIndex(flat_index);
+    return writableLevel(l)[flat_index - levelOffset(l)];
+  }
+
   BlockKey key;
   /// Level the mesher samples this block at (see chooseMeshLevel()); refreshed after fusion.
   int8_t mesh_level = kNumLevels - 1;
@@ -91,8 +133,14 @@ struct VoxelBlock {
   /// Stamp of the last lookup pass that queued this block (BlockLookup de-duplicates its
   /// queue with it instead of sorting every region's finds).
   uint64_t lookup_stamp = 0;
-  /// The 26 neighbours, maintained by the owning BlockOctree. (Last, so the fields fusion and
-  /// lookup touch keep their place next to the voxels.)
+
+ private:
+  /// levelVoxelCount(0) unobserved voxels: what a missing level of any size reads as.
+  static const Voxel* unobservedLevel();
+  std::array<std::unique_ptr<Voxel[]>, kNumLevels> levels_;
+
+ public:
+  /// The 26 neighbours, maintained by the owning BlockOctree.
   NeighbourLinks neighbours;
 };
 
@@ -107,9 +155,11 @@ static_assert(VoxelBlock::index(1, 0, 0, 0) == 512 && VoxelBlock::index(1, 3, 3,
               "4³ level occupies 512..575");
 static_assert(VoxelBlock::index(2, 0, 0, 0) == 576 && VoxelBlock::index(2, 1, 1, 1) == 583,
               "2³ level occupies 576..583");
-// 7008 B of voxels + 32 B of fields + 208 B of neighbour links = 7248 B; with the octree's
-// nodes and bookkeeping a block costs ~7 300 B (7.1 KiB), inside the 10 KiB per block budget.
-static_assert(sizeof(VoxelBlock) <= 584 * 12 + 32 + NeighbourLinks::kCount * sizeof(VoxelBlock*),
-              "VoxelBlock must stay ~7 KiB");
+static_assert(VoxelBlock::levelOfIndex(511) == 0 && VoxelBlock::levelOfIndex(512) == 1 &&
+                  VoxelBlock::levelOfIndex(575) == 1 && VoxelBlock::levelOfIndex(576) == 2,
+              "levelOfIndex() inverts the level offsets");
+// Without its voxels a block is its key, mesh fields, two counters, three level pointers and the
+// 26 neighbour links: under 300 B, so a block seen only at 2³ costs ~400 B with its 96 B of voxels.
+static_assert(sizeof(VoxelBlock) <= 300, "a block's fixed part must stay small");
 
 }  // namespace stereo_fusion
