@@ -6,7 +6,6 @@
 #include <stdexcept>
 
 #include "stereo_fusion/io/MapFile.h"
-#include "stereo_fusion/map/EvictionPolicy.h"
 #include "stereo_fusion/util/Timer.h"
 
 namespace stereo_fusion {
@@ -33,9 +32,12 @@ Mapper::Mapper(const MapperConfig& config)
                                 config_.mesh_level_min_coverage}),
       texture_store_(TextureParams{config_.texture_border_px, config_.texture_max_patch_px,
                                    config_.voxel_size_m, config_.truncation_vox}),
+      mesh_consumer_(map_changes_.subscribe("mesher")),
+      eviction_consumer_(map_changes_.subscribe("eviction")),
+      texture_consumer_(mesh_changes_.subscribe("textures")),
       gate_(config_.max_pose_jump_m, config_.require_increasing_timestamps) {}
 
-IntegrationResult Mapper::integrate(const StereoFrame& frame) {
+IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_timing) {
   IntegrationResult result;
   result.error = validateFrame(frame, config_.blockSizeM());
   if (!result.error.empty()) {
@@ -47,18 +49,14 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame) {
   gate_.accepted(frame);
   result.accepted = true;
   ++frames_integrated_;
+  last_frame_ = frame;  // shares the images: what a deferred texture pass projects into
 
   Timer lookup_timer;
   result.lookup = lookup_.run(frame, &octree_, &queue_, &missing_);
   result.lookup_ms = lookup_timer.elapsedMs();
 
   Timer fusion_timer;
-  // Mesh levels are refreshed by the fusion workers while each block is still in cache.
-  std::function<void(VoxelBlock*)> refresh_level;
-  if (config_.mesh_enabled)
-    refresh_level = [coverage = config_.mesh_level_min_coverage](VoxelBlock* b) { refreshMeshLevel(b, coverage); };
-  result.fusion =
-      fuser_.fuse(frame, octree_, queue_, missing_, frames_integrated_, &updated_, &created_, refresh_level);
+  result.fusion = fuser_.fuse(frame, octree_, queue_, missing_, &updated_, &created_);
   // The blocks the frame created join the map now, in key order (allocation kept apart from the
   // update: only blocks that hold an update are ever allocated).
   if (!created_.empty()) {
@@ -69,41 +67,66 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame) {
                        [](const VoxelBlock* a, const VoxelBlock* b) { return a->key < b->key; });
   }
   result.lookup.blocks_allocated = result.fusion.blocks_created;
-  result.fusion_ms = fusion_timer.elapsedMs();
-
   result.updated_blocks.reserve(updated_.size());
   for (const VoxelBlock* block : updated_) result.updated_blocks.push_back(block->key);
+  map_changes_.recordUpdated(result.updated_blocks);
+  result.fusion_ms = fusion_timer.elapsedMs();
 
   // Memory bound, between fusion and meshing: nothing else touches the octree now.
+  eviction_.recordUpdates(octree_, map_changes_.take(eviction_consumer_).updated, frames_integrated_);
   const EvictionLimits limits{static_cast<size_t>(config_.max_blocks), config_.max_distance_from_camera_m};
-  result.evicted_blocks = selectBlocksToEvict(octree_, frame.T_world_camera.translation(), limits);
+  result.evicted_blocks = eviction_.select(octree_, frame.T_world_camera.translation(), limits);
   if (!result.evicted_blocks.empty()) {
     queue_.clear();  // their pointers dangle after erase
-    // The updated blocks that stay go on to meshing (checked before erase frees the others).
-    updated_.erase(std::remove_if(updated_.begin(), updated_.end(),
-                                  [&](const VoxelBlock* block) {
-                                    return std::binary_search(result.evicted_blocks.begin(),
-                                                              result.evicted_blocks.end(), block->key);
-                                  }),
-                   updated_.end());
+    updated_.clear();
     blocks_evicted_ += octree_.erase(result.evicted_blocks);
+    map_changes_.recordErased(result.evicted_blocks);
     std::vector<BlockKey> kept;
     std::set_difference(result.updated_blocks.begin(), result.updated_blocks.end(), result.evicted_blocks.begin(),
                         result.evicted_blocks.end(), std::back_inserter(kept));
     result.updated_blocks.swap(kept);
   }
-  if (config_.mesh_enabled) {
-    result.mesh = mesh_store_.remeshUpdatedBlocks(octree_, updated_, &pool_, result.evicted_blocks);
-    if (config_.texture == TextureMode::kPatches)
-      result.texture = texture_store_.update(mesh_store_, result.mesh, frame, frames_integrated_, &pool_);
+  if (mesh_timing == MeshTiming::kNow) {
+    MeshPass pass = updateMesh();
+    result.mesh = std::move(pass.mesh);
+    result.texture = pass.texture;
   }
   return result;
 }
 
+MeshPass Mapper::updateMesh() {
+  MeshPass pass;
+  const BlockChangeLog::Changes changes = map_changes_.take(mesh_consumer_);
+  pass.blocks_changed = changes.updated.size() + changes.erased.size();
+  if (!config_.mesh_enabled || changes.empty()) return pass;
+  pass.mesh = mesh_store_.update(octree_, changes.updated, &pool_, changes.erased);
+  recordMeshChanges(pass.mesh);
+  if (config_.texture == TextureMode::kPatches) {
+    const BlockChangeLog::Changes retexture = mesh_changes_.take(texture_consumer_);
+    MeshChanges submeshes;
+    submeshes.changed = retexture.updated;
+    submeshes.removed = retexture.erased;
+    pass.texture = texture_store_.update(mesh_store_, submeshes, last_frame_, frames_integrated_, &pool_);
+  }
+  return pass;
+}
+
+size_t Mapper::blocksAwaitingMesh() const { return map_changes_.pending(mesh_consumer_); }
+
+void Mapper::recordMeshChanges(const MeshChanges& changes) {
+  mesh_changes_.recordUpdated(changes.changed);
+  mesh_changes_.recordErased(changes.removed);
+}
+
 MeshChanges Mapper::rebuildMesh() {
+  map_changes_.take(mesh_consumer_);  // the rebuild covers them
   MeshChanges changes = mesh_store_.rebuild(octree_, &pool_);
+  recordMeshChanges(changes);
   // No frame at hand: the stored patches are re-projected onto the rebuilt submeshes.
-  if (config_.texture == TextureMode::kPatches) texture_store_.reprojectAll(mesh_store_);
+  if (config_.texture == TextureMode::kPatches) {
+    mesh_changes_.take(texture_consumer_);
+    texture_store_.reprojectAll(mesh_store_);
+  }
   return changes;
 }
 
@@ -113,7 +136,8 @@ bool Mapper::saveMap(const std::string& path, std::string* error) const {
 }
 
 std::vector<uint8_t> Mapper::encodeMap() const {
-  return encodeMapFileUnsealed(octree_, config_, frames_integrated_);
+  return encodeMapFileUnsealed(octree_, config_, frames_integrated_,
+                               [this](const VoxelBlock& block) { return eviction_.lastUpdateFrame(block); });
 }
 
 bool Mapper::loadMap(const std::string& path, MeshChanges* changes, std::string* error) {
@@ -130,23 +154,45 @@ MeshChanges Mapper::adoptMap(BlockOctree* loaded, const MapFileInfo& info) {
   queue_.clear();
   missing_.clear();
   updated_.clear();
-  // Later frames must count on from the saved ones, so last_update_frame keeps its LRU order.
+  map_changes_.clear();
+  // Later frames must count on from the saved ones, so the eviction order is kept.
+  eviction_.clear();
   frames_integrated_ = info.frames_integrated;
-  for (const VoxelBlock* b : octree_.blocks()) frames_integrated_ = std::max(frames_integrated_, b->last_update_frame);
+  for (const auto& [key, frame] : info.last_update_frames) {
+    if (const VoxelBlock* block = octree_.find(key)) eviction_.setLastUpdateFrame(octree_, *block, frame);
+    frames_integrated_ = std::max(frames_integrated_, frame);
+  }
   blocks_evicted_ = 0;
   gate_.reset();
+  last_frame_ = StereoFrame();
   // The map file holds no texture patches: the loaded map starts with vertex colours.
   texture_store_.clear();
+  mesh_changes_.take(texture_consumer_);
   // A rebuild over the kept store reports the old map's vanished submeshes as removed.
-  MeshChanges rebuilt = config_.mesh_enabled ? mesh_store_.rebuild(octree_, &pool_) : MeshChanges{};
-  if (!config_.mesh_enabled) mesh_store_.clear();
+  MeshChanges rebuilt;
+  if (config_.mesh_enabled) {
+    rebuilt = mesh_store_.rebuild(octree_, &pool_);
+    recordMeshChanges(rebuilt);
+    mesh_changes_.take(texture_consumer_);
+  } else {
+    mesh_store_.clear();
+  }
   return rebuilt;
 }
 
 void Mapper::reset() {
+  MeshChanges dropped;
+  for (const auto& [key, submesh] : mesh_store_.submeshes()) dropped.removed.push_back(key);
+  std::sort(dropped.removed.begin(), dropped.removed.end());
   octree_.clear();
   mesh_store_.clear();
   texture_store_.clear();
+  eviction_.clear();
+  map_changes_.clear();
+  mesh_changes_.clear();
+  recordMeshChanges(dropped);  // the mesh's consumers learn that every submesh is gone
+  mesh_changes_.take(texture_consumer_);
+  last_frame_ = StereoFrame();
   frames_integrated_ = 0;
   blocks_evicted_ = 0;
   gate_.reset();

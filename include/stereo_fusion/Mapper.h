@@ -10,12 +10,30 @@
 #include "stereo_fusion/integration/StereoFrame.h"
 #include "stereo_fusion/integration/SurfaceFuser.h"
 #include "stereo_fusion/io/MapFile.h"
+#include "stereo_fusion/map/BlockChangeLog.h"
 #include "stereo_fusion/map/BlockOctree.h"
+#include "stereo_fusion/map/EvictionPolicy.h"
 #include "stereo_fusion/mesh/MeshStore.h"
 #include "stereo_fusion/mesh/TextureStore.h"
 #include "stereo_fusion/util/ThreadPool.h"
 
 namespace stereo_fusion {
+
+/// What one meshing pass (Mapper::updateMesh()) did.
+struct MeshPass {
+  /// Submeshes changed / removed by this pass.
+  MeshChanges mesh;
+  /// What the texture pass did (all zero unless texture = patches).
+  TextureStats texture;
+  /// Blocks fusion or eviction changed since the previous pass: what this pass meshed around.
+  size_t blocks_changed = 0;
+};
+
+/// When integrate() brings the mesh up to date.
+enum class MeshTiming {
+  kNow,       ///< right after the frame (updateMesh()): the mesh always matches the map
+  kDeferred,  ///< later, by the caller's updateMesh(): the frame's changes wait in the change log
+};
 
 /// What integrate() did with one frame.
 struct IntegrationResult {
@@ -26,29 +44,38 @@ struct IntegrationResult {
   double fusion_ms = 0.0;
   LookupStats lookup;
   FusionStats fusion;
-  /// Submeshes changed / removed by this frame (empty when meshing is disabled).
-  MeshChanges mesh;
-  /// Blocks whose voxels changed in this frame and were kept, sorted by key (the meshing stage's input).
+  /// Blocks whose voxels changed in this frame and were kept, sorted by key.
   std::vector<BlockKey> updated_blocks;
-  /// What the texture pass did (all zero unless texture = patches).
-  TextureStats texture;
   /// Blocks evicted after this frame by the memory bound (max_blocks,
-  /// max_distance_from_camera_m), sorted by key; their submeshes are in mesh.removed.
+  /// max_distance_from_camera_m), sorted by key.
   std::vector<BlockKey> evicted_blocks;
+  /// With MeshTiming::kNow (and meshing enabled): what the meshing pass after this frame
+  /// changed (the submeshes of evicted blocks among the removed) and its texture pass.
+  /// Empty with MeshTiming::kDeferred.
+  MeshChanges mesh;
+  TextureStats texture;
 };
 
-/// The ROS-free mapping pipeline: integrate(frame) = validate → lookup → fusion → meshing.
+/// The ROS-free mapping pipeline. integrate(frame) = validate → lookup → fusion → eviction; every
+/// stage after fusion learns which blocks changed from a change log (BlockChangeLog) and
+/// catches up at its own rate: eviction after every frame, the mesher (and after it the texture
+/// pass) whenever updateMesh() runs — after every frame by default, or as the caller chooses.
 class Mapper {
  public:
   /// Throws std::invalid_argument listing every invalid parameter.
   explicit Mapper(const MapperConfig& config);
 
   /// Fuses one frame. A frame that fails validateFrame() is rejected with the reason and
-  /// leaves the map untouched.
-  IntegrationResult integrate(const StereoFrame& frame);
+  /// leaves the map untouched. With MeshTiming::kNow the mesh is brought up to date too.
+  IntegrationResult integrate(const StereoFrame& frame, MeshTiming mesh_timing = MeshTiming::kNow);
+  /// Meshes around every block changed since the last pass (nothing when meshing is disabled)
+  /// and, with texture = patches, textures the changed submeshes from the latest frame.
+  MeshPass updateMesh();
+  /// Blocks changed by fusion or eviction that the mesher has not caught up with yet.
+  size_t blocksAwaitingMesh() const;
 
   const BlockOctree& map() const { return octree_; }
-  /// The incrementally maintained mesh, one submesh per block.
+  /// The incrementally maintained mesh, one submesh per block (current as of the last updateMesh()).
   const MeshStore& mesh() const { return mesh_store_; }
   /// The whole mesh, submeshes welded into one (for export).
   TriangleMesh extractMesh() const { return weldSubmeshes(mesh_store_.submeshes()); }
@@ -61,8 +88,18 @@ class Mapper {
   uint64_t framesIntegrated() const { return frames_integrated_; }
   /// Blocks evicted by the memory bound since construction, reset() or loadMap().
   uint64_t blocksEvicted() const { return blocks_evicted_; }
+  /// The frame that last updated `block` (the eviction order).
+  uint64_t lastUpdateFrame(const VoxelBlock& block) const { return eviction_.lastUpdateFrame(block); }
   /// Drops the whole map.
   void reset();
+
+  /// A consumer of the mesh's changes (submeshes changed / removed by meshing passes, rebuilds,
+  /// loads and resets), e.g. a publisher that sends them at its own rate.
+  BlockChangeLog::Consumer subscribeToMeshChanges(const std::string& name) { return mesh_changes_.subscribe(name); }
+  /// The submeshes changed (updated) and removed (erased) since `consumer` last took them.
+  BlockChangeLog::Changes takeMeshChanges(BlockChangeLog::Consumer consumer) { return mesh_changes_.take(consumer); }
+  /// Mesh changes recorded for `consumer` and not taken yet.
+  size_t pendingMeshChanges(BlockChangeLog::Consumer consumer) const { return mesh_changes_.pending(consumer); }
 
   /// Writes the map to `path` (io/MapFile.h format, via a temporary file renamed into place).
   bool saveMap(const std::string& path, std::string* error) const;
@@ -82,6 +119,9 @@ class Mapper {
   MeshChanges adoptMap(BlockOctree* loaded, const MapFileInfo& info);
 
  private:
+  /// Records a meshing pass's (or rebuild's) changes for the mesh's consumers.
+  void recordMeshChanges(const MeshChanges& changes);
+
   MapperConfig config_;
   ThreadPool pool_;
   BlockOctree octree_;
@@ -89,6 +129,15 @@ class Mapper {
   SurfaceFuser fuser_;
   MeshStore mesh_store_;
   TextureStore texture_store_;
+  EvictionPolicy eviction_;
+  /// Blocks fusion updated and eviction erased, for the stages after fusion.
+  BlockChangeLog map_changes_;
+  BlockChangeLog::Consumer mesh_consumer_, eviction_consumer_;
+  /// Submeshes the mesher changed, for the texture pass and outside consumers.
+  BlockChangeLog mesh_changes_;
+  BlockChangeLog::Consumer texture_consumer_;
+  /// The latest accepted frame: what a deferred meshing pass textures from.
+  StereoFrame last_frame_;
   uint64_t frames_integrated_ = 0;
   uint64_t blocks_evicted_ = 0;
   FrameGate gate_;

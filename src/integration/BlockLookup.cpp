@@ -495,18 +495,11 @@ LookupStats BlockLookup::run(const StereoFrame& frame, BlockOctree* octree, std:
         missing->push_back(frame_keys_[i]);  // in key order, as frame_keys_
     }
   } else {
-    // Regions overlap in blocks: keep each block's first find. Stamps are unique across all
-    // BlockLookup instances, so two lookups on one octree never mistake each other's marks.
-    static std::atomic<uint64_t> last_stamp{0};
-    const uint64_t stamp = ++last_stamp;
-    for (size_t r = 0; r < num_regions; ++r)
-      for (VoxelBlock* block : scratch_[r].found) {
-        if (block->lookup_stamp == stamp) continue;
-        block->lookup_stamp = stamp;
-        queue->push_back(block);
-      }
+    // Regions overlap in blocks: each block once, in key order.
+    for (size_t r = 0; r < num_regions; ++r) queue->insert(queue->end(), scratch_[r].found.begin(), scratch_[r].found.end());
     std::sort(queue->begin(), queue->end(),
               [](const VoxelBlock* a, const VoxelBlock* b) { return a->key < b->key; });
+    queue->erase(std::unique(queue->begin(), queue->end()), queue->end());
     if (missing) {
       for (size_t r = 0; r < num_regions; ++r)
         missing->insert(missing->end(), scratch_[r].not_found.begin(), scratch_[r].not_found.end());

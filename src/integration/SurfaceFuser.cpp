@@ -16,15 +16,14 @@ void SurfaceFuser::setKernel(Kernel kernel) {
 }
 
 FusionStats SurfaceFuser::fuse(const StereoFrame& frame, const BlockOctree& octree,
-                               const std::vector<VoxelBlock*>& blocks, uint64_t frame_index,
-                               std::vector<VoxelBlock*>* updated,
+                               const std::vector<VoxelBlock*>& blocks, std::vector<VoxelBlock*>* updated,
                                const std::function<void(VoxelBlock*)>& after_update) {
-  return fuse(frame, octree, blocks, {}, frame_index, updated, nullptr, after_update);
+  return fuse(frame, octree, blocks, {}, updated, nullptr, after_update);
 }
 
 FusionStats SurfaceFuser::fuse(const StereoFrame& frame, const BlockOctree& octree,
                                const std::vector<VoxelBlock*>& blocks, const std::vector<BlockKey>& missing,
-                               uint64_t frame_index, std::vector<VoxelBlock*>* updated,
+                               std::vector<VoxelBlock*>* updated,
                                std::vector<std::unique_ptr<VoxelBlock>>* created,
                                const std::function<void(VoxelBlock*)>& after_update) {
   FusionStats stats;
@@ -66,14 +65,10 @@ FusionStats SurfaceFuser::fuse(const StereoFrame& frame, const BlockOctree& octr
     }
     stats.voxels_updated += per_block_updates_[b];
     ++stats.blocks_updated;
-    if (b < blocks.size()) {
-      blocks[b]->last_update_frame = frame_index;
+    if (b < blocks.size())
       updated->push_back(blocks[b]);
-    } else {
-      std::unique_ptr<VoxelBlock>& candidate = candidates_[b - blocks.size()];
-      candidate->last_update_frame = frame_index;
-      created->push_back(std::move(candidate));
-    }
+    else
+      created->push_back(std::move(candidates_[b - blocks.size()]));
   }
   stats.blocks_created = created ? created->size() : 0;
   return stats;

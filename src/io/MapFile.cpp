@@ -14,7 +14,6 @@
 #include <iterator>
 #include <sstream>
 
-#include "stereo_fusion/mesh/BlockMesher.h"
 #include "stereo_fusion/util/Crc32.h"
 
 namespace stereo_fusion {
@@ -121,14 +120,15 @@ std::string number(double v) {
 
 }  // namespace
 
-std::vector<uint8_t> encodeMapFile(const BlockOctree& map, const MapperConfig& config, uint64_t frames_integrated) {
-  std::vector<uint8_t> file = encodeMapFileUnsealed(map, config, frames_integrated);
+std::vector<uint8_t> encodeMapFile(const BlockOctree& map, const MapperConfig& config, uint64_t frames_integrated,
+                                   const LastUpdateFrameOf& last_update_frame) {
+  std::vector<uint8_t> file = encodeMapFileUnsealed(map, config, frames_integrated, last_update_frame);
   sealMapFile(&file);
   return file;
 }
 
 std::vector<uint8_t> encodeMapFileUnsealed(const BlockOctree& map, const MapperConfig& config,
-                                           uint64_t frames_integrated) {
+                                           uint64_t frames_integrated, const LastUpdateFrameOf& last_update_frame) {
   static_assert(kMapFileV1RecordBytes == kMapFileRecordHeadBytes + VoxelBlock::kVoxelCount * kVoxelRecordBytes,
                 "record layout");
   const std::vector<VoxelBlock*> blocks = map.blocksSortedByKey();
@@ -140,12 +140,9 @@ std::vector<uint8_t> encodeMapFileUnsealed(const BlockOctree& map, const MapperC
     storeU32(record, static_cast<uint32_t>(b->key.x));
     storeU32(record + 4, static_cast<uint32_t>(b->key.y));
     storeU32(record + 8, static_cast<uint32_t>(b->key.z));
-    storeU64(record + 12, b->last_update_frame);
-    record[20] = static_cast<uint8_t>(b->mesh_level);
-    // Whole-block signs (bit 0: a voxel < 0, bit 1: one ≥ 0); derived, recomputed on load.
-    record[21] = static_cast<uint8_t>(b->mesh_sign_bits & (meshSignBit(0, false) | meshSignBit(0, true)));
-    record[22] = levelMask(*b);
-    record[23] = 0;
+    storeU64(record + 12, last_update_frame ? last_update_frame(*b) : 0);
+    record[20] = levelMask(*b);
+    record[21] = record[22] = record[23] = 0;
     record += kMapFileRecordHeadBytes;
     for (int l = 0; l < kNumLevels; ++l) {
       if (!b->hasLevel(l)) continue;
@@ -211,6 +208,7 @@ bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config,
   info->scale4_min_depth_m = getF64(data + 40);
   info->frames_integrated = getU64(data + 48);
   info->block_count = getU64(data + 56);
+  info->last_update_frames.clear();
   const size_t payload_bytes = size - header_bytes;
   // The sizes the header announces, compared by division: a corrupted count must not overflow.
   // Version 1 records have one size; version 2 gives the payload's size (records are checked
@@ -258,11 +256,15 @@ bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config,
       return "block " + std::to_string(n) + " (key " + std::to_string(key.x) + ", " + std::to_string(key.y) + ", " +
              std::to_string(key.z) + ")";
     };
-    const int level = static_cast<int8_t>(r[20]);
-    const uint8_t mask = v1 ? 0b111 : r[22];
-    if (level < 0 || level >= kNumLevels || r[21] > 3 || mask > 0b111) {
-      *error = "invalid map file: " + which() + " has mesh level " + std::to_string(level) + " / flags " +
-               std::to_string(r[21]) + " / levels " + std::to_string(r[22]);
+    // Version 1: derived mesh level and sign flags at 20, 21 (checked, then recomputed);
+    // version 2: the stored levels at 20, then zeros.
+    const uint8_t mask = v1 ? 0b111 : r[20];
+    const bool valid = v1 ? static_cast<int8_t>(r[20]) >= 0 && static_cast<int8_t>(r[20]) < kNumLevels && r[21] <= 3
+                          : mask <= 0b111 && r[21] == 0 && r[22] == 0 && r[23] == 0;
+    if (!valid) {
+      *error = "invalid map file: " + which() + " has head bytes " + std::to_string(r[20]) + ", " +
+               std::to_string(r[21]) + ", " + std::to_string(r[22]) + ", " + std::to_string(r[23]) +
+               (v1 ? " (mesh level, flags, 0, 0)" : " (levels, 0, 0, 0)");
       return false;
     }
     const size_t record_bytes = kMapFileRecordHeadBytes + levelBytes(mask);
@@ -276,8 +278,7 @@ bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config,
       *error = "invalid map file: " + which() + (block ? " appears twice" : " is beyond the map's range");
       return false;
     }
-    block->last_update_frame = getU64(r + 12);
-    block->mesh_level = static_cast<int8_t>(level);
+    info->last_update_frames.emplace_back(key, getU64(r + 12));
     const uint8_t* in = r + kMapFileRecordHeadBytes;
     for (int l = 0; l < kNumLevels; ++l) {
       if (!(mask & (1u << l))) continue;
@@ -298,7 +299,6 @@ bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config,
       if (observed || !v1) block->adoptLevel(l, voxels);
     }
     r += record_bytes;
-    refreshMeshSigns(block);  // derived from the voxels, so a file cannot make the mesher skip a surface
   }
   if (r != payload_end) {
     *error = "invalid map file: " + std::to_string(payload_end - r) + " bytes after the last of " +

@@ -177,6 +177,12 @@ VoxelBlock* BlockOctree::allocate(const BlockKey& key, std::unique_ptr<VoxelBloc
       block_storage_.push_back(std::move(fresh));
       VoxelBlock* block = block_storage_.back().get();
       block->key = key;
+      if (free_rows_.empty()) {
+        block->row = row_count_++;
+      } else {
+        block->row = free_rows_.back();
+        free_rows_.pop_back();
+      }
       link(block);
       blocks_.push_back(block);
       slot.store(block, std::memory_order_release);
@@ -269,6 +275,8 @@ void BlockOctree::clear() {
   blocks_.clear();
   block_storage_.clear();
   nodes_.clear();
+  free_rows_.clear();
+  row_count_ = 0;
 }
 
 size_t BlockOctree::erase(const std::vector<BlockKey>& keys) {
@@ -308,7 +316,10 @@ size_t BlockOctree::erase(const std::vector<BlockKey>& keys) {
   }
   if (doomed_blocks.empty()) return 0;
   // All unlinked before any is freed: unlinking writes into neighbours, which may be doomed too.
-  for (VoxelBlock* block : to_unlink) unlink(block);
+  for (VoxelBlock* block : to_unlink) {
+    unlink(block);
+    free_rows_.push_back(block->row);
+  }
   blocks_.erase(std::remove_if(blocks_.begin(), blocks_.end(),
                                [&](const VoxelBlock* b) { return doomed_blocks.count(b) > 0; }),
                 blocks_.end());
@@ -332,6 +343,8 @@ void BlockOctree::swap(BlockOctree& other) {
   nodes_.swap(other.nodes_);
   blocks_.swap(other.blocks_);
   block_storage_.swap(other.block_storage_);
+  free_rows_.swap(other.free_rows_);
+  std::swap(row_count_, other.row_count_);
 }
 
 }  // namespace stereo_fusion

@@ -4,8 +4,22 @@
 
 namespace stereo_fusion {
 
-std::vector<BlockKey> selectBlocksToEvict(const BlockOctree& map, const Eigen::Vector3d& camera_position_m,
-                                          const EvictionLimits& limits) {
+void EvictionPolicy::recordUpdates(const BlockOctree& map, const std::vector<BlockKey>& updated,
+                                   uint64_t frame_index) {
+  found_.resize(updated.size());
+  map.findBatch(updated.data(), updated.size(), found_.data());
+  last_update_frame_.fit(map);
+  for (const VoxelBlock* block : found_)
+    if (block != nullptr) last_update_frame_[*block] = frame_index;
+}
+
+void EvictionPolicy::setLastUpdateFrame(const BlockOctree& map, const VoxelBlock& block, uint64_t frame_index) {
+  last_update_frame_.fit(map);
+  last_update_frame_[block] = frame_index;
+}
+
+std::vector<BlockKey> EvictionPolicy::select(const BlockOctree& map, const Eigen::Vector3d& camera_position_m,
+                                             const EvictionLimits& limits) const {
   std::vector<BlockKey> evict;
   const bool by_distance = limits.max_distance_from_camera_m > 0.0;
   const bool by_budget = limits.max_blocks > 0 && map.blockCount() > limits.max_blocks;
@@ -24,7 +38,7 @@ std::vector<BlockKey> selectBlocksToEvict(const BlockOctree& map, const Eigen::V
     if (by_distance && distance_m > limits.max_distance_from_camera_m)
       evict.push_back(block->key);
     else
-      keep.push_back({block->last_update_frame, distance_m, block->key});
+      keep.push_back({lastUpdateFrame(*block), distance_m, block->key});
   }
   if (limits.max_blocks > 0 && keep.size() > limits.max_blocks) {
     const size_t excess = keep.size() - limits.max_blocks;

@@ -13,11 +13,7 @@ VoxelBlock& VoxelBlock::operator=(const VoxelBlock& other) {
     if (other.levels_[l]) adoptLevel(l, other.levels_[l].get());
   }
   key = other.key;
-  mesh_level = other.mesh_level;
-  mesh_sign_bits = other.mesh_sign_bits;
-  last_update_frame = other.last_update_frame;
-  lookup_stamp = other.lookup_stamp;
-  return *this;  // neighbours: NeighbourLinks keeps the target's own
+  return *this;  // index and neighbours describe where the target sits in its octree: kept
 }
 
 const Voxel* VoxelBlock::unobservedLevel() {

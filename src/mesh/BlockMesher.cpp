@@ -975,10 +975,12 @@ void BlockMesher::meshGenericBox(Context& ctx, const int lo[3], const int hi[3])
   }
 }
 
-void BlockMesher::mesh(const BlockOctree& map, const VoxelBlock& owner, SubMesh* out) const {
+void BlockMesher::mesh(const BlockOctree& map, const MeshStates& states, const VoxelBlock& owner,
+                       SubMesh* out) const {
   out->clear();
   out->key = owner.key;
-  out->level = owner.mesh_level;
+  const int owner_level = states[owner].level;
+  out->level = owner_level;
   thread_local MeshScratch scratch;
   thread_local std::vector<PointSample> vertex_samples;
   Context ctx;
@@ -995,13 +997,13 @@ void BlockMesher::mesh(const BlockOctree& map, const VoxelBlock& owner, SubMesh*
   int coarsest_level = 0;
   for (int d = 0; d < 8; ++d) {
     ctx.nb[d] = map.neighbour(owner, d & 1, (d >> 1) & 1, (d >> 2) & 1);
-    ctx.level[d] = ctx.nb[d] ? ctx.nb[d]->mesh_level : 0;
+    ctx.level[d] = ctx.nb[d] ? states[*ctx.nb[d]].level : 0;
     ctx.step[d] = 1 << ctx.level[d];
     if (ctx.nb[d] == nullptr) continue;
     coarsest_level = std::max(coarsest_level, ctx.level[d]);
     // Of the +neighbour d the owner reads only what lies near its faces towards the owner.
-    any_negative |= (ctx.nb[d]->mesh_sign_bits & meshSignBit(d, false)) != 0;
-    any_positive |= (ctx.nb[d]->mesh_sign_bits & meshSignBit(d, true)) != 0;
+    any_negative |= (states[*ctx.nb[d]].sign_bits & meshSignBit(d, false)) != 0;
+    any_positive |= (states[*ctx.nb[d]].sign_bits & meshSignBit(d, true)) != 0;
   }
   ctx.truncated_abs = static_cast<float>(0.99 * TruncationBand(params_.voxel_size_m, params_.truncation_vox)
                                                      .measurementM(coarsest_level));
@@ -1016,11 +1018,11 @@ void BlockMesher::mesh(const BlockOctree& map, const VoxelBlock& owner, SubMesh*
     // neighbourhood that differed only by it takes the uniform path. (truncated_abs above still
     // counts it: that is what the general path uses.)
     for (int d = 1; d < 8; ++d)
-      if (ctx.nb[d] && (ctx.nb[d]->mesh_sign_bits & (meshSignBit(d, false) | meshSignBit(d, true))) == 0)
+      if (ctx.nb[d] && (states[*ctx.nb[d]].sign_bits & (meshSignBit(d, false) | meshSignBit(d, true))) == 0)
         ctx.nb[d] = nullptr;
   }
   for (int d = 1; d < 8; ++d)
-    if (ctx.nb[d] && ctx.level[d] != owner.mesh_level) ctx.uniform = false;
+    if (ctx.nb[d] && ctx.level[d] != owner_level) ctx.uniform = false;
   ctx.buildSampleGrid();
   if (ctx.uniform)
     meshUniformBoxes(ctx);

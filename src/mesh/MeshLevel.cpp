@@ -45,8 +45,8 @@ int chooseMeshLevel(const VoxelBlock& block, double level_min_coverage) {
   return levelFromObservedCounts(observed, level_min_coverage);
 }
 
-void refreshMeshSigns(VoxelBlock* block) {
-  const int level = block->mesh_level;
+void refreshMeshSigns(const VoxelBlock& block, MeshBlockState* state) {
+  const int level = state->level;
   const int side = levelSide(level), step = levelScale(level);
   // The owners below reach at most 4 half-voxel units into this block (the coarsest level's
   // first centre), where blockField() weighs up to the next centre beyond: every voxel they
@@ -56,7 +56,7 @@ void refreshMeshSigns(VoxelBlock* block) {
   for (int k = 0; k < side; ++k)
     for (int j = 0; j < side; ++j)
       for (int i = 0; i < side; ++i) {
-        const Voxel& v = block->at(level, i, j, k);
+        const Voxel& v = block.at(level, i, j, k);
         if (!(v.weight > 0.0f)) continue;
         // A value in [−1e-30, 0) counts as both signs: the mesher's weighted sums can round it
         // to −0, which compares as non-negative.
@@ -70,20 +70,20 @@ void refreshMeshSigns(VoxelBlock* block) {
   for (int region = 0; region < 8; ++region)
     for (int near = 0; near < 8; ++near)
       if ((region & near) == region) bits |= static_cast<uint16_t>(seen[near] << (2 * region));
-  block->mesh_sign_bits = bits;
+  state->sign_bits = bits;
 }
 
-void refreshMeshLevel(VoxelBlock* block, double level_min_coverage) {
+void refreshMeshLevel(const VoxelBlock& block, double level_min_coverage, MeshBlockState* state) {
   static const bool use_avx2 = avx2Supported();
   if (use_avx2)
-    refreshMeshLevelAvx2(block, level_min_coverage);
+    refreshMeshLevelAvx2(block, level_min_coverage, state);
   else
-    refreshMeshLevelScalar(block, level_min_coverage);
+    refreshMeshLevelScalar(block, level_min_coverage, state);
 }
 
-void refreshMeshLevelScalar(VoxelBlock* block, double level_min_coverage) {
-  block->mesh_level = static_cast<int8_t>(chooseMeshLevel(*block, level_min_coverage));
-  refreshMeshSigns(block);
+void refreshMeshLevelScalar(const VoxelBlock& block, double level_min_coverage, MeshBlockState* state) {
+  state->level = static_cast<int8_t>(chooseMeshLevel(block, level_min_coverage));
+  refreshMeshSigns(block, state);
 }
 
 #ifdef STEREO_FUSION_HAVE_AVX2_REFRESH
@@ -223,25 +223,26 @@ __attribute__((target("avx2"), noinline)) uint16_t meshSignBitsAvx2(const Voxel*
 
 }  // namespace
 
-__attribute__((target("avx2"))) void refreshMeshLevelAvx2(VoxelBlock* block, double level_min_coverage) {
+__attribute__((target("avx2"))) void refreshMeshLevelAvx2(const VoxelBlock& block, double level_min_coverage,
+                                                           MeshBlockState* state) {
   static_assert(levelOffset(1) % 8 == 0 && levelOffset(2) % 8 == 0 && levelVoxelCount(2) == 8,
                 "every level is whole groups of eight voxels");
   // A level never updated has nothing observed: no need to count it.
-  const int observed[kNumLevels] = {block->hasLevel(0) ? countObservedAvx2<0>(block->level(0)) : 0,
-                                     block->hasLevel(1) ? countObservedAvx2<1>(block->level(1)) : 0,
-                                     block->hasLevel(2) ? countObservedAvx2<2>(block->level(2)) : 0};
+  const int observed[kNumLevels] = {block.hasLevel(0) ? countObservedAvx2<0>(block.level(0)) : 0,
+                                     block.hasLevel(1) ? countObservedAvx2<1>(block.level(1)) : 0,
+                                     block.hasLevel(2) ? countObservedAvx2<2>(block.level(2)) : 0};
   const int level = levelFromObservedCounts(observed, level_min_coverage);
-  block->mesh_level = static_cast<int8_t>(level);
-  const Voxel* voxels = block->level(level);
-  if (level == 0) block->mesh_sign_bits = meshSignBitsAvx2<0>(voxels);
-  if (level == 1) block->mesh_sign_bits = meshSignBitsAvx2<1>(voxels);
-  if (level == 2) block->mesh_sign_bits = meshSignBitsAvx2<2>(voxels);
+  state->level = static_cast<int8_t>(level);
+  const Voxel* voxels = block.level(level);
+  if (level == 0) state->sign_bits = meshSignBitsAvx2<0>(voxels);
+  if (level == 1) state->sign_bits = meshSignBitsAvx2<1>(voxels);
+  if (level == 2) state->sign_bits = meshSignBitsAvx2<2>(voxels);
 }
 
 #else  // not x86: only the scalar path
 
-void refreshMeshLevelAvx2(VoxelBlock* block, double level_min_coverage) {
-  refreshMeshLevelScalar(block, level_min_coverage);
+void refreshMeshLevelAvx2(const VoxelBlock& block, double level_min_coverage, MeshBlockState* state) {
+  refreshMeshLevelScalar(block, level_min_coverage, state);
 }
 
 #endif

@@ -76,7 +76,7 @@ MeshChanges MeshStore::remesh(const BlockOctree& map, const std::vector<Owner>& 
   Timer timer;
   if (scratch_.size() < owners.size()) scratch_.resize(owners.size());
   pool->parallelFor(owners.size(), 4, [&](size_t begin, size_t end) {
-    for (size_t i = begin; i < end; ++i) mesher_.mesh(map, *owners[i].block, &scratch_[i]);
+    for (size_t i = begin; i < end; ++i) mesher_.mesh(map, states_, *owners[i].block, &scratch_[i]);
   });
   MeshChanges update;
   update.blocks_meshed = owners.size();
@@ -97,11 +97,12 @@ MeshChanges MeshStore::update(const BlockOctree& map, const std::vector<BlockKey
                              ThreadPool* pool, const std::vector<BlockKey>& erased) {
   // The one search per updated block: owners and neighbours are then reached through links.
   std::vector<const VoxelBlock*> found(updated.size());
+  states_.fit(map);
   // Each level choice reads one block's voxels: independent, so in parallel.
   pool->parallelFor(updated.size(), 16, [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i)
-      if (VoxelBlock* block = map.find(updated[i])) {
-        refreshMeshLevel(block, params_.level_min_coverage);
+      if (const VoxelBlock* block = map.find(updated[i])) {
+        refreshMeshLevel(*block, params_.level_min_coverage, &states_[*block]);
         found[i] = block;
       }
   });
@@ -114,6 +115,11 @@ MeshChanges MeshStore::update(const BlockOctree& map, const std::vector<BlockKey
 
 MeshChanges MeshStore::remeshUpdatedBlocks(const BlockOctree& map, const std::vector<VoxelBlock*>& updated_blocks,
                                            ThreadPool* pool, const std::vector<BlockKey>& erased) {
+  states_.fit(map);
+  pool->parallelFor(updated_blocks.size(), 16, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i)
+      refreshMeshLevel(*updated_blocks[i], params_.level_min_coverage, &states_[*updated_blocks[i]]);
+  });
   return remeshAround(map, std::vector<const VoxelBlock*>(updated_blocks.begin(), updated_blocks.end()), {}, pool,
                       erased);
 }
@@ -137,10 +143,12 @@ MeshChanges MeshStore::remeshAround(const BlockOctree& map, std::vector<const Vo
 
 MeshChanges MeshStore::rebuild(const BlockOctree& map, ThreadPool* pool) {
   std::vector<Owner> all;
-  for (VoxelBlock* block : map.blocksSortedByKey()) {
-    refreshMeshLevel(block, params_.level_min_coverage);
-    all.push_back({block->key, block});
-  }
+  const std::vector<VoxelBlock*> blocks = map.blocksSortedByKey();
+  states_.fit(map);
+  pool->parallelFor(blocks.size(), 16, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) refreshMeshLevel(*blocks[i], params_.level_min_coverage, &states_[*blocks[i]]);
+  });
+  for (const VoxelBlock* block : blocks) all.push_back({block->key, block});
   std::vector<BlockKey> stale;
   for (const auto& [key, mesh] : meshes_)
     if (map.find(key) == nullptr) stale.push_back(key);

@@ -31,6 +31,7 @@ void FusionNodelet::onInit() {
     throw std::invalid_argument(error);
   }
   mapper_ = std::make_unique<Mapper>(mapper_config_);
+  publisher_ = mapper_->subscribeToMeshChanges("mesh_update publisher");
   started_ = ros::WallTime::now();
   session_ = started_.toNSec();
   last_publish_ = ros::WallTime(0, 0);
@@ -178,7 +179,9 @@ void FusionNodelet::processFrame(const QueuedFrame& f) {
       return;
     }
     try {
-      result = mapper_->integrate(frame);
+      // The mesh is brought up to date when it is published (publishPending()), at most
+      // mesh_publish_rate_hz; with rate 0, after every frame.
+      result = mapper_->integrate(frame, node_config_.mesh_publish_rate_hz > 0 ? MeshTiming::kDeferred : MeshTiming::kNow);
     } catch (const std::exception&) {
       // A throw mid-frame (e.g. bad_alloc) can leave the fused voxels and the mesh out of step:
       // re-mesh from the map and send subscribers a full update before the frame is counted.
@@ -193,18 +196,12 @@ void FusionNodelet::processFrame(const QueuedFrame& f) {
     }
     blocks_evicted_ += result.evicted_blocks.size();
     if (result.accepted) {
-      for (const BlockKey& k : result.mesh.changed) {
-        pending_changed_.insert(k);
-        pending_removed_.erase(k);
-      }
-      for (const BlockKey& k : result.mesh.removed) {
-        pending_removed_.insert(k);
-        pending_changed_.erase(k);
-      }
       unpublished_stamps_.push_back(header.stamp);
-      stage_ms_.push_back({result.lookup_ms, result.fusion_ms, result.mesh.meshing_ms, result.texture.texture_ms,
+      frame_ms_.push_back({result.lookup_ms, result.fusion_ms,
                            result.lookup_ms + result.fusion_ms + result.mesh.meshing_ms + result.texture.texture_ms});
-      if (stage_ms_.size() > 1000) stage_ms_.pop_front();
+      if (frame_ms_.size() > 1000) frame_ms_.pop_front();
+      if (!result.mesh.changed.empty() || !result.mesh.removed.empty() || result.mesh.blocks_meshed > 0)
+        recordMeshPassLocked(result.mesh.meshing_ms, result.texture.texture_ms);
       if (node_config_.publish_path) {
         geometry_msgs::PoseStamped pose;
         pose.header = header;
@@ -242,19 +239,32 @@ void FusionNodelet::processFrame(const QueuedFrame& f) {
   publishPending(header.stamp, false);
 }
 
+void FusionNodelet::recordMeshPassLocked(double meshing_ms, double texture_ms) {
+  mesh_pass_ms_.push_back({meshing_ms, texture_ms});
+  if (mesh_pass_ms_.size() > 1000) mesh_pass_ms_.pop_front();
+  ++mesh_passes_;
+}
+
 void FusionNodelet::publishPending(const ros::Time& stamp, bool force) {
   std::lock_guard<std::mutex> lock(map_mutex_);
-  if (pending_changed_.empty() && pending_removed_.empty() && !markers_full_pending_) return;
+  if (mapper_->blocksAwaitingMesh() == 0 && mapper_->pendingMeshChanges(publisher_) == 0 && !markers_full_pending_)
+    return;
   const ros::WallTime now = ros::WallTime::now();
   if (!force && node_config_.mesh_publish_rate_hz > 0 &&
       (now - last_publish_).toSec() < 1.0 / node_config_.mesh_publish_rate_hz)
     return;
   last_publish_ = now;
+  // The mesher catches up with the blocks fusion changed since the last publish.
+  if (mapper_->blocksAwaitingMesh() > 0) {
+    const MeshPass pass = mapper_->updateMesh();
+    recordMeshPassLocked(pass.mesh.meshing_ms, pass.texture.texture_ms);
+  }
   std_msgs::Header header;
   header.frame_id = node_config_.world_frame;
   header.stamp = stamp.isZero() && !unpublished_stamps_.empty() ? unpublished_stamps_.back() : stamp;
-  const std::vector<BlockKey> changed(pending_changed_.begin(), pending_changed_.end());
-  const std::vector<BlockKey> removed(pending_removed_.begin(), pending_removed_.end());
+  const BlockChangeLog::Changes pending = mapper_->takeMeshChanges(publisher_);
+  const std::vector<BlockKey>& changed = pending.updated;
+  const std::vector<BlockKey>& removed = pending.erased;
   // Every flush of changes gets a sequence number, sent or not: a subscriber that was not
   // connected for one sees the gap and asks ~get_full_mesh. Publish only what someone hears.
   if (!changed.empty() || !removed.empty()) {
@@ -286,14 +296,17 @@ void FusionNodelet::publishPending(const ros::Time& stamp, bool force) {
     if (latencies_s_.size() > 1000) latencies_s_.pop_front();
   }
   unpublished_stamps_.clear();
-  pending_changed_.clear();
-  pending_removed_.clear();
 }
 
 bool FusionNodelet::saveMesh(SaveMesh::Request& req, SaveMesh::Response& res) {
   {
     // Written under the lock: the submeshes and patches are not copied (a rare, manual call).
     std::lock_guard<std::mutex> lock(map_mutex_);
+    // The mesh of every frame fused so far (the publisher sends these changes at its next turn).
+    if (mapper_->blocksAwaitingMesh() > 0) {
+      const MeshPass pass = mapper_->updateMesh();
+      recordMeshPassLocked(pass.mesh.meshing_ms, pass.texture.texture_ms);
+    }
     res.success = exportMesh(req.path, mapper_->mesh().submeshes(), mapper_->textures().patches(), &res.message);
   }
   if (res.success)
@@ -330,9 +343,9 @@ bool FusionNodelet::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&)
   startMapEpochLocked();
   mapper_->reset();
   path_.poses.clear();
-  stage_ms_.clear();
-  pending_changed_.clear();
-  pending_removed_.clear();
+  frame_ms_.clear();
+  mesh_pass_ms_.clear();
+  mapper_->takeMeshChanges(publisher_);  // the empty full update below says it all
   unpublished_stamps_.clear();
   std_msgs::Header header;
   header.frame_id = node_config_.world_frame;
@@ -393,7 +406,8 @@ bool FusionNodelet::loadMap(LoadMap::Request& req, LoadMap::Response& res) {
   res.blocks = mapper_->map().blockCount();
   startMapEpochLocked();
   path_.poses.clear();
-  stage_ms_.clear();
+  frame_ms_.clear();
+  mesh_pass_ms_.clear();
   publishFullLocked(changes.removed);
   res.message = "loaded " + std::to_string(res.blocks) + " blocks from " + req.path;
   NODELET_INFO("stereo_fusion: load_map: %s", res.message.c_str());
@@ -401,8 +415,7 @@ bool FusionNodelet::loadMap(LoadMap::Request& req, LoadMap::Response& res) {
 }
 
 void FusionNodelet::publishFullLocked(const std::vector<BlockKey>& removed) {
-  pending_changed_.clear();
-  pending_removed_.clear();
+  mapper_->takeMeshChanges(publisher_);  // a full update replaces whatever was pending
   unpublished_stamps_.clear();
   std_msgs::Header header;
   header.frame_id = node_config_.world_frame;
@@ -424,13 +437,24 @@ void FusionNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
   const uint64_t dropped = dropped_queue_ + dropped_tf_ + dropped_bad_input_ + dropped_backwards_ +
                            dropped_duplicate_ + dropped_pose_jump_;
   std::vector<double> lat;
+  // lookup, fusion, total per frame; meshing, texture per meshing pass.
   std::vector<double> stages[5];
-  size_t blocks = 0, memory = 0;
+  size_t blocks = 0, memory = 0, awaiting_mesh = 0;
+  uint64_t mesh_passes = 0;
   {
     std::lock_guard<std::mutex> lock(map_mutex_);
     lat.assign(latencies_s_.begin(), latencies_s_.end());
-    for (const auto& s : stage_ms_)
-      for (int k = 0; k < 5; ++k) stages[k].push_back(s[k]);
+    for (const auto& s : frame_ms_) {
+      stages[0].push_back(s[0]);
+      stages[1].push_back(s[1]);
+      stages[4].push_back(s[2]);
+    }
+    for (const auto& s : mesh_pass_ms_) {
+      stages[2].push_back(s[0]);
+      stages[3].push_back(s[1]);
+    }
+    mesh_passes = mesh_passes_;
+    awaiting_mesh = mapper_->blocksAwaitingMesh();
     blocks = mapper_->map().blockCount();
     memory = mapper_->map().memoryBytes();
   }
@@ -458,6 +482,9 @@ void FusionNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
     status.add(std::string(names[k]) + " p50 (ms)", percentile(stages[k], 0.5));
     status.add(std::string(names[k]) + " p99 (ms)", percentile(stages[k], 0.99));
   }
+  status.add("timings", "lookup, fusion, total: per frame; meshing, texture: per meshing pass");
+  status.add("meshing passes", mesh_passes);
+  status.add("blocks awaiting meshing", awaiting_mesh);
   status.add("blocks", blocks);
   status.add("blocks evicted", blocks_evicted_.load());
   status.add("memory (MB)", memory / 1048576.0);

@@ -266,7 +266,8 @@ TEST(BlockMesher, SignBitsPerRegionHandWorked) {
   // (4,4,4) = −0.3 (near on none), (7,0,7) = 0 (near on y; 0 counts as ≥ 0), and an
   // unobserved (1,1,1) = +5 that must not count.
   VoxelBlock block;
-  block.mesh_level = 0;
+  MeshBlockState state;
+  state.level = 0;
   auto set = [&](int i, int j, int k, float sdf, float weight) {
     block.writableAt(0, i, j, k).sdf_m = sdf;
     block.writableAt(0, i, j, k).weight = weight;
@@ -276,8 +277,8 @@ TEST(BlockMesher, SignBitsPerRegionHandWorked) {
   set(4, 4, 4, -0.3f, 2.0f);
   set(7, 0, 7, 0.0f, 1.0f);
   set(1, 1, 1, 5.0f, 0.0f);
-  refreshMeshSigns(&block);
-  auto has = [&](int region, bool non_negative) { return (block.mesh_sign_bits & meshSignBit(region, non_negative)) != 0; };
+  refreshMeshSigns(block, &state);
+  auto has = [&](int region, bool non_negative) { return (state.sign_bits & meshSignBit(region, non_negative)) != 0; };
   // region: bit 0 x, bit 1 y, bit 2 z        <0 from          ≥0 from
   EXPECT_TRUE(has(0, false) && has(0, true));  // all              (3,7,0), (7,0,7)
   EXPECT_TRUE(has(1, false) && has(1, true));  // (0,0,0)          (3,7,0)
@@ -289,17 +290,17 @@ TEST(BlockMesher, SignBitsPerRegionHandWorked) {
   EXPECT_TRUE(has(7, false) && !has(7, true));  // (0,0,0)         —
 
   // Level 2 (step 4): only index 0 (centre 4) is near; the block reads the other level only.
-  block.mesh_level = 2;
+  state.level = 2;
   block.writableAt(2, 0, 0, 0) = Voxel{};
   block.writableAt(2, 1, 0, 0).sdf_m = -1.0f;
   block.writableAt(2, 1, 0, 0).weight = 1.0f;
-  refreshMeshSigns(&block);
-  EXPECT_EQ(block.mesh_sign_bits, meshSignBit(0, false) | meshSignBit(2, false) | meshSignBit(4, false) |
+  refreshMeshSigns(block, &state);
+  EXPECT_EQ(state.sign_bits, meshSignBit(0, false) | meshSignBit(2, false) | meshSignBit(4, false) |
                                       meshSignBit(6, false));
   // A negative too near 0 to keep its sign through the mesher's weighted sums counts as both.
   block.writableAt(2, 1, 0, 0).sdf_m = -1e-31f;
-  refreshMeshSigns(&block);
+  refreshMeshSigns(block, &state);
   uint16_t both = 0;
   for (int region : {0, 2, 4, 6}) both |= meshSignBit(region, false) | meshSignBit(region, true);
-  EXPECT_EQ(block.mesh_sign_bits, both);
+  EXPECT_EQ(state.sign_bits, both);
 }

@@ -64,6 +64,7 @@ void runTrial(uint32_t seed, bool uniform_levels, Trial* totals, double noise_vo
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   const double block_size = kFinestSide * kVoxel;
   BlockOctree map(block_size);
+  MeshStates states;  // the mesher's per-block state, as MeshStore keeps it
   const Eigen::Vector3d normal = Eigen::Vector3d(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5).normalized();
   const double offset = normal.dot(Eigen::Vector3d::Constant(kClusterSide * block_size / 2)) +
                         (unit(rng) - 0.5) * block_size;
@@ -92,7 +93,8 @@ void runTrial(uint32_t seed, bool uniform_levels, Trial* totals, double noise_vo
             }
         // Only `level` holds data, so it is the level chosen (any coverage > 0); a block with
         // no observed voxel falls back to the coarsest level, which the mesher must handle too.
-        refreshMeshLevel(block, 1e-6);
+        states.fit(map);
+        refreshMeshLevel(*block, 1e-6, &states[*block]);
       }
   MeshingParams fast_params{kVoxel, kTruncationVox, 1e-6};
   MeshingParams general_params = fast_params;
@@ -100,12 +102,12 @@ void runTrial(uint32_t seed, bool uniform_levels, Trial* totals, double noise_vo
   const BlockMesher fast(fast_params), general(general_params);
   for (VoxelBlock* owner : map.blocks()) {
     SubMesh a, b;
-    fast.mesh(map, *owner, &a);
-    general.mesh(map, *owner, &b);
+    fast.mesh(map, states, *owner, &a);
+    general.mesh(map, states, *owner, &b);
     bool uniform = true;
     for (int d = 1; d < 8; ++d)
       if (const VoxelBlock* nb = map.find(owner->key.offset(d & 1, (d >> 1) & 1, (d >> 2) & 1)))
-        uniform &= nb->mesh_level == owner->mesh_level;
+        uniform &= states[*nb].level == states[*owner].level;
     ++(uniform ? totals->owners_uniform : totals->owners_mixed);
     totals->triangles += b.triangles.size();
     const std::string where = "seed " + std::to_string(seed) + ", owner (" + std::to_string(owner->key.x) + ", " +

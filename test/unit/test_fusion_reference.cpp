@@ -115,7 +115,7 @@ void expectFuserEqualsReferenceAcrossAllLevels(SurfaceFuser::Kernel kernel) {
     expected.reserve(queue.size());
     for (const VoxelBlock* b : queue) expected.push_back(*b);
     for (VoxelBlock& b : expected) referenceFuseBlock(frame, octree, config, &b);
-    fuser.fuse(frame, octree, queue, f + 1, &updated);
+    fuser.fuse(frame, octree, queue, &updated);
     for (size_t n = 0; n < queue.size(); ++n) {
       ++compared_blocks;
       for (int level = 0; level < kNumLevels; ++level)
@@ -282,7 +282,7 @@ TEST(FusionReference, KernelsEqualReferenceOnRandomFramesAndBlocks) {
       for (size_t n = 0; n < fusers.size(); ++n) {
         std::vector<VoxelBlock*> queue, updated;
         for (VoxelBlock& b : blocks[n]) queue.push_back(&b);
-        voxels_updated.push_back(fusers[n].fuse(frame, octree, queue, frame_index, &updated).voxels_updated);
+        voxels_updated.push_back(fusers[n].fuse(frame, octree, queue, &updated).voxels_updated);
       }
       for (size_t n = 1; n < fusers.size(); ++n) EXPECT_EQ(voxels_updated[n], voxels_updated[0]);
       updates += voxels_updated[0];

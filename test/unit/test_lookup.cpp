@@ -239,7 +239,7 @@ TEST(BlockLookup, EveryBlockFusionCanUpdateIsQueued) {
       for (int32_t x = lo.x - 2; x <= hi.x + 2; ++x) every.push_back(all.findOrAllocate({x, y, z}));
   SurfaceFuser fuser(config, &pool);
   std::vector<VoxelBlock*> updated;
-  const FusionStats stats = fuser.fuse(frame, all, every, 1, &updated);
+  const FusionStats stats = fuser.fuse(frame, all, every, &updated);
   ASSERT_GT(stats.blocks_updated, 100u);
   const TruncationBand band = config.truncationBand();
   const Eigen::Isometry3d T_camera_world = frame.T_world_camera.inverse();

@@ -58,7 +58,6 @@ std::vector<uint8_t> tinyMapFile(const MapperConfig& config) {
   int n = 0;
   for (const BlockKey& k : keys) {
     VoxelBlock* b = map.findOrAllocate(k);
-    b->last_update_frame = 10 + n;
     for (int v = 0; v < VoxelBlock::kVoxelCount; ++v) {
       b->writableVoxel(v).sdf_m = 0.001f * (v - 300) + n;
       b->writableVoxel(v).weight = static_cast<float>(v % 5);
@@ -66,7 +65,7 @@ std::vector<uint8_t> tinyMapFile(const MapperConfig& config) {
     }
     ++n;
   }
-  return encodeMapFile(map, config, 12);
+  return encodeMapFile(map, config, 12, [](const VoxelBlock& b) { return uint64_t{10} + static_cast<uint64_t>(b.key.x + 3); });
 }
 
 /// Re-seals a patched file with correct checksums, so the content checks are what fails.
@@ -109,12 +108,10 @@ TEST(MapFile, OneBlockEncodesToTheDocumentedBytesHandWorked) {
   BlockOctree map(config.blockSizeM());
   VoxelBlock* block = map.findOrAllocate({1, -2, 3});
   ASSERT_NE(block, nullptr);
-  block->last_update_frame = 0x0102030405060708ull;
-  block->mesh_level = 1;
   // Levels 0 and 2 allocated, level 1 not: the record holds 512 + 8 voxels.
   block->writableVoxel(0) = Voxel{0.5f, 2.0f, 10, 20, 30, 0};     // 0x3f000000, 0x40000000
   block->writableVoxel(583) = Voxel{-0.25f, 1.0f, 1, 2, 3, 0};    // 0xbe800000, 0x3f800000
-  const std::vector<uint8_t> file = encodeMapFile(map, config, 12);
+  const std::vector<uint8_t> file = encodeMapFile(map, config, 12, [](const VoxelBlock&) { return 0x0102030405060708ull; });
   const size_t record_bytes = 24 + (512 + 8) * 12;
   ASSERT_EQ(file.size(), kMapFileHeaderBytes + record_bytes);
   auto bytes = [&](size_t offset, std::initializer_list<int> want) {
@@ -126,7 +123,7 @@ TEST(MapFile, OneBlockEncodesToTheDocumentedBytesHandWorked) {
   bytes(64, {int(record_bytes & 0xff), int(record_bytes >> 8), 0, 0, 0, 0, 0, 0});  // payload bytes
   const size_t record = kMapFileHeaderBytes;
   bytes(record, {1, 0, 0, 0, 0xfe, 0xff, 0xff, 0xff, 3, 0, 0, 0});    // key
-  bytes(record + 12, {8, 7, 6, 5, 4, 3, 2, 1, 1, 0, 5, 0});           // frame, level, flags, levels 0 and 2, 0
+  bytes(record + 12, {8, 7, 6, 5, 4, 3, 2, 1, 5, 0, 0, 0});           // last update frame, levels 0 and 2, 0, 0, 0
   bytes(record + 24, {0, 0, 0, 0x3f, 0, 0, 0, 0x40, 10, 20, 30, 0});  // first voxel of level 0
   bytes(record + 24 + 512 * 12 + 7 * 12, {0, 0, 0x80, 0xbe, 0, 0, 0x80, 0x3f, 1, 2, 3, 0});  // last of level 2
   bytes(record + 36, {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0});  // an untouched voxel
@@ -156,8 +153,9 @@ std::vector<uint8_t> versionOneFile(const BlockOctree& map, const MapperConfig& 
   size_t at = kMapFileV1HeaderBytes;
   for (const VoxelBlock* b : blocks) {
     put(at, &b->key, 12);
-    put(at + 12, &b->last_update_frame, 8);
-    file[at + 20] = static_cast<uint8_t>(b->mesh_level);
+    const uint64_t last_update = 40 + static_cast<uint64_t>(b->key.z & 7);  // any: v1 stored the frame here
+    put(at + 12, &last_update, 8);
+    file[at + 20] = 2;  // v1's mesh level: derived data the reader checks (< 3) and ignores
     for (int v = 0; v < VoxelBlock::kVoxelCount; ++v) put(at + 24 + 12 * v, &b->voxel(v), 12);
     at += kMapFileV1RecordBytes;
   }
@@ -205,8 +203,9 @@ TEST(MapFile, SaveLoadGivesTheIdenticalMapAndByteIdenticalMesh) {
   ASSERT_TRUE(loaded.loadMap(map_path, &changes, &error)) << error;
   EXPECT_TRUE(snapshot(loaded.map()) == snapshot(original->map()));
   EXPECT_EQ(loaded.framesIntegrated(), original->framesIntegrated());
+  // The eviction order goes with the map.
   for (const VoxelBlock* b : original->map().blocks())
-    EXPECT_EQ(loaded.map().find(b->key)->last_update_frame, b->last_update_frame) << b->key;
+    EXPECT_EQ(loaded.lastUpdateFrame(*loaded.map().find(b->key)), original->lastUpdateFrame(*b)) << b->key;
   EXPECT_EQ(changes.changed.size(), loaded.mesh().submeshes().size());
   EXPECT_TRUE(changes.removed.empty());
   // Loading allocates block by block and swaps the octree in: the neighbour links the mesher
@@ -240,7 +239,9 @@ TEST(MapFile, EncodeThenWriteAndReadThenAdoptEqualSaveAndLoad) {
   ASSERT_TRUE(original->saveMap(saved, &error)) << error;
   // encodeMap() leaves the checksums to writeMapFileBytes(), which fills them in place.
   std::vector<uint8_t> bytes = original->encodeMap();
-  const std::vector<uint8_t> sealed = encodeMapFile(original->map(), config, original->framesIntegrated());
+  const std::vector<uint8_t> sealed =
+      encodeMapFile(original->map(), config, original->framesIntegrated(),
+                    [&](const VoxelBlock& block) { return original->lastUpdateFrame(block); });
   ASSERT_EQ(bytes.size(), sealed.size());
   EXPECT_TRUE(std::equal(bytes.begin(), bytes.begin() + 72, sealed.begin()));  // header before the checksums
   EXPECT_TRUE(std::equal(bytes.begin() + kMapFileHeaderBytes, bytes.end(), sealed.begin() + kMapFileHeaderBytes));
@@ -372,9 +373,14 @@ TEST(MapFile, VersionParametersAndContentAreChecked) {
   reseal(&bad);
   EXPECT_NE(decodeError(bad, config).find("negative weight"), std::string::npos);
   bad = good;
-  bad[kMapFileHeaderBytes + 20] = 7;  // mesh level
+  bad[kMapFileHeaderBytes + 20] = 8;  // a level that does not exist
   reseal(&bad);
-  EXPECT_NE(decodeError(bad, config).find("mesh level 7"), std::string::npos);
+  EXPECT_NE(decodeError(bad, config).find("has head bytes 8, 0, 0, 0 (levels, 0, 0, 0)"), std::string::npos)
+      << decodeError(bad, config);
+  bad = good;
+  bad[kMapFileHeaderBytes + 23] = 1;  // the head's padding must be zero
+  reseal(&bad);
+  EXPECT_NE(decodeError(bad, config).find("has head bytes 7, 0, 0, 1"), std::string::npos) << decodeError(bad, config);
   bad = good;
   const uint32_t far = (1u << 28) + 5;  // beyond kMaxKey
   std::memcpy(bad.data() + kMapFileHeaderBytes, &far, 4);
@@ -389,7 +395,7 @@ TEST(MapFile, VersionParametersAndContentAreChecked) {
   reseal(&bad);
   EXPECT_NE(decodeError(bad, config).find("corrupted map file"), std::string::npos) << decodeError(bad, config);
   bad = good;
-  bad[kMapFileHeaderBytes + 22] = 3;  // the first block without its level 2: the records no longer add up
+  bad[kMapFileHeaderBytes + 20] = 3;  // the first block without its level 2: the records no longer add up
   reseal(&bad);
   EXPECT_NE(decodeError(bad, config).find("invalid map file"), std::string::npos) << decodeError(bad, config);
 }

@@ -1,6 +1,9 @@
 // Properties of the whole integrate() path that DESIGN.md requires.
 #include <gtest/gtest.h>
 
+#include <set>
+
+#include "MeshTestSupport.h"
 #include "QuickMode.h"
 #include "TestSupport.h"
 
@@ -195,4 +198,63 @@ TEST(MapperProperties, InvalidConfigurationIsRefusedWithEveryReason) {
     EXPECT_NE(what.find("voxel_size_m"), std::string::npos) << what;
     EXPECT_NE(what.find("min_depth_m must be < max_depth_m"), std::string::npos) << what;
   }
+}
+
+// Meshing at its own rate: frames fused with the mesh deferred and one updateMesh() at the end
+// give the same map and the same mesh as meshing after every frame, and that mesh equals a
+// from-scratch extraction. A pass with nothing changed does nothing.
+TEST(MapperProperties, DeferredMeshingEqualsMeshingEveryFrameAndABatchRebuild) {
+  const std::vector<StereoFrame> frames =
+      orbitFrames(4, 0.3, *StereoCamera::create(320, 240, 262.5, 262.5, 159.5, 119.5, 0.1));
+  MapperConfig config;
+  Mapper every_frame(config), deferred(config);
+  for (const StereoFrame& frame : frames) {
+    ASSERT_TRUE(every_frame.integrate(frame).accepted);
+    const IntegrationResult r = deferred.integrate(frame, MeshTiming::kDeferred);
+    ASSERT_TRUE(r.accepted);
+    EXPECT_EQ(r.mesh.blocks_meshed, 0u);
+    EXPECT_TRUE(r.mesh.changed.empty());
+  }
+  EXPECT_GT(deferred.blocksAwaitingMesh(), 0u);
+  EXPECT_TRUE(deferred.mesh().submeshes().empty());
+  const MeshPass pass = deferred.updateMesh();
+  EXPECT_GT(pass.blocks_changed, 100u);
+  EXPECT_EQ(pass.mesh.changed.size(), deferred.mesh().submeshes().size());
+  EXPECT_EQ(deferred.blocksAwaitingMesh(), 0u);
+  EXPECT_TRUE(snapshot(deferred.map()) == snapshot(every_frame.map()));
+  EXPECT_TRUE(triangleSets(deferred.mesh()) == triangleSets(every_frame.mesh()));
+  MeshStore batch(MeshingParams{config.voxel_size_m, config.truncation_vox, config.mesh_level_min_coverage});
+  ThreadPool pool(2);
+  batch.rebuild(deferred.map(), &pool);
+  EXPECT_TRUE(triangleSets(deferred.mesh()) == triangleSets(batch));
+  const MeshPass idle = deferred.updateMesh();
+  EXPECT_EQ(idle.blocks_changed, 0u);
+  EXPECT_EQ(idle.mesh.blocks_meshed, 0u);
+}
+
+// The mesh's consumers (the nodelet's publisher is one) see every submesh change once, whatever
+// their rate: a consumer that takes after every second pass holds exactly the current mesh.
+TEST(MapperProperties, MeshChangeConsumersFollowTheMeshAtTheirOwnRate) {
+  const std::vector<StereoFrame> frames =
+      orbitFrames(5, 0.3, *StereoCamera::create(320, 240, 262.5, 262.5, 159.5, 119.5, 0.1));
+  Mapper mapper(MapperConfig{});
+  const BlockChangeLog::Consumer publisher = mapper.subscribeToMeshChanges("test publisher");
+  std::set<BlockKey> held;
+  for (size_t f = 0; f < frames.size(); ++f) {
+    ASSERT_TRUE(mapper.integrate(frames[f]).accepted);
+    if (f % 2 == 0) continue;
+    const BlockChangeLog::Changes c = mapper.takeMeshChanges(publisher);
+    for (const BlockKey& k : c.updated) held.insert(k);
+    for (const BlockKey& k : c.erased) held.erase(k);
+  }
+  const BlockChangeLog::Changes rest = mapper.takeMeshChanges(publisher);
+  for (const BlockKey& k : rest.updated) held.insert(k);
+  for (const BlockKey& k : rest.erased) held.erase(k);
+  std::set<BlockKey> current;
+  for (const auto& [key, submesh] : mapper.mesh().submeshes()) current.insert(key);
+  EXPECT_EQ(held, current);
+  EXPECT_GT(current.size(), 50u);
+  // A reset reports every submesh as gone.
+  mapper.reset();
+  EXPECT_EQ(mapper.takeMeshChanges(publisher).erased.size(), current.size());
 }

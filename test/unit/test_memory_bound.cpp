@@ -91,8 +91,17 @@ TEST(BlockOctreeErase, EraseOneOfTwoSiblingsKeepsTheOther) {
 
 TEST(EvictionPolicy, HandWorkedBudgetAndDistance) {
   BlockOctree map(1.0);  // 1 m blocks: block (x, 0, 0) has its centre at x + 0.5
-  const uint64_t last_update[] = {5, 3, 3, 0, 9};  // blocks x = 0..4
-  for (int x = 0; x < 5; ++x) map.findOrAllocate({x, 0, 0})->last_update_frame = last_update[x];
+  EvictionPolicy policy;
+  // Blocks x = 0..4 last updated at frames 5, 3, 3, never, 9, as the change log reports them.
+  for (int x = 0; x < 5; ++x) map.findOrAllocate({x, 0, 0});
+  policy.recordUpdates(map, {{1, 0, 0}, {2, 0, 0}}, 3);
+  policy.recordUpdates(map, {{0, 0, 0}}, 5);
+  policy.recordUpdates(map, {{4, 0, 0}, {7, 7, 7}}, 9);  // (7, 7, 7): no block, skipped
+  EXPECT_EQ(policy.lastUpdateFrame(*map.find({3, 0, 0})), 0u);
+  EXPECT_EQ(policy.lastUpdateFrame(*map.find({2, 0, 0})), 3u);
+  auto selectBlocksToEvict = [&](const BlockOctree& m, const Eigen::Vector3d& c, const EvictionLimits& l) {
+    return policy.select(m, c, l);
+  };
   const Eigen::Vector3d camera(0.5, 0.5, 0.5);  // at the centre of block 0
   // No limit, or a budget not exceeded: nothing.
   EXPECT_TRUE(selectBlocksToEvict(map, camera, {}).empty());
@@ -114,13 +123,13 @@ TEST(MemoryBound, BudgetHoldsAfterEveryFrameAndEvictsTheLeastRecent) {
   uint64_t evicted_total = 0;
   for (int f = 0; f < 40; ++f) {
     std::map<BlockKey, uint64_t> before;
-    for (const VoxelBlock* b : mapper.map().blocks()) before[b->key] = b->last_update_frame;
+    for (const VoxelBlock* b : mapper.map().blocks()) before[b->key] = mapper.lastUpdateFrame(*b);
     const IntegrationResult r = mapper.integrate(corridorFrame(scene, 0.15 * f));
     ASSERT_TRUE(r.accepted) << r.error;
     EXPECT_LE(mapper.map().blockCount(), 250u) << "frame " << f;
     evicted_total += r.evicted_blocks.size();
     uint64_t oldest_kept = UINT64_MAX;
-    for (const VoxelBlock* b : mapper.map().blocks()) oldest_kept = std::min(oldest_kept, b->last_update_frame);
+    for (const VoxelBlock* b : mapper.map().blocks()) oldest_kept = std::min(oldest_kept, mapper.lastUpdateFrame(*b));
     for (const BlockKey& k : r.evicted_blocks) {
       EXPECT_EQ(mapper.map().find(k), nullptr) << k;
       EXPECT_FALSE(std::binary_search(r.updated_blocks.begin(), r.updated_blocks.end(), k)) << k;
@@ -135,7 +144,7 @@ TEST(MemoryBound, BudgetHoldsAfterEveryFrameAndEvictsTheLeastRecent) {
   EXPECT_EQ(mapper.blocksEvicted(), evicted_total);
   // The kept map is the recent end of the corridor: every block last updated in the first
   // quarter of the run is gone.
-  for (const VoxelBlock* b : mapper.map().blocks()) EXPECT_GT(b->last_update_frame, 10u) << b->key;
+  for (const VoxelBlock* b : mapper.map().blocks()) EXPECT_GT(mapper.lastUpdateFrame(*b), 10u) << b->key;
 }
 
 TEST(MemoryBound, DistanceLimitKeepsOnlyNearbyBlocks) {

@@ -1,5 +1,5 @@
 // The AVX2 mesh-level refresh against the plain one (chooseMeshLevel(), then refreshMeshSigns()):
-// same mesh_level and mesh_sign_bits on random blocks with unobserved voxels, ±0, values in
+// same level and sign bits on random blocks with unobserved voxels, ±0, values in
 // [−1e-30, 0), NaN, in all three levels and at several coverage shares; and on blocks with a
 // single observed voxel anywhere, which pins each voxel to its region.
 #include <gtest/gtest.h>
@@ -47,22 +47,24 @@ VoxelBlock randomBlock(std::mt19937& rng) {
       v.r = static_cast<uint8_t>(n);
     }
   }
-  // Stale values the refresh must overwrite.
-  block.mesh_level = static_cast<int8_t>(std::uniform_int_distribution<int>(0, kNumLevels - 1)(rng));
-  block.mesh_sign_bits = static_cast<uint16_t>(rng());
   return block;
 }
 
 void expectSameRefresh(const VoxelBlock& block, double coverage) {
-  VoxelBlock plain = block, avx2 = block, dispatched = block;
-  refreshMeshLevelScalar(&plain, coverage);
-  refreshMeshLevelAvx2(&avx2, coverage);
-  refreshMeshLevel(&dispatched, coverage);
-  ASSERT_EQ(plain.mesh_level, chooseMeshLevel(block, coverage));
-  ASSERT_EQ(avx2.mesh_level, plain.mesh_level) << "coverage " << coverage;
-  ASSERT_EQ(avx2.mesh_sign_bits, plain.mesh_sign_bits) << "level " << int{plain.mesh_level};
-  ASSERT_EQ(dispatched.mesh_level, plain.mesh_level);
-  ASSERT_EQ(dispatched.mesh_sign_bits, plain.mesh_sign_bits);
+  // Stale values the refresh must overwrite.
+  static std::mt19937 rng(7);
+  MeshBlockState stale;
+  stale.level = static_cast<int8_t>(std::uniform_int_distribution<int>(0, kNumLevels - 1)(rng));
+  stale.sign_bits = static_cast<uint16_t>(rng());
+  MeshBlockState plain = stale, avx2 = stale, dispatched = stale;
+  refreshMeshLevelScalar(block, coverage, &plain);
+  refreshMeshLevelAvx2(block, coverage, &avx2);
+  refreshMeshLevel(block, coverage, &dispatched);
+  ASSERT_EQ(plain.level, chooseMeshLevel(block, coverage));
+  ASSERT_EQ(avx2.level, plain.level) << "coverage " << coverage;
+  ASSERT_EQ(avx2.sign_bits, plain.sign_bits) << "level " << int{plain.level};
+  ASSERT_EQ(dispatched.level, plain.level);
+  ASSERT_EQ(dispatched.sign_bits, plain.sign_bits);
 }
 
 TEST(MeshLevelRefresh, Avx2MatchesPlainOnRandomBlocks) {

@@ -42,7 +42,6 @@ TEST(MeshStore, UpdateByKeysAndByBlocksAgreeAndEqualARebuildAfterErase) {
   }
   keys.push_back({100, 100, 100});  // no block there, nor at its owners: changes nothing
   const MeshChanges first_by_key = by_key.update(map, keys, &pool);
-  for (VoxelBlock* b : blocks) refreshMeshLevel(b, params.level_min_coverage);  // as fusion does
   const MeshChanges first_by_block = by_block.remeshUpdatedBlocks(map, blocks, &pool);
   expectSameChanges(first_by_key, first_by_block);
   EXPECT_EQ(first_by_key.blocks_meshed, map.blockCount());  // every block owns its own cells

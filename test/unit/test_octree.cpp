@@ -6,6 +6,7 @@
 #include <thread>
 #include <tuple>
 
+#include "stereo_fusion/map/BlockColumn.h"
 #include "stereo_fusion/map/BlockOctree.h"
 
 using namespace stereo_fusion;
@@ -246,4 +247,38 @@ TEST(BlockOctree, BatchFindOrAllocateEqualsOneAtATime) {
     EXPECT_EQ(batched.blockCount(), single.blockCount());
     EXPECT_EQ(batched.height(), single.height());
   }
+}
+
+// Stage columns (BlockColumn) are indexed by the block's row: dense, unique among live blocks,
+// reused after an erase, and reset by clear().
+TEST(BlockOctree, RowsAreDenseUniqueAndReusedAfterErase) {
+  BlockOctree map(0.16);
+  for (int x = 0; x < 10; ++x) map.findOrAllocate({x, 0, 0});
+  EXPECT_EQ(map.rowCount(), 10u);
+  std::set<uint32_t> rows;
+  for (const VoxelBlock* b : map.blocks()) rows.insert(b->row);
+  EXPECT_EQ(rows, (std::set<uint32_t>{0, 1, 2, 3, 4, 5, 6, 7, 8, 9}));
+  const uint32_t freed = map.find({3, 0, 0})->row;
+  ASSERT_EQ(map.erase({{3, 0, 0}}), 1u);
+  auto block = std::make_unique<VoxelBlock>();
+  block->key = {0, 5, 0};
+  const VoxelBlock* inserted = map.insert(std::move(block));
+  ASSERT_NE(inserted, nullptr);
+  EXPECT_EQ(inserted->row, freed);
+  EXPECT_EQ(map.rowCount(), 10u);
+  BlockColumn<int> column;
+  column.fit(map);
+  EXPECT_EQ(column.size(), 10u);
+  column[*inserted] = 7;
+  EXPECT_EQ(column[*map.find({0, 5, 0})], 7);
+  // insert() refuses a taken key and an out-of-range one.
+  auto twin = std::make_unique<VoxelBlock>();
+  twin->key = {0, 5, 0};
+  EXPECT_EQ(map.insert(std::move(twin)), nullptr);
+  auto far = std::make_unique<VoxelBlock>();
+  far->key = {BlockOctree::kMaxKey + 1, 0, 0};
+  EXPECT_EQ(map.insert(std::move(far)), nullptr);
+  map.clear();
+  EXPECT_EQ(map.rowCount(), 0u);
+  EXPECT_EQ(map.findOrAllocate({1, 1, 1})->row, 0u);
 }

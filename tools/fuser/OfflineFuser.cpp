@@ -42,16 +42,17 @@ bool parseFuseArguments(const std::vector<std::string>& args, FuseOptions* optio
       const std::string* v = value("--set");
       if (!v) return false;
       sets.push_back(*v);
-    } else if (a == "--frames") {
-      const std::string* v = value("--frames");
+    } else if (a == "--frames" || a == "--mesh-every") {
+      const std::string* v = value(a.c_str());
       if (!v) return false;
+      const bool mesh_every = a == "--mesh-every";
       try {
         size_t used = 0;
         const long n = std::stol(*v, &used);
-        if (used != v->size() || n < 0) throw std::invalid_argument("");
-        options->max_frames = static_cast<size_t>(n);
+        if (used != v->size() || n < (mesh_every ? 1 : 0)) throw std::invalid_argument("");
+        (mesh_every ? options->mesh_every : options->max_frames) = static_cast<size_t>(n);
       } catch (...) {
-        *error = "--frames: '" + *v + "' is not a frame count";
+        *error = a + ": '" + *v + "' is not a " + (mesh_every ? "frame count ≥ 1" : "frame count");
         return false;
       }
     } else if (a == "--disparity-topic" || a == "--image-topic" || a == "--camera-info-topic" ||
@@ -190,8 +191,10 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
     } else {
       Timer frame_timer;
       IntegrationResult r;
+      // Mesh after every mesh_every-th fused frame; the last frame's pass comes after the loop.
+      const bool mesh_now = (report->frames_used + 1) % options.mesh_every == 0;
       try {
-        r = mapper.integrate(frame);
+        r = mapper.integrate(frame, mesh_now ? MeshTiming::kNow : MeshTiming::kDeferred);
       } catch (const std::bad_alloc&) {
         // Out of memory mid-frame: this frame's blocks may be half fused; stop cleanly with what
         // we have rather than crash. Set max_blocks to stay within memory.
@@ -206,7 +209,7 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
       } else {
         ++report->frames_used;
         report->timings.push_back(
-            {r.lookup_ms, r.fusion_ms, r.mesh.meshing_ms, r.texture.texture_ms, frame_timer.elapsedMs()});
+            {r.lookup_ms, r.fusion_ms, r.mesh.meshing_ms, r.texture.texture_ms, frame_timer.elapsedMs(), mesh_now});
         report->work.push_back({static_cast<double>(r.lookup.valid_points), static_cast<double>(r.lookup.octree_searches),
                                 static_cast<double>(r.lookup.blocks_queued), static_cast<double>(r.fusion.blocks_updated),
                                 static_cast<double>(r.fusion.voxels_updated), static_cast<double>(r.mesh.blocks_meshed),
@@ -214,6 +217,17 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
       }
     }
     if (options.progress) showProgress(i + 1, total, wall.elapsedMs() / 1000.0, terminal, &last_decile);
+  }
+  if (mapper.blocksAwaitingMesh() > 0) {  // the frames since the last meshing pass
+    Timer mesh_timer;
+    const MeshPass pass = mapper.updateMesh();
+    if (!report->timings.empty() && !report->timings.back().meshed) {
+      StageTimings& last = report->timings.back();
+      last.meshing_ms = pass.mesh.meshing_ms;
+      last.texture_ms = pass.texture.texture_ms;
+      last.total_ms += mesh_timer.elapsedMs();
+      last.meshed = true;
+    }
   }
   report->wall_time_s = wall.elapsedMs() / 1000.0;
 
@@ -238,7 +252,9 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
     report->dense_grid_bytes = (hi.x - lo.x + 1.0) * (hi.y - lo.y + 1.0) * (hi.z - lo.z + 1.0) *
                                voxels_per_block * sizeof(Voxel);
   }
-  for (const VoxelBlock* b : mapper.map().blocks()) ++report->blocks_per_level[b->mesh_level];
+  const MeshStates& mesh_states = mapper.mesh().states();  // current: the mesh was brought up to date above
+  for (const VoxelBlock* b : mapper.map().blocks())
+    if (b->row < mesh_states.size()) ++report->blocks_per_level[mesh_states[*b].level];
 
   if (!writePly((fs::path(options.out_dir) / "mesh.ply").string(), mesh, error)) return false;
   report->textured_blocks = mapper.textures().patches().size();
@@ -297,17 +313,24 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   j["texture"]["bytes"] = report.texture_bytes;
   j["texture"]["megabytes"] = report.texture_bytes / 1048576.0;
   j["texture"]["atlases"] = report.atlas_count;
-  auto stage = [&](double StageTimings::*field) {
+  // Lookup, fusion and total over every fused frame; meshing and texture over the meshing
+  // passes only (one per frame with --mesh-every 1).
+  auto stage = [&](double StageTimings::*field, bool mesh_calls_only) {
     std::vector<double> v;
-    for (const StageTimings& t : report.timings) v.push_back(t.*field);
+    for (const StageTimings& t : report.timings)
+      if (t.meshed || !mesh_calls_only) v.push_back(t.*field);
     const Summary s = summarize(v);
-    return nlohmann::ordered_json{{"mean", s.mean}, {"p50", s.p50}, {"p99", s.p99}};
+    return nlohmann::ordered_json{
+        {"mean", s.mean}, {"p50", s.p50}, {"p99", s.p99}, {"per", mesh_calls_only ? "mesh call" : "frame"}};
   };
-  j["timings_ms"]["lookup"] = stage(&StageTimings::lookup_ms);
-  j["timings_ms"]["fusion"] = stage(&StageTimings::fusion_ms);
-  j["timings_ms"]["meshing"] = stage(&StageTimings::meshing_ms);
-  j["timings_ms"]["texture"] = stage(&StageTimings::texture_ms);
-  j["timings_ms"]["total"] = stage(&StageTimings::total_ms);
+  j["timings_ms"]["lookup"] = stage(&StageTimings::lookup_ms, false);
+  j["timings_ms"]["fusion"] = stage(&StageTimings::fusion_ms, false);
+  j["timings_ms"]["meshing"] = stage(&StageTimings::meshing_ms, true);
+  j["timings_ms"]["texture"] = stage(&StageTimings::texture_ms, true);
+  j["timings_ms"]["total"] = stage(&StageTimings::total_ms, false);
+  size_t mesh_calls = 0;
+  for (const StageTimings& t : report.timings) mesh_calls += t.meshed;
+  j["timings_ms"]["mesh_calls"] = mesh_calls;
   auto work = [&](double StageWork::*field) {
     std::vector<double> v;
     for (const StageWork& w : report.work) v.push_back(w.*field);

@@ -19,14 +19,19 @@ struct FuseOptions {
   std::string out_dir;  ///< receives mesh.ply and stats.json (and mesh.obj + .mtl + atlas PNGs with texture = patches)
   MapperConfig config;
   size_t max_frames = 0;  ///< 0 = all
+  /// Bring the mesh up to date after every N-th fused frame (and after the last): 1 = every
+  /// frame, as the nodelet with mesh_publish_rate_hz 0.
+  size_t mesh_every = 1;
   std::string load_map;  ///< map file to start from (empty = an empty map); `input` may then be empty
   std::string save_map;  ///< where to save the map after the last frame (empty = not saved)
   bool progress = true;   ///< progress bar on stderr (a line per 10 % when not a terminal)
 };
 
-/// Per-frame stage timings in milliseconds.
+/// Per-frame stage timings in milliseconds: lookup and fusion of the frame, and the meshing
+/// pass (with its texture pass) that followed it, if one did (`meshed`); total is all of it.
 struct StageTimings {
   double lookup_ms = 0, fusion_ms = 0, meshing_ms = 0, texture_ms = 0, total_ms = 0;
+  bool meshed = false;
 };
 
 /// How much work one frame made each stage do (what the timings above are spent on).

@@ -7,7 +7,7 @@
 namespace {
 const char* kUsage =
     "usage: stereo_fusion_fuse <seq-folder | file.bag> <out-dir> [--config FILE] [--set key=value ...]\n"
-    "                          [--frames N] [--quiet] [--load-map FILE] [--save-map FILE]\n"
+    "                          [--frames N] [--mesh-every N] [--quiet] [--load-map FILE] [--save-map FILE]\n"
     "       stereo_fusion_fuse <out-dir> --load-map FILE [...]   (mesh a saved map)\n"
     "Fuses a dataset folder (see DESIGN.md) or a rosbag (DisparityImage, Image, CameraInfo, /tf)\n"
     "and writes <out-dir>/mesh.ply and <out-dir>/stats.json (with --set texture=patches also\n"
@@ -15,6 +15,7 @@ const char* kUsage =
     "  --config FILE     parameters in config/default.yaml's format (applied before --set)\n"
     "  --set key=value   override one parameter; every key of config/default.yaml is accepted\n"
     "  --frames N        fuse only the first N frames\n"
+    "  --mesh-every N    bring the mesh up to date after every N-th frame (default 1) and the last\n"
     "  --disparity-topic, --image-topic, --camera-info-topic, --world-frame\n"
     "                    what to read from a bag (defaults: /stereo/disparity,\n"
     "                    /stereo/left/image_rect_color, /stereo/left/camera_info, world)\n"

@@ -54,15 +54,11 @@ class SurfaceFuser {
   /// Selects the voxel loop; kAvx2 on a CPU without AVX2 throws std::invalid_argument.
   void setKernel(Kernel kernel);
 
-  /// Fuses `frame` into `blocks` (from BlockLookup). `frame_index` (> 0) is written to
-  /// VoxelBlock::last_update_frame of every block that changed; `updated` receives them.
+  /// Fuses `frame` into `blocks` (from BlockLookup); `updated` receives those that changed.
   /// `after_update`, if set, is called on the worker thread for each block that changed, right
-  /// after its fusion while its voxels are still in cache (the Mapper refreshes mesh levels
-  /// there: a second pass over ~7 KB per block would come from memory).
-  FusionStats fuse(const StereoFrame& frame, const BlockOctree& octree,
-                   const std::vector<VoxelBlock*>& blocks, uint64_t frame_index,
-                   std::vector<VoxelBlock*>* updated,
-                   const std::function<void(VoxelBlock*)>& after_update = {});
+  /// after its fusion while its voxels are still in cache.
+  FusionStats fuse(const StereoFrame& frame, const BlockOctree& octree, const std::vector<VoxelBlock*>& blocks,
+                   std::vector<VoxelBlock*>* updated, const std::function<void(VoxelBlock*)>& after_update = {});
 
   /// fuse(), and the blocks at `missing` (keys the lookup found no block for): each is fused
   /// into a block of its own outside the map, which goes to `created` (in key order) only if
@@ -71,7 +67,7 @@ class SurfaceFuser {
   /// too coarse a measurement) is never allocated. `updated` holds the updated queued blocks
   /// only; `after_update` runs for created blocks too.
   FusionStats fuse(const StereoFrame& frame, const BlockOctree& octree, const std::vector<VoxelBlock*>& blocks,
-                   const std::vector<BlockKey>& missing, uint64_t frame_index, std::vector<VoxelBlock*>* updated,
+                   const std::vector<BlockKey>& missing, std::vector<VoxelBlock*>* updated,
                    std::vector<std::unique_ptr<VoxelBlock>>* created,
                    const std::function<void(VoxelBlock*)>& after_update = {});
 

@@ -1,7 +1,9 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "stereo_fusion/MapperConfig.h"
@@ -18,16 +20,16 @@ namespace stereo_fusion {
 ///     48 u64 frames integrated          56 u64 block count
 ///     64 u64 payload bytes              72 u32 CRC-32 of the payload      76 u32 CRC-32 of header bytes 0..75
 ///   payload: block count records, sorted by key, each a 24-byte head:
-///     i32 x, y, z; u64 last_update_frame; i8 mesh_level; u8 flags (1 = has negative,
-///     2 = has positive; checked ≤ 3, otherwise ignored: the reader derives the mesher's sign
-///     bits from the voxels); u8 levels (bit l: level l is stored); u8 0;
+///     i32 x, y, z; u64 last_update_frame (for the eviction order); u8 levels (bit l: level l is
+///     stored); u8 0, 0, 0;
 ///   then the voxels of each stored level, level 0 first, in index order (eq. 3.4), each
 ///     f32 sdf_m, f32 weight, u8 r, g, b, reserved.
 ///   So a block seen only at 2³ takes 24 + 96 bytes.
 ///
 /// Version 1 (still read): a 72-byte header without the payload size (payload CRC at 64,
-/// header CRC of bytes 0..67 at 68), and records of all 584 voxels (u8 at offset 22 was 0).
-/// Its levels without any observed voxel are not allocated on load.
+/// header CRC of bytes 0..67 at 68), and records of all 584 voxels whose head held i8
+/// mesh_level (checked < 3) and u8 sign flags (checked ≤ 3) at 20 and 21, both derived data the
+/// reader recomputes. Its levels without any observed voxel are not allocated on load.
 ///
 /// voxel_size_m and truncation_vox must equal the loading mapper's: they fix the block grid
 /// and the SDF's clamp. The level thresholds are recorded for information only.
@@ -47,14 +49,20 @@ struct MapFileInfo {
   double scale4_min_depth_m = 0;
   uint64_t frames_integrated = 0;  ///< of the mapper that saved it
   uint64_t block_count = 0;
+  /// Each block's last update frame as the file records it, in key order.
+  std::vector<std::pair<BlockKey, uint64_t>> last_update_frames;
 };
 
+/// The last update frame the map file records for a block (0: unknown).
+using LastUpdateFrameOf = std::function<uint64_t(const VoxelBlock&)>;
+
 /// The file bytes for `map`, built with `config`, after `frames_integrated` frames.
-std::vector<uint8_t> encodeMapFile(const BlockOctree& map, const MapperConfig& config, uint64_t frames_integrated);
+std::vector<uint8_t> encodeMapFile(const BlockOctree& map, const MapperConfig& config, uint64_t frames_integrated,
+                                   const LastUpdateFrameOf& last_update_frame = {});
 /// encodeMapFile() without its two checksums (left zero): the part that reads the map, so a
 /// caller that locks the map holds the lock only for it. sealMapFile() completes the bytes.
 std::vector<uint8_t> encodeMapFileUnsealed(const BlockOctree& map, const MapperConfig& config,
-                                           uint64_t frames_integrated);
+                                           uint64_t frames_integrated, const LastUpdateFrameOf& last_update_frame = {});
 /// Fills in both checksums of bytes from encodeMapFileUnsealed() (again, on sealed bytes: the
 /// same values).
 void sealMapFile(std::vector<uint8_t>* file);

@@ -88,6 +88,9 @@ class BlockOctree {
   VoxelBlock* neighbour(const VoxelBlock& block, int dx, int dy, int dz) const;
 
   size_t blockCount() const { return blocks_.size(); }
+  /// One more than the largest VoxelBlock::row handed out since construction or clear(): the
+  /// rows a BlockColumn needs. Rows of erased blocks are handed out again.
+  size_t rowCount() const { return row_count_; }
   size_t nodeCount() const { return nodes_.size(); }
   /// Height of the root above the leaves (a tree with one root holding 8 blocks has height 1).
   int height() const;
@@ -162,6 +165,8 @@ class BlockOctree {
   std::vector<std::unique_ptr<Node>> nodes_;
   std::vector<VoxelBlock*> blocks_;
   std::vector<std::unique_ptr<VoxelBlock>> block_storage_;
+  std::vector<uint32_t> free_rows_;  // of erased blocks, handed out before new ones
+  uint32_t row_count_ = 0;
 };
 
 // Inline: the lookup calls these twice per pixel.

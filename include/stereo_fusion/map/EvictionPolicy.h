@@ -1,8 +1,10 @@
 #pragma once
 #include <Eigen/Core>
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
+#include "stereo_fusion/map/BlockColumn.h"
 #include "stereo_fusion/map/BlockOctree.h"
 
 namespace stereo_fusion {
@@ -13,11 +15,29 @@ struct EvictionLimits {
   double max_distance_from_camera_m = 0;  ///< 0 = unlimited
 };
 
-/// Blocks to evict after a frame seen from `camera_position_m`, sorted by key: first every
-/// block whose centre is farther than the distance limit, then, while more than max_blocks
-/// remain, the least recently updated (smallest last_update_frame; never-updated blocks
-/// first), the farther first among equals, then by key, so the choice is deterministic.
-std::vector<BlockKey> selectBlocksToEvict(const BlockOctree& map, const Eigen::Vector3d& camera_position_m,
-                                          const EvictionLimits& limits);
+/// The eviction stage: it keeps, in a column of its own, the frame that last updated each block
+/// (fed from the map's change log after every frame) and picks the blocks to evict.
+class EvictionPolicy {
+ public:
+  /// Blocks `updated` (keys; those not in `map` are skipped) were changed by frame `frame_index`.
+  void recordUpdates(const BlockOctree& map, const std::vector<BlockKey>& updated, uint64_t frame_index);
+  /// Sets one block's last update frame (a loaded map's, from its file).
+  void setLastUpdateFrame(const BlockOctree& map, const VoxelBlock& block, uint64_t frame_index);
+  /// The frame that last updated `block` (0: never, as far as this policy saw).
+  uint64_t lastUpdateFrame(const VoxelBlock& block) const {
+    return block.row < last_update_frame_.size() ? last_update_frame_[block] : 0;
+  }
+  /// Blocks to evict after a frame seen from `camera_position_m`, sorted by key: first every
+  /// block whose centre is farther than the distance limit, then, while more than max_blocks
+  /// remain, the least recently updated (smallest last update frame; never-updated blocks
+  /// first), the farther first among equals, then by key, so the choice is deterministic.
+  std::vector<BlockKey> select(const BlockOctree& map, const Eigen::Vector3d& camera_position_m,
+                               const EvictionLimits& limits) const;
+  void clear() { last_update_frame_.clear(); }
+
+ private:
+  BlockColumn<uint64_t> last_update_frame_;
+  std::vector<VoxelBlock*> found_;  // recordUpdates()' searches, reused
+};
 
 }  // namespace stereo_fusion

@@ -74,7 +74,7 @@ struct VoxelBlock {
   static constexpr int kVoxelCount = 584;
 
   VoxelBlock() = default;
-  /// A deep copy of the voxels and fields (a test's snapshot); links stay the target's own.
+  /// A deep copy of the key and voxels (a test's snapshot); index and links stay the target's own.
   VoxelBlock(const VoxelBlock& other);
   VoxelBlock& operator=(const VoxelBlock& other);
 
@@ -118,21 +118,11 @@ struct VoxelBlock {
   }
 
   BlockKey key;
-  /// Level the mesher samples this block at (see chooseMeshLevel()); refreshed after fusion.
-  int8_t mesh_level = kNumLevels - 1;
-  /// Which signs the observed voxels of mesh_level hold, per region of the block: an owner
-  /// whose neighbourhood has one sign cannot contain a surface. Region 0 is the whole block;
-  /// region r = 1..7 is what the mesher may read of this block for the owner at offset −r
-  /// (bit a of r set: x/y/z towards −): the voxels whose centres lie within 4 finest voxels of
-  /// the faces towards that owner. Bit 2r: some voxel < 0; bit 2r+1: some voxel ≥ 0
-  /// (see meshSignBit()). Set by refreshMeshSigns().
-  uint16_t mesh_sign_bits = 0;
-  // (The 8-byte fields last: the small ones above fill the padding after `key`.)
-  /// Frame counter of the last fusion that changed this block (0 = never).
-  uint64_t last_update_frame = 0;
-  /// Stamp of the last lookup pass that queued this block (BlockLookup de-duplicates its
-  /// queue with it instead of sorting every region's finds).
-  uint64_t lookup_stamp = 0;
+  /// The block's row in every stage's BlockColumn: a dense number handed out by its octree on
+  /// insertion and reused after the block is erased (what stages keep per
+  /// block lives there, not here). kNoRow while the block is in no octree.
+  static constexpr uint32_t kNoRow = 0xFFFFFFFFu;
+  uint32_t row = kNoRow;
 
  private:
   /// levelVoxelCount(0) unobserved voxels: what a missing level of any size reads as.
@@ -144,12 +134,6 @@ struct VoxelBlock {
   NeighbourLinks neighbours;
 };
 
-/// The bit of VoxelBlock::mesh_sign_bits saying that region `region` (0..7) holds an observed
-/// voxel < 0 (`non_negative` false) or ≥ 0 (true).
-constexpr uint16_t meshSignBit(int region, bool non_negative) {
-  return static_cast<uint16_t>(1u << (2 * region + (non_negative ? 1 : 0)));
-}
-
 static_assert(VoxelBlock::index(0, 7, 7, 7) == 511, "8³ level ends at 511");
 static_assert(VoxelBlock::index(1, 0, 0, 0) == 512 && VoxelBlock::index(1, 3, 3, 3) == 575,
               "4³ level occupies 512..575");
@@ -158,8 +142,8 @@ static_assert(VoxelBlock::index(2, 0, 0, 0) == 576 && VoxelBlock::index(2, 1, 1,
 static_assert(VoxelBlock::levelOfIndex(511) == 0 && VoxelBlock::levelOfIndex(512) == 1 &&
                   VoxelBlock::levelOfIndex(575) == 1 && VoxelBlock::levelOfIndex(576) == 2,
               "levelOfIndex() inverts the level offsets");
-// Without its voxels a block is its key, mesh fields, two counters, three level pointers and the
-// 26 neighbour links: under 300 B, so a block seen only at 2³ costs ~400 B with its 96 B of voxels.
-static_assert(sizeof(VoxelBlock) <= 300, "a block's fixed part must stay small");
+// Without its voxels a block is its key and index, three level pointers and the 26 neighbour
+// links (256 B): a block seen only at 2³ costs ~350 B with its 96 B of voxels.
+static_assert(sizeof(VoxelBlock) <= 256, "a block's fixed part must stay small");
 
 }  // namespace stereo_fusion

@@ -2,6 +2,7 @@
 #include <cstdint>
 #include <unordered_map>
 
+#include "stereo_fusion/map/BlockColumn.h"
 #include "stereo_fusion/map/BlockOctree.h"
 #include "stereo_fusion/mesh/SubMesh.h"
 
@@ -23,6 +24,28 @@ struct MeshingParams {
   bool fast_paths = true;
 };
 
+/// What the mesher keeps per block, in a BlockColumn that MeshStore owns: derived from the
+/// block's voxels by refreshMeshLevel() whenever fusion changed them, read for the owner and
+/// its neighbours by every meshing pass.
+struct MeshBlockState {
+  /// Level the block is sampled at (chooseMeshLevel()).
+  int8_t level = kNumLevels - 1;
+  /// Which signs the observed voxels of `level` hold, per region of the block: an owner
+  /// whose neighbourhood has one sign cannot contain a surface. Region 0 is the whole block;
+  /// region r = 1..7 is what the mesher may read of this block for the owner at offset −r
+  /// (bit a of r set: x/y/z towards −): the voxels whose centres lie within 4 finest voxels of
+  /// the faces towards that owner. Bit 2r: some voxel < 0; bit 2r+1: some voxel ≥ 0
+  /// (see meshSignBit()). Set by refreshMeshSigns().
+  uint16_t sign_bits = 0;
+};
+using MeshStates = BlockColumn<MeshBlockState>;
+
+/// The bit of MeshBlockState::sign_bits saying that region `region` (0..7) holds an observed
+/// voxel < 0 (`non_negative` false) or ≥ 0 (true).
+constexpr uint16_t meshSignBit(int region, bool non_negative) {
+  return static_cast<uint16_t>(1u << (2 * region + (non_negative ? 1 : 0)));
+}
+
 /// The level a block is meshed at: the finest level whose observed surface area (observed
 /// voxels × voxel volume ÷ band thickness, ∝ n·s²) is at least `level_min_coverage` × the
 /// largest of its levels'. A block seen only from far meshes at 2³, one seen from near at 8³, and one
@@ -30,21 +53,20 @@ struct MeshingParams {
 /// opening holes.
 int chooseMeshLevel(const VoxelBlock& block, double level_min_coverage);
 
-/// Sets block.mesh_sign_bits from the observed voxels of block.mesh_level.
-void refreshMeshSigns(VoxelBlock* block);
+/// Sets state->sign_bits from the observed voxels of `block` at state->level.
+void refreshMeshSigns(const VoxelBlock& block, MeshBlockState* state);
 
-/// Sets block.mesh_level (chooseMeshLevel) and then its sign bits (refreshMeshSigns()).
-/// Runs for every updated block of every frame, so on CPUs with AVX2 it takes the AVX2 path.
-void refreshMeshLevel(VoxelBlock* block, double level_min_coverage);
+/// Sets state->level (chooseMeshLevel) and then its sign bits (refreshMeshSigns()).
+/// Runs for every updated block before it is meshed, so on CPUs with AVX2 it takes the AVX2 path.
+void refreshMeshLevel(const VoxelBlock& block, double level_min_coverage, MeshBlockState* state);
 
 /// refreshMeshLevel() as written: chooseMeshLevel(), then refreshMeshSigns(). The reference
 /// the AVX2 path is tested against.
-void refreshMeshLevelScalar(VoxelBlock* block, double level_min_coverage);
+void refreshMeshLevelScalar(const VoxelBlock& block, double level_min_coverage, MeshBlockState* state);
 
-/// Same mesh_level and mesh_sign_bits as refreshMeshLevelScalar(), eight voxels per step,
-/// counting each level once and reading signs of the chosen level only. Only call it when
-/// avx2Supported().
-void refreshMeshLevelAvx2(VoxelBlock* block, double level_min_coverage);
+/// Same level and sign bits as refreshMeshLevelScalar(), eight voxels per step, counting each
+/// level once and reading signs of the chosen level only. Only call it when avx2Supported().
+void refreshMeshLevelAvx2(const VoxelBlock& block, double level_min_coverage, MeshBlockState* state);
 
 /// Marching cubes for one block (thesis §3.6, Algorithm 3), crack-free across blocks of any
 /// levels.
@@ -86,9 +108,9 @@ class BlockMesher {
  public:
   explicit BlockMesher(const MeshingParams& params);
 
-  /// Meshes everything `owner` owns; neighbours are looked up in `map`. The mesh_level of
-  /// the owner and its neighbours must be current.
-  void mesh(const BlockOctree& map, const VoxelBlock& owner, SubMesh* out) const;
+  /// Meshes everything `owner` owns; neighbours are looked up in `map`. The states of the
+  /// owner and its neighbours must be current.
+  void mesh(const BlockOctree& map, const MeshStates& states, const VoxelBlock& owner, SubMesh* out) const;
 
  private:
   struct Context;

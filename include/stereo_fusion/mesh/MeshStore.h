@@ -33,16 +33,20 @@ class MeshStore {
   MeshChanges update(const BlockOctree& map, const std::vector<BlockKey>& updated, ThreadPool* pool,
                      const std::vector<BlockKey>& erased = {});
   /// update() for the updated blocks themselves, as fusion hands them over (all in `map`, none
-  /// erased), whose mesh levels are already current (refreshMeshLevel() was called on each after
-  /// its fusion): the same result without the one search per updated block. What the Mapper calls.
+  /// erased): the same result without the one search per updated block.
   MeshChanges remeshUpdatedBlocks(const BlockOctree& map, const std::vector<VoxelBlock*>& updated_blocks,
                                   ThreadPool* pool, const std::vector<BlockKey>& erased = {});
   /// Meshes every block from scratch (the reference for the incremental result).
   MeshChanges rebuild(const BlockOctree& map, ThreadPool* pool);
 
   const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes() const { return meshes_; }
+  /// The mesher's per-block state (level and sign bits), current for every block meshed.
+  const MeshStates& states() const { return states_; }
   size_t triangleCount() const;
-  void clear() { meshes_.clear(); }
+  void clear() {
+    meshes_.clear();
+    states_.clear();
+  }
 
   /// The owners a change of `updated` must re-mesh (existing blocks only), sorted by key.
   /// The searches for `updated` run on `pool` when given; their owners are then reached through
@@ -68,6 +72,7 @@ class MeshStore {
 
   MeshingParams params_;
   BlockMesher mesher_;
+  MeshStates states_;  // the mesher's per-block cache, refreshed for every block before it is meshed
   std::unordered_map<BlockKey, SubMesh, BlockKeyHash> meshes_;
   std::vector<SubMesh> scratch_;
   BlockKeySet owner_keys_;  // ownersOf()'s de-duplication, reused frame after frame

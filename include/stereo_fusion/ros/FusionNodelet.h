@@ -65,6 +65,8 @@ class FusionNodelet : public nodelet::Nodelet {
   void workerLoop();
   void processFrame(const QueuedFrame& frame);
   void publishPending(const ros::Time& stamp, bool force);
+  /// Counts one meshing pass and its timings (caller holds map_mutex_).
+  void recordMeshPassLocked(double meshing_ms, double texture_ms);
   bool saveMesh(SaveMesh::Request& req, SaveMesh::Response& res);
   bool getFullMesh(GetFullMesh::Request& req, GetFullMesh::Response& res);
   bool reset(std_srvs::Empty::Request& req, std_srvs::Empty::Response& res);
@@ -82,7 +84,8 @@ class FusionNodelet : public nodelet::Nodelet {
 
   std::mutex map_mutex_;  // guards everything below it up to the queue
   std::unique_ptr<Mapper> mapper_;
-  std::set<BlockKey> pending_changed_, pending_removed_;
+  /// The publisher's place in the mapper's log of mesh changes: what it has not sent yet.
+  BlockChangeLog::Consumer publisher_ = 0;
   MeshMarkers markers_;
   bool markers_full_pending_ = false;
   uint64_t sequence_ = 0;
@@ -91,7 +94,9 @@ class FusionNodelet : public nodelet::Nodelet {
   uint64_t session_ = 0;
   ros::WallTime last_publish_;
   std::deque<double> latencies_s_;  // frame stamp → publish, the last 1000 frames
-  std::deque<std::array<double, 5>> stage_ms_;  // lookup, fusion, meshing, texture, total: last 1000 frames
+  std::deque<std::array<double, 3>> frame_ms_;     // lookup, fusion, total per frame: the last 1000 frames
+  std::deque<std::array<double, 2>> mesh_pass_ms_;  // meshing, texture per meshing pass: the last 1000 passes
+  uint64_t mesh_passes_ = 0;
   static constexpr size_t kMaxPathPoses = 4000;  // ~/camera_path length bound
   nav_msgs::Path path_;
   std::vector<ros::Time> unpublished_stamps_;
