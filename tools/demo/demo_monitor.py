@@ -49,7 +49,8 @@ def main():
             print(f"[demo] no progress for {args.idle_s:.0f} s, stopping", flush=True)
             break
     print()
-    print("per-stage timings over the fused frames (ms)")
+    print("per-stage timings (ms): lookup, fusion and total per fused frame; meshing and texture per "
+          f"meshing pass ({int(number('meshing passes'))} passes, at most mesh_publish_rate_hz)")
     print(f"{'stage':<10} {'p50':>8} {'p99':>8}")
     for stage in ("lookup", "fusion", "meshing", "texture", "total"):
         print(f"{stage:<10} {number(stage + ' p50 (ms)'):8.1f} {number(stage + ' p99 (ms)'):8.1f}")
