@@ -1,4 +1,4 @@
-// Properties of the whole integrate() path that DESIGN.md requires.
+// Properties of the whole integrate() path that doc/design.md lists.
 #include <gtest/gtest.h>
 
 #include <set>

@@ -9,7 +9,7 @@ const char* kUsage =
     "usage: stereo_fusion_fuse <seq-folder | file.bag> <out-dir> [--config FILE] [--set key=value ...]\n"
     "                          [--frames N] [--mesh-every N] [--quiet] [--load-map FILE] [--save-map FILE]\n"
     "       stereo_fusion_fuse <out-dir> --load-map FILE [...]   (mesh a saved map)\n"
-    "Fuses a dataset folder (see DESIGN.md) or a rosbag (DisparityImage, Image, CameraInfo, /tf)\n"
+    "Fuses a dataset folder (see doc/dataset_format.md) or a rosbag (DisparityImage, Image, CameraInfo, /tf)\n"
     "and writes <out-dir>/mesh.ply and <out-dir>/stats.json (with --set texture=patches also\n"
     "<out-dir>/mesh.obj + mesh.mtl + mesh_atlas_K.png, textured from the camera images).\n"
     "  --config FILE     parameters in config/default.yaml's format (applied before --set)\n"

@@ -1,5 +1,5 @@
 #pragma once
-// Writes a sequence in the dataset folder format that DatasetReader reads (DESIGN.md):
+// Writes a sequence in the dataset folder format that DatasetReader reads (doc/dataset_format.md):
 //   calibration.yaml, poses.txt, disparity/NNNNNN.png, color/NNNNNN.png, right/NNNNNN.png,
 //   gt_mesh.ply.
 

@@ -1,5 +1,5 @@
 // stereo_fusion_simulate: renders a stereo sequence of an analytic scene and writes it as a
-// dataset folder (DESIGN.md), with exact, noisy or SGBM disparity and the ground-truth mesh.
+// dataset folder (doc/dataset_format.md), with exact, noisy or SGBM disparity and the ground-truth mesh.
 // Exit codes: 0 success, 1 failure while generating or writing, 2 bad command line.
 
 #include <unistd.h>

@@ -1,5 +1,5 @@
 #pragma once
-// Reader for the dataset folder format of DESIGN.md:
+// Reader for the dataset folder format of doc/dataset_format.md:
 //   <seq>/calibration.yaml        width, height, fx, fy, cx, cy, baseline   (left rectified camera)
 //   <seq>/poses.txt               per frame "timestamp tx ty tz qx qy qz qw" (T_world_camera, TUM order)
 //   <seq>/disparity/NNNNNN.png    uint16, disparity = value / 256, 0 = invalid (KITTI); or .pfm float32
