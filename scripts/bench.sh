@@ -1,20 +1,24 @@
 #!/usr/bin/env bash
 # The benchmark: stereo_fusion (accelerated and naive lookup) and Open3D's ScalableTSDFVolume
-# on the same simulated 640×480 SGBM room sequence (100 frames), at 1, 2 and 4 cm voxels with
-# the same truncation (4 voxels); every mesh scored by scripts/evaluate.sh against the ground
-# truth. Prints per-stage medians (ms), fps, blocks, MB and accuracy side by side, our total
-# with one core kept busy by another process, and memory against a dense voxel grid.
-#   scripts/bench.sh [--voxels "0.01 0.02 0.04"] [--frames N] [--reuse]
+# on the same simulated 640×480 SGBM sequence, at 1, 2 and 4 cm voxels with the same truncation
+# (4 voxels); every mesh scored by scripts/evaluate.sh against the ground truth. Prints
+# per-stage medians (ms), fps, blocks, MB (by level) and accuracy side by side, our total with
+# one core kept busy by another process, and memory against a dense voxel grid.
+#   scripts/bench.sh [--preset room|hall] [--voxels "0.01 0.02 0.04"] [--frames N] [--reuse]
+# room (default): the furnished room, a 100-frame walkthrough, f = 525 px, b = 0.10 m.
+# hall: the far-range class (walls 3–4.5 m away), a 60-frame orbit, f = 576 px, b = 0.12 m.
 # --reuse prints the table from the outputs of an earlier run without running anything.
 # Timings depend on the machine's load: compare ratios from one run, not runs across days.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 BIN="${BUILD_DIR:-$ROOT/.build}/devel/lib/stereo_fusion"
 VOXELS="0.01 0.02 0.04"
-FRAMES=100
+PRESET=room
+FRAMES=""
 REUSE=0
 while [ $# -gt 0 ]; do
   case "$1" in
+    --preset) PRESET="$2"; shift 2 ;;
     --voxels) VOXELS="$2"; shift 2 ;;
     --frames) FRAMES="$2"; shift 2 ;;
     --reuse) REUSE=1; shift ;;
@@ -28,18 +32,22 @@ if ! /usr/bin/python3 -c "import open3d, cv2, numpy" 2>/dev/null; then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends \
     python3-open3d python3-opencv python3-numpy >/dev/null
 fi
+case "$PRESET" in
+  room) FRAMES="${FRAMES:-100}"; SIM_ARGS=(--preset room --trajectory walkthrough) ;;
+  hall) FRAMES="${FRAMES:-60}"; SIM_ARGS=(--preset hall --trajectory orbit --fx 576 --baseline 0.12) ;;
+  *) echo "bench.sh: unknown preset $PRESET (room, hall)" >&2; exit 2 ;;
+esac
 WORK="$ROOT/.bench"
-SEQ="$WORK/room_sgbm_${FRAMES}"
+SEQ="$WORK/${PRESET}_sgbm_${FRAMES}"
 mkdir -p "$WORK"
 if [ ! -f "$SEQ/poses.txt" ]; then
-  echo "[bench] generating the room sequence ($FRAMES frames, SGBM) in $SEQ" >&2
-  "$BIN/stereo_fusion_simulate" --preset room --trajectory walkthrough --frames "$FRAMES" \
-    --disparity sgbm --seed 1 --out "$SEQ" >&2
+  echo "[bench] generating the $PRESET sequence ($FRAMES frames, SGBM) in $SEQ" >&2
+  "$BIN/stereo_fusion_simulate" "${SIM_ARGS[@]}" --frames "$FRAMES" --disparity sgbm --seed 1 --out "$SEQ" >&2
 fi
 json() { /usr/bin/python3 -c "import json,sys; d=json.load(open('$1')); print($2)"; }
 rows=()
 for v in $VOXELS; do
-  out="$WORK/out_$v"
+  out="$WORK/out_${PRESET}_$v"
   tol=$(/usr/bin/python3 -c "print(max(0.05, 2*$v))")
   rows+=("$v|$out|$tol")
   if [ "$REUSE" = 1 ]; then continue; fi
@@ -59,7 +67,7 @@ for v in $VOXELS; do
 done
 
 echo
-echo "stereo_fusion vs Open3D ScalableTSDFVolume — $FRAMES frames 640×480 SGBM room, $(nproc) cores, medians in ms"
+echo "stereo_fusion vs Open3D ScalableTSDFVolume — $FRAMES frames 640×480 SGBM $PRESET, $(nproc) cores, medians in ms"
 printf "%-6s | %-13s | %7s %7s %7s %7s | %7s %7s %7s | %6s | %6s %6s | %8s %8s %6s\n" \
   voxel system "lookN" "lookA" fusion mesh "total" "mean" "p99" fps blocks MB "acc_mm" "compl%" F%
 for row in "${rows[@]}"; do
@@ -81,11 +89,12 @@ for row in "${rows[@]}"; do
     "$(json "$oe" "d['f_score']*100")"
   echo "       Open3D final mesh extraction: $(json "$o" "round(d['extract_ms'])") ms once; ours meshes incrementally every frame (in 'total')"
   echo "       Open3D with a mesh as current as ours (integrate + full extraction, p50 over every 10th frame): $(json "$o" "round(d['integrate_ms']['p50'] + d['live_extract_ms_p50'], 1)") ms per frame"
-  echo "       frame-rate ratio ours / Open3D: $(/usr/bin/python3 -c "import json; s=json.load(open('$s')); o=json.load(open('$o')); t=s['timings_ms']['total']['p50']; print(f\"{o['integrate_ms']['p50']/t:.2f}x integration only, {(o['integrate_ms']['p50']+o['live_extract_ms_p50'])/t:.1f}x with a current mesh; our lookup+fusion alone vs their integration: {o['integrate_ms']['p50']/(s['timings_ms']['lookup']['p50']+s['timings_ms']['fusion']['p50']):.2f}x\")")"
+  echo "       frame-rate ratio ours / Open3D: $(/usr/bin/python3 -c "import json; s=json.load(open('$s')); o=json.load(open('$o')); t=s['timings_ms']['total']['p50']; print(f\"{o['integrate_ms']['p50']/t:.2f}x integration only, {(o['integrate_ms']['p50']+o['live_extract_ms_p50'])/t:.1f}x with a current mesh; our lookup+fusion alone vs their integration: {o['integrate_ms']['p50']/(s['timings_ms']['lookup']['p50']+s['timings_ms']['fusion']['p50']):.2f}x (p50), {o['integrate_ms']['mean']/(s['timings_ms']['lookup']['mean']+s['timings_ms']['fusion']['mean']):.2f}x (mean)\")")"
   if [ -f "$out/busy/stats.json" ]; then
     echo "       one core busy with another process: total p50 $(json "$out/busy/stats.json" "round(d['timings_ms']['total']['p50'], 1)") ms ($(/usr/bin/python3 -c "import json; b=json.load(open('$out/busy/stats.json')); s=json.load(open('$s')); print(round(b['timings_ms']['total']['p50']/s['timings_ms']['total']['p50'], 2))")× the run above)"
   fi
   echo "       work per frame (p50): $(json "$s" "'{:.0f} valid pixels, {:.0f} octree searches, {:.0f} blocks queued, {:.0f} updated ({:.0f} voxel updates), {:.0f} owners meshed, {:.0f} submeshes changed'.format(*[d['work_per_frame_p50'][k] for k in ('valid_points','octree_searches','blocks_queued','blocks_updated','voxels_updated','blocks_meshed','submeshes_changed')])")"
+  echo "       voxel levels allocated: $(json "$s" "', '.join('{}³ in {} blocks ({:.1f} MB, {} B each)'.format(k, v['blocks'], v['bytes']/1048576, v['bytes_per_block']) for k, v in d['memory']['levels'].items())"); fixed part $(json "$s" "round(d['memory']['block_fixed_bytes']/max(1, d['blocks']['total']))") B per block; peak RSS $(json "$s" "round(d['memory']['peak_rss_megabytes'])") MB"
   echo "       memory: $(json "$s" "round(d['memory']['bytes_per_block'])") B per block incl. octree; a dense grid of 12-byte voxels over the same bounds: $(json "$s" "round(d['memory']['dense_grid_megabytes'])") MB ($(json "$s" "round(d['memory']['dense_grid_ratio'], 1)")× ours)"
 done
 echo "lookN / lookA: octree lookup with Algorithm 1 (naive) / Algorithm 2 (accelerated); tolerance for completeness: max(5 cm, 2 voxels)"

@@ -237,9 +237,9 @@ const std::vector<Accessor>& accessors() {
                          "Bounds texture memory to 3 · cap² bytes per block.",
                          member(&MapperConfig::texture_max_patch_px)));
     t.push_back(intParam("max_blocks", "blocks", 0, 100000000,
-                         "Memory budget: after each frame, while the map holds more blocks (~7 KB "
-                         "each), the least recently updated ones (farthest first among equals) are "
-                         "evicted and their submeshes removed. 0 = unlimited.",
+                         "Memory budget: after each frame, while the map holds more blocks (0.3–7 KB "
+                         "each by the levels they hold), the least recently updated ones (farthest "
+                         "first among equals) are evicted and their submeshes removed. 0 = unlimited.",
                          member(&MapperConfig::max_blocks)));
     t.push_back(doubleParam("max_distance_from_camera_m", "m", 0.0, true, 1e6,
                             "After each frame, blocks whose centre is farther than this from the "
