@@ -213,7 +213,8 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
         report->work.push_back({static_cast<double>(r.lookup.valid_points), static_cast<double>(r.lookup.octree_searches),
                                 static_cast<double>(r.lookup.blocks_queued), static_cast<double>(r.fusion.blocks_updated),
                                 static_cast<double>(r.fusion.voxels_updated), static_cast<double>(r.mesh.blocks_meshed),
-                                static_cast<double>(r.mesh.changed.size())});
+                                static_cast<double>(r.mesh.changed.size()), static_cast<double>(r.fusion.blocks_created),
+                                static_cast<double>(r.fusion.blocks_not_created)});
       }
     }
     if (options.progress) showProgress(i + 1, total, wall.elapsedMs() / 1000.0, terminal, &last_decile);
@@ -343,6 +344,9 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   j["work_per_frame_p50"]["voxels_updated"] = work(&StageWork::voxels_updated);
   j["work_per_frame_p50"]["blocks_meshed"] = work(&StageWork::blocks_meshed);
   j["work_per_frame_p50"]["submeshes_changed"] = work(&StageWork::submeshes_changed);
+  // Blocks not yet in the map that the frame's bands reached: created (updated) or not allocated.
+  j["work_per_frame_p50"]["blocks_created"] = work(&StageWork::blocks_created);
+  j["work_per_frame_p50"]["blocks_not_created"] = work(&StageWork::blocks_not_created);
   j["wall_time_s"] = report.wall_time_s;
   for (const ParameterSpec& p : mapperParameterSpecs()) j["config"][p.name] = getMapperParameter(config, p.name);
   return j.dump(2);

@@ -37,7 +37,7 @@ struct StageTimings {
 /// How much work one frame made each stage do (what the timings above are spent on).
 struct StageWork {
   double valid_points = 0, octree_searches = 0, blocks_queued = 0, blocks_updated = 0, voxels_updated = 0,
-         blocks_meshed = 0, submeshes_changed = 0;
+         blocks_meshed = 0, submeshes_changed = 0, blocks_created = 0, blocks_not_created = 0;
 };
 
 /// What a run did; stats.json is this, plus the configuration.
