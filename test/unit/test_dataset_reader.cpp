@@ -289,6 +289,40 @@ TEST(OfflineFuser, WritesMeshAndStatsAndCountsSkippedFrames) {
   fs::remove_all(out);
 }
 
+// --mesh-every N: the mesh after the last frame is the same bytes as meshing every frame, and
+// stats.json counts the meshing passes (frames 3 and 5 of 5: every 3rd, then the last).
+TEST(OfflineFuser, MeshEveryNthFrameWritesTheSameMeshAndCountsMeshCalls) {
+  SmallSequence seq("fuse_mesh_every", 5);
+  auto run = [&](const std::string& name, const std::vector<std::string>& extra, nlohmann::json* stats) {
+    const fs::path out = fs::path(testing::TempDir()) / ("stereo_fusion_fuse_" + name);
+    fs::remove_all(out);
+    std::vector<std::string> args = {seq.dir.string(), out.string(), "--quiet"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    FuseOptions options;
+    std::string error;
+    EXPECT_TRUE(parseFuseArguments(args, &options, &error)) << error;
+    FuseReport report;
+    EXPECT_TRUE(runOfflineFusion(options, &report, &error)) << error;
+    std::ifstream stats_file(out / "stats.json");
+    *stats = nlohmann::json::parse(stats_file);
+    std::ifstream ply(out / "mesh.ply", std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(ply)), std::istreambuf_iterator<char>());
+  };
+  nlohmann::json every, third;
+  const std::string mesh_every = run("every", {}, &every);
+  const std::string mesh_third = run("third", {"--mesh-every", "3"}, &third);
+  EXPECT_GT(mesh_every.size(), 10000u);
+  EXPECT_TRUE(mesh_every == mesh_third);
+  EXPECT_EQ(every["timings_ms"]["mesh_calls"], 5);
+  EXPECT_EQ(third["timings_ms"]["mesh_calls"], 2);
+  EXPECT_EQ(third["timings_ms"]["meshing"]["per"], "mesh call");
+  EXPECT_EQ(third["timings_ms"]["lookup"]["per"], "frame");
+  FuseOptions options;
+  std::string error;
+  EXPECT_FALSE(parseFuseArguments({"seq", "out", "--mesh-every", "0"}, &options, &error));
+  EXPECT_NE(error.find("--mesh-every: '0' is not a frame count ≥ 1"), std::string::npos) << error;
+}
+
 TEST(OfflineFuser, TexturePatchesAddObjMtlAndAtlasAndTheirMemoryToStats) {
   SmallSequence seq("fuse_textured", 3);
   FuseOptions options;
