@@ -16,16 +16,14 @@ void SurfaceFuser::setKernel(Kernel kernel) {
 }
 
 FusionStats SurfaceFuser::fuse(const StereoFrame& frame, const BlockOctree& octree,
-                               const std::vector<VoxelBlock*>& blocks, std::vector<VoxelBlock*>* updated,
-                               const std::function<void(VoxelBlock*)>& after_update) {
-  return fuse(frame, octree, blocks, {}, updated, nullptr, after_update);
+                               const std::vector<VoxelBlock*>& blocks, std::vector<VoxelBlock*>* updated) {
+  return fuse(frame, octree, blocks, {}, updated, nullptr);
 }
 
 FusionStats SurfaceFuser::fuse(const StereoFrame& frame, const BlockOctree& octree,
                                const std::vector<VoxelBlock*>& blocks, const std::vector<BlockKey>& missing,
                                std::vector<VoxelBlock*>* updated,
-                               std::vector<std::unique_ptr<VoxelBlock>>* created,
-                               const std::function<void(VoxelBlock*)>& after_update) {
+                               std::vector<std::unique_ptr<VoxelBlock>>* created) {
   FusionStats stats;
   updated->clear();
   if (created) created->clear();
@@ -55,7 +53,6 @@ FusionStats SurfaceFuser::fuse(const StereoFrame& frame, const BlockOctree& octr
         block = candidate->get();
       }
       per_block_updates_[b] = fuse_block(fusion_frame, octree, block);
-      if (after_update && per_block_updates_[b] > 0) after_update(block);
     }
   });
   for (size_t b = 0; b < total; ++b) {

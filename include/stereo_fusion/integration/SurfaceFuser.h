@@ -1,6 +1,5 @@
 #pragma once
 #include <cstdint>
-#include <functional>
 #include <memory>
 #include <vector>
 
@@ -55,21 +54,17 @@ class SurfaceFuser {
   void setKernel(Kernel kernel);
 
   /// Fuses `frame` into `blocks` (from BlockLookup); `updated` receives those that changed.
-  /// `after_update`, if set, is called on the worker thread for each block that changed, right
-  /// after its fusion while its voxels are still in cache.
   FusionStats fuse(const StereoFrame& frame, const BlockOctree& octree, const std::vector<VoxelBlock*>& blocks,
-                   std::vector<VoxelBlock*>* updated, const std::function<void(VoxelBlock*)>& after_update = {});
+                   std::vector<VoxelBlock*>* updated);
 
   /// fuse(), and the blocks at `missing` (keys the lookup found no block for): each is fused
   /// into a block of its own outside the map, which goes to `created` (in key order) only if
   /// the frame updated it, for the caller to insert (BlockOctree::insert()). So a block that
   /// the band reaches but no voxel of which is updated (behind the surface, outside the image,
-  /// too coarse a measurement) is never allocated. `updated` holds the updated queued blocks
-  /// only; `after_update` runs for created blocks too.
+  /// too coarse a measurement) is never allocated. `updated` holds the updated queued blocks only.
   FusionStats fuse(const StereoFrame& frame, const BlockOctree& octree, const std::vector<VoxelBlock*>& blocks,
                    const std::vector<BlockKey>& missing, std::vector<VoxelBlock*>* updated,
-                   std::vector<std::unique_ptr<VoxelBlock>>* created,
-                   const std::function<void(VoxelBlock*)>& after_update = {});
+                   std::vector<std::unique_ptr<VoxelBlock>>* created);
 
  private:
   MapperConfig config_;
