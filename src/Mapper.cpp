@@ -34,7 +34,9 @@ Mapper::Mapper(const MapperConfig& config)
                                    config_.voxel_size_m, config_.truncation_vox}),
       mesh_consumer_(map_changes_.subscribe("mesher")),
       eviction_consumer_(map_changes_.subscribe("eviction")),
-      texture_consumer_(mesh_changes_.subscribe("textures")),
+      texture_consumer_(config_.texture == TextureMode::kPatches
+                            ? std::optional<BlockChangeLog::Consumer>(mesh_changes_.subscribe("textures"))
+                            : std::nullopt),
       gate_(config_.max_pose_jump_m, config_.require_increasing_timestamps) {}
 
 IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_timing) {
@@ -57,19 +59,24 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
 
   Timer fusion_timer;
   result.fusion = fuser_.fuse(frame, octree_, queue_, missing_, &updated_, &created_);
-  // The blocks the frame created join the map now, in key order (allocation kept apart from the
-  // update: only blocks that hold an update are ever allocated).
-  if (!created_.empty()) {
-    const size_t existing = updated_.size();
-    for (std::unique_ptr<VoxelBlock>& block : created_)
-      if (VoxelBlock* placed = octree_.insert(std::move(block))) updated_.push_back(placed);
-    std::inplace_merge(updated_.begin(), updated_.begin() + existing, updated_.end(),
-                       [](const VoxelBlock* a, const VoxelBlock* b) { return a->key < b->key; });
-  }
-  result.lookup.blocks_allocated = result.fusion.blocks_created;
-  result.updated_blocks.reserve(updated_.size());
+  voxel_bytes_ += result.fusion.level_bytes_allocated;
   for (const VoxelBlock* block : updated_) result.updated_blocks.push_back(block->key);
   map_changes_.recordUpdated(result.updated_blocks);
+  // The blocks the frame created join the map now, in key order (allocation kept apart from the
+  // update: only blocks that hold an update are ever allocated), each reported as it is placed,
+  // so that no block is in the map without its stages knowing.
+  if (!created_.empty()) {
+    const size_t existing = result.updated_blocks.size();
+    for (std::unique_ptr<VoxelBlock>& block : created_) {
+      const BlockKey key = block->key;
+      if (octree_.insert(std::move(block)) == nullptr) continue;
+      map_changes_.recordUpdated({key});
+      result.updated_blocks.push_back(key);
+    }
+    std::inplace_merge(result.updated_blocks.begin(), result.updated_blocks.begin() + existing,
+                       result.updated_blocks.end());
+  }
+  updated_.clear();  // the stages after fusion work from the change log
   result.fusion_ms = fusion_timer.elapsedMs();
 
   // Memory bound, between fusion and meshing: nothing else touches the octree now.
@@ -78,7 +85,8 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
   result.evicted_blocks = eviction_.select(octree_, frame.T_world_camera.translation(), limits);
   if (!result.evicted_blocks.empty()) {
     queue_.clear();  // their pointers dangle after erase
-    updated_.clear();
+    for (const BlockKey& key : result.evicted_blocks)
+      if (const VoxelBlock* block = octree_.find(key)) voxel_bytes_ -= block->voxelBytes();
     blocks_evicted_ += octree_.erase(result.evicted_blocks);
     map_changes_.recordErased(result.evicted_blocks);
     std::vector<BlockKey> kept;
@@ -101,8 +109,8 @@ MeshPass Mapper::updateMesh() {
   if (!config_.mesh_enabled || changes.empty()) return pass;
   pass.mesh = mesh_store_.update(octree_, changes.updated, &pool_, changes.erased);
   recordMeshChanges(pass.mesh);
-  if (config_.texture == TextureMode::kPatches) {
-    const BlockChangeLog::Changes retexture = mesh_changes_.take(texture_consumer_);
+  if (texture_consumer_) {
+    const BlockChangeLog::Changes retexture = mesh_changes_.take(*texture_consumer_);
     MeshChanges submeshes;
     submeshes.changed = retexture.updated;
     submeshes.removed = retexture.erased;
@@ -112,6 +120,11 @@ MeshPass Mapper::updateMesh() {
 }
 
 size_t Mapper::blocksAwaitingMesh() const { return map_changes_.pending(mesh_consumer_); }
+
+size_t Mapper::memoryBytes() const {
+  const BlockOctree::MemoryUse use = octree_.memoryUse(/*with_levels=*/false);
+  return use.total() + voxel_bytes_;
+}
 
 void Mapper::recordMeshChanges(const MeshChanges& changes) {
   mesh_changes_.recordUpdated(changes.changed);
@@ -123,8 +136,8 @@ MeshChanges Mapper::rebuildMesh() {
   MeshChanges changes = mesh_store_.rebuild(octree_, &pool_);
   recordMeshChanges(changes);
   // No frame at hand: the stored patches are re-projected onto the rebuilt submeshes.
-  if (config_.texture == TextureMode::kPatches) {
-    mesh_changes_.take(texture_consumer_);
+  if (texture_consumer_) {
+    mesh_changes_.take(*texture_consumer_);
     texture_store_.reprojectAll(mesh_store_);
   }
   return changes;
@@ -165,18 +178,19 @@ MeshChanges Mapper::adoptMap(BlockOctree* loaded, const MapFileInfo& info) {
   blocks_evicted_ = 0;
   gate_.reset();
   last_frame_ = StereoFrame();
+  voxel_bytes_ = 0;
+  for (const VoxelBlock* block : octree_.blocks()) voxel_bytes_ += block->voxelBytes();
   // The map file holds no texture patches: the loaded map starts with vertex colours.
   texture_store_.clear();
-  mesh_changes_.take(texture_consumer_);
   // A rebuild over the kept store reports the old map's vanished submeshes as removed.
   MeshChanges rebuilt;
   if (config_.mesh_enabled) {
     rebuilt = mesh_store_.rebuild(octree_, &pool_);
     recordMeshChanges(rebuilt);
-    mesh_changes_.take(texture_consumer_);
   } else {
     mesh_store_.clear();
   }
+  if (texture_consumer_) mesh_changes_.take(*texture_consumer_);  // nothing to texture from
   return rebuilt;
 }
 
@@ -185,13 +199,14 @@ void Mapper::reset() {
   for (const auto& [key, submesh] : mesh_store_.submeshes()) dropped.removed.push_back(key);
   std::sort(dropped.removed.begin(), dropped.removed.end());
   octree_.clear();
+  voxel_bytes_ = 0;
   mesh_store_.clear();
   texture_store_.clear();
   eviction_.clear();
   map_changes_.clear();
-  mesh_changes_.clear();
-  recordMeshChanges(dropped);  // the mesh's consumers learn that every submesh is gone
-  mesh_changes_.take(texture_consumer_);
+  // The mesh's consumers learn that every submesh is gone, after whatever they have not taken.
+  recordMeshChanges(dropped);
+  if (texture_consumer_) mesh_changes_.take(*texture_consumer_);
   last_frame_ = StereoFrame();
   frames_integrated_ = 0;
   blocks_evicted_ = 0;

@@ -1,6 +1,7 @@
 #pragma once
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -71,8 +72,13 @@ class Mapper {
   /// Meshes around every block changed since the last pass (nothing when meshing is disabled)
   /// and, with texture = patches, textures the changed submeshes from the latest frame.
   MeshPass updateMesh();
-  /// Blocks changed by fusion or eviction that the mesher has not caught up with yet.
+  /// Block changes (one per block and frame) recorded by fusion or eviction that the mesher has
+  /// not caught up with yet. A caller that integrates with MeshTiming::kDeferred must call
+  /// updateMesh() now and then: the changes wait in memory until it does.
   size_t blocksAwaitingMesh() const;
+  /// The map's bytes (BlockOctree::memoryBytes()) without a walk over the blocks: cheap enough
+  /// to report every frame under a lock.
+  size_t memoryBytes() const;
 
   const BlockOctree& map() const { return octree_; }
   /// The incrementally maintained mesh, one submesh per block (current as of the last updateMesh()).
@@ -94,7 +100,8 @@ class Mapper {
   void reset();
 
   /// A consumer of the mesh's changes (submeshes changed / removed by meshing passes, rebuilds,
-  /// loads and resets), e.g. a publisher that sends them at its own rate.
+  /// loads and resets), e.g. a publisher that sends them at its own rate. It must take them
+  /// now and then: they wait in memory until it does.
   BlockChangeLog::Consumer subscribeToMeshChanges(const std::string& name) { return mesh_changes_.subscribe(name); }
   /// The submeshes changed (updated) and removed (erased) since `consumer` last took them.
   BlockChangeLog::Changes takeMeshChanges(BlockChangeLog::Consumer consumer) { return mesh_changes_.take(consumer); }
@@ -135,7 +142,10 @@ class Mapper {
   BlockChangeLog::Consumer mesh_consumer_, eviction_consumer_;
   /// Submeshes the mesher changed, for the texture pass and outside consumers.
   BlockChangeLog mesh_changes_;
-  BlockChangeLog::Consumer texture_consumer_;
+  std::optional<BlockChangeLog::Consumer> texture_consumer_;  // with texture = patches only
+  /// Bytes of allocated voxel levels, kept up to date as fusion allocates and eviction frees
+  /// them, so memoryBytes() costs no walk over the blocks.
+  size_t voxel_bytes_ = 0;
   /// The latest accepted frame: what a deferred meshing pass textures from.
   StereoFrame last_frame_;
   uint64_t frames_integrated_ = 0;

@@ -56,7 +56,7 @@ inline bool BlockLookup::bandBoxOfPixel(float d, int u, int v, BandBox* box) con
   if (!(z >= g.min_depth_m && z <= g.max_depth_m)) return false;
   const double p_camera[3] = {(u - g.cx) * z * g.inv_fx, (v - g.cy) * z * g.inv_fy, z};
   // The band along the ray: the surface point ± Φ in the ray's direction, widened by the
-  // lateral margin (bandBoxHalfWidth()). All sums spelled out in the AVX2 path's order:
+  // lateral margin (kLateralMarginPx at the far end). All sums spelled out in the AVX2 path's order:
   // Eigen's R·p adds the z row as a0 + (a1 + a2) but the x and y rows as (a0 + a1) + a2, and
   // a point within an ulp of a block face would land in a different block on each path.
   const int level = levelForDepth(z, g.levels);

@@ -60,9 +60,10 @@ inline void updateVoxel(const FusionFrame& f, size_t pixel, float sdf_m, float t
 }
 
 /// Where a kernel fuses one level of `block`: the level's storage when allocated, else this
-/// thread's scratch level, which is all unobserved (a kernel writes voxels only when it
-/// updates them). commit() adopts the scratch into the block only if the level was updated,
-/// and leaves the scratch unobserved again, so a visit that updates nothing allocates nothing.
+/// thread's scratch level, which is all unobserved (a visit that updates no voxel writes none:
+/// the AVX2 kernel stores a group of eight only when a lane of it is updated). commit() adopts
+/// the scratch into the block only if the level was updated and zeroes it again, so a visit
+/// that updates nothing allocates nothing.
 class LevelTarget {
  public:
   LevelTarget(VoxelBlock* block, int level) : block_(block), level_(level), voxels_(block->levelIfAllocated(level)) {

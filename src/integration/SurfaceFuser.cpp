@@ -41,18 +41,22 @@ FusionStats SurfaceFuser::fuse(const StereoFrame& frame, const BlockOctree& octr
   }
   const auto fuse_block = use_avx2_ ? fuseBlockAvx2 : fuseBlockScalar;
   per_block_updates_.assign(total, 0);
+  per_block_new_bytes_.assign(total, 0);
   candidates_.resize(total - blocks.size());
   pool_->parallelFor(total, 8, [&](size_t begin, size_t end) {
     for (size_t b = begin; b < end; ++b) {
-      VoxelBlock* block = b < blocks.size() ? blocks[b] : nullptr;
-      std::unique_ptr<VoxelBlock>* candidate = nullptr;
-      if (block == nullptr) {  // a missing key: a block of its own, kept only if updated
-        candidate = &candidates_[b - blocks.size()];
-        if (!*candidate) *candidate = std::make_unique<VoxelBlock>();
-        (*candidate)->key = missing[b - blocks.size()];
-        block = candidate->get();
+      VoxelBlock* block;
+      if (b < blocks.size()) {
+        block = blocks[b];
+      } else {  // a missing key: a block of its own, kept only if updated
+        std::unique_ptr<VoxelBlock>& candidate = candidates_[b - blocks.size()];
+        if (!candidate) candidate = std::make_unique<VoxelBlock>();
+        candidate->key = missing[b - blocks.size()];
+        block = candidate.get();
       }
+      const size_t bytes_before = block->voxelBytes();
       per_block_updates_[b] = fuse_block(fusion_frame, octree, block);
+      per_block_new_bytes_[b] = block->voxelBytes() - bytes_before;
     }
   });
   for (size_t b = 0; b < total; ++b) {
@@ -61,6 +65,7 @@ FusionStats SurfaceFuser::fuse(const StereoFrame& frame, const BlockOctree& octr
       continue;  // a candidate not updated holds no level: it is reused as it is next frame
     }
     stats.voxels_updated += per_block_updates_[b];
+    stats.level_bytes_allocated += per_block_new_bytes_[b];
     ++stats.blocks_updated;
     if (b < blocks.size())
       updated->push_back(blocks[b]);

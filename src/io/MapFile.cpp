@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <array>
 #include <atomic>
 #include <cerrno>
 #include <cstddef>
@@ -272,33 +273,50 @@ bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config,
       *error = "invalid map file: " + which() + " runs past the end of the file";
       return false;
     }
-    bool allocated = false;
-    VoxelBlock* block = out->findOrAllocate(key, &allocated);
-    if (block == nullptr || !allocated) {
-      *error = "invalid map file: " + which() + (block ? " appears twice" : " is beyond the map's range");
-      return false;
-    }
-    info->last_update_frames.emplace_back(key, getU64(r + 12));
+    // The stored levels, checked; a level is kept only if it holds an observed voxel, as
+    // fusion allocates them. Version 1 stored all three levels of every block the lookup had
+    // reached: its unobserved levels, and blocks with none observed, are dropped (they read the
+    // same as no storage). Version 2 stores only such levels: anything else is invalid.
+    std::array<std::vector<Voxel>, kNumLevels> kept;
     const uint8_t* in = r + kMapFileRecordHeadBytes;
+    bool any_kept = false;
     for (int l = 0; l < kNumLevels; ++l) {
       if (!(mask & (1u << l))) continue;
-      Voxel voxels[levelVoxelCount(0)];
-      loadVoxels(in, levelVoxelCount(l), voxels);
+      std::vector<Voxel> voxels(levelVoxelCount(l));
+      loadVoxels(in, levelVoxelCount(l), voxels.data());
       in += levelVoxelCount(l) * kVoxelRecordBytes;
       bool observed = false;
-      for (int v = 0; v < levelVoxelCount(l); ++v) {
-        const Voxel& voxel = voxels[v];
+      for (const Voxel& voxel : voxels) {
         if (!std::isfinite(voxel.sdf_m) || !std::isfinite(voxel.weight) || voxel.weight < 0.0f) {
           *error = "invalid map file: " + which() + " holds a non-finite distance or a negative weight";
           return false;
         }
         observed = observed || voxel.weight > 0.0f;
       }
-      // A version-1 file stores all three levels: only those holding observations are kept
-      // (a level that no measurement reached reads the same whether stored or not).
-      if (observed || !v1) block->adoptLevel(l, voxels);
+      if (!observed && !v1) {
+        *error = "invalid map file: " + which() + " stores level " + std::to_string(l) + " without an observed voxel";
+        return false;
+      }
+      if (observed) {
+        kept[l] = std::move(voxels);
+        any_kept = true;
+      }
+    }
+    if (!any_kept && !v1) {
+      *error = "invalid map file: " + which() + " stores no level";
+      return false;
     }
     r += record_bytes;
+    if (!any_kept) continue;  // a version-1 block nothing was fused into
+    bool allocated = false;
+    VoxelBlock* block = out->findOrAllocate(key, &allocated);
+    if (block == nullptr || !allocated) {
+      *error = "invalid map file: " + which() + (block ? " appears twice" : " is beyond the map's range");
+      return false;
+    }
+    info->last_update_frames.emplace_back(key, getU64(r - record_bytes + 12));
+    for (int l = 0; l < kNumLevels; ++l)
+      if (!kept[l].empty()) block->adoptLevel(l, kept[l].data());
   }
   if (r != payload_end) {
     *error = "invalid map file: " + std::to_string(payload_end - r) + " bytes after the last of " +

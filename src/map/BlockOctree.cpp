@@ -242,10 +242,11 @@ int BlockOctree::height() const {
   return root ? root->height : 0;
 }
 
-BlockOctree::MemoryUse BlockOctree::memoryUse() const {
+BlockOctree::MemoryUse BlockOctree::memoryUse(bool with_levels) const {
   MemoryUse use;
   use.block_bytes = block_storage_.size() * sizeof(VoxelBlock);
-  for (const VoxelBlock* b : blocks_)
+  if (with_levels)
+    for (const VoxelBlock* b : blocks_)
     for (int level = 0; level < kNumLevels; ++level)
       if (b->hasLevel(level)) {
         use.level_bytes[level] += levelVoxelCount(level) * sizeof(Voxel);

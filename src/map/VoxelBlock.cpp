@@ -13,7 +13,7 @@ VoxelBlock& VoxelBlock::operator=(const VoxelBlock& other) {
     if (other.levels_[l]) adoptLevel(l, other.levels_[l].get());
   }
   key = other.key;
-  return *this;  // index and neighbours describe where the target sits in its octree: kept
+  return *this;  // row and neighbours describe where the target sits in its octree: kept
 }
 
 const Voxel* VoxelBlock::unobservedLevel() {

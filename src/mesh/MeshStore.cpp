@@ -113,17 +113,6 @@ MeshChanges MeshStore::update(const BlockOctree& map, const std::vector<BlockKey
   return remeshAround(map, std::move(present), std::move(absent), pool, erased);
 }
 
-MeshChanges MeshStore::remeshUpdatedBlocks(const BlockOctree& map, const std::vector<VoxelBlock*>& updated_blocks,
-                                           ThreadPool* pool, const std::vector<BlockKey>& erased) {
-  states_.fit(map);
-  pool->parallelFor(updated_blocks.size(), 16, [&](size_t begin, size_t end) {
-    for (size_t i = begin; i < end; ++i)
-      refreshMeshLevel(*updated_blocks[i], params_.level_min_coverage, &states_[*updated_blocks[i]]);
-  });
-  return remeshAround(map, std::vector<const VoxelBlock*>(updated_blocks.begin(), updated_blocks.end()), {}, pool,
-                      erased);
-}
-
 MeshChanges MeshStore::remeshAround(const BlockOctree& map, std::vector<const VoxelBlock*> present,
                                     std::vector<BlockKey> absent, ThreadPool* pool,
                                     const std::vector<BlockKey>& erased) {

@@ -180,8 +180,10 @@ void FusionNodelet::processFrame(const QueuedFrame& f) {
     }
     try {
       // The mesh is brought up to date when it is published (publishPending()), at most
-      // mesh_publish_rate_hz; with rate 0, after every frame.
-      result = mapper_->integrate(frame, node_config_.mesh_publish_rate_hz > 0 ? MeshTiming::kDeferred : MeshTiming::kNow);
+      // mesh_publish_rate_hz; with rate 0, after every frame. Texture patches are cut from the
+      // frame that changed a submesh, so with textures the mesh follows every frame.
+      const bool deferred = node_config_.mesh_publish_rate_hz > 0 && mapper_config_.texture != TextureMode::kPatches;
+      result = mapper_->integrate(frame, deferred ? MeshTiming::kDeferred : MeshTiming::kNow);
     } catch (const std::exception&) {
       // A throw mid-frame (e.g. bad_alloc) can leave the fused voxels and the mesh out of step:
       // re-mesh from the map and send subscribers a full update before the frame is counted.
@@ -364,7 +366,7 @@ bool FusionNodelet::saveMap(SaveMap::Request& req, SaveMap::Response& res) {
   std::vector<uint8_t> bytes;
   double locked_ms = 0.0;
   {
-    // Only the copy of the blocks holds the map (at memory speed, ~7 KB per block); the
+    // Only the copy of the blocks holds the map (at memory speed, 0.3–7 KB per block); the
     // checksums, the write and the fsync (seconds for a large map on a robot's flash) run while
     // frames are fused.
     std::lock_guard<std::mutex> lock(map_mutex_);
@@ -456,7 +458,7 @@ void FusionNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
     mesh_passes = mesh_passes_;
     awaiting_mesh = mapper_->blocksAwaitingMesh();
     blocks = mapper_->map().blockCount();
-    memory = mapper_->map().memoryBytes();
+    memory = mapper_->memoryBytes();
   }
   auto pct = [&](double p) { return percentile(lat, p); };
   if (received_ > 0 && fused_ == 0)
@@ -484,7 +486,7 @@ void FusionNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
   }
   status.add("timings", "lookup, fusion, total: per frame; meshing, texture: per meshing pass");
   status.add("meshing passes", mesh_passes);
-  status.add("blocks awaiting meshing", awaiting_mesh);
+  status.add("block changes awaiting meshing", awaiting_mesh);
   status.add("blocks", blocks);
   status.add("blocks evicted", blocks_evicted_.load());
   status.add("memory (MB)", memory / 1048576.0);

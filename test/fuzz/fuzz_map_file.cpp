@@ -16,12 +16,15 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   std::string error;
   const bool ok = decodeMapFile(data, size, config, &map, &info, &error);
   if (ok) {
-    // A decoded file is self-consistent: as many blocks as announced, and it re-encodes to
-    // exactly the input (the current format has one encoding per map); a version-1 file
-    // re-encodes to a current one that decodes to the same number of blocks.
-    if (map.blockCount() != info.block_count) std::abort();
+    // A decoded file is self-consistent: as many blocks as announced (a version-1 file may
+    // hold blocks without observations, which are not loaded), one last-update frame per block,
+    // and a current file re-encodes to the input's size (one record size per block and levels);
+    // a version-1 file re-encodes to a current one that decodes to the same number of blocks.
+    const bool current = info.version == kMapFileVersion;
+    if (current ? map.blockCount() != info.block_count : map.blockCount() > info.block_count) std::abort();
+    if (info.last_update_frames.size() != map.blockCount()) std::abort();
     const std::vector<uint8_t> again = encodeMapFile(map, config, info.frames_integrated);
-    if (info.version == kMapFileVersion && again.size() != size) std::abort();
+    if (current && again.size() != size) std::abort();
     if (info.version != kMapFileVersion) {
       BlockOctree reread(config.blockSizeM());
       MapFileInfo reread_info;

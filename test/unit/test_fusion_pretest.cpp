@@ -156,7 +156,7 @@ TEST(FusionPreTest, NeverSkipsVoxelsAtTheBackOfTheBand) {
     const double voxel_m = config.voxel_size_m;
     for (int level = 0; level < kNumLevels; ++level) {
       const double level_voxel_m = voxel_m * levelScale(level);
-      const double truncation_m = std::max(config.truncation_vox * voxel_m, SurfaceFuser::kMinBandVoxels * level_voxel_m);
+      const double truncation_m = config.truncationBand().updateM(0, level);
       for (int k = 0; k < levelSide(level); ++k) {
         // Depth of the slice's nearest voxel centre (the pre-test bounds by the nearest).
         double z_near_m = INFINITY;

@@ -59,7 +59,7 @@ void referenceFuseBlock(const StereoFrame& frame, const BlockOctree& octree, con
           if (level < m) continue;
           const float scale = static_cast<float>(levelScale(m));
           const float truncation = std::max(static_cast<float>(config.truncation_vox) * scale * voxel,
-                                            SurfaceFuser::kMinBandVoxels * level_voxel);
+                                            TruncationBand::kMinVoxelsOfUpdatedLevel * level_voxel);
           const float delta = static_cast<float>(config.weight_falloff_start_vox) * scale * voxel;
           const float sdf = signedDistanceAlongRay(p.x(), p.y(), p.z(), z);
           if (sdf > truncation) continue;

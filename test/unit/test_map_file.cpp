@@ -166,15 +166,27 @@ std::vector<uint8_t> versionOneFile(const BlockOctree& map, const MapperConfig& 
 TEST(MapFile, VersionOneFilesStillLoadWithOnlyTheirObservedLevels) {
   MapperConfig config;
   const auto original = fusedMapper(3, config);
-  const std::vector<uint8_t> old_file = versionOneFile(original->map(), config, original->framesIntegrated());
+  // The old lookup allocated every block a band reached, updated or not: a version-1 file holds
+  // such blocks, all voxels unobserved. Two of them here, beside the fused blocks.
+  BlockOctree with_empty(config.blockSizeM());
+  for (const VoxelBlock* b : original->map().blocks()) {
+    VoxelBlock* copy = with_empty.findOrAllocate(b->key);
+    for (int level = 0; level < kNumLevels; ++level)
+      if (b->hasLevel(level)) copy->adoptLevel(level, b->level(level));
+  }
+  with_empty.findOrAllocate({500, 0, 0});
+  with_empty.findOrAllocate({501, 0, 0})->writableLevel(1);  // stored, never observed
+  const std::vector<uint8_t> old_file = versionOneFile(with_empty, config, original->framesIntegrated());
   BlockOctree loaded(config.blockSizeM());
   MapFileInfo info;
   std::string error;
   ASSERT_TRUE(decodeMapFile(old_file.data(), old_file.size(), config, &loaded, &info, &error)) << error;
   EXPECT_EQ(info.version, 1u);
-  // The same blocks and voxels, and a level is allocated exactly where it holds observations
-  // (which is where fusion allocated it).
+  EXPECT_EQ(info.block_count, original->map().blockCount() + 2);
+  // The fused blocks and voxels, without the empty ones, and a level is allocated exactly
+  // where it holds observations (which is where fusion allocated it).
   EXPECT_TRUE(snapshot(loaded) == snapshot(original->map()));
+  EXPECT_EQ(info.last_update_frames.size(), loaded.blockCount());
   size_t blocks_without_level0 = 0;
   for (const VoxelBlock* b : loaded.blocks()) blocks_without_level0 += !b->hasLevel(0);
   EXPECT_GT(blocks_without_level0, 0u);
@@ -390,6 +402,12 @@ TEST(MapFile, VersionParametersAndContentAreChecked) {
   bad[56] = 0xFF;  // block count 255 + ...: more blocks than the payload holds
   reseal(&bad);
   EXPECT_NE(decodeError(bad, config).find("block 3 of 255 runs past the end"), std::string::npos) << decodeError(bad, config);
+  bad = good;
+  for (size_t v = 0; v < 8; ++v)  // the first block's level 2 (its last 8 voxels) unobserved
+    std::memset(bad.data() + kMapFileHeaderBytes + kAllLevelsRecordBytes - 12 * (8 - v) + 4, 0, 4);
+  reseal(&bad);
+  EXPECT_NE(decodeError(bad, config).find("stores level 2 without an observed voxel"), std::string::npos)
+      << decodeError(bad, config);
   bad = good;
   bad[64] = 0;  // a payload size other than the file's
   reseal(&bad);

@@ -227,3 +227,62 @@ TEST(MemoryBound, DistanceBoundBelowTheFusionRangeIsRefused) {
   config.max_distance_from_camera_m = 0.0;  // off
   EXPECT_TRUE(validateMapperConfig(config).empty());
 }
+
+// Meshing at its own rate with the memory bound on: frames fused with the mesh deferred, a
+// meshing pass every third frame, give the same map and mesh as meshing after every frame,
+// and that mesh equals a rebuild, although blocks are evicted (and their rows reused) between
+// passes. The Mapper's running memory figure equals the octree's own count all along.
+TEST(MemoryBound, DeferredMeshingWithEvictionEqualsMeshingEveryFrame) {
+  const sim::AnalyticScene scene = corridor();
+  MapperConfig config = boundedConfig();
+  config.max_blocks = 250;
+  Mapper every_frame(config), deferred(config);
+  uint64_t evicted = 0;
+  for (int f = 0; f < 24; ++f) {
+    const StereoFrame frame = corridorFrame(scene, 0.15 * f);
+    ASSERT_TRUE(every_frame.integrate(frame).accepted);
+    const IntegrationResult r = deferred.integrate(frame, MeshTiming::kDeferred);
+    ASSERT_TRUE(r.accepted);
+    evicted += r.evicted_blocks.size();
+    if (f % 3 == 2) deferred.updateMesh();
+    EXPECT_EQ(deferred.memoryBytes(), deferred.map().memoryBytes()) << "frame " << f;
+  }
+  deferred.updateMesh();
+  EXPECT_GT(evicted, 100u);
+  EXPECT_TRUE(snapshot(deferred.map()) == snapshot(every_frame.map()));
+  EXPECT_TRUE(triangleSets(deferred.mesh()) == triangleSets(every_frame.mesh()));
+  MeshStore batch(MeshingParams{config.voxel_size_m, config.truncation_vox, config.mesh_level_min_coverage});
+  ThreadPool pool(2);
+  batch.rebuild(deferred.map(), &pool);
+  EXPECT_TRUE(triangleSets(deferred.mesh()) == triangleSets(batch));
+}
+
+// A reset reports every submesh as removed to the mesh's consumers, after what they have not
+// taken yet (here removals by eviction): a consumer that mirrors the mesh ends empty.
+TEST(MemoryBound, MeshConsumersMirrorTheMeshThroughEvictionAndReset) {
+  const sim::AnalyticScene scene = corridor();
+  MapperConfig config = boundedConfig();
+  config.max_blocks = 250;
+  Mapper mapper(config);
+  const BlockChangeLog::Consumer mirror = mapper.subscribeToMeshChanges("mirror");
+  std::set<BlockKey> held;
+  auto apply = [&] {
+    const BlockChangeLog::Changes c = mapper.takeMeshChanges(mirror);
+    for (const BlockKey& k : c.updated) held.insert(k);
+    for (const BlockKey& k : c.erased) held.erase(k);
+  };
+  size_t removed_pending = 0;
+  for (int f = 0; f < 20; ++f) {
+    const IntegrationResult r = mapper.integrate(corridorFrame(scene, 0.15 * f));
+    ASSERT_TRUE(r.accepted);
+    if (f < 17) {
+      apply();
+    } else {
+      removed_pending += r.mesh.removed.size();  // left for the reset to come after
+    }
+  }
+  EXPECT_GT(removed_pending, 0u);
+  mapper.reset();
+  apply();
+  EXPECT_TRUE(held.empty()) << held.size() << " submeshes still held";
+}

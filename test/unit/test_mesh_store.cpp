@@ -1,7 +1,7 @@
-// MeshStore's two entries for a frame's changes: by keys (update, which refreshes the mesh
-// levels itself) and by the blocks fusion hands over (remeshUpdatedBlocks, after the levels were
-// refreshed as the Mapper's fusion workers do). Both reach owners through the neighbour links and
-// must give the same submeshes and changes, before and after blocks are erased.
+// MeshStore::update() by keys, as the Mapper's meshing passes call it with the change log's
+// updated and erased blocks: it refreshes the mesher's state of the updated blocks, reaches
+// owners through the neighbour links, and must give the submeshes of a from-scratch rebuild,
+// before and after blocks are erased.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,17 +12,7 @@
 using namespace stereo_fusion;
 using namespace stereo_fusion::test;
 
-namespace {
-
-void expectSameChanges(const MeshChanges& a, const MeshChanges& b) {
-  EXPECT_EQ(a.changed, b.changed);
-  EXPECT_EQ(a.removed, b.removed);
-  EXPECT_EQ(a.blocks_meshed, b.blocks_meshed);
-}
-
-}  // namespace
-
-TEST(MeshStore, UpdateByKeysAndByBlocksAgreeAndEqualARebuildAfterErase) {
+TEST(MeshStore, UpdateByKeysEqualsARebuildBeforeAndAfterErase) {
   const double voxel_m = 0.02;
   BlockOctree map(8 * voxel_m);
   sim::AnalyticScene scene;
@@ -32,30 +22,26 @@ TEST(MeshStore, UpdateByKeysAndByBlocksAgreeAndEqualARebuildAfterErase) {
   ASSERT_GT(map.blockCount(), 100u);
   ThreadPool pool(2);
   const MeshingParams params{voxel_m, 4.0, 0.8};
-  MeshStore by_key(params), by_block(params);
+  MeshStore by_key(params);
 
   std::vector<BlockKey> keys;
-  std::vector<VoxelBlock*> blocks;
-  for (VoxelBlock* b : map.blocksSortedByKey()) {
-    keys.push_back(b->key);
-    blocks.push_back(b);
-  }
+  for (const VoxelBlock* b : map.blocksSortedByKey()) keys.push_back(b->key);
+  const size_t blocks = keys.size();
   keys.push_back({100, 100, 100});  // no block there, nor at its owners: changes nothing
   const MeshChanges first_by_key = by_key.update(map, keys, &pool);
-  const MeshChanges first_by_block = by_block.remeshUpdatedBlocks(map, blocks, &pool);
-  expectSameChanges(first_by_key, first_by_block);
   EXPECT_EQ(first_by_key.blocks_meshed, map.blockCount());  // every block owns its own cells
   EXPECT_GT(first_by_key.changed.size(), 40u);
   EXPECT_TRUE(first_by_key.removed.empty());
-  EXPECT_TRUE(triangleSets(by_key) == triangleSets(by_block));
+  MeshStore first_rebuild(params);
+  const MeshChanges rebuilt_changes = first_rebuild.rebuild(map, &pool);
+  EXPECT_EQ(first_by_key.changed, rebuilt_changes.changed);
+  EXPECT_TRUE(triangleSets(by_key) == triangleSets(first_rebuild));
 
   // Erase every third block with a surface: their submeshes go, their owners are re-meshed.
   std::vector<BlockKey> erased;
   for (size_t i = 0; i < first_by_key.changed.size(); i += 3) erased.push_back(first_by_key.changed[i]);
   ASSERT_EQ(map.erase(erased), erased.size());
   const MeshChanges second_by_key = by_key.update(map, {}, &pool, erased);
-  const MeshChanges second_by_block = by_block.remeshUpdatedBlocks(map, {}, &pool, erased);
-  expectSameChanges(second_by_key, second_by_block);
   for (const BlockKey& k : erased)
     EXPECT_TRUE(std::binary_search(second_by_key.removed.begin(), second_by_key.removed.end(), k)) << k;
   // Up to 7 surviving owners per erased block, shared between neighbours.
@@ -63,13 +49,12 @@ TEST(MeshStore, UpdateByKeysAndByBlocksAgreeAndEqualARebuildAfterErase) {
   EXPECT_LE(second_by_key.blocks_meshed, 7 * erased.size());
 
   std::printf("[ mesh store ] %zu blocks, %zu submeshes; %zu erased: %zu owners re-meshed, %zu removed\n",
-              blocks.size(), first_by_key.changed.size(), erased.size(), second_by_key.blocks_meshed,
+              blocks, first_by_key.changed.size(), erased.size(), second_by_key.blocks_meshed,
               second_by_key.removed.size());
 
   MeshStore rebuilt(params);
   rebuilt.rebuild(map, &pool);
   EXPECT_TRUE(triangleSets(by_key) == triangleSets(rebuilt));
-  EXPECT_TRUE(triangleSets(by_block) == triangleSets(rebuilt));
   EXPECT_EQ(by_key.submeshes().size(), rebuilt.submeshes().size());
   EXPECT_LE(by_key.submeshes().size(), first_by_key.changed.size() - erased.size());
 }

@@ -127,8 +127,30 @@ TEST(BlockOctree, MemoryAccounting) {
     for (int x = 0; x < 40; ++x) tree.findOrAllocate({x, y, 5});
   EXPECT_EQ(tree.blockCount(), 1600u);
   EXPECT_GE(tree.memoryBytes(), 1600 * sizeof(VoxelBlock));
-  // Octree overhead is small next to the 7 KiB of voxels: stays under 10 KiB per block.
-  EXPECT_LT(tree.bytesPerBlock(), 10 * 1024.0);
+  // Without voxels a block and its share of the octree stay under 400 B.
+  EXPECT_LT(tree.bytesPerBlock(), 400.0);
+  const size_t empty_bytes = tree.memoryBytes();
+  // Levels by hand: all 1 600 hold 2³, 100 also 4³, 10 all three.
+  size_t n = 0;
+  for (VoxelBlock* b : tree.blocksSortedByKey()) {
+    b->writableLevel(2);
+    if (n < 100) b->writableLevel(1);
+    if (n < 10) b->writableLevel(0);
+    ++n;
+  }
+  const BlockOctree::MemoryUse use = tree.memoryUse();
+  EXPECT_EQ(use.level_blocks[2], 1600u);
+  EXPECT_EQ(use.level_blocks[1], 100u);
+  EXPECT_EQ(use.level_blocks[0], 10u);
+  EXPECT_EQ(use.level_bytes[2], 1600u * 8 * 12);
+  EXPECT_EQ(use.level_bytes[1], 100u * 64 * 12);
+  EXPECT_EQ(use.level_bytes[0], 10u * 512 * 12);
+  EXPECT_EQ(use.block_bytes, 1600u * sizeof(VoxelBlock));
+  EXPECT_EQ(tree.memoryBytes(), empty_bytes + (1600u * 8 + 100u * 64 + 10u * 512) * 12);
+  // Without the levels: no walk, the structure only.
+  EXPECT_EQ(tree.memoryUse(false).total(), empty_bytes);
+  // Even all three levels everywhere stay inside the old 10 KiB budget.
+  EXPECT_LT(static_cast<double>(sizeof(VoxelBlock) + 584 * 12), 10 * 1024.0);
   std::printf("[ memory ] %zu blocks, %zu nodes: %.0f bytes per block incl. octree (block alone %zu)\n",
               tree.blockCount(), tree.nodeCount(), tree.bytesPerBlock(), sizeof(VoxelBlock));
   EXPECT_GT(tree.nodeCount(), 0u);

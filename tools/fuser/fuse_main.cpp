@@ -16,6 +16,7 @@ const char* kUsage =
     "  --set key=value   override one parameter; every key of config/default.yaml is accepted\n"
     "  --frames N        fuse only the first N frames\n"
     "  --mesh-every N    bring the mesh up to date after every N-th frame (default 1) and the last\n"
+    "                    (texture patches are then cut from the frames that end a meshing pass)\n"
     "  --disparity-topic, --image-topic, --camera-info-topic, --world-frame\n"
     "                    what to read from a bag (defaults: /stereo/disparity,\n"
     "                    /stereo/left/image_rect_color, /stereo/left/camera_info, world)\n"

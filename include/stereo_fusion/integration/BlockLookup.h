@@ -25,9 +25,11 @@ struct LookupStats {
 /// to update. Each valid pixel contributes the blocks that its truncation band reaches: the
 /// segment of its ray within ±Φ of the measured surface (Φ of the level its depth selects,
 /// eq. 3.2, TruncationBand), widened by the voxels that project onto the pixel
-/// (kLateralMarginPx). Those are exactly the blocks holding a voxel that fusion can update
-/// from this pixel, so the queue follows the surface, not the volume of a ±Φ cube around each
-/// point (a cube queues ~25× the blocks at far range, where Φ spans several blocks). The histogram filter, when on, drops per image region the
+/// (kLateralMarginPx). Those are the blocks holding a voxel that this pixel's measurement puts
+/// within its band (|sdf| ≤ Φ); voxels farther in front (fused clamped to −Φ) and the wider band
+/// a near measurement leaves in coarse levels are fused where some band brings their block. So
+/// the queue follows the surface, not the volume of a ±Φ cube around each point (a cube queues
+/// ~25× the blocks at far range, where Φ spans several blocks). The histogram filter, when on, drops per image region the
 /// blocks reached by fewer than `histogram_min_points` points.
 ///
 /// Naive (Algorithm 1) searches the octree for every (pixel, band block) pair; accelerated

@@ -24,7 +24,7 @@ namespace stereo_fusion {
 struct FusionFrame {
   /// Per voxel level: the steps between neighbouring voxel centres in camera coordinates and
   /// the band half-width Φ for a measurement of each level (eq. 3.15, never below
-  /// SurfaceFuser::kMinBandVoxels of this level's voxels).
+  /// 2 of this level's voxels, TruncationBand::updateM()).
   struct Level {
     Eigen::Vector3f ex_m, ey_m, ez_m;
     float truncation_m[kNumLevels];  ///< indexed by the measurement's level

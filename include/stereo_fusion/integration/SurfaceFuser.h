@@ -17,6 +17,7 @@ struct FusionStats {
   uint64_t blocks_updated = 0;  ///< queued blocks in which at least one voxel changed (created ones included)
   uint64_t blocks_created = 0;  ///< of the missing blocks, those the frame updated: new in the map
   uint64_t blocks_not_created = 0;  ///< missing blocks the frame reached but did not update: never allocated
+  uint64_t level_bytes_allocated = 0;  ///< voxel bytes of the levels the frame allocated (created blocks' included)
 };
 
 /// Stage 2 of the pipeline (thesis §3.5): for every voxel of every queued block, at every
@@ -25,11 +26,8 @@ struct FusionStats {
 /// (eq. 3.10) into the running average (eq. 3.8–3.9).
 ///
 /// The level of a measurement follows the surface depth z (eq. 3.2): it updates its own level
-/// and every coarser one (see VoxelBlock), with Φ = truncation_vox · s · voxel_size_m (s of the
-/// measurement's level) but never less than kMinBandVoxels voxels of the level being updated,
-/// so coarse levels fed by near measurements still bracket the surface. (A band of
-/// truncation_vox coarse voxels would be thicker than small objects and let views disagree
-/// about their far side.)
+/// and every coarser one (see VoxelBlock), with Φ = TruncationBand::updateM(): truncation_vox
+/// voxels of the measurement's level, but never less than 2 voxels of the level being updated.
 /// Behind the surface, voxels farther than Φ are left untouched (unobserved); in front, the
 /// distance is clamped to −Φ (observed free space).
 ///
@@ -41,9 +39,6 @@ struct FusionStats {
 /// (DepthTiles) and skips those that provably get no update.
 class SurfaceFuser {
  public:
-  /// Minimum band half-width, in voxels of the level being updated.
-  static constexpr float kMinBandVoxels = TruncationBand::kMinVoxelsOfUpdatedLevel;
-
   /// Which voxel loop fuse() runs. All give identical voxels; kAuto takes the fastest this CPU
   /// supports. The others let tests hold the paths against each other.
   enum class Kernel { kAuto, kScalar, kAvx2 };
@@ -73,6 +68,7 @@ class SurfaceFuser {
   MeasurementImage measurements_;            // reused across frames
   DepthTiles tiles_;                         // reused across frames
   std::vector<uint64_t> per_block_updates_;  // reused across frames
+  std::vector<size_t> per_block_new_bytes_;  // reused across frames
   std::vector<std::unique_ptr<VoxelBlock>> candidates_;  // one per missing key, reused across frames
 };
 

@@ -48,7 +48,7 @@ struct MapFileInfo {
   double scale2_min_depth_m = 0;
   double scale4_min_depth_m = 0;
   uint64_t frames_integrated = 0;  ///< of the mapper that saved it
-  uint64_t block_count = 0;
+  uint64_t block_count = 0;  ///< as the header announces (a version-1 file's blocks without observations are not loaded)
   /// Each block's last update frame as the file records it, in key order.
   std::vector<std::pair<BlockKey, uint64_t>> last_update_frames;
 };

@@ -109,7 +109,8 @@ class BlockOctree {
       return t;
     }
   };
-  MemoryUse memoryUse() const;
+  /// `with_levels` false leaves the level figures at 0 and walks no block (O(1)).
+  MemoryUse memoryUse(bool with_levels = true) const;
   /// memoryUse().total(): bytes held by blocks, their voxels, inner nodes and bookkeeping.
   size_t memoryBytes() const { return memoryUse().total(); }
   /// memoryBytes() / blockCount(): the per-block cost including octree overhead.

@@ -32,10 +32,6 @@ class MeshStore {
   /// updated block), so no allocation may run on `map` meanwhile (BlockOctree::neighbour).
   MeshChanges update(const BlockOctree& map, const std::vector<BlockKey>& updated, ThreadPool* pool,
                      const std::vector<BlockKey>& erased = {});
-  /// update() for the updated blocks themselves, as fusion hands them over (all in `map`, none
-  /// erased): the same result without the one search per updated block.
-  MeshChanges remeshUpdatedBlocks(const BlockOctree& map, const std::vector<VoxelBlock*>& updated_blocks,
-                                  ThreadPool* pool, const std::vector<BlockKey>& erased = {});
   /// Meshes every block from scratch (the reference for the incremental result).
   MeshChanges rebuild(const BlockOctree& map, ThreadPool* pool);
 
