@@ -8,7 +8,7 @@ add_library(stereo_fusion_simulator STATIC
   tools/simulator/StereoRenderer.cpp
   tools/simulator/DatasetWriter.cpp
 )
-target_link_libraries(stereo_fusion_simulator PUBLIC stereo_fusion_sim ${OpenCV_LIBS})
+target_link_libraries(stereo_fusion_simulator PUBLIC stereo_fusion_sim stereo_fusion_readers ${OpenCV_LIBS})  # readers: SgbmParams
 
 # scripts/simulate.sh runs this: writes a simulated sequence as a dataset folder.
 add_executable(stereo_fusion_simulate tools/simulator/simulate_main.cpp)

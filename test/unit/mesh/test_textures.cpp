@@ -13,7 +13,7 @@
 
 #include "MeshTestSupport.h"
 #include "TestSupport.h"
-#include "stereo_fusion/io/ObjReader.h"
+#include "readers/ObjReader.h"
 #include "stereo_fusion/io/ObjWriter.h"
 #include "stereo_fusion/io/TextureAtlas.h"
 
