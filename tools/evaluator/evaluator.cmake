@@ -20,13 +20,12 @@ set(EVALUATOR_SOURCES
   ${EVALUATOR_DIR}/HeldOutEvaluator.cpp
   ${EVALUATOR_DIR}/HeldOutSelection.cpp
   ${EVALUATOR_DIR}/EvaluateArguments.cpp
-  ${EVALUATOR_DIR}/JsonWriter.cpp
   ${EVALUATOR_DIR}/EvaluationReport.cpp
 )
 
 add_library(stereo_fusion_evaluator STATIC ${EVALUATOR_SOURCES})
 target_include_directories(stereo_fusion_evaluator PUBLIC ${PROJECT_SOURCE_DIR}/tools)
-target_link_libraries(stereo_fusion_evaluator PUBLIC stereo_fusion_core)
+target_link_libraries(stereo_fusion_evaluator PUBLIC stereo_fusion_core PRIVATE nlohmann_json::nlohmann_json)
 
 add_executable(stereo_fusion_evaluate ${EVALUATOR_DIR}/evaluate_main.cpp)
 target_link_libraries(stereo_fusion_evaluate stereo_fusion_evaluator stereo_fusion_readers)
