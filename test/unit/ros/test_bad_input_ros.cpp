@@ -1,0 +1,119 @@
+// The bad-input catalogue (README "Bad input") cases of the ROS layer: CameraInfo and
+// DisparityImage calibration, empty images, and truncated bags in the offline path. Each checks
+// the message, or that frames that cannot be read are skipped and counted. The Mapper's cases are
+// in test/unit/mapper/test_bad_input.cpp.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <functional>
+
+#include "MeshTestSupport.h"
+#include "fuser/OfflineFuser.h"
+#include "stereo_fusion/ros/BagSequence.h"
+#include "stereo_fusion/ros/MessageConversions.h"
+#include "stereo_fusion/ros/StereoBagWriter.h"
+
+using namespace stereo_fusion;
+using namespace stereo_fusion::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+StereoFrame frameAt(int i, double timestamp_s) {
+  StereoFrame f = renderFrame(floorAndSphere(), qvgaCamera(),
+                              sim::lookAt({-0.15 + 0.1 * i, -0.2, 0.0}, {0.05, 0.1, 1.2}, -Eigen::Vector3d::UnitY()));
+  f.timestamp_s = timestamp_s;
+  return f;
+}
+
+struct Messages {
+  stereo_msgs::DisparityImage disparity;
+  sensor_msgs::Image image;
+  sensor_msgs::CameraInfo info;
+};
+
+Messages messagesOf(const StereoFrame& f) {
+  Messages m;
+  std_msgs::Header header;
+  header.stamp = ros::Time(5.0);
+  header.frame_id = "left_optical";
+  toMessages(f, header, 128.0f, &m.disparity, &m.image, &m.info);
+  return m;
+}
+
+}  // namespace
+
+TEST(BadInput, CameraInfoAndDisparityCalibrationAreChecked) {
+  const Messages good = messagesOf(frameAt(0, 1.0));
+  StereoFrame out;
+  std::string error;
+  ASSERT_TRUE(toStereoFrame(good.disparity, good.image, good.info, Eigen::Isometry3d::Identity(), &out, &error)) << error;
+  struct Case {
+    const char* name;
+    std::function<void(Messages*)> corrupt;
+    const char* message;
+  };
+  const std::vector<Case> cases = {
+      {"CameraInfo fx = 0 (P and K)", [](Messages* m) { m->info.P[0] = 0; m->info.K[0] = 0; }, "disagrees with DisparityImage f"},
+      {"CameraInfo fx < 0", [](Messages* m) { m->info.P[0] = -262.5; }, "disagrees with DisparityImage f"},
+      {"CameraInfo fx NaN", [](Messages* m) { m->info.P[0] = NAN; }, "focal lengths must be finite and > 0"},
+      {"CameraInfo fy = 0", [](Messages* m) { m->info.P[5] = 0; }, "focal lengths must be finite and > 0"},
+      {"CameraInfo fy NaN", [](Messages* m) { m->info.P[5] = NAN; }, "focal lengths must be finite and > 0"},
+      {"CameraInfo cx inf", [](Messages* m) { m->info.P[2] = INFINITY; }, "principal point must be finite"},
+      {"DisparityImage T = 0", [](Messages* m) { m->disparity.T = 0; }, "needs f > 0 and T > 0"},
+      {"DisparityImage T < 0", [](Messages* m) { m->disparity.T = -0.1f; }, "needs f > 0 and T > 0"},
+      {"DisparityImage f = 0", [](Messages* m) { m->disparity.f = 0; }, "needs f > 0 and T > 0"},
+      {"DisparityImage f NaN", [](Messages* m) { m->disparity.f = NAN; }, "needs f > 0 and T > 0"},
+      {"empty disparity image", [](Messages* m) { m->disparity.image.width = 0; m->disparity.image.height = 0;
+                                                  m->disparity.image.data.clear(); }, "disparity image is empty"},
+      {"empty colour image", [](Messages* m) { m->image.width = 0; m->image.height = 0; m->image.data.clear(); },
+       "image is 0x0 but the disparity is 320x240"},
+      {"colour data shorter than step × height", [](Messages* m) { m->image.data.resize(100); }, "image data is shorter than step × height"},
+      {"unsupported encoding bayer", [](Messages* m) { m->image.encoding = "bayer_rggb8"; }, "unsupported image encoding"},
+      {"disparity 16UC1", [](Messages* m) { m->disparity.image.encoding = "16UC1"; }, "must be 32FC1"},
+      {"CameraInfo size differs", [](Messages* m) { m->info.width = 640; }, "CameraInfo is 640x240"},
+  };
+  for (const Case& c : cases) {
+    Messages m = good;
+    c.corrupt(&m);
+    error.clear();
+    EXPECT_FALSE(toStereoFrame(m.disparity, m.image, m.info, Eigen::Isometry3d::Identity(), &out, &error)) << c.name;
+    EXPECT_NE(error.find(c.message), std::string::npos) << c.name << ": " << error;
+  }
+}
+
+TEST(BadInput, TruncatedBagsFailCleanlyInTheOfflinePath) {
+  const std::string path = testing::TempDir() + "stereo_fusion_truncated_" + std::to_string(::getpid()) + ".bag";
+  std::string error;
+  {
+    auto writer = StereoBagWriter::open(path, BagTopics{}, "left_optical", 1.0, &error);
+    ASSERT_TRUE(writer) << error;
+    for (int i = 0; i < 3; ++i) ASSERT_TRUE(writer->write(frameAt(i, 0.1 * i), 128.0f, &error)) << error;
+    writer->close();
+  }
+  const auto full_size = fs::file_size(path);
+  const std::string out_dir = path + ".out";
+  // Cut the bag at several points: every run either refuses the bag with one message or
+  // skips and counts the frames it cannot read; none crashes, none fuses garbage.
+  for (double share : {0.0, 0.01, 0.3, 0.6, 0.95}) {
+    const std::string cut = path + ".cut.bag";
+    fs::copy_file(path, cut, fs::copy_options::overwrite_existing);
+    fs::resize_file(cut, static_cast<uintmax_t>(full_size * share));
+    FuseOptions options;
+    ASSERT_TRUE(parseFuseArguments({cut, out_dir, "--quiet"}, &options, &error)) << error;
+    FuseReport report;
+    const bool ran = runOfflineFusion(options, &report, &error);
+    if (!ran) {
+      EXPECT_NE(error.find(cut), std::string::npos) << share << ": the message names the bag: " << error;
+    } else {
+      size_t skipped = 0;
+      for (const auto& [reason, n] : report.skipped) skipped += n;
+      EXPECT_EQ(report.frames_used + skipped, report.frames_total) << share;
+      EXPECT_LE(report.frames_used, 3u);
+    }
+    fs::remove(cut);
+  }
+  fs::remove(path);
+  fs::remove_all(out_dir);
+}
