@@ -31,5 +31,5 @@ add_executable(stereo_fusion_evaluate ${EVALUATOR_DIR}/evaluate_main.cpp)
 target_link_libraries(stereo_fusion_evaluate stereo_fusion_evaluator stereo_fusion_readers)
 
 if(CATKIN_ENABLE_TESTING)
-  target_link_libraries(stereo_fusion_unit_tests stereo_fusion_evaluator)
+  target_link_libraries(stereo_fusion_tool_tests stereo_fusion_evaluator)
 endif()

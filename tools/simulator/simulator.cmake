@@ -15,6 +15,6 @@ add_executable(stereo_fusion_simulate tools/simulator/simulate_main.cpp)
 target_link_libraries(stereo_fusion_simulate stereo_fusion_simulator stereo_fusion_ros)
 
 if(CATKIN_ENABLE_TESTING)
-  # test/unit/tools/test_simulator.cpp is globbed into the unit test binary by the root.
-  target_link_libraries(stereo_fusion_unit_tests stereo_fusion_simulator)
+  # test/unit/tools/test_simulator.cpp is globbed into the tools' unit test binary by the root.
+  target_link_libraries(stereo_fusion_tool_tests stereo_fusion_simulator)
 endif()

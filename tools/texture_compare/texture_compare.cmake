@@ -15,5 +15,5 @@ add_executable(stereo_fusion_texture_compare ${PROJECT_SOURCE_DIR}/tools/texture
 target_link_libraries(stereo_fusion_texture_compare stereo_fusion_texture_compare_lib stereo_fusion_offline)
 
 if(CATKIN_ENABLE_TESTING)
-  target_link_libraries(stereo_fusion_unit_tests stereo_fusion_texture_compare_lib)
+  target_link_libraries(stereo_fusion_tool_tests stereo_fusion_texture_compare_lib)
 endif()
