@@ -3,7 +3,8 @@
 # them; any sanitizer report or test failure makes it exit non-zero. Ends with a summary.
 #   scripts/check.sh [--asan | --tsan | --all]      (default --all)
 #   --asan  AddressSanitizer + UndefinedBehaviorSanitizer (g++), in .build-asan/: every unit
-#           test, and every fuzz target's checked-in corpus and regressions (test/fuzz/)
+#           test (the core's and the tools' binaries), and every fuzz target's checked-in corpus
+#           and regressions (test/fuzz/)
 #   --tsan  ThreadSanitizer (g++), in .build-tsan/: the tests that run code on several threads
 #           (test/unit/thread_tests.cmake)
 # Both run with STEREO_FUSION_TEST_QUICK=1: the three heaviest thread tests use smaller inputs
@@ -77,9 +78,11 @@ export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$ROOT/
 
 if [ "$mode" != --tsan ]; then
   dir="$ROOT/.build-asan"
-  if build "$dir" address,undefined stereo_fusion_unit_tests stereo_fusion_fuzz_replays; then
-    bin="$(find "$dir" -type f -name stereo_fusion_unit_tests -perm -u+x | head -n 1)"
-    run_gtest asan_unit_tests "$bin" '*' || failed=1
+  if build "$dir" address,undefined stereo_fusion_unit_tests stereo_fusion_tool_tests stereo_fusion_fuzz_replays; then
+    for binary in stereo_fusion_unit_tests stereo_fusion_tool_tests; do
+      bin="$(find "$dir" -type f -name "$binary" -perm -u+x | head -n 1)"
+      run_gtest "asan_${binary#stereo_fusion_}" "$bin" '*' || failed=1
+    done
     t0=$SECONDS
     replay_status=clean
     for replay in $(find "$dir" -type f -name 'fuzz_*_replay' -perm -u+x | sort); do

@@ -2,7 +2,8 @@
 #   - with STEREO_FUSION_FUZZ (clang):  the libFuzzer executable fuzz_<name>  (scripts/fuzz.sh)
 #   - in the normal test build:         fuzz_<name>_replay, run by ctest over the checked-in
 #                                       corpus/fuzz_<name>/ and regressions/fuzz_<name>/
-# A new file is picked up by the glob; no edit here is needed. Targets link stereo_fusion_core.
+# A new file is picked up by the glob; no edit here is needed. Targets link stereo_fusion_core and
+# stereo_fusion_readers (the dataset folder and PFM readers, tools/readers/).
 
 set(FUZZ_DIR ${PROJECT_SOURCE_DIR}/test/fuzz)
 file(GLOB FUZZ_TARGET_SOURCES CONFIGURE_DEPENDS ${FUZZ_DIR}/fuzz_*.cpp)
@@ -12,7 +13,7 @@ if(STEREO_FUSION_FUZZ)
   foreach(source ${FUZZ_TARGET_SOURCES})
     get_filename_component(name ${source} NAME_WE)
     add_executable(${name} ${source})
-    target_link_libraries(${name} stereo_fusion_core)
+    target_link_libraries(${name} stereo_fusion_core stereo_fusion_readers)
     target_link_options(${name} PRIVATE -fsanitize=fuzzer)
   endforeach()
 elseif(CATKIN_ENABLE_TESTING)
@@ -20,7 +21,7 @@ elseif(CATKIN_ENABLE_TESTING)
   foreach(source ${FUZZ_TARGET_SOURCES})
     get_filename_component(name ${source} NAME_WE)
     add_executable(${name}_replay ${source} ${FUZZ_DIR}/fuzz_replay_main.cpp)
-    target_link_libraries(${name}_replay stereo_fusion_core)
+    target_link_libraries(${name}_replay stereo_fusion_core stereo_fusion_readers)
     add_dependencies(stereo_fusion_fuzz_replays ${name}_replay)
     add_test(NAME fuzz_replay.${name}
              COMMAND ${name}_replay ${FUZZ_DIR}/corpus/${name} ${FUZZ_DIR}/regressions/${name})

@@ -9,8 +9,8 @@
 #include <opencv2/core.hpp>
 
 #include "FuzzSupport.h"
+#include "readers/DatasetReader.h"
 #include "stereo_fusion/integration/StereoFrame.h"
-#include "stereo_fusion/io/DatasetReader.h"
 #include "stereo_fusion/map/BlockOctree.h"
 
 using namespace stereo_fusion;

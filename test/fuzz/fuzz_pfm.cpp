@@ -3,7 +3,7 @@
 #include <opencv2/core.hpp>
 
 #include "FuzzSupport.h"
-#include "stereo_fusion/io/DatasetReader.h"
+#include "readers/DatasetReader.h"
 
 using namespace stereo_fusion;
 

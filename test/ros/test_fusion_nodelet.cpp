@@ -17,9 +17,9 @@
 
 #include "../unit/TestSupport.h"
 #include "RosTestSupport.h"
+#include "readers/ObjReader.h"
+#include "readers/PlyReader.h"
 #include "stereo_fusion/io/MapFile.h"
-#include "stereo_fusion/io/ObjReader.h"
-#include "stereo_fusion/io/PlyReader.h"
 #include "stereo_fusion/ros/MeshMessages.h"
 #include "stereo_fusion/ros/MessageConversions.h"
 #include "stereo_fusion/ros/RosParameters.h"

@@ -17,8 +17,8 @@
 
 #include "../unit/TestSupport.h"
 #include "RosTestSupport.h"
+#include "readers/ObjReader.h"
 #include "stereo_fusion/Mapper.h"
-#include "stereo_fusion/io/ObjReader.h"
 #include "stereo_fusion/ros/MeshMessages.h"
 #include "stereo_fusion/ros/MessageConversions.h"
 #include "stereo_fusion/ros/RosParameters.h"

@@ -2,11 +2,28 @@
 
 #include <cmath>
 #include <cstdio>
-
-#include "evaluator/JsonWriter.h"
+#include <cstdlib>
+#include <nlohmann/json.hpp>
 
 namespace stereo_fusion::eval {
 namespace {
+
+using Json = nlohmann::ordered_json;  // keys keep insertion order, so reports diff cleanly
+
+/// A number with 9 significant digits (1 nm at 1 km); null when not finite (JSON has no NaN or
+/// infinity).
+Json number(double value) {
+  if (!std::isfinite(value)) return nullptr;
+  char buffer[32];
+  std::snprintf(buffer, sizeof(buffer), "%.9g", value);
+  return std::strtod(buffer, nullptr);
+}
+
+/// The document indented by two spaces, with a final newline. File names are copied as given: a
+/// byte sequence that is not UTF-8 is replaced by U+FFFD rather than failing the report.
+std::string dump(const Json& json) {
+  return json.dump(2, ' ', false, Json::error_handler_t::replace) + "\n";
+}
 
 std::string format(const char* pattern, double value) {
   if (!std::isfinite(value)) return std::isnan(value) ? "n/a" : "inf";
@@ -24,13 +41,13 @@ std::string row(const std::string& name, const std::string& value) {
   return buffer;
 }
 
-JsonObject summaryJson(const DistanceSummary& summary) {
-  JsonObject json;
-  json.integer("count", summary.count)
-      .number("mean", summary.mean_m)
-      .number("median", summary.median_m)
-      .number("p90", summary.p90_m)
-      .number("max", summary.max_m);
+Json summaryJson(const DistanceSummary& summary) {
+  Json json;
+  json["count"] = summary.count;
+  json["mean"] = number(summary.mean_m);
+  json["median"] = number(summary.median_m);
+  json["p90"] = number(summary.p90_m);
+  json["max"] = number(summary.max_m);
   return json;
 }
 
@@ -103,31 +120,30 @@ std::string formatTable(const HeldOutReport& report) {
 
 std::string toJson(const GroundTruthReport& report) {
   const GroundTruthResult& r = report.result;
-  JsonObject json;
-  json.text("mode", "ground_truth")
-      .text("mesh", report.mesh_path)
-      .text("ground_truth", report.ground_truth_path)
-      .text("sequence", report.sequence_path)
-      .number("tolerance_m", report.options.tolerance_m)
-      .integer("samples", report.options.samples)
-      .integer("seed", report.options.seed)
-      .number("precision", r.precision)
-      .number("completeness", r.completeness)
-      .number("completeness_all", r.completeness_all)
-      .number("f_score", r.f_score)
-      .object("accuracy_m", summaryJson(r.accuracy))
-      .object("completion_m", summaryJson(r.completion))
-      .number("reconstruction_area_m2", r.reconstruction_area_m2)
-      .number("ground_truth_area_m2", r.ground_truth_area_m2)
-      .integer("reconstruction_samples", r.reconstruction_samples)
-      .integer("ground_truth_samples", r.ground_truth_samples)
-      .integer("ground_truth_samples_evaluated", r.ground_truth_samples_evaluated);
-  JsonObject visibility;
-  visibility.boolean("used", r.visibility_used)
-      .integer("frames_used", report.visibility.frames_used)
-      .integer("frames_skipped", report.visibility.frames_skipped);
-  json.object("visibility", visibility).number("elapsed_s", report.elapsed_s);
-  return json.str() + "\n";
+  Json json;
+  json["mode"] = "ground_truth";
+  json["mesh"] = report.mesh_path;
+  json["ground_truth"] = report.ground_truth_path;
+  json["sequence"] = report.sequence_path;
+  json["tolerance_m"] = number(report.options.tolerance_m);
+  json["samples"] = report.options.samples;
+  json["seed"] = report.options.seed;
+  json["precision"] = number(r.precision);
+  json["completeness"] = number(r.completeness);
+  json["completeness_all"] = number(r.completeness_all);
+  json["f_score"] = number(r.f_score);
+  json["accuracy_m"] = summaryJson(r.accuracy);
+  json["completion_m"] = summaryJson(r.completion);
+  json["reconstruction_area_m2"] = number(r.reconstruction_area_m2);
+  json["ground_truth_area_m2"] = number(r.ground_truth_area_m2);
+  json["reconstruction_samples"] = r.reconstruction_samples;
+  json["ground_truth_samples"] = r.ground_truth_samples;
+  json["ground_truth_samples_evaluated"] = r.ground_truth_samples_evaluated;
+  json["visibility"]["used"] = r.visibility_used;
+  json["visibility"]["frames_used"] = report.visibility.frames_used;
+  json["visibility"]["frames_skipped"] = report.visibility.frames_skipped;
+  json["elapsed_s"] = number(report.elapsed_s);
+  return dump(json);
 }
 
 std::string toJson(const HeldOutReport& report) {
@@ -135,43 +151,41 @@ std::string toJson(const HeldOutReport& report) {
   const auto share = [](uint64_t numerator, uint64_t denominator) {
     return denominator == 0 ? NAN : static_cast<double>(numerator) / static_cast<double>(denominator);
   };
-  JsonObject json;
-  json.text("mode", "held_out")
-      .text("mesh", report.mesh_path)
-      .text("sequence", report.sequence_path)
-      .text("held_out", report.held_out_spec)
-      .number("tolerance_m", report.options.tolerance_m)
-      .number("min_depth_m", report.options.min_depth_m)
-      .number("max_depth_m", report.options.max_depth_m)
-      .number("median_abs_residual_m", r.median_abs_residual_m)
-      .number("p90_abs_residual_m", r.p90_abs_residual_m)
-      .number("mean_abs_residual_m", r.mean_abs_residual_m)
-      .number("floating_share", r.floating_share)
-      .number("completeness", r.completeness);
-  JsonObject pixels;
-  pixels.integer("measured", r.total.measured_pixels)
-      .integer("mesh", r.total.mesh_pixels)
-      .integer("both", r.total.overlap_pixels)
-      .integer("agreeing", r.total.agreeing_pixels)
-      .integer("floating", r.total.floating_pixels);
-  json.object("pixels", pixels)
-      .integers("frames_evaluated", r.frames_evaluated)
-      .integer("frames_skipped", r.frames_skipped);
-  std::vector<JsonObject> per_frame;
+  Json json;
+  json["mode"] = "held_out";
+  json["mesh"] = report.mesh_path;
+  json["sequence"] = report.sequence_path;
+  json["held_out"] = report.held_out_spec;
+  json["tolerance_m"] = number(report.options.tolerance_m);
+  json["min_depth_m"] = number(report.options.min_depth_m);
+  json["max_depth_m"] = number(report.options.max_depth_m);
+  json["median_abs_residual_m"] = number(r.median_abs_residual_m);
+  json["p90_abs_residual_m"] = number(r.p90_abs_residual_m);
+  json["mean_abs_residual_m"] = number(r.mean_abs_residual_m);
+  json["floating_share"] = number(r.floating_share);
+  json["completeness"] = number(r.completeness);
+  json["pixels"]["measured"] = r.total.measured_pixels;
+  json["pixels"]["mesh"] = r.total.mesh_pixels;
+  json["pixels"]["both"] = r.total.overlap_pixels;
+  json["pixels"]["agreeing"] = r.total.agreeing_pixels;
+  json["pixels"]["floating"] = r.total.floating_pixels;
+  json["frames_evaluated"] = r.frames_evaluated;
+  json["frames_skipped"] = r.frames_skipped;
+  json["per_frame"] = Json::array();
   for (size_t i = 0; i < r.per_frame.size(); ++i) {
     const HeldOutCounts& c = r.per_frame[i];
-    JsonObject frame;
-    frame.integer("frame", r.frames_evaluated[i])
-        .number("mean_abs_residual_m",
-                c.overlap_pixels == 0 ? NAN : c.abs_residual_sum_m / static_cast<double>(c.overlap_pixels))
-        .number("floating_share", share(c.floating_pixels, c.overlap_pixels))
-        .number("completeness", share(c.agreeing_pixels, c.measured_pixels))
-        .integer("measured_pixels", c.measured_pixels)
-        .integer("mesh_pixels", c.mesh_pixels);
-    per_frame.push_back(frame);
+    Json frame;
+    frame["frame"] = r.frames_evaluated[i];
+    frame["mean_abs_residual_m"] =
+        number(c.overlap_pixels == 0 ? NAN : c.abs_residual_sum_m / static_cast<double>(c.overlap_pixels));
+    frame["floating_share"] = number(share(c.floating_pixels, c.overlap_pixels));
+    frame["completeness"] = number(share(c.agreeing_pixels, c.measured_pixels));
+    frame["measured_pixels"] = c.measured_pixels;
+    frame["mesh_pixels"] = c.mesh_pixels;
+    json["per_frame"].push_back(std::move(frame));
   }
-  json.array("per_frame", per_frame).number("elapsed_s", report.elapsed_s);
-  return json.str() + "\n";
+  json["elapsed_s"] = number(report.elapsed_s);
+  return dump(json);
 }
 
 }  // namespace stereo_fusion::eval

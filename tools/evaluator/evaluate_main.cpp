@@ -13,8 +13,8 @@
 #include "evaluator/EvaluationReport.h"
 #include "evaluator/HeldOutSelection.h"
 #include "evaluator/SurfaceSampler.h"
-#include "stereo_fusion/io/DatasetReader.h"
-#include "stereo_fusion/io/PlyReader.h"
+#include "readers/DatasetReader.h"
+#include "readers/PlyReader.h"
 
 namespace fs = std::filesystem;
 using namespace stereo_fusion;

@@ -1,15 +1,11 @@
 # Targets of the mesh evaluator (owned by the evaluator work; included from the root).
 #
-#   stereo_fusion_evaluator   static library: PLY reading, exact mesh distances (BVH), surface
-#                             sampling, ground-truth and held-out scoring, reports
-#   stereo_fusion_evaluate    the command line tool behind scripts/evaluate.sh
+#   stereo_fusion_evaluator   static library: exact mesh distances (BVH), surface sampling,
+#                             ground-truth and held-out scoring, reports
+#   stereo_fusion_evaluate    the command line tool behind scripts/evaluate.sh (reads the PLY
+#                             and the sequence with stereo_fusion_readers, tools/readers/)
 
 set(EVALUATOR_DIR ${PROJECT_SOURCE_DIR}/tools/evaluator)
-
-# The PLY reader belongs to the core library; until the core's source list holds it, the
-# evaluator compiles it itself (either way it is compiled exactly once).
-get_target_property(_evaluator_core_sources stereo_fusion_core SOURCES)
-string(FIND "${_evaluator_core_sources}" "io/PlyReader.cpp" _evaluator_core_has_ply_reader)
 
 set(EVALUATOR_SOURCES
   ${EVALUATOR_DIR}/TriangleDistance.cpp
@@ -24,20 +20,16 @@ set(EVALUATOR_SOURCES
   ${EVALUATOR_DIR}/HeldOutEvaluator.cpp
   ${EVALUATOR_DIR}/HeldOutSelection.cpp
   ${EVALUATOR_DIR}/EvaluateArguments.cpp
-  ${EVALUATOR_DIR}/JsonWriter.cpp
   ${EVALUATOR_DIR}/EvaluationReport.cpp
 )
-if(_evaluator_core_has_ply_reader EQUAL -1)
-  list(APPEND EVALUATOR_SOURCES ${PROJECT_SOURCE_DIR}/src/io/PlyReader.cpp)
-endif()
 
 add_library(stereo_fusion_evaluator STATIC ${EVALUATOR_SOURCES})
 target_include_directories(stereo_fusion_evaluator PUBLIC ${PROJECT_SOURCE_DIR}/tools)
-target_link_libraries(stereo_fusion_evaluator PUBLIC stereo_fusion_core)
+target_link_libraries(stereo_fusion_evaluator PUBLIC stereo_fusion_core PRIVATE nlohmann_json::nlohmann_json)
 
 add_executable(stereo_fusion_evaluate ${EVALUATOR_DIR}/evaluate_main.cpp)
-target_link_libraries(stereo_fusion_evaluate stereo_fusion_evaluator)
+target_link_libraries(stereo_fusion_evaluate stereo_fusion_evaluator stereo_fusion_readers)
 
 if(CATKIN_ENABLE_TESTING)
-  target_link_libraries(stereo_fusion_unit_tests stereo_fusion_evaluator)
+  target_link_libraries(stereo_fusion_tool_tests stereo_fusion_evaluator)
 endif()

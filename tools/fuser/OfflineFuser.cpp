@@ -9,9 +9,9 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "readers/DatasetReader.h"
 #include "stereo_fusion/Mapper.h"
 #include "stereo_fusion/io/ConfigFile.h"
-#include "stereo_fusion/io/DatasetReader.h"
 #include "stereo_fusion/io/ObjWriter.h"
 #include "stereo_fusion/io/PlyWriter.h"
 #include "stereo_fusion/ros/BagSequence.h"

@@ -9,9 +9,9 @@
 #include <optional>
 #include <string>
 
+#include "readers/DatasetReader.h"  // SgbmParams: the same knobs as the reader's SGBM
 #include "simulator/AnalyticScene.h"
 #include "stereo_fusion/camera/StereoCamera.h"
-#include "stereo_fusion/io/DatasetReader.h"  // SgbmParams: the same knobs as the reader's SGBM
 
 namespace stereo_fusion::sim {
 

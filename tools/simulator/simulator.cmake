@@ -8,13 +8,13 @@ add_library(stereo_fusion_simulator STATIC
   tools/simulator/StereoRenderer.cpp
   tools/simulator/DatasetWriter.cpp
 )
-target_link_libraries(stereo_fusion_simulator PUBLIC stereo_fusion_sim ${OpenCV_LIBS})
+target_link_libraries(stereo_fusion_simulator PUBLIC stereo_fusion_sim stereo_fusion_readers ${OpenCV_LIBS})  # readers: SgbmParams
 
 # scripts/simulate.sh runs this: writes a simulated sequence as a dataset folder.
 add_executable(stereo_fusion_simulate tools/simulator/simulate_main.cpp)
 target_link_libraries(stereo_fusion_simulate stereo_fusion_simulator stereo_fusion_ros)
 
 if(CATKIN_ENABLE_TESTING)
-  # test/unit/test_simulator.cpp is globbed into the unit test binary by the root.
-  target_link_libraries(stereo_fusion_unit_tests stereo_fusion_simulator)
+  # test/unit/tools/test_simulator.cpp is globbed into the tools' unit test binary by the root.
+  target_link_libraries(stereo_fusion_tool_tests stereo_fusion_simulator)
 endif()

@@ -1,11 +1,11 @@
 #pragma once
-// An OBJ file read back (io/ObjReader) in the form the rasteriser draws, so the comparison can
+// An OBJ file read back (readers/ObjReader) in the form the rasteriser draws, so the comparison can
 // render exactly what the export wrote.
 
 #include <string>
 #include <unordered_map>
 
-#include "stereo_fusion/io/ObjReader.h"
+#include "readers/ObjReader.h"
 #include "stereo_fusion/mesh/SubMesh.h"
 #include "stereo_fusion/mesh/TexturePatch.h"
 

@@ -9,11 +9,11 @@ add_library(stereo_fusion_texture_compare_lib STATIC
   ${PROJECT_SOURCE_DIR}/tools/texture_compare/ObjRenderable.cpp
 )
 target_include_directories(stereo_fusion_texture_compare_lib PUBLIC ${PROJECT_SOURCE_DIR}/tools)
-target_link_libraries(stereo_fusion_texture_compare_lib PUBLIC stereo_fusion_core)
+target_link_libraries(stereo_fusion_texture_compare_lib PUBLIC stereo_fusion_core stereo_fusion_readers)
 
 add_executable(stereo_fusion_texture_compare ${PROJECT_SOURCE_DIR}/tools/texture_compare/texture_compare_main.cpp)
 target_link_libraries(stereo_fusion_texture_compare stereo_fusion_texture_compare_lib stereo_fusion_offline)
 
 if(CATKIN_ENABLE_TESTING)
-  target_link_libraries(stereo_fusion_unit_tests stereo_fusion_texture_compare_lib)
+  target_link_libraries(stereo_fusion_tool_tests stereo_fusion_texture_compare_lib)
 endif()

@@ -11,9 +11,9 @@
 #include <opencv2/imgproc.hpp>
 
 #include "fuser/OfflineFuser.h"
+#include "readers/DatasetReader.h"
+#include "readers/ObjReader.h"
 #include "stereo_fusion/Mapper.h"
-#include "stereo_fusion/io/DatasetReader.h"
-#include "stereo_fusion/io/ObjReader.h"
 #include "stereo_fusion/io/ObjWriter.h"
 #include "texture_compare/ImageMetrics.h"
 #include "texture_compare/MeshRasterizer.h"

@@ -1,4 +1,4 @@
-#include "stereo_fusion/io/DatasetReader.h"
+#include "readers/DatasetReader.h"
 
 #include <yaml-cpp/yaml.h>
 

@@ -1,4 +1,4 @@
-#include "stereo_fusion/io/ObjReader.h"
+#include "readers/ObjReader.h"
 
 #include <filesystem>
 #include <fstream>

@@ -9,8 +9,8 @@
 
 #include "MeshTestSupport.h"
 #include "fuser/OfflineFuser.h"
-#include "stereo_fusion/io/DatasetReader.h"
-#include "stereo_fusion/io/ObjReader.h"
+#include "readers/DatasetReader.h"
+#include "readers/ObjReader.h"
 
 using namespace stereo_fusion;
 using namespace stereo_fusion::test;

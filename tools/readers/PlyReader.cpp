@@ -1,4 +1,4 @@
-#include "stereo_fusion/io/PlyReader.h"
+#include "readers/PlyReader.h"
 
 #include <algorithm>
 #include <cctype>

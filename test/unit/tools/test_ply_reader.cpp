@@ -8,7 +8,7 @@
 #include <random>
 #include <string>
 
-#include "stereo_fusion/io/PlyReader.h"
+#include "readers/PlyReader.h"
 #include "stereo_fusion/io/PlyWriter.h"
 
 namespace stereo_fusion {

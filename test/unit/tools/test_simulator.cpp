@@ -14,12 +14,12 @@
 #include <set>
 #include <sstream>
 
+#include "readers/DatasetReader.h"
 #include "simulator/AnalyticScene.h"
 #include "simulator/DatasetWriter.h"
 #include "simulator/SceneLibrary.h"
 #include "simulator/StereoRenderer.h"
 #include "simulator/Trajectory.h"
-#include "stereo_fusion/io/DatasetReader.h"
 #include "stereo_fusion/mesh/SubMesh.h"
 
 using namespace stereo_fusion;

@@ -1,0 +1,75 @@
+# The core: stereo_fusion_core, the ROS-free library (everything in src/ and include/ outside
+# ros/), and its unit tests. Included by the catkin package (CMakeLists.txt) and by the plain CMake
+# project next to this file (cmake/core/CMakeLists.txt, built and tested alone by
+# scripts/check_core_standalone.sh in CI), so the core cannot come to need catkin, ROS, rosbag or
+# a tool without that build failing.
+#
+# The includer sets STEREO_FUSION_ROOT (the repository) and STEREO_FUSION_CORE_TESTS, and has found
+# Eigen3, OpenCV (core imgproc imgcodecs), yaml-cpp, Threads and ZLIB; with the tests also GTest
+# and include(GoogleTest).
+#
+#   stereo_fusion_core         the library
+#   stereo_fusion_sim          analytic scenes and ray casting (tools/simulator/AnalyticScene.cpp, no
+#                              ROS): ground truth for the tests, the simulator and the evaluator
+#   stereo_fusion_unit_tests   the core's unit tests, test/unit/<folder>/ for every core folder
+#                              below; they link the two libraries above and GTest, nothing else
+#                              (the tools' and the ROS layer's unit tests are stereo_fusion_tool_tests,
+#                              defined by the catkin package)
+
+add_library(stereo_fusion_core STATIC
+  ${STEREO_FUSION_ROOT}/src/MapperConfig.cpp
+  ${STEREO_FUSION_ROOT}/src/Mapper.cpp
+  ${STEREO_FUSION_ROOT}/src/camera/StereoCamera.cpp
+  ${STEREO_FUSION_ROOT}/src/map/BlockOctree.cpp
+  ${STEREO_FUSION_ROOT}/src/map/VoxelBlock.cpp
+  ${STEREO_FUSION_ROOT}/src/map/BlockChangeLog.cpp
+  ${STEREO_FUSION_ROOT}/src/map/EvictionPolicy.cpp
+  ${STEREO_FUSION_ROOT}/src/integration/StereoFrame.cpp
+  ${STEREO_FUSION_ROOT}/src/integration/FrameGate.cpp
+  ${STEREO_FUSION_ROOT}/src/integration/BlockLookup.cpp
+  ${STEREO_FUSION_ROOT}/src/integration/SurfaceFuser.cpp
+  ${STEREO_FUSION_ROOT}/src/integration/MeasurementImage.cpp
+  ${STEREO_FUSION_ROOT}/src/integration/DepthTiles.cpp
+  ${STEREO_FUSION_ROOT}/src/integration/FusionKernels.cpp
+  ${STEREO_FUSION_ROOT}/src/mesh/CellPolygonizer.cpp
+  ${STEREO_FUSION_ROOT}/src/mesh/BlockMesher.cpp
+  ${STEREO_FUSION_ROOT}/src/mesh/MeshLevel.cpp
+  ${STEREO_FUSION_ROOT}/src/mesh/MeshStore.cpp
+  ${STEREO_FUSION_ROOT}/src/mesh/TexturePatch.cpp
+  ${STEREO_FUSION_ROOT}/src/mesh/TextureStore.cpp
+  ${STEREO_FUSION_ROOT}/src/io/TextureAtlas.cpp
+  ${STEREO_FUSION_ROOT}/src/io/MeshExport.cpp
+  ${STEREO_FUSION_ROOT}/src/io/ObjWriter.cpp
+  ${STEREO_FUSION_ROOT}/src/io/ConfigFile.cpp
+  ${STEREO_FUSION_ROOT}/src/io/PlyWriter.cpp
+  ${STEREO_FUSION_ROOT}/src/io/MapFile.cpp
+  ${STEREO_FUSION_ROOT}/src/util/ThreadPool.cpp
+  ${STEREO_FUSION_ROOT}/src/util/Crc32.cpp
+  ${STEREO_FUSION_ROOT}/src/util/CpuFeatures.cpp
+)
+target_include_directories(stereo_fusion_core PUBLIC ${STEREO_FUSION_ROOT}/include ${EIGEN3_INCLUDE_DIR}
+                                                     ${OpenCV_INCLUDE_DIRS})
+# The OpenCV modules the core uses (the includer may have found more for the tools).
+target_link_libraries(stereo_fusion_core PUBLIC opencv_core opencv_imgproc opencv_imgcodecs yaml-cpp
+                                                Threads::Threads ZLIB::ZLIB)
+
+# Analytic scenes and ray casting: ground truth for tests, the simulator and the evaluator.
+add_library(stereo_fusion_sim STATIC ${STEREO_FUSION_ROOT}/tools/simulator/AnalyticScene.cpp)
+target_include_directories(stereo_fusion_sim PUBLIC ${STEREO_FUSION_ROOT}/tools)
+target_link_libraries(stereo_fusion_sim PUBLIC stereo_fusion_core)
+
+# The core's unit tests: one gtest binary (one link, parallel compile); every test case is its own
+# ctest entry so the summary counts cases. The helpers (TestSupport.h, ...) are in test/unit/.
+set(STEREO_FUSION_CORE_TEST_FOLDERS camera map integration mesh io util mapper)
+if(STEREO_FUSION_CORE_TESTS)
+  set(_core_test_globs)
+  foreach(folder ${STEREO_FUSION_CORE_TEST_FOLDERS})
+    list(APPEND _core_test_globs ${STEREO_FUSION_ROOT}/test/unit/${folder}/*.cpp)
+  endforeach()
+  file(GLOB STEREO_FUSION_CORE_TEST_SOURCES CONFIGURE_DEPENDS ${_core_test_globs})
+  add_executable(stereo_fusion_unit_tests ${STEREO_FUSION_CORE_TEST_SOURCES})
+  target_include_directories(stereo_fusion_unit_tests PRIVATE ${STEREO_FUSION_ROOT}/test/unit)
+  target_link_libraries(stereo_fusion_unit_tests stereo_fusion_core stereo_fusion_sim GTest::gtest GTest::gtest_main)
+  target_compile_definitions(stereo_fusion_unit_tests PRIVATE STEREO_FUSION_SOURCE_DIR="${STEREO_FUSION_ROOT}")
+  gtest_discover_tests(stereo_fusion_unit_tests DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 300)
+endif()

@@ -1,0 +1,119 @@
+// The bad-input catalogue (README "Bad input") cases of the Mapper not covered elsewhere: time
+// order, duplicates and pose jumps, degenerate disparity values. Each checks the message, the
+// counter or reason, and that the map and mesh did not change. The cases of ROS messages and
+// bags are in test/unit/ros/test_bad_input_ros.cpp.
+#include <gtest/gtest.h>
+
+#include <cfloat>
+
+#include "MeshTestSupport.h"
+
+using namespace stereo_fusion;
+using namespace stereo_fusion::test;
+
+namespace {
+
+StereoFrame frameAt(int i, double timestamp_s) {
+  StereoFrame f = renderFrame(floorAndSphere(), qvgaCamera(),
+                              sim::lookAt({-0.15 + 0.1 * i, -0.2, 0.0}, {0.05, 0.1, 1.2}, -Eigen::Vector3d::UnitY()));
+  f.timestamp_s = timestamp_s;
+  return f;
+}
+
+/// The map and the mesh, for before/after comparisons.
+struct MapState {
+  MapSnapshot map;
+  std::map<BlockKey, std::multiset<std::array<float, 9>>> mesh;
+  bool operator==(const MapState& o) const { return map == o.map && mesh == o.mesh; }
+};
+MapState state(const Mapper& m) { return {snapshot(m.map()), triangleSets(m.mesh())}; }
+
+}  // namespace
+
+TEST(BadInput, TimestampsGoingBackwardsAndDuplicatesAreRejectedByReason) {
+  Mapper mapper(MapperConfig{});
+  ASSERT_TRUE(mapper.integrate(frameAt(0, 10.0)).accepted);
+  ASSERT_TRUE(mapper.integrate(frameAt(1, 10.5)).accepted);
+  const MapState before = state(mapper);
+
+  IntegrationResult r = mapper.integrate(frameAt(2, 10.2));
+  EXPECT_FALSE(r.accepted);
+  EXPECT_EQ(r.reason, RejectReason::kTimestampBackwards);
+  EXPECT_EQ(r.error, "timestamp 10.2 s goes backwards (last fused frame at 10.5 s)");
+  EXPECT_STREQ(rejectReasonName(r.reason), "timestamp_backwards");
+  EXPECT_TRUE(state(mapper) == before);
+
+  r = mapper.integrate(frameAt(1, 10.5));  // the same frame delivered twice
+  EXPECT_FALSE(r.accepted);
+  EXPECT_EQ(r.reason, RejectReason::kDuplicateTimestamp);
+  EXPECT_EQ(r.error, "duplicate frame: timestamp 10.5 s was already fused");
+  EXPECT_STREQ(rejectReasonName(r.reason), "duplicate");
+  EXPECT_TRUE(state(mapper) == before);
+  EXPECT_EQ(mapper.framesIntegrated(), 2u);
+
+  // Time 0 is "unknown" and never ordered; a later stamp is accepted again.
+  EXPECT_TRUE(mapper.integrate(frameAt(2, 0.0)).accepted);
+  EXPECT_TRUE(mapper.integrate(frameAt(3, 11.0)).accepted);
+  // The check can be switched off; reset() forgets the history.
+  MapperConfig lax;
+  lax.require_increasing_timestamps = false;
+  Mapper relaxed(lax);
+  EXPECT_TRUE(relaxed.integrate(frameAt(0, 10.0)).accepted);
+  EXPECT_TRUE(relaxed.integrate(frameAt(1, 9.0)).accepted);
+  mapper.reset();
+  EXPECT_TRUE(mapper.integrate(frameAt(0, 1.0)).accepted);
+}
+
+TEST(BadInput, PoseJumpsOfKilometresAreRejectedAndARelocalisationCostsOneFrame) {
+  Mapper mapper(MapperConfig{});  // max_pose_jump_m = 100
+  ASSERT_TRUE(mapper.integrate(frameAt(0, 1.0)).accepted);
+  const MapState before = state(mapper);
+  StereoFrame glitch = frameAt(1, 2.0);
+  glitch.T_world_camera.translation() += Eigen::Vector3d(3000.0, 0, 0);
+  IntegrationResult r = mapper.integrate(glitch);
+  EXPECT_FALSE(r.accepted);
+  EXPECT_EQ(r.reason, RejectReason::kPoseJump);
+  EXPECT_NE(r.error.find("camera jumped 3000"), std::string::npos) << r.error;
+  EXPECT_NE(r.error.find("max_pose_jump_m = 100"), std::string::npos) << r.error;
+  EXPECT_TRUE(state(mapper) == before);
+  // Back at the old place: a jump from the glitch, rejected too; then fusing resumes.
+  r = mapper.integrate(frameAt(1, 3.0));
+  EXPECT_EQ(r.reason, RejectReason::kPoseJump);
+  EXPECT_TRUE(state(mapper) == before);
+  EXPECT_TRUE(mapper.integrate(frameAt(2, 4.0)).accepted);
+  // A lasting relocalisation: one frame lost, then the new place is fused.
+  StereoFrame moved = frameAt(3, 5.0);
+  moved.T_world_camera.translation() += Eigen::Vector3d(0, 0, 500.0);
+  EXPECT_EQ(mapper.integrate(moved).reason, RejectReason::kPoseJump);
+  moved.timestamp_s = 6.0;
+  EXPECT_TRUE(mapper.integrate(moved).accepted);
+  // 0 disables the check.
+  MapperConfig off;
+  off.max_pose_jump_m = 0;
+  Mapper unchecked(off);
+  EXPECT_TRUE(unchecked.integrate(frameAt(0, 1.0)).accepted);
+  EXPECT_TRUE(unchecked.integrate(glitch).accepted);
+}
+
+TEST(BadInput, DegenerateDisparityValuesLeaveTheMapUnchanged) {
+  Mapper mapper(MapperConfig{});
+  ASSERT_TRUE(mapper.integrate(frameAt(0, 1.0)).accepted);
+  const MapState before = state(mapper);
+  struct Case {
+    const char* name;
+    float value;
+  };
+  // Huge disparities mean a depth below min_depth_m (f·b/d → 0); the rest are invalid.
+  const Case cases[] = {{"NaN", NAN}, {"+inf", INFINITY}, {"-inf", -INFINITY}, {"negative", -5.0f},
+                        {"huge", 1e30f}, {"FLT_MAX", FLT_MAX}, {"all zero (all invalid)", 0.0f}};
+  double t = 2.0;
+  for (const Case& c : cases) {
+    StereoFrame f = frameAt(1, t += 1.0);
+    f.disparity_px.setTo(c.value);
+    const IntegrationResult r = mapper.integrate(f);
+    EXPECT_TRUE(r.accepted) << c.name << ": valid input with nothing in it";
+    EXPECT_EQ(r.lookup.valid_points, 0u) << c.name;
+    EXPECT_TRUE(r.updated_blocks.empty()) << c.name;
+    EXPECT_TRUE(state(mapper) == before) << c.name << " changed the map";
+  }
+}
