@@ -27,6 +27,7 @@ BlockLookup::PixelGeometry BlockLookup::pixelGeometry(const StereoFrame& frame,
   g.t_world_camera = frame.T_world_camera.translation();
   const StereoCamera& cam = frame.camera;
   g.fb = cam.fx() * cam.baseline();
+  g.inv_fb = 1.0 / g.fb;
   g.cx = cam.cx();
   g.cy = cam.cy();
   g.inv_fx = 1.0 / cam.fx();
@@ -60,8 +61,10 @@ inline bool BlockLookup::bandBoxOfPixel(float d, int u, int v, BandBox* box) con
   // Eigen's R·p adds the z row as a0 + (a1 + a2) but the x and y rows as (a0 + a1) + a2, and
   // a point within an ulp of a block face would land in a different block on each path.
   const int level = levelForDepth(z, g.levels);
-  const double range_m = std::sqrt((p_camera[0] * p_camera[0] + p_camera[1] * p_camera[1]) + p_camera[2] * p_camera[2]);
-  const double along = g.band_blocks[level] / range_m;             // blocks per metre of the ray
+  // ±Φ along the ray moves the point by Φ·p/‖p‖; Φ·p/z bounds it (‖p‖ ≥ z) without a square
+  // root or a division per pixel (1/z = d/(f·b)), at most ‖p‖/z longer: 1.2 at a 640×480
+  // image's corners for f = 576 px, 1 on the optical axis.
+  const double along = g.band_blocks[level] * (static_cast<double>(d) * g.inv_fb);  // blocks per metre of R·p
   const double lateral = (z + g.band_m[level]) * g.lateral_blocks_per_m;  // blocks
   const Eigen::Matrix3d& R = g.R_world_camera;
   Eigen::Vector3d lo, hi;
@@ -131,6 +134,7 @@ __attribute__((target("avx2"))) void BlockLookup::countRegionBoxesAvx2(const Ste
                                                                        RegionScratch* s) const {
   const PixelGeometry& g = geometry_;
   const __m256d zero = _mm256_setzero_pd(), infinity = _mm256_set1_pd(HUGE_VAL);
+  const __m256d inv_fb = _mm256_set1_pd(g.inv_fb);
   const __m256d fb = _mm256_set1_pd(g.fb), min_z = _mm256_set1_pd(g.min_depth_m), max_z = _mm256_set1_pd(g.max_depth_m);
   const __m256d cx = _mm256_set1_pd(g.cx);
   const __m256d inv_fx = _mm256_set1_pd(g.inv_fx), inv_fy = _mm256_set1_pd(g.inv_fy);
@@ -195,9 +199,7 @@ __attribute__((target("avx2"))) void BlockLookup::countRegionBoxesAvx2(const Ste
       const __m256d band = _mm256_blendv_pd(_mm256_blendv_pd(band0, band1, at_least_2), band2, at_least_4);
       const __m256d band_m = _mm256_blendv_pd(_mm256_blendv_pd(band0_m, band1_m, at_least_2), band2_m, at_least_4);
       // bandBoxOfPixel()'s ray segment ± Φ and lateral margin, in its operation order.
-      const __m256d range = _mm256_sqrt_pd(
-          _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(p[0], p[0]), _mm256_mul_pd(p[1], p[1])), _mm256_mul_pd(p[2], p[2])));
-      const __m256d along = _mm256_div_pd(band, range);
+      const __m256d along = _mm256_mul_pd(band, _mm256_mul_pd(d, inv_fb));
       const __m256d lateral = _mm256_mul_pd(_mm256_add_pd(z, band_m), lateral_per_m);
       __m128i key[6];  // lo x, y, z, hi x, y, z of the four lanes
       for (int i = 0; i < 3; ++i) {

@@ -24,7 +24,8 @@ struct LookupStats {
 /// Stage 1 of the pipeline (thesis §3.4): turns a disparity map into the queue of voxel blocks
 /// to update. Each valid pixel contributes the blocks that its truncation band reaches: the
 /// segment of its ray within ±Φ of the measured surface (Φ of the level its depth selects,
-/// eq. 3.2, TruncationBand), widened by the voxels that project onto the pixel
+/// eq. 3.2, TruncationBand; bounded as ±Φ·p/z, up to 1.2× longer off-axis), widened by the
+/// voxels that project onto the pixel
 /// (kLateralMarginPx). Those are the blocks holding a voxel that this pixel's measurement puts
 /// within its band (|sdf| ≤ Φ); voxels farther in front (fused clamped to −Φ) and the wider band
 /// a near measurement leaves in coarse levels are fused where some band brings their block. So
@@ -68,7 +69,7 @@ class BlockLookup {
   struct PixelGeometry {
     Eigen::Matrix3d R_world_camera;
     Eigen::Vector3d t_world_camera;
-    double fb = 0.0, cx = 0.0, cy = 0.0, inv_fx = 0.0, inv_fy = 0.0;
+    double fb = 0.0, inv_fb = 0.0, cx = 0.0, cy = 0.0, inv_fx = 0.0, inv_fy = 0.0;
     double inv_block_size = 0.0;                       ///< 1 / block edge, per metre
     double min_depth_m = 0.0, max_depth_m = 0.0;       ///< usable depth range
     LevelThresholds levels;                            ///< eq. 3.2 switch depths
