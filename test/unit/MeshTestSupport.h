@@ -2,7 +2,9 @@
 // Helpers for the meshing tests: objects fused from views all around, and mesh topology checks.
 
 #include <Eigen/Geometry>
+#include <fstream>
 #include <functional>
+#include <iterator>
 #include <map>
 #include <set>
 
@@ -24,6 +26,51 @@ inline sim::AnalyticScene floorAndSphere() {
   scene.add(sim::makeSphere({0.05, 0.1, 1.2}, 0.2), {200, 60, 60});
   return scene;
 }
+
+/// View i of floorAndSphere(): the camera steps 10 cm along x, looking at the sphere.
+inline Eigen::Isometry3d floorAndSphereView(int i) {
+  return sim::lookAt({-0.15 + 0.1 * i, -0.2, 0.0}, {0.05, 0.1, 1.2}, -Eigen::Vector3d::UnitY());
+}
+
+/// floorAndSphere() seen from floorAndSphereView(i), stamped `timestamp_s`.
+inline StereoFrame floorAndSphereFrame(int i, double timestamp_s) {
+  StereoFrame f = renderFrame(floorAndSphere(), qvgaCamera(), floorAndSphereView(i));
+  f.timestamp_s = timestamp_s;
+  return f;
+}
+
+/// The texture tests' configuration: patches on, no histogram filter.
+inline MapperConfig texturedConfig() {
+  MapperConfig c;
+  c.texture = TextureMode::kPatches;
+  c.histogram_min_points = 0;
+  return c;
+}
+
+/// A camera pose at `eye` looking at `target`, image y down.
+inline Eigen::Isometry3d lookFrom(const Eigen::Vector3d& eye, const Eigen::Vector3d& target) {
+  return sim::lookAt(eye, target, -Eigen::Vector3d::UnitY());
+}
+
+/// A wall facing the camera at z = 1.5 m with the simulator's procedural texture.
+inline sim::AnalyticScene wallScene() {
+  sim::AnalyticScene scene;
+  scene.add(sim::makePlane({0, 0, 1.5}, {0, 0, -1}), {200, 170, 120});
+  return scene;
+}
+
+/// The whole file at `path` (empty if unreadable).
+inline std::vector<uint8_t> readBytes(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  return std::vector<uint8_t>((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+}
+
+/// Replaces the file at `path` by `bytes`.
+inline void writeBytes(const std::string& path, const std::vector<uint8_t>& bytes) {
+  std::ofstream f(path, std::ios::binary | std::ios::trunc);
+  f.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+}
+
 
 inline std::vector<Eigen::Isometry3d> viewsAround(const Eigen::Vector3d& centre, double radius, int n) {
   std::vector<Eigen::Isometry3d> poses;
@@ -132,6 +179,15 @@ inline std::map<BlockKey, std::multiset<std::array<float, 9>>> triangleSets(cons
     }
   }
   return out;
+}
+
+/// The mesh `mapper` keeps equals a from-scratch extraction of its map.
+inline void expectMeshEqualsRebuild(const Mapper& mapper) {
+  const MapperConfig& config = mapper.config();
+  MeshStore batch(MeshingParams{config.voxel_size_m, config.truncation_vox, config.mesh_level_min_coverage});
+  ThreadPool pool(2);
+  batch.rebuild(mapper.map(), &pool);
+  EXPECT_TRUE(triangleSets(mapper.mesh()) == triangleSets(batch)) << "incremental mesh differs from a rebuild";
 }
 
 }  // namespace stereo_fusion::test

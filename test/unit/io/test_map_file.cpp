@@ -18,16 +18,13 @@ namespace fs = std::filesystem;
 
 namespace {
 
-Eigen::Isometry3d view(int i) {
-  return sim::lookAt({-0.15 + 0.1 * i, -0.2, 0.0}, {0.05, 0.1, 1.2}, -Eigen::Vector3d::UnitY());
-}
 
 /// A mapper that fused `frames` views of the floor and sphere.
 std::unique_ptr<Mapper> fusedMapper(int frames, MapperConfig config = {}) {
   auto mapper = std::make_unique<Mapper>(config);
   const sim::AnalyticScene scene = floorAndSphere();
   for (int i = 0; i < frames; ++i) {
-    StereoFrame f = renderFrame(scene, qvgaCamera(), view(i), 0.2, i);
+    StereoFrame f = renderFrame(scene, qvgaCamera(), floorAndSphereView(i), 0.2, i);
     f.timestamp_s = 1.0 + i;
     EXPECT_TRUE(mapper->integrate(f).accepted);
   }
@@ -38,15 +35,7 @@ std::string tempPath(const std::string& name) {
   return testing::TempDir() + "stereo_fusion_mapfile_" + std::to_string(::getpid()) + "_" + name;
 }
 
-std::vector<uint8_t> readBytes(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  return std::vector<uint8_t>((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-}
 
-void writeBytes(const std::string& path, const std::vector<uint8_t>& bytes) {
-  std::ofstream f(path, std::ios::binary | std::ios::trunc);
-  f.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-}
 
 /// A tiny hand-made map of three blocks (fast to decode thousands of times).
 std::vector<uint8_t> tinyMapFile(const MapperConfig& config) {
@@ -310,7 +299,7 @@ TEST(MapFile, FusingOnAfterLoadContinuesTheSameMap) {
   ASSERT_TRUE(resumed.loadMap(path, nullptr, &error)) << error;
   const sim::AnalyticScene scene = floorAndSphere();
   for (int i = 2; i < 4; ++i) {
-    StereoFrame f = renderFrame(scene, qvgaCamera(), view(i), 0.2, i);
+    StereoFrame f = renderFrame(scene, qvgaCamera(), floorAndSphereView(i), 0.2, i);
     f.timestamp_s = 1.0 + i;
     ASSERT_TRUE(resumed.integrate(f).accepted);
   }

@@ -251,10 +251,7 @@ TEST(MemoryBound, DeferredMeshingWithEvictionEqualsMeshingEveryFrame) {
   EXPECT_GT(evicted, 100u);
   EXPECT_TRUE(snapshot(deferred.map()) == snapshot(every_frame.map()));
   EXPECT_TRUE(triangleSets(deferred.mesh()) == triangleSets(every_frame.mesh()));
-  MeshStore batch(MeshingParams{config.voxel_size_m, config.truncation_vox, config.mesh_level_min_coverage});
-  ThreadPool pool(2);
-  batch.rebuild(deferred.map(), &pool);
-  EXPECT_TRUE(triangleSets(deferred.mesh()) == triangleSets(batch));
+  expectMeshEqualsRebuild(deferred);
 }
 
 // A reset reports every submesh as removed to the mesh's consumers, after what they have not

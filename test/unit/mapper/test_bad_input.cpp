@@ -13,12 +13,6 @@ using namespace stereo_fusion::test;
 
 namespace {
 
-StereoFrame frameAt(int i, double timestamp_s) {
-  StereoFrame f = renderFrame(floorAndSphere(), qvgaCamera(),
-                              sim::lookAt({-0.15 + 0.1 * i, -0.2, 0.0}, {0.05, 0.1, 1.2}, -Eigen::Vector3d::UnitY()));
-  f.timestamp_s = timestamp_s;
-  return f;
-}
 
 /// The map and the mesh, for before/after comparisons.
 struct MapState {
@@ -32,18 +26,18 @@ MapState state(const Mapper& m) { return {snapshot(m.map()), triangleSets(m.mesh
 
 TEST(BadInput, TimestampsGoingBackwardsAndDuplicatesAreRejectedByReason) {
   Mapper mapper(MapperConfig{});
-  ASSERT_TRUE(mapper.integrate(frameAt(0, 10.0)).accepted);
-  ASSERT_TRUE(mapper.integrate(frameAt(1, 10.5)).accepted);
+  ASSERT_TRUE(mapper.integrate(floorAndSphereFrame(0, 10.0)).accepted);
+  ASSERT_TRUE(mapper.integrate(floorAndSphereFrame(1, 10.5)).accepted);
   const MapState before = state(mapper);
 
-  IntegrationResult r = mapper.integrate(frameAt(2, 10.2));
+  IntegrationResult r = mapper.integrate(floorAndSphereFrame(2, 10.2));
   EXPECT_FALSE(r.accepted);
   EXPECT_EQ(r.reason, RejectReason::kTimestampBackwards);
   EXPECT_EQ(r.error, "timestamp 10.2 s goes backwards (last fused frame at 10.5 s)");
   EXPECT_STREQ(rejectReasonName(r.reason), "timestamp_backwards");
   EXPECT_TRUE(state(mapper) == before);
 
-  r = mapper.integrate(frameAt(1, 10.5));  // the same frame delivered twice
+  r = mapper.integrate(floorAndSphereFrame(1, 10.5));  // the same frame delivered twice
   EXPECT_FALSE(r.accepted);
   EXPECT_EQ(r.reason, RejectReason::kDuplicateTimestamp);
   EXPECT_EQ(r.error, "duplicate frame: timestamp 10.5 s was already fused");
@@ -52,23 +46,23 @@ TEST(BadInput, TimestampsGoingBackwardsAndDuplicatesAreRejectedByReason) {
   EXPECT_EQ(mapper.framesIntegrated(), 2u);
 
   // Time 0 is "unknown" and never ordered; a later stamp is accepted again.
-  EXPECT_TRUE(mapper.integrate(frameAt(2, 0.0)).accepted);
-  EXPECT_TRUE(mapper.integrate(frameAt(3, 11.0)).accepted);
+  EXPECT_TRUE(mapper.integrate(floorAndSphereFrame(2, 0.0)).accepted);
+  EXPECT_TRUE(mapper.integrate(floorAndSphereFrame(3, 11.0)).accepted);
   // The check can be switched off; reset() forgets the history.
   MapperConfig lax;
   lax.require_increasing_timestamps = false;
   Mapper relaxed(lax);
-  EXPECT_TRUE(relaxed.integrate(frameAt(0, 10.0)).accepted);
-  EXPECT_TRUE(relaxed.integrate(frameAt(1, 9.0)).accepted);
+  EXPECT_TRUE(relaxed.integrate(floorAndSphereFrame(0, 10.0)).accepted);
+  EXPECT_TRUE(relaxed.integrate(floorAndSphereFrame(1, 9.0)).accepted);
   mapper.reset();
-  EXPECT_TRUE(mapper.integrate(frameAt(0, 1.0)).accepted);
+  EXPECT_TRUE(mapper.integrate(floorAndSphereFrame(0, 1.0)).accepted);
 }
 
 TEST(BadInput, PoseJumpsOfKilometresAreRejectedAndARelocalisationCostsOneFrame) {
   Mapper mapper(MapperConfig{});  // max_pose_jump_m = 100
-  ASSERT_TRUE(mapper.integrate(frameAt(0, 1.0)).accepted);
+  ASSERT_TRUE(mapper.integrate(floorAndSphereFrame(0, 1.0)).accepted);
   const MapState before = state(mapper);
-  StereoFrame glitch = frameAt(1, 2.0);
+  StereoFrame glitch = floorAndSphereFrame(1, 2.0);
   glitch.T_world_camera.translation() += Eigen::Vector3d(3000.0, 0, 0);
   IntegrationResult r = mapper.integrate(glitch);
   EXPECT_FALSE(r.accepted);
@@ -77,12 +71,12 @@ TEST(BadInput, PoseJumpsOfKilometresAreRejectedAndARelocalisationCostsOneFrame) 
   EXPECT_NE(r.error.find("max_pose_jump_m = 100"), std::string::npos) << r.error;
   EXPECT_TRUE(state(mapper) == before);
   // Back at the old place: a jump from the glitch, rejected too; then fusing resumes.
-  r = mapper.integrate(frameAt(1, 3.0));
+  r = mapper.integrate(floorAndSphereFrame(1, 3.0));
   EXPECT_EQ(r.reason, RejectReason::kPoseJump);
   EXPECT_TRUE(state(mapper) == before);
-  EXPECT_TRUE(mapper.integrate(frameAt(2, 4.0)).accepted);
+  EXPECT_TRUE(mapper.integrate(floorAndSphereFrame(2, 4.0)).accepted);
   // A lasting relocalisation: one frame lost, then the new place is fused.
-  StereoFrame moved = frameAt(3, 5.0);
+  StereoFrame moved = floorAndSphereFrame(3, 5.0);
   moved.T_world_camera.translation() += Eigen::Vector3d(0, 0, 500.0);
   EXPECT_EQ(mapper.integrate(moved).reason, RejectReason::kPoseJump);
   moved.timestamp_s = 6.0;
@@ -91,13 +85,13 @@ TEST(BadInput, PoseJumpsOfKilometresAreRejectedAndARelocalisationCostsOneFrame) 
   MapperConfig off;
   off.max_pose_jump_m = 0;
   Mapper unchecked(off);
-  EXPECT_TRUE(unchecked.integrate(frameAt(0, 1.0)).accepted);
+  EXPECT_TRUE(unchecked.integrate(floorAndSphereFrame(0, 1.0)).accepted);
   EXPECT_TRUE(unchecked.integrate(glitch).accepted);
 }
 
 TEST(BadInput, DegenerateDisparityValuesLeaveTheMapUnchanged) {
   Mapper mapper(MapperConfig{});
-  ASSERT_TRUE(mapper.integrate(frameAt(0, 1.0)).accepted);
+  ASSERT_TRUE(mapper.integrate(floorAndSphereFrame(0, 1.0)).accepted);
   const MapState before = state(mapper);
   struct Case {
     const char* name;
@@ -108,7 +102,7 @@ TEST(BadInput, DegenerateDisparityValuesLeaveTheMapUnchanged) {
                         {"huge", 1e30f}, {"FLT_MAX", FLT_MAX}, {"all zero (all invalid)", 0.0f}};
   double t = 2.0;
   for (const Case& c : cases) {
-    StereoFrame f = frameAt(1, t += 1.0);
+    StereoFrame f = floorAndSphereFrame(1, t += 1.0);
     f.disparity_px.setTo(c.value);
     const IntegrationResult r = mapper.integrate(f);
     EXPECT_TRUE(r.accepted) << c.name << ": valid input with nothing in it";

@@ -232,10 +232,7 @@ TEST(MapperProperties, DeferredMeshingEqualsMeshingEveryFrameAndABatchRebuild) {
   EXPECT_EQ(deferred.blocksAwaitingMesh(), 0u);
   EXPECT_TRUE(snapshot(deferred.map()) == snapshot(every_frame.map()));
   EXPECT_TRUE(triangleSets(deferred.mesh()) == triangleSets(every_frame.mesh()));
-  MeshStore batch(MeshingParams{config.voxel_size_m, config.truncation_vox, config.mesh_level_min_coverage});
-  ThreadPool pool(2);
-  batch.rebuild(deferred.map(), &pool);
-  EXPECT_TRUE(triangleSets(deferred.mesh()) == triangleSets(batch));
+  expectMeshEqualsRebuild(deferred);
   const MeshPass idle = deferred.updateMesh();
   EXPECT_EQ(idle.blocks_changed, 0u);
   EXPECT_EQ(idle.mesh.blocks_meshed, 0u);

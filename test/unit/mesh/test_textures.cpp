@@ -15,23 +15,6 @@
 namespace stereo_fusion::test {
 namespace {
 
-MapperConfig texturedConfig() {
-  MapperConfig c;
-  c.texture = TextureMode::kPatches;
-  c.histogram_min_points = 0;
-  return c;
-}
-
-Eigen::Isometry3d lookFrom(const Eigen::Vector3d& eye, const Eigen::Vector3d& target) {
-  return sim::lookAt(eye, target, -Eigen::Vector3d::UnitY());
-}
-
-/// A wall facing the camera at z = 1.5 m with the simulator's procedural texture.
-sim::AnalyticScene wallScene() {
-  sim::AnalyticScene scene;
-  scene.add(sim::makePlane({0, 0, 1.5}, {0, 0, -1}), {200, 170, 120});
-  return scene;
-}
 
 TEST(TextureStore, PatchesCoverTheirSubmeshWithUvsInTheUnitSquareAndTrueColours) {
   const sim::AnalyticScene scene = wallScene();

@@ -20,12 +20,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-StereoFrame frameAt(int i, double timestamp_s) {
-  StereoFrame f = renderFrame(floorAndSphere(), qvgaCamera(),
-                              sim::lookAt({-0.15 + 0.1 * i, -0.2, 0.0}, {0.05, 0.1, 1.2}, -Eigen::Vector3d::UnitY()));
-  f.timestamp_s = timestamp_s;
-  return f;
-}
 
 struct Messages {
   stereo_msgs::DisparityImage disparity;
@@ -45,7 +39,7 @@ Messages messagesOf(const StereoFrame& f) {
 }  // namespace
 
 TEST(BadInput, CameraInfoAndDisparityCalibrationAreChecked) {
-  const Messages good = messagesOf(frameAt(0, 1.0));
+  const Messages good = messagesOf(floorAndSphereFrame(0, 1.0));
   StereoFrame out;
   std::string error;
   ASSERT_TRUE(toStereoFrame(good.disparity, good.image, good.info, Eigen::Isometry3d::Identity(), &out, &error)) << error;
@@ -89,7 +83,7 @@ TEST(BadInput, TruncatedBagsFailCleanlyInTheOfflinePath) {
   {
     auto writer = StereoBagWriter::open(path, BagTopics{}, "left_optical", 1.0, &error);
     ASSERT_TRUE(writer) << error;
-    for (int i = 0; i < 3; ++i) ASSERT_TRUE(writer->write(frameAt(i, 0.1 * i), 128.0f, &error)) << error;
+    for (int i = 0; i < 3; ++i) ASSERT_TRUE(writer->write(floorAndSphereFrame(i, 0.1 * i), 128.0f, &error)) << error;
     writer->close();
   }
   const auto full_size = fs::file_size(path);

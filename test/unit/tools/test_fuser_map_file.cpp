@@ -17,19 +17,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-Eigen::Isometry3d view(int i) {
-  return sim::lookAt({-0.15 + 0.1 * i, -0.2, 0.0}, {0.05, 0.1, 1.2}, -Eigen::Vector3d::UnitY());
-}
 
-std::vector<uint8_t> readBytes(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  return std::vector<uint8_t>((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-}
 
-void writeBytes(const std::string& path, const std::vector<uint8_t>& bytes) {
-  std::ofstream f(path, std::ios::binary | std::ios::trunc);
-  f.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-}
 
 }  // namespace
 
@@ -41,8 +30,8 @@ TEST(OfflineFuser, SaveMapThenLoadMapAloneWritesTheSameMesh) {
   ASSERT_TRUE(writer) << error;
   const sim::AnalyticScene scene = floorAndSphere();
   for (int i = 0; i < 3; ++i) {
-    const StereoFrame f = renderFrame(scene, qvgaCamera(), view(i));
-    ASSERT_TRUE(writer->writeFrame(i, 0.1 * (i + 1), view(i), f.disparity_px, f.color, cv::Mat(), &error)) << error;
+    const StereoFrame f = renderFrame(scene, qvgaCamera(), floorAndSphereView(i));
+    ASSERT_TRUE(writer->writeFrame(i, 0.1 * (i + 1), floorAndSphereView(i), f.disparity_px, f.color, cv::Mat(), &error)) << error;
   }
   const std::string out_a = (seq / "out_a").string(), out_b = (seq / "out_b").string();
   const std::string map_path = (seq / "map.sfmap").string();

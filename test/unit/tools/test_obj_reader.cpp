@@ -21,23 +21,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-MapperConfig texturedConfig() {
-  MapperConfig c;
-  c.texture = TextureMode::kPatches;
-  c.histogram_min_points = 0;
-  return c;
-}
-
-Eigen::Isometry3d lookFrom(const Eigen::Vector3d& eye, const Eigen::Vector3d& target) {
-  return sim::lookAt(eye, target, -Eigen::Vector3d::UnitY());
-}
-
-/// A wall facing the camera at z = 1.5 m with the simulator's procedural texture.
-sim::AnalyticScene wallScene() {
-  sim::AnalyticScene scene;
-  scene.add(sim::makePlane({0, 0, 1.5}, {0, 0, -1}), {200, 170, 120});
-  return scene;
-}
 
 /// A folder unique to this process and test (ctest runs tests in parallel).
 fs::path tempFolder(const std::string& name) {
