@@ -51,7 +51,7 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
   gate_.accepted(frame);
   result.accepted = true;
   ++frames_integrated_;
-  last_frame_ = frame;  // shares the images: what a deferred texture pass projects into
+  if (texture_consumer_) last_frame_ = frame;  // shares the images: what a deferred texture pass projects into
 
   Timer lookup_timer;
   result.lookup = lookup_.run(frame, &octree_, &queue_, &missing_);
@@ -178,8 +178,7 @@ MeshChanges Mapper::adoptMap(BlockOctree* loaded, const MapFileInfo& info) {
   blocks_evicted_ = 0;
   gate_.reset();
   last_frame_ = StereoFrame();
-  voxel_bytes_ = 0;
-  for (const VoxelBlock* block : octree_.blocks()) voxel_bytes_ += block->voxelBytes();
+  voxel_bytes_ = octree_.memoryUse().voxelBytes();
   // The map file holds no texture patches: the loaded map starts with vertex colours.
   texture_store_.clear();
   // A rebuild over the kept store reports the old map's vanished submeshes as removed.

@@ -247,6 +247,12 @@ void FusionNodelet::recordMeshPassLocked(double meshing_ms, double texture_ms) {
   ++mesh_passes_;
 }
 
+void FusionNodelet::catchUpMeshLocked() {
+  if (mapper_->blocksAwaitingMesh() == 0) return;
+  const MeshPass pass = mapper_->updateMesh();
+  recordMeshPassLocked(pass.mesh.meshing_ms, pass.texture.texture_ms);
+}
+
 void FusionNodelet::publishPending(const ros::Time& stamp, bool force) {
   std::lock_guard<std::mutex> lock(map_mutex_);
   if (mapper_->blocksAwaitingMesh() == 0 && mapper_->pendingMeshChanges(publisher_) == 0 && !markers_full_pending_)
@@ -257,10 +263,7 @@ void FusionNodelet::publishPending(const ros::Time& stamp, bool force) {
     return;
   last_publish_ = now;
   // The mesher catches up with the blocks fusion changed since the last publish.
-  if (mapper_->blocksAwaitingMesh() > 0) {
-    const MeshPass pass = mapper_->updateMesh();
-    recordMeshPassLocked(pass.mesh.meshing_ms, pass.texture.texture_ms);
-  }
+  catchUpMeshLocked();
   std_msgs::Header header;
   header.frame_id = node_config_.world_frame;
   header.stamp = stamp.isZero() && !unpublished_stamps_.empty() ? unpublished_stamps_.back() : stamp;
@@ -305,10 +308,7 @@ bool FusionNodelet::saveMesh(SaveMesh::Request& req, SaveMesh::Response& res) {
     // Written under the lock: the submeshes and patches are not copied (a rare, manual call).
     std::lock_guard<std::mutex> lock(map_mutex_);
     // The mesh of every frame fused so far (the publisher sends these changes at its next turn).
-    if (mapper_->blocksAwaitingMesh() > 0) {
-      const MeshPass pass = mapper_->updateMesh();
-      recordMeshPassLocked(pass.mesh.meshing_ms, pass.texture.texture_ms);
-    }
+    catchUpMeshLocked();
     res.success = exportMesh(req.path, mapper_->mesh().submeshes(), mapper_->textures().patches(), &res.message);
   }
   if (res.success)

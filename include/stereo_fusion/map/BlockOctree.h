@@ -103,11 +103,12 @@ class BlockOctree {
     size_t level_blocks[kNumLevels] = {};
     size_t node_bytes = 0;
     size_t bookkeeping_bytes = 0;
-    size_t total() const {
-      size_t t = block_bytes + node_bytes + bookkeeping_bytes;
-      for (size_t b : level_bytes) t += b;
-      return t;
+    size_t voxelBytes() const {
+      size_t bytes = 0;
+      for (size_t b : level_bytes) bytes += b;
+      return bytes;
     }
+    size_t total() const { return block_bytes + node_bytes + bookkeeping_bytes + voxelBytes(); }
   };
   /// `with_levels` false leaves the level figures at 0 and walks no block (O(1)).
   MemoryUse memoryUse(bool with_levels = true) const;

@@ -67,6 +67,9 @@ class FusionNodelet : public nodelet::Nodelet {
   void publishPending(const ros::Time& stamp, bool force);
   /// Counts one meshing pass and its timings (caller holds map_mutex_).
   void recordMeshPassLocked(double meshing_ms, double texture_ms);
+  /// Meshes the blocks fused since the last meshing pass, if any, and counts the pass (caller
+  /// holds map_mutex_).
+  void catchUpMeshLocked();
   bool saveMesh(SaveMesh::Request& req, SaveMesh::Response& res);
   bool getFullMesh(GetFullMesh::Request& req, GetFullMesh::Response& res);
   bool reset(std_srvs::Empty::Request& req, std_srvs::Empty::Response& res);
