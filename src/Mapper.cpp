@@ -1,3 +1,4 @@
+#include <cstdio>
 #include "stereo_fusion/Mapper.h"
 
 #include <algorithm>
@@ -54,11 +55,12 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
   if (texture_consumer_) last_frame_ = frame;  // shares the images: what a deferred texture pass projects into
 
   Timer lookup_timer;
-  result.lookup = lookup_.run(frame, &octree_, &queue_, &missing_);
+  { Timer mt; measurements_.build(frame, config_, &pool_); static double a; static int n; a+=mt.elapsedMs(); if(++n%60==0) fprintf(stderr,"MI %.3f\n",a/60), a=0; }
+  result.lookup = lookup_.run(frame, measurements_, &octree_, &queue_, &missing_);
   result.lookup_ms = lookup_timer.elapsedMs();
 
   Timer fusion_timer;
-  result.fusion = fuser_.fuse(frame, octree_, queue_, missing_, &updated_, &created_);
+  result.fusion = fuser_.fuse(frame, measurements_, octree_, queue_, missing_, &updated_, &created_);
   voxel_bytes_ += result.fusion.level_bytes_allocated;
   for (const VoxelBlock* block : updated_) result.updated_blocks.push_back(block->key);
   map_changes_.recordUpdated(result.updated_blocks);

@@ -41,7 +41,7 @@ struct IntegrationResult {
   bool accepted = false;  ///< false: the frame was rejected and the map is unchanged
   RejectReason reason = RejectReason::kNone;  ///< why it was rejected, for counters
   std::string error;      ///< why it was rejected, one sentence
-  double lookup_ms = 0.0;
+  double lookup_ms = 0.0;  ///< converting the frame's disparities to depths and colours, then the lookup
   double fusion_ms = 0.0;
   LookupStats lookup;
   FusionStats fusion;
@@ -132,6 +132,7 @@ class Mapper {
   MapperConfig config_;
   ThreadPool pool_;
   BlockOctree octree_;
+  MeasurementImage measurements_;  // the frame's depths and colours, read by lookup and fusion
   BlockLookup lookup_;
   SurfaceFuser fuser_;
   MeshStore mesh_store_;

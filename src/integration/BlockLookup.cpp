@@ -20,63 +20,60 @@ namespace stereo_fusion {
 BlockLookup::BlockLookup(const MapperConfig& config, ThreadPool* pool, bool allow_simd)
     : config_(config), pool_(pool), use_avx2_(allow_simd && avx2Supported()) {}
 
-BlockLookup::PixelGeometry BlockLookup::pixelGeometry(const StereoFrame& frame,
-                                                      const BlockOctree& octree) const {
-  PixelGeometry g;
-  g.R_world_camera = frame.T_world_camera.linear();
-  g.t_world_camera = frame.T_world_camera.translation();
+void BlockLookup::setPixelGeometry(const StereoFrame& frame, const BlockOctree& octree) {
+  PixelGeometry& g = geometry_;
   const StereoCamera& cam = frame.camera;
-  g.fb = cam.fx() * cam.baseline();
-  g.inv_fb = 1.0 / g.fb;
-  g.cx = cam.cx();
-  g.cy = cam.cy();
-  g.inv_fx = 1.0 / cam.fx();
-  g.inv_fy = 1.0 / cam.fy();
-  g.inv_block_size = 1.0 / octree.blockSize();
-  g.min_depth_m = config_.min_depth_m;
-  g.max_depth_m = config_.max_depth_m;
-  g.levels = config_.levels;
-  const TruncationBand band = config_.truncationBand();
-  for (int level = 0; level < kNumLevels; ++level) {
-    g.band_m[level] = band.measurementM(level);
-    g.band_blocks[level] = g.band_m[level] * g.inv_block_size;
+  const Eigen::Matrix3d R_world_camera = frame.T_world_camera.linear();
+  const double inv_block_size = 1.0 / octree.blockSize();
+  // validateFrame() keeps the camera within kMaxKey / 2 blocks of the origin.
+  const Eigen::Vector3d camera_blocks = frame.T_world_camera.translation() * inv_block_size;
+  for (int i = 0; i < 3; ++i) {
+    const double key = std::floor(camera_blocks[i]);
+    g.origin_key[i] = static_cast<int32_t>(key);
+    g.origin_frac[i] = static_cast<float>(camera_blocks[i] - key);
   }
+  for (int i = 0; i < 3; ++i) {
+    g.column_dir[i].resize(static_cast<size_t>(frame.disparity_px.cols));
+    for (int u = 0; u < frame.disparity_px.cols; ++u)
+      g.column_dir[i][u] = static_cast<float>(R_world_camera(i, 0) * ((u - cam.cx()) / cam.fx()) * inv_block_size);
+    g.row_dir[i].resize(static_cast<size_t>(frame.disparity_px.rows));
+    for (int v = 0; v < frame.disparity_px.rows; ++v)
+      g.row_dir[i][v] = static_cast<float>(
+          (R_world_camera(i, 1) * ((v - cam.cy()) / cam.fy()) + R_world_camera(i, 2)) * inv_block_size);
+  }
+  g.levels = FloatLevelThresholds(config_.levels);
+  const TruncationBand band = config_.truncationBand();
+  for (int level = 0; level < kNumLevels; ++level) g.band_m[level] = band.measurementM<float>(level);
   // A voxel centre that fusion reads at a pixel projects within half a pixel of its centre on
   // each image axis: within 0.5·√2 pixel footprints of the pixel's ray (0.75 for margin).
-  g.lateral_blocks_per_m = kLateralMarginPx / std::min(cam.fx(), cam.fy()) * g.inv_block_size;
+  g.lateral_blocks_per_m = static_cast<float>(kLateralMarginPx / std::min(cam.fx(), cam.fy()) * inv_block_size);
   g.bands_non_negative = true;
-  for (double b : g.band_blocks) g.bands_non_negative = g.bands_non_negative && b >= 0.0;
-  return g;
+  for (float b : g.band_m) g.bands_non_negative = g.bands_non_negative && b >= 0.0f;
 }
 
 // Inline: called for every pixel (a call per pixel cost a fifth of the lookup).
-inline bool BlockLookup::bandBoxOfPixel(float d, int u, int v, BandBox* box) const {
+inline bool BlockLookup::bandBoxOfPixel(const float* depth_row, int u, int v, BandBox* box) const {
   const PixelGeometry& g = geometry_;
-  if (!(d > 0.0f) || !std::isfinite(d)) return false;
-  const double z = g.fb / d;
-  if (!(z >= g.min_depth_m && z <= g.max_depth_m)) return false;
-  const double p_camera[3] = {(u - g.cx) * z * g.inv_fx, (v - g.cy) * z * g.inv_fy, z};
+  const float z = depth_row[u];  // NaN where there is no measurement: every comparison below fails
   // The band along the ray: the surface point ± Φ in the ray's direction, widened by the
-  // lateral margin (kLateralMarginPx at the far end). All sums spelled out in the AVX2 path's order:
-  // Eigen's R·p adds the z row as a0 + (a1 + a2) but the x and y rows as (a0 + a1) + a2, and
-  // a point within an ulp of a block face would land in a different block on each path.
-  const int level = levelForDepth(z, g.levels);
-  // ±Φ along the ray moves the point by Φ·p/‖p‖; Φ·p/z bounds it (‖p‖ ≥ z) without a square
-  // root or a division per pixel (1/z = d/(f·b)), at most ‖p‖/z longer: 1.2 at a 640×480
-  // image's corners for f = 576 px, 1 on the optical axis.
-  const double along = g.band_blocks[level] * (static_cast<double>(d) * g.inv_fb);  // blocks per metre of R·p
-  const double lateral = (z + g.band_m[level]) * g.lateral_blocks_per_m;  // blocks
-  const Eigen::Matrix3d& R = g.R_world_camera;
-  Eigen::Vector3d lo, hi;
+  // lateral margin (kLateralMarginPx at the far end). ±Φ along the ray moves the point by
+  // Φ·p/‖p‖; Φ·p/z = Φ·dir bounds it (‖p‖ ≥ z) without a square root or a division, at most
+  // ‖p‖/z longer: 1.2 at a 640×480 image's corners for f = 576 px, 1 on the optical axis.
+  // The float operations and their order are the AVX2 path's (no FMA: see FusionKernels.cpp).
+  const float band = g.band_m[g.levels.levelOf(z)];
+  const float lateral = (z + band) * g.lateral_blocks_per_m;  // blocks
+  int32_t lo[3], hi[3];
   for (int i = 0; i < 3; ++i) {
-    const double ray = (R(i, 0) * p_camera[0] + R(i, 1) * p_camera[1]) + R(i, 2) * p_camera[2];  // world − camera centre
-    const double centre = (ray + g.t_world_camera[i]) * g.inv_block_size;
-    const double half = std::fabs(ray * along) + lateral;
-    lo[i] = centre - half;
-    hi[i] = centre + half;
+    const float dir = g.column_dir[i][u] + g.row_dir[i][v];  // blocks per metre of depth
+    const float centre = z * dir + g.origin_frac[i];
+    const float half = std::fabs(dir) * band + lateral;
+    const float lo_blocks = std::floor(centre - half), hi_blocks = std::floor(centre + half);
+    if (!(lo_blocks >= -kMaxBlocksFromCamera && hi_blocks <= kMaxBlocksFromCamera)) return false;
+    lo[i] = static_cast<int32_t>(lo_blocks) + g.origin_key[i];
+    hi[i] = static_cast<int32_t>(hi_blocks) + g.origin_key[i];
   }
-  box->lo = BlockOctree::keyForBlockCoordinates(lo);
-  box->hi = BlockOctree::keyForBlockCoordinates(hi);
+  box->lo = BlockKey{lo[0], lo[1], lo[2]};
+  box->hi = BlockKey{hi[0], hi[1], hi[2]};
   return BlockOctree::keyInRange(box->lo) && BlockOctree::keyInRange(box->hi);
 }
 
@@ -91,8 +88,8 @@ static void forEachKeyInBox(const BlockKey& lo, const BlockKey& hi, F&& f) {
 // comparison with the previous box settles most pixels.
 __attribute__((always_inline)) inline void BlockLookup::countBox(const BandBox& box, RegionScratch* s, size_t* last) const {
   ++s->stats.valid_points;
-  if (*last < s->boxes.size() && s->boxes[*last].first == box) {
-    ++s->boxes[*last].second;
+  if (*last < s->boxes.size() && s->boxes[*last].box == box) {
+    ++s->boxes[*last].count;
     return;
   }
   *last = countInBoxes(box, s);
@@ -102,72 +99,73 @@ __attribute__((always_inline)) inline size_t BlockLookup::countInBoxes(const Ban
   // Boxes are distinct, so the search order does not matter; from the newest, since a
   // changed box is most often one just seen (a neighbour in the row or the row above).
   for (size_t i = s->boxes.size(); i-- > 0;) {
-    if (s->boxes[i].first == box) {
-      ++s->boxes[i].second;
+    if (s->boxes[i].box == box) {
+      ++s->boxes[i].count;
       return i;
     }
   }
-  s->boxes.emplace_back(box, 1);
+  s->boxes.push_back(BoxCount{box, 1});
   return s->boxes.size() - 1;
 }
 
 // The reference per-pixel path: every pixel through bandBoxOfPixel().
-void BlockLookup::countRegionBoxesScalar(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const {
+void BlockLookup::countRegionBoxesScalar(const MeasurementImage& m, const cv::Rect& region, RegionScratch* s) const {
   size_t last = 0;
   for (int v = region.y; v < region.y + region.height; ++v) {
-    const float* disparity_row = frame.disparity_px.ptr<float>(v);
+    const float* depth_row = m.depths() + static_cast<size_t>(v) * m.width();
     for (int u = region.x; u < region.x + region.width; ++u) {
       BandBox box;
-      if (bandBoxOfPixel(disparity_row[u], u, v, &box)) countBox(box, s, &last);
+      if (bandBoxOfPixel(depth_row, u, v, &box)) countBox(box, s, &last);
     }
   }
 }
 
 #ifdef STEREO_FUSION_HAVE_AVX2_LOOKUP
-// Four pixels at a time: the same double operations as bandBoxOfPixel() in the same order
-// (no FMA: the target is AVX2 only), so the boxes are identical; a row's last width % 4
+// Bit i set: lane i of `key` (lo x, y, z, hi x, y, z of eight boxes) equals `box` (the same six).
+__attribute__((target("avx2"), always_inline)) static inline int lanesInBox(const __m256i key[6], const int32_t box[6]) {
+  __m256i equal = _mm256_cmpeq_epi32(key[0], _mm256_set1_epi32(box[0]));
+  for (int k = 1; k < 6; ++k) equal = _mm256_and_si256(equal, _mm256_cmpeq_epi32(key[k], _mm256_set1_epi32(box[k])));
+  return _mm256_movemask_ps(_mm256_castsi256_ps(equal));
+}
+
+// Eight pixels at a time: the same float operations as bandBoxOfPixel() in the same order
+// (no FMA: the target is AVX2 only), so the boxes are identical; a row's last width % 8
 // pixels go through bandBoxOfPixel(). The whole region in one call: a region row is only a
 // few groups, too few to pay for setting the constants up per row.
 // Needs geometry_.bands_non_negative (see the key range test below).
-__attribute__((target("avx2"))) void BlockLookup::countRegionBoxesAvx2(const StereoFrame& frame,
+__attribute__((target("avx2"))) void BlockLookup::countRegionBoxesAvx2(const MeasurementImage& m,
                                                                        const cv::Rect& region,
                                                                        RegionScratch* s) const {
   const PixelGeometry& g = geometry_;
-  const __m256d zero = _mm256_setzero_pd(), infinity = _mm256_set1_pd(HUGE_VAL);
-  const __m256d inv_fb = _mm256_set1_pd(g.inv_fb);
-  const __m256d fb = _mm256_set1_pd(g.fb), min_z = _mm256_set1_pd(g.min_depth_m), max_z = _mm256_set1_pd(g.max_depth_m);
-  const __m256d cx = _mm256_set1_pd(g.cx);
-  const __m256d inv_fx = _mm256_set1_pd(g.inv_fx), inv_fy = _mm256_set1_pd(g.inv_fy);
-  const __m256d scale2 = _mm256_set1_pd(g.levels.scale2_min_depth_m), scale4 = _mm256_set1_pd(g.levels.scale4_min_depth_m);
-  const __m256d band0 = _mm256_set1_pd(g.band_blocks[0]), band1 = _mm256_set1_pd(g.band_blocks[1]),
-                band2 = _mm256_set1_pd(g.band_blocks[2]);
-  const __m256d band0_m = _mm256_set1_pd(g.band_m[0]), band1_m = _mm256_set1_pd(g.band_m[1]),
-                band2_m = _mm256_set1_pd(g.band_m[2]);
-  const __m256d lateral_per_m = _mm256_set1_pd(g.lateral_blocks_per_m);
-  const __m256d sign_bit = _mm256_set1_pd(-0.0);
-  const __m256d max_key = _mm256_set1_pd(BlockOctree::kMaxKey), min_key = _mm256_set1_pd(-BlockOctree::kMaxKey);
-  __m256d r[3][3], t[3];
+  const __m256 level1_min = _mm256_set1_ps(g.levels.level1_min_depth_m),
+               level2_min = _mm256_set1_ps(g.levels.level2_min_depth_m);
+  const __m256 band0 = _mm256_set1_ps(g.band_m[0]), band1 = _mm256_set1_ps(g.band_m[1]),
+               band2 = _mm256_set1_ps(g.band_m[2]);
+  const __m256 lateral_per_m = _mm256_set1_ps(g.lateral_blocks_per_m);
+  const __m256 sign_bit = _mm256_set1_ps(-0.0f);
+  const __m256 min_blocks = _mm256_set1_ps(-kMaxBlocksFromCamera), max_blocks = _mm256_set1_ps(kMaxBlocksFromCamera);
+  // keyInRange(): key ≥ −kMaxKey ⇔ key > −kMaxKey − 1, key ≤ kMaxKey ⇔ kMaxKey + 1 > key.
+  const __m256i below_min_key = _mm256_set1_epi32(-BlockOctree::kMaxKey - 1),
+                above_max_key = _mm256_set1_epi32(BlockOctree::kMaxKey + 1);
+  __m256 origin_frac[3];
+  __m256i origin_key[3];
   for (int i = 0; i < 3; ++i) {
-    for (int k = 0; k < 3; ++k) r[i][k] = _mm256_set1_pd(g.R_world_camera(i, k));
-    t[i] = _mm256_set1_pd(g.t_world_camera[i]);
+    origin_frac[i] = _mm256_set1_ps(g.origin_frac[i]);
+    origin_key[i] = _mm256_set1_epi32(g.origin_key[i]);
   }
-  const __m256d inv_block = _mm256_set1_pd(g.inv_block_size);
-  // Small integers are exact in double, so stepping u by 4.0 gives the converted int exactly.
-  const __m256d four = _mm256_set1_pd(4.0);
-  const __m256d u_first = _mm256_add_pd(_mm256_set1_pd(region.x), _mm256_setr_pd(0.0, 1.0, 2.0, 3.0));
-  const int u_end = region.x + region.width, u_vector_end = region.x + (region.width & ~3);
+  const int u_end = region.x + region.width, u_vector_end = region.x + (region.width & ~7);
 
-  // countBox()'s previous box, broadcast to all lanes; refreshed whenever countBox() runs.
+  // countBox()'s previous box (lo x, y, z, hi x, y, z); refreshed whenever countBox() runs.
+  // Plain ints: the lambdas are not compiled for AVX2.
   size_t last = 0;
-  __m128i last_key[6] = {_mm_setzero_si128(), _mm_setzero_si128(), _mm_setzero_si128(),
-                         _mm_setzero_si128(), _mm_setzero_si128(), _mm_setzero_si128()};
+  int32_t last_key[6] = {};
   int* last_count = nullptr;  // nullptr until the region has a box
   auto track_last = [&] {
-    std::pair<BandBox, int>& entry = s->boxes[last];  // may have moved: boxes can grow
-    const BandBox& b = entry.first;
-    last_key[0] = _mm_set1_epi32(b.lo.x), last_key[1] = _mm_set1_epi32(b.lo.y), last_key[2] = _mm_set1_epi32(b.lo.z);
-    last_key[3] = _mm_set1_epi32(b.hi.x), last_key[4] = _mm_set1_epi32(b.hi.y), last_key[5] = _mm_set1_epi32(b.hi.z);
-    last_count = &entry.second;
+    BoxCount& entry = s->boxes[last];  // may have moved: boxes can grow
+    const BandBox& b = entry.box;
+    last_key[0] = b.lo.x, last_key[1] = b.lo.y, last_key[2] = b.lo.z;
+    last_key[3] = b.hi.x, last_key[4] = b.hi.y, last_key[5] = b.hi.z;
+    last_count = &entry.count;
   };
   auto count_box = [&](const BandBox& box) {
     countBox(box, s, &last);
@@ -181,106 +179,102 @@ __attribute__((target("avx2"))) void BlockLookup::countRegionBoxesAvx2(const Ste
   };
 
   for (int v = region.y; v < region.y + region.height; ++v) {
-    const float* disparity_row = frame.disparity_px.ptr<float>(v);
-    const __m256d y_offset = _mm256_set1_pd(v - g.cy);
-    __m256d u_px = u_first;
+    const float* depth_row = m.depths() + static_cast<size_t>(v) * m.width();
+    const __m256 row_dir[3] = {_mm256_set1_ps(g.row_dir[0][v]), _mm256_set1_ps(g.row_dir[1][v]),
+                               _mm256_set1_ps(g.row_dir[2][v])};
     int u = region.x;
-    for (; u < u_vector_end; u += 4, u_px = _mm256_add_pd(u_px, four)) {
-      const __m256d d = _mm256_cvtps_pd(_mm_loadu_ps(disparity_row + u));
-      // d > 0 and finite (NaN fails both ordered comparisons).
-      __m256d valid = _mm256_and_pd(_mm256_cmp_pd(d, zero, _CMP_GT_OQ), _mm256_cmp_pd(d, infinity, _CMP_LT_OQ));
-      if (_mm256_movemask_pd(valid) == 0) continue;
-      const __m256d z = _mm256_div_pd(fb, d);
-      valid = _mm256_and_pd(valid, _mm256_and_pd(_mm256_cmp_pd(z, min_z, _CMP_GE_OQ), _mm256_cmp_pd(z, max_z, _CMP_LE_OQ)));
-      const __m256d p[3] = {_mm256_mul_pd(_mm256_mul_pd(_mm256_sub_pd(u_px, cx), z), inv_fx),
-                            _mm256_mul_pd(_mm256_mul_pd(y_offset, z), inv_fy), z};
-      // Level of eq. 3.2 → band, lane by lane.
-      const __m256d at_least_2 = _mm256_cmp_pd(z, scale2, _CMP_GE_OQ), at_least_4 = _mm256_cmp_pd(z, scale4, _CMP_GE_OQ);
-      const __m256d band = _mm256_blendv_pd(_mm256_blendv_pd(band0, band1, at_least_2), band2, at_least_4);
-      const __m256d band_m = _mm256_blendv_pd(_mm256_blendv_pd(band0_m, band1_m, at_least_2), band2_m, at_least_4);
-      // bandBoxOfPixel()'s ray segment ± Φ and lateral margin, in its operation order.
-      const __m256d along = _mm256_mul_pd(band, _mm256_mul_pd(d, inv_fb));
-      const __m256d lateral = _mm256_mul_pd(_mm256_add_pd(z, band_m), lateral_per_m);
-      __m128i key[6];  // lo x, y, z, hi x, y, z of the four lanes
+    for (; u < u_vector_end; u += 8) {
+      const __m256 z = _mm256_loadu_ps(depth_row + u);
+      if (_mm256_movemask_ps(_mm256_cmp_ps(z, z, _CMP_ORD_Q)) == 0) continue;  // no depth in any lane
+      // Level of eq. 3.2 → band, lane by lane (NaN: level 0, refused below).
+      const __m256 band = _mm256_blendv_ps(_mm256_blendv_ps(band0, band1, _mm256_cmp_ps(z, level1_min, _CMP_GE_OQ)),
+                                           band2, _mm256_cmp_ps(z, level2_min, _CMP_GE_OQ));
+      const __m256 lateral = _mm256_mul_ps(_mm256_add_ps(z, band), lateral_per_m);
+      __m256 valid = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+      __m256i key[6];  // lo x, y, z, hi x, y, z of the eight lanes
       for (int i = 0; i < 3; ++i) {
-        const __m256d ray = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(r[i][0], p[0]), _mm256_mul_pd(r[i][1], p[1])),
-                                          _mm256_mul_pd(r[i][2], p[2]));
-        const __m256d centre = _mm256_mul_pd(_mm256_add_pd(ray, t[i]), inv_block);
-        const __m256d half = _mm256_add_pd(_mm256_andnot_pd(sign_bit, _mm256_mul_pd(ray, along)), lateral);
-        const __m256d lo_d = _mm256_floor_pd(_mm256_sub_pd(centre, half));
-        const __m256d hi_d = _mm256_floor_pd(_mm256_add_pd(centre, half));
-        // keyInRange() of lo and hi, i.e. |key| ≤ kMaxKey with NaN failing: with half ≥ 0,
-        // lo ≤ hi whenever neither is NaN, so lo ≥ -kMaxKey and hi ≤ kMaxKey cover all four bounds.
-        valid = _mm256_and_pd(valid, _mm256_and_pd(_mm256_cmp_pd(lo_d, min_key, _CMP_GE_OQ),
-                                                   _mm256_cmp_pd(hi_d, max_key, _CMP_LE_OQ)));
-        key[i] = _mm256_cvttpd_epi32(lo_d);
-        key[3 + i] = _mm256_cvttpd_epi32(hi_d);
+        const __m256 dir = _mm256_add_ps(_mm256_loadu_ps(g.column_dir[i].data() + u), row_dir[i]);
+        const __m256 centre = _mm256_add_ps(_mm256_mul_ps(z, dir), origin_frac[i]);
+        const __m256 half = _mm256_add_ps(_mm256_mul_ps(_mm256_andnot_ps(sign_bit, dir), band), lateral);
+        const __m256 lo_blocks = _mm256_floor_ps(_mm256_sub_ps(centre, half));
+        const __m256 hi_blocks = _mm256_floor_ps(_mm256_add_ps(centre, half));
+        // With half ≥ 0, lo ≤ hi whenever neither is NaN, so lo ≥ −max and hi ≤ max cover all
+        // four bounds (NaN fails both); then both convert exactly, and the same holds for
+        // the integer key range test.
+        valid = _mm256_and_ps(valid, _mm256_and_ps(_mm256_cmp_ps(lo_blocks, min_blocks, _CMP_GE_OQ),
+                                                   _mm256_cmp_ps(hi_blocks, max_blocks, _CMP_LE_OQ)));
+        key[i] = _mm256_add_epi32(_mm256_cvttps_epi32(lo_blocks), origin_key[i]);
+        key[3 + i] = _mm256_add_epi32(_mm256_cvttps_epi32(hi_blocks), origin_key[i]);
+        valid = _mm256_and_ps(valid, _mm256_castsi256_ps(_mm256_and_si256(_mm256_cmpgt_epi32(key[i], below_min_key),
+                                                                          _mm256_cmpgt_epi32(above_max_key, key[3 + i]))));
       }
-      const int lanes = _mm256_movemask_pd(valid);
+      const int lanes = _mm256_movemask_ps(valid);
       if (lanes == 0) continue;
-      // Bit i: lane i's box equals lane i-1's (lane 0: the previous box's). Neighbouring
-      // pixels almost always share a box, so most groups are counted at once and most others
-      // call countBox() only where the box changes.
-      __m128i same = _mm_set1_epi32(-1);
-      for (int k = 0; k < 6; ++k)
-        same = _mm_and_si128(same, _mm_cmpeq_epi32(key[k], _mm_alignr_epi8(key[k], last_key[k], 12)));
-      int repeats = _mm_movemask_ps(_mm_castsi128_ps(same));
-      if (last_count == nullptr) repeats &= ~1;  // lane 0 has no previous box to repeat
-      if (lanes == 15 && repeats == 15) {
-        repeat_box(4);
-        continue;
-      }
-      alignas(16) int32_t keys[6][4];
-      for (int k = 0; k < 6; ++k) _mm_store_si128(reinterpret_cast<__m128i*>(keys[k]), key[k]);
-      auto box_of_lane = [&](int lane) {
-        return BandBox{{keys[0][lane], keys[1][lane], keys[2][lane]}, {keys[3][lane], keys[4][lane], keys[5][lane]}};
-      };
-      if (lanes == 15) {
-        // Only the lanes where the box changes search the boxes; the runs between them
-        // repeat the previous box (lane 0 only if there is one: see above).
-        int counted = 0;  // lanes before this one are counted
-        for (int changes = ~repeats & 15; changes != 0; changes &= changes - 1) {
-          const int lane = __builtin_ctz(changes);
-          if (lane > counted) repeat_box(lane - counted);
-          // The box differs from its predecessor, boxes[last]: countBox() would search.
-          ++s->stats.valid_points;
-          last = countInBoxes(box_of_lane(lane), s);
-          last_count = &s->boxes[last].second;
-          counted = lane + 1;
+      // Neighbouring pixels almost always share a box: first the lanes in the previous box
+      // (all eight, most often), then the region's boxes from the newest, each taking all
+      // the lanes it holds at once, then new boxes in lane order: countBox() per lane would
+      // give the same boxes, in the same order, with the same counts.
+      int remaining = lanes;
+      if (last_count != nullptr) {
+        const int in_last = lanesInBox(key, last_key) & remaining;
+        if (in_last == 0xFF) {
+          repeat_box(8);
+          continue;
         }
-        if (counted < 4) repeat_box(4 - counted);
-        track_last();
-        continue;
+        *last_count += __builtin_popcount(in_last);
+        remaining &= ~in_last;
       }
-      // Some lanes invalid: a lane's predecessor is the previous valid lane, so compare lane by lane.
-      for (int lane = 0; lane < 4; ++lane)
-        if ((lanes >> lane) & 1) count_box(box_of_lane(lane));
+      s->stats.valid_points += __builtin_popcount(lanes);
+      const int last_lane = 1 << (31 - __builtin_clz(static_cast<unsigned>(lanes)));
+      for (size_t j = s->boxes.size(); remaining != 0 && j-- > 0;) {
+        if (j == last && last_count != nullptr) continue;  // done above
+        const int in_box = lanesInBox(key, reinterpret_cast<const int32_t*>(&s->boxes[j].box)) & remaining;
+        if (in_box == 0) continue;
+        s->boxes[j].count += __builtin_popcount(in_box);
+        remaining &= ~in_box;
+        if (in_box & last_lane) last = j;
+      }
+      if (remaining != 0) {
+        alignas(32) int32_t keys[6][8];
+        for (int k = 0; k < 6; ++k) _mm256_store_si256(reinterpret_cast<__m256i*>(keys[k]), key[k]);
+        while (remaining != 0) {
+          const int lane = __builtin_ctz(static_cast<unsigned>(remaining));
+          const int32_t lane_key[6] = {keys[0][lane], keys[1][lane], keys[2][lane],
+                                       keys[3][lane], keys[4][lane], keys[5][lane]};
+          const int in_box = lanesInBox(key, lane_key) & remaining;
+          s->boxes.push_back(BoxCount{{{lane_key[0], lane_key[1], lane_key[2]}, {lane_key[3], lane_key[4], lane_key[5]}},
+                                      __builtin_popcount(in_box)});
+          remaining &= ~in_box;
+          if (in_box & last_lane) last = s->boxes.size() - 1;
+        }
+      }
+      track_last();  // the box of the last valid lane
     }
     for (; u < u_end; ++u) {
       BandBox box;
-      if (bandBoxOfPixel(disparity_row[u], u, v, &box)) count_box(box);
+      if (bandBoxOfPixel(depth_row, u, v, &box)) count_box(box);
     }
   }
 }
 
 #else
-void BlockLookup::countRegionBoxesAvx2(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const {
-  countRegionBoxesScalar(frame, region, s);  // not x86: no vector path
+void BlockLookup::countRegionBoxesAvx2(const MeasurementImage& m, const cv::Rect& region, RegionScratch* s) const {
+  countRegionBoxesScalar(m, region, s);  // not x86: no vector path
 }
 #endif
 
-void BlockLookup::countRegionBoxes(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const {
+void BlockLookup::countRegionBoxes(const MeasurementImage& m, const cv::Rect& region, RegionScratch* s) const {
   s->boxes.clear();
   if (use_avx2_ && geometry_.bands_non_negative)
-    countRegionBoxesAvx2(frame, region, s);
+    countRegionBoxesAvx2(m, region, s);
   else
-    countRegionBoxesScalar(frame, region, s);
+    countRegionBoxesScalar(m, region, s);
   if (s->boxes.empty()) return;
-  s->boxes_lo = s->boxes.front().first.lo;
-  s->boxes_hi = s->boxes.front().first.hi;
-  for (const auto& box_count : s->boxes) {
-    s->boxes_lo = componentMin(s->boxes_lo, box_count.first.lo);
-    s->boxes_hi = componentMax(s->boxes_hi, box_count.first.hi);
+  s->boxes_lo = s->boxes.front().box.lo;
+  s->boxes_hi = s->boxes.front().box.hi;
+  for (const BoxCount& box_count : s->boxes) {
+    s->boxes_lo = componentMin(s->boxes_lo, box_count.box.lo);
+    s->boxes_hi = componentMax(s->boxes_hi, box_count.box.hi);
   }
 }
 
@@ -297,15 +291,15 @@ void BlockLookup::forEachBlockCount(RegionScratch* s, Visit&& visit) const {
     // past its end (the next row's, or this padding) getting + 0.
     constexpr size_t kDenseRowPadding = 8;
     s->dense_counts.assign(static_cast<size_t>(nx * ny * nz) + kDenseRowPadding, 0);
-    for (const auto& box_count : s->boxes) {
-      const BandBox& box = box_count.first;
+    for (const BoxCount& box_count : s->boxes) {
+      const BandBox& box = box_count.box;
       const int32_t width = box.hi.x - box.lo.x + 1;
       auto row_of = [&](int32_t y, int32_t z) {
         return &s->dense_counts[static_cast<size_t>(((z - lo.z) * ny + (y - lo.y)) * nx + (box.lo.x - lo.x))];
       };
 #if defined(__SSE2__)
       if (width <= 8) {  // always, unless Φ is over 3.5 blocks
-        const __m128i lane = _mm_setr_epi32(0, 1, 2, 3), count = _mm_set1_epi32(box_count.second);
+        const __m128i lane = _mm_setr_epi32(0, 1, 2, 3), count = _mm_set1_epi32(box_count.count);
         const __m128i add_first = _mm_and_si128(count, _mm_cmplt_epi32(lane, _mm_set1_epi32(width)));
         const __m128i add_second = _mm_and_si128(count, _mm_cmplt_epi32(lane, _mm_set1_epi32(width - 4)));
         for (int32_t z = box.lo.z; z <= box.hi.z; ++z)
@@ -320,7 +314,7 @@ void BlockLookup::forEachBlockCount(RegionScratch* s, Visit&& visit) const {
       for (int32_t z = box.lo.z; z <= box.hi.z; ++z)
         for (int32_t y = box.lo.y; y <= box.hi.y; ++y) {
           int* row = row_of(y, z);
-          for (int32_t x = 0; x < width; ++x) row[x] += box_count.second;
+          for (int32_t x = 0; x < width; ++x) row[x] += box_count.count;
         }
     }
     const int* count = s->dense_counts.data();
@@ -332,9 +326,9 @@ void BlockLookup::forEachBlockCount(RegionScratch* s, Visit&& visit) const {
   }
   s->sparse_counts.clear();
   // Not a structured binding: lambdas may capture those only from C++20 (clang refuses).
-  for (const auto& box_count : s->boxes) {
-    const auto& box = box_count.first;
-    const auto count = box_count.second;
+  for (const BoxCount& box_count : s->boxes) {
+    const BandBox& box = box_count.box;
+    const int count = box_count.count;
     forEachKeyInBox(box.lo, box.hi, [&](const BlockKey& key) {
       auto it = std::find_if(s->sparse_counts.begin(), s->sparse_counts.end(),
                              [&](const auto& entry) { return entry.first == key; });
@@ -347,9 +341,9 @@ void BlockLookup::forEachBlockCount(RegionScratch* s, Visit&& visit) const {
   for (const auto& [key, count] : s->sparse_counts) visit(key, count);
 }
 
-void BlockLookup::gatherHistogram(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const {
+void BlockLookup::gatherHistogram(const MeasurementImage& m, const cv::Rect& region, RegionScratch* s) const {
   // Count points per distinct band box first and expand boxes to blocks after.
-  countRegionBoxes(frame, region, s);
+  countRegionBoxes(m, region, s);
   s->key_counts.clear();
   forEachBlockCount(s, [s](const BlockKey& key, int count) { s->key_counts.emplace_back(key, count); });
 }
@@ -361,10 +355,10 @@ bool BlockLookup::passesFilter(const RegionScratch& s, const BlockKey& key) cons
   return false;
 }
 
-void BlockLookup::runRegionAccelerated(const StereoFrame& frame, const cv::Rect& region,
+void BlockLookup::runRegionAccelerated(const MeasurementImage& m, const cv::Rect& region,
                                        RegionScratch* s) const {
   // The histogram straight into the filter: no per-block list in between.
-  countRegionBoxes(frame, region, s);
+  countRegionBoxes(m, region, s);
   s->passing.clear();
   const int min_points = config_.histogram_min_points;
   forEachBlockCount(s, [s, min_points](const BlockKey& key, int count) {
@@ -407,20 +401,20 @@ void BlockLookup::collectSortedDistinctKeys(size_t num_regions) {
   std::sort(frame_keys_.begin(), frame_keys_.end());
 }
 
-void BlockLookup::runRegionNaive(const StereoFrame& frame, const cv::Rect& region, BlockOctree* octree,
+void BlockLookup::runRegionNaive(const MeasurementImage& m, const cv::Rect& region, BlockOctree* octree,
                                  bool allocate, RegionScratch* s) const {
   const bool filter = config_.histogram_min_points > 0;
   if (filter) {
-    gatherHistogram(frame, region, s);
+    gatherHistogram(m, region, s);
     for (const auto& [key, count] : s->key_counts)
       s->stats.blocks_filtered += count < config_.histogram_min_points;
     s->stats.valid_points = 0;  // counted again below
   }
   for (int v = region.y; v < region.y + region.height; ++v) {
-    const float* disparity_row = frame.disparity_px.ptr<float>(v);
+    const float* depth_row = m.depths() + static_cast<size_t>(v) * m.width();
     for (int u = region.x; u < region.x + region.width; ++u) {
       BandBox box;
-      if (!bandBoxOfPixel(disparity_row[u], u, v, &box)) continue;
+      if (!bandBoxOfPixel(depth_row, u, v, &box)) continue;
       ++s->stats.valid_points;
       forEachKeyInBox(box.lo, box.hi, [&](const BlockKey& key) {
         if (filter && !passesFilter(*s, key)) return;
@@ -437,8 +431,8 @@ void BlockLookup::runRegionNaive(const StereoFrame& frame, const cv::Rect& regio
   }
 }
 
-LookupStats BlockLookup::run(const StereoFrame& frame, BlockOctree* octree, std::vector<VoxelBlock*>* queue,
-                             std::vector<BlockKey>* missing) {
+LookupStats BlockLookup::run(const StereoFrame& frame, const MeasurementImage& measurements, BlockOctree* octree,
+                             std::vector<VoxelBlock*>* queue, std::vector<BlockKey>* missing) {
   const bool allocate = missing == nullptr;
   if (missing) missing->clear();
   const int region_px = config_.lookup_region_px;
@@ -446,7 +440,7 @@ LookupStats BlockLookup::run(const StereoFrame& frame, BlockOctree* octree, std:
   const int rows = (frame.disparity_px.rows + region_px - 1) / region_px;
   const size_t num_regions = static_cast<size_t>(cols) * rows;
   if (scratch_.size() < num_regions) scratch_.resize(num_regions);
-  geometry_ = pixelGeometry(frame, *octree);
+  setPixelGeometry(frame, *octree);
 
   const bool accelerated = config_.lookup_mode == LookupMode::kAccelerated;
   pool_->parallelFor(num_regions, 4, [&](size_t begin, size_t end) {
@@ -460,9 +454,9 @@ LookupStats BlockLookup::run(const StereoFrame& frame, BlockOctree* octree, std:
       const cv::Rect region(x, y, std::min(region_px, frame.disparity_px.cols - x),
                             std::min(region_px, frame.disparity_px.rows - y));
       if (accelerated)
-        runRegionAccelerated(frame, region, &s);
+        runRegionAccelerated(measurements, region, &s);
       else
-        runRegionNaive(frame, region, octree, allocate, &s);
+        runRegionNaive(measurements, region, octree, allocate, &s);
     }
   });
 

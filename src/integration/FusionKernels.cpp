@@ -21,13 +21,6 @@
 namespace stereo_fusion {
 namespace {
 
-/// Smallest float f with (double)f ≥ t, so that z ≥ f ⇔ (double)z ≥ t for every float z.
-float smallestFloatAtOrAbove(double t) {
-  float f = static_cast<float>(t);
-  if (static_cast<double>(f) < t) f = std::nextafter(f, INFINITY);
-  return f;
-}
-
 /// Block origin in camera coordinates: transformed in double (world coordinates may be large);
 /// the small offsets to the voxel centres are then stepped in float.
 Eigen::Vector3f blockOriginInCamera(const FusionFrame& f, const BlockOctree& octree, const BlockKey& key) {
@@ -124,8 +117,9 @@ FusionFrame makeFusionFrame(const StereoFrame& frame, const MapperConfig& config
   f.depth_weight_reference_m = static_cast<float>(config.depth_weight_reference_m);
   f.weight_mode = config.weight_mode;
   f.thresholds = config.levels;
-  f.level1_min_depth_m = smallestFloatAtOrAbove(config.levels.scale2_min_depth_m);
-  f.level2_min_depth_m = smallestFloatAtOrAbove(config.levels.scale4_min_depth_m);
+  const FloatLevelThresholds float_thresholds(config.levels);
+  f.level1_min_depth_m = float_thresholds.level1_min_depth_m;
+  f.level2_min_depth_m = float_thresholds.level2_min_depth_m;
   f.depth_m = measurements.depths();
   if (config.use_color && !frame.color.empty()) f.rgb = measurements.colours();
   return f;

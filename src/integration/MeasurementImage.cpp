@@ -113,4 +113,11 @@ void MeasurementImage::build(const cv::Mat& disparity_px, const cv::Mat& color, 
   });
 }
 
+void MeasurementImage::build(const StereoFrame& frame, const MapperConfig& config, ThreadPool* pool) {
+  const StereoCamera& camera = frame.camera;
+  build(frame.disparity_px, config.use_color ? frame.color : cv::Mat(),
+        static_cast<float>(camera.fx() * camera.baseline()), static_cast<float>(config.min_depth_m),
+        static_cast<float>(config.max_depth_m), pool);
+}
+
 }  // namespace stereo_fusion

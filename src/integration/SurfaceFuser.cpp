@@ -15,12 +15,14 @@ void SurfaceFuser::setKernel(Kernel kernel) {
   use_avx2_ = kernel == Kernel::kAvx2 || (kernel == Kernel::kAuto && avx2Supported());
 }
 
-FusionStats SurfaceFuser::fuse(const StereoFrame& frame, const BlockOctree& octree,
-                               const std::vector<VoxelBlock*>& blocks, std::vector<VoxelBlock*>* updated) {
-  return fuse(frame, octree, blocks, {}, updated, nullptr);
+FusionStats SurfaceFuser::fuse(const StereoFrame& frame, const MeasurementImage& measurements,
+                               const BlockOctree& octree, const std::vector<VoxelBlock*>& blocks,
+                               std::vector<VoxelBlock*>* updated) {
+  return fuse(frame, measurements, octree, blocks, {}, updated, nullptr);
 }
 
-FusionStats SurfaceFuser::fuse(const StereoFrame& frame, const BlockOctree& octree,
+FusionStats SurfaceFuser::fuse(const StereoFrame& frame, const MeasurementImage& measurements,
+                               const BlockOctree& octree,
                                const std::vector<VoxelBlock*>& blocks, const std::vector<BlockKey>& missing,
                                std::vector<VoxelBlock*>* updated,
                                std::vector<std::unique_ptr<VoxelBlock>>* created) {
@@ -29,13 +31,9 @@ FusionStats SurfaceFuser::fuse(const StereoFrame& frame, const BlockOctree& octr
   if (created) created->clear();
   const size_t total = blocks.size() + (created ? missing.size() : 0);
   if (total == 0) return stats;
-  const StereoCamera& cam = frame.camera;
-  measurements_.build(frame.disparity_px, config_.use_color ? frame.color : cv::Mat(),
-                      static_cast<float>(cam.fx() * cam.baseline()), static_cast<float>(config_.min_depth_m),
-                      static_cast<float>(config_.max_depth_m), pool_);
-  FusionFrame fusion_frame = makeFusionFrame(frame, config_, measurements_);
+  FusionFrame fusion_frame = makeFusionFrame(frame, config_, measurements);
   if (use_avx2_) {  // only the AVX2 kernel uses the tiles; the scalar one stays the plain reference
-    tiles_.build(measurements_.depths(), measurements_.width(), measurements_.height(),
+    tiles_.build(measurements.depths(), measurements.width(), measurements.height(),
                  fusion_frame.level1_min_depth_m, fusion_frame.level2_min_depth_m, pool_);
     fusion_frame.tiles = &tiles_;
   }

@@ -3,6 +3,7 @@
 #include <vector>
 
 #include "stereo_fusion/MapperConfig.h"
+#include "stereo_fusion/integration/MeasurementImage.h"
 #include "stereo_fusion/integration/StereoFrame.h"
 #include "stereo_fusion/map/BlockKeyBitmap.h"
 #include "stereo_fusion/map/BlockKeySet.h"
@@ -21,17 +22,22 @@ struct LookupStats {
   uint64_t blocks_filtered = 0;   ///< (region, block) pairs dropped by the histogram filter
 };
 
-/// Stage 1 of the pipeline (thesis §3.4): turns a disparity map into the queue of voxel blocks
-/// to update. Each valid pixel contributes the blocks that its truncation band reaches: the
-/// segment of its ray within ±Φ of the measured surface (Φ of the level its depth selects,
-/// eq. 3.2, TruncationBand; bounded as ±Φ·p/z, up to 1.2× longer off-axis), widened by the
-/// voxels that project onto the pixel
-/// (kLateralMarginPx). Those are the blocks holding a voxel that this pixel's measurement puts
-/// within its band (|sdf| ≤ Φ); voxels farther in front (fused clamped to −Φ) and the wider band
-/// a near measurement leaves in coarse levels are fused where some band brings their block. So
-/// the queue follows the surface, not the volume of a ±Φ cube around each point (a cube queues
-/// ~25× the blocks at far range, where Φ spans several blocks). The histogram filter, when on, drops per image region the
-/// blocks reached by fewer than `histogram_min_points` points.
+/// Stage 1 of the pipeline (thesis §3.4): turns a frame's depths into the queue of voxel blocks
+/// to update. Each pixel with a depth (MeasurementImage: the same validity and depth as fusion
+/// uses) contributes the blocks that its truncation band reaches: the segment of its ray within
+/// ±Φ of the measured surface (Φ of the level its depth selects, eq. 3.2, TruncationBand;
+/// bounded as ±Φ·p/z, up to 1.2× longer off-axis), widened by the voxels that project onto the
+/// pixel (kLateralMarginPx). Those are the blocks holding a voxel that this pixel's measurement
+/// puts within its band (|sdf| ≤ Φ); voxels farther in front (fused clamped to −Φ) and the wider
+/// band a near measurement leaves in coarse levels are fused where some band brings their block.
+/// So the queue follows the surface, not the volume of a ±Φ cube around each point (a cube
+/// queues ~25× the blocks at far range, where Φ spans several blocks). The histogram filter,
+/// when on, drops per image region the blocks reached by fewer than `histogram_min_points` points.
+///
+/// Per pixel the box is float arithmetic relative to the block holding the camera (so its
+/// precision does not depend on how far the camera is from the world origin): the ray
+/// direction per pixel column plus one per row, times the depth. The scalar path is the
+/// reference; the AVX2 path does the same float operations eight pixels at a time.
 ///
 /// Naive (Algorithm 1) searches the octree for every (pixel, band block) pair; accelerated
 /// (Algorithm 2) first gathers the distinct blocks of each region (and its histogram), then
@@ -47,11 +53,12 @@ class BlockLookup {
   bool usesSimd() const { return use_avx2_; }
 
   /// Fills `queue` with the distinct blocks to update, sorted by key (deterministic).
-  /// The frame must have passed validateFrame(). With `missing`, blocks not yet in the octree
+  /// The frame must have passed validateFrame(); `measurements` holds its depths
+  /// (MeasurementImage::build(frame, config, …) with this lookup's configuration). With `missing`, blocks not yet in the octree
   /// are not allocated: their keys go to *missing (sorted), for fusion to create only those it
   /// really updates (SurfaceFuser::fuse); without, they are allocated and queued.
-  LookupStats run(const StereoFrame& frame, BlockOctree* octree, std::vector<VoxelBlock*>* queue,
-                  std::vector<BlockKey>* missing = nullptr);
+  LookupStats run(const StereoFrame& frame, const MeasurementImage& measurements, BlockOctree* octree,
+                  std::vector<VoxelBlock*>* queue, std::vector<BlockKey>* missing = nullptr);
 
  private:
   /// How far (in pixels) from a pixel's ray a voxel centre that fusion reads at that pixel can
@@ -64,25 +71,37 @@ class BlockLookup {
     BlockKey lo, hi;  // inclusive key range of the blocks a point's band touches
     bool operator==(const BandBox& o) const { return lo == o.lo && hi == o.hi; }
   };
-  /// Per-frame constants of the pixel → band box mapping, so the per-pixel work is
-  /// multiplications (no divisions except z = f·b/d, no function calls).
+  /// A distinct band box of a region and its number of points, in one 32-byte vector so that
+  /// the AVX2 path compares a box with one instruction.
+  struct alignas(32) BoxCount {
+    BandBox box;
+    int32_t count = 0;
+    int32_t unused = 0;
+  };
+  static_assert(sizeof(BandBox) == 6 * sizeof(int32_t), "a BandBox is lo x, y, z, hi x, y, z");
+  static_assert(sizeof(BoxCount) == 32, "a BoxCount is one AVX2 vector");
+  /// Per-frame constants of the pixel → band box mapping. Positions are in blocks relative to
+  /// origin_key (the block holding the camera): the ray of pixel (u, v) at depth z reaches
+  /// origin_key + origin_frac + z · (column_dir[u] + row_dir[v]).
   struct PixelGeometry {
-    Eigen::Matrix3d R_world_camera;
-    Eigen::Vector3d t_world_camera;
-    double fb = 0.0, inv_fb = 0.0, cx = 0.0, cy = 0.0, inv_fx = 0.0, inv_fy = 0.0;
-    double inv_block_size = 0.0;                       ///< 1 / block edge, per metre
-    double min_depth_m = 0.0, max_depth_m = 0.0;       ///< usable depth range
-    LevelThresholds levels;                            ///< eq. 3.2 switch depths
-    double band_m[kNumLevels] = {};                    ///< Φ of each measurement level
-    double band_blocks[kNumLevels] = {};               ///< the same in blocks
+    int32_t origin_key[3] = {};
+    float origin_frac[3] = {};
+    /// Per world axis: R·((u − cx)/fx, 0, 0) per image column u and R·(0, (v − cy)/fy, 1) per
+    /// image row v, in blocks per metre of depth.
+    std::vector<float> column_dir[3], row_dir[3];
+    FloatLevelThresholds levels;  ///< eq. 3.2, the same float compares as fusion
+    float band_m[kNumLevels] = {};  ///< Φ of each measurement level
     /// Lateral margin around a pixel's ray, in blocks per metre of depth (kLateralMarginPx).
-    double lateral_blocks_per_m = 0.0;
+    float lateral_blocks_per_m = 0.0f;
     /// Every Φ ≥ 0 (so lo ≤ hi in each box), which the AVX2 path's key range test relies on;
     /// a config without it keeps to the scalar path.
     bool bands_non_negative = false;
   };
+  /// Boxes reaching beyond this many blocks from the camera's block are refused before their
+  /// float coordinates are converted to integers (keys beyond ±kMaxKey are refused anyway).
+  static constexpr float kMaxBlocksFromCamera = 1 << 29;
   struct RegionScratch {
-    std::vector<std::pair<BandBox, int>> boxes;      // distinct band boxes and their point counts
+    std::vector<BoxCount> boxes;                       // distinct band boxes and their point counts
     BlockKey boxes_lo, boxes_hi;                       // the boxes' union, if there are boxes
     std::vector<std::pair<BlockKey, int>> key_counts;  // naive: histogram, points per block
     std::vector<std::pair<BlockKey, int>> sparse_counts;  // points per block off the dense grid
@@ -93,29 +112,30 @@ class BlockLookup {
     LookupStats stats;
   };
 
-  PixelGeometry pixelGeometry(const StereoFrame& frame, const BlockOctree& octree) const;
-  /// The band box of pixel (u, v) with disparity `d`; false if the pixel has no usable depth.
-  bool bandBoxOfPixel(float d, int u, int v, BandBox* box) const;
+  void setPixelGeometry(const StereoFrame& frame, const BlockOctree& octree);
+  /// The band box of pixel (u, v), `depth_row` being row v of the depths; false if the pixel
+  /// has no depth or its box leaves the key range.
+  bool bandBoxOfPixel(const float* depth_row, int u, int v, BandBox* box) const;
   void countBox(const BandBox& box, RegionScratch* s, size_t* last) const;
   /// One more point in `box`, found among s->boxes or added; returns its index.
   size_t countInBoxes(const BandBox& box, RegionScratch* s) const;
   /// Fill s->boxes and s->stats.valid_points from the region's pixels (the AVX2 path gives
   /// exactly the scalar path's boxes and counts).
-  void countRegionBoxesScalar(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const;
-  void countRegionBoxesAvx2(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const;
+  void countRegionBoxesScalar(const MeasurementImage& m, const cv::Rect& region, RegionScratch* s) const;
+  void countRegionBoxesAvx2(const MeasurementImage& m, const cv::Rect& region, RegionScratch* s) const;
   /// s->boxes, their union and s->stats.valid_points of the region.
-  void countRegionBoxes(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const;
+  void countRegionBoxes(const MeasurementImage& m, const cv::Rect& region, RegionScratch* s) const;
   /// Calls visit(key, count) for each block the region's boxes reach, with its number of
   /// points, in z, y, x order (or the boxes' order when the union is too large for the grid).
   template <typename Visit>
   void forEachBlockCount(RegionScratch* s, Visit&& visit) const;
   /// s->boxes, then s->key_counts: the region's histogram.
-  void gatherHistogram(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const;
+  void gatherHistogram(const MeasurementImage& m, const cv::Rect& region, RegionScratch* s) const;
   bool passesFilter(const RegionScratch& s, const BlockKey& key) const;
-  void runRegionAccelerated(const StereoFrame& frame, const cv::Rect& region, RegionScratch* s) const;
+  void runRegionAccelerated(const MeasurementImage& m, const cv::Rect& region, RegionScratch* s) const;
   /// frame_keys_ ← the distinct `passing` keys of the first `num_regions` regions, sorted.
   void collectSortedDistinctKeys(size_t num_regions);
-  void runRegionNaive(const StereoFrame& frame, const cv::Rect& region, BlockOctree* octree, bool allocate,
+  void runRegionNaive(const MeasurementImage& m, const cv::Rect& region, BlockOctree* octree, bool allocate,
                       RegionScratch* s) const;
 
   MapperConfig config_;

@@ -45,9 +45,7 @@ struct FusionFrame {
   float depth_weight_reference_m = 0;
   WeightMode weight_mode = WeightMode::kSteinbruecker;
   LevelThresholds thresholds;
-  /// The thresholds as the smallest floats at or above them: for a float depth z,
-  /// z ≥ level1_min_depth_m ⇔ (double)z ≥ thresholds.scale2_min_depth_m (likewise level 2),
-  /// so a float comparison decides levelForDepth() exactly.
+  /// FloatLevelThresholds of `thresholds`: a float comparison decides levelForDepth() exactly.
   float level1_min_depth_m = 0, level2_min_depth_m = 0;
   Level levels[kNumLevels];
   const float* depth_m = nullptr;  ///< MeasurementImage::depths(), width_px per row

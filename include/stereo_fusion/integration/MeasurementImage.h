@@ -5,6 +5,8 @@
 
 #include <opencv2/core/mat.hpp>
 
+#include "stereo_fusion/MapperConfig.h"
+#include "stereo_fusion/integration/StereoFrame.h"
 #include "stereo_fusion/util/ThreadPool.h"
 
 namespace stereo_fusion {
@@ -26,6 +28,10 @@ class MeasurementImage {
   /// colours() must not be used. Rows are converted in parallel on `pool`.
   void build(const cv::Mat& disparity_px, const cv::Mat& color, float fb_px_m, float min_depth_m,
              float max_depth_m, ThreadPool* pool);
+  /// The frame's measurements as the pipeline uses them: f·b of its camera, the configured
+  /// depth range, colours only if `config.use_color`. Built once per frame (the Mapper's first
+  /// step), read by the lookup (depths) and by fusion (depths and colours).
+  void build(const StereoFrame& frame, const MapperConfig& config, ThreadPool* pool);
 
   int width() const { return width_; }
   int height() const { return height_; }

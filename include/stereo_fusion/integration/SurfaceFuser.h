@@ -32,8 +32,8 @@ struct FusionStats {
 /// distance is clamped to −Φ (observed free space).
 ///
 /// Blocks are independent, so they run in parallel and the result does not depend on the
-/// number of threads. Each frame's disparities are first converted to depths once
-/// (MeasurementImage); the voxel loop then runs eight voxels at a time on CPUs with AVX2, with
+/// number of threads. The frame's disparities come converted to depths once per frame
+/// (MeasurementImage, shared with the lookup); the voxel loop then runs eight voxels at a time on CPUs with AVX2, with
 /// results bit-identical to the scalar loop (FusionKernels.h). The AVX2 loop first puts whole
 /// groups of level-0 voxels to a conservative test against an 8×8-pixel summary of the depths
 /// (DepthTiles) and skips those that provably get no update.
@@ -49,23 +49,24 @@ class SurfaceFuser {
   void setKernel(Kernel kernel);
 
   /// Fuses `frame` into `blocks` (from BlockLookup); `updated` receives those that changed.
-  FusionStats fuse(const StereoFrame& frame, const BlockOctree& octree, const std::vector<VoxelBlock*>& blocks,
-                   std::vector<VoxelBlock*>* updated);
+  /// `measurements` holds the frame's depths and colours (MeasurementImage::build(frame, config, …)
+  /// with this fuser's configuration).
+  FusionStats fuse(const StereoFrame& frame, const MeasurementImage& measurements, const BlockOctree& octree,
+                   const std::vector<VoxelBlock*>& blocks, std::vector<VoxelBlock*>* updated);
 
   /// fuse(), and the blocks at `missing` (keys the lookup found no block for): each is fused
   /// into a block of its own outside the map, which goes to `created` (in key order) only if
   /// the frame updated it, for the caller to insert (BlockOctree::insert()). So a block that
   /// the band reaches but no voxel of which is updated (behind the surface, outside the image,
   /// too coarse a measurement) is never allocated. `updated` holds the updated queued blocks only.
-  FusionStats fuse(const StereoFrame& frame, const BlockOctree& octree, const std::vector<VoxelBlock*>& blocks,
-                   const std::vector<BlockKey>& missing, std::vector<VoxelBlock*>* updated,
+  FusionStats fuse(const StereoFrame& frame, const MeasurementImage& measurements, const BlockOctree& octree,
+                   const std::vector<VoxelBlock*>& blocks, const std::vector<BlockKey>& missing, std::vector<VoxelBlock*>* updated,
                    std::vector<std::unique_ptr<VoxelBlock>>* created);
 
  private:
   MapperConfig config_;
   ThreadPool* pool_;
   bool use_avx2_;
-  MeasurementImage measurements_;            // reused across frames
   DepthTiles tiles_;                         // reused across frames
   std::vector<uint64_t> per_block_updates_;  // reused across frames
   std::vector<size_t> per_block_new_bytes_;  // reused across frames

@@ -1,4 +1,6 @@
 #pragma once
+#include <cmath>
+
 // The three resolution levels of a voxel block (thesis §3.3, eq. 3.2–3.5).
 
 namespace stereo_fusion {
@@ -29,5 +31,31 @@ inline int levelForDepth(double depth_m, const LevelThresholds& t) {
   if (depth_m >= t.scale2_min_depth_m) return 1;
   return 0;
 }
+
+/// levelForDepth() for float depths, with float compares only: each threshold becomes the
+/// smallest float at or above it, so for every float z, z ≥ level1_min_depth_m ⇔
+/// (double)z ≥ scale2_min_depth_m (likewise level 2) and levelOf(z) == levelForDepth(z).
+/// The lookup and the fusion kernels select a measurement's level with it.
+struct FloatLevelThresholds {
+  float level1_min_depth_m = 0, level2_min_depth_m = 0;
+
+  FloatLevelThresholds() = default;
+  explicit FloatLevelThresholds(const LevelThresholds& t)
+      : level1_min_depth_m(smallestFloatAtOrAbove(t.scale2_min_depth_m)),
+        level2_min_depth_m(smallestFloatAtOrAbove(t.scale4_min_depth_m)) {}
+
+  /// NaN selects level 0.
+  int levelOf(float depth_m) const {
+    if (depth_m >= level2_min_depth_m) return 2;
+    if (depth_m >= level1_min_depth_m) return 1;
+    return 0;
+  }
+
+  static float smallestFloatAtOrAbove(double t) {
+    float f = static_cast<float>(t);
+    if (static_cast<double>(f) < t) f = std::nextafter(f, INFINITY);
+    return f;
+  }
+};
 
 }  // namespace stereo_fusion

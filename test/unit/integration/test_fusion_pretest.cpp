@@ -109,8 +109,10 @@ class KernelPair {
     VoxelBlock want, got;
     want.key = got.key = key;
     std::vector<VoxelBlock*> updated;
-    const uint64_t want_updates = scalar_.fuse(frame, octree_, {&want}, &updated).voxels_updated;
-    const uint64_t got_updates = avx2_.fuse(frame, octree_, {&got}, &updated).voxels_updated;
+    MeasurementImage measurements;
+    measurements.build(frame, config_, &pool_);
+    const uint64_t want_updates = scalar_.fuse(frame, measurements, octree_, {&want}, &updated).voxels_updated;
+    const uint64_t got_updates = avx2_.fuse(frame, measurements, octree_, {&got}, &updated).voxels_updated;
     EXPECT_EQ(got_updates, want_updates);
     for (int level = 0; level < kNumLevels; ++level)
       EXPECT_EQ(got.hasLevel(level), want.hasLevel(level)) << "level " << level << " allocated";

@@ -108,14 +108,16 @@ void expectFuserEqualsReferenceAcrossAllLevels(SurfaceFuser::Kernel kernel) {
     T_world_camera.translation() = Eigen::Vector3d(0.05 * f, -0.02 * f, 0.1 * f);
     const StereoFrame frame = renderFrame(scene, vgaCamera(), T_world_camera);
     std::vector<VoxelBlock*> queue, updated;
-    lookup.run(frame, &octree, &queue);
+    MeasurementImage measurements;
+    measurements.build(frame, config, &pool);
+    lookup.run(frame, measurements, &octree, &queue);
     ASSERT_GT(queue.size(), 500u);
     // The reference runs on copies of the blocks as they were before this frame.
     std::vector<VoxelBlock> expected;
     expected.reserve(queue.size());
     for (const VoxelBlock* b : queue) expected.push_back(*b);
     for (VoxelBlock& b : expected) referenceFuseBlock(frame, octree, config, &b);
-    fuser.fuse(frame, octree, queue, &updated);
+    fuser.fuse(frame, measurements, octree, queue, &updated);
     for (size_t n = 0; n < queue.size(); ++n) {
       ++compared_blocks;
       for (int level = 0; level < kNumLevels; ++level)
@@ -279,10 +281,12 @@ TEST(FusionReference, KernelsEqualReferenceOnRandomFramesAndBlocks) {
       }
       for (VoxelBlock& b : expected) referenceFuseBlock(frame, octree, config, &b);
       std::vector<uint64_t> voxels_updated;
+      MeasurementImage measurements;
+      measurements.build(frame, config, &pool);
       for (size_t n = 0; n < fusers.size(); ++n) {
         std::vector<VoxelBlock*> queue, updated;
         for (VoxelBlock& b : blocks[n]) queue.push_back(&b);
-        voxels_updated.push_back(fusers[n].fuse(frame, octree, queue, &updated).voxels_updated);
+        voxels_updated.push_back(fusers[n].fuse(frame, measurements, octree, queue, &updated).voxels_updated);
       }
       for (size_t n = 1; n < fusers.size(); ++n) EXPECT_EQ(voxels_updated[n], voxels_updated[0]);
       updates += voxels_updated[0];

@@ -36,7 +36,9 @@ LookupRun runLookup(const MapperConfig& config, const StereoFrame& frame, BlockO
   ThreadPool pool(config.num_threads);
   BlockLookup lookup(config, &pool);
   LookupRun run;
-  run.stats = lookup.run(frame, tree, &run.queue);
+  MeasurementImage measurements;
+  measurements.build(frame, config, &pool);
+  run.stats = lookup.run(frame, measurements, tree, &run.queue);
   return run;
 }
 
@@ -81,8 +83,10 @@ ScalarAndVector runScalarAndVector(const MapperConfig& config, const StereoFrame
   EXPECT_FALSE(scalar.usesSimd());
   std::vector<VoxelBlock*> scalar_queue, vector_queue;
   ScalarAndVector r;
-  r.scalar = scalar.run(frame, &scalar_tree, &scalar_queue);
-  r.vector = vector.run(frame, &vector_tree, &vector_queue);
+  MeasurementImage measurements;
+  measurements.build(frame, config, pool);
+  r.scalar = scalar.run(frame, measurements, &scalar_tree, &scalar_queue);
+  r.vector = vector.run(frame, measurements, &vector_tree, &vector_queue);
   r.scalar_keys = keysOf(scalar_queue);
   r.vector_keys = keysOf(vector_queue);
   return r;
@@ -210,16 +214,19 @@ TEST(BlockLookup, BandGrowsWithTheMeasurementLevel) {
 // must lie in a queued block. (Voxels farther in front are fused, clamped to −Φ, only where a
 // band brings their block.) At near range (level 0) and far range (levels 1 and 2, whose Φ
 // spans several blocks), from an oblique pose, with noise.
-TEST(BlockLookup, EveryBlockFusionCanUpdateIsQueued) {
+namespace {
+void expectEveryBlockFusionCanUpdateIsQueued(const Eigen::Vector3d& world_offset_m) {
   MapperConfig config;
   config.histogram_min_points = 0;  // the filter drops sparse blocks on purpose
   config.voxel_size_m = 0.01;
   const StereoCamera camera = *StereoCamera::create(160, 120, 131.25, 131.25, 79.5, 59.5, 0.1);
+  const Eigen::Vector3d& o = world_offset_m;
   sim::AnalyticScene scene;
-  scene.add(sim::makePlane({0, 0, 6.0}, {0.3, -0.2, -1.0}));
-  scene.add(sim::makeSphere({0.4, 0.1, 1.2}, 0.3));
-  scene.add(sim::makeSphere({-1.0, -0.3, 3.0}, 0.5));
-  const Eigen::Isometry3d pose = sim::lookAt({0.2, -0.1, -0.3}, {0.1, 0.0, 3.0}, -Eigen::Vector3d::UnitY());
+  scene.add(sim::makePlane(o + Eigen::Vector3d(0, 0, 6.0), {0.3, -0.2, -1.0}));
+  scene.add(sim::makeSphere(o + Eigen::Vector3d(0.4, 0.1, 1.2), 0.3));
+  scene.add(sim::makeSphere(o + Eigen::Vector3d(-1.0, -0.3, 3.0), 0.5));
+  const Eigen::Isometry3d pose =
+      sim::lookAt(o + Eigen::Vector3d(0.2, -0.1, -0.3), o + Eigen::Vector3d(0.1, 0.0, 3.0), -Eigen::Vector3d::UnitY());
   const StereoFrame frame = renderFrame(scene, camera, pose, 0.3, 7);
   ThreadPool pool(2);
   BlockOctree tree(config.blockSizeM());
@@ -239,7 +246,9 @@ TEST(BlockLookup, EveryBlockFusionCanUpdateIsQueued) {
       for (int32_t x = lo.x - 2; x <= hi.x + 2; ++x) every.push_back(all.findOrAllocate({x, y, z}));
   SurfaceFuser fuser(config, &pool);
   std::vector<VoxelBlock*> updated;
-  const FusionStats stats = fuser.fuse(frame, all, every, &updated);
+  MeasurementImage measurements;
+  measurements.build(frame, config, &pool);
+  const FusionStats stats = fuser.fuse(frame, measurements, all, every, &updated);
   ASSERT_GT(stats.blocks_updated, 100u);
   const TruncationBand band = config.truncationBand();
   const Eigen::Isometry3d T_camera_world = frame.T_world_camera.inverse();
@@ -265,6 +274,38 @@ TEST(BlockLookup, EveryBlockFusionCanUpdateIsQueued) {
     }
   EXPECT_EQ(missed, 0u);
   for (int level = 0; level < kNumLevels; ++level) EXPECT_GT(in_band[level], 100u) << "level " << level;
+}
+}  // namespace
+
+TEST(BlockLookup, EveryBlockFusionCanUpdateIsQueued) { expectEveryBlockFusionCanUpdateIsQueued(Eigen::Vector3d::Zero()); }
+
+// The same 12 km from the world origin, where a float world coordinate is off by a millimetre:
+// the lookup's boxes are relative to the camera's block, so the margin still holds.
+TEST(BlockLookup, EveryBlockFusionCanUpdateIsQueuedFarFromTheOrigin) {
+  expectEveryBlockFusionCanUpdateIsQueued(Eigen::Vector3d(12345.6, -7890.1, 2345.7));
+}
+
+// Moving the camera by whole blocks moves every queued key by exactly as many blocks, however
+// far from the origin: nothing in the per-pixel arithmetic depends on the camera's position.
+TEST(BlockLookup, CameraMovedByWholeBlocksShiftsTheQueueExactly) {
+  MapperConfig config;
+  config.histogram_min_points = 0;
+  config.voxel_size_m = 0.02;
+  const StereoFrame near_frame = renderFrame(planeAndSphere(), vgaCamera(),
+                                             sim::lookAt({0.21, -0.13, -0.4}, {0, 0, 2.0}, -Eigen::Vector3d::UnitY()));
+  BlockOctree near_tree(config.blockSizeM());
+  const LookupRun near_run = runLookup(config, near_frame, &near_tree);
+  ASSERT_GT(near_run.queue.size(), 500u);
+  const BlockKey shift{1000003, -2000017, 300007};  // ≈ 160 km at 8 cm blocks
+  StereoFrame far_frame = near_frame;
+  far_frame.T_world_camera.translation() += config.blockSizeM() * Eigen::Vector3d(shift.x, shift.y, shift.z);
+  BlockOctree far_tree(config.blockSizeM());
+  const LookupRun far_run = runLookup(config, far_frame, &far_tree);
+  ASSERT_EQ(far_run.queue.size(), near_run.queue.size());
+  for (size_t i = 0; i < near_run.queue.size(); ++i) {
+    const BlockKey& k = near_run.queue[i]->key;
+    ASSERT_EQ(far_run.queue[i]->key, (BlockKey{k.x + shift.x, k.y + shift.y, k.z + shift.z})) << "block " << i;
+  }
 }
 
 TEST(BlockLookup, InvalidDisparitiesAreSkipped) {
