@@ -1,4 +1,3 @@
-#include <cstdio>
 #include "stereo_fusion/Mapper.h"
 
 #include <algorithm>
@@ -55,7 +54,7 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
   if (texture_consumer_) last_frame_ = frame;  // shares the images: what a deferred texture pass projects into
 
   Timer lookup_timer;
-  { Timer mt; measurements_.build(frame, config_, &pool_); static double a; static int n; a+=mt.elapsedMs(); if(++n%60==0) fprintf(stderr,"MI %.3f\n",a/60), a=0; }
+  measurements_.build(frame, config_, &pool_);
   result.lookup = lookup_.run(frame, measurements_, &octree_, &queue_, &missing_);
   result.lookup_ms = lookup_timer.elapsedMs();
 
