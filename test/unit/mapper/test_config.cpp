@@ -1,7 +1,5 @@
 #include <gtest/gtest.h>
 
-#include <fstream>
-#include <sstream>
 #include <yaml-cpp/yaml.h>
 
 #include "stereo_fusion/MapperConfig.h"
@@ -11,12 +9,6 @@ using namespace stereo_fusion;
 
 namespace {
 const std::string kSourceDir = STEREO_FUSION_SOURCE_DIR;
-std::string readFile(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 }  // namespace
 
 TEST(Config, DefaultYamlHoldsEveryParameterWithTheCompiledDefault) {
@@ -34,13 +26,6 @@ TEST(Config, DefaultYamlHoldsEveryParameterWithTheCompiledDefault) {
     EXPECT_EQ(getMapperParameter(parsed, spec.name), getMapperParameter(defaults, spec.name))
         << spec.name << ": default.yaml and MapperConfig disagree";
   }
-}
-
-TEST(Config, ReadmeDocumentsEveryParameter) {
-  const std::string readme = readFile(kSourceDir + "/README.md");
-  for (const ParameterSpec& spec : mapperParameterSpecs())
-    EXPECT_NE(readme.find("| `" + spec.name + "` |"), std::string::npos)
-        << spec.name << " is missing from the README parameter table";
 }
 
 TEST(Config, DefaultsAreValid) { EXPECT_TRUE(validateMapperConfig(MapperConfig{}).empty()); }

@@ -1,0 +1,13 @@
+#pragma once
+// doc/parameters.md, generated from the parameter registry (mapperParameterSpecs()), so the
+// reference cannot drift from the code: `stereo_fusion_parameters --markdown > doc/parameters.md`
+// writes it, and a test compares the file with it.
+#include <string>
+
+namespace stereo_fusion {
+
+/// The whole page: how parameters are set, then one table row per parameter in registry order
+/// (name, unit, default, accepted range, meaning).
+std::string parameterPageMarkdown();
+
+}  // namespace stereo_fusion
