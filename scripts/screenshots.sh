@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# rviz screenshots for the README, made headless: installs rviz, Xvfb and ImageMagick if missing
+# rviz screenshots for README.md and doc/, made headless: installs rviz, Xvfb and ImageMagick if missing
 # (scripts/setup.sh --screenshots), replays the demo bag (the simulated room) through
 # stereo_fusion with rviz on a virtual X display (software OpenGL, Mesa llvmpipe) and captures
 # the screen:

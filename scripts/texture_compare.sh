@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Textured vs vertex-coloured mesh against ground truth (README "Textured meshes").
+# Textured vs vertex-coloured mesh against ground truth (doc/offline_tools.md, "Texture comparison").
 #   scripts/texture_compare.sh [--frames N] [--views K] [--out DIR] [extra stereo_fusion_texture_compare args]
 # Simulates the SGBM room sequence once (.texture_compare/room_N, cached), fuses its even frames
 # with texture=patches, renders both meshes into the odd (held-out) frames' poses, prints PSNR and

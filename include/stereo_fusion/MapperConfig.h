@@ -26,7 +26,7 @@ enum class TextureMode {
 };
 
 /// Every parameter of the mapping core. Defaults here are the single source of truth:
-/// config/default.yaml and the README table are checked against them by the tests.
+/// config/default.yaml and the table in doc/parameters.md are checked against them by the tests.
 struct MapperConfig {
   double voxel_size_m = 0.02;          ///< Edge of a finest-level voxel; a block is 8 voxels wide.
   double truncation_vox = 4.0;         ///< Φ in voxels of the measurement's level (Φ = truncation_vox · s · voxel_size_m).
@@ -58,7 +58,7 @@ struct MapperConfig {
   TruncationBand truncationBand() const { return TruncationBand(voxel_size_m, truncation_vox); }
 };
 
-/// Description of one parameter, for validation, --set, YAML loading and the README table.
+/// Description of one parameter, for validation, --set, YAML loading and the table in doc/parameters.md.
 struct ParameterSpec {
   std::string name;
   std::string type;         ///< "double", "int", "bool" or "enum"

@@ -1,4 +1,4 @@
-// The bad-input catalogue (README "Bad input") cases of the Mapper not covered elsewhere: time
+// The bad-input catalogue (doc/reliability.md, "Bad input") cases of the Mapper not covered elsewhere: time
 // order, duplicates and pose jumps, degenerate disparity values. Each checks the message, the
 // counter or reason, and that the map and mesh did not change. The cases of ROS messages and
 // bags are in test/unit/ros/test_bad_input_ros.cpp.

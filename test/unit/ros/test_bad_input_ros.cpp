@@ -1,4 +1,4 @@
-// The bad-input catalogue (README "Bad input") cases of the ROS layer: CameraInfo and
+// The bad-input catalogue (doc/reliability.md, "Bad input") cases of the ROS layer: CameraInfo and
 // DisparityImage calibration, empty images, and truncated bags in the offline path. Each checks
 // the message, or that frames that cannot be read are skipped and counted. The Mapper's cases are
 // in test/unit/mapper/test_bad_input.cpp.
