@@ -6,13 +6,22 @@
 
 using namespace stereo_fusion;
 
-TEST(VoxelBlock, SizesMatchTheReadme) {
+TEST(VoxelBlock, SizesMatchTheMemoryTable) {
   static_assert(sizeof(Voxel) == 12);
   static_assert(VoxelBlock::kVoxelCount == 8 * 8 * 8 + 4 * 4 * 4 + 2 * 2 * 2);
   EXPECT_EQ(VoxelBlock::kVoxelCount, 584);
-  // README, Memory: 7 248 B = 584 voxels + 32 B of fields + 26 neighbour links.
-  EXPECT_LE(sizeof(VoxelBlock), 584u * 12u + 32u + 26u * sizeof(VoxelBlock*));
   EXPECT_EQ(NeighbourLinks::kCount, 26);
+  // doc/maps.md, Memory: a fixed part of 248 B (key, row, three level pointers, 26 links), then
+  // 96 / 768 / 6 144 B per allocated level (2³ / 4³ / 8³).
+  EXPECT_EQ(sizeof(VoxelBlock), 248u);
+  VoxelBlock block;
+  EXPECT_EQ(block.voxelBytes(), 0u);
+  block.writableLevel(2);
+  EXPECT_EQ(block.voxelBytes(), 96u);
+  block.writableLevel(1);
+  EXPECT_EQ(block.voxelBytes(), 96u + 768u);
+  block.writableLevel(0);
+  EXPECT_EQ(block.voxelBytes(), 96u + 768u + 6144u);
 }
 
 TEST(VoxelBlock, FlatIndexEq34Eq35HandWorked) {
