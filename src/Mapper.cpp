@@ -37,7 +37,8 @@ Mapper::Mapper(const MapperConfig& config)
       texture_consumer_(config_.texture == TextureMode::kPatches
                             ? std::optional<BlockChangeLog::Consumer>(mesh_changes_.subscribe("textures"))
                             : std::nullopt),
-      gate_(config_.max_pose_jump_m, config_.require_increasing_timestamps) {}
+      gate_(FrameGateLimits{config_.max_pose_jump_m, config_.max_timestamp_gap_s,
+                            config_.require_increasing_timestamps}) {}
 
 IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_timing) {
   IntegrationResult result;
@@ -46,7 +47,10 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
     result.reason = RejectReason::kInvalidFrame;
     return result;
   }
-  result.reason = gate_.check(frame, &result.error);
+  std::string gate_message;
+  result.reason = gate_.check(frame, &gate_message, &result.reanchored);
+  if (result.reason != RejectReason::kNone) result.error = gate_message;
+  if (result.reanchored) result.note = gate_message;
   if (result.reason != RejectReason::kNone) return result;
   gate_.accepted(frame);
   result.accepted = true;

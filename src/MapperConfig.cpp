@@ -247,14 +247,22 @@ const std::vector<Accessor>& accessors() {
                             "otherwise at least max_depth_m.",
                             member(&MapperConfig::max_distance_from_camera_m)));
     t.push_back(doubleParam("max_pose_jump_m", "m", 0.0, true, 1e6,
-                            "A frame whose camera is farther than this from the previous frame's "
-                            "camera is rejected (a SLAM glitch); the next frame is compared with it, "
-                            "so a real relocalisation costs one frame. 0 = no check.",
+                            "A frame whose camera is farther than this from the last fused frame's "
+                            "camera is rejected (a SLAM glitch); a rejected frame never becomes the "
+                            "reference, and after 3 rejected frames that agree with each other (a "
+                            "relocalisation) the third is fused and becomes it. 0 = no check.",
                             member(&MapperConfig::max_pose_jump_m)));
+    t.push_back(doubleParam("max_timestamp_gap_s", "s", 0.0, true, 1e9,
+                            "A frame stamped more than this after the last fused frame is rejected "
+                            "(a stamp far in the future would otherwise make every later frame go "
+                            "\"backwards\"); 3 consecutive frames that agree with each other are "
+                            "accepted as a clock jump. 0 = no check.",
+                            member(&MapperConfig::max_timestamp_gap_s)));
     t.push_back(boolParam("require_increasing_timestamps",
                           "Reject a frame whose timestamp is before (backwards) or equal to "
-                          "(duplicate) the last fused frame's; timestamp 0 means unknown and is "
-                          "not checked.",
+                          "(duplicate) the last fused frame's; 3 consecutive later frames that agree "
+                          "with each other are accepted as a clock reset. Timestamp 0 means unknown "
+                          "and is not checked (the nodelet drops ROS messages stamped 0).",
                           member(&MapperConfig::require_increasing_timestamps)));
     return t;
   }();

@@ -41,6 +41,10 @@ struct IntegrationResult {
   bool accepted = false;  ///< false: the frame was rejected and the map is unchanged
   RejectReason reason = RejectReason::kNone;  ///< why it was rejected, for counters
   std::string error;      ///< why it was rejected, one sentence
+  /// Accepted only because the frames rejected before it agreed with it (FrameGate: a
+  /// relocalisation or a clock reset); `note` says why.
+  bool reanchored = false;
+  std::string note;
   double lookup_ms = 0.0;  ///< converting the frame's disparities to depths and colours, then the lookup
   double fusion_ms = 0.0;
   LookupStats lookup;

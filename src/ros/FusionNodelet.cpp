@@ -132,6 +132,20 @@ void FusionNodelet::workerLoop() {
 
 void FusionNodelet::processFrame(const QueuedFrame& f) {
   const std_msgs::Header& header = f.disparity->header;
+  // A stamp of 0 would make tf return its latest pose, whatever time the image is from; a stamp
+  // far ahead of the clock is a broken driver clock. Neither may reach the map.
+  const ros::Time now = ros::Time::now();
+  if (header.stamp.isZero() ||
+      (node_config_.max_stamp_ahead_s > 0.0 && !now.isZero() &&
+       (header.stamp - now).toSec() > node_config_.max_stamp_ahead_s)) {
+    ++dropped_bad_stamp_;
+    NODELET_WARN_THROTTLE(5.0, "stereo_fusion: frame stamped %.3f s %s, frame dropped (%llu so far)",
+                          header.stamp.toSec(),
+                          header.stamp.isZero() ? "(no time: its pose cannot be looked up)"
+                                                : "is ahead of the clock by more than max_stamp_ahead_s",
+                          static_cast<unsigned long long>(dropped_bad_stamp_.load()));
+    return;
+  }
   std::string tf_error;
   // Wait in wall time: under simulated time a paused or finished bag stops the ROS clock, and a
   // ROS-time timeout would then never expire. Shutdown interrupts the wait.
@@ -231,6 +245,7 @@ void FusionNodelet::processFrame(const QueuedFrame& f) {
     std::atomic<uint64_t>& counter = result.reason == RejectReason::kTimestampBackwards ? dropped_backwards_
                                      : result.reason == RejectReason::kDuplicateTimestamp ? dropped_duplicate_
                                      : result.reason == RejectReason::kPoseJump          ? dropped_pose_jump_
+                                     : result.reason == RejectReason::kTimestampJump     ? dropped_timestamp_jump_
                                                                                           : dropped_bad_input_;
     ++counter;
     NODELET_ERROR_THROTTLE(5.0, "stereo_fusion: frame rejected (%s, %llu so far): %s", rejectReasonName(result.reason),
@@ -238,6 +253,10 @@ void FusionNodelet::processFrame(const QueuedFrame& f) {
     return;
   }
   ++fused_;
+  if (result.reanchored) {
+    ++reanchored_;
+    NODELET_WARN("stereo_fusion: %s", result.note.c_str());
+  }
   publishPending(header.stamp, false);
 }
 
@@ -437,7 +456,7 @@ void FusionNodelet::publishFullLocked(const std::vector<BlockKey>& removed) {
 void FusionNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   const double elapsed = std::max(1e-3, (ros::WallTime::now() - started_).toSec());
   const uint64_t dropped = dropped_queue_ + dropped_tf_ + dropped_bad_input_ + dropped_backwards_ +
-                           dropped_duplicate_ + dropped_pose_jump_;
+                           dropped_duplicate_ + dropped_pose_jump_ + dropped_timestamp_jump_ + dropped_bad_stamp_;
   std::vector<double> lat;
   // lookup, fusion, total per frame; meshing, texture per meshing pass.
   std::vector<double> stages[5];
@@ -476,6 +495,9 @@ void FusionNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
   status.add("dropped: timestamp backwards", dropped_backwards_.load());
   status.add("dropped: duplicate frame", dropped_duplicate_.load());
   status.add("dropped: pose jump", dropped_pose_jump_.load());
+  status.add("dropped: timestamp jump", dropped_timestamp_jump_.load());
+  status.add("dropped: bad timestamp", dropped_bad_stamp_.load());
+  status.add("re-anchored (relocalisation or clock reset)", reanchored_.load());
   status.add("dropped: superseded by reset/load", dropped_superseded_.load());
   status.add("latency p50 (s)", pct(0.5));
   status.add("latency p99 (s)", pct(0.99));

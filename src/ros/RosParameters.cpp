@@ -53,6 +53,7 @@ bool loadParameters(const ros::NodeHandle& nh, MapperConfig* mapper, NodeConfig*
   nh.param("approximate_sync", node->approximate_sync, node->approximate_sync);
   nh.param("sync_queue_size", node->sync_queue_size, node->sync_queue_size);
   nh.param("tf_timeout_s", node->tf_timeout_s, node->tf_timeout_s);
+  nh.param("max_stamp_ahead_s", node->max_stamp_ahead_s, node->max_stamp_ahead_s);
   nh.param("mesh_publish_rate_hz", node->mesh_publish_rate_hz, node->mesh_publish_rate_hz);
   nh.param("publish_markers", node->publish_markers, node->publish_markers);
   nh.param("publish_path", node->publish_path, node->publish_path);
@@ -71,6 +72,8 @@ bool loadParameters(const ros::NodeHandle& nh, MapperConfig* mapper, NodeConfig*
   node->drop_oldest = policy == "drop_oldest";
   if (node->sync_queue_size < 1 || node->sync_queue_size > 1000) return fail("sync_queue_size", "must be in [1, 1000]");
   if (!(node->tf_timeout_s >= 0.0 && node->tf_timeout_s <= 10.0)) return fail("tf_timeout_s", "must be in [0, 10] s");
+  if (!(node->max_stamp_ahead_s >= 0.0 && node->max_stamp_ahead_s <= 1e6))
+    return fail("max_stamp_ahead_s", "must be in [0, 1e6] s");
   if (!(node->mesh_publish_rate_hz >= 0.0 && node->mesh_publish_rate_hz <= 1000.0))
     return fail("mesh_publish_rate_hz", "must be in [0, 1000] Hz");
   if (!(node->frustum_depth_m > 0.0 && node->frustum_depth_m <= 100.0))

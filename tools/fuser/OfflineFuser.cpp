@@ -208,6 +208,10 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
         skip(reason, "frame " + std::to_string(i) + ": " + r.error);
       } else {
         ++report->frames_used;
+        if (r.reanchored) {
+          ++report->frames_reanchored;
+          std::fprintf(stderr, "%sframe %zu: %s\n", terminal && options.progress ? "\n" : "", i, r.note.c_str());
+        }
         report->timings.push_back(
             {r.lookup_ms, r.fusion_ms, r.mesh.meshing_ms, r.texture.texture_ms, frame_timer.elapsedMs(), mesh_now});
         report->work.push_back({static_cast<double>(r.lookup.valid_points), static_cast<double>(r.lookup.octree_searches),
@@ -280,6 +284,7 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   nlohmann::ordered_json j;
   j["frames"]["total"] = report.frames_total;
   j["frames"]["used"] = report.frames_used;
+  j["frames"]["reanchored"] = report.frames_reanchored;
   size_t skipped = 0;
   for (const auto& [reason, n] : report.skipped) skipped += n;
   j["frames"]["skipped"] = skipped;

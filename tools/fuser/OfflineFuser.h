@@ -44,6 +44,7 @@ struct StageWork {
 struct FuseReport {
   size_t frames_total = 0;
   size_t frames_used = 0;
+  size_t frames_reanchored = 0;  ///< of those, accepted as a relocalisation / clock reset (FrameGate)
   std::map<std::string, size_t> skipped;        ///< reason → count
   std::vector<std::string> skipped_examples;    ///< the first few messages, verbatim
   std::vector<StageTimings> timings;            ///< one per used frame

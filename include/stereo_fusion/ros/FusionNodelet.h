@@ -124,6 +124,9 @@ class FusionNodelet : public nodelet::Nodelet {
 
   std::atomic<uint64_t> received_{0}, fused_{0}, dropped_queue_{0}, dropped_tf_{0}, dropped_bad_input_{0};
   std::atomic<uint64_t> dropped_backwards_{0}, dropped_duplicate_{0}, dropped_pose_jump_{0};
+  std::atomic<uint64_t> dropped_timestamp_jump_{0};
+  std::atomic<uint64_t> dropped_bad_stamp_{0};  // stamped 0, or too far ahead of the clock
+  std::atomic<uint64_t> reanchored_{0};  // frames the gate accepted as a relocalisation / clock reset
   std::atomic<uint64_t> dropped_superseded_{0};  // arrived before a reset / load_map: not fused into the new map
   /// Bumped (under both queue_mutex_ and map_mutex_) by reset and load_map: a frame that arrived
   /// earlier belongs to the map those replaced.

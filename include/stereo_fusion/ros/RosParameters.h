@@ -16,6 +16,8 @@ struct NodeConfig {
   bool approximate_sync = false;           ///< ApproximateTime instead of ExactTime synchronisation
   int sync_queue_size = 10;                ///< message_filters synchroniser queue
   double tf_timeout_s = 0.2;               ///< how long the worker waits for T_world_camera
+  /// A frame stamped more than this ahead of the node's clock is dropped (0 = no check).
+  double max_stamp_ahead_s = 10.0;
   double mesh_publish_rate_hz = 2.0;       ///< 0 = publish after every frame
   bool publish_markers = true;             ///< ~mesh_markers for rviz
   bool publish_path = true;                ///< ~camera_path (nav_msgs/Path) of the fused frames

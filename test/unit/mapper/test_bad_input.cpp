@@ -58,7 +58,7 @@ TEST(BadInput, TimestampsGoingBackwardsAndDuplicatesAreRejectedByReason) {
   EXPECT_TRUE(mapper.integrate(floorAndSphereFrame(0, 1.0)).accepted);
 }
 
-TEST(BadInput, PoseJumpsOfKilometresAreRejectedAndARelocalisationCostsOneFrame) {
+TEST(BadInput, PoseJumpsAreJudgedAgainstTheLastFusedFrameAndARelocalisationCostsTwoFrames) {
   Mapper mapper(MapperConfig{});  // max_pose_jump_m = 100
   ASSERT_TRUE(mapper.integrate(floorAndSphereFrame(0, 1.0)).accepted);
   const MapState before = state(mapper);
@@ -68,25 +68,68 @@ TEST(BadInput, PoseJumpsOfKilometresAreRejectedAndARelocalisationCostsOneFrame) 
   EXPECT_FALSE(r.accepted);
   EXPECT_EQ(r.reason, RejectReason::kPoseJump);
   EXPECT_NE(r.error.find("camera jumped 3000"), std::string::npos) << r.error;
-  EXPECT_NE(r.error.find("max_pose_jump_m = 100"), std::string::npos) << r.error;
+  EXPECT_NE(r.error.find("since the last fused frame (max_pose_jump_m = 100)"), std::string::npos) << r.error;
   EXPECT_TRUE(state(mapper) == before);
-  // Back at the old place: a jump from the glitch, rejected too; then fusing resumes.
+  // The glitch did not become the reference: the next good frame is fused.
   r = mapper.integrate(floorAndSphereFrame(1, 3.0));
-  EXPECT_EQ(r.reason, RejectReason::kPoseJump);
-  EXPECT_TRUE(state(mapper) == before);
-  EXPECT_TRUE(mapper.integrate(floorAndSphereFrame(2, 4.0)).accepted);
-  // A lasting relocalisation: one frame lost, then the new place is fused.
-  StereoFrame moved = floorAndSphereFrame(3, 5.0);
-  moved.T_world_camera.translation() += Eigen::Vector3d(0, 0, 500.0);
-  EXPECT_EQ(mapper.integrate(moved).reason, RejectReason::kPoseJump);
-  moved.timestamp_s = 6.0;
-  EXPECT_TRUE(mapper.integrate(moved).accepted);
+  EXPECT_TRUE(r.accepted) << r.error;
+  EXPECT_FALSE(r.reanchored);
+  // Glitches that do not agree with each other never take over, however many there are.
+  for (int k = 0; k < 6; ++k) {
+    StereoFrame wild = floorAndSphereFrame(2, 4.0 + k);
+    wild.T_world_camera.translation() += Eigen::Vector3d(k % 2 ? -2000.0 : 2000.0, 300.0 * k, 0);
+    EXPECT_EQ(mapper.integrate(wild).reason, RejectReason::kPoseJump) << k;
+  }
+  EXPECT_TRUE(mapper.integrate(floorAndSphereFrame(2, 10.0)).accepted);
+  // A lasting relocalisation: two frames lost, the third that agrees with them is fused and
+  // becomes the reference.
+  const MapState before_relocalisation = state(mapper);
+  for (int k = 0; k < FrameGate::kFramesToReanchor; ++k) {
+    StereoFrame moved = floorAndSphereFrame(3, 11.0 + k);
+    moved.T_world_camera.translation() += Eigen::Vector3d(0, 0.01 * k, 500.0);
+    r = mapper.integrate(moved);
+    if (k + 1 < FrameGate::kFramesToReanchor) {
+      EXPECT_EQ(r.reason, RejectReason::kPoseJump) << k;
+      EXPECT_TRUE(state(mapper) == before_relocalisation) << k;
+    }
+  }
+  EXPECT_TRUE(r.accepted) << r.error;
+  EXPECT_TRUE(r.reanchored);
+  EXPECT_NE(r.note.find("agree with each other"), std::string::npos) << r.note;
+  StereoFrame next = floorAndSphereFrame(4, 20.0);
+  next.T_world_camera.translation() += Eigen::Vector3d(0, 0, 500.0);
+  EXPECT_TRUE(mapper.integrate(next).accepted);
   // 0 disables the check.
   MapperConfig off;
   off.max_pose_jump_m = 0;
   Mapper unchecked(off);
   EXPECT_TRUE(unchecked.integrate(floorAndSphereFrame(0, 1.0)).accepted);
   EXPECT_TRUE(unchecked.integrate(glitch).accepted);
+}
+
+TEST(BadInput, AStampFarInTheFutureCostsOneFrameAndAClockResetThree) {
+  Mapper mapper(MapperConfig{});  // max_timestamp_gap_s = 3600
+  ASSERT_TRUE(mapper.integrate(floorAndSphereFrame(0, 100.0)).accepted);
+  const MapState before = state(mapper);
+  IntegrationResult r = mapper.integrate(floorAndSphereFrame(1, 1e9));
+  EXPECT_FALSE(r.accepted);
+  EXPECT_EQ(r.reason, RejectReason::kTimestampJump);
+  EXPECT_STREQ(rejectReasonName(r.reason), "timestamp_jump");
+  EXPECT_NE(r.error.find("after the last fused frame (max_timestamp_gap_s = 3600)"), std::string::npos) << r.error;
+  EXPECT_TRUE(state(mapper) == before);
+  // Later good frames are not "backwards" from the bad stamp: they are fused.
+  for (int k = 0; k < 5; ++k) EXPECT_TRUE(mapper.integrate(floorAndSphereFrame(1 + k % 3, 101.0 + k)).accepted) << k;
+  // A clock that really went back (a new recording, a restarted driver): after three frames
+  // that follow each other, the gate follows the new clock.
+  for (int k = 0; k < FrameGate::kFramesToReanchor; ++k) {
+    r = mapper.integrate(floorAndSphereFrame(k % 3, 5.0 + 0.1 * k));
+    EXPECT_EQ(r.accepted, k + 1 == FrameGate::kFramesToReanchor) << k << " " << r.error;
+  }
+  EXPECT_TRUE(r.reanchored);
+  EXPECT_TRUE(mapper.integrate(floorAndSphereFrame(1, 5.5)).accepted);
+  // Frames stamped after one bad past stamp do not agree with it: a lone stamp never takes over.
+  EXPECT_EQ(mapper.integrate(floorAndSphereFrame(2, 1.0)).reason, RejectReason::kTimestampBackwards);
+  EXPECT_TRUE(mapper.integrate(floorAndSphereFrame(2, 5.6)).accepted);
 }
 
 TEST(BadInput, DegenerateDisparityValuesLeaveTheMapUnchanged) {
