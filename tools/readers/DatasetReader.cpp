@@ -126,22 +126,23 @@ bool readPoses(const fs::path& path, std::vector<DatasetFrameInfo>* frames, std:
       *error = where + ": expected 8 numbers 'timestamp tx ty tz qx qy qz qw'";
       return false;
     }
-    for (double x : v)
-      if (!std::isfinite(x)) {
-        *error = where + ": pose is not finite";
-        return false;
-      }
-    const Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);  // file order qx qy qz qw
-    if (std::abs(q.norm() - 1.0) > 1e-3) {
-      *error = where + ": quaternion is not unit length (|q| = " + std::to_string(q.norm()) + ")";
-      return false;
-    }
+    // A malformed line is a broken file (an error); a well-formed line with an unusable pose
+    // (a SLAM export's NaN, a zero quaternion) costs only its frame, as in the nodelet.
     DatasetFrameInfo info;
     info.index = frames->size();
     info.timestamp_s = v[0];
     info.T_world_camera = Eigen::Isometry3d::Identity();
-    info.T_world_camera.linear() = q.normalized().toRotationMatrix();
-    info.T_world_camera.translation() = Eigen::Vector3d(v[1], v[2], v[3]);
+    const Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);  // file order qx qy qz qw
+    bool finite = true;
+    for (double x : v) finite = finite && std::isfinite(x);
+    if (!finite)
+      info.pose_error = where + ": pose is not finite";
+    else if (std::abs(q.norm() - 1.0) > 1e-3)
+      info.pose_error = where + ": quaternion is not unit length (|q| = " + std::to_string(q.norm()) + ")";
+    else {
+      info.T_world_camera.linear() = q.normalized().toRotationMatrix();
+      info.T_world_camera.translation() = Eigen::Vector3d(v[1], v[2], v[3]);
+    }
     frames->push_back(info);
   }
   return true;
@@ -275,6 +276,10 @@ bool DatasetReader::load(size_t i, StereoFrame* frame, std::string* error) const
     return false;
   }
   const DatasetFrameInfo& info = frames_[i];
+  if (!info.pose_error.empty()) {
+    *error = "frame " + std::to_string(i) + ": " + info.pose_error;
+    return false;
+  }
   StereoFrame out;
   out.timestamp_s = info.timestamp_s;
   out.T_world_camera = info.T_world_camera;

@@ -37,6 +37,9 @@ struct DatasetFrameInfo {
   std::string disparity_path;
   std::string color_path;
   std::string right_path;
+  /// Why the pose line cannot be used (not finite, not a unit quaternion), naming file and line;
+  /// empty if it can. Such a frame is skipped by load(), not the whole sequence.
+  std::string pose_error;
 };
 
 /// A validated dataset folder. open() checks calibration, poses and file lists up front and

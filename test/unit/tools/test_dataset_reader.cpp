@@ -158,10 +158,23 @@ TEST(DatasetReader, BadFoldersNameTheFileAndLine) {
   EXPECT_NE(openError(seq.dir).find("1 poses for 2 frames"), std::string::npos) << openError(seq.dir);
   writeText(poses, good_poses + "0.3 1 2 x 0 0 0 1\n");
   EXPECT_NE(openError(seq.dir).find("poses.txt:4: expected 8 numbers"), std::string::npos) << openError(seq.dir);
-  writeText(poses, "0 1 2 3 0 0 0 1\n0.1 1 2 nan 0 0 0 1\n");
-  EXPECT_NE(openError(seq.dir).find("poses.txt:2: pose is not finite"), std::string::npos) << openError(seq.dir);
-  writeText(poses, "0 1 2 3 0 0 0 1\n0.1 1 2 3 0 0 0.5 1\n");
-  EXPECT_NE(openError(seq.dir).find("poses.txt:2: quaternion is not unit length"), std::string::npos);
+  // An unusable pose on a well-formed line costs its frame only: the sequence opens, that frame
+  // does not load and says why, the others load.
+  for (const std::string& bad : {std::string("0.1 1 2 nan 0 0 0 1"), std::string("0.1 1 2 3 0 0 0 0"),
+                                 std::string("0.1 1 2 3 0 0 0.5 1")}) {
+    writeText(poses, "0 1 2 3 0 0 0 1\n" + bad + "\n");
+    std::string open_error;
+    const std::optional<DatasetReader> reader = DatasetReader::open(seq.dir.string(), &open_error);
+    ASSERT_TRUE(reader) << bad << ": " << open_error;
+    StereoFrame frame;
+    std::string why;
+    EXPECT_TRUE(reader->load(0, &frame, &why)) << why;
+    EXPECT_FALSE(reader->load(1, &frame, &why)) << bad;
+    EXPECT_NE(why.find("frame 1: " + (seq.dir / "poses.txt").string() + ":2: "), std::string::npos) << why;
+    EXPECT_NE(why.find(bad.find("nan") != std::string::npos ? "pose is not finite" : "quaternion is not unit length"),
+              std::string::npos)
+        << why;
+  }
   writeText(poses, "0 1 2 3 0 0 0 1 9\n");
   EXPECT_NE(openError(seq.dir).find("poses.txt:1: expected 8 numbers"), std::string::npos);
   writeText(poses, good_poses);
@@ -252,9 +265,20 @@ TEST(DatasetReader, ImagesWhoseDecoderThrowsAreUnreadable) {
 }
 
 TEST(OfflineFuser, WritesMeshAndStatsAndCountsSkippedFrames) {
-  SmallSequence seq("fuse", 4);
+  SmallSequence seq("fuse", 5);
   const fs::path truncated = seq.dir / "disparity" / "000002.png";
   fs::resize_file(truncated, fs::file_size(truncated) / 3);
+  {  // frame 4's pose exported as NaN by a SLAM stack: that frame is skipped, not the run
+    std::ifstream in(seq.dir / "poses.txt");
+    std::string text, line;
+    int pose_lines = 0;
+    while (std::getline(in, line)) {
+      if (!line.empty() && line[0] != '#' && pose_lines++ == 4) line = line.substr(0, line.find(' ')) + " nan 0 0 0 0 0 1";
+      text += line + "\n";
+    }
+    in.close();
+    std::ofstream(seq.dir / "poses.txt") << text;
+  }
   FuseOptions options;
   std::string error;
   const fs::path out = fs::path(testing::TempDir()) / "stereo_fusion_fuse_out";
@@ -264,16 +288,19 @@ TEST(OfflineFuser, WritesMeshAndStatsAndCountsSkippedFrames) {
   EXPECT_DOUBLE_EQ(options.config.voxel_size_m, 0.03);
   FuseReport report;
   ASSERT_TRUE(runOfflineFusion(options, &report, &error)) << error;
-  EXPECT_EQ(report.frames_total, 4u);
+  EXPECT_EQ(report.frames_total, 5u);
   EXPECT_EQ(report.frames_used, 3u);
-  EXPECT_EQ(report.skipped.at("unreadable"), 1u);
+  EXPECT_EQ(report.skipped.at("unreadable"), 2u);
   EXPECT_GT(report.mesh_triangles, 500u);
   ASSERT_TRUE(fs::exists(out / "mesh.ply"));
   std::ifstream stats_file(out / "stats.json");
   const nlohmann::json stats = nlohmann::json::parse(stats_file);
   EXPECT_EQ(stats["frames"]["used"], 3);
-  EXPECT_EQ(stats["frames"]["skipped_by_reason"]["unreadable"], 1);
+  EXPECT_EQ(stats["frames"]["skipped_by_reason"]["unreadable"], 2);
   EXPECT_NE(stats["frames"]["skipped_examples"][0].get<std::string>().find("000002.png"), std::string::npos);
+  EXPECT_NE(stats["frames"]["skipped_examples"][1].get<std::string>().find("frame 4: "), std::string::npos);
+  EXPECT_NE(stats["frames"]["skipped_examples"][1].get<std::string>().find("poses.txt:"), std::string::npos);
+  EXPECT_NE(stats["frames"]["skipped_examples"][1].get<std::string>().find("pose is not finite"), std::string::npos);
   EXPECT_EQ(stats["config"]["voxel_size_m"], "0.03");
   for (const char* stage : {"lookup", "fusion", "meshing", "total"})
     for (const char* stat : {"mean", "p50", "p99"}) EXPECT_GE(stats["timings_ms"][stage][stat].get<double>(), 0.0);
