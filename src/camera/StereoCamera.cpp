@@ -1,5 +1,7 @@
 #include "stereo_fusion/camera/StereoCamera.h"
 
+#include <algorithm>
+
 #include <cmath>
 #include <sstream>
 
@@ -21,6 +23,16 @@ std::optional<StereoCamera> StereoCamera::create(int width_px, int height_px, do
     why << "principal point must be finite, got cx=" << cx_px << " cy=" << cy_px;
   } else if (!finitePositive(baseline_m)) {
     why << "stereo baseline must be finite and > 0 m, got " << baseline_m;
+  } else if (fx_px < kMinFocalPerImageSize * std::max(width_px, height_px) ||
+             fy_px < kMinFocalPerImageSize * std::max(width_px, height_px)) {
+    // A pinhole's focal length is w / (2 tan(FOV / 2)): 0.044 w at a 170° field of view. A broken
+    // CameraInfo (fy = 1e-3) would otherwise stretch one frame's points over kilometres.
+    why << "focal lengths fx=" << fx_px << " fy=" << fy_px << " px are implausible for a " << width_px << "x"
+        << height_px << " image (at least " << kMinFocalPerImageSize << " × " << std::max(width_px, height_px)
+        << " px, a field of view under 170°)";
+  } else if (!(fx_px / fy_px >= 1.0 / kMaxFocalRatio && fx_px / fy_px <= kMaxFocalRatio)) {
+    why << "fx / fy = " << fx_px / fy_px << " is implausible (pixels more than " << kMaxFocalRatio
+        << " times wider than high, or the reverse)";
   }
   const std::string reason = why.str();
   if (!reason.empty()) {

@@ -86,11 +86,20 @@ bool toStereoFrame(const stereo_msgs::DisparityImage& disparity, const sensor_ms
     *error = std::string("disparity conversion failed: ") + e.what();
     return false;
   }
+  // The message's own range of valid disparities: values outside it are not measurements. A
+  // max_disparity of 0 or less means the producer gave no upper bound.
+  if (!std::isfinite(disparity.min_disparity) || !std::isfinite(disparity.max_disparity) ||
+      (disparity.max_disparity > 0.0f && disparity.max_disparity < disparity.min_disparity)) {
+    *error = "DisparityImage min_disparity = " + std::to_string(disparity.min_disparity) + ", max_disparity = " +
+             std::to_string(disparity.max_disparity) + " is not a range";
+    return false;
+  }
   const float min_valid = std::max(0.0f, disparity.min_disparity);
+  const float max_valid = disparity.max_disparity > 0.0f ? disparity.max_disparity : INFINITY;
   for (int v = 0; v < disparity_px.rows; ++v) {
     float* row = disparity_px.ptr<float>(v);
     for (int u = 0; u < disparity_px.cols; ++u)
-      if (!std::isfinite(row[u]) || row[u] <= 0.0f || row[u] < min_valid) row[u] = 0.0f;
+      if (!(row[u] > 0.0f && row[u] >= min_valid && row[u] <= max_valid)) row[u] = 0.0f;  // NaN fails too
   }
   frame->timestamp_s = disparity.header.stamp.toSec();
   frame->camera = *camera;

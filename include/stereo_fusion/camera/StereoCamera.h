@@ -16,9 +16,16 @@ class StereoCamera {
   StereoCamera() = default;
   bool valid() const { return width_px_ > 0; }
 
+  /// Smallest focal length accepted, per pixel of the image's larger side: a pinhole with a
+  /// field of view just under 170°.
+  static constexpr double kMinFocalPerImageSize = 0.04;
+  /// Largest accepted fx / fy (or fy / fx).
+  static constexpr double kMaxFocalRatio = 10.0;
+
   /// Returns the camera, or std::nullopt with a human-readable reason in `error`.
   /// Rejects non-finite, zero or negative fx, fy, baseline; non-finite cx, cy;
-  /// non-positive image size.
+  /// non-positive image size; and implausible calibrations: a focal length below
+  /// kMinFocalPerImageSize × the larger image side, fx / fy beyond kMaxFocalRatio.
   static std::optional<StereoCamera> create(int width_px, int height_px, double fx_px, double fy_px,
                                             double cx_px, double cy_px, double baseline_m,
                                             std::string* error = nullptr);

@@ -84,3 +84,19 @@ TEST(StereoCamera, RejectsInvalidIntrinsics) {
   EXPECT_FALSE(StereoCamera().valid());
   EXPECT_TRUE(camera().valid());
 }
+
+// A CameraInfo with fy = 1e-3 once stretched one frame over ±30 km; focal lengths are judged
+// against the image (a 170° pinhole has f = 0.044 w) and against each other.
+TEST(StereoCamera, RejectsImplausibleCalibrations) {
+  std::string error;
+  EXPECT_FALSE(StereoCamera::create(640, 480, 525, 1e-3, 320, 240, 0.1, &error));
+  EXPECT_NE(error.find("focal lengths fx=525 fy=0.001 px are implausible for a 640x480 image (at least 0.04 × 640 px"),
+            std::string::npos)
+      << error;
+  EXPECT_FALSE(StereoCamera::create(640, 480, 25.5, 25.5, 320, 240, 0.1));  // below 0.04 × 640 = 25.6
+  EXPECT_TRUE(StereoCamera::create(640, 480, 25.7, 25.7, 320, 240, 0.1));   // a 170° lens
+  EXPECT_TRUE(StereoCamera::create(640, 480, 64000, 64000, 320, 240, 0.1)); // a telescope
+  EXPECT_FALSE(StereoCamera::create(640, 480, 5000, 450, 320, 240, 0.1, &error));
+  EXPECT_NE(error.find("fx / fy = 11.1"), std::string::npos) << error;
+  EXPECT_TRUE(StereoCamera::create(640, 480, 500, 51, 320, 240, 0.1));
+}

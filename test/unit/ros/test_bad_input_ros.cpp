@@ -67,6 +67,12 @@ TEST(BadInput, CameraInfoAndDisparityCalibrationAreChecked) {
       {"unsupported encoding bayer", [](Messages* m) { m->image.encoding = "bayer_rggb8"; }, "unsupported image encoding"},
       {"disparity 16UC1", [](Messages* m) { m->disparity.image.encoding = "16UC1"; }, "must be 32FC1"},
       {"CameraInfo size differs", [](Messages* m) { m->info.width = 640; }, "CameraInfo is 640x240"},
+      {"CameraInfo fy = 1e-3", [](Messages* m) { m->info.P[5] = 1e-3; m->info.K[4] = 1e-3; },
+       "px are implausible for a 320x240 image"},
+      {"DisparityImage min_disparity NaN", [](Messages* m) { m->disparity.min_disparity = NAN; }, "is not a range"},
+      {"DisparityImage max_disparity inf", [](Messages* m) { m->disparity.max_disparity = INFINITY; }, "is not a range"},
+      {"DisparityImage max < min", [](Messages* m) { m->disparity.min_disparity = 50; m->disparity.max_disparity = 10; },
+       "is not a range"},
   };
   for (const Case& c : cases) {
     Messages m = good;
@@ -75,6 +81,37 @@ TEST(BadInput, CameraInfoAndDisparityCalibrationAreChecked) {
     EXPECT_FALSE(toStereoFrame(m.disparity, m.image, m.info, Eigen::Isometry3d::Identity(), &out, &error)) << c.name;
     EXPECT_NE(error.find(c.message), std::string::npos) << c.name << ": " << error;
   }
+}
+
+// A DisparityImage says which disparities are valid (min_disparity … max_disparity): values
+// outside are not measurements and must not be fused.
+TEST(BadInput, DisparitiesOutsideTheMessagesRangeAreNotMeasurements) {
+  Messages m = messagesOf(floorAndSphereFrame(0, 1.0));
+  StereoFrame all, clipped;
+  std::string error;
+  m.disparity.max_disparity = 0;  // no upper bound given
+  ASSERT_TRUE(toStereoFrame(m.disparity, m.image, m.info, Eigen::Isometry3d::Identity(), &all, &error)) << error;
+  std::vector<float> valid;
+  for (int v = 0; v < all.disparity_px.rows; ++v)
+    for (int u = 0; u < all.disparity_px.cols; ++u)
+      if (all.disparity_px.at<float>(v, u) > 0) valid.push_back(all.disparity_px.at<float>(v, u));
+  ASSERT_GT(valid.size(), 1000u);
+  std::nth_element(valid.begin(), valid.begin() + valid.size() / 2, valid.end());
+  const float median = valid[valid.size() / 2];
+  m.disparity.max_disparity = median;
+  ASSERT_TRUE(toStereoFrame(m.disparity, m.image, m.info, Eigen::Isometry3d::Identity(), &clipped, &error)) << error;
+  size_t dropped = 0;
+  for (int v = 0; v < all.disparity_px.rows; ++v)
+    for (int u = 0; u < all.disparity_px.cols; ++u) {
+      const float d = all.disparity_px.at<float>(v, u), kept = clipped.disparity_px.at<float>(v, u);
+      if (d > median) {
+        EXPECT_EQ(kept, 0.0f);
+        ++dropped;
+      } else {
+        EXPECT_EQ(kept, d);
+      }
+    }
+  EXPECT_GT(dropped, valid.size() / 4);
 }
 
 TEST(BadInput, TruncatedBagsFailCleanlyInTheOfflinePath) {
