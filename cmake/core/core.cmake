@@ -43,6 +43,7 @@ add_library(stereo_fusion_core STATIC
   ${STEREO_FUSION_ROOT}/src/io/ConfigFile.cpp
   ${STEREO_FUSION_ROOT}/src/io/PlyWriter.cpp
   ${STEREO_FUSION_ROOT}/src/io/MapFile.cpp
+  ${STEREO_FUSION_ROOT}/src/io/WriteTarget.cpp
   ${STEREO_FUSION_ROOT}/src/util/ThreadPool.cpp
   ${STEREO_FUSION_ROOT}/src/util/Crc32.cpp
   ${STEREO_FUSION_ROOT}/src/util/CpuFeatures.cpp

@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cerrno>
@@ -13,8 +14,10 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <new>
 #include <sstream>
 
+#include "stereo_fusion/io/WriteTarget.h"
 #include "stereo_fusion/util/Crc32.h"
 
 namespace stereo_fusion {
@@ -172,14 +175,20 @@ void sealMapFile(std::vector<uint8_t>* file) {
   storeU32(header + 76, crc32(header, 76));
 }
 
-bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config, BlockOctree* out,
-                   MapFileInfo* info, std::string* error) {
-  if (size < 8 || std::memcmp(data, kMagic, 8) != 0) {
+namespace {
+
+/// The header of a map file: `data` holds its first `available` bytes, the whole file has
+/// `file_size`. Checks magic, version, the header checksum and the sizes it announces against
+/// `file_size`, so a reader can refuse a file before reading its payload; fills `info` (not its
+/// last update frames) and `*header_bytes`.
+bool decodeMapHeader(const uint8_t* data, size_t available, size_t file_size, MapFileInfo* info,
+                     size_t* header_bytes_out, std::string* error) {
+  if (available < 8 || std::memcmp(data, kMagic, 8) != 0) {
     *error = "not a stereo_fusion map file (bad magic)";
     return false;
   }
-  if (size < 12) {
-    *error = "truncated map file: " + std::to_string(size) + " bytes, the header alone has " +
+  if (available < 12) {
+    *error = "truncated map file: " + std::to_string(file_size) + " bytes, the header alone has " +
              std::to_string(kMapFileHeaderBytes);
     return false;
   }
@@ -193,9 +202,9 @@ bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config,
   const bool v1 = info->version == 1;
   // Where the header of this version keeps its size and checksums.
   const size_t header_bytes = v1 ? kMapFileV1HeaderBytes : kMapFileHeaderBytes;
-  const size_t payload_crc_at = v1 ? 64 : 72, header_crc_at = v1 ? 68 : 76;
-  if (size < header_bytes) {
-    *error = "truncated map file: " + std::to_string(size) + " bytes, the header alone has " +
+  const size_t header_crc_at = v1 ? 68 : 76;
+  if (available < header_bytes) {
+    *error = "truncated map file: " + std::to_string(file_size) + " bytes, the header alone has " +
              std::to_string(header_bytes);
     return false;
   }
@@ -209,11 +218,10 @@ bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config,
   info->scale4_min_depth_m = getF64(data + 40);
   info->frames_integrated = getU64(data + 48);
   info->block_count = getU64(data + 56);
-  info->last_update_frames.clear();
-  const size_t payload_bytes = size - header_bytes;
+  const size_t payload_bytes = file_size - header_bytes;
   // The sizes the header announces, compared by division: a corrupted count must not overflow.
   // Version 1 records have one size; version 2 gives the payload's size (records are checked
-  // against it one by one below).
+  // against it one by one when decoded).
   const uint64_t announced_payload_bytes = v1 ? 0 : getU64(data + 64);
   const bool short_file = v1 ? info->block_count > payload_bytes / kMapFileV1RecordBytes
                              : announced_payload_bytes > payload_bytes;
@@ -221,13 +229,27 @@ bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config,
                              : announced_payload_bytes != payload_bytes ||
                                    info->block_count > payload_bytes / kMapFileRecordHeadBytes;
   if (short_file || wrong_size) {
-    *error = std::string(short_file ? "truncated" : "corrupted") + " map file: " + std::to_string(size) +
+    *error = std::string(short_file ? "truncated" : "corrupted") + " map file: " + std::to_string(file_size) +
              " bytes, but the header announces " + std::to_string(info->block_count) + " blocks in " +
              (v1 ? std::to_string(info->block_count) + " × " + std::to_string(kMapFileV1RecordBytes)
                  : std::to_string(announced_payload_bytes)) +
              " bytes after a header of " + std::to_string(header_bytes);
     return false;
   }
+  *header_bytes_out = header_bytes;
+  return true;
+}
+
+}  // namespace
+
+bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config, BlockOctree* out,
+                   MapFileInfo* info, std::string* error) {
+  size_t header_bytes = 0;
+  if (!decodeMapHeader(data, size, size, info, &header_bytes, error)) return false;
+  info->last_update_frames.clear();
+  const bool v1 = info->version == 1;
+  const size_t payload_crc_at = v1 ? 64 : 72;
+  const size_t payload_bytes = size - header_bytes;
   const uint8_t* payload = data + header_bytes;
   if (getU32(data + payload_crc_at) != crc32(payload, payload_bytes)) {
     *error = "corrupted map file: block data checksum mismatch";
@@ -371,11 +393,12 @@ void syncParentDirectory(const std::string& path) {
 }  // namespace
 
 bool writeMapFileBytes(const std::string& path, std::vector<uint8_t>* bytes, std::string* error) {
+  // A rename would replace a FIFO or a device node by a regular file: refuse those.
+  if (!isWritableTarget(path, error)) return false;
   sealMapFile(bytes);
   // Unique per process and per call, so that saves to one path from several threads (or
   // nodelets of one manager) never share a temporary; the last rename wins, whole.
-  static std::atomic<uint64_t> save_count{0};
-  const std::string tmp = path + ".tmp-" + std::to_string(getpid()) + "-" + std::to_string(save_count++);
+  const std::string tmp = temporaryPathBeside(path);
   std::string reason;
   if (!writeDurably(tmp, *bytes, &reason)) {
     std::remove(tmp.c_str());
@@ -409,12 +432,31 @@ bool readMapFile(const std::string& path, const MapperConfig& config, BlockOctre
     *error = path + ": cannot open the map file";
     return false;
   }
-  std::vector<uint8_t> bytes(static_cast<size_t>(st.st_size));
-  f.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-  if (f.gcount() != static_cast<std::streamsize>(bytes.size())) {
+  // The header first: a file whose header is wrong, or announces another size than the file
+  // has, is refused before its payload is read into memory (a 64 GiB sparse file costs nothing).
+  const size_t file_size = static_cast<size_t>(st.st_size);
+  const size_t head = std::min(file_size, kMapFileHeaderBytes);
+  std::vector<uint8_t> bytes(head);
+  auto read = [&](uint8_t* to, size_t n) {
+    f.read(reinterpret_cast<char*>(to), static_cast<std::streamsize>(n));
+    if (f.gcount() == static_cast<std::streamsize>(n)) return true;
     *error = path + ": read error (the file changed while it was read?)";
     return false;
+  };
+  if (!read(bytes.data(), head)) return false;
+  size_t header_bytes = 0;
+  MapFileInfo header_info;
+  if (!decodeMapHeader(bytes.data(), head, file_size, &header_info, &header_bytes, error)) {
+    *error = path + ": " + *error;
+    return false;
   }
+  try {
+    bytes.resize(file_size);
+  } catch (const std::bad_alloc&) {
+    *error = path + ": not enough memory to read its " + std::to_string(file_size) + " bytes";
+    return false;
+  }
+  if (!read(bytes.data() + head, file_size - head)) return false;
   if (!decodeMapFile(bytes.data(), bytes.size(), config, out, info, error)) {
     *error = path + ": " + *error;
     return false;

@@ -8,6 +8,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "stereo_fusion/io/WriteTarget.h"
+
 namespace stereo_fusion {
 
 namespace fs = std::filesystem;
@@ -88,9 +90,16 @@ bool writeTexturedObj(const std::string& obj_path,
     if (has_patch[i]) info->placements[keys[i]] = layout.placements[i];
 
   std::vector<std::string> atlas_names;
+  for (size_t k = 0; k < atlases.size(); ++k) atlas_names.push_back(stem + "_atlas_" + std::to_string(k) + ".png");
+  const std::string mtl_path = (dir / mtl_name).string();
+  // Every file is checked before any is written: a FIFO or a device among them stops the export
+  // with nothing written.
+  std::vector<std::string> targets{obj_path, mtl_path};
+  for (const std::string& name : atlas_names) targets.push_back((dir / name).string());
+  for (const std::string& target : targets)
+    if (!isWritableTarget(target, error)) return false;
   for (size_t k = 0; k < atlases.size(); ++k) {
-    atlas_names.push_back(stem + "_atlas_" + std::to_string(k) + ".png");
-    const std::string path = (dir / atlas_names.back()).string();
+    const std::string path = (dir / atlas_names[k]).string();
     cv::Mat bgr;
     cv::cvtColor(atlases[k], bgr, cv::COLOR_RGB2BGR);
     bool ok = false;
@@ -105,7 +114,6 @@ bool writeTexturedObj(const std::string& obj_path,
     info->files.push_back(path);
   }
 
-  const std::string mtl_path = (dir / mtl_name).string();
   {
     File mtl(std::fopen(mtl_path.c_str(), "w"));
     if (!mtl) {

@@ -323,13 +323,18 @@ void FusionNodelet::publishPending(const ros::Time& stamp, bool force) {
 }
 
 bool FusionNodelet::saveMesh(SaveMesh::Request& req, SaveMesh::Response& res) {
+  // Only the copy of the mesh holds the map; the file is written while frames are fused (a slow
+  // disk, or a target that blocks, must not stop fusion).
+  std::unordered_map<BlockKey, SubMesh, BlockKeyHash> submeshes;
+  std::unordered_map<BlockKey, TexturePatch, BlockKeyHash> patches;
   {
-    // Written under the lock: the submeshes and patches are not copied (a rare, manual call).
     std::lock_guard<std::mutex> lock(map_mutex_);
     // The mesh of every frame fused so far (the publisher sends these changes at its next turn).
     catchUpMeshLocked();
-    res.success = exportMesh(req.path, mapper_->mesh().submeshes(), mapper_->textures().patches(), &res.message);
+    submeshes = mapper_->mesh().submeshes();
+    patches = mapper_->textures().patches();
   }
+  res.success = exportMesh(req.path, submeshes, patches, &res.message);
   if (res.success)
     NODELET_INFO("stereo_fusion: save_mesh: %s", res.message.c_str());
   else

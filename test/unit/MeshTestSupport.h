@@ -40,6 +40,18 @@ inline StereoFrame floorAndSphereFrame(int i, double timestamp_s) {
 }
 
 /// The texture tests' configuration: patches on, no histogram filter.
+/// A mapper that fused `frames` noisy views of the floor and sphere (stamped 1, 2, ... s).
+inline std::unique_ptr<Mapper> fusedMapper(int frames, MapperConfig config = {}) {
+  auto mapper = std::make_unique<Mapper>(config);
+  const sim::AnalyticScene scene = floorAndSphere();
+  for (int i = 0; i < frames; ++i) {
+    StereoFrame f = renderFrame(scene, qvgaCamera(), floorAndSphereView(i), 0.2, i);
+    f.timestamp_s = 1.0 + i;
+    EXPECT_TRUE(mapper->integrate(f).accepted);
+  }
+  return mapper;
+}
+
 inline MapperConfig texturedConfig() {
   MapperConfig c;
   c.texture = TextureMode::kPatches;

@@ -19,18 +19,6 @@ namespace fs = std::filesystem;
 namespace {
 
 
-/// A mapper that fused `frames` views of the floor and sphere.
-std::unique_ptr<Mapper> fusedMapper(int frames, MapperConfig config = {}) {
-  auto mapper = std::make_unique<Mapper>(config);
-  const sim::AnalyticScene scene = floorAndSphere();
-  for (int i = 0; i < frames; ++i) {
-    StereoFrame f = renderFrame(scene, qvgaCamera(), floorAndSphereView(i), 0.2, i);
-    f.timestamp_s = 1.0 + i;
-    EXPECT_TRUE(mapper->integrate(f).accepted);
-  }
-  return mapper;
-}
-
 std::string tempPath(const std::string& name) {
   return testing::TempDir() + "stereo_fusion_mapfile_" + std::to_string(::getpid()) + "_" + name;
 }

@@ -1,0 +1,29 @@
+#include "stereo_fusion/io/WriteTarget.h"
+
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <atomic>
+
+namespace stereo_fusion {
+
+bool isWritableTarget(const std::string& path, std::string* error) {
+  struct stat st;
+  // Absent (or not reachable): the writer creates it, or fails with its own message.
+  if (::stat(path.c_str(), &st) != 0) return true;
+  if (S_ISREG(st.st_mode)) return true;
+  const char* kind = S_ISFIFO(st.st_mode) ? "a FIFO"
+                     : S_ISDIR(st.st_mode) ? "a directory"
+                     : S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode) ? "a device"
+                     : S_ISSOCK(st.st_mode) ? "a socket"
+                                            : "not a regular file";
+  *error = path + " is " + kind + ": only regular files are written (nothing was written)";
+  return false;
+}
+
+std::string temporaryPathBeside(const std::string& path) {
+  static std::atomic<uint64_t> count{0};
+  return path + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(count++);
+}
+
+}  // namespace stereo_fusion
