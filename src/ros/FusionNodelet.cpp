@@ -71,6 +71,10 @@ void FusionNodelet::onInit() {
   worker_ = std::thread([this] { workerLoop(); });
 
   disparity_sub_.subscribe(nh, "disparity", 5);
+  // Counted before the synchroniser sees it (registered first, called first): a disparity the
+  // synchroniser drops, for want of its image and CameraInfo or pushed out by a newer one with
+  // the same stamp, shows as received but never matched.
+  disparity_sub_.registerCallback([this](const DisparityMsg::ConstPtr&) { ++disparities_in_; });
   image_sub_.subscribe(nh, "image", 5);
   info_sub_.subscribe(nh, "camera_info", 5);
   if (node_config_.approximate_sync) {
@@ -460,8 +464,11 @@ void FusionNodelet::publishFullLocked(const std::vector<BlockKey>& removed) {
 
 void FusionNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   const double elapsed = std::max(1e-3, (ros::WallTime::now() - started_).toSec());
+  const uint64_t disparities_in = disparities_in_.load(), matched = received_.load();
+  const uint64_t unmatched = disparities_in > matched ? disparities_in - matched : 0;
   const uint64_t dropped = dropped_queue_ + dropped_tf_ + dropped_bad_input_ + dropped_backwards_ +
-                           dropped_duplicate_ + dropped_pose_jump_ + dropped_timestamp_jump_ + dropped_bad_stamp_;
+                           dropped_duplicate_ + dropped_pose_jump_ + dropped_timestamp_jump_ + dropped_bad_stamp_ +
+                           unmatched;
   std::vector<double> lat;
   // lookup, fusion, total per frame; meshing, texture per meshing pass.
   std::vector<double> stages[5];
@@ -491,7 +498,10 @@ void FusionNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
     status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "frames dropped; see the counters");
   else
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, "fusing");
-  status.add("frames received", received_.load());
+  // disparities received = frames fused + every "dropped:" counter + frames in the queue / worker.
+  status.add("disparities received", disparities_in);
+  status.add("frames received", matched);
+  status.add("dropped: not synchronised (no matching image / camera_info yet)", unmatched);
   status.add("frames fused", fused_.load());
   status.add("input rate (Hz)", received_ / elapsed);
   status.add("dropped: queue full", dropped_queue_.load());

@@ -12,6 +12,7 @@
 
 #include <map>
 #include <mutex>
+#include <vector>
 #include <string>
 #include <utility>
 
@@ -63,6 +64,14 @@ class DiagnosticsWatcher {
       ros::WallDuration(0.02).sleep();
     }
     return false;
+  }
+
+  /// Every key reported so far.
+  std::vector<std::string> keys() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    std::vector<std::string> out;
+    for (const auto& kv : values_) out.push_back(kv.first);
+    return out;
   }
 
   /// The value of `key` as an integer, or -1 when it has not been reported yet.

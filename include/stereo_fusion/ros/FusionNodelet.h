@@ -123,6 +123,9 @@ class FusionNodelet : public nodelet::Nodelet {
   ros::WallTimer diagnostics_timer_;
 
   std::atomic<uint64_t> received_{0}, fused_{0}, dropped_queue_{0}, dropped_tf_{0}, dropped_bad_input_{0};
+  /// Disparity messages that reached the node; those the synchroniser never matched with an
+  /// image and a CameraInfo (or that still wait for them) are disparities_in_ − received_.
+  std::atomic<uint64_t> disparities_in_{0};
   std::atomic<uint64_t> dropped_backwards_{0}, dropped_duplicate_{0}, dropped_pose_jump_{0};
   std::atomic<uint64_t> dropped_timestamp_jump_{0};
   std::atomic<uint64_t> dropped_bad_stamp_{0};  // stamped 0, or too far ahead of the clock
