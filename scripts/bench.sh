@@ -25,7 +25,7 @@ while [ $# -gt 0 ]; do
     *) echo "bench.sh: unknown option $1" >&2; exit 2 ;;
   esac
 done
-"$ROOT/scripts/setup.sh" >&2
+"$ROOT/scripts/setup.sh" --targets "stereo_fusion_fuse stereo_fusion_simulate stereo_fusion_evaluate" >&2
 if ! /usr/bin/python3 -c "import open3d, cv2, numpy" 2>/dev/null; then
   echo "[bench] installing Open3D, OpenCV and NumPy for Debian's python3" >&2
   SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"

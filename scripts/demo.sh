@@ -20,7 +20,7 @@ while [ $# -gt 0 ]; do
   esac
 done
 
-"$ROOT/scripts/setup.sh"
+"$ROOT/scripts/setup.sh" --targets "stereo_fusion_nodelet stereo_fusion_simulate stereo_fusion_generate_messages"
 if [ "$RVIZ" = true ] && ! command -v rviz >/dev/null; then
   echo "[demo] installing rviz" >&2
   SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
@@ -41,9 +41,16 @@ roslaunch stereo_fusion replay.launch bag:="$BAG" rate:="$RATE" rviz:="$RVIZ" pl
   >"$DEMO/launch.log" 2>&1 &
 PIDS+=($!)
 /usr/bin/python3 "$ROOT/tools/demo/demo_monitor.py" --frames "$FRAMES"
-rosservice call /stereo_fusion/save_mesh "path: '$ROOT/demo_output/mesh.ply'"
+# rosservice prints the raw reply ("success: True / message: ..."): keep it for the log, say it once.
+reply=$(rosservice call /stereo_fusion/save_mesh "path: '$ROOT/demo_output/mesh.ply'" 2>&1) || true
+echo "$reply" >>"$DEMO/launch.log"
+if ! grep -q "success: True" <<<"$reply"; then
+  echo "[demo] saving the mesh failed: $reply" >&2
+  exit 1
+fi
+message=$(sed -n 's/^message: //p' <<<"$reply" | sed 's/^"//; s/"$//')
+echo "[demo] ${message:-mesh saved} (demo_output/mesh.ply)"
 if [ "$RVIZ" = true ]; then
   echo "[demo] rviz is open; press Enter to stop"
   read -r _
 fi
-echo "[demo] mesh saved to demo_output/mesh.ply"

@@ -13,7 +13,7 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 BUILD_DIR="${BUILD_DIR:-$ROOT/.build}"
 
 # Setup's progress goes to stderr so that stdout carries only the evaluator's table.
-if ! "$ROOT/scripts/setup.sh" >&2; then
+if ! "$ROOT/scripts/setup.sh" --targets stereo_fusion_evaluate >&2; then
   echo "setup or build failed" >&2
   exit 1
 fi

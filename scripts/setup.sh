@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # Installs the Debian packages stereo_fusion needs (only the missing ones) and builds the
 # package into .build/. Idempotent; safe to run on a fresh Debian bookworm machine.
-#   scripts/setup.sh [--no-build] [--screenshots] [--with sanitizers|fuzz]...
-# --screenshots adds rviz, Xvfb and ImageMagick (scripts/screenshots.sh); --with adds an opt-in
-# package group (scripts/check.sh, scripts/fuzz.sh use them).
+#   scripts/setup.sh [--no-build] [--targets "T1 T2 ..."] [--screenshots] [--with sanitizers|fuzz]...
+# --targets builds only those CMake targets (and what they need), not the tests: what the demo and
+# the offline tools pass, so a first run does not wait for the test suite. --screenshots adds
+# rviz, Xvfb and ImageMagick (scripts/screenshots.sh); --with adds an opt-in package group
+# (scripts/check.sh, scripts/fuzz.sh use them).
 # Environment: BUILD_TYPE (default Release), BUILD_DIR (default <repo>/.build).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -36,9 +38,11 @@ PACKAGES=(
 # that script passes); CI does not need them.
 SCREENSHOT_PACKAGES=(rviz xvfb xauth imagemagick libgl1-mesa-dri x11-apps)
 NO_BUILD=0
+TARGETS=()
 while (($# > 0)); do
   case "$1" in
     --no-build) NO_BUILD=1 ;;
+    --targets) read -r -a TARGETS <<<"${2:-}"; shift ;;
     --screenshots) PACKAGES+=("${SCREENSHOT_PACKAGES[@]}") ;;
     --with)
       case "${2:-}" in
@@ -49,7 +53,7 @@ while (($# > 0)); do
         *) echo "[setup] unknown package group '${2:-}' (sanitizers, fuzz)" >&2; exit 2 ;;
       esac
       shift ;;
-    *) echo "usage: scripts/setup.sh [--no-build] [--screenshots] [--with sanitizers|fuzz]..." >&2; exit 2 ;;
+    *) echo "usage: scripts/setup.sh [--no-build] [--targets \"T1 T2 ...\"] [--screenshots] [--with sanitizers|fuzz]..." >&2; exit 2 ;;
   esac
   shift
 done
@@ -61,12 +65,22 @@ for pkg in "${PACKAGES[@]}"; do
   fi
 done
 if ((${#missing[@]} > 0)); then
-  echo "[setup] installing ${#missing[@]} missing Debian packages: ${missing[*]}"
+  echo "[setup] installing ${#missing[@]} missing Debian packages (with what they pull in, a few hundred on a"
+  echo "[setup] fresh machine: about 5 minutes; log /tmp/stereo_fusion_apt.log): ${missing[*]}"
   SUDO=""
   if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+  echo "[setup] apt-get update"
   $SUDO apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" \
-    >/tmp/stereo_fusion_apt.log 2>&1 || { tail -n 30 /tmp/stereo_fusion_apt.log; exit 1; }
+  # One line per 25 packages set up, so a long install is visibly moving.
+  set +o pipefail
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y --no-install-recommends "${missing[@]}" 2>&1 \
+    | tee /tmp/stereo_fusion_apt.log \
+    | awk '/^Need to get/ {print "[setup] " $0; fflush()}
+           /^Setting up / {n++; if (n % 25 == 0) {print "[setup] " n " packages set up (" $3 ")"; fflush()}}'
+  apt_status=${PIPESTATUS[0]}
+  set -o pipefail
+  if ((apt_status != 0)); then tail -n 30 /tmp/stereo_fusion_apt.log; exit 1; fi
+  echo "[setup] packages installed"
 else
   echo "[setup] all ${#PACKAGES[@]} Debian packages present"
 fi
@@ -83,7 +97,12 @@ cmake -S "$ROOT" -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE="${BUILD_TYPE:-Release}" "${
   -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 \
   -DCATKIN_ENABLE_TESTING=ON >"$BUILD_DIR.configure.log" 2>&1 \
   || { cat "$BUILD_DIR.configure.log"; exit 1; }
-cmake --build "$BUILD_DIR" -j"$(nproc)"
-# catkin builds the rostest executables only in its `tests` target.
-cmake --build "$BUILD_DIR" -j"$(nproc)" --target tests
+if ((${#TARGETS[@]} > 0)); then
+  echo "[setup] building ${TARGETS[*]} (a first build takes a few minutes)"
+  cmake --build "$BUILD_DIR" -j"$(nproc)" --target "${TARGETS[@]}"
+else
+  cmake --build "$BUILD_DIR" -j"$(nproc)"
+  # catkin builds the rostest executables only in its `tests` target.
+  cmake --build "$BUILD_DIR" -j"$(nproc)" --target tests
+fi
 echo "[setup] build done"

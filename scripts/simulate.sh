@@ -9,7 +9,7 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 BUILD_DIR="${BUILD_DIR:-$ROOT/.build}"
 
 log="$(mktemp)"
-if ! "$ROOT/scripts/setup.sh" >"$log" 2>&1; then
+if ! "$ROOT/scripts/setup.sh" --targets stereo_fusion_simulate >"$log" 2>&1; then
   cat "$log" >&2
   rm -f "$log"
   echo "simulate: setup or build failed" >&2

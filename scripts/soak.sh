@@ -25,7 +25,7 @@ while [ $# -gt 0 ]; do
     *) echo "soak.sh: unknown option $1" >&2; exit 2 ;;
   esac
 done
-"$ROOT/scripts/setup.sh" >&2
+"$ROOT/scripts/setup.sh" --targets stereo_fusion_soak >&2
 mkdir -p "$OUT"
 common=(--frames "$FRAMES" --sample-every "$EVERY" --set "voxel_size_m=$VOXEL" --set num_threads=2)
 echo "[soak] unbounded: $FRAMES frames, voxel $VOXEL m"
