@@ -273,7 +273,8 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   after_gap.blocks.push_back(toMeshBlock(stray));
   ASSERT_TRUE(test::waitFor([&] { return injector.getNumSubscribers() > 0; }, 30.0));
   injector.publish(after_gap);
-  ros::WallDuration(1.0).sleep();  // let it arrive before the next real update
+  // It must arrive before the next real update: the assembler counts the gap when it does.
+  ASSERT_TRUE(test::waitFor([&] { return assembler_diagnostics.value("sequence gaps") >= 1; }, 30.0));
   publishFrame(kFrames);
   ASSERT_TRUE(test::waitFor([&] { return diagnostics.value("frames fused") >= kFrames + 1; }, 60.0));
   ASSERT_TRUE(test::waitFor([&] {
@@ -302,7 +303,7 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   restarted.session = robot_raw.session + 1;
   restarted.sequence = robot_sequence + 1;
   injector.publish(restarted);
-  ros::WallDuration(1.0).sleep();
+  ASSERT_TRUE(test::waitFor([&] { return assembler_diagnostics.value("robot restarts") >= 1; }, 30.0));
   // And a stale full update of the robot's own session (older than what the assembler holds,
   // e.g. a late reply): ignored, not a replacement of the mesh by an old one.
   MeshUpdate stale_full = after_gap;
@@ -310,7 +311,7 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   stale_full.sequence = robot_sequence - 1;
   stale_full.full = true;
   injector.publish(stale_full);
-  ros::WallDuration(1.0).sleep();
+  ros::WallDuration(1.0).sleep();  // ignoring leaves no trace to wait for: give it time to arrive
   ASSERT_TRUE(fetch("/mesh_assembler/get_full_mesh", &assembled, &assembled_sequence, &base_raw));
   EXPECT_EQ(assembled.count(stray.key), 0u) << "an update of another session or a stale full update was applied";
   EXPECT_EQ(base_raw.session, robot_raw.session);
