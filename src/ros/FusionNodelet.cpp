@@ -466,9 +466,12 @@ void FusionNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
   const double elapsed = std::max(1e-3, (ros::WallTime::now() - started_).toSec());
   const uint64_t disparities_in = disparities_in_.load(), matched = received_.load();
   const uint64_t unmatched = disparities_in > matched ? disparities_in - matched : 0;
+  // A disparity whose image has not arrived yet is unmatched for a moment in normal operation:
+  // only more than the synchroniser's queue can hold is surely lost.
+  const bool lost_in_sync = unmatched > static_cast<uint64_t>(node_config_.sync_queue_size);
   const uint64_t dropped = dropped_queue_ + dropped_tf_ + dropped_bad_input_ + dropped_backwards_ +
                            dropped_duplicate_ + dropped_pose_jump_ + dropped_timestamp_jump_ + dropped_bad_stamp_ +
-                           unmatched;
+                           (lost_in_sync ? unmatched : 0);
   std::vector<double> lat;
   // lookup, fusion, total per frame; meshing, texture per meshing pass.
   std::vector<double> stages[5];
