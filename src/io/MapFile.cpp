@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <cerrno>
 #include <cstddef>
 #include <cmath>
@@ -393,26 +392,19 @@ void syncParentDirectory(const std::string& path) {
 }  // namespace
 
 bool writeMapFileBytes(const std::string& path, std::vector<uint8_t>* bytes, std::string* error) {
-  // A rename would replace a FIFO or a device node by a regular file: refuse those.
-  if (!isWritableTarget(path, error)) return false;
   sealMapFile(bytes);
-  // Unique per process and per call, so that saves to one path from several threads (or
-  // nodelets of one manager) never share a temporary; the last rename wins, whole.
-  const std::string tmp = temporaryPathBeside(path);
-  std::string reason;
-  if (!writeDurably(tmp, *bytes, &reason)) {
-    std::remove(tmp.c_str());
-    *error = path + ": cannot write the map file (" + reason + ")";
-    return false;
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    reason = std::strerror(errno);
-    std::remove(tmp.c_str());
-    *error = path + ": cannot write the map file (rename failed: " + reason + ")";
-    return false;
-  }
-  syncParentDirectory(path);
-  return true;
+  // The temporary is unique per process and per call, so saves to one path from several threads
+  // (or nodelets of one manager) never share one; the last rename wins, whole.
+  const bool written = writeThroughTemporary(path, "cannot write the map file",
+                                             [&](const std::string& temporary, std::string* why) {
+                                               std::string reason;
+                                               if (writeDurably(temporary, *bytes, &reason)) return true;
+                                               *why = path + ": cannot write the map file (" + reason + ")";
+                                               return false;
+                                             },
+                                             error);
+  if (written) syncParentDirectory(path);
+  return written;
 }
 
 bool readMapFile(const std::string& path, const MapperConfig& config, BlockOctree* out, MapFileInfo* info,

@@ -4,6 +4,9 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 
 namespace stereo_fusion {
 
@@ -24,6 +27,23 @@ bool isWritableTarget(const std::string& path, std::string* error) {
 std::string temporaryPathBeside(const std::string& path) {
   static std::atomic<uint64_t> count{0};
   return path + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(count++);
+}
+
+bool writeThroughTemporary(const std::string& path, const std::string& what,
+                           const std::function<bool(const std::string& temporary_path, std::string* error)>& write,
+                           std::string* error) {
+  if (!isWritableTarget(path, error)) return false;
+  const std::string temporary = temporaryPathBeside(path);
+  if (!write(temporary, error)) {
+    std::remove(temporary.c_str());
+    return false;
+  }
+  if (std::rename(temporary.c_str(), path.c_str()) != 0) {
+    *error = path + ": " + what + " (rename failed: " + std::strerror(errno) + ")";
+    std::remove(temporary.c_str());
+    return false;
+  }
+  return true;
 }
 
 }  // namespace stereo_fusion

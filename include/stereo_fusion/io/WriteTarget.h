@@ -1,4 +1,5 @@
 #pragma once
+#include <functional>
 #include <string>
 
 namespace stereo_fusion {
@@ -11,5 +12,13 @@ bool isWritableTarget(const std::string& path, std::string* error);
 /// A fresh temporary name beside `path` (same directory, so a rename onto `path` is atomic),
 /// unique per process and per call.
 std::string temporaryPathBeside(const std::string& path);
+
+/// Writes `path` whole or not at all: refuses a target that isWritableTarget() refuses, has
+/// `write` fill a temporary beside it (false with `*error` set: the temporary is removed) and
+/// renames that into place, so a reader never sees half a file and a failure leaves the old one.
+/// A rename failure reads "<path>: <what> (rename failed: <reason>)".
+bool writeThroughTemporary(const std::string& path, const std::string& what,
+                           const std::function<bool(const std::string& temporary_path, std::string* error)>& write,
+                           std::string* error);
 
 }  // namespace stereo_fusion
