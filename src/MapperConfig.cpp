@@ -7,6 +7,8 @@
 #include <limits>
 #include <sstream>
 
+#include "stereo_fusion/integration/FrameGate.h"
+
 namespace stereo_fusion {
 
 namespace {
@@ -246,22 +248,24 @@ const std::vector<Accessor>& accessors() {
                             "camera are evicted and their submeshes removed. 0 = unlimited; "
                             "otherwise at least max_depth_m.",
                             member(&MapperConfig::max_distance_from_camera_m)));
+    // The frame gate's rule, stated where it is documented (FrameGate::kFramesToReanchor).
+    const std::string reanchor_frames = std::to_string(FrameGate::kFramesToReanchor);
     t.push_back(doubleParam("max_pose_jump_m", "m", 0.0, true, 1e6,
                             "A frame whose camera is farther than this from the last fused frame's "
                             "camera is rejected (a SLAM glitch); a rejected frame never becomes the "
-                            "reference, and after 3 rejected frames that agree with each other (a "
-                            "relocalisation) the third is fused and becomes it. 0 = no check.",
+                            "reference, and after " + reanchor_frames + " rejected frames that agree with "
+                            "each other (a relocalisation) the last is fused and becomes it. 0 = no check.",
                             member(&MapperConfig::max_pose_jump_m)));
     t.push_back(doubleParam("max_timestamp_gap_s", "s", 0.0, true, 1e9,
                             "A frame stamped more than this after the last fused frame is rejected "
                             "(a stamp far in the future would otherwise make every later frame go "
-                            "\"backwards\"); 3 consecutive frames that agree with each other are "
-                            "accepted as a clock jump. 0 = no check.",
+                            "\"backwards\"); " + reanchor_frames + " consecutive frames that agree with "
+                            "each other are accepted as a clock jump. 0 = no check.",
                             member(&MapperConfig::max_timestamp_gap_s)));
     t.push_back(boolParam("require_increasing_timestamps",
                           "Reject a frame whose timestamp is before (backwards) or equal to "
-                          "(duplicate) the last fused frame's; 3 consecutive later frames that agree "
-                          "with each other are accepted as a clock reset. Timestamp 0 means unknown "
+                          "(duplicate) the last fused frame's; " + reanchor_frames + " consecutive later "
+                          "frames that agree with each other are accepted as a clock reset. Timestamp 0 means unknown "
                           "and is not checked (the nodelet drops ROS messages stamped 0).",
                           member(&MapperConfig::require_increasing_timestamps)));
     return t;
