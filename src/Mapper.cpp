@@ -52,15 +52,23 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
   if (result.reason != RejectReason::kNone) result.error = gate_message;
   if (result.reanchored) result.note = gate_message;
   if (result.reason != RejectReason::kNone) return result;
-  gate_.accepted(frame);
-  result.accepted = true;
-  ++frames_integrated_;
-  if (texture_consumer_) last_frame_ = frame;  // shares the images: what a deferred texture pass projects into
 
   Timer lookup_timer;
   measurements_.build(frame, config_, &pool_);
   result.lookup = lookup_.run(frame, measurements_, &octree_, &queue_, &missing_);
   result.lookup_ms = lookup_timer.elapsedMs();
+  // The lookup only reads the map: a frame over its allocation budget leaves it untouched.
+  if (config_.max_new_blocks_per_frame > 0 && missing_.size() > static_cast<size_t>(config_.max_new_blocks_per_frame)) {
+    result.reason = RejectReason::kAllocationBudget;
+    result.error = "its truncation bands reach " + std::to_string(missing_.size()) +
+                   " blocks not yet in the map, more than max_new_blocks_per_frame (" +
+                   std::to_string(config_.max_new_blocks_per_frame) + "): noise or a wrong calibration?";
+    return result;
+  }
+  gate_.accepted(frame);
+  result.accepted = true;
+  ++frames_integrated_;
+  if (texture_consumer_) last_frame_ = frame;  // shares the images: what a deferred texture pass projects into
 
   Timer fusion_timer;
   result.fusion = fuser_.fuse(frame, measurements_, octree_, queue_, missing_, &updated_, &created_);

@@ -243,6 +243,13 @@ const std::vector<Accessor>& accessors() {
                          "each by the levels they hold), the least recently updated ones (farthest "
                          "first among equals) are evicted and their submeshes removed. 0 = unlimited.",
                          member(&MapperConfig::max_blocks)));
+    t.push_back(intParam("max_new_blocks_per_frame", "blocks", 0, 100000000,
+                         "Allocation budget of one frame: a frame whose truncation bands reach more "
+                         "blocks that are not yet in the map is rejected before fusion, the map "
+                         "unchanged (so a frame allocates at most this many blocks, 0.3–7 KB each). "
+                         "A real 640×480 frame at 1 cm adds up to ~10 000 (first frame); raise it for "
+                         "larger images or finer voxels (it grows with pixels / voxel²). 0 = no limit.",
+                         member(&MapperConfig::max_new_blocks_per_frame)));
     t.push_back(doubleParam("max_distance_from_camera_m", "m", 0.0, true, 1e6,
                             "After each frame, blocks whose centre is farther than this from the "
                             "camera are evicted and their submeshes removed. 0 = unlimited; "

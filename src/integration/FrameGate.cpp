@@ -13,6 +13,7 @@ const char* rejectReasonName(RejectReason reason) {
     case RejectReason::kDuplicateTimestamp: return "duplicate";
     case RejectReason::kPoseJump: return "pose_jump";
     case RejectReason::kTimestampJump: return "timestamp_jump";
+    case RejectReason::kAllocationBudget: return "allocation_budget";
   }
   return "unknown";
 }

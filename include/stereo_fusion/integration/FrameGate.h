@@ -16,6 +16,7 @@ enum class RejectReason {
   kDuplicateTimestamp,  ///< timestamp equal to the last fused frame's
   kPoseJump,            ///< camera moved more than max_pose_jump_m since the last fused frame
   kTimestampJump,       ///< timestamp more than max_timestamp_gap_s after the last fused frame's
+  kAllocationBudget,    ///< its bands reach more new blocks than max_new_blocks_per_frame
 };
 
 /// Short stable name of a reason, e.g. "timestamp_backwards" (counter keys, stats.json).

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cfloat>
+#include <opencv2/core.hpp>
 
 #include "MeshTestSupport.h"
 
@@ -153,4 +154,56 @@ TEST(BadInput, DegenerateDisparityValuesLeaveTheMapUnchanged) {
     EXPECT_TRUE(r.updated_blocks.empty()) << c.name;
     EXPECT_TRUE(state(mapper) == before) << c.name << " changed the map";
   }
+}
+
+// Random disparities put a point anywhere along every ray: each pixel reaches its own blocks, so
+// the frame's bands reach far more new blocks than a surface does. Over the budget the frame is
+// rejected before fusion; at exactly the budget it is fused.
+TEST(BadInput, AFrameOverItsAllocationBudgetIsRejectedAndTheMapUnchanged) {
+  MapperConfig config;
+  config.histogram_min_points = 0;  // every pixel reaches the map: the bound alone must hold
+  StereoFrame noise = floorAndSphereFrame(1, 2.0);
+  cv::RNG rng(7);
+  rng.fill(noise.disparity_px, cv::RNG::UNIFORM, 1.0, 64.0);
+
+  // How many new blocks the noise frame reaches after the first good frame, with no limit.
+  size_t reached = 0;
+  {
+    config.max_new_blocks_per_frame = 0;
+    Mapper unlimited(config);
+    ASSERT_TRUE(unlimited.integrate(floorAndSphereFrame(0, 1.0)).accepted);
+    const IntegrationResult r = unlimited.integrate(noise);
+    ASSERT_TRUE(r.accepted);
+    reached = r.lookup.blocks_missing;
+    EXPECT_GT(r.fusion.blocks_created, 1000u) << "noise must allocate much more than the budget below";
+  }
+  ASSERT_GT(reached, 0u);
+
+  config.max_new_blocks_per_frame = static_cast<int>(reached) - 1;
+  Mapper mapper(config);
+  ASSERT_TRUE(mapper.integrate(floorAndSphereFrame(0, 1.0)).accepted);
+  const MapState before = state(mapper);
+  const size_t bytes_before = mapper.memoryBytes();
+  const IntegrationResult rejected = mapper.integrate(noise);
+  EXPECT_FALSE(rejected.accepted);
+  EXPECT_EQ(rejected.reason, RejectReason::kAllocationBudget);
+  EXPECT_STREQ(rejectReasonName(rejected.reason), "allocation_budget");
+  EXPECT_NE(rejected.error.find("reach " + std::to_string(reached) + " blocks not yet in the map, more than "
+                                "max_new_blocks_per_frame (" + std::to_string(reached - 1) + ")"),
+            std::string::npos)
+      << rejected.error;
+  EXPECT_TRUE(rejected.updated_blocks.empty());
+  EXPECT_TRUE(state(mapper) == before) << "a rejected frame changed the map";
+  EXPECT_EQ(mapper.memoryBytes(), bytes_before);
+
+  // The rejected frame did not become the time reference: a good frame stamped before it is fused.
+  const IntegrationResult good = mapper.integrate(floorAndSphereFrame(2, 1.5));
+  EXPECT_TRUE(good.accepted) << good.error;
+  EXPECT_FALSE(good.updated_blocks.empty());
+
+  // At exactly the budget the frame is fused.
+  config.max_new_blocks_per_frame = static_cast<int>(reached);
+  Mapper at_budget(config);
+  ASSERT_TRUE(at_budget.integrate(floorAndSphereFrame(0, 1.0)).accepted);
+  EXPECT_TRUE(at_budget.integrate(noise).accepted);
 }
