@@ -74,7 +74,11 @@ void FusionNodelet::onInit() {
   // Counted before the synchroniser sees it (registered first, called first): a disparity the
   // synchroniser drops, for want of its image and CameraInfo or pushed out by a newer one with
   // the same stamp, shows as received but never matched.
-  disparity_sub_.registerCallback([this](const DisparityMsg::ConstPtr&) { ++disparities_in_; });
+  // roscpp runs one subscription's callbacks one at a time, so disparity_seq_ needs no lock.
+  disparity_sub_.registerCallback([this](const DisparityMsg::ConstPtr& disparity) {
+    ++disparities_in_;
+    disparities_missed_ += disparity_seq_.next(disparity->header.seq);
+  });
   image_sub_.subscribe(nh, "image", 5);
   info_sub_.subscribe(nh, "camera_info", 5);
   if (node_config_.approximate_sync) {
@@ -472,7 +476,8 @@ void FusionNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
   const bool lost_in_sync = unmatched > static_cast<uint64_t>(node_config_.sync_queue_size);
   const uint64_t dropped = dropped_queue_ + dropped_tf_ + dropped_bad_input_ + dropped_backwards_ +
                            dropped_duplicate_ + dropped_pose_jump_ + dropped_timestamp_jump_ +
-                           dropped_allocation_budget_ + dropped_bad_stamp_ + (lost_in_sync ? unmatched : 0);
+                           dropped_allocation_budget_ + dropped_bad_stamp_ + dropped_superseded_ +
+                           (lost_in_sync ? unmatched : 0);
   std::vector<double> lat;
   // lookup, fusion, total per frame; meshing, texture per meshing pass.
   std::vector<double> stages[5];
@@ -504,6 +509,8 @@ void FusionNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, "fusing");
   // disparities received = frames fused + every "dropped:" counter + frames in the queue / worker.
   status.add("disparities received", disparities_in);
+  // Lost before they reached the node (transport queues, the driver): not part of the sum above.
+  status.add("disparities missed upstream (header.seq gaps)", disparities_missed_.load());
   status.add("frames received", matched);
   status.add("dropped: not synchronised (no matching image / camera_info yet)", unmatched);
   status.add("frames fused", fused_.load());

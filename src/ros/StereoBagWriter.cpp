@@ -50,6 +50,7 @@ StereoBagWriter::~StereoBagWriter() { close(); }
 
 bool StereoBagWriter::write(const StereoFrame& frame, float max_disparity_px, std::string* error) {
   std_msgs::Header header;
+  header.seq = ++frames_written_;
   header.stamp = ros::Time(frame.timestamp_s + stamp_offset_s_);
   header.frame_id = camera_frame_;
   stereo_msgs::DisparityImage disparity;
@@ -73,6 +74,7 @@ bool StereoBagWriter::write(const StereoFrame& frame, float max_disparity_px, st
 bool StereoBagWriter::writePair(const StereoFrame& frame, const cv::Mat& right_rgb, const PairTopics& topics,
                                 std::string* error) {
   std_msgs::Header header;
+  header.seq = ++frames_written_;
   header.stamp = ros::Time(frame.timestamp_s + stamp_offset_s_);
   header.frame_id = camera_frame_;
   stereo_msgs::DisparityImage unused_disparity;

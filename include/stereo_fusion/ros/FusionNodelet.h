@@ -33,6 +33,7 @@
 #include "stereo_fusion/Mapper.h"
 #include "stereo_fusion/ros/MeshMessages.h"
 #include "stereo_fusion/ros/RosParameters.h"
+#include "stereo_fusion/ros/SequenceGaps.h"
 
 namespace stereo_fusion {
 
@@ -126,6 +127,8 @@ class FusionNodelet : public nodelet::Nodelet {
   /// Disparity messages that reached the node; those the synchroniser never matched with an
   /// image and a CameraInfo (or that still wait for them) are disparities_in_ − received_.
   std::atomic<uint64_t> disparities_in_{0};
+  std::atomic<uint64_t> disparities_missed_{0};  // gaps in the disparities' header.seq
+  SequenceGaps disparity_seq_;
   std::atomic<uint64_t> dropped_backwards_{0}, dropped_duplicate_{0}, dropped_pose_jump_{0};
   std::atomic<uint64_t> dropped_timestamp_jump_{0};
   std::atomic<uint64_t> dropped_allocation_budget_{0};  // bands reaching more than max_new_blocks_per_frame new blocks

@@ -56,6 +56,7 @@ class StereoBagWriter {
   std::unique_ptr<rosbag::Bag> bag_;
   BagTopics topics_;
   std::string camera_frame_;
+  uint32_t frames_written_ = 0;  // header.seq of the last frame written (numbered from 1, as drivers do)
   double stamp_offset_s_ = 0.0;
 };
 
