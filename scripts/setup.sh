@@ -71,12 +71,14 @@ if ((${#missing[@]} > 0)); then
   if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
   echo "[setup] apt-get update"
   $SUDO apt-get update -qq
-  # One line per 25 packages set up, so a long install is visibly moving.
+  # A line per 100 packages downloaded and per 25 set up, so a long install is visibly moving.
   set +o pipefail
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y --no-install-recommends "${missing[@]}" 2>&1 \
     | tee /tmp/stereo_fusion_apt.log \
-    | awk '/^Need to get/ {print "[setup] " $0; fflush()}
-           /^Setting up / {n++; if (n % 25 == 0) {print "[setup] " n " packages set up (" $3 ")"; fflush()}}'
+    | awk '/ newly installed, / {total = $3}
+           /^Need to get/ {print "[setup] " $0; fflush()}
+           /^Get:/ {g++; if (g % 100 == 0) {print "[setup] " g " of " total " packages downloaded"; fflush()}}
+           /^Setting up / {n++; if (n % 25 == 0) {print "[setup] " n " of " total " packages set up (" $3 ")"; fflush()}}'
   apt_status=${PIPESTATUS[0]}
   set -o pipefail
   if ((apt_status != 0)); then tail -n 30 /tmp/stereo_fusion_apt.log; exit 1; fi
