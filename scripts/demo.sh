@@ -40,7 +40,11 @@ echo "[demo] replaying $BAG through stereo_fusion (log: $DEMO/launch.log)"
 roslaunch stereo_fusion replay.launch bag:="$BAG" rate:="$RATE" rviz:="$RVIZ" player_required:=false \
   >"$DEMO/launch.log" 2>&1 &
 PIDS+=($!)
-/usr/bin/python3 "$ROOT/tools/demo/demo_monitor.py" --frames "$FRAMES"
+if ! /usr/bin/python3 "$ROOT/tools/demo/demo_monitor.py" --frames "$FRAMES" --launch-pid "$!"; then
+  echo "[demo] the launch failed; the end of $DEMO/launch.log:" >&2
+  tail -n 15 "$DEMO/launch.log" >&2
+  exit 1
+fi
 # rosservice prints the raw reply ("success: True / message: ..."): keep it for the log, say it once.
 reply=$(rosservice call /stereo_fusion/save_mesh "path: '$ROOT/demo_output/mesh.ply'" 2>&1) || true
 echo "$reply" >>"$DEMO/launch.log"

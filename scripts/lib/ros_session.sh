@@ -29,6 +29,11 @@ ensure_demo_bag() {
 # exported as ROS_MASTER_URI; its PID is appended to the caller's PIDS array. Waits until it is up.
 start_master() {
   local tag="$1" log="$2" port
+  # roscore and roslaunch find their own machine by the name localhost.
+  if ! getent hosts localhost >/dev/null; then
+    echo "[$tag] the name localhost does not resolve (ROS needs it): add '127.0.0.1 localhost' to /etc/hosts" >&2
+    exit 1
+  fi
   port="$(/usr/bin/python3 -c 'import socket; s = socket.socket(); s.bind(("", 0)); print(s.getsockname()[1])')"
   export ROS_MASTER_URI="http://localhost:$port"
   echo "[$tag] ROS master on port $port"

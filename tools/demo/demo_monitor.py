@@ -1,8 +1,10 @@
 #!/usr/bin/python3
 """Follows a running stereo_fusion: prints progress from /diagnostics once a second and, when
 all expected frames are accounted for (fused + dropped) or nothing happened for --idle-s
-seconds, the per-stage timing table. Used by scripts/demo.sh."""
+seconds, the per-stage timing table. Exits with 1 at once if the --launch-pid process ends
+first (roslaunch failed). Used by scripts/demo.sh."""
 import argparse
+import os
 import sys
 import time
 
@@ -25,19 +27,34 @@ def number(key, default=0.0):
         return default
 
 
+def dropped_keys():
+    return sorted(k for k in list(values) if k.startswith("dropped: "))
+
+
+def alive(pid):
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    return True
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--frames", type=int, required=True, help="frames the bag holds")
     parser.add_argument("--idle-s", type=float, default=30.0)
+    parser.add_argument("--launch-pid", type=int, default=0, help="stop as soon as this process ends")
     args = parser.parse_args(rospy.myargv()[1:])
     rospy.init_node("stereo_fusion_demo_monitor", anonymous=True, disable_signals=True)
     rospy.Subscriber("/diagnostics", DiagnosticArray, on_diagnostics)
-    drops = ("dropped: queue full", "dropped: tf timeout", "dropped: bad input")
     last, last_change = -1, time.time()
     while True:
         time.sleep(1.0)
+        if args.launch_pid and not alive(args.launch_pid):
+            print("[demo] roslaunch ended before the frames were fused", flush=True)
+            return 1
         fused = int(number("frames fused"))
-        dropped = int(sum(number(k) for k in drops))
+        dropped = int(sum(number(k) for k in dropped_keys()))
         print(f"[demo] {fused + dropped}/{args.frames} frames: {fused} fused, {dropped} dropped | "
               f"last {number('total p50 (ms)'):.1f} ms/frame (p50) | {int(number('blocks'))} blocks, "
               f"{number('memory (MB)'):.1f} MB", flush=True)
@@ -56,8 +73,9 @@ def main():
         print(f"{stage:<10} {number(stage + ' p50 (ms)'):8.1f} {number(stage + ' p99 (ms)'):8.1f}")
     print(f"latency stamp -> publish: p50 {number('latency p50 (s)') * 1000:.0f} ms, "
           f"p99 {number('latency p99 (s)') * 1000:.0f} ms")
-    for k in drops:
-        print(f"{k}: {int(number(k))}")
+    for k in dropped_keys():
+        if number(k) > 0:
+            print(f"{k}: {int(number(k))}")
     return 0
 
 
