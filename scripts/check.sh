@@ -1,23 +1,36 @@
 #!/usr/bin/env bash
 # Sanitizer checks: builds the unit tests with sanitizers in their own build folders and runs
 # them; any sanitizer report or test failure makes it exit non-zero. Ends with a summary.
-#   scripts/check.sh [--asan | --tsan | --all]      (default --all)
+#   scripts/check.sh [--asan | --tsan | --all] [--tsan-ros]      (default --all)
 #   --asan  AddressSanitizer + UndefinedBehaviorSanitizer (g++), in .build-asan/: every unit
 #           test (the core's and the tools' binaries), and every fuzz target's checked-in corpus
 #           and regressions (test/fuzz/)
 #   --tsan  ThreadSanitizer (g++), in .build-tsan/: the tests that run code on several threads
 #           (test/unit/thread_tests.cmake)
+# --asan also runs the ROS code under ASan + UBSan (+ LeakSanitizer): the nodelet and the
+# assembler built with them, loaded into the package's own nodelet manager (stereo_fusion_manager,
+# also built with them) and driven by the rostests with a real master: fusion_nodelet.test (every
+# message type, services, bad input), mesh_assembler.test (the base-station stream) and
+# overload.test. A report in any of those processes fails the step (.check-logs/asan_ros.output.log).
+# --tsan-ros (opt-in, not in --all): the same rostests under TSan. Not clean yet: roscpp, nodelet
+# and bondcpp are not instrumented, so TSan cannot order the boost::shared_ptr hand-overs between
+# their threads and ours; test/tsan_suppressions.txt names the library-internal ones, but frames in
+# the dlopen'ed nodelet stay unsymbolised and cannot be matched (doc/reliability.md).
 # Both run with STEREO_FUSION_TEST_QUICK=1: the three heaviest thread tests use smaller inputs
 # (test/unit/QuickMode.h); under ASan the mapper's thread-count test alone took 150 s otherwise.
 # Environment: CHECK_JOBS (default 2) parallel compile jobs and test shards.
 set -uo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 JOBS="${CHECK_JOBS:-2}"
-mode="${1:---all}"
-case "$mode" in
-  --asan | --tsan | --all) ;;
-  *) echo "usage: scripts/check.sh [--asan | --tsan | --all]" >&2; exit 2 ;;
-esac
+mode=--all
+TSAN_ROS=0
+for arg in "$@"; do
+  case "$arg" in
+    --asan | --tsan | --all) mode="$arg" ;;
+    --tsan-ros) TSAN_ROS=1 ;;
+    *) echo "usage: scripts/check.sh [--asan | --tsan | --all] [--tsan-ros]" >&2; exit 2 ;;
+  esac
+done
 
 "$ROOT/scripts/setup.sh" --no-build --with sanitizers || { echo "check: setup failed"; exit 1; }
 export PYENV_VERSION=system ROS_HOSTNAME=localhost
@@ -46,6 +59,33 @@ build() {
   cmake --build "$dir" -j"$JOBS" $(printf -- '--target %s ' "$@") || return 1
   echo "[check] built $* with -fsanitize=$sanitize in $((SECONDS - t0)) s"
 }
+
+# run_rostests <name> <build dir> <ctest regex>: the rostests with every process of ours built
+# with the sanitizers. The nodes' stderr reaches ctest's log (roslaunch leaves it on the console),
+# and any report in it fails the step, even one printed while the launch shuts down.
+run_rostests() {
+  local name="$1" dir="$2" regex="$3" t0=$SECONDS status=clean logdir="$ROOT/.check-logs"
+  mkdir -p "$logdir"
+  STEREO_FUSION_MANAGER_PKG=stereo_fusion STEREO_FUSION_MANAGER_TYPE=stereo_fusion_manager \
+    LSAN_OPTIONS="suppressions=$ROOT/test/lsan_suppressions.txt" \
+    ctest --test-dir "$dir" -R "$regex" >"$logdir/$name.log" 2>&1 || status=FAILED
+  cp "$dir/Testing/Temporary/LastTest.log" "$logdir/$name.output.log"
+  local pattern='ERROR: (Address|Leak)Sanitizer|WARNING: ThreadSanitizer|runtime error:'
+  local reports
+  reports=$(grep -cE "$pattern" "$logdir/$name.output.log")
+  if ((reports > 0)); then
+    status="FAILED ($reports sanitizer reports)"
+    grep -E -A30 "$pattern" "$logdir/$name.output.log" | head -n 120
+  fi
+  [ "$status" = clean ] || grep -E "Test +#|tests passed" "$logdir/$name.log"
+  results+=("$name: $(grep -oE '[0-9]+% tests passed, [0-9]+ tests failed out of [0-9]+' "$logdir/$name.log" || echo 'no result'), $status ($((SECONDS - t0)) s; logs .check-logs/$name.*)")
+  [ "$status" = clean ]
+}
+
+# The ROS targets the sanitizer runs of the rostests need.
+ROS_TARGETS=(stereo_fusion_nodelet stereo_fusion_manager stereo_fusion_rostest stereo_fusion_assembler_test
+             stereo_fusion_overload_test)
+ROS_TESTS='_test_ros_(fusion_nodelet|mesh_assembler|overload)\.test$'
 
 # run_gtest <name> <binary> <gtest filter>: runs the binary in $JOBS shards in parallel.
 run_gtest() {
@@ -78,7 +118,8 @@ export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$ROOT/
 
 if [ "$mode" != --tsan ]; then
   dir="$ROOT/.build-asan"
-  if build "$dir" address,undefined stereo_fusion_unit_tests stereo_fusion_tool_tests stereo_fusion_fuzz_replays; then
+  if build "$dir" address,undefined stereo_fusion_unit_tests stereo_fusion_tool_tests stereo_fusion_fuzz_replays \
+      "${ROS_TARGETS[@]}"; then
     for binary in stereo_fusion_unit_tests stereo_fusion_tool_tests; do
       bin="$(find "$dir" -type f -name "$binary" -perm -u+x | head -n 1)"
       run_gtest "asan_${binary#stereo_fusion_}" "$bin" '*' || failed=1
@@ -96,6 +137,7 @@ if [ "$mode" != --tsan ]; then
       results+=("asan $target replay: $(tail -n 1 "$ROOT/.check-logs/asan_$target.log")")
     done
     results+=("asan fuzz replays: $replay_status ($((SECONDS - t0)) s)")
+    run_rostests asan_ros "$dir" "$ROS_TESTS" || failed=1
   else
     results+=("asan build: FAILED"); failed=1
   fi
@@ -103,13 +145,16 @@ fi
 
 if [ "$mode" != --asan ]; then
   dir="$ROOT/.build-tsan"
-  if build "$dir" thread stereo_fusion_thread_tests; then
+  tsan_targets=(stereo_fusion_thread_tests)
+  if ((TSAN_ROS)); then tsan_targets+=("${ROS_TARGETS[@]}"); fi
+  if build "$dir" thread "${tsan_targets[@]}"; then
     bin="$(find "$dir" -type f -name stereo_fusion_thread_tests -perm -u+x | head -n 1)"
     threaded='ThreadPool.*:BlockOctree.ConcurrentAllocationCreatesEachBlockOnce'
     threaded+=':BlockOctreeLinks.EqualSearchesAfterRandomAllocateEraseClearSwap'
     threaded+=':BlockLookup.ResultDoesNotDependOnThreadsOrRegionSize:MapperProperties.ThreadCountDoesNotChangeTheMap'
     threaded+=':BlockMesher.ThreadCountDoesNotChangeTheMesh'
     run_gtest tsan_thread_tests "$bin" "$threaded" || failed=1
+    if ((TSAN_ROS)); then run_rostests tsan_ros "$dir" "$ROS_TESTS" || failed=1; fi
   else
     results+=("tsan build: FAILED"); failed=1
   fi
