@@ -27,7 +27,11 @@ DistanceSummary summarizeDistances(std::vector<double> distances_m) {
   summary.mean_m = sum / static_cast<double>(distances_m.size());
   summary.median_m = quantileOfSorted(distances_m, 0.5);
   summary.p90_m = quantileOfSorted(distances_m, 0.9);
+  summary.p99_m = quantileOfSorted(distances_m, 0.99);
   summary.max_m = distances_m.back();
+  const auto first_over = std::upper_bound(distances_m.begin(), distances_m.end(), kGrossErrorM);
+  summary.share_over_10cm = static_cast<double>(distances_m.end() - first_over) /
+                            static_cast<double>(distances_m.size());
   return summary;
 }
 

@@ -30,6 +30,10 @@ std::string evaluateUsage() {
          "options:\n"
          "  --tolerance-m X   agreement distance in metres (default 0.04 = 2 voxels)\n"
          "  --json FILE       also write the results as JSON (metres, fractions)\n"
+         "  --error-ply FILE  ground-truth mode: also write the mesh (same vertices and faces)\n"
+         "                    as binary PLY coloured by each vertex's distance to the ground\n"
+         "                    truth: blue 0, green tolerance/2, yellow tolerance, red 2 x\n"
+         "                    tolerance and beyond, linear in between\n"
          "  --held-out SPEC   held-out frames: odd | even | i,j,k (default odd); forces\n"
          "                    held-out mode on a folder that has gt_mesh.ply\n"
          "  --samples N       surface samples per mesh in ground-truth mode (default 1000000)\n"
@@ -69,6 +73,8 @@ bool parseEvaluateArguments(const std::vector<std::string>& args, EvaluateArgume
       }
     } else if (arg == "--json") {
       parsed->json_path = value;
+    } else if (arg == "--error-ply") {
+      parsed->error_ply_path = value;
     } else if (arg == "--held-out") {
       parsed->held_out_spec = value;
       parsed->held_out_given = true;

@@ -13,6 +13,7 @@ struct EvaluateArguments {
   std::string reference_path;  ///< ground-truth .ply or sequence folder
   double tolerance_m = 0.04;
   std::string json_path;  ///< empty: no JSON file
+  std::string error_ply_path;  ///< empty: no error-coloured mesh (ground-truth mode only)
   std::string held_out_spec = "odd";
   bool held_out_given = false;  ///< --held-out forces held-out mode on a folder with gt_mesh.ply
   size_t samples = 1000000;

@@ -41,6 +41,13 @@ std::string row(const std::string& name, const std::string& value) {
   return buffer;
 }
 
+/// The rows of a distance summary, in the order of the table.
+std::string summaryRows(const DistanceSummary& summary) {
+  return row("mean", millimetres(summary.mean_m)) + row("median", millimetres(summary.median_m)) +
+         row("p90", millimetres(summary.p90_m)) + row("p99", millimetres(summary.p99_m)) +
+         row("share > 10 cm", percent(summary.share_over_10cm));
+}
+
 Json summaryJson(const DistanceSummary& summary) {
   Json json;
   json["count"] = summary.count;
@@ -48,6 +55,8 @@ Json summaryJson(const DistanceSummary& summary) {
   json["median"] = number(summary.median_m);
   json["p90"] = number(summary.p90_m);
   json["max"] = number(summary.max_m);
+  json["p99_m"] = number(summary.p99_m);
+  json["share_over_10cm"] = number(summary.share_over_10cm);
   return json;
 }
 
@@ -66,13 +75,9 @@ std::string formatTable(const GroundTruthReport& report) {
              format("%.3f m²", r.reconstruction_area_m2) + " / " +
                  format("%.3f m²", r.ground_truth_area_m2));
   out += "accuracy (reconstruction -> truth)\n";
-  out += row("mean", millimetres(r.accuracy.mean_m));
-  out += row("median", millimetres(r.accuracy.median_m));
-  out += row("p90", millimetres(r.accuracy.p90_m));
+  out += summaryRows(r.accuracy);
   out += "completion (truth -> reconstruction)\n";
-  out += row("mean", millimetres(r.completion.mean_m));
-  out += row("median", millimetres(r.completion.median_m));
-  out += row("p90", millimetres(r.completion.p90_m));
+  out += summaryRows(r.completion);
   out += "scores\n";
   out += row("precision", percent(r.precision));
   if (r.visibility_used) {
@@ -107,7 +112,9 @@ std::string formatTable(const HeldOutReport& report) {
   out += "depth residual |mesh - measured| (pixels with both)\n";
   out += row("median", millimetres(r.median_abs_residual_m));
   out += row("p90", millimetres(r.p90_abs_residual_m));
+  out += row("p99", millimetres(r.p99_abs_residual_m));
   out += row("mean", millimetres(r.mean_abs_residual_m));
+  out += row("share > 10 cm", percent(r.share_over_10cm));
   out += "scores\n";
   out += row("completeness (measured covered)", percent(r.completeness));
   out += row("floating (mesh in front)", percent(r.floating_share));
@@ -162,6 +169,8 @@ std::string toJson(const HeldOutReport& report) {
   json["median_abs_residual_m"] = number(r.median_abs_residual_m);
   json["p90_abs_residual_m"] = number(r.p90_abs_residual_m);
   json["mean_abs_residual_m"] = number(r.mean_abs_residual_m);
+  json["p99_abs_residual_m"] = number(r.p99_abs_residual_m);
+  json["share_over_10cm"] = number(r.share_over_10cm);
   json["floating_share"] = number(r.floating_share);
   json["completeness"] = number(r.completeness);
   json["pixels"]["measured"] = r.total.measured_pixels;
@@ -169,6 +178,7 @@ std::string toJson(const HeldOutReport& report) {
   json["pixels"]["both"] = r.total.overlap_pixels;
   json["pixels"]["agreeing"] = r.total.agreeing_pixels;
   json["pixels"]["floating"] = r.total.floating_pixels;
+  json["pixels"]["over_10cm"] = r.total.over_10cm_pixels;
   json["frames_evaluated"] = r.frames_evaluated;
   json["frames_skipped"] = r.frames_skipped;
   json["per_frame"] = Json::array();

@@ -5,6 +5,7 @@
 #include <mutex>
 
 #include "evaluator/DepthRasterizer.h"
+#include "evaluator/DistanceStats.h"
 #include "evaluator/ResidualHistogram.h"
 #include "stereo_fusion/util/ThreadPool.h"
 
@@ -32,6 +33,7 @@ HeldOutCounts compareFrame(const cv::Mat& mesh_depth, const StereoFrame& frame,
       counts.abs_residual_sum_m += std::abs(residual);
       counts.agreeing_pixels += std::abs(residual) <= options.tolerance_m;
       counts.floating_pixels += residual < -options.tolerance_m;
+      counts.over_10cm_pixels += std::abs(residual) > kGrossErrorM;
       histogram->add(std::abs(residual));
     }
   }
@@ -103,14 +105,17 @@ HeldOutResult evaluateHeldOut(const TriangleMesh& mesh, const FrameSource& frame
     t.overlap_pixels += outcome.counts.overlap_pixels;
     t.agreeing_pixels += outcome.counts.agreeing_pixels;
     t.floating_pixels += outcome.counts.floating_pixels;
+    t.over_10cm_pixels += outcome.counts.over_10cm_pixels;
     t.abs_residual_sum_m += outcome.counts.abs_residual_sum_m;  // in frame order: deterministic
   }
   const HeldOutCounts& t = result.total;
   result.median_abs_residual_m = histogram.quantile(0.5);
   result.p90_abs_residual_m = histogram.quantile(0.9);
+  result.p99_abs_residual_m = histogram.quantile(0.99);
   result.mean_abs_residual_m =
       t.overlap_pixels == 0 ? NAN : t.abs_residual_sum_m / static_cast<double>(t.overlap_pixels);
   result.floating_share = ratio(t.floating_pixels, t.overlap_pixels);
+  result.share_over_10cm = ratio(t.over_10cm_pixels, t.overlap_pixels);
   result.completeness = ratio(t.agreeing_pixels, t.measured_pixels);
   return result;
 }

@@ -25,11 +25,12 @@ struct HeldOutOptions {
 
 /// Pixel counts of one frame (or of all frames summed).
 struct HeldOutCounts {
-  uint64_t measured_pixels = 0;  ///< valid measured depth within the depth range
-  uint64_t mesh_pixels = 0;      ///< covered by the rendered mesh
-  uint64_t overlap_pixels = 0;   ///< both
-  uint64_t agreeing_pixels = 0;  ///< both, with |residual| ≤ tolerance
-  uint64_t floating_pixels = 0;  ///< both, mesh more than tolerance in front of the measurement
+  uint64_t measured_pixels = 0;   ///< valid measured depth within the depth range
+  uint64_t mesh_pixels = 0;       ///< covered by the rendered mesh
+  uint64_t overlap_pixels = 0;    ///< both
+  uint64_t agreeing_pixels = 0;   ///< both, with |residual| ≤ tolerance
+  uint64_t floating_pixels = 0;   ///< both, mesh more than tolerance in front of the measurement
+  uint64_t over_10cm_pixels = 0;  ///< both, |residual| > kGrossErrorM (DistanceStats.h)
   double abs_residual_sum_m = 0.0;
 };
 
@@ -39,9 +40,11 @@ struct HeldOutResult {
   HeldOutCounts total;
   double median_abs_residual_m = NAN;  ///< over overlap pixels (0.1 mm histogram resolution)
   double p90_abs_residual_m = NAN;
+  double p99_abs_residual_m = NAN;
   double mean_abs_residual_m = NAN;
-  double floating_share = NAN;  ///< floating / overlap pixels
-  double completeness = NAN;    ///< agreeing / measured pixels
+  double floating_share = NAN;   ///< floating / overlap pixels
+  double share_over_10cm = NAN;  ///< over_10cm / overlap pixels
+  double completeness = NAN;     ///< agreeing / measured pixels
   std::vector<size_t> frames_evaluated;
   std::vector<HeldOutCounts> per_frame;  ///< parallel to frames_evaluated
   size_t frames_skipped = 0;

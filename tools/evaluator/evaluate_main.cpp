@@ -1,7 +1,6 @@
 // stereo_fusion_evaluate: scores a reconstructed mesh against a ground-truth mesh, or against
 // held-out frames of a sequence without ground truth. See evaluateUsage() for the interface.
 
-#include <cctype>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -9,7 +8,9 @@
 #include <iostream>
 #include <optional>
 
+#include "evaluator/ErrorColouredMesh.h"
 #include "evaluator/EvaluateArguments.h"
+#include "evaluator/EvaluationMode.h"
 #include "evaluator/EvaluationReport.h"
 #include "evaluator/HeldOutSelection.h"
 #include "evaluator/SurfaceSampler.h"
@@ -62,6 +63,17 @@ void writeJsonOrFail(const std::string& path, const std::string& json) {
   std::fprintf(stderr, "[evaluate] wrote %s\n", path.c_str());
 }
 
+void writeErrorPlyOrFail(const EvaluateArguments& args, const TriangleMesh& reconstruction,
+                         const TriangleMesh& ground_truth) {
+  if (args.error_ply_path.empty()) return;
+  std::string error;
+  if (!writeErrorColouredPly(args.error_ply_path, reconstruction, ground_truth, args.tolerance_m,
+                             args.threads, &error)) {
+    throw Failure{kExitUnreadable, error};
+  }
+  std::fprintf(stderr, "[evaluate] wrote error-coloured mesh to %s\n", args.error_ply_path.c_str());
+}
+
 void runGroundTruth(const EvaluateArguments& args, const std::string& gt_path,
                     const std::string& sequence) {
   const auto start = std::chrono::steady_clock::now();
@@ -96,6 +108,7 @@ void runGroundTruth(const EvaluateArguments& args, const std::string& gt_path,
   report.elapsed_s = secondsSince(start);
   std::cout << formatTable(report);
   writeJsonOrFail(args.json_path, toJson(report));
+  writeErrorPlyOrFail(args, reconstruction, ground_truth);
 }
 
 void runHeldOut(const EvaluateArguments& args) {
@@ -128,45 +141,32 @@ void runHeldOut(const EvaluateArguments& args) {
   writeJsonOrFail(args.json_path, toJson(report));
 }
 
-bool hasPlyExtension(const fs::path& path) {
-  std::string extension = path.extension().string();
-  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return extension == ".ply";
+/// Fails before minutes of work, not after, when an output cannot be written.
+void checkOutputFolderOrFail(const std::string& path) {
+  if (path.empty()) return;
+  const fs::path parent = fs::absolute(path).parent_path();
+  std::error_code ec;
+  if (!fs::is_directory(parent, ec)) {
+    throw Failure{kExitUnreadable, path + ": folder " + parent.string() + " does not exist"};
+  }
 }
 
 /// Chooses the mode from the second argument (see the usage text) and runs it.
 void run(const EvaluateArguments& args) {
-  // Fail before minutes of work, not after, when the report cannot be written.
-  if (!args.json_path.empty()) {
-    const fs::path parent = fs::absolute(args.json_path).parent_path();
-    std::error_code ec;
-    if (!fs::is_directory(parent, ec)) {
-      throw Failure{kExitUnreadable, args.json_path + ": folder " + parent.string() + " does not exist"};
-    }
+  EvaluationMode mode;
+  std::string error;
+  switch (chooseEvaluationMode(args, &mode, &error)) {
+    case ModeError::kNone: break;
+    case ModeError::kUnreadable: throw Failure{kExitUnreadable, error};
+    case ModeError::kBadArguments: throw Failure{kExitBadArguments, error};
   }
-  const fs::path reference(args.reference_path);
-  std::error_code ec;
-  const fs::file_status status = fs::status(reference, ec);
-  if (!fs::exists(status)) {
-    throw Failure{kExitUnreadable, args.reference_path + ": does not exist"};
+  checkOutputFolderOrFail(args.json_path);
+  checkOutputFolderOrFail(args.error_ply_path);
+  if (mode.ground_truth) {
+    runGroundTruth(args, mode.ground_truth_path, mode.sequence_path);
+  } else {
+    runHeldOut(args);
   }
-  if (fs::is_directory(status)) {
-    const fs::path gt_mesh = reference / "gt_mesh.ply";
-    if (!args.held_out_given && fs::exists(gt_mesh, ec)) {
-      runGroundTruth(args, gt_mesh.string(), args.reference_path);
-    } else {
-      runHeldOut(args);
-    }
-    return;
-  }
-  if (!hasPlyExtension(reference)) {
-    throw Failure{kExitBadArguments,
-                  args.reference_path + ": expected a ground-truth .ply or a sequence folder"};
-  }
-  if (args.held_out_given) {
-    throw Failure{kExitBadArguments, "--held-out needs a sequence folder, not a mesh"};
-  }
-  runGroundTruth(args, args.reference_path, "");
 }
 
 }  // namespace

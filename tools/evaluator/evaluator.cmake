@@ -1,7 +1,7 @@
 # Targets of the mesh evaluator (owned by the evaluator work; included from the root).
 #
 #   stereo_fusion_evaluator   static library: exact mesh distances (BVH), surface sampling,
-#                             ground-truth and held-out scoring, reports
+#                             ground-truth and held-out scoring, reports, the error-coloured mesh
 #   stereo_fusion_evaluate    the command line tool behind scripts/evaluate.sh (reads the PLY
 #                             and the sequence with stereo_fusion_readers, tools/readers/)
 
@@ -20,7 +20,9 @@ set(EVALUATOR_SOURCES
   ${EVALUATOR_DIR}/HeldOutEvaluator.cpp
   ${EVALUATOR_DIR}/HeldOutSelection.cpp
   ${EVALUATOR_DIR}/EvaluateArguments.cpp
+  ${EVALUATOR_DIR}/EvaluationMode.cpp
   ${EVALUATOR_DIR}/EvaluationReport.cpp
+  ${EVALUATOR_DIR}/ErrorColouredMesh.cpp
 )
 
 add_library(stereo_fusion_evaluator STATIC ${EVALUATOR_SOURCES})

@@ -1,17 +1,22 @@
 // Mesh evaluator: exact point-to-triangle distances, the BVH, area sampling, ground-truth scores
-// (accuracy, completeness, precision, F-score, visibility) and held-out scores on frames built
-// here with the camera model.
+// (accuracy, completeness, precision, F-score, visibility), held-out scores on frames built
+// here with the camera model, the reports, the mode choice and the error-coloured mesh.
 
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <random>
+#include <sstream>
 
 #include "evaluator/BatchDistance.h"
 #include "evaluator/DepthRasterizer.h"
 #include "evaluator/DistanceStats.h"
+#include "evaluator/ErrorColouredMesh.h"
 #include "evaluator/EvaluateArguments.h"
+#include "evaluator/EvaluationMode.h"
 #include "evaluator/EvaluationReport.h"
 #include "evaluator/HeldOutEvaluator.h"
 #include "evaluator/HeldOutSelection.h"
@@ -21,6 +26,7 @@
 #include "evaluator/SurfaceSampler.h"
 #include "evaluator/TriangleBvh.h"
 #include "evaluator/TriangleDistance.h"
+#include "readers/PlyReader.h"
 
 namespace stereo_fusion::eval {
 namespace {
@@ -174,6 +180,30 @@ TEST(EvaluatorStats, PercentilesAndFScoreByHand) {
   EXPECT_DOUBLE_EQ(fScore(NAN, 1.0), 0.0);
 }
 
+TEST(EvaluatorStats, P99AndShareOverTenCentimetresByHand) {
+  // 0, 1, ..., 100 cm: rank 0.99 · 100 = 99 → 99 cm; over 10 cm: 11 .. 100 cm, 90 of 101
+  // (exactly 10 cm is not over).
+  std::vector<double> centimetres;
+  for (int i = 100; i >= 0; --i) centimetres.push_back(i / 100.0);  // descending: sorted inside
+  const DistanceSummary s = summarizeDistances(centimetres);
+  EXPECT_EQ(s.count, 101u);
+  EXPECT_NEAR(s.p99_m, 0.99, 1e-12);
+  EXPECT_NEAR(s.p90_m, 0.90, 1e-12);
+  EXPECT_DOUBLE_EQ(s.share_over_10cm, 90.0 / 101.0);
+
+  // Interpolated: rank 0.99 · 3 = 2.97 between 0.15 and 0.30 → 0.15 + 0.97 · 0.15.
+  const DistanceSummary few = summarizeDistances({0.30, 0.05, 0.15, 0.10});
+  EXPECT_NEAR(few.p99_m, 0.2955, 1e-12);
+  EXPECT_DOUBLE_EQ(few.share_over_10cm, 0.5);
+  EXPECT_DOUBLE_EQ(summarizeDistances({0.01, 0.02}).share_over_10cm, 0.0);
+  EXPECT_DOUBLE_EQ(summarizeDistances({INFINITY}).share_over_10cm, 1.0);  // nothing to measure to
+
+  const DistanceSummary empty = summarizeDistances({});
+  EXPECT_EQ(empty.count, 0u);
+  EXPECT_TRUE(std::isnan(empty.p99_m));
+  EXPECT_TRUE(std::isnan(empty.share_over_10cm));
+}
+
 // ---------------------------------------------------------------------------------------------
 // Ground-truth mode
 // ---------------------------------------------------------------------------------------------
@@ -228,6 +258,116 @@ TEST(EvaluatorGroundTruth, EmptyReconstructionScoresZero) {
   EXPECT_NE(toJson(GroundTruthReport{"m", "g", "", smallOptions(0.02), r, {}, 0.0})
                 .find("\"precision\": null"),
             std::string::npos);
+}
+
+/// True if `table` has a row `name` … `value` (the name padded with spaces, as the report does).
+bool hasRow(const std::string& table, const std::string& name, const std::string& value) {
+  std::istringstream lines(table);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("  " + name + " ", 0) != 0) continue;
+    const size_t value_start = line.find_first_not_of(' ', 2 + name.size());
+    if (value_start != std::string::npos && line.substr(value_start) == value) return true;
+  }
+  return false;
+}
+
+TEST(EvaluatorReport, GroundTruthShowsP99AndShareOverTenCentimetres) {
+  GroundTruthReport report{"m.ply", "g.ply", "", smallOptions(0.04), {}, {}, 0.0};
+  report.result.accuracy = summarizeDistances({0.30, 0.05, 0.15, 0.10});  // p99 0.2955, share 1/2
+  report.result.completion = summarizeDistances({0.2, 0.0});              // p99 0.198, share 1/2
+  const std::string table = formatTable(report);
+  EXPECT_TRUE(hasRow(table, "p99", "295.50 mm")) << table;
+  EXPECT_TRUE(hasRow(table, "p99", "198.00 mm")) << table;
+  EXPECT_TRUE(hasRow(table, "share > 10 cm", "50.00 %")) << table;
+  EXPECT_TRUE(hasRow(table, "p90", "255.00 mm")) << table;
+  const std::string json = toJson(report);
+  // The existing keys stay (scripts/bench.sh reads accuracy_m.median); the new ones follow.
+  EXPECT_NE(json.find("\"accuracy_m\": {\n    \"count\": 4,\n    \"mean\": 0.15,\n    \"median\": 0.125,\n"
+                      "    \"p90\": 0.255,\n    \"max\": 0.3,\n    \"p99_m\": 0.2955,\n"
+                      "    \"share_over_10cm\": 0.5\n  }"),
+            std::string::npos)
+      << json;
+  EXPECT_NE(json.find("\"p99_m\": 0.198"), std::string::npos) << json;
+  // An empty summary: null, not NaN (JSON has none).
+  report.result.completion = summarizeDistances({});
+  EXPECT_NE(toJson(report).find("\"share_over_10cm\": null"), std::string::npos);
+}
+
+TEST(EvaluatorReport, HeldOutShowsP99AndShareOverTenCentimetres) {
+  HeldOutReport report;
+  report.result.p99_abs_residual_m = 0.125;
+  report.result.share_over_10cm = 0.25;
+  report.result.total.over_10cm_pixels = 7;
+  const std::string table = formatTable(report);
+  EXPECT_TRUE(hasRow(table, "p99", "125.00 mm")) << table;
+  EXPECT_TRUE(hasRow(table, "share > 10 cm", "25.00 %")) << table;
+  const std::string json = toJson(report);
+  EXPECT_NE(json.find("\"p99_abs_residual_m\": 0.125"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"share_over_10cm\": 0.25"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"over_10cm\": 7"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"p90_abs_residual_m\": null"), std::string::npos) << json;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Error-coloured mesh
+// ---------------------------------------------------------------------------------------------
+using Rgb = std::array<uint8_t, 3>;
+
+TEST(EvaluatorErrorColour, KeyPointsOfTheScale) {
+  const double tolerance = 0.04;
+  EXPECT_EQ(errorColour(0.0, tolerance), (Rgb{0, 0, 255}));
+  EXPECT_EQ(errorColour(tolerance / 2, tolerance), (Rgb{0, 255, 0}));
+  EXPECT_EQ(errorColour(tolerance, tolerance), (Rgb{255, 255, 0}));
+  EXPECT_EQ(errorColour(2 * tolerance, tolerance), (Rgb{255, 0, 0}));
+  EXPECT_EQ(errorColour(0.5, tolerance), (Rgb{255, 0, 0}));
+  EXPECT_EQ(errorColour(INFINITY, tolerance), (Rgb{255, 0, 0}));
+  EXPECT_EQ(errorColour(NAN, tolerance), (Rgb{255, 0, 0}));
+}
+
+TEST(EvaluatorErrorColour, LinearBetweenTheKeyPoints) {
+  // Tolerance 1 m keeps the arithmetic exact; channels round to nearest (half away from 0).
+  EXPECT_EQ(errorColour(0.1, 1.0), (Rgb{0, 51, 204}));     // blue → green, 1/5 of the way
+  EXPECT_EQ(errorColour(0.25, 1.0), (Rgb{0, 128, 128}));   // halfway: 127.5 each
+  EXPECT_EQ(errorColour(0.75, 1.0), (Rgb{128, 255, 0}));   // green → yellow, halfway
+  EXPECT_EQ(errorColour(1.75, 1.0), (Rgb{255, 64, 0}));    // yellow → red, 3/4: 63.75
+  EXPECT_EQ(errorColour(1.999, 1.0), (Rgb{255, 0, 0}));    // 0.255 rounds to 0
+  EXPECT_EQ(errorColour(0.02, 0.08), errorColour(0.25, 1.0));  // only distance / tolerance counts
+}
+
+TEST(EvaluatorErrorColour, WrittenMeshReadsBackWithColoursByDistance) {
+  // Ground truth: the plane z = 0 beyond the reconstruction on every side, so each vertex's
+  // distance is its height. Reconstruction: a unit square fanned around its centre, corners 0,
+  // 2, 4 and 10 cm above the plane (tolerance 4 cm: blue, green, yellow, red), centre 7 cm;
+  // no normals.
+  const TriangleMesh truth = planeMesh(-1, 2, -1, 2, 0.0, 3);
+  TriangleMesh reconstruction;
+  reconstruction.positions = {{0, 0, 0}, {1, 0, 0.02f}, {1, 1, 0.04f}, {0, 1, 0.10f}, {0.5f, 0.5f, 0.07f}};
+  reconstruction.triangles = {{{0, 1, 4}}, {{1, 2, 4}}, {{2, 3, 4}}, {{3, 0, 4}}};
+  const std::string path = testing::TempDir() + "stereo_fusion_evaluator_error.ply";
+  std::string error;
+  ASSERT_TRUE(writeErrorColouredPly(path, reconstruction, truth, 0.04, 2, &error)) << error;
+
+  TriangleMesh read;
+  ASSERT_TRUE(readPly(path, &read, &error)) << error;
+  ASSERT_EQ(read.positions.size(), 5u);
+  EXPECT_EQ(read.positions, reconstruction.positions);
+  EXPECT_EQ(read.triangles, reconstruction.triangles);
+  ASSERT_EQ(read.colors.size(), 5u);
+  EXPECT_EQ(read.colors[0], (Rgb{0, 0, 255}));
+  EXPECT_EQ(read.colors[1], (Rgb{0, 255, 0}));
+  EXPECT_EQ(read.colors[2], (Rgb{255, 255, 0}));
+  EXPECT_EQ(read.colors[3], (Rgb{255, 0, 0}));
+  EXPECT_EQ(read.colors[4], (Rgb{255, 64, 0}));  // 7 cm = 1.75 tolerances
+  ASSERT_EQ(read.normals.size(), 5u);  // computed, since the input had none
+  for (const Eigen::Vector3f& n : read.normals) {
+    EXPECT_NEAR(n.norm(), 1.0f, 1e-5f);
+    EXPECT_GT(n.z(), 0.9f);  // the square is nearly flat, wound counter-clockwise from above
+  }
+  std::filesystem::remove(path);
+
+  // An unwritable target leaves nothing behind and says why.
+  EXPECT_FALSE(writeErrorColouredPly(testing::TempDir(), reconstruction, truth, 0.04, 1, &error));
+  EXPECT_NE(error.find("directory"), std::string::npos) << error;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -326,6 +466,15 @@ TEST(EvaluatorHeldOut, MeshFiveCentimetresInFrontIsFloating) {
   EXPECT_GT(r.floating_share, 0.999);
   EXPECT_LT(r.completeness, 0.001);
   EXPECT_NEAR(r.median_abs_residual_m, 0.05, 2e-4);
+  EXPECT_NEAR(r.p99_abs_residual_m, 0.05, 2e-4);
+  EXPECT_EQ(r.total.over_10cm_pixels, 0u);
+  EXPECT_DOUBLE_EQ(r.share_over_10cm, 0.0);
+  // 15 cm in front: every overlapping pixel is a gross error.
+  const HeldOutResult far = evaluateHeldOut(planeMesh(-4, 4, -3, 3, 2.0 - 0.15), source, {0}, HeldOutOptions{});
+  EXPECT_GT(far.total.overlap_pixels, 0u);
+  EXPECT_EQ(far.total.over_10cm_pixels, far.total.overlap_pixels);
+  EXPECT_DOUBLE_EQ(far.share_over_10cm, 1.0);
+  EXPECT_NEAR(far.p99_abs_residual_m, 0.15, 2e-4);
   // Missing frames are skipped with a reason, not fatal.
   const HeldOutResult with_missing = evaluateHeldOut(nearer, source, {0, 5}, HeldOutOptions{});
   EXPECT_EQ(with_missing.frames_skipped, 1u);
@@ -406,6 +555,49 @@ TEST(EvaluatorArguments, ParsesOptionsAndRejectsBadOnes) {
     EXPECT_FALSE(parseEvaluateArguments(arguments, &parsed, &error)) << arguments.back();
     EXPECT_FALSE(error.empty());
   }
+}
+
+TEST(EvaluatorArguments, ErrorPlyOnlyInGroundTruthMode) {
+  namespace fs = std::filesystem;
+  EvaluateArguments args;
+  std::string error;
+  ASSERT_TRUE(parseEvaluateArguments({"m.ply", "seq", "--error-ply", "e.ply"}, &args, &error)) << error;
+  EXPECT_EQ(args.error_ply_path, "e.ply");
+  EXPECT_FALSE(parseEvaluateArguments({"m.ply", "seq", "--error-ply"}, &args, &error));
+
+  const fs::path folder = fs::path(testing::TempDir()) / "stereo_fusion_evaluator_mode";
+  fs::remove_all(folder);
+  fs::create_directories(folder);
+  const auto choose = [&](const std::vector<std::string>& arguments, EvaluationMode* mode) {
+    EvaluateArguments parsed;
+    EXPECT_TRUE(parseEvaluateArguments(arguments, &parsed, &error)) << error;
+    error.clear();
+    return chooseEvaluationMode(parsed, mode, &error);
+  };
+  EvaluationMode mode;
+  // A folder without gt_mesh.ply is held-out mode: --error-ply is an argument error.
+  EXPECT_EQ(choose({"m.ply", folder.string()}, &mode), ModeError::kNone);
+  EXPECT_FALSE(mode.ground_truth);
+  EXPECT_EQ(choose({"m.ply", folder.string(), "--error-ply", "e.ply"}, &mode), ModeError::kBadArguments);
+  EXPECT_NE(error.find("--error-ply needs a ground truth"), std::string::npos) << error;
+
+  // With gt_mesh.ply it is ground-truth mode, unless --held-out forces held-out mode.
+  std::ofstream(folder / "gt_mesh.ply") << "ply\n";
+  EXPECT_EQ(choose({"m.ply", folder.string(), "--error-ply", "e.ply"}, &mode), ModeError::kNone);
+  EXPECT_TRUE(mode.ground_truth);
+  EXPECT_EQ(mode.ground_truth_path, (folder / "gt_mesh.ply").string());
+  EXPECT_EQ(mode.sequence_path, folder.string());
+  EXPECT_EQ(choose({"m.ply", folder.string(), "--held-out", "odd", "--error-ply", "e.ply"}, &mode),
+            ModeError::kBadArguments);
+  EXPECT_NE(error.find("--error-ply"), std::string::npos) << error;
+
+  // A ground-truth .ply directly: ground truth without visibility.
+  EXPECT_EQ(choose({"m.ply", (folder / "gt_mesh.ply").string(), "--error-ply", "e.ply"}, &mode),
+            ModeError::kNone);
+  EXPECT_TRUE(mode.ground_truth);
+  EXPECT_TRUE(mode.sequence_path.empty());
+  EXPECT_EQ(choose({"m.ply", (folder / "missing.ply").string()}, &mode), ModeError::kUnreadable);
+  fs::remove_all(folder);
 }
 
 }  // namespace

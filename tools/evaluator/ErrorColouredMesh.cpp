@@ -1,0 +1,69 @@
+#include "evaluator/ErrorColouredMesh.h"
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <vector>
+
+#include "evaluator/BatchDistance.h"
+#include "stereo_fusion/io/PlyWriter.h"
+#include "stereo_fusion/io/WriteTarget.h"
+
+namespace stereo_fusion::eval {
+namespace {
+
+uint8_t channel(double share) { return static_cast<uint8_t>(std::lround(255.0 * share)); }
+
+/// Area-weighted face normals per vertex; +z where no face touches a vertex.
+std::vector<Eigen::Vector3f> vertexNormals(const TriangleMesh& mesh) {
+  std::vector<Eigen::Vector3f> normals(mesh.positions.size(), Eigen::Vector3f::Zero());
+  for (const auto& t : mesh.triangles) {
+    const Eigen::Vector3f n = (mesh.positions[t[1]] - mesh.positions[t[0]])
+                                  .cross(mesh.positions[t[2]] - mesh.positions[t[0]]);
+    for (const uint32_t v : t) normals[v] += n;
+  }
+  for (Eigen::Vector3f& n : normals) {
+    const float length = n.norm();
+    n = length > 0.0f ? Eigen::Vector3f(n / length) : Eigen::Vector3f::UnitZ();
+  }
+  return normals;
+}
+
+}  // namespace
+
+std::array<uint8_t, 3> errorColour(double distance_m, double tolerance_m) {
+  const double t = distance_m / tolerance_m;  // in tolerances
+  if (!(t < 2.0)) return {255, 0, 0};         // also +inf and NaN: no surface near
+  if (t <= 0.0) return {0, 0, 255};
+  if (t < 0.5) return {0, channel(2.0 * t), channel(1.0 - 2.0 * t)};  // blue → green
+  if (t < 1.0) return {channel(2.0 * t - 1.0), 255, 0};              // green → yellow
+  return {255, channel(2.0 - t), 0};                                  // yellow → red
+}
+
+TriangleMesh errorColouredMesh(const TriangleMesh& reconstruction, const TriangleBvh& ground_truth,
+                               double tolerance_m, ThreadPool* pool) {
+  TriangleMesh coloured = reconstruction;
+  if (coloured.normals.size() != coloured.positions.size()) coloured.normals = vertexNormals(coloured);
+  std::vector<Eigen::Vector3d> vertices_m;
+  vertices_m.reserve(coloured.positions.size());
+  for (const Eigen::Vector3f& p : coloured.positions) vertices_m.push_back(p.cast<double>());
+  const std::vector<double> distances_m = distancesToSurface(ground_truth, vertices_m, pool);
+  coloured.colors.resize(distances_m.size());
+  for (size_t v = 0; v < distances_m.size(); ++v) {
+    coloured.colors[v] = errorColour(distances_m[v], tolerance_m);
+  }
+  return coloured;
+}
+
+bool writeErrorColouredPly(const std::string& path, const TriangleMesh& reconstruction,
+                           const TriangleMesh& ground_truth, double tolerance_m, int num_threads,
+                           std::string* error) {
+  ThreadPool pool(num_threads);
+  const TriangleMesh coloured =
+      errorColouredMesh(reconstruction, TriangleBvh(ground_truth), tolerance_m, &pool);
+  const auto write = [&](const std::string& temporary, std::string* why) {
+    return writePly(temporary, coloured, why);
+  };
+  return writeThroughTemporary(path, "cannot write the error-coloured mesh", write, error);
+}
+
+}  // namespace stereo_fusion::eval
