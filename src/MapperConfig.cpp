@@ -173,13 +173,27 @@ const std::vector<Accessor>& accessors() {
     t.push_back(doubleParam("max_depth_m", "m", 0.0, false, 1000.0,
                             "Measurements farther than this are ignored (stereo error grows as z²).",
                             member(&MapperConfig::max_depth_m)));
+    t.push_back(enumParam<LevelMode>(
+        "level_mode", {{"noise", LevelMode::kNoise}, {"depth", LevelMode::kDepth}},
+        "Where measurements switch to the coarser levels (eq. 3.2). noise: from the camera, at the "
+        "depth where the stereo depth error z²·σ_d/(f·b) exceeds a level's voxel edge: the 4³ level "
+        "from √(voxel_size_m·f·b/σ_d), 2³ from √2 times that (σ_d = disparity_noise_px), so a "
+        "precise or long-baseline camera stays fine farther. depth: at scale2_min_depth_m and "
+        "scale4_min_depth_m whatever the camera (the thesis).",
+        member(&MapperConfig::level_mode)));
+    t.push_back(doubleParam("disparity_noise_px", "px", 0.0, false, 100.0,
+                            "Expected disparity error (1σ) of the disparity source, for "
+                            "level_mode noise. 0.15 suits OpenCV SGBM on well-textured images and "
+                            "depth cameras converted to disparity; raise it for noisier matching "
+                            "(coarser levels sooner).",
+                            member(&MapperConfig::disparity_noise_px)));
     t.push_back(doubleParam("scale2_min_depth_m", "m", 0.0, false, 1000.0,
-                            "Depth from which a measurement is fused at the 4³ level and coarser "
-                            "(eq. 3.2; thesis: 2 m).",
+                            "level_mode depth: depth from which a measurement is fused at the 4³ "
+                            "level and coarser (eq. 3.2; thesis: 2 m).",
                             [](MapperConfig& c) -> double& { return c.levels.scale2_min_depth_m; }));
     t.push_back(doubleParam("scale4_min_depth_m", "m", 0.0, false, 1000.0,
-                            "Depth from which a measurement is fused at the 2³ level only "
-                            "(eq. 3.2; thesis: 4 m).",
+                            "level_mode depth: depth from which a measurement is fused at the 2³ "
+                            "level only (eq. 3.2; thesis: 4 m).",
                             [](MapperConfig& c) -> double& { return c.levels.scale4_min_depth_m; }));
     t.push_back(enumParam<WeightMode>(
         "weight_mode",

@@ -2,6 +2,7 @@
 #include <string>
 #include <vector>
 
+#include "stereo_fusion/integration/LevelSelection.h"
 #include "stereo_fusion/map/ResolutionLevel.h"
 #include "stereo_fusion/map/TruncationBand.h"
 
@@ -32,7 +33,9 @@ struct MapperConfig {
   double truncation_vox = 4.0;         ///< Φ in voxels of the measurement's level (Φ = truncation_vox · s · voxel_size_m).
   double min_depth_m = 0.1;            ///< Disparities giving a nearer depth are ignored.
   double max_depth_m = 8.0;            ///< Disparities giving a farther depth are ignored.
-  LevelThresholds levels;              ///< eq. 3.2 switch depths.
+  LevelMode level_mode = LevelMode::kNoise;  ///< Switch depths from the camera's depth error, or the fixed ones below.
+  double disparity_noise_px = 0.15;    ///< σ_d: expected disparity error (1σ) of the source, for LevelMode::kNoise.
+  LevelThresholds levels;              ///< eq. 3.2 switch depths for LevelMode::kDepth.
   WeightMode weight_mode = WeightMode::kSteinbruecker;
   double weight_falloff_start_vox = 1.0;  ///< δ of eq. 3.10, in voxels of the measurement's level.
   double depth_weight_reference_m = 1.0;  ///< z_ref of the depth-aware weight (w = 1 at this depth).

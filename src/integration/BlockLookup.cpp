@@ -20,7 +20,8 @@ namespace stereo_fusion {
 BlockLookup::BlockLookup(const MapperConfig& config, ThreadPool* pool, bool allow_simd)
     : config_(config), pool_(pool), use_avx2_(allow_simd && avx2Supported()) {}
 
-void BlockLookup::setPixelGeometry(const StereoFrame& frame, const BlockOctree& octree) {
+void BlockLookup::setPixelGeometry(const StereoFrame& frame, const MeasurementImage& measurements,
+                                   const BlockOctree& octree) {
   PixelGeometry& g = geometry_;
   const StereoCamera& cam = frame.camera;
   const Eigen::Matrix3d R_world_camera = frame.T_world_camera.linear();
@@ -41,7 +42,7 @@ void BlockLookup::setPixelGeometry(const StereoFrame& frame, const BlockOctree& 
       g.row_dir[i][v] = static_cast<float>(
           (R_world_camera(i, 1) * ((v - cam.cy()) / cam.fy()) + R_world_camera(i, 2)) * inv_block_size);
   }
-  g.levels = FloatLevelThresholds(config_.levels);
+  g.levels = FloatLevelThresholds(measurements.levels());
   const TruncationBand band = config_.truncationBand();
   for (int level = 0; level < kNumLevels; ++level) g.band_m[level] = band.measurementM<float>(level);
   // A voxel centre that fusion reads at a pixel projects within half a pixel of its centre on
@@ -440,7 +441,7 @@ LookupStats BlockLookup::run(const StereoFrame& frame, const MeasurementImage& m
   const int rows = (frame.disparity_px.rows + region_px - 1) / region_px;
   const size_t num_regions = static_cast<size_t>(cols) * rows;
   if (scratch_.size() < num_regions) scratch_.resize(num_regions);
-  setPixelGeometry(frame, *octree);
+  setPixelGeometry(frame, measurements, *octree);
 
   const bool accelerated = config_.lookup_mode == LookupMode::kAccelerated;
   pool_->parallelFor(num_regions, 4, [&](size_t begin, size_t end) {

@@ -116,8 +116,8 @@ FusionFrame makeFusionFrame(const StereoFrame& frame, const MapperConfig& config
   f.max_weight = static_cast<float>(config.max_weight);
   f.depth_weight_reference_m = static_cast<float>(config.depth_weight_reference_m);
   f.weight_mode = config.weight_mode;
-  f.thresholds = config.levels;
-  const FloatLevelThresholds float_thresholds(config.levels);
+  f.thresholds = measurements.levels();
+  const FloatLevelThresholds float_thresholds(measurements.levels());
   f.level1_min_depth_m = float_thresholds.level1_min_depth_m;
   f.level2_min_depth_m = float_thresholds.level2_min_depth_m;
   f.depth_m = measurements.depths();

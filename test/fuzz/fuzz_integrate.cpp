@@ -24,7 +24,7 @@ namespace {
 
 constexpr int kWidth = 32;
 constexpr int kHeight = 24;
-constexpr int kConfigCount = 4;
+constexpr int kConfigCount = 5;
 
 MapperConfig configFor(int variant) {
   MapperConfig c;
@@ -49,9 +49,13 @@ MapperConfig configFor(int variant) {
       c.truncation_vox = 8;
       c.min_depth_m = 0.0;
       c.max_depth_m = 1000.0;
+      c.level_mode = LevelMode::kDepth;
       c.levels.scale2_min_depth_m = 1000.0;
       c.levels.scale4_min_depth_m = 1000.0;
       c.histogram_min_points = 0;
+      break;
+    case 4:  // levels from the camera's depth error, a very noisy source: coarse levels from near
+      c.disparity_noise_px = 5.0;
       break;
     default:
       break;

@@ -112,7 +112,7 @@ class BlockLookup {
     LookupStats stats;
   };
 
-  void setPixelGeometry(const StereoFrame& frame, const BlockOctree& octree);
+  void setPixelGeometry(const StereoFrame& frame, const MeasurementImage& measurements, const BlockOctree& octree);
   /// The band box of pixel (u, v), `depth_row` being row v of the depths; false if the pixel
   /// has no depth or its box leaves the key range.
   bool bandBoxOfPixel(const float* depth_row, int u, int v, BandBox* box) const;

@@ -35,6 +35,9 @@ class MeasurementImage {
 
   int width() const { return width_; }
   int height() const { return height_; }
+  /// The frame's level switch depths (levelThresholdsFor() of its camera); set by the
+  /// frame-level build(), the configured ones otherwise.
+  const LevelThresholds& levels() const { return levels_; }
   /// Row-major depths, width() per row, no padding.
   const float* depths() const { return depth_m_.data(); }
   /// Row-major packed colours, width() per row, no padding.
@@ -49,6 +52,7 @@ class MeasurementImage {
 
  private:
   std::vector<float> depth_m_;
+  LevelThresholds levels_;
   std::vector<uint32_t> rgb_;
   int width_ = 0;
   int height_ = 0;

@@ -55,7 +55,7 @@ void referenceFuseBlock(const StereoFrame& frame, const BlockOctree& octree, con
           if (!(d > 0.0f) || !std::isfinite(d)) continue;
           const float z = fb / d;
           if (!(z >= static_cast<float>(config.min_depth_m) && z <= static_cast<float>(config.max_depth_m))) continue;
-          const int m = levelForDepth(z, config.levels);
+          const int m = levelForDepth(z, levelThresholdsFor(config, cam.fx() * cam.baseline()));
           if (level < m) continue;
           const float scale = static_cast<float>(levelScale(m));
           const float truncation = std::max(static_cast<float>(config.truncation_vox) * scale * voxel,
@@ -231,6 +231,7 @@ TEST(FusionReference, KernelsEqualReferenceOnRandomFramesAndBlocks) {
     config.max_weight = rng() % 2 ? 100.0 : 3.0;
     config.min_depth_m = rng() % 2 ? 0.1 : 0.0;
     config.max_depth_m = rng() % 2 ? 8.0 : 1e30;
+    config.level_mode = LevelMode::kDepth;  // the thresholds below, drawn at random
     config.levels.scale2_min_depth_m = rng() % 2 ? 2.0 : 2.0000001;
     config.levels.scale4_min_depth_m = rng() % 2 ? 4.0 : 1.0 + 5.0 * unit(rng);  // may be below level 1's
     config.use_color = rng() % 4 != 0;

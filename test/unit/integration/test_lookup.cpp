@@ -195,6 +195,7 @@ TEST(BlockLookup, BandGrowsWithTheMeasurementLevel) {
   StereoFrame frame = constantDepthFrame(camera, 0.0f);
   frame.disparity_px.at<float>(2, 2) = 20.0f;  // z = 50/20 = 2.5
   MapperConfig config;
+  config.level_mode = LevelMode::kDepth;  // the depths above straddle the thesis' 2 m and 4 m
   config.histogram_min_points = 0;
   BlockOctree tree(config.blockSizeM());
   const LookupRun run = runLookup(config, frame, &tree);
@@ -219,6 +220,7 @@ void expectEveryBlockFusionCanUpdateIsQueued(const Eigen::Vector3d& world_offset
   MapperConfig config;
   config.histogram_min_points = 0;  // the filter drops sparse blocks on purpose
   config.voxel_size_m = 0.01;
+  config.level_mode = LevelMode::kDepth;  // the scene's depths (1.2, 3, 6 m) put points at all three levels
   const StereoCamera camera = *StereoCamera::create(160, 120, 131.25, 131.25, 79.5, 59.5, 0.1);
   const Eigen::Vector3d& o = world_offset_m;
   sim::AnalyticScene scene;
@@ -263,7 +265,8 @@ void expectEveryBlockFusionCanUpdateIsQueued(const Eigen::Vector3d& world_offset
             if (!(v.weight > 0.0f)) continue;
             const Eigen::Vector3d x_c = T_camera_world * voxelCentre(all, b->key, level, i, j, k);
             const double surface_depth_m = x_c.z() * (1.0 - v.sdf_m / x_c.norm());  // eq. 3.15 solved for z
-            const double phi_m = band.measurementM(levelForDepth(surface_depth_m, config.levels));
+            const double phi_m = band.measurementM(
+                levelForDepth(surface_depth_m, levelThresholdsFor(config, frame.camera.fx() * frame.camera.baseline())));
             if (std::abs(v.sdf_m) > 0.999 * phi_m) continue;
             ++in_band[level];
             if (!queued.count(b->key)) {

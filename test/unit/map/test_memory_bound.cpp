@@ -33,6 +33,7 @@ MapperConfig boundedConfig() {
   MapperConfig config;
   config.voxel_size_m = 0.04;
   config.num_threads = 2;
+  config.level_mode = LevelMode::kDepth;  // the budgets below were sized with the thesis' levels
   return config;
 }
 

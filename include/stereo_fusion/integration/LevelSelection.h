@@ -1,0 +1,30 @@
+#pragma once
+// Where a frame's measurements switch to coarser levels (eq. 3.2): at fixed depths (the thesis),
+// or where the stereo depth error reaches the next level's voxel edge.
+
+#include "stereo_fusion/map/ResolutionLevel.h"
+
+namespace stereo_fusion {
+
+struct MapperConfig;
+
+enum class LevelMode {
+  kDepth,  ///< the configured switch depths scale2_min_depth_m / scale4_min_depth_m (thesis: 2 m, 4 m)
+  kNoise,  ///< from the camera: where σ_z = z² · σ_d / (f · b) exceeds the voxel edge of a level
+};
+
+/// The depth error (1σ, metres) of a measurement at `depth_m` from a camera with f · b =
+/// `fb_px_m` whose disparities have an error of `disparity_noise_px` (1σ): σ_z = z² σ_d / (f b)
+/// (eq. 3.1 propagated to first order).
+inline double depthNoiseM(double depth_m, double fb_px_m, double disparity_noise_px) {
+  return depth_m * depth_m * disparity_noise_px / fb_px_m;
+}
+
+/// The switch depths a frame from a camera with f · b = `fb_px_m` uses. kDepth: the configured
+/// ones. kNoise: a measurement is fused at the finest level whose voxel edge (voxel_size_m · 2^l)
+/// is at least its depth error, so level l starts at z_l = sqrt(2^(l−1) · voxel_size_m · f · b /
+/// σ_d): a precise camera (long baseline, small σ_d) stays fine farther, a noisy one goes coarse
+/// sooner.
+LevelThresholds levelThresholdsFor(const MapperConfig& config, double fb_px_m);
+
+}  // namespace stereo_fusion
