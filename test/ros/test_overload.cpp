@@ -97,12 +97,9 @@ TEST(Overload, ABurstOfNumberedFramesIsAccountedForFrameByFrame) {
   const ros::Time t0 = ros::Time::now() + ros::Duration(1.0);
   std::vector<test::FrameMessages> messages;
   tf2_ros::TransformBroadcaster tf;
-  for (int k = 0; k <= sent + 1; ++k) {  // the primer, the burst, a last frame after it
+  // roscpp numbers each publisher's messages (header.seq 0, 1, 2, …) as it sends them.
+  for (int k = 0; k <= sent + 1; ++k)  // the primer, the burst, a last frame after it
     messages.push_back(test::frameMessages(frame, &tf, "left_optical", t0 + ros::Duration(0.001 * k)));
-    for (std_msgs::Header* h : {&messages.back().disparity.header, &messages.back().image.header,
-                                &messages.back().info.header})
-      h->seq = static_cast<uint32_t>(k + 1);
-  }
   ros::WallDuration(0.5).sleep();  // the transforms reach the nodelet's buffer before the frames
   auto publish = [&](const test::FrameMessages& m) {
     disparity_pub.publish(m.disparity);

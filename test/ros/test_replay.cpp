@@ -85,7 +85,13 @@ TEST(ReplayFast, EveryFrameOfTheBagIsFusedOrCountedAsLost) {
   // behind them, so one more numbered disparity follows, alone (it finds no image: it is counted
   // as received and not synchronised).
   ros::NodeHandle nh;
-  ros::Publisher last_pub = nh.advertise<stereo_msgs::DisparityImage>("/stereo/disparity", 1);
+  // Like rosbag play, a publisher without the header flag: roscpp keeps the seq set below
+  // instead of numbering this publisher's messages from 0.
+  ros::AdvertiseOptions options = ros::AdvertiseOptions::create<stereo_msgs::DisparityImage>(
+      "/stereo/disparity", 1, ros::SubscriberStatusCallback(), ros::SubscriberStatusCallback(), ros::VoidConstPtr(),
+      nullptr);
+  options.has_header = false;
+  ros::Publisher last_pub = nh.advertise(options);
   ASSERT_TRUE(test::waitFor([&] { return last_pub.getNumSubscribers() > 0; }, 30.0));
   long settled = -1;
   ASSERT_TRUE(test::waitFor([&] {

@@ -54,7 +54,8 @@ def main():
             print("[demo] roslaunch ended before the frames were fused", flush=True)
             return 1
         fused = int(number("frames fused"))
-        dropped = int(sum(number(k) for k in dropped_keys()))
+        # lost before the node (header.seq gaps) or dropped in it
+        dropped = int(number("disparities missed upstream (header.seq gaps)") + sum(number(k) for k in dropped_keys()))
         print(f"[demo] {fused + dropped}/{args.frames} frames: {fused} fused, {dropped} dropped | "
               f"last {number('total p50 (ms)'):.1f} ms/frame (p50) | {int(number('blocks'))} blocks, "
               f"{number('memory (MB)'):.1f} MB", flush=True)

@@ -5,24 +5,26 @@ namespace stereo_fusion {
 
 /// Counts messages lost before they reached a subscriber, from the gaps in their header.seq:
 /// what a publisher's or subscriber's queue discarded in the transport, or a driver skipped.
-/// A stream that does not number its messages (seq always 0, as roscpp leaves it) counts
-/// nothing; a number that goes back (the publisher restarted, or a reordering) or jumps by more
-/// than kMaxGap (a different publisher) starts a new count without a gap.
+/// roscpp numbers every message a publisher sends to another process (0, 1, 2, …, per
+/// publisher); rosbag play keeps the recorded numbers. A number that does not follow the
+/// previous one by at most kMaxGap + 1 (a repeat, a publisher restarted at 0, another publisher,
+/// a bag recorded with every seq 0) starts a new count without a gap; 2³² − 1 → 0 is a wrap.
 class SequenceGaps {
  public:
   static constexpr uint32_t kMaxGap = 100000;
 
   /// The number of messages missing between the previous message and this one (0 if none).
   uint64_t next(uint32_t seq) {
-    const uint32_t last = last_;
+    const bool first = !have_last_;
+    const uint32_t gap = seq - last_ - 1;  // modulo 2³²: a wrap is a gap of 0
+    have_last_ = true;
     last_ = seq;
-    if (seq == 0 || last == 0 || seq <= last) return 0;
-    const uint32_t gap = seq - last - 1;
-    return gap <= kMaxGap ? gap : 0;
+    return !first && gap <= kMaxGap ? gap : 0;
   }
 
  private:
-  uint32_t last_ = 0;  // 0: no numbered message yet
+  bool have_last_ = false;
+  uint32_t last_ = 0;
 };
 
 }  // namespace stereo_fusion
