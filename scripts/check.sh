@@ -42,7 +42,7 @@ failed=0
 start=$SECONDS
 
 # build <dir> <sanitizers> <targets...>: configure (catkin needs the whole project) and build
-# only the given targets, not the nodelet, tools or ROS tests.
+# only the given targets (the unit tests, and the ROS targets its rostest steps need).
 build() {
   local dir="$1" sanitize="$2"
   shift 2

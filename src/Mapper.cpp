@@ -63,6 +63,8 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
     result.error = "its truncation bands reach " + std::to_string(missing_.size()) +
                    " blocks not yet in the map, more than max_new_blocks_per_frame (" +
                    std::to_string(config_.max_new_blocks_per_frame) + "): noise or a wrong calibration?";
+    result.reanchored = false;  // not fused, so the gate did not follow it
+    result.note.clear();
     return result;
   }
   gate_.accepted(frame);

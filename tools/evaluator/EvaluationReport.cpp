@@ -55,7 +55,7 @@ Json summaryJson(const DistanceSummary& summary) {
   json["median"] = number(summary.median_m);
   json["p90"] = number(summary.p90_m);
   json["max"] = number(summary.max_m);
-  json["p99_m"] = number(summary.p99_m);
+  json["p99"] = number(summary.p99_m);
   json["share_over_10cm"] = number(summary.share_over_10cm);
   return json;
 }

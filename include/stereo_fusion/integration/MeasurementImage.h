@@ -35,8 +35,8 @@ class MeasurementImage {
 
   int width() const { return width_; }
   int height() const { return height_; }
-  /// The frame's level switch depths (levelThresholdsFor() of its camera); set by the
-  /// frame-level build(), the configured ones otherwise.
+  /// The frame's level switch depths (levelThresholdsFor() of its camera), set by the
+  /// frame-level build(); the thesis' 2 m / 4 m before any.
   const LevelThresholds& levels() const { return levels_; }
   /// Row-major depths, width() per row, no padding.
   const float* depths() const { return depth_m_.data(); }

@@ -33,6 +33,7 @@ void referenceFuseBlock(const StereoFrame& frame, const BlockOctree& octree, con
   const Eigen::Matrix3f R_cw = T_camera_world.linear().cast<float>();
   const float fx = static_cast<float>(cam.fx()), fy = static_cast<float>(cam.fy());
   const float cx = static_cast<float>(cam.cx()), cy = static_cast<float>(cam.cy());
+  const LevelThresholds thresholds = levelThresholdsFor(config, cam.fx() * cam.baseline());  // the frame's
   const float fb = static_cast<float>(cam.fx() * cam.baseline());
   const float voxel = static_cast<float>(config.voxel_size_m);
   for (int level = 0; level < kNumLevels; ++level) {
@@ -55,7 +56,7 @@ void referenceFuseBlock(const StereoFrame& frame, const BlockOctree& octree, con
           if (!(d > 0.0f) || !std::isfinite(d)) continue;
           const float z = fb / d;
           if (!(z >= static_cast<float>(config.min_depth_m) && z <= static_cast<float>(config.max_depth_m))) continue;
-          const int m = levelForDepth(z, levelThresholdsFor(config, cam.fx() * cam.baseline()));
+          const int m = levelForDepth(z, thresholds);
           if (level < m) continue;
           const float scale = static_cast<float>(levelScale(m));
           const float truncation = std::max(static_cast<float>(config.truncation_vox) * scale * voxel,

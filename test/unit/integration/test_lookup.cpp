@@ -242,6 +242,7 @@ void expectEveryBlockFusionCanUpdateIsQueued(const Eigen::Vector3d& world_offset
     hi = componentMax(hi, b->key);
   }
   BlockOctree all(config.blockSizeM());
+  const LevelThresholds thresholds = levelThresholdsFor(config, frame.camera.fx() * frame.camera.baseline());
   std::vector<VoxelBlock*> every;
   for (int32_t z = lo.z - 2; z <= hi.z + 2; ++z)
     for (int32_t y = lo.y - 2; y <= hi.y + 2; ++y)
@@ -266,7 +267,7 @@ void expectEveryBlockFusionCanUpdateIsQueued(const Eigen::Vector3d& world_offset
             const Eigen::Vector3d x_c = T_camera_world * voxelCentre(all, b->key, level, i, j, k);
             const double surface_depth_m = x_c.z() * (1.0 - v.sdf_m / x_c.norm());  // eq. 3.15 solved for z
             const double phi_m = band.measurementM(
-                levelForDepth(surface_depth_m, levelThresholdsFor(config, frame.camera.fx() * frame.camera.baseline())));
+                levelForDepth(surface_depth_m, thresholds));
             if (std::abs(v.sdf_m) > 0.999 * phi_m) continue;
             ++in_band[level];
             if (!queued.count(b->key)) {

@@ -283,11 +283,11 @@ TEST(EvaluatorReport, GroundTruthShowsP99AndShareOverTenCentimetres) {
   const std::string json = toJson(report);
   // The existing keys stay (scripts/bench.sh reads accuracy_m.median); the new ones follow.
   EXPECT_NE(json.find("\"accuracy_m\": {\n    \"count\": 4,\n    \"mean\": 0.15,\n    \"median\": 0.125,\n"
-                      "    \"p90\": 0.255,\n    \"max\": 0.3,\n    \"p99_m\": 0.2955,\n"
+                      "    \"p90\": 0.255,\n    \"max\": 0.3,\n    \"p99\": 0.2955,\n"
                       "    \"share_over_10cm\": 0.5\n  }"),
             std::string::npos)
       << json;
-  EXPECT_NE(json.find("\"p99_m\": 0.198"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"p99\": 0.198"), std::string::npos) << json;
   // An empty summary: null, not NaN (JSON has none).
   report.result.completion = summarizeDistances({});
   EXPECT_NE(toJson(report).find("\"share_over_10cm\": null"), std::string::npos);
