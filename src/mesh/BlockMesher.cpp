@@ -1028,7 +1028,7 @@ void BlockMesher::mesh(const BlockOctree& map, const MeshStates& states, const V
     meshUniformBoxes(ctx);
   else
     meshMixedBoxes(ctx);
-  computeNormals(out);
+  computeVertexNormals(out);
 }
 
 void BlockMesher::meshUniformBoxes(Context& ctx) const {
@@ -1145,15 +1145,14 @@ bool BlockMesher::mixedBoxIsEmpty(Context& ctx, const int lo[3], const int hi[3]
   }
 }
 
-void BlockMesher::computeNormals(SubMesh* out) {
-  // Area-weighted face normals, pointing to negative SDF (the triangles' winding).
-  out->normals.assign(out->positions.size(), Eigen::Vector3f::Zero());
-  for (const auto& t : out->triangles) {
-    const Eigen::Vector3f n = (out->positions[t[1]] - out->positions[t[0]])
-                                  .cross(out->positions[t[2]] - out->positions[t[0]]);
-    for (uint32_t v : t) out->normals[v] += n;
+void computeVertexNormals(TriangleMesh* mesh) {
+  mesh->normals.assign(mesh->positions.size(), Eigen::Vector3f::Zero());
+  for (const auto& t : mesh->triangles) {
+    const Eigen::Vector3f n = (mesh->positions[t[1]] - mesh->positions[t[0]])
+                                  .cross(mesh->positions[t[2]] - mesh->positions[t[0]]);
+    for (uint32_t v : t) mesh->normals[v] += n;
   }
-  for (Eigen::Vector3f& n : out->normals) {
+  for (Eigen::Vector3f& n : mesh->normals) {
     const float len = n.norm();
     n = len > 0.0f ? Eigen::Vector3f(n / len) : Eigen::Vector3f::UnitZ();
   }

@@ -13,21 +13,6 @@ namespace {
 
 uint8_t channel(double share) { return static_cast<uint8_t>(std::lround(255.0 * share)); }
 
-/// Area-weighted face normals per vertex; +z where no face touches a vertex.
-std::vector<Eigen::Vector3f> vertexNormals(const TriangleMesh& mesh) {
-  std::vector<Eigen::Vector3f> normals(mesh.positions.size(), Eigen::Vector3f::Zero());
-  for (const auto& t : mesh.triangles) {
-    const Eigen::Vector3f n = (mesh.positions[t[1]] - mesh.positions[t[0]])
-                                  .cross(mesh.positions[t[2]] - mesh.positions[t[0]]);
-    for (const uint32_t v : t) normals[v] += n;
-  }
-  for (Eigen::Vector3f& n : normals) {
-    const float length = n.norm();
-    n = length > 0.0f ? Eigen::Vector3f(n / length) : Eigen::Vector3f::UnitZ();
-  }
-  return normals;
-}
-
 }  // namespace
 
 std::array<uint8_t, 3> errorColour(double distance_m, double tolerance_m) {
@@ -42,7 +27,7 @@ std::array<uint8_t, 3> errorColour(double distance_m, double tolerance_m) {
 TriangleMesh errorColouredMesh(const TriangleMesh& reconstruction, const TriangleBvh& ground_truth,
                                double tolerance_m, ThreadPool* pool) {
   TriangleMesh coloured = reconstruction;
-  if (coloured.normals.size() != coloured.positions.size()) coloured.normals = vertexNormals(coloured);
+  if (coloured.normals.size() != coloured.positions.size()) computeVertexNormals(&coloured);
   std::vector<Eigen::Vector3d> vertices_m;
   vertices_m.reserve(coloured.positions.size());
   for (const Eigen::Vector3f& p : coloured.positions) vertices_m.push_back(p.cast<double>());

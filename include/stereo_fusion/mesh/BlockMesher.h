@@ -134,7 +134,6 @@ class BlockMesher {
   /// and every voxel its points may weigh share one sign), decided on voxel bit masks
   /// without sampling; false when in doubt.
   bool mixedBoxIsEmpty(Context& ctx, const int lo[3], const int hi[3]) const;
-  static void computeNormals(SubMesh* out);
   bool samplePoint(const Context& ctx, int qx, int qy, int qz, PointSample* out) const;
   bool cachedSample(Context& ctx, const int q[3], PointSample* out) const;
   bool boxHasNoSurface(Context& ctx, const int lo[3], const int hi[3]) const;

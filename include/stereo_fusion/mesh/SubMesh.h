@@ -24,6 +24,10 @@ struct TriangleMesh {
   }
 };
 
+/// Sets `mesh->normals` to the area-weighted face normals of each vertex (the triangles'
+/// winding: towards negative SDF for the mesher's triangles); +z where no face touches a vertex.
+void computeVertexNormals(TriangleMesh* mesh);
+
 /// The triangles one block contributes to the global mesh: its own cells plus the seams it
 /// owns towards +x/+y/+z. Vertices on the same cell edge are shared.
 struct SubMesh : TriangleMesh {
