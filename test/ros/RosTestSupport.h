@@ -10,6 +10,7 @@
 
 #include "stereo_fusion/ros/MessageConversions.h"
 
+#include <algorithm>
 #include <map>
 #include <mutex>
 #include <vector>
@@ -66,12 +67,14 @@ class DiagnosticsWatcher {
     return false;
   }
 
-  /// Every key reported so far.
-  std::vector<std::string> keys() {
+  /// The sum of every counter whose key starts with "dropped: " (each frame the node received
+  /// and did not fuse is in exactly one); 0 before the first report.
+  long droppedTotal() {
     std::lock_guard<std::mutex> lock(mutex_);
-    std::vector<std::string> out;
-    for (const auto& kv : values_) out.push_back(kv.first);
-    return out;
+    long sum = 0;
+    for (const auto& kv : values_)
+      if (kv.first.rfind("dropped: ", 0) == 0) sum += std::max(0L, std::stol(kv.second));
+    return sum;
   }
 
   /// The value of `key` as an integer, or -1 when it has not been reported yet.

@@ -77,9 +77,7 @@ TEST(ReplayFast, EveryFrameOfTheBagIsFusedOrCountedAsLost) {
     received = diag("disparities received");
     missed = diag("disparities missed upstream (header.seq gaps)");
     fused = diag("frames fused");
-    dropped = 0;
-    for (const std::string& key : diagnostics.keys())
-      if (key.rfind("dropped: ", 0) == 0) dropped += diag(key);
+    dropped = diagnostics.droppedTotal();
   };
   // The bag is played once the counters stop moving. Losses at its very end would leave no gap
   // behind them, so one more numbered disparity follows, alone (it finds no image: it is counted
