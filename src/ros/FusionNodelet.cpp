@@ -70,26 +70,44 @@ void FusionNodelet::onInit() {
 
   worker_ = std::thread([this] { workerLoop(); });
 
-  disparity_sub_.subscribe(nh, "disparity", 5);
-  // Counted before the synchroniser sees it (registered first, called first): a disparity the
-  // synchroniser drops, for want of its image and CameraInfo or pushed out by a newer one with
-  // the same stamp, shows as received but never matched.
+  // The synchroniser is fed by hand so that the first message of a stamp on each topic wins: it
+  // would let a second one replace the first while the set is incomplete (see RecentStamps).
   // roscpp runs one subscription's callbacks one at a time, so disparity_seq_ needs no lock.
+  const size_t stamp_window = static_cast<size_t>(std::max(8, 2 * node_config_.sync_queue_size));
+  disparity_stamps_ = RecentStamps(stamp_window);
+  image_stamps_ = RecentStamps(stamp_window);
+  info_stamps_ = RecentStamps(stamp_window);
+  if (node_config_.approximate_sync)
+    approx_sync_ = std::make_unique<message_filters::Synchronizer<ApproxPolicy>>(ApproxPolicy(node_config_.sync_queue_size));
+  else
+    exact_sync_ = std::make_unique<message_filters::Synchronizer<ExactPolicy>>(ExactPolicy(node_config_.sync_queue_size));
+  if (approx_sync_) approx_sync_->registerCallback(&FusionNodelet::onFrame, this);
+  if (exact_sync_) exact_sync_->registerCallback(&FusionNodelet::onFrame, this);
+
+  disparity_sub_.subscribe(nh, "disparity", 5);
   disparity_sub_.registerCallback([this](const DisparityMsg::ConstPtr& disparity) {
     ++disparities_in_;
     disparities_missed_ += disparity_seq_.next(disparity->header.seq);
+    if (!passToSync(&disparity_stamps_, disparity->header.stamp)) {
+      ++dropped_sync_duplicate_;
+      NODELET_WARN_THROTTLE(5.0, "stereo_fusion: a second disparity stamped %.3f arrived before its frame was "
+                                 "matched; the first is kept, this one dropped (%llu so far)",
+                            disparity->header.stamp.toSec(),
+                            static_cast<unsigned long long>(dropped_sync_duplicate_.load()));
+      return;
+    }
+    addToSync<0>(disparity);
   });
   image_sub_.subscribe(nh, "image", 5);
+  image_sub_.registerCallback([this](const ImageMsg::ConstPtr& image) {
+    if (passToSync(&image_stamps_, image->header.stamp)) addToSync<1>(image);
+    else ++ignored_duplicate_parts_;
+  });
   info_sub_.subscribe(nh, "camera_info", 5);
-  if (node_config_.approximate_sync) {
-    approx_sync_ = std::make_unique<message_filters::Synchronizer<ApproxPolicy>>(
-        ApproxPolicy(node_config_.sync_queue_size), disparity_sub_, image_sub_, info_sub_);
-    approx_sync_->registerCallback(&FusionNodelet::onFrame, this);
-  } else {
-    exact_sync_ = std::make_unique<message_filters::Synchronizer<ExactPolicy>>(
-        ExactPolicy(node_config_.sync_queue_size), disparity_sub_, image_sub_, info_sub_);
-    exact_sync_->registerCallback(&FusionNodelet::onFrame, this);
-  }
+  info_sub_.registerCallback([this](const InfoMsg::ConstPtr& info) {
+    if (passToSync(&info_stamps_, info->header.stamp)) addToSync<2>(info);
+    else ++ignored_duplicate_parts_;
+  });
   NODELET_INFO("stereo_fusion: fusing %s + %s + %s into frame '%s' (voxel %.3f m, %d threads)",
                disparity_sub_.getTopic().c_str(), image_sub_.getTopic().c_str(), info_sub_.getTopic().c_str(),
                node_config_.world_frame.c_str(), mapper_config_.voxel_size_m, mapper_config_.num_threads);
@@ -98,6 +116,12 @@ void FusionNodelet::onInit() {
 void FusionNodelet::onFrame(const DisparityMsg::ConstPtr& d, const ImageMsg::ConstPtr& i,
                             const InfoMsg::ConstPtr& c) {
   ++received_;
+  {
+    std::lock_guard<std::mutex> lock(stamps_mutex_);
+    disparity_stamps_.forget(d->header.stamp.toNSec());
+    image_stamps_.forget(i->header.stamp.toNSec());
+    info_stamps_.forget(c->header.stamp.toNSec());
+  }
   {
     std::lock_guard<std::mutex> lock(queue_mutex_);
     if (queue_.size() >= static_cast<size_t>(node_config_.queue_size)) {
@@ -470,13 +494,14 @@ void FusionNodelet::publishFullLocked(const std::vector<BlockKey>& removed) {
 void FusionNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   const double elapsed = std::max(1e-3, (ros::WallTime::now() - started_).toSec());
   const uint64_t disparities_in = disparities_in_.load(), matched = received_.load();
-  const uint64_t unmatched = disparities_in > matched ? disparities_in - matched : 0;
+  const uint64_t held_back = dropped_sync_duplicate_.load();
+  const uint64_t unmatched = disparities_in > matched + held_back ? disparities_in - matched - held_back : 0;
   // A disparity whose image has not arrived yet is unmatched for a moment in normal operation:
   // only more than the synchroniser's queue can hold is surely lost.
   const bool lost_in_sync = unmatched > static_cast<uint64_t>(node_config_.sync_queue_size);
   const uint64_t dropped = dropped_queue_ + dropped_tf_ + dropped_bad_input_ + dropped_backwards_ +
                            dropped_duplicate_ + dropped_pose_jump_ + dropped_timestamp_jump_ +
-                           dropped_allocation_budget_ + dropped_bad_stamp_ + dropped_superseded_ +
+                           dropped_allocation_budget_ + dropped_bad_stamp_ + dropped_superseded_ + held_back +
                            (lost_in_sync ? unmatched : 0);
   std::vector<double> lat;
   // lookup, fusion, total per frame; meshing, texture per meshing pass.
@@ -520,6 +545,8 @@ void FusionNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
   status.add("dropped: bad input", dropped_bad_input_.load());
   status.add("dropped: timestamp backwards", dropped_backwards_.load());
   status.add("dropped: duplicate frame", dropped_duplicate_.load());
+  status.add("dropped: duplicate stamp before synchronisation", held_back);
+  status.add("ignored: image / camera_info repeating a stamp", ignored_duplicate_parts_.load());
   status.add("dropped: pose jump", dropped_pose_jump_.load());
   status.add("dropped: timestamp jump", dropped_timestamp_jump_.load());
   status.add("dropped: allocation budget", dropped_allocation_budget_.load());

@@ -33,6 +33,7 @@
 #include "stereo_fusion/Mapper.h"
 #include "stereo_fusion/ros/MeshMessages.h"
 #include "stereo_fusion/ros/RosParameters.h"
+#include "stereo_fusion/ros/RecentStamps.h"
 #include "stereo_fusion/ros/SequenceGaps.h"
 
 namespace stereo_fusion {
@@ -62,6 +63,17 @@ class FusionNodelet : public nodelet::Nodelet {
   };
 
   void onInit() override;
+  /// False if a message of `stamp` on that topic already waits in the synchroniser.
+  bool passToSync(RecentStamps* stamps, const ros::Time& stamp) {
+    std::lock_guard<std::mutex> lock(stamps_mutex_);
+    return stamps->pass(stamp.toNSec());
+  }
+  /// Hands one message to whichever synchroniser runs (it calls onFrame when a set is complete).
+  template <int I, typename M>
+  void addToSync(const M& msg) {
+    if (exact_sync_) exact_sync_->template add<I>(msg);
+    if (approx_sync_) approx_sync_->template add<I>(msg);
+  }
   void onFrame(const DisparityMsg::ConstPtr& d, const ImageMsg::ConstPtr& i, const InfoMsg::ConstPtr& c);
   void workerLoop();
   void processFrame(const QueuedFrame& frame);
@@ -129,6 +141,11 @@ class FusionNodelet : public nodelet::Nodelet {
   std::atomic<uint64_t> disparities_in_{0};
   std::atomic<uint64_t> disparities_missed_{0};  // gaps in the disparities' header.seq
   SequenceGaps disparity_seq_;
+  /// Stamps each topic passed to the synchroniser, not matched yet: the first message of a stamp wins.
+  std::mutex stamps_mutex_;
+  RecentStamps disparity_stamps_{1}, image_stamps_{1}, info_stamps_{1};
+  std::atomic<uint64_t> dropped_sync_duplicate_{0};   // disparities repeating a stamp, held back
+  std::atomic<uint64_t> ignored_duplicate_parts_{0};  // images / camera_infos repeating a stamp
   std::atomic<uint64_t> dropped_backwards_{0}, dropped_duplicate_{0}, dropped_pose_jump_{0};
   std::atomic<uint64_t> dropped_timestamp_jump_{0};
   std::atomic<uint64_t> dropped_allocation_budget_{0};  // bands reaching more than max_new_blocks_per_frame new blocks
