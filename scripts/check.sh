@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Sanitizer checks: builds the unit tests with sanitizers in their own build folders and runs
 # them; any sanitizer report or test failure makes it exit non-zero. Ends with a summary.
-#   scripts/check.sh [--asan | --tsan | --all] [--tsan-ros]      (default --all)
+#   scripts/check.sh [--asan | --tsan | --all]      (default --all)
 #   --asan  AddressSanitizer + UndefinedBehaviorSanitizer (g++), in .build-asan/: every unit
 #           test (the core's and the tools' binaries), and every fuzz target's checked-in corpus
 #           and regressions (test/fuzz/)
@@ -12,10 +12,9 @@
 # also built with them) and driven by the rostests with a real master: fusion_nodelet.test (every
 # message type, services, bad input), mesh_assembler.test (the base-station stream) and
 # overload.test. A report in any of those processes fails the step (.check-logs/asan_ros.output.log).
-# --tsan-ros (opt-in, not in --all): the same rostests under TSan. Not clean yet: roscpp, nodelet
-# and bondcpp are not instrumented, so TSan cannot order the boost::shared_ptr hand-overs between
-# their threads and ours; test/tsan_suppressions.txt names the library-internal ones, but frames in
-# the dlopen'ed nodelet stay unsymbolised and cannot be matched (doc/reliability.md).
+# --tsan runs the same rostests under TSan. roscpp, nodelet and bondcpp are not instrumented, so
+# TSan cannot order the boost::shared_ptr hand-overs between their threads and ours:
+# test/tsan_suppressions.txt names the library-internal frames of those reports, each with why.
 # Both run with STEREO_FUSION_TEST_QUICK=1: the three heaviest thread tests use smaller inputs
 # (test/unit/QuickMode.h); under ASan the mapper's thread-count test alone took 150 s otherwise.
 # Environment: CHECK_JOBS (default 2) parallel compile jobs and test shards.
@@ -23,12 +22,10 @@ set -uo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 JOBS="${CHECK_JOBS:-2}"
 mode=--all
-TSAN_ROS=0
 for arg in "$@"; do
   case "$arg" in
     --asan | --tsan | --all) mode="$arg" ;;
-    --tsan-ros) TSAN_ROS=1 ;;
-    *) echo "usage: scripts/check.sh [--asan | --tsan | --all] [--tsan-ros]" >&2; exit 2 ;;
+    *) echo "usage: scripts/check.sh [--asan | --tsan | --all]" >&2; exit 2 ;;
   esac
 done
 
@@ -145,16 +142,14 @@ fi
 
 if [ "$mode" != --asan ]; then
   dir="$ROOT/.build-tsan"
-  tsan_targets=(stereo_fusion_thread_tests)
-  if ((TSAN_ROS)); then tsan_targets+=("${ROS_TARGETS[@]}"); fi
-  if build "$dir" thread "${tsan_targets[@]}"; then
+  if build "$dir" thread stereo_fusion_thread_tests "${ROS_TARGETS[@]}"; then
     bin="$(find "$dir" -type f -name stereo_fusion_thread_tests -perm -u+x | head -n 1)"
     threaded='ThreadPool.*:BlockOctree.ConcurrentAllocationCreatesEachBlockOnce'
     threaded+=':BlockOctreeLinks.EqualSearchesAfterRandomAllocateEraseClearSwap'
     threaded+=':BlockLookup.ResultDoesNotDependOnThreadsOrRegionSize:MapperProperties.ThreadCountDoesNotChangeTheMap'
     threaded+=':BlockMesher.ThreadCountDoesNotChangeTheMesh'
     run_gtest tsan_thread_tests "$bin" "$threaded" || failed=1
-    if ((TSAN_ROS)); then run_rostests tsan_ros "$dir" "$ROS_TESTS" || failed=1; fi
+    run_rostests tsan_ros "$dir" "$ROS_TESTS" || failed=1
   else
     results+=("tsan build: FAILED"); failed=1
   fi

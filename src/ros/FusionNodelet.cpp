@@ -376,6 +376,9 @@ bool FusionNodelet::saveMesh(SaveMesh::Request& req, SaveMesh::Response& res) {
 }
 
 bool FusionNodelet::getFullMesh(GetFullMesh::Request&, GetFullMesh::Response& res) {
+  // Frames already fused are in the answer even if their meshing waits for the publish rate:
+  // their changes go out as an update first, so the full mesh's sequence covers them.
+  publishPending(ros::Time(0), true);
   std::lock_guard<std::mutex> lock(map_mutex_);
   std::vector<BlockKey> all;
   for (const auto& [key, sub] : mapper_->mesh().submeshes()) all.push_back(key);

@@ -46,6 +46,11 @@ class DiagnosticsWatcher {
   explicit DiagnosticsWatcher(std::string name_part = "fusion") : name_part_(std::move(name_part)) {
     sub_ = ros::NodeHandle().subscribe("/diagnostics", 10, &DiagnosticsWatcher::onMessage, this);
   }
+  /// The spinner threads may be in onMessage while a test ends: shutdown() waits for that
+  /// callback before the members it reads are destroyed (TSan saw the map freed under it).
+  ~DiagnosticsWatcher() { sub_.shutdown(); }
+  DiagnosticsWatcher(const DiagnosticsWatcher&) = delete;
+  DiagnosticsWatcher& operator=(const DiagnosticsWatcher&) = delete;
 
   /// Waits for the next report after this call. Counters only grow, so values read after it are
   /// at least what the node had counted when this was called: a stale, lower reading taken as

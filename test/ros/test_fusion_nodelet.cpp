@@ -51,6 +51,9 @@ class NodeletFixture : public testing::Test {
              info_pub_.getNumSubscribers() > 0 && update_sub_.getNumPublishers() > 0;
     }, 30.0)) << "the nodelet did not connect";
     ASSERT_TRUE(test::waitForTfSubscriber(30.0)) << "the nodelet's tf listener did not connect";
+    // Each test has its own watcher: without a first report its counters read -1, and a test's
+    // baseline ("fused before") would be 0 while the nodelet has fused frames of earlier tests.
+    ASSERT_TRUE(diagnostics_.waitForNextReport(30.0)) << "no diagnostics from the nodelet";
   }
 
   // The subscriber is declared before the members its callback uses, so it would be destroyed
@@ -311,6 +314,7 @@ TEST_F(NodeletFixture, ASecondDisparityOfAStampArrivingBeforeItsFrameIsMatchedIs
   // the good frame. The first of a stamp must win and the second be counted.
   std_srvs::Empty empty;
   ASSERT_TRUE(ros::service::call("/stereo_fusion/reset", empty));
+  ASSERT_TRUE(diagnostics_.waitForNextReport(30.0));  // baselines no older than the reset
   const sim::AnalyticScene s = scene();
   const auto pose = sim::lookAt({0.0, -0.2, 0.0}, {0.05, 0.1, 1.2}, -Eigen::Vector3d::UnitY());
   test::FrameMessages good = test::frameMessages(test::renderFrame(s, qvga(), pose), &tf_);
