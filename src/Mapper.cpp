@@ -1,16 +1,25 @@
 #include "stereo_fusion/Mapper.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <functional>
 #include <iterator>
 #include <stdexcept>
 
+#include "stereo_fusion/integration/DisparityCoherence.h"
 #include "stereo_fusion/io/MapFile.h"
 #include "stereo_fusion/util/Timer.h"
 
 namespace stereo_fusion {
 
 namespace {
+/// "12.3 %" for a share of 0.123.
+std::string formatPercent(double share) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.1f %%", 100.0 * share);
+  return text;
+}
+
 const MapperConfig& checked(const MapperConfig& config) {
   const std::vector<std::string> errors = validateMapperConfig(config);
   if (!errors.empty()) {
@@ -55,6 +64,19 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
 
   Timer lookup_timer;
   measurements_.build(frame, config_, &pool_);
+  if (config_.min_coherent_pixel_share > 0.0) {
+    const DisparityCoherence coherence = measureDisparityCoherence(frame.disparity_px, measurements_, &pool_);
+    if (coherence.usable_pixels >= kCoherenceMinUsablePixels && coherence.share() < config_.min_coherent_pixel_share) {
+      result.reason = RejectReason::kIncoherentDisparity;
+      result.error = "only " + formatPercent(coherence.share()) + " of its " + std::to_string(coherence.usable_pixels) +
+                     " usable disparities agree within 0.5 px with a neighbour, less than "
+                     "min_coherent_pixel_share (" + formatPercent(config_.min_coherent_pixel_share) +
+                     "): a broken matcher or a wrong topic?";
+      result.reanchored = false;  // not fused, so the gate did not follow it
+      result.note.clear();
+      return result;
+    }
+  }
   result.lookup = lookup_.run(frame, measurements_, &octree_, &queue_, &missing_);
   result.lookup_ms = lookup_timer.elapsedMs();
   // The lookup only reads the map: a frame over its allocation budget leaves it untouched.

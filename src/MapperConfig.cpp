@@ -257,6 +257,14 @@ const std::vector<Accessor>& accessors() {
                          "each by the levels they hold), the least recently updated ones (farthest "
                          "first among equals) are evicted and their submeshes removed. 0 = unlimited.",
                          member(&MapperConfig::max_blocks)));
+    t.push_back(doubleParam("min_coherent_pixel_share", "", 0.0, true, 1.0,
+                            "A frame is rejected before the lookup, the map unchanged, when fewer of "
+                            "its usable disparities than this share agree within 0.5 px with one of "
+                            "their 8 neighbours: random values from a broken matcher or a wrong topic "
+                            "(about 12 % agree over 0–64 px) would put a point anywhere along every "
+                            "ray. Real stereo and depth cameras measure 99.8–100 %. Frames with fewer "
+                            "than 64 usable pixels are not judged. 0 = no check.",
+                            member(&MapperConfig::min_coherent_pixel_share)));
     t.push_back(intParam("max_new_blocks_per_frame", "blocks", 0, 100000000,
                          "Allocation budget of one frame: a frame whose truncation bands reach more "
                          "blocks that are not yet in the map is rejected before fusion, the map "

@@ -51,6 +51,7 @@ struct MapperConfig {
   int texture_border_px = 24;          ///< A frame textures a block only if all its vertices project this far inside the image.
   int texture_max_patch_px = 64;       ///< Cap on a patch's edge; larger crops are downscaled (bounds texture memory).
   int max_blocks = 0;                  ///< Memory budget in blocks (0.3–7 KB each); beyond it the least recently updated are evicted. 0 = unlimited.
+  double min_coherent_pixel_share = 0.5;  ///< A frame whose usable disparities agree with a neighbour less often is rejected (DisparityCoherence). 0 = no check.
   int max_new_blocks_per_frame = 50000;  ///< A frame whose bands reach more blocks not yet in the map is rejected before fusion. 0 = no limit.
   double max_distance_from_camera_m = 0.0;  ///< Blocks whose centre is farther from the current camera are evicted. 0 = unlimited.
   double max_pose_jump_m = 100.0;      ///< A camera more than this from the last fused frame's camera is rejected. 0 = no check.

@@ -14,6 +14,7 @@ const char* rejectReasonName(RejectReason reason) {
     case RejectReason::kPoseJump: return "pose_jump";
     case RejectReason::kTimestampJump: return "timestamp_jump";
     case RejectReason::kAllocationBudget: return "allocation_budget";
+    case RejectReason::kIncoherentDisparity: return "incoherent_disparity";
   }
   return "unknown";
 }

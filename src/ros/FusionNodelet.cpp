@@ -279,6 +279,7 @@ void FusionNodelet::processFrame(const QueuedFrame& f) {
                                      : result.reason == RejectReason::kPoseJump          ? dropped_pose_jump_
                                      : result.reason == RejectReason::kTimestampJump     ? dropped_timestamp_jump_
                                      : result.reason == RejectReason::kAllocationBudget  ? dropped_allocation_budget_
+                                     : result.reason == RejectReason::kIncoherentDisparity ? dropped_incoherent_
                                                                                           : dropped_bad_input_;
     ++counter;
     NODELET_ERROR_THROTTLE(5.0, "stereo_fusion: frame rejected (%s, %llu so far): %s", rejectReasonName(result.reason),
@@ -504,7 +505,7 @@ void FusionNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
   const bool lost_in_sync = unmatched > static_cast<uint64_t>(node_config_.sync_queue_size);
   const uint64_t dropped = dropped_queue_ + dropped_tf_ + dropped_bad_input_ + dropped_backwards_ +
                            dropped_duplicate_ + dropped_pose_jump_ + dropped_timestamp_jump_ +
-                           dropped_allocation_budget_ + dropped_bad_stamp_ + dropped_superseded_ + held_back +
+                           dropped_allocation_budget_ + dropped_incoherent_ + dropped_bad_stamp_ + dropped_superseded_ + held_back +
                            (lost_in_sync ? unmatched : 0);
   std::vector<double> lat;
   // lookup, fusion, total per frame; meshing, texture per meshing pass.
@@ -553,6 +554,7 @@ void FusionNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
   status.add("dropped: pose jump", dropped_pose_jump_.load());
   status.add("dropped: timestamp jump", dropped_timestamp_jump_.load());
   status.add("dropped: allocation budget", dropped_allocation_budget_.load());
+  status.add("dropped: incoherent disparity", dropped_incoherent_.load());
   status.add("dropped: bad timestamp", dropped_bad_stamp_.load());
   status.add("re-anchored (relocalisation or clock reset)", reanchored_.load());
   status.add("dropped: superseded by reset/load", dropped_superseded_.load());

@@ -204,8 +204,15 @@ TEST_F(NodeletFixture, MissingTfAndBadInputAreDroppedCountedAndSurvived) {
     i->step /= 2;
     i->data.resize(i->step * i->height);
   });
-  ASSERT_TRUE(waitFor([&] { return diag("dropped: tf timeout") >= 1 && diag("dropped: bad input") >= 4; }, 30.0))
-      << "tf " << diag("dropped: tf timeout") << ", bad " << diag("dropped: bad input");
+  publish(frame, "left_optical", true, [](stereo_msgs::DisparityImage* d, sensor_msgs::Image*) {
+    float* px = reinterpret_cast<float*>(d->image.data.data());  // a broken matcher: random values
+    cv::RNG rng(11);
+    for (size_t k = 0; k < d->image.data.size() / 4; ++k) px[k] = rng.uniform(1.0f, 64.0f);
+  });
+  ASSERT_TRUE(waitFor([&] {
+    return diag("dropped: tf timeout") >= 1 && diag("dropped: bad input") >= 4 && diag("dropped: incoherent disparity") >= 1;
+  }, 30.0)) << "tf " << diag("dropped: tf timeout") << ", bad " << diag("dropped: bad input") << ", incoherent "
+            << diag("dropped: incoherent disparity");
   // A disparity image full of NaN is valid input with nothing in it: fused, map unchanged.
   const long fused_mid = diag("frames fused");
   publish(frame, "left_optical", true, [](stereo_msgs::DisparityImage* d, sensor_msgs::Image*) {
@@ -225,6 +232,7 @@ TEST_F(NodeletFixture, MissingTfAndBadInputAreDroppedCountedAndSurvived) {
   EXPECT_TRUE(waitFor([&] { return diag("frames fused") >= fused_before + 2; }, 30.0));
   EXPECT_EQ(diag("dropped: tf timeout"), 1);
   EXPECT_EQ(diag("dropped: bad input"), 4);
+  EXPECT_EQ(diag("dropped: incoherent disparity"), 1);
   EXPECT_EQ(diag("dropped: superseded by reset/load"), 0);
   std_srvs::Empty reset;
   EXPECT_TRUE(ros::service::call("/stereo_fusion/reset", reset));

@@ -17,6 +17,7 @@ enum class RejectReason {
   kPoseJump,            ///< camera moved more than max_pose_jump_m since the last fused frame
   kTimestampJump,       ///< timestamp more than max_timestamp_gap_s after the last fused frame's
   kAllocationBudget,    ///< its bands reach more new blocks than max_new_blocks_per_frame
+  kIncoherentDisparity,  ///< fewer usable disparities agree with a neighbour than min_coherent_pixel_share
 };
 
 /// Short stable name of a reason, e.g. "timestamp_backwards" (counter keys, stats.json).

@@ -295,9 +295,10 @@ TEST(FusionReference, KernelsEqualReferenceOnRandomFramesAndBlocks) {
       for (size_t n = 0; n < fusers.size(); ++n)
         for (size_t b = 0; b < expected.size(); ++b)
           for (int v = 0; v < VoxelBlock::kVoxelCount; ++v) {
-            if (v == 0)
+            if (v == 0) {
               for (int level = 0; level < kNumLevels; ++level)
                 ASSERT_EQ(blocks[n][b].hasLevel(level), expected[b].hasLevel(level)) << "kernel " << n << " level " << level;
+            }
             const Voxel& got = blocks[n][b].voxel(v);
             const Voxel& want = expected[b].voxel(v);
             ASSERT_EQ(std::memcmp(&got, &want, sizeof(Voxel)), 0)

@@ -162,6 +162,7 @@ TEST(BadInput, DegenerateDisparityValuesLeaveTheMapUnchanged) {
 TEST(BadInput, AFrameOverItsAllocationBudgetIsRejectedAndTheMapUnchanged) {
   MapperConfig config;
   config.histogram_min_points = 0;  // every pixel reaches the map: the bound alone must hold
+  config.min_coherent_pixel_share = 0.0;  // the coherence check would reject the noise first
   StereoFrame noise = floorAndSphereFrame(1, 2.0);
   cv::RNG rng(7);
   rng.fill(noise.disparity_px, cv::RNG::UNIFORM, 1.0, 64.0);
@@ -206,4 +207,42 @@ TEST(BadInput, AFrameOverItsAllocationBudgetIsRejectedAndTheMapUnchanged) {
   Mapper at_budget(config);
   ASSERT_TRUE(at_budget.integrate(floorAndSphereFrame(0, 1.0)).accepted);
   EXPECT_TRUE(at_budget.integrate(noise).accepted);
+}
+
+// Random disparities agree with their neighbours only by chance (about 12 % over 1–64 px);
+// a matcher's output almost always. Below min_coherent_pixel_share the frame is rejected before
+// the lookup, whatever its allocation, and the map stays as it was.
+TEST(BadInput, RandomDisparitiesAreRejectedAsIncoherentAndTheMapUnchanged) {
+  MapperConfig config;
+  StereoFrame noise = floorAndSphereFrame(1, 2.0);
+  cv::RNG rng(7);
+  rng.fill(noise.disparity_px, cv::RNG::UNIFORM, 1.0, 64.0);
+  Mapper mapper(config);
+  ASSERT_TRUE(mapper.integrate(floorAndSphereFrame(0, 1.0)).accepted);
+  const MapState before = state(mapper);
+  const size_t bytes_before = mapper.memoryBytes();
+  const IntegrationResult rejected = mapper.integrate(noise);
+  EXPECT_FALSE(rejected.accepted);
+  EXPECT_EQ(rejected.reason, RejectReason::kIncoherentDisparity);
+  EXPECT_STREQ(rejectReasonName(rejected.reason), "incoherent_disparity");
+  EXPECT_NE(rejected.error.find("usable disparities agree within 0.5 px with a neighbour, less than "
+                                "min_coherent_pixel_share (50.0 %)"),
+            std::string::npos)
+      << rejected.error;
+  EXPECT_TRUE(rejected.updated_blocks.empty());
+  EXPECT_TRUE(state(mapper) == before) << "a rejected frame changed the map";
+  EXPECT_EQ(mapper.memoryBytes(), bytes_before);
+  // Not the time reference: a good frame stamped before it is fused.
+  EXPECT_TRUE(mapper.integrate(floorAndSphereFrame(2, 1.5)).accepted);
+
+  // With the check off the same frame is fused (the budget is then the only bound).
+  config.min_coherent_pixel_share = 0.0;
+  Mapper unchecked(config);
+  ASSERT_TRUE(unchecked.integrate(floorAndSphereFrame(0, 1.0)).accepted);
+  EXPECT_TRUE(unchecked.integrate(noise).accepted);
+  // A noisy real surface (0.3 px) is fused with the default.
+  Mapper noisy(MapperConfig{});
+  StereoFrame surface = renderFrame(floorAndSphere(), qvgaCamera(), floorAndSphereView(1), 0.3, 5);
+  surface.timestamp_s = 1.0;
+  EXPECT_TRUE(noisy.integrate(surface).accepted);
 }
