@@ -5,6 +5,7 @@
 #include <functional>
 #include <iterator>
 #include <stdexcept>
+#include <utility>
 
 #include "stereo_fusion/integration/DisparityCoherence.h"
 #include "stereo_fusion/io/MapFile.h"
@@ -62,33 +63,35 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
   if (result.reanchored) result.note = gate_message;
   if (result.reason != RejectReason::kNone) return result;
 
+  // A frame the gate passed but the measurements or the lookup refuse is not fused, so the gate
+  // does not follow it (no re-anchoring either).
+  auto reject_after_gate = [&result](RejectReason reason, std::string error) {
+    result.reason = reason;
+    result.error = std::move(error);
+    result.reanchored = false;
+    result.note.clear();
+    return result;
+  };
   Timer lookup_timer;
   measurements_.build(frame, config_, &pool_);
   if (config_.min_coherent_pixel_share > 0.0) {
     const DisparityCoherence coherence = measureDisparityCoherence(frame.disparity_px, measurements_, &pool_);
-    if (coherence.usable_pixels >= kCoherenceMinUsablePixels && coherence.share() < config_.min_coherent_pixel_share) {
-      result.reason = RejectReason::kIncoherentDisparity;
-      result.error = "only " + formatPercent(coherence.share()) + " of its " + std::to_string(coherence.usable_pixels) +
-                     " usable disparities agree within 0.5 px with a neighbour, less than "
-                     "min_coherent_pixel_share (" + formatPercent(config_.min_coherent_pixel_share) +
-                     "): a broken matcher or a wrong topic?";
-      result.reanchored = false;  // not fused, so the gate did not follow it
-      result.note.clear();
-      return result;
-    }
+    if (coherence.usable_pixels >= kCoherenceMinUsablePixels && coherence.share() < config_.min_coherent_pixel_share)
+      return reject_after_gate(RejectReason::kIncoherentDisparity,
+                               "only " + formatPercent(coherence.share()) + " of its " +
+                                   std::to_string(coherence.usable_pixels) +
+                                   " usable disparities agree within 0.5 px with a neighbour, less than "
+                                   "min_coherent_pixel_share (" + formatPercent(config_.min_coherent_pixel_share) +
+                                   "): a broken matcher or a wrong topic?");
   }
   result.lookup = lookup_.run(frame, measurements_, &octree_, &queue_, &missing_);
   result.lookup_ms = lookup_timer.elapsedMs();
   // The lookup only reads the map: a frame over its allocation budget leaves it untouched.
-  if (config_.max_new_blocks_per_frame > 0 && missing_.size() > static_cast<size_t>(config_.max_new_blocks_per_frame)) {
-    result.reason = RejectReason::kAllocationBudget;
-    result.error = "its truncation bands reach " + std::to_string(missing_.size()) +
-                   " blocks not yet in the map, more than max_new_blocks_per_frame (" +
-                   std::to_string(config_.max_new_blocks_per_frame) + "): noise or a wrong calibration?";
-    result.reanchored = false;  // not fused, so the gate did not follow it
-    result.note.clear();
-    return result;
-  }
+  if (config_.max_new_blocks_per_frame > 0 && missing_.size() > static_cast<size_t>(config_.max_new_blocks_per_frame))
+    return reject_after_gate(RejectReason::kAllocationBudget,
+                             "its truncation bands reach " + std::to_string(missing_.size()) +
+                                 " blocks not yet in the map, more than max_new_blocks_per_frame (" +
+                                 std::to_string(config_.max_new_blocks_per_frame) + "): noise or a wrong calibration?");
   gate_.accepted(frame);
   result.accepted = true;
   ++frames_integrated_;

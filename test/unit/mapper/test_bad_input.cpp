@@ -23,6 +23,30 @@ struct MapState {
 };
 MapState state(const Mapper& m) { return {snapshot(m.map()), triangleSets(m.mesh())}; }
 
+/// Frame 1 of floorAndSphereFrame() with disparities drawn uniformly over 1–64 px (a broken
+/// matcher): a point anywhere along every ray.
+StereoFrame randomDisparityFrame() {
+  StereoFrame noise = floorAndSphereFrame(1, 2.0);
+  cv::RNG rng(7);
+  rng.fill(noise.disparity_px, cv::RNG::UNIFORM, 1.0, 64.0);
+  return noise;
+}
+
+/// Integrates `frame`, which must be rejected for `reason` with the map (state and memory) as it
+/// was; returns the result for its message.
+IntegrationResult expectRejectedMapUnchanged(Mapper* mapper, const StereoFrame& frame, RejectReason reason,
+                                             const char* reason_name) {
+  const MapState before = state(*mapper);
+  const size_t bytes_before = mapper->memoryBytes();
+  const IntegrationResult rejected = mapper->integrate(frame);
+  EXPECT_FALSE(rejected.accepted);
+  EXPECT_EQ(rejected.reason, reason);
+  EXPECT_STREQ(rejectReasonName(rejected.reason), reason_name);
+  EXPECT_TRUE(rejected.updated_blocks.empty());
+  EXPECT_TRUE(state(*mapper) == before) << "a rejected frame changed the map";
+  EXPECT_EQ(mapper->memoryBytes(), bytes_before);
+  return rejected;
+}
 }  // namespace
 
 TEST(BadInput, TimestampsGoingBackwardsAndDuplicatesAreRejectedByReason) {
@@ -163,9 +187,7 @@ TEST(BadInput, AFrameOverItsAllocationBudgetIsRejectedAndTheMapUnchanged) {
   MapperConfig config;
   config.histogram_min_points = 0;  // every pixel reaches the map: the bound alone must hold
   config.min_coherent_pixel_share = 0.0;  // the coherence check would reject the noise first
-  StereoFrame noise = floorAndSphereFrame(1, 2.0);
-  cv::RNG rng(7);
-  rng.fill(noise.disparity_px, cv::RNG::UNIFORM, 1.0, 64.0);
+  const StereoFrame noise = randomDisparityFrame();
 
   // How many new blocks the noise frame reaches after the first good frame, with no limit.
   size_t reached = 0;
@@ -183,19 +205,12 @@ TEST(BadInput, AFrameOverItsAllocationBudgetIsRejectedAndTheMapUnchanged) {
   config.max_new_blocks_per_frame = static_cast<int>(reached) - 1;
   Mapper mapper(config);
   ASSERT_TRUE(mapper.integrate(floorAndSphereFrame(0, 1.0)).accepted);
-  const MapState before = state(mapper);
-  const size_t bytes_before = mapper.memoryBytes();
-  const IntegrationResult rejected = mapper.integrate(noise);
-  EXPECT_FALSE(rejected.accepted);
-  EXPECT_EQ(rejected.reason, RejectReason::kAllocationBudget);
-  EXPECT_STREQ(rejectReasonName(rejected.reason), "allocation_budget");
+  const IntegrationResult rejected =
+      expectRejectedMapUnchanged(&mapper, noise, RejectReason::kAllocationBudget, "allocation_budget");
   EXPECT_NE(rejected.error.find("reach " + std::to_string(reached) + " blocks not yet in the map, more than "
                                 "max_new_blocks_per_frame (" + std::to_string(reached - 1) + ")"),
             std::string::npos)
       << rejected.error;
-  EXPECT_TRUE(rejected.updated_blocks.empty());
-  EXPECT_TRUE(state(mapper) == before) << "a rejected frame changed the map";
-  EXPECT_EQ(mapper.memoryBytes(), bytes_before);
 
   // The rejected frame did not become the time reference: a good frame stamped before it is fused.
   const IntegrationResult good = mapper.integrate(floorAndSphereFrame(2, 1.5));
@@ -214,24 +229,15 @@ TEST(BadInput, AFrameOverItsAllocationBudgetIsRejectedAndTheMapUnchanged) {
 // the lookup, whatever its allocation, and the map stays as it was.
 TEST(BadInput, RandomDisparitiesAreRejectedAsIncoherentAndTheMapUnchanged) {
   MapperConfig config;
-  StereoFrame noise = floorAndSphereFrame(1, 2.0);
-  cv::RNG rng(7);
-  rng.fill(noise.disparity_px, cv::RNG::UNIFORM, 1.0, 64.0);
+  const StereoFrame noise = randomDisparityFrame();
   Mapper mapper(config);
   ASSERT_TRUE(mapper.integrate(floorAndSphereFrame(0, 1.0)).accepted);
-  const MapState before = state(mapper);
-  const size_t bytes_before = mapper.memoryBytes();
-  const IntegrationResult rejected = mapper.integrate(noise);
-  EXPECT_FALSE(rejected.accepted);
-  EXPECT_EQ(rejected.reason, RejectReason::kIncoherentDisparity);
-  EXPECT_STREQ(rejectReasonName(rejected.reason), "incoherent_disparity");
+  const IntegrationResult rejected =
+      expectRejectedMapUnchanged(&mapper, noise, RejectReason::kIncoherentDisparity, "incoherent_disparity");
   EXPECT_NE(rejected.error.find("usable disparities agree within 0.5 px with a neighbour, less than "
                                 "min_coherent_pixel_share (50.0 %)"),
             std::string::npos)
       << rejected.error;
-  EXPECT_TRUE(rejected.updated_blocks.empty());
-  EXPECT_TRUE(state(mapper) == before) << "a rejected frame changed the map";
-  EXPECT_EQ(mapper.memoryBytes(), bytes_before);
   // Not the time reference: a good frame stamped before it is fused.
   EXPECT_TRUE(mapper.integrate(floorAndSphereFrame(2, 1.5)).accepted);
 
