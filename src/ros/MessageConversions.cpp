@@ -4,6 +4,7 @@
 #include <sensor_msgs/image_encodings.h>
 #include <tf2_eigen/tf2_eigen.h>
 
+#include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
@@ -79,9 +80,23 @@ bool toStereoFrame(const stereo_msgs::DisparityImage& disparity, const sensor_ms
     *error = std::string("image conversion failed: ") + e.what();
     return false;
   }
+  // cv_bridge does not reorder bytes (a big-endian 32FC1 comes back as 8UC4): swap them here.
+  constexpr bool kHostBigEndian = __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__;
+  sensor_msgs::Image host_order;
+  const sensor_msgs::Image* disparity_image = &d;
+  if (static_cast<bool>(d.is_bigendian) != kHostBigEndian) {
+    host_order = d;
+    host_order.is_bigendian = kHostBigEndian;
+    for (size_t row = 0; row < d.height; ++row)
+      for (size_t k = 0; k < size_t{d.width}; ++k) {
+        uint8_t* value = host_order.data.data() + row * d.step + 4 * k;
+        std::reverse(value, value + 4);
+      }
+    disparity_image = &host_order;
+  }
   cv::Mat disparity_px;
   try {
-    disparity_px = cv_bridge::toCvCopy(d, enc::TYPE_32FC1)->image;
+    disparity_px = cv_bridge::toCvCopy(*disparity_image, enc::TYPE_32FC1)->image;
   } catch (const cv_bridge::Exception& e) {
     *error = std::string("disparity conversion failed: ") + e.what();
     return false;

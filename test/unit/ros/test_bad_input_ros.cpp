@@ -148,3 +148,18 @@ TEST(BadInput, TruncatedBagsFailCleanlyInTheOfflinePath) {
   fs::remove(path);
   fs::remove_all(out_dir);
 }
+
+// A DisparityImage from a big-endian producer (is_bigendian = 1, bytes of each float reversed)
+// reads as the same disparities: misread bytes would be garbage depths.
+TEST(BadInput, BigEndianDisparitiesReadAsTheSameValues) {
+  Messages m = messagesOf(floorAndSphereFrame(0, 1.0));
+  StereoFrame little, big;
+  std::string error;
+  ASSERT_TRUE(toStereoFrame(m.disparity, m.image, m.info, Eigen::Isometry3d::Identity(), &little, &error)) << error;
+  sensor_msgs::Image& d = m.disparity.image;
+  for (size_t k = 0; k + 4 <= d.data.size(); k += 4) std::reverse(d.data.begin() + k, d.data.begin() + k + 4);
+  d.is_bigendian = 1;
+  ASSERT_TRUE(toStereoFrame(m.disparity, m.image, m.info, Eigen::Isometry3d::Identity(), &big, &error)) << error;
+  ASSERT_EQ(big.disparity_px.size(), little.disparity_px.size());
+  EXPECT_EQ(cv::norm(big.disparity_px, little.disparity_px, cv::NORM_INF), 0.0);
+}
