@@ -185,7 +185,9 @@ const std::vector<Accessor>& accessors() {
                             "Expected disparity error (1σ) of the disparity source, for "
                             "level_mode noise. 0.15 suits OpenCV SGBM on well-textured images and "
                             "depth cameras converted to disparity; raise it for noisier matching "
-                            "(coarser levels sooner).",
+                            "(coarser levels sooner). A source whose disparities come in coarse "
+                            "steps (DisparityImage.delta_d) uses at least their rounding error "
+                            "delta_d/√12 (0.29 px for whole pixels).",
                             member(&MapperConfig::disparity_noise_px)));
     t.push_back(doubleParam("scale2_min_depth_m", "m", 0.0, false, 1000.0,
                             "level_mode depth: depth from which a measurement is fused at the 4³ "

@@ -118,7 +118,7 @@ void MeasurementImage::build(const StereoFrame& frame, const MapperConfig& confi
   build(frame.disparity_px, config.use_color ? frame.color : cv::Mat(),
         static_cast<float>(camera.fx() * camera.baseline()), static_cast<float>(config.min_depth_m),
         static_cast<float>(config.max_depth_m), pool);
-  levels_ = levelThresholdsFor(config, camera.fx() * camera.baseline());
+  levels_ = levelThresholdsFor(config, camera.fx() * camera.baseline(), frame.disparity_step_px);
 }
 
 }  // namespace stereo_fusion

@@ -12,6 +12,9 @@ std::string validateFrame(const StereoFrame& frame, double block_size_m) {
   const StereoCamera& cam = frame.camera;
   if (!cam.valid()) return "camera model is not set (zero image size or intrinsics)";
   if (frame.disparity_px.empty()) return "disparity image is empty";
+  if (!(frame.disparity_step_px >= 0.0 && frame.disparity_step_px <= kMaxDisparityStepPx))
+    return "disparity step (DisparityImage.delta_d) of " + std::to_string(frame.disparity_step_px) +
+           " px is not a resolution in [0, " + std::to_string(static_cast<int>(kMaxDisparityStepPx)) + "] px";
   if (frame.disparity_px.type() != CV_32FC1)
     return "disparity image must be CV_32FC1 (float pixels), got type " +
            std::to_string(frame.disparity_px.type());

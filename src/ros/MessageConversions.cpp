@@ -118,6 +118,7 @@ bool toStereoFrame(const stereo_msgs::DisparityImage& disparity, const sensor_ms
   }
   frame->timestamp_s = disparity.header.stamp.toSec();
   frame->camera = *camera;
+  frame->disparity_step_px = disparity.delta_d;  // validateFrame() checks its range
   frame->disparity_px = disparity_px;
   frame->color = color;
   frame->T_world_camera = T_world_camera;

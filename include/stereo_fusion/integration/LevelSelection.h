@@ -20,11 +20,17 @@ inline double depthNoiseM(double depth_m, double fb_px_m, double disparity_noise
   return depth_m * depth_m * disparity_noise_px / fb_px_m;
 }
 
+/// The disparity error (1σ, px) of a source: disparity_noise_px, but never below what quantising
+/// disparities to steps of `disparity_step_px` alone costs (step/√12, a uniform rounding error;
+/// DisparityImage.delta_d, 0 = unknown). SGBM's 1/16 px steps add nothing (0.018 px); a matcher
+/// that gives whole pixels is at least 0.29 px.
+double disparityNoisePx(const MapperConfig& config, double disparity_step_px);
+
 /// The switch depths a frame from a camera with f · b = `fb_px_m` uses. kDepth: the configured
 /// ones. kNoise: a measurement is fused at the finest level whose voxel edge (voxel_size_m · 2^l)
 /// is at least its depth error, so level l starts at z_l = sqrt(2^(l−1) · voxel_size_m · f · b /
-/// σ_d): a precise camera (long baseline, small σ_d) stays fine farther, a noisy one goes coarse
-/// sooner.
-LevelThresholds levelThresholdsFor(const MapperConfig& config, double fb_px_m);
+/// σ_d) with σ_d = disparityNoisePx(config, disparity_step_px): a precise camera (long
+/// baseline, small σ_d) stays fine farther, a noisy one goes coarse sooner.
+LevelThresholds levelThresholdsFor(const MapperConfig& config, double fb_px_m, double disparity_step_px = 0.0);
 
 }  // namespace stereo_fusion

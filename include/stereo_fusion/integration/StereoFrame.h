@@ -17,7 +17,13 @@ struct StereoFrame {
   /// Pose of the left camera's optical frame: maps camera points into the world.
   Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();
   StereoCamera camera;
+  /// The source's disparity resolution in px (DisparityImage.delta_d; 0 = unknown): coarse
+  /// steps add their rounding error to the disparity noise that picks the levels.
+  double disparity_step_px = 0.0;
 };
+
+/// The coarsest disparity resolution a frame may claim (px).
+constexpr double kMaxDisparityStepPx = 4.0;
 
 /// Empty string when `frame` can be fused; otherwise one sentence saying what is wrong
 /// (image types and sizes, camera, pose finiteness and orthonormality, pose range).

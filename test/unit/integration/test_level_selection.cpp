@@ -29,6 +29,25 @@ TEST(LevelSelection, NoiseModeSwitchesWhereTheDepthErrorReachesTheVoxelEdge) {
   EXPECT_NEAR(levelThresholdsFor(config, 386.14).scale2_min_depth_m, 0.5 * std::sqrt(0.10 * 386.14 / 0.15), 1e-9);
 }
 
+TEST(LevelSelection, CoarseDisparityStepsRaiseTheNoiseToTheirRoundingError) {
+  MapperConfig config;  // level_mode noise, σ_d 0.15 px
+  config.voxel_size_m = 0.02;
+  // SGBM's 1/16 px steps round by 0.018 px (1σ): below σ_d, nothing changes.
+  EXPECT_DOUBLE_EQ(disparityNoisePx(config, 1.0 / 16.0), 0.15);
+  EXPECT_DOUBLE_EQ(disparityNoisePx(config, 0.0), 0.15) << "unknown step";
+  EXPECT_EQ(levelThresholdsFor(config, 69.12, 1.0 / 16.0).scale2_min_depth_m,
+            levelThresholdsFor(config, 69.12).scale2_min_depth_m);
+  // Whole-pixel disparities: σ_d = 1/√12 = 0.288675 px, so z1 = sqrt(0.02 · 69.12 / 0.288675)
+  // = sqrt(4.788774) = 2.188327 m and z2 = sqrt(9.577548) = 3.094761 m.
+  EXPECT_NEAR(disparityNoisePx(config, 1.0), 0.2886751, 1e-7);
+  const LevelThresholds whole = levelThresholdsFor(config, 69.12, 1.0);
+  EXPECT_NEAR(whole.scale2_min_depth_m, 2.188327, 1e-6);
+  EXPECT_NEAR(whole.scale4_min_depth_m, 3.094761, 1e-6);
+  // The configured depths ignore it.
+  config.level_mode = LevelMode::kDepth;
+  EXPECT_EQ(levelThresholdsFor(config, 69.12, 1.0).scale2_min_depth_m, config.levels.scale2_min_depth_m);
+}
+
 TEST(LevelSelection, DepthModeKeepsTheConfiguredDepths) {
   MapperConfig config;
   config.level_mode = LevelMode::kDepth;
@@ -63,6 +82,20 @@ TEST(LevelSelection, TheMapperFusesAtTheLevelTheFramesCameraSelects) {
   EXPECT_EQ(levelsAllocated(depth_mode), 0b110) << "2.5 m is past the thesis' 2 m: 4³ and coarser";
   MapperConfig noise_mode;  // σ_d = 0.15 px: level 1 from 3.04 m
   EXPECT_EQ(levelsAllocated(noise_mode), 0b111) << "good data at 2.5 m stays at 8³ (and updates the coarser levels)";
+  // Whole-pixel disparities (delta_d = 1): σ_d ≥ 0.289 px, level 1 from 2.19 m.
+  frame.disparity_step_px = 1.0;
+  EXPECT_EQ(levelsAllocated(noise_mode), 0b110) << "rounded disparities at 2.5 m go to 4³";
+  frame.disparity_step_px = 0.0;
   noise_mode.disparity_noise_px = 0.6;  // level 1 from 1.52 m, level 2 from 2.15 m
   EXPECT_EQ(levelsAllocated(noise_mode), 0b100);
+  // A step that is no resolution is refused with the frame.
+  for (double step : {-1.0, 5.0, std::nan("")}) {
+    frame.disparity_step_px = step;
+    Mapper mapper(noise_mode);
+    const IntegrationResult r = mapper.integrate(frame);
+    EXPECT_FALSE(r.accepted) << step;
+    EXPECT_EQ(r.reason, RejectReason::kInvalidFrame) << step;
+    EXPECT_NE(r.error.find("disparity step (DisparityImage.delta_d)"), std::string::npos) << r.error;
+    EXPECT_EQ(mapper.map().blockCount(), 0u);
+  }
 }

@@ -163,3 +163,18 @@ TEST(BadInput, BigEndianDisparitiesReadAsTheSameValues) {
   ASSERT_EQ(big.disparity_px.size(), little.disparity_px.size());
   EXPECT_EQ(cv::norm(big.disparity_px, little.disparity_px, cv::NORM_INF), 0.0);
 }
+
+// DisparityImage.delta_d travels with the frame: it sets a floor under the disparity noise that
+// picks the levels (LevelSelection.*), and a value that is no resolution refuses the frame there.
+TEST(BadInput, TheDisparityStepTravelsWithTheFrame) {
+  Messages m = messagesOf(floorAndSphereFrame(0, 1.0));
+  StereoFrame frame;
+  std::string error;
+  m.disparity.delta_d = 1.0f;
+  ASSERT_TRUE(toStereoFrame(m.disparity, m.image, m.info, Eigen::Isometry3d::Identity(), &frame, &error)) << error;
+  EXPECT_EQ(frame.disparity_step_px, 1.0);
+  EXPECT_EQ(validateFrame(frame, 0.16), "");
+  m.disparity.delta_d = NAN;
+  ASSERT_TRUE(toStereoFrame(m.disparity, m.image, m.info, Eigen::Isometry3d::Identity(), &frame, &error)) << error;
+  EXPECT_NE(validateFrame(frame, 0.16).find("is not a resolution in [0, 4] px"), std::string::npos);
+}
