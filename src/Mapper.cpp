@@ -14,10 +14,10 @@
 namespace stereo_fusion {
 
 namespace {
-/// "12.3 %" for a share of 0.123.
-std::string formatPercent(double share) {
+/// `value` printed with `pattern`, e.g. "%.1f %%".
+std::string format(const char* pattern, double value) {
   char text[32];
-  std::snprintf(text, sizeof(text), "%.1f %%", 100.0 * share);
+  std::snprintf(text, sizeof(text), pattern, value);
   return text;
 }
 
@@ -78,10 +78,11 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
     const DisparityCoherence coherence = measureDisparityCoherence(frame.disparity_px, measurements_, &pool_);
     if (coherence.usable_pixels >= kCoherenceMinUsablePixels && coherence.share() < config_.min_coherent_pixel_share)
       return reject_after_gate(RejectReason::kIncoherentDisparity,
-                               "only " + formatPercent(coherence.share()) + " of its " +
-                                   std::to_string(coherence.usable_pixels) +
-                                   " usable disparities agree within 0.5 px with a neighbour, less than "
-                                   "min_coherent_pixel_share (" + formatPercent(config_.min_coherent_pixel_share) +
+                               "only " + format("%.1f %%", 100.0 * coherence.share()) + " of its " +
+                                   std::to_string(coherence.usable_pixels) + " usable disparities agree within " +
+                                   format("%g", kCoherenceTolerancePx) +
+                                   " px with a neighbour, less than min_coherent_pixel_share (" +
+                                   format("%.1f %%", 100.0 * config_.min_coherent_pixel_share) +
                                    "): a broken matcher or a wrong topic?");
   }
   result.lookup = lookup_.run(frame, measurements_, &octree_, &queue_, &missing_);
