@@ -118,7 +118,9 @@ bool waitFor(F&& done, double timeout_s) {
 
 /// Waits until a node (the fusion nodelet's tf listener) is connected to this process's /tf
 /// publication, which a TransformBroadcaster shares: a transform sent before that connection
-/// is up is lost, and its frame then dropped for want of tf, however long the test waits.
+/// is up is lost, and its frame then dropped for want of tf, however long the test waits. The
+/// broadcaster must exist before this call and outlive it: the publication lives only while
+/// some publisher of /tf in the process does.
 inline bool waitForTfSubscriber(double timeout_s) {
   const ros::Publisher tf_pub = ros::NodeHandle().advertise<tf2_msgs::TFMessage>("/tf", 100);
   return waitFor([&] { return tf_pub.getNumSubscribers() > 0; }, timeout_s);
