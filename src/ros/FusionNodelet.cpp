@@ -77,12 +77,13 @@ void FusionNodelet::onInit() {
   disparity_stamps_ = RecentStamps(stamp_window);
   image_stamps_ = RecentStamps(stamp_window);
   info_stamps_ = RecentStamps(stamp_window);
-  if (node_config_.approximate_sync)
+  if (node_config_.approximate_sync) {
     approx_sync_ = std::make_unique<message_filters::Synchronizer<ApproxPolicy>>(ApproxPolicy(node_config_.sync_queue_size));
-  else
+    approx_sync_->registerCallback(&FusionNodelet::onFrame, this);
+  } else {
     exact_sync_ = std::make_unique<message_filters::Synchronizer<ExactPolicy>>(ExactPolicy(node_config_.sync_queue_size));
-  if (approx_sync_) approx_sync_->registerCallback(&FusionNodelet::onFrame, this);
-  if (exact_sync_) exact_sync_->registerCallback(&FusionNodelet::onFrame, this);
+    exact_sync_->registerCallback(&FusionNodelet::onFrame, this);
+  }
 
   disparity_sub_.subscribe(nh, "disparity", 5);
   disparity_sub_.registerCallback([this](const DisparityMsg::ConstPtr& disparity) {
