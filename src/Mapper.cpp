@@ -39,7 +39,7 @@ Mapper::Mapper(const MapperConfig& config)
       lookup_(config_, &pool_),
       fuser_(config_, &pool_),
       mesh_store_(MeshingParams{config_.voxel_size_m, config_.truncation_vox,
-                                config_.mesh_level_min_coverage}),
+                                config_.mesh_level_min_coverage, config_.mesh_fill_seams}),
       texture_store_(TextureParams{config_.texture_border_px, config_.texture_max_patch_px,
                                    config_.voxel_size_m, config_.truncation_vox}),
       mesh_consumer_(map_changes_.subscribe("mesher")),

@@ -239,6 +239,12 @@ const std::vector<Accessor>& accessors() {
                             "A block is meshed at the finest level whose observed surface area is at "
                             "least this share of the largest among its three levels.",
                             member(&MapperConfig::mesh_level_min_coverage)));
+    t.push_back(boolParam("mesh_fill_seams",
+                          "Where a block is meshed at a finer level than it holds, its unobserved face "
+                          "voxels take the value of its own coarser levels, so a fine block meets a "
+                          "coarser neighbour without a hole. false: those cells are skipped (the "
+                          "thesis).",
+                          member(&MapperConfig::mesh_fill_seams)));
     t.push_back(enumParam<TextureMode>(
         "texture", {{"off", TextureMode::kOff}, {"patches", TextureMode::kPatches}},
         "Colour of the exported / published mesh: vertex colours only, or also one image patch "

@@ -47,6 +47,7 @@ struct MapperConfig {
   bool use_color = true;               ///< Fuse the colour image into per-voxel colour.
   bool mesh_enabled = true;            ///< Re-mesh the changed blocks after every frame.
   double mesh_level_min_coverage = 0.8;  ///< A block meshes at the finest level whose observed area is ≥ this share of its best level's.
+  bool mesh_fill_seams = true;  ///< Unobserved face voxels of a block take its coarser levels' values (no seam holes).
   TextureMode texture = TextureMode::kOff;  ///< off: vertex colours only; patches: a texture patch per submesh.
   int texture_border_px = 24;          ///< A frame textures a block only if all its vertices project this far inside the image.
   int texture_max_patch_px = 64;       ///< Cap on a patch's edge; larger crops are downscaled (bounds texture memory).

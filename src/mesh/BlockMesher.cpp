@@ -33,10 +33,11 @@ inline bool lexLess(const int a[3], const int b[3]) {
   return a[2] < b[2];
 }
 
-/// Trilinear interpolation of `block`'s samples at `level`, at block-local lattice
-/// coordinates (0..16), clamped to the block's voxel centres. False if a sample that
-/// contributes is unobserved.
-bool blockField(const VoxelBlock& block, int level, const int local[3], float* sdf, float rgb[3]) {
+/// Trilinear interpolation of one block's voxels of `level` (`voxels`: levelVoxelCount(level)
+/// of them, VoxelBlock::index() order) at block-local lattice coordinates (0..16, in half
+/// finest voxels), clamped to the block's voxel centres. False if a sample that contributes is
+/// unobserved.
+bool blockField(const Voxel* voxels, int level, const int local[3], float* sdf, float rgb[3]) {
   const int step = 1 << level;
   const int side = kFinestSide >> level;
   // Centres are `den` = 2·step apart: shifts and masks instead of integer division (the
@@ -48,7 +49,8 @@ bool blockField(const VoxelBlock& block, int level, const int local[3], float* s
   if (((local[0] - step) & mask) == 0 && ((local[1] - step) & mask) == 0 && ((local[2] - step) & mask) == 0 &&
       local[0] > 0 && local[1] > 0 && local[2] > 0 && local[0] < kBlockUnits &&
       local[1] < kBlockUnits && local[2] < kBlockUnits) {
-    const Voxel& v = block.at(level, (local[0] - step) >> shift, (local[1] - step) >> shift, (local[2] - step) >> shift);
+    const Voxel& v = voxels[VoxelBlock::indexInLevel(side, (local[0] - step) >> shift, (local[1] - step) >> shift,
+                                                     (local[2] - step) >> shift)];
     if (!(v.weight > 0.0f)) return false;
     *sdf = v.sdf_m;
     rgb[0] = v.r;
@@ -72,7 +74,8 @@ bool blockField(const VoxelBlock& block, int level, const int local[3], float* s
   // weight 1. The sums start at +0 as in the loop below, so −0 reads as +0 there too.
   if ((frac[0] == 0.0f || frac[0] == 1.0f) && (frac[1] == 0.0f || frac[1] == 1.0f) &&
       (frac[2] == 0.0f || frac[2] == 1.0f)) {
-    const Voxel& v = block.at(level, i0[0] + (frac[0] == 1.0f), i0[1] + (frac[1] == 1.0f), i0[2] + (frac[2] == 1.0f));
+    const Voxel& v = voxels[VoxelBlock::indexInLevel(side, i0[0] + (frac[0] == 1.0f), i0[1] + (frac[1] == 1.0f),
+                                                     i0[2] + (frac[2] == 1.0f))];
     if (!(v.weight > 0.0f)) return false;
     *sdf = 0.0f + v.sdf_m;
     rgb[0] = 0.0f + v.r;
@@ -86,7 +89,7 @@ bool blockField(const VoxelBlock& block, int level, const int local[3], float* s
     const float w = (dx ? frac[0] : 1.0f - frac[0]) * (dy ? frac[1] : 1.0f - frac[1]) *
                     (dz ? frac[2] : 1.0f - frac[2]);
     if (w == 0.0f) continue;
-    const Voxel& v = block.at(level, i0[0] + dx, i0[1] + dy, i0[2] + dz);
+    const Voxel& v = voxels[VoxelBlock::indexInLevel(side, i0[0] + dx, i0[1] + dy, i0[2] + dz)];
     if (!(v.weight > 0.0f)) return false;
     acc += w * v.sdf_m;
     acc_rgb[0] += w * v.r;
@@ -290,6 +293,7 @@ class VertexTable {
 
 /// Per-thread buffers reused across mesh() calls, so the hot path does not allocate.
 struct MeshScratch {
+  std::vector<Voxel> seam_fills[8];            // face-filled copies of the neighbourhood's blocks
   std::vector<uint8_t> sample_state;           // SampleState per lattice grid point
   std::vector<BlockMesher::PointSample> samples;  // per grid point, valid when kObserved
   // Generic-box scratch.
@@ -340,6 +344,7 @@ const CrossingEdgeTable& crossingEdgeTable() {
 
 struct BlockMesher::Context {
   const VoxelBlock* nb[8] = {};  // owner + (d & 1, (d >> 1) & 1, (d >> 2) & 1)
+  const Voxel* voxels[8] = {};   // what the mesher samples of nb[d]: meshVoxels()
   int level[8] = {};
   int step[8] = {};
   bool uniform = true;  // every present neighbour has the owner's level
@@ -401,7 +406,8 @@ struct BlockMesher::Context {
     const float w = 1.0f / static_cast<float>(step[0]);
     bool any_negative = false, any_nonnegative = false;
     for (int c = 0; c < 8; ++c) {
-      const Voxel& v = nb[0]->at(level, i + (c & 1), j + ((c >> 1) & 1), k + (c >> 2));
+      const Voxel& v =
+          voxels[0][VoxelBlock::indexInLevel(levelSide(level), i + (c & 1), j + ((c >> 1) & 1), k + (c >> 2))];
       if (!(v.weight > 0.0f)) return true;
       // samplePoint() yields (0 + w·sdf) / w; dividing by w > 0 (≤ 1) keeps the sign and
       // cannot underflow, and 0 + x ≥ 0 iff x ≥ 0: the sign of w·sdf is the sample's.
@@ -455,11 +461,11 @@ struct BlockMesher::Context {
         const int block_j = j == side ? 0 : j, block_k = k == side ? 0 : k;
         VoxelClasses row;
         if (nb[d] != nullptr)
-          row = classifyVoxels(&nb[d]->at(level, 0, block_j, block_k), side);
+          row = classifyVoxels(&voxels[d][VoxelBlock::indexInLevel(side, 0, block_j, block_k)], side);
         else
           row.unobserved = row_bits;
         if (nb[d + 1] != nullptr)
-          classifyVoxelsScalar(&nb[d + 1]->at(level, 0, block_j, block_k), 1, side, &row);
+          classifyVoxelsScalar(&voxels[d + 1][VoxelBlock::indexInLevel(side, 0, block_j, block_k)], 1, side, &row);
         else
           row.unobserved |= face_bit;
         row_negative[k][j] = static_cast<uint16_t>(row.negative);
@@ -505,7 +511,8 @@ struct BlockMesher::Context {
     const float w = uniform_weight;
     if (q[0] < kBlockUnits && q[1] < kBlockUnits && q[2] < kBlockUnits) {
       // An owner centre, the most common point: one voxel, the loop below unrolled.
-      const Voxel& v = nb[0]->at(level, (q[0] - step[0]) >> shift, (q[1] - step[0]) >> shift, (q[2] - step[0]) >> shift);
+      const Voxel& v = voxels[0][VoxelBlock::indexInLevel(side, (q[0] - step[0]) >> shift, (q[1] - step[0]) >> shift,
+                                                          (q[2] - step[0]) >> shift)];
       if (!(v.weight > 0.0f)) return false;
       // (0 + w·sdf) / w, as a product with 1/w = s; w·c / w for a colour byte c is c exactly.
       out->sdf = (0.0f + w * v.sdf_m) * static_cast<float>(step[0]);
@@ -522,10 +529,8 @@ struct BlockMesher::Context {
     float weight_sum = 0.0f, acc = 0.0f, acc_rgb[3] = {0, 0, 0};
     for (unsigned blocks = incidentBlocks(q, q); blocks != 0; blocks &= blocks - 1) {
       const int d = __builtin_ctz(blocks);
-      const VoxelBlock* block = nb[d];
-      if (block == nullptr) return false;
-      const Voxel& v = block->level(level)[offset_index[d & 1][0] + offset_index[(d >> 1) & 1][1] +
-                                           offset_index[d >> 2][2]];
+      if (nb[d] == nullptr) return false;
+      const Voxel& v = voxels[d][offset_index[d & 1][0] + offset_index[(d >> 1) & 1][1] + offset_index[d >> 2][2]];
       if (!(v.weight > 0.0f)) return false;
       weight_sum += w;
       acc += w * v.sdf_m;
@@ -552,7 +557,7 @@ struct BlockMesher::Context {
     if (rows_ready[d] & row_bit) return;
     rows_ready[d] |= row_bit;
     const int side = levelSide(level[d]);
-    const Voxel* row = nb[d]->level(level[d]) + (j + k * side) * side;
+    const Voxel* row = voxels[d] + VoxelBlock::indexInLevel(side, 0, j, k);
     const VoxelClasses classes = classifyVoxels(row, side);
     mask_unobserved[d][k][j] = static_cast<uint8_t>(classes.unobserved);
     mask_negative[d][k][j] = static_cast<uint8_t>(classes.negative);
@@ -660,11 +665,10 @@ bool BlockMesher::samplePoint(const Context& ctx, int qx, int qy, int qz, PointS
     for (int dy = first[1]; dy <= last[1]; ++dy)
       for (int dx = first[0]; dx <= last[0]; ++dx) {
         const int d = dx + 2 * dy + 4 * dz;
-        const VoxelBlock* block = ctx.nb[d];
-        if (block == nullptr) return false;
+        if (ctx.nb[d] == nullptr) return false;
         const int local[3] = {qx - kBlockUnits * dx, qy - kBlockUnits * dy, qz - kBlockUnits * dz};
         float sdf, rgb[3];
-        if (!blockField(*block, ctx.level[d], local, &sdf, rgb)) return false;
+        if (!blockField(ctx.voxels[d], ctx.level[d], local, &sdf, rgb)) return false;
         const float w = 1.0f / static_cast<float>(ctx.step[d]);  // finer block, nearer centre
         weight_sum += w;
         acc += w * sdf;
@@ -998,6 +1002,7 @@ void BlockMesher::mesh(const BlockOctree& map, const MeshStates& states, const V
   for (int d = 0; d < 8; ++d) {
     ctx.nb[d] = map.neighbour(owner, d & 1, (d >> 1) & 1, (d >> 2) & 1);
     ctx.level[d] = ctx.nb[d] ? states[*ctx.nb[d]].level : 0;
+    ctx.voxels[d] = ctx.nb[d] ? meshVoxels(*ctx.nb[d], states[*ctx.nb[d]], &scratch.seam_fills[d]) : nullptr;
     ctx.step[d] = 1 << ctx.level[d];
     if (ctx.nb[d] == nullptr) continue;
     coarsest_level = std::max(coarsest_level, ctx.level[d]);

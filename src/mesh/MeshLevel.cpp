@@ -2,6 +2,7 @@
 // workers for every updated block, apart from the mesher itself.
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 
 #include "stereo_fusion/mesh/BlockMesher.h"
@@ -35,6 +36,76 @@ int levelFromObservedCounts(const int observed[kNumLevels], double level_min_cov
 
 }  // namespace
 
+namespace {
+
+/// The trilinear field of `voxels` (one level of `side`³ voxels) at `position`, given in that
+/// level's voxel units (voxel centres at whole numbers), extrapolated linearly beyond its outer
+/// centres. False if a voxel it weighs is unobserved.
+bool linearField(const Voxel* voxels, int side, const float position[3], float* sdf, float rgb[3]) {
+  int i0[3];
+  float frac[3];
+  for (int a = 0; a < 3; ++a) {
+    i0[a] = std::clamp(static_cast<int>(std::floor(position[a])), 0, side - 2);
+    frac[a] = position[a] - static_cast<float>(i0[a]);
+  }
+  float acc = 0.0f, acc_rgb[3] = {0, 0, 0};
+  for (int c = 0; c < 8; ++c) {
+    const int dx = c & 1, dy = (c >> 1) & 1, dz = c >> 2;
+    const float w = (dx ? frac[0] : 1.0f - frac[0]) * (dy ? frac[1] : 1.0f - frac[1]) * (dz ? frac[2] : 1.0f - frac[2]);
+    if (w == 0.0f) continue;
+    const Voxel& v = voxels[VoxelBlock::indexInLevel(side, i0[0] + dx, i0[1] + dy, i0[2] + dz)];
+    if (!(v.weight > 0.0f)) return false;
+    acc += w * v.sdf_m;
+    acc_rgb[0] += w * v.r;
+    acc_rgb[1] += w * v.g;
+    acc_rgb[2] += w * v.b;
+  }
+  *sdf = acc;
+  for (int k = 0; k < 3; ++k) rgb[k] = acc_rgb[k];
+  return true;
+}
+
+}  // namespace
+
+bool fillFacesFromCoarserLevels(const VoxelBlock& block, int level, std::vector<Voxel>* out) {
+  out->clear();
+  const int side = levelSide(level);
+  const Voxel* voxels = block.level(level);
+  for (int k = 0; k < side; ++k)
+    for (int j = 0; j < side; ++j) {
+      const bool on_face_jk = j == 0 || k == 0 || j == side - 1 || k == side - 1;
+      // Off the y/z faces only i = 0 and i = side − 1 lie on a face.
+      for (int i = 0; i < side; i += on_face_jk ? 1 : side - 1) {
+        const int index = VoxelBlock::indexInLevel(side, i, j, k);
+        if (voxels[index].weight > 0.0f) continue;
+        for (int coarser = level + 1; coarser < kNumLevels; ++coarser) {
+          if (!block.hasLevel(coarser)) continue;
+          // Centre (i + ½)·s_level in finest voxels; in coarser voxel units, centres at whole numbers.
+          const float ratio = static_cast<float>(levelScale(level)) / static_cast<float>(levelScale(coarser));
+          const float position[3] = {(i + 0.5f) * ratio - 0.5f, (j + 0.5f) * ratio - 0.5f, (k + 0.5f) * ratio - 0.5f};
+          float sdf, rgb[3];
+          if (!linearField(block.level(coarser), levelSide(coarser), position, &sdf, rgb)) continue;
+          if (out->empty()) out->assign(voxels, voxels + levelVoxelCount(level));
+          Voxel& v = (*out)[index];
+          v.sdf_m = sdf;
+          v.weight = 1.0f;
+          v.r = static_cast<uint8_t>(std::lround(std::clamp(rgb[0], 0.0f, 255.0f)));
+          v.g = static_cast<uint8_t>(std::lround(std::clamp(rgb[1], 0.0f, 255.0f)));
+          v.b = static_cast<uint8_t>(std::lround(std::clamp(rgb[2], 0.0f, 255.0f)));
+          break;
+        }
+        if (side == 1) break;
+      }
+    }
+  return !out->empty();
+}
+
+const Voxel* meshVoxels(const VoxelBlock& block, const MeshBlockState& state, std::vector<Voxel>* scratch) {
+  if (!state.seam_filled) return block.level(state.level);
+  fillFacesFromCoarserLevels(block, state.level, scratch);
+  return scratch->data();
+}
+
 int chooseMeshLevel(const VoxelBlock& block, double level_min_coverage) {
   int observed[kNumLevels] = {};
   for (int level = 0; level < kNumLevels; ++level) {
@@ -45,8 +116,9 @@ int chooseMeshLevel(const VoxelBlock& block, double level_min_coverage) {
   return levelFromObservedCounts(observed, level_min_coverage);
 }
 
-void refreshMeshSigns(const VoxelBlock& block, MeshBlockState* state) {
-  const int level = state->level;
+namespace {
+/// refreshMeshSigns() over `voxels`, the block's meshed voxels at `level`.
+uint16_t meshSignBits(const Voxel* voxels, int level) {
   const int side = levelSide(level), step = levelScale(level);
   // The owners below reach at most 4 half-voxel units into this block (the coarsest level's
   // first centre), where blockField() weighs up to the next centre beyond: every voxel they
@@ -56,7 +128,7 @@ void refreshMeshSigns(const VoxelBlock& block, MeshBlockState* state) {
   for (int k = 0; k < side; ++k)
     for (int j = 0; j < side; ++j)
       for (int i = 0; i < side; ++i) {
-        const Voxel& v = block.at(level, i, j, k);
+        const Voxel& v = voxels[VoxelBlock::indexInLevel(side, i, j, k)];
         if (!(v.weight > 0.0f)) continue;
         // A value in [−1e-30, 0) counts as both signs: the mesher's weighted sums can round it
         // to −0, which compares as non-negative.
@@ -70,20 +142,41 @@ void refreshMeshSigns(const VoxelBlock& block, MeshBlockState* state) {
   for (int region = 0; region < 8; ++region)
     for (int near = 0; near < 8; ++near)
       if ((region & near) == region) bits |= static_cast<uint16_t>(seen[near] << (2 * region));
-  state->sign_bits = bits;
+  return bits;
 }
 
-void refreshMeshLevel(const VoxelBlock& block, double level_min_coverage, MeshBlockState* state) {
+/// The fill scratch of the refresh on this thread.
+std::vector<Voxel>& refreshScratch() {
+  thread_local std::vector<Voxel> scratch;
+  return scratch;
+}
+}  // namespace
+
+void refreshMeshSigns(const VoxelBlock& block, MeshBlockState* state) {
+  state->sign_bits = meshSignBits(meshVoxels(block, *state, &refreshScratch()), state->level);
+}
+
+void refreshMeshLevel(const VoxelBlock& block, const MeshingParams& params, MeshBlockState* state) {
   static const bool use_avx2 = avx2Supported();
   if (use_avx2)
-    refreshMeshLevelAvx2(block, level_min_coverage, state);
+    refreshMeshLevelAvx2(block, params, state);
   else
-    refreshMeshLevelScalar(block, level_min_coverage, state);
+    refreshMeshLevelScalar(block, params, state);
 }
 
-void refreshMeshLevelScalar(const VoxelBlock& block, double level_min_coverage, MeshBlockState* state) {
-  state->level = static_cast<int8_t>(chooseMeshLevel(block, level_min_coverage));
-  refreshMeshSigns(block, state);
+namespace {
+/// Sets state->seam_filled for state->level; returns the voxels to take the signs of.
+const Voxel* refreshSeamFill(const VoxelBlock& block, const MeshingParams& params, MeshBlockState* state) {
+  std::vector<Voxel>& scratch = refreshScratch();
+  state->seam_filled =
+      params.fill_faces_from_coarser_levels && fillFacesFromCoarserLevels(block, state->level, &scratch);
+  return state->seam_filled ? scratch.data() : block.level(state->level);
+}
+}  // namespace
+
+void refreshMeshLevelScalar(const VoxelBlock& block, const MeshingParams& params, MeshBlockState* state) {
+  state->level = static_cast<int8_t>(chooseMeshLevel(block, params.level_min_coverage));
+  state->sign_bits = meshSignBits(refreshSeamFill(block, params, state), state->level);
 }
 
 #ifdef STEREO_FUSION_HAVE_AVX2_REFRESH
@@ -223,7 +316,7 @@ __attribute__((target("avx2"), noinline)) uint16_t meshSignBitsAvx2(const Voxel*
 
 }  // namespace
 
-__attribute__((target("avx2"))) void refreshMeshLevelAvx2(const VoxelBlock& block, double level_min_coverage,
+__attribute__((target("avx2"))) void refreshMeshLevelAvx2(const VoxelBlock& block, const MeshingParams& params,
                                                            MeshBlockState* state) {
   static_assert(levelOffset(1) % 8 == 0 && levelOffset(2) % 8 == 0 && levelVoxelCount(2) == 8,
                 "every level is whole groups of eight voxels");
@@ -231,9 +324,9 @@ __attribute__((target("avx2"))) void refreshMeshLevelAvx2(const VoxelBlock& bloc
   const int observed[kNumLevels] = {block.hasLevel(0) ? countObservedAvx2<0>(block.level(0)) : 0,
                                      block.hasLevel(1) ? countObservedAvx2<1>(block.level(1)) : 0,
                                      block.hasLevel(2) ? countObservedAvx2<2>(block.level(2)) : 0};
-  const int level = levelFromObservedCounts(observed, level_min_coverage);
+  const int level = levelFromObservedCounts(observed, params.level_min_coverage);
   state->level = static_cast<int8_t>(level);
-  const Voxel* voxels = block.level(level);
+  const Voxel* voxels = refreshSeamFill(block, params, state);
   if (level == 0) state->sign_bits = meshSignBitsAvx2<0>(voxels);
   if (level == 1) state->sign_bits = meshSignBitsAvx2<1>(voxels);
   if (level == 2) state->sign_bits = meshSignBitsAvx2<2>(voxels);
@@ -241,8 +334,8 @@ __attribute__((target("avx2"))) void refreshMeshLevelAvx2(const VoxelBlock& bloc
 
 #else  // not x86: only the scalar path
 
-void refreshMeshLevelAvx2(const VoxelBlock& block, double level_min_coverage, MeshBlockState* state) {
-  refreshMeshLevelScalar(block, level_min_coverage, state);
+void refreshMeshLevelAvx2(const VoxelBlock& block, const MeshingParams& params, MeshBlockState* state) {
+  refreshMeshLevelScalar(block, params, state);
 }
 
 #endif

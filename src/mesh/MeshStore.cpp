@@ -102,7 +102,7 @@ MeshChanges MeshStore::update(const BlockOctree& map, const std::vector<BlockKey
   pool->parallelFor(updated.size(), 16, [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i)
       if (const VoxelBlock* block = map.find(updated[i])) {
-        refreshMeshLevel(*block, params_.level_min_coverage, &states_[*block]);
+        refreshMeshLevel(*block, params_, &states_[*block]);
         found[i] = block;
       }
   });
@@ -135,7 +135,7 @@ MeshChanges MeshStore::rebuild(const BlockOctree& map, ThreadPool* pool) {
   const std::vector<VoxelBlock*> blocks = map.blocksSortedByKey();
   states_.fit(map);
   pool->parallelFor(blocks.size(), 16, [&](size_t begin, size_t end) {
-    for (size_t i = begin; i < end; ++i) refreshMeshLevel(*blocks[i], params_.level_min_coverage, &states_[*blocks[i]]);
+    for (size_t i = begin; i < end; ++i) refreshMeshLevel(*blocks[i], params_, &states_[*blocks[i]]);
   });
   for (const VoxelBlock* block : blocks) all.push_back({block->key, block});
   std::vector<BlockKey> stale;

@@ -258,8 +258,12 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
                                voxels_per_block * sizeof(Voxel);
   }
   const MeshStates& mesh_states = mapper.mesh().states();  // current: the mesh was brought up to date above
-  for (const VoxelBlock* b : mapper.map().blocks())
-    if (b->row < mesh_states.size()) ++report->blocks_per_level[mesh_states[*b].level];
+  for (const VoxelBlock* b : mapper.map().blocks()) {
+    if (b->row >= mesh_states.size()) continue;
+    const MeshBlockState& state = mesh_states[*b];
+    ++report->blocks_per_level[state.level];
+    report->seam_filled_blocks += state.seam_filled;
+  }
 
   if (!writePly((fs::path(options.out_dir) / "mesh.ply").string(), mesh, error)) return false;
   report->textured_blocks = mapper.textures().patches().size();
@@ -295,6 +299,7 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   j["blocks"]["meshed_at_8"] = report.blocks_per_level[0];
   j["blocks"]["meshed_at_4"] = report.blocks_per_level[1];
   j["blocks"]["meshed_at_2"] = report.blocks_per_level[2];
+  j["blocks"]["seam_filled"] = report.seam_filled_blocks;
   j["blocks"]["evicted"] = report.blocks_evicted;
   j["map"]["loaded_blocks"] = report.blocks_loaded;
   j["memory"]["bytes"] = report.memory_bytes;

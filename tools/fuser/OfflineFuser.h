@@ -53,6 +53,7 @@ struct FuseReport {
   size_t blocks_loaded = 0;                     ///< blocks of the --load-map file
   uint64_t blocks_evicted = 0;                  ///< by the memory bound (max_blocks, max_distance_from_camera_m)
   size_t blocks_per_level[3] = {0, 0, 0};       ///< by the level each block is meshed at
+  size_t seam_filled_blocks = 0;                ///< blocks meshed with faces filled from coarser levels (mesh_fill_seams)
   size_t memory_bytes = 0;
   double bytes_per_block = 0;
   BlockOctree::MemoryUse memory;  ///< memory_bytes by part: blocks, voxel levels, nodes

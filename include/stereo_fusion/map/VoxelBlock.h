@@ -84,6 +84,9 @@ struct VoxelBlock {
     const int side = levelSide(level);
     return i + j * side + k * side * side + levelOffset(level);
   }
+  /// Index of voxel (i, j, k) within the voxels of one level of `side`³ (index() without the
+  /// level's offset).
+  static constexpr int indexInLevel(int side, int i, int j, int k) { return i + side * (j + side * k); }
   /// The level a flat index lies in.
   static constexpr int levelOfIndex(int flat_index) {
     return flat_index < levelOffset(1) ? 0 : (flat_index < levelOffset(2) ? 1 : 2);

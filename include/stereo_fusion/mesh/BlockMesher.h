@@ -1,6 +1,7 @@
 #pragma once
 #include <cstdint>
 #include <unordered_map>
+#include <vector>
 
 #include "stereo_fusion/map/BlockColumn.h"
 #include "stereo_fusion/map/BlockOctree.h"
@@ -18,6 +19,11 @@ struct MeshingParams {
   /// A block is sampled at the finest level whose observed area is at least this share of
   /// the largest observed area among its levels (see chooseMeshLevel()).
   double level_min_coverage = 0.8;
+  /// Close the seams between levels: an unobserved voxel on a face of a block meshed at a
+  /// finer level than its coarsest takes the value of the block's own coarser levels there
+  /// (see fillFacesFromCoarserLevels()). false: such voxels stay unobserved (cells touching
+  /// them are skipped and leave a hole where a fine block meets a coarse one).
+  bool fill_faces_from_coarser_levels = true;
   /// Test switch: false meshes every neighbourhood through the general path (every box
   /// visited, every point sampled by samplePoint(); no owner skipped on its sign bits). The fast paths must produce the same
   /// bits; test_block_mesher_fast_paths compares the two.
@@ -37,6 +43,11 @@ struct MeshBlockState {
   /// the faces towards that owner. Bit 2r: some voxel < 0; bit 2r+1: some voxel ≥ 0
   /// (see meshSignBit()). Set by refreshMeshSigns().
   uint16_t sign_bits = 0;
+  /// True: the block is meshed with its faces filled from its coarser levels
+  /// (fillFacesFromCoarserLevels() filled some voxel). The copy is not kept: the mesher
+  /// rebuilds it per owner in scratch (meshVoxels()), which costs less than the ~20 % of the
+  /// map's memory that keeping it took.
+  bool seam_filled = false;
 };
 using MeshStates = BlockColumn<MeshBlockState>;
 
@@ -46,6 +57,21 @@ constexpr uint16_t meshSignBit(int region, bool non_negative) {
   return static_cast<uint16_t>(1u << (2 * region + (non_negative ? 1 : 0)));
 }
 
+/// What the mesher samples of `block`: its voxels at state.level, or (state.seam_filled) their
+/// face-filled copy, built in `scratch`.
+const Voxel* meshVoxels(const VoxelBlock& block, const MeshBlockState& state, std::vector<Voxel>* scratch);
+
+/// Fills `*out` with the voxels of `level` in which every unobserved voxel on the block's
+/// faces (i, j or k = 0 or side − 1) takes the trilinear field of the block's next coarser level
+/// whose voxels around that centre are observed, extrapolated linearly beyond the coarser
+/// level's outer centres (a signed distance is locally linear; clamping would bend a surface
+/// that meets the face obliquely): sdf and colour, weight 1 to mark it observed. A measurement
+/// updates its own level and every coarser one, so a block seen partly from near and partly
+/// from far holds coarse values near its faces where its fine voxels are empty: filled, the
+/// fine block meets its coarse neighbour without a hole. Depends on the block alone, so the
+/// owners of a seam agree. Returns false, with `*out` empty, when no voxel was filled.
+bool fillFacesFromCoarserLevels(const VoxelBlock& block, int level, std::vector<Voxel>* out);
+
 /// The level a block is meshed at: the finest level whose observed surface area (observed
 /// voxels × voxel volume ÷ band thickness, ∝ n·s²) is at least `level_min_coverage` × the
 /// largest of its levels'. A block seen only from far meshes at 2³, one seen from near at 8³, and one
@@ -53,20 +79,21 @@ constexpr uint16_t meshSignBit(int region, bool non_negative) {
 /// opening holes.
 int chooseMeshLevel(const VoxelBlock& block, double level_min_coverage);
 
-/// Sets state->sign_bits from the observed voxels of `block` at state->level.
+/// Sets state->sign_bits from the observed voxels of meshVoxels(block, *state, …).
 void refreshMeshSigns(const VoxelBlock& block, MeshBlockState* state);
 
-/// Sets state->level (chooseMeshLevel) and then its sign bits (refreshMeshSigns()).
+/// Sets state->level (chooseMeshLevel), its face fill (fillFacesFromCoarserLevels(), when
+/// params.fill_faces_from_coarser_levels) and then its sign bits (refreshMeshSigns()).
 /// Runs for every updated block before it is meshed, so on CPUs with AVX2 it takes the AVX2 path.
-void refreshMeshLevel(const VoxelBlock& block, double level_min_coverage, MeshBlockState* state);
+void refreshMeshLevel(const VoxelBlock& block, const MeshingParams& params, MeshBlockState* state);
 
-/// refreshMeshLevel() as written: chooseMeshLevel(), then refreshMeshSigns(). The reference
-/// the AVX2 path is tested against.
-void refreshMeshLevelScalar(const VoxelBlock& block, double level_min_coverage, MeshBlockState* state);
+/// refreshMeshLevel() as written: chooseMeshLevel(), the fill, then refreshMeshSigns(). The
+/// reference the AVX2 path is tested against.
+void refreshMeshLevelScalar(const VoxelBlock& block, const MeshingParams& params, MeshBlockState* state);
 
-/// Same level and sign bits as refreshMeshLevelScalar(), eight voxels per step, counting each
-/// level once and reading signs of the chosen level only. Only call it when avx2Supported().
-void refreshMeshLevelAvx2(const VoxelBlock& block, double level_min_coverage, MeshBlockState* state);
+/// Same level, fill and sign bits as refreshMeshLevelScalar(), eight voxels per step, counting
+/// each level once and reading signs of the meshed voxels only. Only call it when avx2Supported().
+void refreshMeshLevelAvx2(const VoxelBlock& block, const MeshingParams& params, MeshBlockState* state);
 
 /// Marching cubes for one block (thesis §3.6, Algorithm 3), crack-free across blocks of any
 /// levels.

@@ -196,7 +196,8 @@ TEST(MemoryBound, MeshAfterEvictionEqualsARebuildAndTheStreamedCopy) {
   }
   EXPECT_GT(removed_by_eviction, 20u);
   ThreadPool pool(2);
-  MeshStore batch(MeshingParams{config.voxel_size_m, config.truncation_vox, config.mesh_level_min_coverage});
+  MeshStore batch(MeshingParams{config.voxel_size_m, config.truncation_vox, config.mesh_level_min_coverage,
+                                config.mesh_fill_seams});
   batch.rebuild(mapper.map(), &pool);
   ASSERT_GT(batch.triangleCount(), 1000u);
   EXPECT_TRUE(triangleSets(mapper.mesh()) == triangleSets(batch)) << "incremental mesh differs from a rebuild";

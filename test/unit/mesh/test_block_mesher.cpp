@@ -46,9 +46,11 @@ void forgetFineLevels(const Mapper& mapper, const std::function<int(const BlockK
   }
 }
 
-void expectWatertight(const char* name, const sim::AnalyticScene& scene,
-                      const std::function<int(const BlockKey&)>& coarse_level,
-                      std::set<int> expected_levels, double truncation_vox = 4.0) {
+/// The welded mesh of fused `scene` whose blocks keep only the levels from `coarse_level(key)`
+/// up, meshed with or without the seam fill.
+Topology fusedTopology(const char* name, const sim::AnalyticScene& scene,
+                       const std::function<int(const BlockKey&)>& coarse_level, std::set<int> expected_levels,
+                       bool fill_seams, double truncation_vox = 4.0) {
   // 1e-6: every block meshes at the finest level holding any data, i.e. at the level the
   // test leaves it (the default 0.8 may keep a barely touched block coarse).
   MapperConfig config;
@@ -57,13 +59,23 @@ void expectWatertight(const char* name, const sim::AnalyticScene& scene,
   auto mapper = fuseViews(scene, viewsAround(kCentre, 1.0, 60), config);
   forgetFineLevels(*mapper, coarse_level);
   ThreadPool pool(2);
-  MeshStore store(MeshingParams{kVoxel, truncation_vox, 1e-6});
+  MeshingParams params{kVoxel, truncation_vox, 1e-6};
+  params.fill_faces_from_coarser_levels = fill_seams;
+  MeshStore store(params);
   store.rebuild(mapper->map(), &pool);
   std::set<int> levels;
   for (const auto& [key, sub] : store.submeshes()) levels.insert(sub.level);
   EXPECT_EQ(levels, expected_levels) << name;
   const Topology t = topology(weldSubmeshes(store.submeshes()));
-  std::printf("[ watertight ] %-28s %zu submeshes: %s\n", name, store.submeshes().size(), describe(t).c_str());
+  std::printf("[ watertight ] %-28s %-12s %zu submeshes: %s\n", name, fill_seams ? "seams filled" : "no seam fill",
+              store.submeshes().size(), describe(t).c_str());
+  return t;
+}
+
+void expectWatertight(const char* name, const sim::AnalyticScene& scene,
+                      const std::function<int(const BlockKey&)>& coarse_level,
+                      std::set<int> expected_levels, double truncation_vox = 4.0) {
+  const Topology t = fusedTopology(name, scene, coarse_level, expected_levels, true, truncation_vox);
   EXPECT_TRUE(t.watertight()) << name << ": " << describe(t);
 }
 
@@ -89,13 +101,29 @@ TEST(BlockMesher, WatertightAcrossAResolutionChange) {
   expectWatertight("torus, 8^3 | 4^3", torusScene(), half, {0, 1});
 }
 
+TEST(BlockMesher, FusedFineBlocksMeetTwoCubedBlocksWithoutHoles) {
+  // Half of each object keeps only its 2³ level (seen from far), the rest keeps all three and
+  // meshes at 8³. Where the fine band is thinner than a 2³ seam cell, the fine block's face
+  // voxels are unobserved: without the seam fill those cells are skipped (holes along the
+  // seam); filled from the fine block's own 2³ level, the mesh closes.
+  auto half = [](const BlockKey& k) { return k.x >= 0 ? 2 : 0; };
+  const std::pair<const char*, sim::AnalyticScene> shapes[] = {
+      {"sphere, 8^3 | 2^3", sphereScene()}, {"box, 8^3 | 2^3", boxScene()}, {"torus, 8^3 | 2^3", torusScene()}};
+  size_t open_without_fill = 0;
+  for (const auto& [name, scene] : shapes) {
+    const Topology filled = fusedTopology(name, scene, half, {0, 2}, /*fill_seams=*/true);
+    EXPECT_TRUE(filled.watertight()) << name << ": " << describe(filled);
+    open_without_fill += fusedTopology(name, scene, half, {0, 2}, /*fill_seams=*/false).boundary_edges;
+  }
+  EXPECT_GT(open_without_fill, 0u) << "the seams must have holes to close, or this test shows nothing";
+}
+
 TEST(BlockMesher, WatertightAcrossAllThreeLevelsInACheckerboard) {
   // The mesher's own guarantee, separated from fusion: every block holds the exact SDF at a
   // level picked from its key, so 8³, 4³ and 2³ blocks meet on every face, edge and corner,
   // 8³ next to 2³ included, and every sample is observed. Any open or doubled edge would be a
-  // crack or overlap made by the mesher. (With fused data, a seam cell between a fine and a
-  // 2³ block is as tall as a 2³ voxel; where the fine block's band is thinner than that, the
-  // cell has an unobserved corner and is skipped, as the thesis skips unobserved cells.)
+  // crack or overlap made by the mesher. (With fused data, see
+  // FusedFineBlocksMeetTwoCubedBlocksWithoutHoles.)
   auto mixed = [](const BlockKey& k) { return ((k.x + 2 * k.y + 3 * k.z) % 3 + 3) % 3; };
   const Eigen::AlignedBox3d bounds(kCentre - Eigen::Vector3d::Constant(0.5), kCentre + Eigen::Vector3d::Constant(0.5));
   const std::pair<const char*, sim::AnalyticScene> shapes[] = {
@@ -180,7 +208,8 @@ TEST(BlockMesher, IncrementalEqualsBatchAfterRandomPartialViews) {
     EXPECT_GT(r.mesh.blocks_meshed, 0u);
   }
   ThreadPool pool(2);
-  MeshStore batch(MeshingParams{config.voxel_size_m, config.truncation_vox, config.mesh_level_min_coverage});
+  MeshStore batch(MeshingParams{config.voxel_size_m, config.truncation_vox, config.mesh_level_min_coverage,
+                                config.mesh_fill_seams});
   batch.rebuild(mapper.map(), &pool);
   ASSERT_GT(batch.triangleCount(), 1000u);
   EXPECT_EQ(mapper.mesh().triangleCount(), batch.triangleCount());

@@ -53,13 +53,15 @@ float voxelValue(std::mt19937& rng, const Eigen::Vector3d& centre, const Eigen::
 }
 
 struct Trial {
-  int owners_uniform = 0, owners_mixed = 0;
+  int owners_uniform = 0, owners_mixed = 0, face_filled_blocks = 0;
   size_t triangles = 0;
 };
 
 /// Builds one random cluster and compares every block's submesh from both paths. The voxels
 /// hold a plane's distance plus Gaussian noise of `noise_vox` voxels.
-void runTrial(uint32_t seed, bool uniform_levels, Trial* totals, double noise_vox = 0.3) {
+/// `layered`: each block also holds every level coarser than its own (as fusion leaves them), so
+/// the mesher samples face-filled copies (fillFacesFromCoarserLevels()).
+void runTrial(uint32_t seed, bool uniform_levels, Trial* totals, double noise_vox = 0.3, bool layered = false) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   const double block_size = kFinestSide * kVoxel;
@@ -77,24 +79,29 @@ void runTrial(uint32_t seed, bool uniform_levels, Trial* totals, double noise_vo
         if (unit(rng) > presence) continue;
         VoxelBlock* block = map.findOrAllocate({x, y, z});
         const int level = uniform_levels ? shared_level : std::uniform_int_distribution<int>(0, kNumLevels - 1)(rng);
-        const int side = levelSide(level);
-        const double h = block_size / side;
-        for (int k = 0; k < side; ++k)
-          for (int j = 0; j < side; ++j)
-            for (int i = 0; i < side; ++i) {
-              if (unit(rng) > observed_share) continue;
-              const Eigen::Vector3d centre = map.blockOrigin(block->key) + Eigen::Vector3d(i + 0.5, j + 0.5, k + 0.5) * h;
-              Voxel& v = block->writableAt(level, i, j, k);
-              v.sdf_m = voxelValue(rng, centre, normal, offset, noise_vox);
-              v.weight = 1.0f;
-              v.r = static_cast<uint8_t>(rng());
-              v.g = static_cast<uint8_t>(rng());
-              v.b = static_cast<uint8_t>(rng());
-            }
-        // Only `level` holds data, so it is the level chosen (any coverage > 0); a block with
-        // no observed voxel falls back to the coarsest level, which the mesher must handle too.
+        for (int written = level; written <= (layered ? kNumLevels - 1 : level); ++written) {
+          const int side = levelSide(written);
+          const double h = block_size / side;
+          for (int k = 0; k < side; ++k)
+            for (int j = 0; j < side; ++j)
+              for (int i = 0; i < side; ++i) {
+                if (unit(rng) > observed_share) continue;
+                const Eigen::Vector3d centre =
+                    map.blockOrigin(block->key) + Eigen::Vector3d(i + 0.5, j + 0.5, k + 0.5) * h;
+                Voxel& v = block->writableAt(written, i, j, k);
+                v.sdf_m = voxelValue(rng, centre, normal, offset, noise_vox);
+                v.weight = 1.0f;
+                v.r = static_cast<uint8_t>(rng());
+                v.g = static_cast<uint8_t>(rng());
+                v.b = static_cast<uint8_t>(rng());
+              }
+        }
+        // `level` is the finest level holding data, so it is the level chosen (any coverage > 0);
+        // a block with no observed voxel falls back to the coarsest level, which the mesher must
+        // handle too.
         states.fit(map);
-        refreshMeshLevel(*block, 1e-6, &states[*block]);
+        refreshMeshLevel(*block, MeshingParams{kVoxel, kTruncationVox, 1e-6}, &states[*block]);
+        totals->face_filled_blocks += states[*block].seam_filled;
       }
   MeshingParams fast_params{kVoxel, kTruncationVox, 1e-6};
   MeshingParams general_params = fast_params;
@@ -135,6 +142,23 @@ TEST(BlockMesherFastPaths, SameBitsAsTheGeneralPathOnRandomNeighbourhoods) {
   // (per trial ≈ 30 uniform and 24 mixed owners and 2 000+ triangles; quick mode runs fewer).
   EXPECT_GT(totals.owners_uniform, 20 * trials);
   EXPECT_GT(totals.owners_mixed, 15 * trials);
+  EXPECT_GT(totals.triangles, 1000u * trials);
+}
+
+// Blocks holding their coarser levels too: unobserved face voxels of the finer ones are filled,
+// and the fast paths' masks and sign bits must read the filled copies as samplePoint() does.
+TEST(BlockMesherFastPaths, SameBitsWithFacesFilledFromCoarserLevels) {
+  Trial totals;
+  const int trials = test::quickMode() ? 20 : 80;
+  for (int t = 0; t < trials; ++t) {
+    runTrial(9000 + t, /*uniform_levels=*/t % 2 == 0, &totals, /*noise_vox=*/t % 4 < 2 ? 0.3 : 2.0, /*layered=*/true);
+    if (HasFatalFailure()) return;
+  }
+  std::printf("[ fast paths, face-filled ] %d uniform and %d mixed neighbourhoods, %d filled blocks, %zu triangles: "
+              "identical\n",
+              totals.owners_uniform, totals.owners_mixed, totals.face_filled_blocks, totals.triangles);
+  EXPECT_GT(totals.face_filled_blocks, 10 * trials);  // ≈ 17 per trial
+  EXPECT_GT(totals.owners_mixed, 10 * trials);
   EXPECT_GT(totals.triangles, 1000u * trials);
 }
 
