@@ -38,6 +38,7 @@ Mapper::Mapper(const MapperConfig& config)
       octree_(config_.blockSizeM()),
       lookup_(config_, &pool_),
       fuser_(config_, &pool_),
+      carver_(config_, &pool_),
       mesh_store_(MeshingParams{config_.voxel_size_m, config_.truncation_vox,
                                 config_.mesh_level_min_coverage, config_.mesh_fill_seams}),
       texture_store_(TextureParams{config_.texture_border_px, config_.texture_max_patch_px,
@@ -102,6 +103,20 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
   result.fusion = fuser_.fuse(frame, measurements_, octree_, queue_, missing_, &updated_, &created_);
   voxel_bytes_ += result.fusion.level_bytes_allocated;
   for (const VoxelBlock* block : updated_) result.updated_blocks.push_back(block->key);
+  result.fusion_ms = fusion_timer.elapsedMs();
+  if (config_.free_space_carving) {
+    // Before the created blocks join the map: they are the frame's own, fusion updated them.
+    Timer carve_timer;
+    result.carve = carver_.carve(frame, measurements_, octree_, queue_, &carved_);
+    std::vector<BlockKey> keys;
+    for (const VoxelBlock* block : carved_) keys.push_back(block->key);
+    std::vector<BlockKey> merged;
+    std::set_union(result.updated_blocks.begin(), result.updated_blocks.end(), keys.begin(), keys.end(),
+                   std::back_inserter(merged));
+    result.updated_blocks.swap(merged);
+    result.carve_ms = carve_timer.elapsedMs();
+  }
+  Timer insert_timer;
   map_changes_.recordUpdated(result.updated_blocks);
   // The blocks the frame created join the map now, in key order (allocation kept apart from the
   // update: only blocks that hold an update are ever allocated), each reported as it is placed,
@@ -118,7 +133,8 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
                        result.updated_blocks.end());
   }
   updated_.clear();  // the stages after fusion work from the change log
-  result.fusion_ms = fusion_timer.elapsedMs();
+  carved_.clear();
+  result.fusion_ms += insert_timer.elapsedMs();
 
   // Memory bound, between fusion and meshing: nothing else touches the octree now.
   eviction_.recordUpdates(octree_, map_changes_.take(eviction_consumer_).updated, frames_integrated_);

@@ -215,6 +215,21 @@ const std::vector<Accessor>& accessors() {
     t.push_back(doubleParam("max_weight", "", 0.0, false, 1e6,
                             "Cap on a voxel's cumulative weight, so the map keeps adapting.",
                             member(&MapperConfig::max_weight)));
+    t.push_back(boolParam("free_space_carving",
+                          "Free-space evidence: the observed voxels of blocks in view that lie in front of "
+                          "the measured surface by more than fusion's band are updated towards free space, "
+                          "at every level, so people who walked on and stereo floaters fade (FreeSpaceCarver).",
+                          member(&MapperConfig::free_space_carving)));
+    t.push_back(doubleParam("free_space_decay", "", 0.0, true, 0.99,
+                            "Share of a voxel's weight that one frame seeing through it removes before "
+                            "fusing -Φ: recent evidence wins, a surface seen through ~10-15 times is gone "
+                            "whatever its history. 0: plain averaging.",
+                            member(&MapperConfig::free_space_decay)));
+    t.push_back(intParam("free_space_window_px", "px", 0, 16,
+                         "A voxel counts as seen through only if every pixel within this radius of its "
+                         "projection has a measurement beyond it: depth edges, thin structures and the "
+                         "matcher's gaps are not carved.",
+                         member(&MapperConfig::free_space_window_px)));
     t.push_back(enumParam<LookupMode>(
         "lookup_mode", {{"naive", LookupMode::kNaive}, {"accelerated", LookupMode::kAccelerated}},
         "Octree lookup: Algorithm 1 (search per pixel) or Algorithm 2 (search per distinct block "

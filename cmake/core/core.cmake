@@ -28,6 +28,7 @@ add_library(stereo_fusion_core STATIC
   ${STEREO_FUSION_ROOT}/src/integration/FrameGate.cpp
   ${STEREO_FUSION_ROOT}/src/integration/BlockLookup.cpp
   ${STEREO_FUSION_ROOT}/src/integration/SurfaceFuser.cpp
+  ${STEREO_FUSION_ROOT}/src/integration/FreeSpaceCarver.cpp
   ${STEREO_FUSION_ROOT}/src/integration/MeasurementImage.cpp
   ${STEREO_FUSION_ROOT}/src/integration/DisparityCoherence.cpp
   ${STEREO_FUSION_ROOT}/src/integration/LevelSelection.cpp

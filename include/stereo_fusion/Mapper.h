@@ -8,6 +8,7 @@
 #include "stereo_fusion/MapperConfig.h"
 #include "stereo_fusion/integration/BlockLookup.h"
 #include "stereo_fusion/integration/FrameGate.h"
+#include "stereo_fusion/integration/FreeSpaceCarver.h"
 #include "stereo_fusion/integration/StereoFrame.h"
 #include "stereo_fusion/integration/SurfaceFuser.h"
 #include "stereo_fusion/io/MapFile.h"
@@ -47,8 +48,10 @@ struct IntegrationResult {
   std::string note;
   double lookup_ms = 0.0;  ///< converting the frame's disparities to depths and colours, then the lookup
   double fusion_ms = 0.0;
+  double carve_ms = 0.0;  ///< free-space carving (FreeSpaceCarver), included in nothing else
   LookupStats lookup;
   FusionStats fusion;
+  CarveStats carve;
   /// Blocks whose voxels changed in this frame and were kept, sorted by key.
   std::vector<BlockKey> updated_blocks;
   /// Blocks evicted after this frame by the memory bound (max_blocks,
@@ -139,6 +142,7 @@ class Mapper {
   MeasurementImage measurements_;  // the frame's depths and colours, read by lookup and fusion
   BlockLookup lookup_;
   SurfaceFuser fuser_;
+  FreeSpaceCarver carver_;
   MeshStore mesh_store_;
   TextureStore texture_store_;
   EvictionPolicy eviction_;
@@ -159,6 +163,7 @@ class Mapper {
   std::vector<VoxelBlock*> queue_;    // reused across frames
   std::vector<BlockKey> missing_;     // reused across frames
   std::vector<VoxelBlock*> updated_;  // reused across frames
+  std::vector<VoxelBlock*> carved_;   // reused across frames
   std::vector<std::unique_ptr<VoxelBlock>> created_;  // reused across frames
 };
 

@@ -40,6 +40,9 @@ struct MapperConfig {
   double weight_falloff_start_vox = 1.0;  ///< δ of eq. 3.10, in voxels of the measurement's level.
   double depth_weight_reference_m = 1.0;  ///< z_ref of the depth-aware weight (w = 1 at this depth).
   double max_weight = 100.0;           ///< Cap on the cumulative weight W so the map can still change.
+  bool free_space_carving = true;      ///< Blocks seen through (beyond fusion's bands) are updated towards free space.
+  double free_space_decay = 0.2;       ///< Share of a voxel's weight a see-through frame removes before its free-space update.
+  int free_space_window_px = 1;        ///< A voxel is seen through only if every pixel within this radius measures beyond it.
   LookupMode lookup_mode = LookupMode::kAccelerated;
   int lookup_region_px = 16;           ///< Edge of the square image regions of Algorithm 2.
   int histogram_min_points = 4;        ///< Blocks hit by fewer points in a region are dropped; 0 = off.

@@ -69,6 +69,35 @@ VoxelBlock* BlockOctree::findBelow(const Node* node, const BlockKey& key) {
   }
 }
 
+void BlockOctree::collectBlocks(const std::function<bool(const Eigen::AlignedBox3d& box_world)>& may_contain,
+                                std::vector<VoxelBlock*>* out) const {
+  const Node* root = root_.load(std::memory_order_acquire);
+  if (root == nullptr) return;
+  auto box = [this](const std::array<int64_t, 3>& origin, int64_t side) {
+    const Eigen::Vector3d lo(static_cast<double>(origin[0]), static_cast<double>(origin[1]),
+                             static_cast<double>(origin[2]));
+    return Eigen::AlignedBox3d(lo * block_size_m_, (lo + Eigen::Vector3d::Constant(static_cast<double>(side))) * block_size_m_);
+  };
+  std::vector<const Node*> stack{root};
+  while (!stack.empty()) {
+    const Node* node = stack.back();
+    stack.pop_back();
+    if (!may_contain(box(node->origin, int64_t{1} << node->height))) continue;
+    if (node->height > 1) {
+      for (int octant = 7; octant >= 0; --octant)  // pushed in reverse: visited 0..7
+        if (void* child = node->child[octant].load(std::memory_order_acquire))
+          stack.push_back(static_cast<const Node*>(child));
+      continue;
+    }
+    for (int octant = 0; octant < 8; ++octant) {
+      auto* block = static_cast<VoxelBlock*>(node->child[octant].load(std::memory_order_acquire));
+      if (block == nullptr) continue;
+      const std::array<int64_t, 3> origin{block->key.x, block->key.y, block->key.z};
+      if (may_contain(box(origin, 1))) out->push_back(block);
+    }
+  }
+}
+
 void BlockOctree::growToContain(const BlockKey& key) {
   Node* root = root_.load(std::memory_order_relaxed);
   if (root == nullptr) {

@@ -246,8 +246,10 @@ void FusionNodelet::processFrame(const QueuedFrame& f) {
     blocks_evicted_ += result.evicted_blocks.size();
     if (result.accepted) {
       unpublished_stamps_.push_back(header.stamp);
-      frame_ms_.push_back({result.lookup_ms, result.fusion_ms,
-                           result.lookup_ms + result.fusion_ms + result.mesh.meshing_ms + result.texture.texture_ms});
+      // Free-space carving counts as fusion: it is the frame's update of the map.
+      frame_ms_.push_back({result.lookup_ms, result.fusion_ms + result.carve_ms,
+                           result.lookup_ms + result.fusion_ms + result.carve_ms + result.mesh.meshing_ms +
+                               result.texture.texture_ms});
       if (frame_ms_.size() > 1000) frame_ms_.pop_front();
       if (!result.mesh.changed.empty() || !result.mesh.removed.empty() || result.mesh.blocks_meshed > 0)
         recordMeshPassLocked(result.mesh.meshing_ms, result.texture.texture_ms);

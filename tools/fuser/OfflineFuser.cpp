@@ -213,12 +213,14 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
           std::fprintf(stderr, "%sframe %zu: %s\n", terminal && options.progress ? "\n" : "", i, r.note.c_str());
         }
         report->timings.push_back(
-            {r.lookup_ms, r.fusion_ms, r.mesh.meshing_ms, r.texture.texture_ms, frame_timer.elapsedMs(), mesh_now});
+            {r.lookup_ms, r.fusion_ms, r.carve_ms, r.mesh.meshing_ms, r.texture.texture_ms, frame_timer.elapsedMs(),
+             mesh_now});
         report->work.push_back({static_cast<double>(r.lookup.valid_points), static_cast<double>(r.lookup.octree_searches),
                                 static_cast<double>(r.lookup.blocks_queued), static_cast<double>(r.fusion.blocks_updated),
                                 static_cast<double>(r.fusion.voxels_updated), static_cast<double>(r.mesh.blocks_meshed),
                                 static_cast<double>(r.mesh.changed.size()), static_cast<double>(r.fusion.blocks_created),
-                                static_cast<double>(r.fusion.blocks_not_created)});
+                                static_cast<double>(r.fusion.blocks_not_created), static_cast<double>(r.carve.blocks_carved),
+                                static_cast<double>(r.carve.voxels_carved)});
       }
     }
     if (options.progress) showProgress(i + 1, total, wall.elapsedMs() / 1000.0, terminal, &last_decile);
@@ -336,6 +338,7 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   };
   j["timings_ms"]["lookup"] = stage(&StageTimings::lookup_ms, false);
   j["timings_ms"]["fusion"] = stage(&StageTimings::fusion_ms, false);
+  j["timings_ms"]["carve"] = stage(&StageTimings::carve_ms, false);
   j["timings_ms"]["meshing"] = stage(&StageTimings::meshing_ms, true);
   j["timings_ms"]["texture"] = stage(&StageTimings::texture_ms, true);
   j["timings_ms"]["total"] = stage(&StageTimings::total_ms, false);
@@ -352,6 +355,8 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   j["work_per_frame_p50"]["blocks_queued"] = work(&StageWork::blocks_queued);
   j["work_per_frame_p50"]["blocks_updated"] = work(&StageWork::blocks_updated);
   j["work_per_frame_p50"]["voxels_updated"] = work(&StageWork::voxels_updated);
+  j["work_per_frame_p50"]["blocks_carved"] = work(&StageWork::blocks_carved);
+  j["work_per_frame_p50"]["voxels_carved"] = work(&StageWork::voxels_carved);
   j["work_per_frame_p50"]["blocks_meshed"] = work(&StageWork::blocks_meshed);
   j["work_per_frame_p50"]["submeshes_changed"] = work(&StageWork::submeshes_changed);
   // Blocks not yet in the map that the frame's bands reached: created (updated) or not allocated.

@@ -30,14 +30,15 @@ struct FuseOptions {
 /// Per-frame stage timings in milliseconds: lookup and fusion of the frame, and the meshing
 /// pass (with its texture pass) that followed it, if one did (`meshed`); total is all of it.
 struct StageTimings {
-  double lookup_ms = 0, fusion_ms = 0, meshing_ms = 0, texture_ms = 0, total_ms = 0;
+  double lookup_ms = 0, fusion_ms = 0, carve_ms = 0, meshing_ms = 0, texture_ms = 0, total_ms = 0;
   bool meshed = false;
 };
 
 /// How much work one frame made each stage do (what the timings above are spent on).
 struct StageWork {
   double valid_points = 0, octree_searches = 0, blocks_queued = 0, blocks_updated = 0, voxels_updated = 0,
-         blocks_meshed = 0, submeshes_changed = 0, blocks_created = 0, blocks_not_created = 0;
+         blocks_meshed = 0, submeshes_changed = 0, blocks_created = 0, blocks_not_created = 0, blocks_carved = 0,
+         voxels_carved = 0;
 };
 
 /// What a run did; stats.json is this, plus the configuration.

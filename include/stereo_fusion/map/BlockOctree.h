@@ -1,9 +1,11 @@
 #pragma once
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <array>
 #include <atomic>
 #include <cmath>
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <vector>
@@ -116,6 +118,14 @@ class BlockOctree {
   size_t memoryBytes() const { return memoryUse().total(); }
   /// memoryBytes() / blockCount(): the per-block cost including octree overhead.
   double bytesPerBlock() const;
+
+  /// Appends to `out` the blocks whose boxes pass `may_contain` (world coordinates), descending
+  /// only into nodes whose boxes pass it: a query for the blocks in a region (a camera's
+  /// frustum) that costs the nodes and blocks near the region, not the whole map.
+  /// `may_contain` must accept a node's box whenever it accepts a block's box inside it (a
+  /// conservative "does the box reach the region" test). Order: depth-first by octant.
+  void collectBlocks(const std::function<bool(const Eigen::AlignedBox3d& box_world)>& may_contain,
+                     std::vector<VoxelBlock*>* out) const;
 
   /// All blocks, in allocation order. Not safe while another thread allocates.
   const std::vector<VoxelBlock*>& blocks() const { return blocks_; }
