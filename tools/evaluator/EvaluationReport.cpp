@@ -94,6 +94,10 @@ std::string formatTable(const GroundTruthReport& report) {
     out += row("completeness", percent(r.completeness));
   }
   out += row("F-score", percent(r.f_score));
+  if (!report.options.ghost_regions_m.empty())
+    out += row("ghost surface (objects gone)", format("%.4f m²", r.ghost_area_m2) + " in " +
+                                                   std::to_string(report.options.ghost_regions_m.size()) +
+                                                   " region(s) of dynamic.txt");
   out += row("time", format("%.2f s", report.elapsed_s));
   return out;
 }
@@ -146,6 +150,10 @@ std::string toJson(const GroundTruthReport& report) {
   json["reconstruction_samples"] = r.reconstruction_samples;
   json["ground_truth_samples"] = r.ground_truth_samples;
   json["ground_truth_samples_evaluated"] = r.ground_truth_samples_evaluated;
+  if (!report.options.ghost_regions_m.empty()) {
+    json["ghost_area_m2"] = number(r.ghost_area_m2);
+    json["ghost_regions"] = report.options.ghost_regions_m.size();
+  }
   json["visibility"]["used"] = r.visibility_used;
   json["visibility"]["frames_used"] = report.visibility.frames_used;
   json["visibility"]["frames_skipped"] = report.visibility.frames_skipped;

@@ -41,6 +41,20 @@ GroundTruthResult evaluateAgainstGroundTruthSamples(const TriangleMesh& reconstr
     const TriangleBvh gt_surface(ground_truth);
     const std::vector<double> to_gt = distancesToSurface(gt_surface, recon.points_m, &pool);
     result.precision = shareWithin(to_gt, options.tolerance_m);
+    if (!options.ghost_regions_m.empty() && !recon.points_m.empty()) {
+      size_t ghost = 0;
+      for (size_t i = 0; i < recon.points_m.size(); ++i) {
+        if (!(to_gt[i] > options.tolerance_m)) continue;
+        for (const Eigen::AlignedBox3d& region : options.ghost_regions_m)
+          if (region.contains(recon.points_m[i])) {
+            ++ghost;
+            break;
+          }
+      }
+      result.ghost_area_m2 = recon.area_m2 * static_cast<double>(ghost) / static_cast<double>(recon.points_m.size());
+    } else if (!options.ghost_regions_m.empty()) {
+      result.ghost_area_m2 = 0.0;
+    }
     result.accuracy = summarizeDistances(to_gt);
   }
   // Completeness: ground truth → reconstruction, over all samples and over the visible ones.

@@ -1,4 +1,5 @@
 #pragma once
+#include <Eigen/Geometry>
 // Ground-truth evaluation of a reconstructed mesh: accuracy, completeness, precision, F-score.
 
 #include <Eigen/Core>
@@ -21,6 +22,9 @@ struct GroundTruthOptions {
   uint64_t seed = 1;
   /// Threads for the distance queries, the caller included; 0 = all cores.
   int num_threads = 0;
+  /// Where objects stood that have gone since (the sequence's dynamic.txt): reconstruction
+  /// surface inside them that is farther than the tolerance from the truth is ghost surface.
+  std::vector<Eigen::AlignedBox3d> ghost_regions_m;
 };
 
 /// Scores of a reconstruction against a ground-truth surface. Shares are fractions in [0, 1].
@@ -46,6 +50,9 @@ struct GroundTruthResult {
   double ground_truth_area_m2 = 0.0;
   double reconstruction_area_m2 = 0.0;
   bool visibility_used = false;
+  /// Area of reconstruction surface inside GroundTruthOptions::ghost_regions_m and farther than
+  /// the tolerance from the truth (NaN without regions).
+  double ghost_area_m2 = NAN;
 };
 
 /// Draws `options.samples` points from each mesh and scores `reconstruction` against

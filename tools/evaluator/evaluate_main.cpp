@@ -7,6 +7,7 @@
 #include <fstream>
 #include <iostream>
 #include <optional>
+#include <sstream>
 
 #include "evaluator/ErrorColouredMesh.h"
 #include "evaluator/EvaluateArguments.h"
@@ -74,6 +75,28 @@ void writeErrorPlyOrFail(const EvaluateArguments& args, const TriangleMesh& reco
   std::fprintf(stderr, "[evaluate] wrote error-coloured mesh to %s\n", args.error_ply_path.c_str());
 }
 
+/// The regions of `sequence`/dynamic.txt ("ghost_region x0 y0 z0 x1 y1 z1" lines, world metres,
+/// written by the simulator's --dynamic): where objects stood that later left. No file: none.
+bool readGhostRegions(const std::string& sequence, std::vector<Eigen::AlignedBox3d>* regions, std::string* error) {
+  const std::string path = sequence + "/dynamic.txt";
+  std::ifstream in(path);
+  if (!in) return true;
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    std::istringstream fields(line);
+    std::string kind;
+    if (!(fields >> kind) || kind[0] == '#') continue;
+    Eigen::Vector3d lo, hi;
+    if (kind != "ghost_region" || !(fields >> lo.x() >> lo.y() >> lo.z() >> hi.x() >> hi.y() >> hi.z()) ||
+        !(lo.array() <= hi.array()).all()) {
+      *error = path + ":" + std::to_string(number) + ": expected 'ghost_region x0 y0 z0 x1 y1 z1' with x0 <= x1 ...";
+      return false;
+    }
+    regions->emplace_back(lo, hi);
+  }
+  return true;
+}
+
 void runGroundTruth(const EvaluateArguments& args, const std::string& gt_path,
                     const std::string& sequence) {
   const auto start = std::chrono::steady_clock::now();
@@ -91,6 +114,8 @@ void runGroundTruth(const EvaluateArguments& args, const std::string& gt_path,
   const SurfaceSamples gt_samples = sampleSurface(ground_truth, args.samples, args.seed);
   if (gt_samples.points_m.empty()) throw Failure{kExitUnreadable, gt_path + ": has no surface area"};
   if (!sequence.empty()) {
+    std::string error;
+    if (!readGhostRegions(sequence, &report.options.ghost_regions_m, &error)) throw Failure{kExitUnreadable, error};
     const DatasetReader frames = openSequenceOrFail(sequence);
     report.visibility =
         computeVisibility(gt_samples.points_m, frames, args.tolerance_m, args.threads);

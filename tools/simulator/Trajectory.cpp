@@ -146,9 +146,10 @@ std::vector<std::string> trajectoryNames() { return {"orbit", "walkthrough"}; }
 std::optional<std::vector<TimedPose>> makeTrajectory(const std::string& name,
                                                      const ScenePreset& preset, int frames,
                                                      double rate_hz, uint32_t seed,
-                                                     std::string* error) {
+                                                     std::string* error, double revolutions) {
   if (name == "orbit") {
     OrbitParams orbit;
+    orbit.revolutions = revolutions;
     orbit.centre_m = preset.focus_m;
     orbit.radius_m = preset.orbit_radius_m;
     orbit.height_m = preset.orbit_height_m;

@@ -63,10 +63,10 @@ std::optional<std::vector<TimedPose>> makeWalkthrough(const AnalyticScene& scene
 std::vector<std::string> trajectoryNames();
 
 /// Trajectory `name` ("orbit" or "walkthrough") with the preset's defaults (orbit around its
-/// focus; walkthrough of its room). std::nullopt with a reason on failure.
+/// focus, `revolutions` times; walkthrough of its room). std::nullopt with a reason on failure.
 std::optional<std::vector<TimedPose>> makeTrajectory(const std::string& name,
                                                      const ScenePreset& preset, int frames,
                                                      double rate_hz, uint32_t seed,
-                                                     std::string* error);
+                                                     std::string* error, double revolutions = 1.0);
 
 }  // namespace stereo_fusion::sim

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <fstream>
 #include <future>
 #include <iostream>
 #include <map>
@@ -45,6 +46,8 @@ struct Options {
   /// disparity (matched) | pair (left/right raw images only) | rectified-pair (rectified images only)
   std::string bag_content = "disparity";
   double gt_max_edge_m = 0.03;
+  double revolutions = 1.0;
+  std::string dynamic = "none";
   SgbmParams sgbm;
   std::string out;
 };
@@ -67,6 +70,14 @@ calibration.yaml, poses.txt, disparity/ color/ right/ NNNNNN.png, gt_mesh.ply.
   --sgbm-num-disparities N        sgbm: search range, a multiple of 16 (default 128)
   --sgbm-block-size N             sgbm: odd matching window size (default 5)
   --seed K                        scene, path and noise seed, 0..4294967295 (default 0)
+  --revolutions R                 orbit: laps over the whole sequence (default 1)
+  --dynamic none|person|moved     objects that change during the sequence (default none):
+                                  person: a person (cylinder 0.5 m wide, 1.7 m tall) stands at
+                                  the orbit's focus during the first half of the frames only;
+                                  moved: a box stands beside the focus in the first half and
+                                  on its other side in the second. gt_mesh.ply is the scene as
+                                  it ends; dynamic.txt lists where objects stood that left
+                                  (the evaluator reports the surface left there as ghost)
   --rate-hz R                     frame rate for the timestamps (default 10)
   --gt-max-edge M                 ground-truth mesh grid step in metres (default 0.03)
   --out DIR                       output folder (created; an old dataset there is replaced)
@@ -157,6 +168,8 @@ bool parseArguments(int argc, char** argv, Options* o) {
          if (o->sgbm.block_size % 2 == 0) throw UsageError{f + ": must be odd"};
        }},
       {"--seed", [&](auto& f, auto& v) { o->seed = static_cast<uint32_t>(parseInteger(f, v, 0, 4294967295LL)); }},
+      {"--revolutions", [&](auto& f, auto& v) { o->revolutions = parseDouble(f, v, 0, 100, true); }},
+      {"--dynamic", [&](auto& f, auto& v) { o->dynamic = parseChoice(f, v, {"none", "person", "moved"}); }},
       {"--rate-hz", [&](auto& f, auto& v) { o->rate_hz = parseDouble(f, v, 0, 1e6, true); }},
       {"--gt-max-edge", [&](auto& f, auto& v) { o->gt_max_edge_m = parseDouble(f, v, 0.001, 10, false); }},
       {"--bag", [&](auto& f, auto& v) {
@@ -188,6 +201,46 @@ bool parseArguments(int argc, char** argv, Options* o) {
   }
   if (o->out.empty()) throw UsageError{"--out DIR is required"};
   return true;
+}
+
+/// What --dynamic changes: the scene of the first half of the frames (nullptr: none) and the
+/// regions where objects stood that left.
+struct DynamicScene {
+  std::unique_ptr<AnalyticScene> first_half;
+  std::vector<Eigen::AlignedBox3d> ghost_regions;
+};
+
+/// Builds --dynamic `kind` around the orbit focus of preset `preset_name` (seed `seed`); adds to
+/// `final_scene` what the scene holds at the end (the moved box at its second place).
+DynamicScene makeDynamicScene(const std::string& kind, const std::string& preset_name, uint32_t seed,
+                              AnalyticScene* final_scene) {
+  DynamicScene out;
+  if (kind == "none") return out;
+  auto first = makePreset(preset_name, seed);  // same seed, same scene
+  out.first_half = std::make_unique<AnalyticScene>(std::move(first->scene));
+  const Eigen::Vector3d focus = first->focus_m;
+  const double margin_m = 0.05;
+  if (kind == "person") {
+    const double radius_m = 0.25, half_height_m = 0.85;
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translate(Eigen::Vector3d(focus.x(), focus.y(), half_height_m));
+    out.first_half->add(makeCylinder(T, radius_m, half_height_m), {180, 90, 70});
+    out.ghost_regions.emplace_back(
+        Eigen::Vector3d(focus.x() - radius_m - margin_m, focus.y() - radius_m - margin_m, 0.0),
+        Eigen::Vector3d(focus.x() + radius_m + margin_m, focus.y() + radius_m + margin_m, 2 * half_height_m + margin_m));
+    return out;
+  }
+  // moved: a 0.4 × 0.4 × 0.6 m box beside the focus, then on its other side.
+  const Eigen::Vector3d half(0.2, 0.2, 0.3);
+  const Eigen::Vector3d before(focus.x() + 0.45, focus.y(), half.z()), after(focus.x() - 0.45, focus.y() + 0.2, half.z());
+  Eigen::Isometry3d T_before = Eigen::Isometry3d::Identity(), T_after = Eigen::Isometry3d::Identity();
+  T_before.translate(before);
+  T_after.translate(after);
+  out.first_half->add(makeBox(T_before, half), {70, 120, 180});
+  final_scene->add(makeBox(T_after, half), {70, 120, 180});
+  const Eigen::Vector3d m = Eigen::Vector3d::Constant(margin_m);
+  out.ghost_regions.emplace_back(before - half - m, before + half + m);
+  return out;
 }
 
 /// One progress line on stderr, rewritten in place on a terminal, every 10 % otherwise.
@@ -223,8 +276,8 @@ int main(int argc, char** argv) {
     std::cerr << "stereo_fusion_simulate: " << error << "\n";
     return 2;
   }
-  const auto preset = makePreset(o.preset, o.seed);
-  const auto poses = makeTrajectory(o.trajectory, *preset, o.frames, o.rate_hz, o.seed, &error);
+  auto preset = makePreset(o.preset, o.seed);
+  const auto poses = makeTrajectory(o.trajectory, *preset, o.frames, o.rate_hz, o.seed, &error, o.revolutions);
   if (!poses) {
     std::cerr << "stereo_fusion_simulate: " << error << "\n";
     return 1;
@@ -251,7 +304,12 @@ int main(int argc, char** argv) {
   config.noise.outlier_max_px = o.sgbm.num_disparities;
   config.sgbm = o.sgbm;
   config.seed = o.seed;
+  // With --dynamic the first half of the frames sees `first_half` (the preset + what later
+  // leaves or moves), the second half and the ground truth `preset` (+ where it moved to).
+  const DynamicScene dynamic = makeDynamicScene(o.dynamic, o.preset, o.seed, &preset->scene);
   StereoRenderer renderer(preset->scene, *camera, config);
+  std::unique_ptr<StereoRenderer> first_half_renderer;
+  if (dynamic.first_half) first_half_renderer = std::make_unique<StereoRenderer>(*dynamic.first_half, *camera, config);
 
   std::cerr << "[simulate] " << o.preset << ", " << o.trajectory << ", " << o.frames << " frames "
             << o.width_px << "x" << o.height_px << ", disparity " << o.disparity << ", seed "
@@ -271,7 +329,8 @@ int main(int argc, char** argv) {
   double valid_share_sum = 0;
   for (int k = 0; k < o.frames; ++k) {
     const TimedPose pose = (*poses)[k];
-    StereoView view = renderer.render(pose.T_world_camera, static_cast<uint64_t>(k));
+    StereoRenderer& frame_renderer = first_half_renderer && k < o.frames / 2 ? *first_half_renderer : renderer;
+    StereoView view = frame_renderer.render(pose.T_world_camera, static_cast<uint64_t>(k));
     valid_share_sum += cv::countNonZero(view.disparity_px) / static_cast<double>(view.disparity_px.total());
     if (!finishWrite()) return 1;
     pending_write = std::async(std::launch::async, [&, k, pose, view = std::move(view)] {
@@ -295,6 +354,17 @@ int main(int argc, char** argv) {
   if (!finishWrite()) return 1;
   if (bag) bag->close();
 
+  if (!dynamic.ghost_regions.empty()) {
+    std::ofstream regions(o.out + "/dynamic.txt");
+    regions << "# where objects stood that left or moved (world, metres): x0 y0 z0 x1 y1 z1\n";
+    for (const Eigen::AlignedBox3d& box : dynamic.ghost_regions)
+      regions << "ghost_region " << box.min().x() << " " << box.min().y() << " " << box.min().z() << " "
+              << box.max().x() << " " << box.max().y() << " " << box.max().z() << "\n";
+    if (!regions) {
+      std::cerr << "stereo_fusion_simulate: cannot write " << o.out << "/dynamic.txt\n";
+      return 1;
+    }
+  }
   TriangleMesh gt_mesh;
   preset->scene.tessellate(&gt_mesh, o.gt_max_edge_m);
   if (!writer->writeGroundTruthMesh(gt_mesh, &error)) {

@@ -248,6 +248,27 @@ TEST(EvaluatorGroundTruth, HalfAPlaneIsHalfComplete) {
   EXPECT_NEAR(r.completion.max_m, 0.5, 1e-3);  // the far edge of the truth
 }
 
+TEST(EvaluatorGroundTruth, GhostSurfaceIsWhatLiesOffTheTruthInsideTheRegions) {
+  // The truth: the floor z = 0. The reconstruction: the floor, a 0.2 × 0.2 m square 0.5 m above
+  // it inside the region where an object stood (ghost), and one outside the region (not ghost:
+  // wrong, but no dynamic object's).
+  const TriangleMesh truth = planeMesh(0, 1, 0, 1, 0.0);
+  TriangleMesh reconstruction = truth;
+  for (const TriangleMesh& square : {planeMesh(0.2, 0.4, 0.2, 0.4, 0.5), planeMesh(0.7, 0.9, 0.7, 0.9, 0.5)}) {
+    const auto offset = static_cast<uint32_t>(reconstruction.positions.size());
+    reconstruction.positions.insert(reconstruction.positions.end(), square.positions.begin(), square.positions.end());
+    for (auto t : square.triangles) reconstruction.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  }
+  GroundTruthOptions options = smallOptions(0.02);
+  EXPECT_TRUE(std::isnan(evaluateAgainstGroundTruth(reconstruction, truth, options).ghost_area_m2));
+  // The region holds floor too (within tolerance of the truth: not ghost).
+  options.ghost_regions_m.emplace_back(Vector3d(0.1, 0.1, -0.1), Vector3d(0.5, 0.5, 0.7));
+  const GroundTruthResult r = evaluateAgainstGroundTruth(reconstruction, truth, options);
+  // 20 000 samples over 1.08 m²: the ghost's 0.04 m² gets ~740 of them, ±4 % (1σ).
+  EXPECT_NEAR(r.ghost_area_m2, 0.04, 0.005);
+  EXPECT_NE(toJson(GroundTruthReport{"m", "g", "", options, r, {}, 0.0}).find("\"ghost_area_m2\""), std::string::npos);
+}
+
 TEST(EvaluatorGroundTruth, EmptyReconstructionScoresZero) {
   const GroundTruthResult r =
       evaluateAgainstGroundTruth(TriangleMesh{}, planeMesh(0, 1, 0, 1, 0.0), smallOptions(0.02));
