@@ -218,12 +218,15 @@ const std::vector<Accessor>& accessors() {
     t.push_back(boolParam("free_space_carving",
                           "Free-space evidence: the observed voxels of blocks in view that lie in front of "
                           "the measured surface by more than fusion's band are updated towards free space, "
-                          "at every level, so people who walked on and stereo floaters fade (FreeSpaceCarver).",
+                          "at every level, so people who walked on and stereo floaters fade (FreeSpaceCarver); "
+                          "fusion lets contradicted voxels decay (free_space_decay). false: the thesis' plain "
+                          "running average.",
                           member(&MapperConfig::free_space_carving)));
     t.push_back(doubleParam("free_space_decay", "", 0.0, true, 0.99,
                             "Share of a voxel's weight that one frame seeing through it removes before "
-                            "fusing -Φ: recent evidence wins, a surface seen through ~10-15 times is gone "
-                            "whatever its history. 0: plain averaging.",
+                            "fusing -Φ, and that fusion removes where a measurement contradicts the stored "
+                            "value by more than the band (|D - d| > Φ): recent evidence wins, a surface seen "
+                            "through ~10-15 times is gone whatever its history. 0: plain averaging.",
                             member(&MapperConfig::free_space_decay)));
     t.push_back(intParam("free_space_window_px", "px", 0, 16,
                          "A voxel counts as seen through only if every pixel within this radius of its "

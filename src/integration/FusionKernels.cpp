@@ -49,7 +49,9 @@ inline void updateVoxel(const FusionFrame& f, size_t pixel, float sdf_m, float t
                         Voxel* voxel) {
   uint8_t rgb[3];
   if (f.rgb != nullptr) MeasurementImage::unpack(f.rgb[pixel], rgb);
-  fuseMeasurement(voxel, std::max(sdf_m, -truncation_m), weight, f.max_weight, f.rgb != nullptr ? rgb : nullptr);
+  const float truncated = std::max(sdf_m, -truncation_m);
+  voxel->weight = weightBeforeUpdate(voxel->sdf_m, voxel->weight, truncated, truncation_m, f.contradicted_keep);
+  fuseMeasurement(voxel, truncated, weight, f.max_weight, f.rgb != nullptr ? rgb : nullptr);
 }
 
 /// Where a kernel fuses one level of `block`: the level's storage when allocated, else this
@@ -114,6 +116,7 @@ FusionFrame makeFusionFrame(const StereoFrame& frame, const MapperConfig& config
     for (int m = 0; m < kNumLevels; ++m) geometry.truncation_m[m] = band.updateM<float>(m, level);
   }
   f.max_weight = static_cast<float>(config.max_weight);
+  f.contradicted_keep = config.free_space_carving ? static_cast<float>(1.0 - config.free_space_decay) : 1.0f;
   f.depth_weight_reference_m = static_cast<float>(config.depth_weight_reference_m);
   f.weight_mode = config.weight_mode;
   f.thresholds = measurements.levels();
@@ -184,7 +187,7 @@ namespace {
 /// Frame constants broadcast to all lanes, once per block.
 struct Avx2Constants {
   __m256 fx, fy, cx, cy, u_end, v_end, minus_half, half, zero, one, nan;
-  __m256 level1_min_depth, level2_min_depth, depth_weight_reference, max_weight, max_channel;
+  __m256 level1_min_depth, level2_min_depth, depth_weight_reference, max_weight, max_channel, contradicted_keep;
   __m256i width, height;
 };
 
@@ -206,6 +209,7 @@ SF_AVX2 Avx2Constants avx2Constants(const FusionFrame& f) {
   c.depth_weight_reference = _mm256_set1_ps(f.depth_weight_reference_m);
   c.max_weight = _mm256_set1_ps(f.max_weight);
   c.max_channel = _mm256_set1_ps(255.0f);
+  c.contradicted_keep = _mm256_set1_ps(f.contradicted_keep);
   c.width = _mm256_set1_epi32(f.width_px);
   c.height = _mm256_set1_epi32(f.height_px);
   return c;
@@ -282,10 +286,15 @@ SF_AVX2 __m256i blendChannel(const Avx2Constants& c, __m256i old_rgb, __m256i ob
 /// the others are written back unchanged.
 SF_AVX2 void updateEightAvx2(const FusionFrame& f, const Avx2Constants& c, __m256 keep, __m256 sdf,
                              __m256 truncation, __m256 weight, __m256i pixel, Voxel* voxels) {
-  const Avx2Voxels old = loadVoxels(voxels);
+  Avx2Voxels old = loadVoxels(voxels);
+  const __m256 stored_weight = old.weight;  // written back in the lanes not updated
   // std::max(sdf, −Φ); −Φ flips the sign bit as scalar negation does.
   const __m256 minus_truncation = _mm256_xor_ps(truncation, _mm256_set1_ps(-0.0f));
   const __m256 clamped = _mm256_blendv_ps(sdf, minus_truncation, _mm256_cmp_ps(sdf, minus_truncation, _CMP_LT_OQ));
+  // weightBeforeUpdate(): |D − d| clears the sign bit as std::abs does.
+  const __m256 disagreement = _mm256_andnot_ps(_mm256_set1_ps(-0.0f), _mm256_sub_ps(old.sdf_m, clamped));
+  old.weight = _mm256_blendv_ps(old.weight, _mm256_mul_ps(old.weight, c.contradicted_keep),
+                                _mm256_cmp_ps(disagreement, truncation, _CMP_GT_OQ));
   const __m256 weight_sum = _mm256_add_ps(old.weight, weight);
   Avx2Voxels updated;
   updated.sdf_m = _mm256_div_ps(_mm256_add_ps(_mm256_mul_ps(old.weight, old.sdf_m), _mm256_mul_ps(weight, clamped)),
@@ -304,7 +313,7 @@ SF_AVX2 void updateEightAvx2(const FusionFrame& f, const Avx2Constants& c, __m25
     updated.rgb = rgb;
   }
   updated.sdf_m = _mm256_blendv_ps(old.sdf_m, updated.sdf_m, keep);
-  updated.weight = _mm256_blendv_ps(old.weight, updated.weight, keep);
+  updated.weight = _mm256_blendv_ps(stored_weight, updated.weight, keep);
   updated.rgb = _mm256_castps_si256(
       _mm256_blendv_ps(_mm256_castsi256_ps(old.rgb), _mm256_castsi256_ps(updated.rgb), keep));
   storeVoxels(updated, voxels);

@@ -42,6 +42,9 @@ struct FusionFrame {
   float max_truncation_m = 0;
   float delta_m[kNumLevels] = {};  ///< δ of eq. 3.10 by measurement level
   float max_weight = 0;
+  /// What a contradicted voxel keeps of its weight (weightBeforeUpdate()): 1 − free_space_decay
+  /// with free_space_carving, else 1.
+  float contradicted_keep = 1.0f;
   float depth_weight_reference_m = 0;
   WeightMode weight_mode = WeightMode::kSteinbruecker;
   LevelThresholds thresholds;

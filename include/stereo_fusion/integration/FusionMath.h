@@ -43,6 +43,16 @@ inline float measurementWeight(WeightMode mode, float sdf_m, float delta_m, floa
   return 0.0f;
 }
 
+/// The weight W a voxel brings into eq. 3.8 when a measurement contradicts it by more than the
+/// band, |D − d| > Φ (d already truncated to [−Φ, Φ]): the world changed there — an object left
+/// or arrived — or one of the two is an outlier. It keeps `keep` (1 − free_space_decay) of
+/// itself, so a change wins within a few frames rather than after as many frames as W counts;
+/// otherwise W. keep = 1 is the thesis' plain running average.
+inline float weightBeforeUpdate(float stored_sdf_m, float stored_weight, float truncated_sdf_m, float truncation_m,
+                                float keep) {
+  return std::abs(stored_sdf_m - truncated_sdf_m) > truncation_m ? stored_weight * keep : stored_weight;
+}
+
 /// Eq. 3.8–3.9: D ← (W·D + w·d)/(W + w), W ← min(W + w, W_max); colour averaged with the same
 /// weights. `sdf_m` must already be truncated to [−Φ, Φ].
 inline void fuseMeasurement(Voxel* voxel, float sdf_m, float weight, float max_weight,

@@ -65,6 +65,24 @@ TEST(FusionMath, RunningAverageEq38Eq39HandWorked) {
   EXPECT_EQ(v.b, 3);    // (0 + 10)/4 = 2.5, rounded half up
 }
 
+TEST(FusionMath, AContradictedVoxelKeepsPartOfItsWeightHandWorked) {
+  // Stored 0.05 behind a surface; the measurement says 0.04 in front; Φ = 0.08.
+  // |0.05 − (−0.04)| = 0.09 > 0.08: W = 10 · 0.8 = 8, then (8·0.05 + 1·(−0.04)) / 9 = 0.04.
+  Voxel v;
+  v.sdf_m = 0.05f;
+  v.weight = 10.0f;
+  v.weight = weightBeforeUpdate(v.sdf_m, v.weight, -0.04f, 0.08f, 0.8f);
+  EXPECT_FLOAT_EQ(v.weight, 8.0f);
+  fuseMeasurement(&v, -0.04f, 1.0f, 100.0f, nullptr);
+  EXPECT_NEAR(v.sdf_m, 0.04f, 1e-7f);
+  EXPECT_FLOAT_EQ(v.weight, 9.0f);
+  // |0.03 − (−0.04)| = 0.07 ≤ 0.08: agreement within the band keeps W (noise is averaged).
+  EXPECT_FLOAT_EQ(weightBeforeUpdate(0.03f, 10.0f, -0.04f, 0.08f, 0.8f), 10.0f);
+  // Exactly Φ apart is no contradiction; keep = 1 is the thesis' plain average.
+  EXPECT_FLOAT_EQ(weightBeforeUpdate(0.04f, 10.0f, -0.04f, 0.08f, 0.8f), 10.0f);
+  EXPECT_FLOAT_EQ(weightBeforeUpdate(0.05f, 10.0f, -0.04f, 0.08f, 1.0f), 10.0f);
+}
+
 TEST(FusionMath, FirstMeasurementIsTakenAsIs) {
   Voxel v;
   fuseMeasurement(&v, 0.033f, 0.4f, 100.0f, nullptr);

@@ -75,8 +75,10 @@ void referenceFuseBlock(const StereoFrame& frame, const BlockOctree& octree, con
             grey[0] = grey[1] = grey[2] = frame.color.at<uint8_t>(iv, iu);
             rgb = grey;
           }
-          fuseMeasurement(&block->writableAt(level, i, j, k),
-                          std::max(sdf, -truncation), w, static_cast<float>(config.max_weight), rgb);
+          Voxel& voxel = block->writableAt(level, i, j, k);
+          const float keep = config.free_space_carving ? static_cast<float>(1.0 - config.free_space_decay) : 1.0f;
+          voxel.weight = weightBeforeUpdate(voxel.sdf_m, voxel.weight, std::max(sdf, -truncation), truncation, keep);
+          fuseMeasurement(&voxel, std::max(sdf, -truncation), w, static_cast<float>(config.max_weight), rgb);
         }
   }
 }
