@@ -172,16 +172,11 @@ CarveStats FreeSpaceCarver::carve(const StereoFrame& frame, const MeasurementIma
               if (!(voxel.weight > 0.0f)) continue;  // unknown stays unknown
               const Eigen::Vector3f p = first + static_cast<float>(i) * geometry.ex_m +
                                         static_cast<float>(j) * geometry.ey_m + static_cast<float>(k) * geometry.ez_m;
-              if (!(p.z() > 0.0f)) continue;
-              // The pixel fusion would read (eq. 3.12–3.14, nearest pixel).
-              const float u = f.fx_px * p.x() / p.z() + f.cx_px;
-              const float v = f.fy_px * p.y() / p.z() + f.cy_px;
-              if (!(u >= -0.5f && v >= -0.5f && u < f.u_end_px && v < f.v_end_px)) continue;
-              const int iu = static_cast<int>(std::floor(u + 0.5f));
-              const int iv = static_cast<int>(std::floor(v + 0.5f));
-              if (iu < 0 || iv < 0 || iu >= f.width_px || iv >= f.height_px) continue;
+              size_t pixel;  // the pixel fusion would read
+              if (!nearestPixel(f, p, &pixel)) continue;
               // The pixel's own depth bounds its free depth: most voxels stop here.
-              if (!(f.depth_m[static_cast<size_t>(iv) * f.width_px + iu] > p.z())) continue;
+              if (!(f.depth_m[pixel] > p.z())) continue;
+              const int iu = static_cast<int>(pixel % f.width_px), iv = static_cast<int>(pixel / f.width_px);
               const float free_depth = freeDepth(f.depth_m, f.width_px, f.height_px, window, iu, iv);
               if (!(free_depth > p.z())) continue;  // not in front (or no measurement near)
               const int measurement_level = levelForDepth(free_depth, f.thresholds);

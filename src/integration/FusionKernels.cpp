@@ -143,16 +143,8 @@ uint64_t fuseBlockScalar(const FusionFrame& f, const BlockOctree& octree, VoxelB
         for (int i = 0; i < side; ++i) {
           const Eigen::Vector3f p = first + static_cast<float>(i) * geometry.ex_m +
                                     static_cast<float>(j) * geometry.ey_m + static_cast<float>(k) * geometry.ez_m;
-          if (!(p.z() > 0.0f)) continue;
-          // Eq. 3.12–3.14: nearest pixel of the voxel centre's projection. Bounds are checked
-          // in float first: u, v can be huge or infinite for z_c near 0.
-          const float u = f.fx_px * p.x() / p.z() + f.cx_px;
-          const float v = f.fy_px * p.y() / p.z() + f.cy_px;
-          if (!(u >= -0.5f && v >= -0.5f && u < f.u_end_px && v < f.v_end_px)) continue;
-          const int iu = static_cast<int>(std::floor(u + 0.5f));
-          const int iv = static_cast<int>(std::floor(v + 0.5f));
-          if (iu < 0 || iv < 0 || iu >= f.width_px || iv >= f.height_px) continue;
-          const size_t pixel = static_cast<size_t>(iv) * f.width_px + iu;
+          size_t pixel;
+          if (!nearestPixel(f, p, &pixel)) continue;
           const float surface_depth = f.depth_m[pixel];
           if (std::isnan(surface_depth)) continue;  // no usable measurement
           const int measurement_level = levelForDepth(surface_depth, f.thresholds);

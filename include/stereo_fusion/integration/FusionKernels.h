@@ -6,6 +6,7 @@
 // against each other and against a per-voxel transcription of the equations.
 
 #include <Eigen/Geometry>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 
@@ -58,6 +59,22 @@ struct FusionFrame {
   /// groups of voxels that provably get no update. nullptr: every voxel is visited.
   const DepthTiles* tiles = nullptr;
 };
+
+/// Eq. 3.12–3.14: the nearest pixel of camera point `p_c`, as an index into the frame's images;
+/// false when it lies behind the camera or projects outside the image. Bounds are checked in
+/// float first: u, v can be huge or infinite for z_c near 0. (The scalar kernel's rule; the
+/// AVX2 kernel repeats it eight lanes at a time.)
+inline bool nearestPixel(const FusionFrame& f, const Eigen::Vector3f& p_c, size_t* pixel) {
+  if (!(p_c.z() > 0.0f)) return false;
+  const float u = f.fx_px * p_c.x() / p_c.z() + f.cx_px;
+  const float v = f.fy_px * p_c.y() / p_c.z() + f.cy_px;
+  if (!(u >= -0.5f && v >= -0.5f && u < f.u_end_px && v < f.v_end_px)) return false;
+  const int iu = static_cast<int>(std::floor(u + 0.5f));
+  const int iv = static_cast<int>(std::floor(v + 0.5f));
+  if (iu < 0 || iv < 0 || iu >= f.width_px || iv >= f.height_px) return false;
+  *pixel = static_cast<size_t>(iv) * f.width_px + iu;
+  return true;
+}
 
 /// Derives the FusionFrame of `frame`; `measurements` must already hold the frame's depths and,
 /// if colour is fused, its colours.
