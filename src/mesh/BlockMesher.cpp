@@ -980,7 +980,7 @@ void BlockMesher::meshGenericBox(Context& ctx, const int lo[3], const int hi[3])
 }
 
 void BlockMesher::mesh(const BlockOctree& map, const MeshStates& states, const VoxelBlock& owner,
-                       SubMesh* out) const {
+                       SubMesh* out, const SeamFills* seam_fills) const {
   out->clear();
   out->key = owner.key;
   const int owner_level = states[owner].level;
@@ -1002,7 +1002,12 @@ void BlockMesher::mesh(const BlockOctree& map, const MeshStates& states, const V
   for (int d = 0; d < 8; ++d) {
     ctx.nb[d] = map.neighbour(owner, d & 1, (d >> 1) & 1, (d >> 2) & 1);
     ctx.level[d] = ctx.nb[d] ? states[*ctx.nb[d]].level : 0;
-    ctx.voxels[d] = ctx.nb[d] ? meshVoxels(*ctx.nb[d], states[*ctx.nb[d]], &scratch.seam_fills[d]) : nullptr;
+    if (ctx.nb[d] != nullptr) {
+      const bool prepared = seam_fills != nullptr && ctx.nb[d]->row < seam_fills->size() &&
+                            !(*seam_fills)[*ctx.nb[d]].empty();
+      ctx.voxels[d] = prepared ? (*seam_fills)[*ctx.nb[d]].data()
+                               : meshVoxels(*ctx.nb[d], states[*ctx.nb[d]], &scratch.seam_fills[d]);
+    }
     ctx.step[d] = 1 << ctx.level[d];
     if (ctx.nb[d] == nullptr) continue;
     coarsest_level = std::max(coarsest_level, ctx.level[d]);

@@ -75,9 +75,25 @@ std::vector<BlockKey> MeshStore::affectedOwners(const BlockOctree& map,
 MeshChanges MeshStore::remesh(const BlockOctree& map, const std::vector<Owner>& owners, ThreadPool* pool) {
   Timer timer;
   if (scratch_.size() < owners.size()) scratch_.resize(owners.size());
-  pool->parallelFor(owners.size(), 4, [&](size_t begin, size_t end) {
-    for (size_t i = begin; i < end; ++i) mesher_.mesh(map, states_, *owners[i].block, &scratch_[i]);
+  // The face-filled copies the owners read, each built once for the pass instead of once per
+  // owner reading it (up to 8), and freed after it: they are not kept between passes.
+  seam_fills_.fit(map);
+  std::vector<const VoxelBlock*> filled;
+  for (const Owner& owner : owners)
+    for (int d = 0; d < 8; ++d) {
+      const VoxelBlock* block = map.neighbour(*owner.block, d & 1, (d >> 1) & 1, (d >> 2) & 1);
+      if (block == nullptr || !states_[*block].seam_filled || !seam_fills_[*block].empty()) continue;
+      seam_fills_[*block].resize(1);  // marks it taken; filled below
+      filled.push_back(block);
+    }
+  pool->parallelFor(filled.size(), 16, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i)
+      fillFacesFromCoarserLevels(*filled[i], states_[*filled[i]].level, &seam_fills_[*filled[i]]);
   });
+  pool->parallelFor(owners.size(), 4, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) mesher_.mesh(map, states_, *owners[i].block, &scratch_[i], &seam_fills_);
+  });
+  for (const VoxelBlock* block : filled) std::vector<Voxel>().swap(seam_fills_[*block]);
   MeshChanges update;
   update.blocks_meshed = owners.size();
   for (size_t i = 0; i < owners.size(); ++i) {

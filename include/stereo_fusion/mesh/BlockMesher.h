@@ -50,6 +50,9 @@ struct MeshBlockState {
   bool seam_filled = false;
 };
 using MeshStates = BlockColumn<MeshBlockState>;
+/// Face-filled copies (fillFacesFromCoarserLevels()) of the seam-filled blocks a meshing pass
+/// reads, built once per pass; an empty entry is built by the mesher when it needs it.
+using SeamFills = BlockColumn<std::vector<Voxel>>;
 
 /// The bit of MeshBlockState::sign_bits saying that region `region` (0..7) holds an observed
 /// voxel < 0 (`non_negative` false) or ≥ 0 (true).
@@ -136,8 +139,10 @@ class BlockMesher {
   explicit BlockMesher(const MeshingParams& params);
 
   /// Meshes everything `owner` owns; neighbours are looked up in `map`. The states of the
-  /// owner and its neighbours must be current.
-  void mesh(const BlockOctree& map, const MeshStates& states, const VoxelBlock& owner, SubMesh* out) const;
+  /// owner and its neighbours must be current. `seam_fills` (optional) holds the face-filled
+  /// copies of seam-filled blocks prepared for the pass (MeshStore builds each once per pass).
+  void mesh(const BlockOctree& map, const MeshStates& states, const VoxelBlock& owner, SubMesh* out,
+            const SeamFills* seam_fills = nullptr) const;
 
  private:
   struct Context;

@@ -42,6 +42,7 @@ class MeshStore {
   void clear() {
     meshes_.clear();
     states_.clear();
+    seam_fills_.clear();
   }
 
   /// The owners a change of `updated` must re-mesh (existing blocks only), sorted by key.
@@ -69,6 +70,7 @@ class MeshStore {
   MeshingParams params_;
   BlockMesher mesher_;
   MeshStates states_;  // the mesher's per-block cache, refreshed for every block before it is meshed
+  SeamFills seam_fills_;  // during a pass: the face-filled copies its owners read, then freed
   std::unordered_map<BlockKey, SubMesh, BlockKeyHash> meshes_;
   std::vector<SubMesh> scratch_;
   BlockKeySet owner_keys_;  // ownersOf()'s de-duplication, reused frame after frame
