@@ -135,10 +135,13 @@ CarveStats FreeSpaceCarver::carve(const StereoFrame& frame, const MeasurementIma
       v_hi = std::max(v_hi, f.fy_px * c.y() / c.z() + f.cy_px);
     }
     // The voxels' nearest pixels lie within the corners' box (a convex hull's projection).
-    const int tx0 = std::clamp(static_cast<int>(std::floor(u_lo + 0.5f)), 0, f.width_px - 1) / kTilePx;
-    const int tx1 = std::clamp(static_cast<int>(std::floor(u_hi + 0.5f)), 0, f.width_px - 1) / kTilePx;
-    const int ty0 = std::clamp(static_cast<int>(std::floor(v_lo + 0.5f)), 0, f.height_px - 1) / kTilePx;
-    const int ty1 = std::clamp(static_cast<int>(std::floor(v_hi + 0.5f)), 0, f.height_px - 1) / kTilePx;
+    // Clamped in float first: a corner just in front of the camera projects far beyond int.
+    auto tile = [](float coordinate_px, int size_px) {
+      const float clamped = std::clamp(coordinate_px + 0.5f, 0.0f, static_cast<float>(size_px - 1));
+      return static_cast<int>(std::floor(clamped)) / kTilePx;
+    };
+    const int tx0 = tile(u_lo, f.width_px), tx1 = tile(u_hi, f.width_px);
+    const int ty0 = tile(v_lo, f.height_px), ty1 = tile(v_hi, f.height_px);
     for (int ty = ty0; ty <= ty1; ++ty)
       for (int tx = tx0; tx <= tx1; ++tx)
         if (tile_max_depth_m_[static_cast<size_t>(ty) * tiles_x_ + tx] > z_near) return true;
