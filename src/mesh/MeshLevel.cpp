@@ -48,21 +48,7 @@ bool linearField(const Voxel* voxels, int side, const float position[3], float* 
     i0[a] = std::clamp(static_cast<int>(std::floor(position[a])), 0, side - 2);
     frac[a] = position[a] - static_cast<float>(i0[a]);
   }
-  float acc = 0.0f, acc_rgb[3] = {0, 0, 0};
-  for (int c = 0; c < 8; ++c) {
-    const int dx = c & 1, dy = (c >> 1) & 1, dz = c >> 2;
-    const float w = (dx ? frac[0] : 1.0f - frac[0]) * (dy ? frac[1] : 1.0f - frac[1]) * (dz ? frac[2] : 1.0f - frac[2]);
-    if (w == 0.0f) continue;
-    const Voxel& v = voxels[VoxelBlock::indexInLevel(side, i0[0] + dx, i0[1] + dy, i0[2] + dz)];
-    if (!(v.weight > 0.0f)) return false;
-    acc += w * v.sdf_m;
-    acc_rgb[0] += w * v.r;
-    acc_rgb[1] += w * v.g;
-    acc_rgb[2] += w * v.b;
-  }
-  *sdf = acc;
-  for (int k = 0; k < 3; ++k) rgb[k] = acc_rgb[k];
-  return true;
+  return trilinearVoxels(voxels, side, i0, frac, sdf, rgb);
 }
 
 }  // namespace

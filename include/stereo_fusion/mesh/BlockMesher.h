@@ -60,6 +60,30 @@ constexpr uint16_t meshSignBit(int region, bool non_negative) {
   return static_cast<uint16_t>(1u << (2 * region + (non_negative ? 1 : 0)));
 }
 
+/// The trilinear interpolation of one level's voxels (`side`³ of them) in the cell starting at
+/// voxel i0 with fractions `frac` (0..1 inside the cell; beyond it, linear extrapolation):
+/// signed distance and colour. False if a voxel with non-zero weight is unobserved. The one
+/// weighted sum of the mesher's samples (blockField()) and the seam fill.
+inline bool trilinearVoxels(const Voxel* voxels, int side, const int i0[3], const float frac[3], float* sdf,
+                            float rgb[3]) {
+  float acc = 0.0f, acc_rgb[3] = {0, 0, 0};
+  for (int c = 0; c < 8; ++c) {
+    const int dx = c & 1, dy = (c >> 1) & 1, dz = (c >> 2) & 1;
+    const float w = (dx ? frac[0] : 1.0f - frac[0]) * (dy ? frac[1] : 1.0f - frac[1]) *
+                    (dz ? frac[2] : 1.0f - frac[2]);
+    if (w == 0.0f) continue;
+    const Voxel& v = voxels[VoxelBlock::indexInLevel(side, i0[0] + dx, i0[1] + dy, i0[2] + dz)];
+    if (!(v.weight > 0.0f)) return false;
+    acc += w * v.sdf_m;
+    acc_rgb[0] += w * v.r;
+    acc_rgb[1] += w * v.g;
+    acc_rgb[2] += w * v.b;
+  }
+  *sdf = acc;
+  for (int k = 0; k < 3; ++k) rgb[k] = acc_rgb[k];
+  return true;
+}
+
 /// What the mesher samples of `block`: its voxels at state.level, or (state.seam_filled) their
 /// face-filled copy, built in `scratch`.
 const Voxel* meshVoxels(const VoxelBlock& block, const MeshBlockState& state, std::vector<Voxel>* scratch);
