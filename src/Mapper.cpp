@@ -9,6 +9,7 @@
 
 #include "stereo_fusion/integration/DisparityCoherence.h"
 #include "stereo_fusion/io/MapFile.h"
+#include "stereo_fusion/map/RegionClearing.h"
 #include "stereo_fusion/util/Timer.h"
 
 namespace stereo_fusion {
@@ -248,6 +249,34 @@ MeshChanges Mapper::adoptMap(BlockOctree* loaded, const MapFileInfo& info) {
   }
   if (texture_consumer_) mesh_changes_.take(*texture_consumer_);  // nothing to texture from
   return rebuilt;
+}
+
+ClearResult Mapper::clearRegion(const MapRegion& region, MeshTiming mesh_timing) {
+  ClearResult result;
+  result.error = region.validate();
+  if (!result.error.empty()) return result;
+  result.accepted = true;
+  Timer timer;
+  const RegionClearing clearing = clearRegionVoxels(region, &octree_);
+  result.blocks_visited = clearing.blocks_visited;
+  result.blocks_changed = clearing.changed.size();
+  result.voxels_cleared = clearing.voxels_cleared;
+  voxel_bytes_ -= clearing.bytes_freed;
+  if (!clearing.emptied.empty()) {
+    queue_.clear();  // their pointers dangle after erase
+    result.blocks_erased = octree_.erase(clearing.emptied);
+  }
+  // Eviction keeps each block's last update: a cleared block is not "recently updated".
+  map_changes_.recordUpdated(clearing.changed);
+  map_changes_.recordErased(clearing.emptied);
+  map_changes_.take(eviction_consumer_);
+  result.clear_ms = timer.elapsedMs();
+  if (mesh_timing == MeshTiming::kNow) {
+    MeshPass pass = updateMesh();
+    result.mesh = std::move(pass.mesh);
+    result.texture = pass.texture;
+  }
+  return result;
 }
 
 void Mapper::reset() {

@@ -24,6 +24,8 @@ add_library(stereo_fusion_core STATIC
   ${STEREO_FUSION_ROOT}/src/map/VoxelBlock.cpp
   ${STEREO_FUSION_ROOT}/src/map/BlockChangeLog.cpp
   ${STEREO_FUSION_ROOT}/src/map/EvictionPolicy.cpp
+  ${STEREO_FUSION_ROOT}/src/map/MapRegion.cpp
+  ${STEREO_FUSION_ROOT}/src/map/RegionClearing.cpp
   ${STEREO_FUSION_ROOT}/src/integration/StereoFrame.cpp
   ${STEREO_FUSION_ROOT}/src/integration/FrameGate.cpp
   ${STEREO_FUSION_ROOT}/src/integration/BlockLookup.cpp

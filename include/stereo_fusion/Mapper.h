@@ -15,6 +15,7 @@
 #include "stereo_fusion/map/BlockChangeLog.h"
 #include "stereo_fusion/map/BlockOctree.h"
 #include "stereo_fusion/map/EvictionPolicy.h"
+#include "stereo_fusion/map/MapRegion.h"
 #include "stereo_fusion/mesh/MeshStore.h"
 #include "stereo_fusion/mesh/TextureStore.h"
 #include "stereo_fusion/util/ThreadPool.h"
@@ -64,6 +65,20 @@ struct IntegrationResult {
   TextureStats texture;
 };
 
+/// What clearRegion() did.
+struct ClearResult {
+  bool accepted = false;  ///< false: the region was invalid (`error` says why) and the map is unchanged
+  std::string error;
+  uint64_t blocks_visited = 0;  ///< blocks of the map the region reaches
+  uint64_t blocks_changed = 0;  ///< blocks that lost observed voxels and keep some
+  uint64_t blocks_erased = 0;   ///< blocks left without an observed voxel, erased
+  uint64_t voxels_cleared = 0;  ///< observed voxels made unobserved, all levels
+  double clear_ms = 0.0;
+  /// As IntegrationResult::mesh and ::texture: with MeshTiming::kNow, what the meshing pass changed.
+  MeshChanges mesh;
+  TextureStats texture;
+};
+
 /// The ROS-free mapping pipeline. integrate(frame) = validate → lookup → fusion → eviction; every
 /// stage after fusion learns which blocks changed from a change log (BlockChangeLog) and
 /// catches up at its own rate: eviction after every frame, the mesher (and after it the texture
@@ -105,6 +120,11 @@ class Mapper {
   uint64_t lastUpdateFrame(const VoxelBlock& block) const { return eviction_.lastUpdateFrame(block); }
   /// Drops the whole map.
   void reset();
+  /// Forgets what the map holds in `region` (world frame): every observed voxel whose centre
+  /// lies in it becomes unobserved, at every level; blocks left empty are erased (and their
+  /// submeshes removed), the others re-meshed. Unknown space stays unknown: later frames fill
+  /// the region again. An invalid region is refused and leaves the map untouched.
+  ClearResult clearRegion(const MapRegion& region, MeshTiming mesh_timing = MeshTiming::kNow);
 
   /// A consumer of the mesh's changes (submeshes changed / removed by meshing passes, rebuilds,
   /// loads and resets), e.g. a publisher that sends them at its own rate. It must take them
