@@ -60,6 +60,8 @@ void FusionNodelet::onInit() {
   reset_srv_ = service_nh.advertiseService("reset", &FusionNodelet::reset, this);
   save_map_srv_ = service_nh.advertiseService("save_map", &FusionNodelet::saveMap, this);
   load_map_srv_ = service_nh.advertiseService("load_map", &FusionNodelet::loadMap, this);
+  clear_box_srv_ = service_nh.advertiseService("clear_box", &FusionNodelet::clearBox, this);
+  clear_sphere_srv_ = service_nh.advertiseService("clear_sphere", &FusionNodelet::clearSphere, this);
 
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
   diagnostics_->setHardwareID("stereo_fusion");
@@ -133,7 +135,7 @@ void FusionNodelet::onFrame(const DisparityMsg::ConstPtr& d, const ImageMsg::Con
       if (!node_config_.drop_oldest) return;
       queue_.pop_front();
     }
-    queue_.push_back({d, i, c, map_epoch_.load()});
+    queue_.push_back({d, i, c, map_epoch_.load(), clear_epoch_.load()});
   }
   queue_cv_.notify_one();
 }
@@ -230,7 +232,9 @@ void FusionNodelet::processFrame(const QueuedFrame& f) {
       // mesh_publish_rate_hz; with rate 0, after every frame. Texture patches are cut from the
       // frame that changed a submesh, so with textures the mesh follows every frame.
       const bool deferred = node_config_.mesh_publish_rate_hz > 0 && mapper_config_.texture != TextureMode::kPatches;
-      result = mapper_->integrate(frame, deferred ? MeshTiming::kDeferred : MeshTiming::kNow);
+      const MeshTiming timing = deferred ? MeshTiming::kDeferred : MeshTiming::kNow;
+      result = mapper_->integrate(frame, timing);
+      if (result.accepted) reapplyClearsLocked(f, header.stamp, timing);
     } catch (const std::exception&) {
       // A throw mid-frame (e.g. bad_alloc) can leave the fused voxels and the mesh out of step:
       // re-mesh from the map and send subscribers a full update before the frame is counted.
@@ -408,6 +412,7 @@ bool FusionNodelet::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&)
   std::lock_guard<std::mutex> lock(map_mutex_);
   startMapEpochLocked();
   mapper_->reset();
+  cleared_regions_.clear();
   path_.poses.clear();
   frame_ms_.clear();
   mesh_pass_ms_.clear();
@@ -423,6 +428,69 @@ bool FusionNodelet::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&)
   mesh_update_pub_.publish(empty);
   NODELET_INFO("stereo_fusion: map reset");
   return true;
+}
+
+void FusionNodelet::reapplyClearsLocked(const QueuedFrame& f, const ros::Time& stamp, MeshTiming timing) {
+  bool recleared = false;
+  for (const ClearedRegion& cleared : cleared_regions_) {
+    if (f.clear_epoch >= cleared.clear_epoch && stamp >= cleared.stamp) continue;
+    const ClearResult again = mapper_->clearRegion(cleared.region, timing);
+    recleared = recleared || again.voxels_cleared > 0;
+  }
+  if (recleared) ++frames_recleared_;
+  // Frames come in arrival order and (with require_increasing_timestamps) in stamp order: a clear
+  // this frame does not predate, no later frame predates either.
+  while (!cleared_regions_.empty() && f.clear_epoch >= cleared_regions_.front().clear_epoch &&
+         stamp >= cleared_regions_.front().stamp)
+    cleared_regions_.pop_front();
+}
+
+template <typename Response>
+bool FusionNodelet::clearRegion(const MapRegion& region, Response* res) {
+  {
+    std::lock_guard<std::mutex> lock(map_mutex_);
+    const std::string invalid = region.validate();
+    if (!invalid.empty()) {
+      res->success = false;
+      res->message = invalid + " (the map is unchanged)";
+      NODELET_ERROR("stereo_fusion: clear: %s", res->message.c_str());
+      return true;
+    }
+    ClearedRegion cleared;
+    {
+      std::lock_guard<std::mutex> queue_lock(queue_mutex_);
+      cleared.clear_epoch = ++clear_epoch_;
+    }
+    cleared.stamp = ros::Time::now();
+    cleared.region = region;
+    if (cleared_regions_.size() >= kMaxClearedRegions) {
+      // Frames from before the oldest clear could refill its region; counted on /diagnostics.
+      cleared_regions_.pop_front();
+      ++clears_forgotten_;
+    }
+    cleared_regions_.push_back(cleared);
+    const ClearResult result = mapper_->clearRegion(region, MeshTiming::kDeferred);
+    ++regions_cleared_;
+    res->success = true;
+    res->voxels_cleared = result.voxels_cleared;
+    res->blocks_changed = result.blocks_changed;
+    res->blocks_erased = result.blocks_erased;
+    res->message = "cleared " + region.describe() + ": " + std::to_string(result.voxels_cleared) + " voxels, " +
+                   std::to_string(result.blocks_erased) + " blocks erased, " + std::to_string(result.blocks_changed) +
+                   " changed";
+  }
+  // The mesh follows now, whatever the publish rate: the caller expects the region gone.
+  publishPending(ros::Time(0), true);
+  NODELET_INFO("stereo_fusion: %s", res->message.c_str());
+  return true;
+}
+
+bool FusionNodelet::clearBox(ClearBox::Request& req, ClearBox::Response& res) {
+  return clearRegion(MapRegion::box({req.min.x, req.min.y, req.min.z}, {req.max.x, req.max.y, req.max.z}), &res);
+}
+
+bool FusionNodelet::clearSphere(ClearSphere::Request& req, ClearSphere::Response& res) {
+  return clearRegion(MapRegion::sphere({req.center.x, req.center.y, req.center.z}, req.radius), &res);
 }
 
 bool FusionNodelet::saveMap(SaveMap::Request& req, SaveMap::Response& res) {
@@ -471,6 +539,7 @@ bool FusionNodelet::loadMap(LoadMap::Request& req, LoadMap::Response& res) {
   const MeshChanges changes = mapper_->adoptMap(&loaded, info);
   res.blocks = mapper_->map().blockCount();
   startMapEpochLocked();
+  cleared_regions_.clear();
   path_.poses.clear();
   frame_ms_.clear();
   mesh_pass_ms_.clear();
@@ -561,6 +630,10 @@ void FusionNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
   status.add("dropped: bad timestamp", dropped_bad_stamp_.load());
   status.add("re-anchored (relocalisation or clock reset)", reanchored_.load());
   status.add("dropped: superseded by reset/load", dropped_superseded_.load());
+  status.add("regions cleared (~clear_box, ~clear_sphere)", regions_cleared_.load());
+  // Frames from before a clear whose fusion refilled the region, which was then cleared again.
+  status.add("frames fused from before a clear (region cleared again)", frames_recleared_.load());
+  status.add("clears forgotten (more than 256 pending)", clears_forgotten_.load());
   status.add("latency p50 (s)", pct(0.5));
   status.add("latency p99 (s)", pct(0.99));
   const char* names[5] = {"lookup", "fusion", "meshing", "texture", "total"};

@@ -1,5 +1,7 @@
 // Integration test with a real master, the real nodelet and real messages (rostest).
 #include <std_srvs/Empty.h>
+#include <stereo_fusion/ClearBox.h>
+#include <stereo_fusion/ClearSphere.h>
 #include <stereo_fusion/GetFullMesh.h>
 #include <stereo_fusion/LoadMap.h>
 #include <stereo_fusion/MeshUpdate.h>
@@ -504,6 +506,102 @@ TEST_F(NodeletEpoch, AFrameWaitingForTfAcrossResetOrLoadMapIsDroppedAsSuperseded
   publish(frame_at(0.0), "left_optical", true);
   EXPECT_TRUE(waitFor([&] { return diag("frames fused") >= fused + 1; }, 30.0));
   std::filesystem::remove(path);
+}
+
+namespace {
+/// Vertices of the whole mesh `full` within `radius_m` of `centre`.
+size_t verticesNear(const MeshUpdate& full, const Eigen::Vector3d& centre, double radius_m) {
+  std::unordered_map<BlockKey, SubMesh, BlockKeyHash> mesh;
+  EXPECT_TRUE(applyMeshUpdate(full, &mesh));
+  size_t n = 0;
+  for (const auto& [key, sub] : mesh)
+    for (const Eigen::Vector3f& p : sub.positions) n += (p.cast<double>() - centre).norm() < radius_m;
+  return n;
+}
+}  // namespace
+
+// ~clear_sphere / ~clear_box forget a region; the streamed mesh follows with removals. A frame
+// that arrived before the clear (here: still waiting for its tf) is fused, but the region is
+// cleared again after it, so it does not bring back what the operator cleared; frames after
+// the clear fill the region again.
+TEST_F(NodeletEpoch, ClearedRegionsStayClearOfFramesFromBeforeTheClear) {
+  const sim::AnalyticScene s = scene();
+  const Eigen::Vector3d ball(0.05, 0.1, 1.2);
+  auto frame_at = [&](double x) {
+    return test::renderFrame(s, qvga(), sim::lookAt({x, -0.25, 0.0}, ball, -Eigen::Vector3d::UnitY()));
+  };
+  std_srvs::Empty reset;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/reset", reset));
+  const long fused_start = std::max(0L, diag("frames fused"));
+  const long superseded_start = std::max(0L, diag("dropped: superseded by reset/load"));
+  for (int f = 0; f < 3; ++f) publish(frame_at(-0.1 + 0.1 * f), "left_optical", true);
+  ASSERT_TRUE(waitFor([&] { return diag("frames fused") >= fused_start + 3; }, 60.0)) << diag("frames fused");
+  GetFullMesh before;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", before));
+  ASSERT_GT(verticesNear(before.response.mesh, ball, 0.25), 200u);
+
+  // An invalid region is refused and changes nothing.
+  ClearSphere bad;
+  bad.request.center.z = 1.2;
+  bad.request.radius = -0.5;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/clear_sphere", bad));
+  EXPECT_FALSE(bad.response.success);
+  EXPECT_NE(bad.response.message.find("radius must be positive"), std::string::npos) << bad.response.message;
+  GetFullMesh unchanged;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", unchanged));
+  expectSameMesh(before.response.mesh, unchanged.response.mesh);
+
+  // A frame from before the clear waits for its tf while the operator clears the ball.
+  const StereoFrame held = frame_at(0.15);
+  const ros::Time held_stamp = publishHeldForTf(held, "held_clear_optical");
+  ClearSphere clear;
+  clear.request.center.x = ball.x();
+  clear.request.center.y = ball.y();
+  clear.request.center.z = ball.z();
+  clear.request.radius = 0.35;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/clear_sphere", clear));
+  ASSERT_TRUE(clear.response.success) << clear.response.message;
+  EXPECT_GT(clear.response.voxels_cleared, 1000u);
+  EXPECT_GT(clear.response.blocks_erased, 0u);
+  GetFullMesh cleared;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", cleared));
+  EXPECT_EQ(verticesNear(cleared.response.mesh, ball, 0.34), 0u);
+  EXPECT_GT(verticesNear(cleared.response.mesh, ball, 1.0), 100u) << "the floor around the ball is kept";
+  // The stream carried the removals: the subscriber's copy equals the full mesh.
+  ASSERT_TRUE(waitFor([&] {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return streamed_.size() == cleared.response.mesh.blocks.size();
+  }, 10.0)) << "the removals did not arrive on ~mesh_update";
+
+  releaseTf(held, "held_clear_optical", held_stamp);
+  ASSERT_TRUE(waitFor([&] { return diag("frames fused") >= fused_start + 4; }, 30.0));
+  ASSERT_TRUE(diagnostics_.waitForNextReport(10.0));
+  EXPECT_EQ(diag("frames fused from before a clear (region cleared again)"), 1);
+  GetFullMesh after_held;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", after_held));
+  EXPECT_EQ(verticesNear(after_held.response.mesh, ball, 0.34), 0u) << "a frame from before the clear refilled it";
+
+  // A frame after the clear sees the ball again; a box clears it again.
+  publish(frame_at(0.05), "left_optical", true);
+  ASSERT_TRUE(waitFor([&] { return diag("frames fused") >= fused_start + 5; }, 30.0));
+  GetFullMesh refilled;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", refilled));
+  EXPECT_GT(verticesNear(refilled.response.mesh, ball, 0.25), 100u);
+  ClearBox box;
+  box.request.min.x = ball.x() - 0.3;
+  box.request.min.y = ball.y() - 0.3;
+  box.request.min.z = ball.z() - 0.3;
+  box.request.max.x = ball.x() + 0.3;
+  box.request.max.y = ball.y() + 0.3;
+  box.request.max.z = ball.z() + 0.3;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/clear_box", box));
+  ASSERT_TRUE(box.response.success) << box.response.message;
+  GetFullMesh boxed;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", boxed));
+  EXPECT_EQ(verticesNear(boxed.response.mesh, ball, 0.29), 0u);
+  EXPECT_TRUE(waitFor([&] { return diag("regions cleared (~clear_box, ~clear_sphere)") == 2; }, 10.0))
+      << diag("regions cleared (~clear_box, ~clear_sphere)");
+  EXPECT_EQ(diag("dropped: superseded by reset/load"), superseded_start) << "a clear drops no frame";
 }
 
 TEST(NodeParameters, OutOfRangeValuesAtStartUpNameTheParameter) {

@@ -13,6 +13,8 @@
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <std_srvs/Empty.h>
+#include <stereo_fusion/ClearBox.h>
+#include <stereo_fusion/ClearSphere.h>
 #include <stereo_fusion/GetFullMesh.h>
 #include <stereo_fusion/LoadMap.h>
 #include <stereo_fusion/SaveMap.h>
@@ -40,7 +42,8 @@ namespace stereo_fusion {
 
 /// Nodelet `stereo_fusion/FusionNodelet`. Topics: `disparity`, `image`, `camera_info` in;
 /// `~mesh_update`, `~mesh_markers`, `~camera_path`, `~frustum`, `~block_bounds` out. Services:
-/// `~save_mesh`, `~reset`, `~get_full_mesh`, `~save_map`, `~load_map`. Every dropped frame is
+/// `~save_mesh`, `~reset`, `~get_full_mesh`, `~save_map`, `~load_map`, `~clear_box`,
+/// `~clear_sphere`. Every dropped frame is
 /// counted by reason (queue full, tf timeout, bad input, timestamp backwards, duplicate, pose
 /// jump) and reported on /diagnostics together with rates, latency, map size and blocks
 /// evicted by the memory bound.
@@ -60,6 +63,13 @@ class FusionNodelet : public nodelet::Nodelet {
     ImageMsg::ConstPtr image;
     InfoMsg::ConstPtr info;
     uint64_t map_epoch = 0;  ///< map_epoch_ when the frame arrived
+    uint64_t clear_epoch = 0;  ///< clear_epoch_ when the frame arrived
+  };
+  /// A region an operator cleared, kept while frames from before the clear may still arrive.
+  struct ClearedRegion {
+    uint64_t clear_epoch = 0;  ///< clear_epoch_ after the clear: frames that arrived earlier have less
+    ros::Time stamp;           ///< ROS time of the clear: frames stamped earlier are from before it
+    MapRegion region;
   };
 
   void onInit() override;
@@ -90,6 +100,15 @@ class FusionNodelet : public nodelet::Nodelet {
   /// Starts a new map epoch: drops (and counts) the queued frames. Caller holds map_mutex_.
   void startMapEpochLocked();
   bool loadMap(LoadMap::Request& req, LoadMap::Response& res);
+  bool clearBox(ClearBox::Request& req, ClearBox::Response& res);
+  bool clearSphere(ClearSphere::Request& req, ClearSphere::Response& res);
+  /// Clears `region` for ~clear_box / ~clear_sphere and publishes the mesh's changes.
+  template <typename Response>
+  bool clearRegion(const MapRegion& region, Response* res);
+  /// After fusing frame `f` (stamped `stamp`): clears again the regions cleared after it arrived
+  /// or after it was taken, so that a frame from before a clear does not refill the region,
+  /// and forgets the clears no later frame can predate. Caller holds map_mutex_.
+  void reapplyClearsLocked(const QueuedFrame& f, const ros::Time& stamp, MeshTiming timing);
   /// Publishes the whole mesh as a `full` update and redraws the markers (after reset / load).
   /// Caller holds map_mutex_.
   void publishFullLocked(const std::vector<BlockKey>& removed);
@@ -131,7 +150,7 @@ class FusionNodelet : public nodelet::Nodelet {
   std::unique_ptr<message_filters::Synchronizer<ExactPolicy>> exact_sync_;
   std::unique_ptr<message_filters::Synchronizer<ApproxPolicy>> approx_sync_;
   ros::Publisher mesh_update_pub_, markers_pub_, path_pub_, frustum_pub_, block_bounds_pub_;
-  ros::ServiceServer save_srv_, full_srv_, reset_srv_, save_map_srv_, load_map_srv_;
+  ros::ServiceServer save_srv_, full_srv_, reset_srv_, save_map_srv_, load_map_srv_, clear_box_srv_, clear_sphere_srv_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
   ros::WallTimer diagnostics_timer_;
 
@@ -156,6 +175,11 @@ class FusionNodelet : public nodelet::Nodelet {
   /// Bumped (under both queue_mutex_ and map_mutex_) by reset and load_map: a frame that arrived
   /// earlier belongs to the map those replaced.
   std::atomic<uint64_t> map_epoch_{0};
+  /// Bumped (under both queue_mutex_ and map_mutex_) by ~clear_box / ~clear_sphere.
+  std::atomic<uint64_t> clear_epoch_{0};
+  static constexpr size_t kMaxClearedRegions = 256;
+  std::deque<ClearedRegion> cleared_regions_;  // guarded by map_mutex_, oldest first
+  std::atomic<uint64_t> regions_cleared_{0}, frames_recleared_{0}, clears_forgotten_{0};
   std::atomic<uint64_t> blocks_evicted_{0};  // by the memory bound, since start (reset and load included)
   ros::WallTime started_;
 };
