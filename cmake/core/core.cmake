@@ -26,6 +26,8 @@ add_library(stereo_fusion_core STATIC
   ${STEREO_FUSION_ROOT}/src/map/EvictionPolicy.cpp
   ${STEREO_FUSION_ROOT}/src/map/MapRegion.cpp
   ${STEREO_FUSION_ROOT}/src/map/RegionClearing.cpp
+  ${STEREO_FUSION_ROOT}/src/trajectory/PoseCorrection.cpp
+  ${STEREO_FUSION_ROOT}/src/trajectory/CorrectionWindow.cpp
   ${STEREO_FUSION_ROOT}/src/integration/StereoFrame.cpp
   ${STEREO_FUSION_ROOT}/src/integration/FrameGate.cpp
   ${STEREO_FUSION_ROOT}/src/integration/BlockLookup.cpp
@@ -66,7 +68,7 @@ target_link_libraries(stereo_fusion_sim PUBLIC stereo_fusion_core)
 
 # The core's unit tests: one gtest binary (one link, parallel compile); every test case is its own
 # ctest entry so the summary counts cases. The helpers (TestSupport.h, ...) are in test/unit/.
-set(STEREO_FUSION_CORE_TEST_FOLDERS camera map integration mesh io util mapper)
+set(STEREO_FUSION_CORE_TEST_FOLDERS camera map integration mesh io util mapper trajectory)
 if(STEREO_FUSION_CORE_TESTS)
   set(_core_test_globs)
   foreach(folder ${STEREO_FUSION_CORE_TEST_FOLDERS})

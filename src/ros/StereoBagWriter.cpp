@@ -1,6 +1,8 @@
 #include "stereo_fusion/ros/StereoBagWriter.h"
 
 #include <cv_bridge/cv_bridge.h>
+#include <nav_msgs/Path.h>
+#include <tf2_eigen/tf2_eigen.h>
 #include <rosbag/bag.h>
 #include <sensor_msgs/image_encodings.h>
 #include <tf2_msgs/TFMessage.h>
@@ -64,6 +66,26 @@ bool StereoBagWriter::write(const StereoFrame& frame, float max_disparity_px, st
     bag_->write(topics_.disparity, header.stamp, disparity);
     bag_->write(topics_.image, header.stamp, image);
     bag_->write(topics_.camera_info, header.stamp, info);
+  } catch (const rosbag::BagException& e) {
+    *error = std::string("writing the bag failed: ") + e.what();
+    return false;
+  }
+  return true;
+}
+
+bool StereoBagWriter::writeTrajectory(const std::vector<StampedPose>& poses, double stamp_s, std::string* error) {
+  nav_msgs::Path path;
+  path.header.stamp = ros::Time(stamp_s + stamp_offset_s_);
+  path.header.frame_id = topics_.world_frame;
+  for (const StampedPose& p : poses) {
+    geometry_msgs::PoseStamped pose;
+    pose.header.stamp = ros::Time(p.stamp_s + stamp_offset_s_);
+    pose.header.frame_id = topics_.world_frame;
+    pose.pose = tf2::toMsg(p.T_world_camera);
+    path.poses.push_back(pose);
+  }
+  try {
+    bag_->write(topics_.trajectory, path.header.stamp, path);
   } catch (const rosbag::BagException& e) {
     *error = std::string("writing the bag failed: ") + e.what();
     return false;

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "readers/DatasetReader.h"
@@ -15,6 +16,7 @@
 #include "stereo_fusion/io/ObjWriter.h"
 #include "stereo_fusion/io/PlyWriter.h"
 #include "stereo_fusion/ros/BagSequence.h"
+#include "stereo_fusion/trajectory/PoseCorrection.h"
 #include "stereo_fusion/util/Percentile.h"
 #include "stereo_fusion/util/Timer.h"
 
@@ -63,10 +65,10 @@ bool parseFuseArguments(const std::vector<std::string>& args, FuseOptions* optio
        : a == "--image-topic"     ? options->bag_topics.image
        : a == "--camera-info-topic" ? options->bag_topics.camera_info
                                     : options->bag_topics.world_frame) = *v;
-    } else if (a == "--load-map" || a == "--save-map") {
+    } else if (a == "--load-map" || a == "--save-map" || a == "--trajectory") {
       const std::string* v = value(a.c_str());
       if (!v) return false;
-      (a == "--load-map" ? options->load_map : options->save_map) = *v;
+      (a == "--load-map" ? options->load_map : a == "--save-map" ? options->save_map : options->trajectory) = *v;
     } else if (a == "--quiet") {
       options->progress = false;
     } else if (!a.empty() && a[0] == '-') {
@@ -84,6 +86,10 @@ bool parseFuseArguments(const std::vector<std::string>& args, FuseOptions* optio
   } else {
     *error = "expected <seq-folder | file.bag> <out-dir> (or <out-dir> with --load-map), got " +
              std::to_string(positional.size()) + " arguments";
+    return false;
+  }
+  if (!options->trajectory.empty() && options->input.empty()) {
+    *error = "--trajectory needs the frames it corrects (an input folder or bag)";
     return false;
   }
   if (!config_file.empty() && !loadMapperConfigFile(config_file, &options->config, error)) return false;
@@ -139,6 +145,70 @@ Summary summarize(std::vector<double> v) {
   return s;
 }
 
+
+/// The usable poses of a TUM trajectory file, by stamp.
+bool readTrajectory(const std::string& path, std::vector<StampedPose>* poses, std::string* error) {
+  std::vector<DatasetFrameInfo> lines;
+  if (!readTumPoses(path, &lines, error)) return false;
+  for (const DatasetFrameInfo& line : lines)
+    if (line.pose_error.empty()) poses->push_back({line.timestamp_s, line.T_world_camera});
+  std::sort(poses->begin(), poses->end(), [](const StampedPose& a, const StampedPose& b) { return a.stamp_s < b.stamp_s; });
+  if (poses->empty()) {
+    *error = path + ": no usable pose";
+    return false;
+  }
+  return true;
+}
+
+/// A fused frame: where it is in the input and the pose it was fused at.
+struct FusedFrame {
+  size_t index = 0;
+  StampedPose original;
+};
+
+/// Fuses the frames again at the poses `trajectory` implies (PoseCorrection) into a new mapper
+/// (starting from `load_map` when given), which then replaces `*mapper`.
+bool applyTrajectory(const FuseOptions& options, FrameSource* reader, const std::vector<FusedFrame>& fused,
+                     const std::vector<StampedPose>& trajectory, std::unique_ptr<Mapper>* mapper,
+                     CorrectionReport* report, std::string* error) {
+  Timer timer;
+  std::vector<StampedPose> originals;
+  for (const FusedFrame& f : fused) originals.push_back(f.original);
+  std::sort(originals.begin(), originals.end(), [](const StampedPose& a, const StampedPose& b) { return a.stamp_s < b.stamp_s; });
+  // Offline the trajectory comes after every frame: all of them share the drift it removes.
+  const PoseCorrection correction(originals, trajectory, std::numeric_limits<double>::infinity());
+  report->trajectory_poses = trajectory.size();
+  report->matched_poses = correction.corrections().size();
+  if (correction.empty()) {
+    *error = options.trajectory + ": none of its " + std::to_string(trajectory.size()) +
+             " stamps lies within 0.5 s of a fused frame (stamps must match poses.txt's / the bag's)";
+    return false;
+  }
+  auto corrected = std::make_unique<Mapper>(options.config);
+  if (!options.load_map.empty() && !corrected->loadMap(options.load_map, nullptr, error)) return false;
+  const bool terminal = isatty(STDERR_FILENO);
+  size_t last_decile = 0;
+  if (options.progress) std::fprintf(stderr, "applying %s: fusing %zu frames again at their corrected poses\n",
+                                     options.trajectory.c_str(), fused.size());
+  for (size_t k = 0; k < fused.size(); ++k) {
+    StereoFrame frame;
+    if (!reader->load(fused[k].index, &frame, error)) return false;  // it loaded a moment ago
+    frame.T_world_camera = correction.corrected(fused[k].original.stamp_s, fused[k].original.T_world_camera);
+    const Eigen::Isometry3d delta = frame.T_world_camera * fused[k].original.T_world_camera.inverse();
+    report->max_shift_m = std::max(report->max_shift_m, (frame.T_world_camera.translation() -
+                                                         fused[k].original.T_world_camera.translation()).norm());
+    report->max_rotation_deg =
+        std::max(report->max_rotation_deg, Eigen::AngleAxisd(delta.linear()).angle() * 180.0 / M_PI);
+    ++report->frames_refused;
+    if (!corrected->integrate(frame, MeshTiming::kDeferred).accepted) ++report->frames_rejected;
+    if (options.progress) showProgress(k + 1, fused.size(), timer.elapsedMs() / 1000.0, terminal, &last_decile);
+  }
+  corrected->updateMesh();
+  *mapper = std::move(corrected);
+  report->applied = true;
+  report->ms = timer.elapsedMs();
+  return true;
+}
 }  // namespace
 
 bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::string* error) {
@@ -154,10 +224,14 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
   } else {
     return false;
   }
-  Mapper mapper(options.config);
+  std::vector<StampedPose> trajectory;
+  if (!options.trajectory.empty() && !readTrajectory(options.trajectory, &trajectory, error)) return false;
+  std::vector<FusedFrame> fused;  // with --trajectory
+  auto owner = std::make_unique<Mapper>(options.config);
+  Mapper* mapper = owner.get();
   if (!options.load_map.empty()) {
-    if (!mapper.loadMap(options.load_map, nullptr, error)) return false;
-    report->blocks_loaded = mapper.map().blockCount();
+    if (!mapper->loadMap(options.load_map, nullptr, error)) return false;
+    report->blocks_loaded = mapper->map().blockCount();
   }
   std::error_code ec;
   fs::create_directories(options.out_dir, ec);
@@ -194,12 +268,12 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
       // Mesh after every mesh_every-th fused frame; the last frame's pass comes after the loop.
       const bool mesh_now = (report->frames_used + 1) % options.mesh_every == 0;
       try {
-        r = mapper.integrate(frame, mesh_now ? MeshTiming::kNow : MeshTiming::kDeferred);
+        r = mapper->integrate(frame, mesh_now ? MeshTiming::kNow : MeshTiming::kDeferred);
       } catch (const std::bad_alloc&) {
         // Out of memory mid-frame: this frame's blocks may be half fused; stop cleanly with what
         // we have rather than crash. Set max_blocks to stay within memory.
         *error = "out of memory at frame " + std::to_string(i) + " with " +
-                 std::to_string(mapper.map().blockCount()) + " blocks; set max_blocks";
+                 std::to_string(mapper->map().blockCount()) + " blocks; set max_blocks";
         return false;
       }
       if (!r.accepted) {
@@ -208,6 +282,7 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
         skip(reason, "frame " + std::to_string(i) + ": " + r.error);
       } else {
         ++report->frames_used;
+        if (!trajectory.empty()) fused.push_back({i, {frame.timestamp_s, frame.T_world_camera}});
         if (r.reanchored) {
           ++report->frames_reanchored;
           std::fprintf(stderr, "%sframe %zu: %s\n", terminal && options.progress ? "\n" : "", i, r.note.c_str());
@@ -225,9 +300,9 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
     }
     if (options.progress) showProgress(i + 1, total, wall.elapsedMs() / 1000.0, terminal, &last_decile);
   }
-  if (mapper.blocksAwaitingMesh() > 0) {  // the frames since the last meshing pass
+  if (mapper->blocksAwaitingMesh() > 0) {  // the frames since the last meshing pass
     Timer mesh_timer;
-    const MeshPass pass = mapper.updateMesh();
+    const MeshPass pass = mapper->updateMesh();
     if (!report->timings.empty() && !report->timings.back().meshed) {
       StageTimings& last = report->timings.back();
       last.meshing_ms = pass.mesh.meshing_ms;
@@ -236,22 +311,26 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
       last.meshed = true;
     }
   }
+  if (!trajectory.empty() && !fused.empty()) {
+    if (!applyTrajectory(options, reader.get(), fused, trajectory, &owner, &report->correction, error)) return false;
+    mapper = owner.get();
+  }
   report->wall_time_s = wall.elapsedMs() / 1000.0;
 
-  const TriangleMesh mesh = mapper.extractMesh();
+  const TriangleMesh mesh = mapper->extractMesh();
   report->mesh_vertices = mesh.positions.size();
   report->mesh_triangles = mesh.triangles.size();
-  report->blocks = mapper.map().blockCount();
-  report->blocks_evicted = mapper.blocksEvicted();
-  if (!options.save_map.empty() && !mapper.saveMap(options.save_map, error)) return false;
-  report->memory_bytes = mapper.map().memoryBytes();
-  report->bytes_per_block = mapper.map().bytesPerBlock();
-  report->memory = mapper.map().memoryUse();
+  report->blocks = mapper->map().blockCount();
+  report->blocks_evicted = mapper->blocksEvicted();
+  if (!options.save_map.empty() && !mapper->saveMap(options.save_map, error)) return false;
+  report->memory_bytes = mapper->map().memoryBytes();
+  report->bytes_per_block = mapper->map().bytesPerBlock();
+  report->memory = mapper->map().memoryUse();
   struct rusage usage {};
   if (getrusage(RUSAGE_SELF, &usage) == 0) report->peak_rss_bytes = usage.ru_maxrss * 1024.0;  // KiB on Linux
-  if (!mapper.map().blocks().empty()) {
-    BlockKey lo = mapper.map().blocks().front()->key, hi = lo;
-    for (const VoxelBlock* b : mapper.map().blocks()) {
+  if (!mapper->map().blocks().empty()) {
+    BlockKey lo = mapper->map().blocks().front()->key, hi = lo;
+    for (const VoxelBlock* b : mapper->map().blocks()) {
       lo = componentMin(lo, b->key);
       hi = componentMax(hi, b->key);
     }
@@ -259,8 +338,8 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
     report->dense_grid_bytes = (hi.x - lo.x + 1.0) * (hi.y - lo.y + 1.0) * (hi.z - lo.z + 1.0) *
                                voxels_per_block * sizeof(Voxel);
   }
-  const MeshStates& mesh_states = mapper.mesh().states();  // current: the mesh was brought up to date above
-  for (const VoxelBlock* b : mapper.map().blocks()) {
+  const MeshStates& mesh_states = mapper->mesh().states();  // current: the mesh was brought up to date above
+  for (const VoxelBlock* b : mapper->map().blocks()) {
     if (b->row >= mesh_states.size()) continue;
     const MeshBlockState& state = mesh_states[*b];
     ++report->blocks_per_level[state.level];
@@ -268,12 +347,12 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
   }
 
   if (!writePly((fs::path(options.out_dir) / "mesh.ply").string(), mesh, error)) return false;
-  report->textured_blocks = mapper.textures().patches().size();
-  report->texture_bytes = mapper.textures().memoryBytes();
+  report->textured_blocks = mapper->textures().patches().size();
+  report->texture_bytes = mapper->textures().memoryBytes();
   if (options.config.texture == TextureMode::kPatches) {
     ObjExportInfo info;
-    if (!writeTexturedObj((fs::path(options.out_dir) / "mesh.obj").string(), mapper.mesh().submeshes(),
-                          mapper.textures().patches(), ObjExportOptions{}, &info, error))
+    if (!writeTexturedObj((fs::path(options.out_dir) / "mesh.obj").string(), mapper->mesh().submeshes(),
+                          mapper->textures().patches(), ObjExportOptions{}, &info, error))
       return false;
     report->atlas_count = info.files.size() - 2;  // besides the .obj and the .mtl
   }
@@ -362,6 +441,16 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   // Blocks not yet in the map that the frame's bands reached: created (updated) or not allocated.
   j["work_per_frame_p50"]["blocks_created"] = work(&StageWork::blocks_created);
   j["work_per_frame_p50"]["blocks_not_created"] = work(&StageWork::blocks_not_created);
+  if (report.correction.applied) {
+    const CorrectionReport& c = report.correction;
+    j["trajectory"]["poses"] = c.trajectory_poses;
+    j["trajectory"]["matched_poses"] = c.matched_poses;
+    j["trajectory"]["frames_refused"] = c.frames_refused;
+    j["trajectory"]["frames_rejected"] = c.frames_rejected;
+    j["trajectory"]["max_shift_m"] = c.max_shift_m;
+    j["trajectory"]["max_rotation_deg"] = c.max_rotation_deg;
+    j["trajectory"]["ms"] = c.ms;
+  }
   j["wall_time_s"] = report.wall_time_s;
   for (const ParameterSpec& p : mapperParameterSpecs()) j["config"][p.name] = getMapperParameter(config, p.name);
   return j.dump(2);

@@ -25,6 +25,21 @@ struct FuseOptions {
   std::string load_map;  ///< map file to start from (empty = an empty map); `input` may then be empty
   std::string save_map;  ///< where to save the map after the last frame (empty = not saved)
   bool progress = true;   ///< progress bar on stderr (a line per 10 % when not a terminal)
+  /// A SLAM's corrected camera poses (TUM lines, stamps matching the frames'), applied after the
+  /// last frame: the frames are fused again at their corrected poses (empty = none).
+  std::string trajectory;
+};
+
+/// What --trajectory did.
+struct CorrectionReport {
+  bool applied = false;
+  size_t trajectory_poses = 0;  ///< usable lines of the file
+  size_t matched_poses = 0;     ///< of those, within 0.5 s of a fused frame (they define the correction)
+  size_t frames_refused = 0;    ///< frames fused again at their corrected poses
+  size_t frames_rejected = 0;   ///< of those, rejected at the corrected pose (by the FrameGate)
+  double max_shift_m = 0.0;     ///< the largest move of a camera centre
+  double max_rotation_deg = 0.0;
+  double ms = 0.0;              ///< re-fusing and re-meshing
 };
 
 /// Per-frame stage timings in milliseconds: lookup and fusion of the frame, and the meshing
@@ -67,11 +82,12 @@ struct FuseReport {
   size_t texture_bytes = 0;          ///< memory held by the texture patches
   size_t atlas_count = 0;            ///< atlas PNGs written with mesh.obj
   double wall_time_s = 0;
+  CorrectionReport correction;
 };
 
 /// Parses `fuse <input> <out-dir> [--config FILE] [--set key=value ...] [--frames N] [--quiet]
 /// [--disparity-topic T] [--image-topic T] [--camera-info-topic T] [--world-frame F]
-/// [--load-map FILE] [--save-map FILE]`; with --load-map the input may be left out
+/// [--load-map FILE] [--save-map FILE] [--trajectory FILE]`; with --load-map the input may be left out
 /// (`fuse <out-dir> --load-map FILE` meshes a saved map).
 /// --config is applied before every --set, whatever their order. False with a message (which
 /// names the parameter or flag) on any error: unknown flags, unknown keys, out-of-range values.

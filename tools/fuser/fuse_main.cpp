@@ -8,6 +8,7 @@ namespace {
 const char* kUsage =
     "usage: stereo_fusion_fuse <seq-folder | file.bag> <out-dir> [--config FILE] [--set key=value ...]\n"
     "                          [--frames N] [--mesh-every N] [--quiet] [--load-map FILE] [--save-map FILE]\n"
+    "                          [--trajectory FILE]\n"
     "       stereo_fusion_fuse <out-dir> --load-map FILE [...]   (mesh a saved map)\n"
     "Fuses a dataset folder (see doc/dataset_format.md) or a rosbag (DisparityImage, Image, CameraInfo, /tf)\n"
     "and writes <out-dir>/mesh.ply and <out-dir>/stats.json (with --set texture=patches also\n"
@@ -22,6 +23,10 @@ const char* kUsage =
     "                    /stereo/left/image_rect_color, /stereo/left/camera_info, world)\n"
     "  --load-map FILE   start from a map saved with --save-map (same voxel_size_m, truncation_vox)\n"
     "  --save-map FILE   save the map after the last frame (versioned binary, checksummed)\n"
+    "  --trajectory FILE a SLAM's corrected camera poses, TUM lines 'stamp tx ty tz qx qy qz qw' with\n"
+    "                    stamps matching the frames' (typically keyframes): after the last frame the\n"
+    "                    frames are fused again at the poses it implies (frames between two of its\n"
+    "                    poses take their interpolated correction), as after a loop closure\n"
     "  --quiet           no progress output\n";
 }
 
@@ -54,6 +59,12 @@ int main(int argc, char** argv) {
   if (options.config.texture == stereo_fusion::TextureMode::kPatches)
     std::printf("wrote %s/mesh.obj + mesh.mtl + %zu atlas PNG(s): %zu textured blocks, texture memory %.1f MB\n",
                 options.out_dir.c_str(), report.atlas_count, report.textured_blocks, report.texture_bytes / 1048576.0);
+  if (report.correction.applied)
+    std::printf("trajectory %s: %zu of %zu poses matched fused frames; %zu frames fused again (%zu rejected) in %.1f s, "
+                "largest correction %.3f m / %.2f deg\n",
+                options.trajectory.c_str(), report.correction.matched_poses, report.correction.trajectory_poses,
+                report.correction.frames_refused, report.correction.frames_rejected, report.correction.ms / 1000.0,
+                report.correction.max_shift_m, report.correction.max_rotation_deg);
   if (!options.save_map.empty()) std::printf("saved the map (%zu blocks) to %s\n", report.blocks, options.save_map.c_str());
   // Meshing a loaded map alone is a success without frames.
   return report.frames_used > 0 || (!options.load_map.empty() && report.frames_total == 0) ? 0 : 1;

@@ -91,61 +91,11 @@ bool readCalibration(const fs::path& path, StereoCamera* camera, std::string* er
 }
 
 bool readPoses(const fs::path& path, std::vector<DatasetFrameInfo>* frames, std::string* error) {
-  std::ifstream in(path);
-  if (!in) {
+  if (!fs::exists(path)) {
     *error = path.string() + ": missing (the dataset folder needs poses.txt)";
     return false;
   }
-  std::string line;
-  int line_number = 0;
-  while (std::getline(in, line)) {
-    ++line_number;
-    const size_t first = line.find_first_not_of(" \t\r");
-    if (first == std::string::npos || line[first] == '#') continue;
-    std::istringstream fields(line);
-    double v[8];
-    int n = 0;
-    std::string token;
-    bool numeric = true;
-    while (fields >> token) {
-      if (n == 8) {
-        n = 9;
-        break;
-      }
-      try {
-        size_t used = 0;
-        v[n] = std::stod(token, &used);
-        numeric &= used == token.size();
-      } catch (...) {
-        numeric = false;
-      }
-      ++n;
-    }
-    const std::string where = path.string() + ":" + std::to_string(line_number);
-    if (n != 8 || !numeric) {
-      *error = where + ": expected 8 numbers 'timestamp tx ty tz qx qy qz qw'";
-      return false;
-    }
-    // A malformed line is a broken file (an error); a well-formed line with an unusable pose
-    // (a SLAM export's NaN, a zero quaternion) costs only its frame, as in the nodelet.
-    DatasetFrameInfo info;
-    info.index = frames->size();
-    info.timestamp_s = v[0];
-    info.T_world_camera = Eigen::Isometry3d::Identity();
-    const Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);  // file order qx qy qz qw
-    bool finite = true;
-    for (double x : v) finite = finite && std::isfinite(x);
-    if (!finite)
-      info.pose_error = where + ": pose is not finite";
-    else if (std::abs(q.norm() - 1.0) > 1e-3)
-      info.pose_error = where + ": quaternion is not unit length (|q| = " + std::to_string(q.norm()) + ")";
-    else {
-      info.T_world_camera.linear() = q.normalized().toRotationMatrix();
-      info.T_world_camera.translation() = Eigen::Vector3d(v[1], v[2], v[3]);
-    }
-    frames->push_back(info);
-  }
-  return true;
+  return readTumPoses(path.string(), frames, error);
 }
 
 /// cv::imread, with the one message every caller gives when the file cannot be decoded.
@@ -209,6 +159,65 @@ cv::Mat readColor(const std::string& path, std::string* error) {
 }
 
 }  // namespace
+
+bool readTumPoses(const std::string& file, std::vector<DatasetFrameInfo>* frames, std::string* error) {
+  const fs::path path(file);
+  std::ifstream in(path);
+  if (!in) {
+    *error = path.string() + ": cannot be opened";
+    return false;
+  }
+  std::string line;
+  int line_number = 0;
+  while (std::getline(in, line)) {
+    ++line_number;
+    const size_t first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    std::istringstream fields(line);
+    double v[8];
+    int n = 0;
+    std::string token;
+    bool numeric = true;
+    while (fields >> token) {
+      if (n == 8) {
+        n = 9;
+        break;
+      }
+      try {
+        size_t used = 0;
+        v[n] = std::stod(token, &used);
+        numeric &= used == token.size();
+      } catch (...) {
+        numeric = false;
+      }
+      ++n;
+    }
+    const std::string where = path.string() + ":" + std::to_string(line_number);
+    if (n != 8 || !numeric) {
+      *error = where + ": expected 8 numbers 'timestamp tx ty tz qx qy qz qw'";
+      return false;
+    }
+    // A malformed line is a broken file (an error); a well-formed line with an unusable pose
+    // (a SLAM export's NaN, a zero quaternion) costs only its frame, as in the nodelet.
+    DatasetFrameInfo info;
+    info.index = frames->size();
+    info.timestamp_s = v[0];
+    info.T_world_camera = Eigen::Isometry3d::Identity();
+    const Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);  // file order qx qy qz qw
+    bool finite = true;
+    for (double x : v) finite = finite && std::isfinite(x);
+    if (!finite)
+      info.pose_error = where + ": pose is not finite";
+    else if (std::abs(q.norm() - 1.0) > 1e-3)
+      info.pose_error = where + ": quaternion is not unit length (|q| = " + std::to_string(q.norm()) + ")";
+    else {
+      info.T_world_camera.linear() = q.normalized().toRotationMatrix();
+      info.T_world_camera.translation() = Eigen::Vector3d(v[1], v[2], v[3]);
+    }
+    frames->push_back(info);
+  }
+  return true;
+}
 
 std::optional<DatasetReader> DatasetReader::open(const std::string& folder, std::string* error,
                                                  const SgbmParams& sgbm) {

@@ -42,6 +42,11 @@ struct DatasetFrameInfo {
   std::string pose_error;
 };
 
+/// Reads a file of TUM pose lines "timestamp tx ty tz qx qy qz qw" (T_world_camera; blank lines
+/// and '#' comments skipped) into `frames` (index, timestamp, pose; pose_error for a line whose
+/// pose is unusable). False with "file:line: ..." on a malformed line or an unreadable file.
+bool readTumPoses(const std::string& path, std::vector<DatasetFrameInfo>* frames, std::string* error);
+
 /// A validated dataset folder. open() checks calibration, poses and file lists up front and
 /// fails with one message naming the file and line; load() reads one frame and fails (without
 /// throwing) for a missing, unreadable or truncated image, so a caller can skip and count it.

@@ -34,11 +34,12 @@ bool writePng(const std::string& path, const cv::Mat& image, std::string* error)
 }
 
 /// Removes what an earlier run wrote into `folder` (frame images with six-digit names, poses,
-/// calibration and mesh), nothing else.
+/// calibration, mesh, the --drift and --dynamic files), nothing else.
 bool clearOldDataset(const fs::path& folder, std::string* error) {
   static const std::regex kFrameName(R"(\d{6}\.(png|pfm|jpg|jpeg))");
   std::error_code ec;
-  for (const char* name : {"poses.txt", "calibration.yaml", "gt_mesh.ply"}) fs::remove(folder / name, ec);
+  for (const char* name : {"poses.txt", "calibration.yaml", "gt_mesh.ply", "poses_true.txt", "trajectory.txt", "dynamic.txt"})
+    fs::remove(folder / name, ec);
   for (const char* sub : kImageFolders) {
     if (!fs::is_directory(folder / sub)) continue;
     for (const auto& entry : fs::directory_iterator(folder / sub, ec)) {

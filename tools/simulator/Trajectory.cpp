@@ -164,4 +164,18 @@ std::optional<std::vector<TimedPose>> makeTrajectory(const std::string& name,
   return std::nullopt;
 }
 
+std::vector<TimedPose> addOdometryDrift(const std::vector<TimedPose>& truth, double yaw_deg, double metres) {
+  std::vector<TimedPose> out = truth;
+  if (truth.empty()) return out;
+  const Eigen::Vector3d pivot = truth.front().T_world_camera.translation();
+  for (size_t k = 0; k < truth.size(); ++k) {
+    const double f = truth.size() > 1 ? static_cast<double>(k) / (truth.size() - 1) : 0.0;
+    Eigen::Isometry3d D = Eigen::Isometry3d::Identity();
+    D.linear() = Eigen::AngleAxisd(f * yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    D.translation() = pivot - D.linear() * pivot + f * metres * Eigen::Vector3d(2, 1, 0).normalized();
+    out[k].T_world_camera = D * truth[k].T_world_camera;
+  }
+  return out;
+}
+
 }  // namespace stereo_fusion::sim

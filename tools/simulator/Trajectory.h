@@ -69,4 +69,9 @@ std::optional<std::vector<TimedPose>> makeTrajectory(const std::string& name,
                                                      double rate_hz, uint32_t seed,
                                                      std::string* error, double revolutions = 1.0);
 
+/// `truth` as drifting odometry reports it: pose k becomes D(k) · T_k, where D grows linearly from
+/// the identity at the first pose to, at the last, `yaw_deg` of rotation about the vertical (z)
+/// through the first camera and an offset of `metres` along (2, 1, 0)/√5.
+std::vector<TimedPose> addOdometryDrift(const std::vector<TimedPose>& truth, double yaw_deg, double metres);
+
 }  // namespace stereo_fusion::sim

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <functional>
 #include <fstream>
+#include <iomanip>
 #include <future>
 #include <iostream>
 #include <map>
@@ -48,6 +49,9 @@ struct Options {
   double gt_max_edge_m = 0.03;
   double revolutions = 1.0;
   std::string dynamic = "none";
+  double drift_yaw_deg = 0.0;  ///< --drift: odometry yaw error at the last frame
+  double drift_m = 0.0;        ///< --drift: odometry position error at the last frame
+  int keyframe_every = 5;
   SgbmParams sgbm;
   std::string out;
 };
@@ -78,6 +82,15 @@ calibration.yaml, poses.txt, disparity/ color/ right/ NNNNNN.png, gt_mesh.ply.
                                   on its other side in the second. gt_mesh.ply is the scene as
                                   it ends; dynamic.txt lists where objects stood that left
                                   (the evaluator reports the surface left there as ghost)
+  --drift YAW_DEG,METRES          poses.txt (and the bag's /tf) drift like odometry: by the last
+                                  frame YAW_DEG of yaw about the vertical through the first
+                                  camera and METRES of horizontal offset, growing linearly; the
+                                  images stay true. Also writes poses_true.txt and
+                                  trajectory.txt, a SLAM's corrected keyframe poses (the true
+                                  poses of every --keyframe-every-th frame, TUM lines); a bag
+                                  gets that trajectory as nav_msgs/Path on /trajectory twice,
+                                  after the middle frame (keyframes so far) and after the last
+  --keyframe-every N              keyframe spacing of trajectory.txt (default 5)
   --rate-hz R                     frame rate for the timestamps (default 10)
   --gt-max-edge M                 ground-truth mesh grid step in metres (default 0.03)
   --out DIR                       output folder (created; an old dataset there is replaced)
@@ -170,6 +183,13 @@ bool parseArguments(int argc, char** argv, Options* o) {
       {"--seed", [&](auto& f, auto& v) { o->seed = static_cast<uint32_t>(parseInteger(f, v, 0, 4294967295LL)); }},
       {"--revolutions", [&](auto& f, auto& v) { o->revolutions = parseDouble(f, v, 0, 100, true); }},
       {"--dynamic", [&](auto& f, auto& v) { o->dynamic = parseChoice(f, v, {"none", "person", "moved"}); }},
+      {"--drift", [&](auto& f, auto& v) {
+         const size_t comma = v.find(',');
+         if (comma == std::string::npos) throw UsageError{f + ": expected YAW_DEG,METRES, got '" + v + "'"};
+         o->drift_yaw_deg = parseDouble(f, v.substr(0, comma), -180, 180, false);
+         o->drift_m = parseDouble(f, v.substr(comma + 1), 0, 1000, false);
+       }},
+      {"--keyframe-every", [&](auto& f, auto& v) { o->keyframe_every = static_cast<int>(parseInteger(f, v, 1, 1000000)); }},
       {"--rate-hz", [&](auto& f, auto& v) { o->rate_hz = parseDouble(f, v, 0, 1e6, true); }},
       {"--gt-max-edge", [&](auto& f, auto& v) { o->gt_max_edge_m = parseDouble(f, v, 0.001, 10, false); }},
       {"--bag", [&](auto& f, auto& v) {
@@ -327,10 +347,36 @@ int main(int argc, char** argv) {
     return false;
   };
   double valid_share_sum = 0;
+  const bool drifting = o.drift_yaw_deg != 0.0 || o.drift_m != 0.0;
+  const std::vector<TimedPose> odometry = addOdometryDrift(*poses, o.drift_yaw_deg, o.drift_m);
+  std::vector<StampedPose> keyframes;  // the SLAM's corrected trajectory: true poses
+  if (drifting) {
+    for (int k = 0; k < o.frames; k += o.keyframe_every)
+      keyframes.push_back({(*poses)[k].timestamp_s, (*poses)[k].T_world_camera});
+    auto writeTum = [&](const std::string& name, const std::vector<StampedPose>& list) {
+      std::ofstream out(o.out + "/" + name);
+      out << std::setprecision(12);
+      for (const StampedPose& p : list) {
+        const Eigen::Quaterniond q(p.T_world_camera.rotation());
+        const Eigen::Vector3d t = p.T_world_camera.translation();
+        out << p.stamp_s << " " << t.x() << " " << t.y() << " " << t.z() << " " << q.x() << " " << q.y() << " "
+            << q.z() << " " << q.w() << "\n";
+      }
+      return static_cast<bool>(out);
+    };
+    std::vector<StampedPose> truth;
+    for (const TimedPose& p : *poses) truth.push_back({p.timestamp_s, p.T_world_camera});
+    if (!writeTum("poses_true.txt", truth) || !writeTum("trajectory.txt", keyframes)) {
+      std::cerr << "stereo_fusion_simulate: cannot write " << o.out << "/poses_true.txt or trajectory.txt\n";
+      return 1;
+    }
+  }
   for (int k = 0; k < o.frames; ++k) {
-    const TimedPose pose = (*poses)[k];
+    TimedPose pose = (*poses)[k];
+    const Eigen::Isometry3d T_true = pose.T_world_camera;
     StereoRenderer& frame_renderer = first_half_renderer && k < o.frames / 2 ? *first_half_renderer : renderer;
-    StereoView view = frame_renderer.render(pose.T_world_camera, static_cast<uint64_t>(k));
+    StereoView view = frame_renderer.render(T_true, static_cast<uint64_t>(k));
+    if (drifting) pose.T_world_camera = odometry[k].T_world_camera;
     valid_share_sum += cv::countNonZero(view.disparity_px) / static_cast<double>(view.disparity_px.total());
     if (!finishWrite()) return 1;
     pending_write = std::async(std::launch::async, [&, k, pose, view = std::move(view)] {
@@ -344,6 +390,15 @@ int main(int argc, char** argv) {
       frame.camera = *camera;
       frame.disparity_px = view.disparity_px;
       frame.color = view.left_rgb;
+      if (drifting && o.bag_content == "disparity") {
+        // After the middle frame and after the last: the trajectory's keyframes up to this frame.
+        if (!bag->write(frame, static_cast<float>(o.sgbm.num_disparities), &write_error)) return false;
+        if (k != o.frames / 2 - 1 && k != o.frames - 1) return true;
+        std::vector<StampedPose> so_far;
+        for (const StampedPose& key : keyframes)
+          if (key.stamp_s <= pose.timestamp_s) so_far.push_back(key);
+        return bag->writeTrajectory(so_far, pose.timestamp_s + 0.5 / o.rate_hz, &write_error);
+      }
       if (o.bag_content == "pair") return bag->writePair(frame, view.right_rgb, PairTopics{}, &write_error);
       if (o.bag_content == "rectified-pair")
         return bag->writePair(frame, view.right_rgb, PairTopics::rectified(), &write_error);

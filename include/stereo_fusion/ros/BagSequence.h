@@ -20,6 +20,9 @@ struct BagTopics {
   std::string image = "/stereo/left/image_rect_color";
   std::string camera_info = "/stereo/left/camera_info";
   std::string world_frame = "world";
+  /// A SLAM's corrected trajectory (nav_msgs/Path in world_frame), written by the simulator with
+  /// --drift; the nodelet's `trajectory` input.
+  std::string trajectory = "/trajectory";
 };
 
 /// A rosbag as a FrameSource: DisparityImage + Image + CameraInfo matched by exact stamp, the

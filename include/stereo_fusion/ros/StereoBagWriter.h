@@ -6,6 +6,7 @@
 
 #include "stereo_fusion/integration/StereoFrame.h"
 #include "stereo_fusion/ros/BagSequence.h"
+#include "stereo_fusion/trajectory/PoseCorrection.h"
 
 namespace rosbag {
 class Bag;
@@ -49,6 +50,10 @@ class StereoBagWriter {
   /// stereo_image_proc requires one frame for the pair (the baseline is in the right P). False with a message on I/O failure.
   bool writePair(const StereoFrame& frame, const cv::Mat& right_rgb, const PairTopics& topics,
                  std::string* error);
+  /// Writes a SLAM's corrected trajectory as it publishes one after a loop closure: a
+  /// nav_msgs/Path of `poses` (camera poses in the world frame, stamps shifted like the frames')
+  /// on BagTopics::trajectory, stamped `stamp_s` (+ the offset). False with a message on I/O failure.
+  bool writeTrajectory(const std::vector<StampedPose>& poses, double stamp_s, std::string* error);
   void close();
 
  private:

@@ -320,6 +320,29 @@ TEST(SimulatorTrajectory, OrbitCirclesTheCentreLookingAtIt) {
   EXPECT_FALSE(other[7].T_world_camera.isApprox(poses[7].T_world_camera, 1e-6));
 }
 
+TEST(SimulatorTrajectory, OdometryDriftGrowsLinearlyToTheRequestedYawAndOffset) {
+  // Three frames: the first at (1, 0, 1.5), the others elsewhere; 4° and 0.15 m at the last.
+  std::vector<TimedPose> truth(3);
+  truth[0].T_world_camera.translation() = Eigen::Vector3d(1, 0, 1.5);
+  truth[1].T_world_camera.translation() = Eigen::Vector3d(0, 1, 1.5);
+  truth[2].T_world_camera.translation() = Eigen::Vector3d(-1, 0, 1.0);
+  truth[2].T_world_camera.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  const std::vector<TimedPose> odometry = addOdometryDrift(truth, 4.0, 0.15);
+  ASSERT_EQ(odometry.size(), 3u);
+  EXPECT_TRUE(odometry[0].T_world_camera.isApprox(truth[0].T_world_camera, 1e-15));
+  // Last frame: rotated by 4° about the vertical through (1, 0): the point (−1, 0) is 2 m from
+  // it, so it moves to (1 − 2 cos 4°, −2 sin 4°), then by 0.15·(2, 1)/√5.
+  const double a = 4.0 * M_PI / 180.0;
+  const Eigen::Vector3d expected(1 - 2 * std::cos(a) + 0.3 / std::sqrt(5.0), -2 * std::sin(a) + 0.15 / std::sqrt(5.0), 1.0);
+  EXPECT_TRUE(odometry[2].T_world_camera.translation().isApprox(expected, 1e-12));
+  const Eigen::Matrix3d turn = odometry[2].T_world_camera.linear() * truth[2].T_world_camera.linear().transpose();
+  EXPECT_NEAR(std::atan2(turn(1, 0), turn(0, 0)), a, 1e-12);
+  EXPECT_NEAR(turn(2, 2), 1.0, 1e-12);  // about the vertical only
+  // Halfway: half of it.
+  const Eigen::Matrix3d half = odometry[1].T_world_camera.linear() * truth[1].T_world_camera.linear().transpose();
+  EXPECT_NEAR(std::atan2(half(1, 0), half(0, 0)), a / 2, 1e-12);
+}
+
 TEST(SimulatorTrajectory, PresetPathsStayInsideTheRoomAndSeeTheScene) {
   // The disparity limit of the default SGBM range: nothing visible may be nearer than this.
   const StereoCamera camera = smallCamera(80, 60, 65.625, 0.1);
