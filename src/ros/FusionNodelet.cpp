@@ -15,6 +15,12 @@ namespace stereo_fusion {
 
 FusionNodelet::~FusionNodelet() {
   {
+    std::lock_guard<std::mutex> lock(correction_mutex_);
+    correction_stopping_ = true;
+  }
+  correction_cv_.notify_all();
+  if (correction_thread_.joinable()) correction_thread_.join();
+  {
     std::lock_guard<std::mutex> lock(queue_mutex_);
     stopping_ = true;
   }
@@ -32,6 +38,7 @@ void FusionNodelet::onInit() {
   }
   mapper_ = std::make_unique<Mapper>(mapper_config_);
   publisher_ = mapper_->subscribeToMeshChanges("mesh_update publisher");
+  window_ = std::make_unique<CorrectionWindow>(mapper_config_, static_cast<size_t>(node_config_.loop_closure_max_frames));
   started_ = ros::WallTime::now();
   session_ = started_.toNSec();
   last_publish_ = ros::WallTime(0, 0);
@@ -71,6 +78,8 @@ void FusionNodelet::onInit() {
   });
 
   worker_ = std::thread([this] { workerLoop(); });
+  correction_thread_ = std::thread([this] { correctionLoop(); });
+  trajectory_sub_ = nh.subscribe("trajectory", 5, &FusionNodelet::onTrajectory, this);
 
   // The synchroniser is fed by hand so that the first message of a stamp on each topic wins: it
   // would let a second one replace the first while the set is incomplete (see RecentStamps).
@@ -249,6 +258,9 @@ void FusionNodelet::processFrame(const QueuedFrame& f) {
     }
     blocks_evicted_ += result.evicted_blocks.size();
     if (result.accepted) {
+      window_->add(frame);  // kept for a loop closure (shares the images)
+      ++window_frames_added_;
+      camera_frame_ = header.frame_id;
       unpublished_stamps_.push_back(header.stamp);
       // Free-space carving counts as fusion: it is the frame's update of the map.
       frame_ms_.push_back({result.lookup_ms, result.fusion_ms + result.carve_ms,
@@ -271,7 +283,7 @@ void FusionNodelet::processFrame(const QueuedFrame& f) {
           path_.poses.swap(thinned);
         }
         path_.header.stamp = header.stamp;
-        if (path_pub_.getNumSubscribers() > 0) path_pub_.publish(path_);
+        if (path_pub_.getNumSubscribers() > 0) path_pub_.publish(correctedPathLocked());
       }
       if (node_config_.publish_frustum) {
         std_msgs::Header world_header = header;
@@ -413,6 +425,7 @@ bool FusionNodelet::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&)
   startMapEpochLocked();
   mapper_->reset();
   cleared_regions_.clear();
+  dropCorrectionStateLocked();
   path_.poses.clear();
   frame_ms_.clear();
   mesh_pass_ms_.clear();
@@ -469,6 +482,7 @@ bool FusionNodelet::clearRegion(const MapRegion& region, Response* res) {
       ++clears_forgotten_;
     }
     cleared_regions_.push_back(cleared);
+    window_->clearRegion(region, cleared.stamp.toSec());  // a loop closure's re-fusion repeats it
     const ClearResult result = mapper_->clearRegion(region, MeshTiming::kDeferred);
     ++regions_cleared_;
     res->success = true;
@@ -540,6 +554,15 @@ bool FusionNodelet::loadMap(LoadMap::Request& req, LoadMap::Response& res) {
   res.blocks = mapper_->map().blockCount();
   startMapEpochLocked();
   cleared_regions_.clear();
+  dropCorrectionStateLocked();
+  if (node_config_.loop_closure_max_frames > 0) {
+    // The loaded map is the base a later correction re-fuses the new frames over: it holds
+    // voxels, not frames, so it is not moved itself.
+    std::vector<uint8_t> base = mapper_->encodeMap();
+    sealMapFile(&base);
+    std::string why;
+    if (!window_->clear(base, &why)) NODELET_ERROR("stereo_fusion: load_map: the loop closure base: %s", why.c_str());
+  }
   path_.poses.clear();
   frame_ms_.clear();
   mesh_pass_ms_.clear();
@@ -634,6 +657,21 @@ void FusionNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
   // Frames from before a clear whose fusion refilled the region, which was then cleared again.
   status.add("frames fused from before a clear (region cleared again)", frames_recleared_.load());
   status.add("clears forgotten (more than 256 pending)", clears_forgotten_.load());
+  {
+    std::lock_guard<std::mutex> lock(map_mutex_);
+    status.add("loop closure: frames kept", window_->size());
+    status.add("loop closure: kept frames (MB)", window_->bytes() / 1048576.0);
+    // Older frames are fused into the base and no longer moved by a correction.
+    status.add("loop closure: frames beyond the window (frozen)", window_->framesFrozen());
+    status.add("loop closure: last correction, frames fused again", last_correction_frames_);
+    status.add("loop closure: last correction (ms)", last_correction_ms_);
+    status.add("loop closure: last correction, largest move (m)", last_correction_shift_m_);
+    status.add("loop closure: last correction, largest turn (deg)", last_correction_deg_);
+  }
+  status.add("trajectories received", trajectories_received_.load());
+  status.add("trajectories rejected", trajectories_rejected_.load());
+  status.add("corrections applied", corrections_applied_.load());
+  status.add("corrections superseded by a newer trajectory", corrections_superseded_.load());
   status.add("latency p50 (s)", pct(0.5));
   status.add("latency p99 (s)", pct(0.99));
   const char* names[5] = {"lookup", "fusion", "meshing", "texture", "total"};

@@ -62,6 +62,8 @@ bool loadParameters(const ros::NodeHandle& nh, MapperConfig* mapper, NodeConfig*
   nh.param("publish_block_bounds", node->publish_block_bounds, node->publish_block_bounds);
   std::string encoding = node->mesh_encoding == MeshEncoding::kCompact ? "compact" : "float32";
   nh.param("mesh_encoding", encoding, encoding);
+  nh.param("loop_closure_max_frames", node->loop_closure_max_frames, node->loop_closure_max_frames);
+  nh.param("trajectory_frame", node->trajectory_frame, node->trajectory_frame);
   auto fail = [&](const std::string& name, const std::string& why) {
     *error = "parameter '" + nh.resolveName(name) + "' " + why;
     return false;
@@ -79,6 +81,8 @@ bool loadParameters(const ros::NodeHandle& nh, MapperConfig* mapper, NodeConfig*
   if (!(node->frustum_depth_m > 0.0 && node->frustum_depth_m <= 100.0))
     return fail("frustum_depth_m", "must be in (0, 100] m");
   if (!parseMeshEncoding(encoding, &node->mesh_encoding)) return fail("mesh_encoding", "must be float32 or compact");
+  if (node->loop_closure_max_frames < 0 || node->loop_closure_max_frames > 100000)
+    return fail("loop_closure_max_frames", "must be in [0, 100000]");
   return true;
 }
 

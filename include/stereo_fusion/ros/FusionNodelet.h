@@ -29,6 +29,7 @@
 #include <deque>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <thread>
 
@@ -37,10 +38,12 @@
 #include "stereo_fusion/ros/RosParameters.h"
 #include "stereo_fusion/ros/RecentStamps.h"
 #include "stereo_fusion/ros/SequenceGaps.h"
+#include "stereo_fusion/trajectory/CorrectionWindow.h"
 
 namespace stereo_fusion {
 
-/// Nodelet `stereo_fusion/FusionNodelet`. Topics: `disparity`, `image`, `camera_info` in;
+/// Nodelet `stereo_fusion/FusionNodelet`. Topics: `disparity`, `image`, `camera_info`,
+/// `trajectory` (a SLAM's corrected poses, nav_msgs/Path: the map follows) in;
 /// `~mesh_update`, `~mesh_markers`, `~camera_path`, `~frustum`, `~block_bounds` out. Services:
 /// `~save_mesh`, `~reset`, `~get_full_mesh`, `~save_map`, `~load_map`, `~clear_box`,
 /// `~clear_sphere`. Every dropped frame is
@@ -114,6 +117,19 @@ class FusionNodelet : public nodelet::Nodelet {
   void publishFullLocked(const std::vector<BlockKey>& removed);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
 
+  // Loop closures (FusionNodeletLoopClosure.cpp).
+  /// A trajectory message: its poses as camera poses, queued for the correction thread.
+  void onTrajectory(const nav_msgs::Path::ConstPtr& path);
+  /// The correction thread: re-fuses the kept frames at the corrected poses while fusion goes
+  /// on, catches up with the frames fused meanwhile, then swaps the maps.
+  void correctionLoop();
+  /// Swaps in `rebuilt` (caller holds map_mutex_) and publishes it as a full update.
+  void adoptCorrectedMapLocked(std::unique_ptr<Mapper> rebuilt, const PoseCorrection& correction);
+  /// The fused frames' path with the current correction applied (caller holds map_mutex_).
+  nav_msgs::Path correctedPathLocked() const;
+  /// Stops a running correction and forgets the kept frames (reset, load_map). Caller holds map_mutex_.
+  void dropCorrectionStateLocked();
+
   NodeConfig node_config_;
   MapperConfig mapper_config_;
 
@@ -180,6 +196,28 @@ class FusionNodelet : public nodelet::Nodelet {
   static constexpr size_t kMaxClearedRegions = 256;
   std::deque<ClearedRegion> cleared_regions_;  // guarded by map_mutex_, oldest first
   std::atomic<uint64_t> regions_cleared_{0}, frames_recleared_{0}, clears_forgotten_{0};
+  /// A trajectory waiting for the correction thread (the newest supersedes an older one).
+  struct PendingTrajectory {
+    std::vector<StampedPose> poses;  ///< camera poses in world_frame, by stamp
+    double fused_until_s = 0.0;      ///< the newest fused frame's stamp when it arrived
+  };
+  std::mutex correction_mutex_;
+  std::condition_variable correction_cv_;
+  std::optional<PendingTrajectory> pending_trajectory_;  // guarded by correction_mutex_
+  bool correction_stopping_ = false;                     // guarded by correction_mutex_
+  std::thread correction_thread_;
+  /// Bumped under map_mutex_ by reset and load_map: a correction started before is dropped.
+  std::atomic<uint64_t> correction_generation_{0};
+  ros::Subscriber trajectory_sub_;
+  std::unique_ptr<CorrectionWindow> window_;  // guarded by map_mutex_
+  uint64_t window_frames_added_ = 0;          // guarded by map_mutex_: frames window_ received
+  PoseCorrection correction_;                 // guarded by map_mutex_: the latest applied
+  std::string camera_frame_;                  // guarded by map_mutex_: the disparity's frame_id
+  std::atomic<uint64_t> trajectories_received_{0}, trajectories_rejected_{0}, corrections_applied_{0};
+  std::atomic<uint64_t> corrections_superseded_{0};
+  double last_correction_ms_ = 0.0;           // guarded by map_mutex_
+  size_t last_correction_frames_ = 0;         // guarded by map_mutex_
+  double last_correction_shift_m_ = 0.0, last_correction_deg_ = 0.0;  // guarded by map_mutex_
   std::atomic<uint64_t> blocks_evicted_{0};  // by the memory bound, since start (reset and load included)
   ros::WallTime started_;
 };

@@ -25,6 +25,12 @@ struct NodeConfig {
   double frustum_depth_m = 1.0;            ///< depth at which ~frustum is drawn
   bool publish_block_bounds = false;       ///< ~block_bounds: edges of every meshed block (debug)
   MeshEncoding mesh_encoding = MeshEncoding::kFloat32;  ///< how ~mesh_update carries the mesh
+  /// Frames kept for loop closures (their images: ~2.1 MB each at 640×480); 0 = none, and a
+  /// trajectory can then correct nothing.
+  int loop_closure_max_frames = 300;
+  /// The frame whose poses the trajectory topic carries; empty = the camera frame of the
+  /// disparity messages. Another frame (e.g. base_link) is related to the camera through tf.
+  std::string trajectory_frame;
 };
 
 /// Reads every MapperConfig key and the NodeConfig keys from the private namespace of `nh`

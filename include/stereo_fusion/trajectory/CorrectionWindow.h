@@ -7,9 +7,17 @@
 #include <vector>
 
 #include "stereo_fusion/Mapper.h"
+#include "stereo_fusion/map/MapRegion.h"
 #include "stereo_fusion/trajectory/PoseCorrection.h"
 
 namespace stereo_fusion {
+
+/// A region an operator cleared (Mapper::clearRegion) at a time: frames stamped before it do not
+/// refill it.
+struct TimedRegion {
+  double stamp_s = 0.0;
+  MapRegion region;
+};
 
 /// What a loop closure can still move: the newest `max_frames` fused frames, kept whole (the
 /// disparity and colour images share the frame's buffers), and the *base*, a map of the older
@@ -31,7 +39,15 @@ class CorrectionWindow {
   /// The correction frames leaving the window are fused at (the latest the SLAM sent).
   void setCorrection(const PoseCorrection& correction) { correction_ = correction; }
   const PoseCorrection& correction() const { return correction_; }
-  void clear();
+  /// Forgets the kept frames, the base and the correction; a non-empty `base_bytes` (a sealed map
+  /// file, e.g. a map just loaded) becomes the base. False with `error` if it cannot be read
+  /// (the base is then empty).
+  bool clear(const std::vector<uint8_t>& base_bytes = {}, std::string* error = nullptr);
+  /// An operator cleared `region` at `stamp_s`: the base forgets it now, and a re-fusion clears it
+  /// again after the window's frames stamped before it (refuseWindow()'s `clears`).
+  void clearRegion(const MapRegion& region, double stamp_s);
+  /// The clears a re-fusion of the window must repeat (those not older than its oldest frame).
+  const std::vector<TimedRegion>& clears() const { return clears_; }
 
   size_t size() const { return frames_.size(); }
   size_t maxFrames() const { return max_frames_; }
@@ -53,15 +69,18 @@ class CorrectionWindow {
   std::unique_ptr<Mapper> base_;  // created when the first frame leaves
   uint64_t frames_frozen_ = 0;
   PoseCorrection correction_;
+  std::vector<TimedRegion> clears_;
 };
 
 /// Fuses `frames` (in order) at the poses `correction` gives into a new mapper that starts from
-/// `base_bytes` (a sealed map file, empty for an empty map), meshes it, and returns it; nullptr
-/// with `error` if the base cannot be read or `cancelled()` turns true between frames.
-/// `rejected` (optional) counts frames the new mapper refused (its FrameGate).
+/// `base_bytes` (a sealed map file, empty for an empty map), clearing each of `clears` after the
+/// last frame stamped before it, meshes it, and returns it; nullptr with `error` if the base
+/// cannot be read or `cancelled()` turns true between frames. `rejected` (optional) counts frames
+/// the new mapper refused (its FrameGate).
 std::unique_ptr<Mapper> refuseWindow(const MapperConfig& config, const std::vector<uint8_t>& base_bytes,
                                      const std::vector<StereoFrame>& frames, const PoseCorrection& correction,
-                                     const std::function<bool()>& cancelled, size_t* rejected, std::string* error);
+                                     const std::function<bool()>& cancelled, size_t* rejected, std::string* error,
+                                     const std::vector<TimedRegion>& clears = {});
 
 /// The largest move of a camera centre (m) and rotation (deg) that `correction` gives `frames`.
 void correctionMagnitude(const std::vector<StereoFrame>& frames, const PoseCorrection& correction, double* shift_m,

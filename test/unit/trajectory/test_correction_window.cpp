@@ -152,3 +152,86 @@ TEST(CorrectionWindow, NothingIsKeptWithZeroFramesAndACancelledRefusalReturnsNot
   EXPECT_FALSE(cancelled);
   EXPECT_EQ(error, "cancelled");
 }
+
+TEST(CorrectionWindow, AClearIsRepeatedAfterTheFramesStampedBeforeIt) {
+  const MapperConfig config = windowConfig();
+  CorrectionWindow window(config, 100);
+  std::vector<StereoFrame> frames;
+  const MapRegion ball = MapRegion::sphere({0.05, 0.1, 1.2}, 0.3);
+  for (int i = 0; i < kFrames; ++i) {
+    frames.push_back(driftingFrame(i));  // stamped 1 + i
+    window.add(frames.back());
+    if (i == 3) window.clearRegion(ball, 4.5);
+  }
+  ASSERT_EQ(window.clears().size(), 1u);
+  const PoseCorrection correction(window.originalPoses(), keyframes(), frames.back().timestamp_s);
+  const std::vector<StereoFrame> kept(window.frames().begin(), window.frames().end());
+  std::string error;
+  const std::unique_ptr<Mapper> refused =
+      refuseWindow(config, window.baseBytes(), kept, correction, {}, nullptr, &error, window.clears());
+  ASSERT_TRUE(refused) << error;
+  Mapper reference(config);
+  for (int i = 0; i < kFrames; ++i) {
+    if (i == 4) {
+      ASSERT_TRUE(reference.clearRegion(ball).accepted);
+    }
+    StereoFrame f = frames[i];
+    f.T_world_camera = correction.corrected(f.timestamp_s, f.T_world_camera);
+    ASSERT_TRUE(reference.integrate(f).accepted);
+  }
+  EXPECT_TRUE(snapshot(refused->map()) == snapshot(reference.map()));
+  // Without the clear the maps differ: the test would see a refusal that forgot it.
+  const std::unique_ptr<Mapper> forgetful = refuseWindow(config, window.baseBytes(), kept, correction, {}, nullptr, &error);
+  EXPECT_FALSE(snapshot(forgetful->map()) == snapshot(reference.map()));
+  // Once every frame older than the clear has left the window, the clear is dropped.
+  for (int i = 0; i < 100; ++i) {
+    StereoFrame f = driftingFrame(i % kFrames);
+    f.timestamp_s = 100.0 + i;
+    window.add(f);
+  }
+  EXPECT_TRUE(window.clears().empty());
+}
+
+TEST(CorrectionWindow, ALoadedMapBecomesTheBaseTheNewFramesAreRefusedOver) {
+  const MapperConfig config = windowConfig();
+  // A map from an earlier session (frames 0–2 at their true poses), loaded; then frames 3–7.
+  Mapper earlier(config);
+  for (int i = 0; i < 3; ++i) {
+    StereoFrame f = renderFrame(floorAndSphere(), qvgaCamera(), floorAndSphereView(i), 0.2, i);
+    f.timestamp_s = 0.1 * (i + 1);
+    ASSERT_TRUE(earlier.integrate(f).accepted);
+  }
+  std::vector<uint8_t> bytes = earlier.encodeMap();
+  sealMapFile(&bytes);
+  CorrectionWindow window(config, 100);
+  std::string error;
+  ASSERT_TRUE(window.clear(bytes, &error)) << error;
+  EXPECT_EQ(window.size(), 0u);
+  std::vector<StereoFrame> frames;
+  for (int i = 3; i < kFrames; ++i) {
+    frames.push_back(driftingFrame(i));
+    window.add(frames.back());
+  }
+  const PoseCorrection correction(window.originalPoses(), keyframes(), frames.back().timestamp_s);
+  const std::vector<StereoFrame> kept(window.frames().begin(), window.frames().end());
+  const std::unique_ptr<Mapper> refused = refuseWindow(config, window.baseBytes(), kept, correction, {}, nullptr, &error);
+  ASSERT_TRUE(refused) << error;
+  // The loaded map, then the new frames at their corrected poses.
+  Mapper reference(config);
+  BlockOctree loaded(config.blockSizeM());
+  MapFileInfo info;
+  ASSERT_TRUE(decodeMapFile(bytes.data(), bytes.size(), config, &loaded, &info, &error)) << error;
+  reference.adoptMap(&loaded, info);
+  for (StereoFrame f : frames) {
+    f.T_world_camera = correction.corrected(f.timestamp_s, f.T_world_camera);
+    ASSERT_TRUE(reference.integrate(f).accepted);
+  }
+  EXPECT_TRUE(snapshot(refused->map()) == snapshot(reference.map()));
+  // Without the base the re-fusion would lose the loaded map.
+  const std::unique_ptr<Mapper> baseless = refuseWindow(config, {}, kept, correction, {}, nullptr, &error);
+  EXPECT_LT(baseless->map().blockCount(), refused->map().blockCount());
+  // A broken base is reported, and the window starts empty.
+  bytes.resize(bytes.size() / 2);
+  EXPECT_FALSE(window.clear(bytes, &error));
+  EXPECT_TRUE(window.baseBytes().empty());
+}
