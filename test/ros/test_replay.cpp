@@ -1,6 +1,7 @@
 // A simulator bag played through launch/replay.launch (sim time) gives the same mesh as the
 // offline pipeline on the same bag with the same parameters.
 #include <stereo_fusion/GetFullMesh.h>
+#include <stereo_fusion/MeshUpdate.h>
 
 #include "RosTestSupport.h"
 
@@ -10,6 +11,7 @@
 #include "stereo_fusion/ros/RosParameters.h"
 
 #include <fstream>
+#include <mutex>
 #include <sstream>
 
 #include "readers/DatasetReader.h"
@@ -191,6 +193,21 @@ TEST(DynamicReplay, APersonWhoLeftIsClearedFromTheLiveMesh) {
   ASSERT_TRUE(pnh.getParam("seed", seed));
   const std::optional<sim::ScenePreset> room = sim::makePreset("room", static_cast<uint32_t>(seed));
   ASSERT_TRUE(room);
+  // The stream, as a base station receives it from the first update on (the bag starts 2 s
+  // after the launch): carving empties the person's submeshes, which must arrive as removals.
+  std::mutex stream_mutex;
+  std::unordered_map<BlockKey, SubMesh, BlockKeyHash> streamed;
+  uint64_t first_sequence = 0, last_sequence = 0, sequence_gaps = 0, removals = 0;
+  bool applied_ok = true;
+  ros::NodeHandle nh;
+  ros::Subscriber stream = nh.subscribe<MeshUpdate>("/stereo_fusion/mesh_update", 1000, [&](const MeshUpdate::ConstPtr& u) {
+    std::lock_guard<std::mutex> lock(stream_mutex);
+    if (first_sequence == 0) first_sequence = u->sequence;
+    if (last_sequence != 0 && u->sequence != last_sequence + 1) ++sequence_gaps;
+    last_sequence = u->sequence;
+    removals += u->removed_keys.size() / 3;
+    applied_ok &= applyMeshUpdate(*u, &streamed);
+  });
   std::string error;
   auto bag = BagSequence::open(bag_path, BagTopics{}, &error);
   ASSERT_TRUE(bag) << error;
@@ -237,6 +254,20 @@ TEST(DynamicReplay, APersonWhoLeftIsClearedFromTheLiveMesh) {
   ASSERT_GT(ghost_off, 300u) << "the person must leave a ghost when nothing clears it";
   EXPECT_LE(ghost_live, ghost_off / 20) << "more than 5 % of the ghost is left";
   test::expectSameSubmeshes(live, with_carving->mesh().submeshes());
+
+  // The full mesh answers with the last published sequence: once the stream reached it, the
+  // streamed copy must equal it.
+  ASSERT_TRUE(test::waitFor([&] {
+    std::lock_guard<std::mutex> lock(stream_mutex);
+    return last_sequence >= full.response.mesh.sequence;
+  }, 10.0));
+  stream.shutdown();
+  std::lock_guard<std::mutex> lock(stream_mutex);
+  EXPECT_EQ(first_sequence, 1u) << "the test subscribed after the first update";
+  EXPECT_EQ(sequence_gaps, 0u);
+  EXPECT_TRUE(applied_ok);
+  EXPECT_GT(removals, 0u) << "carving emptied no submesh?";
+  test::expectSameSubmeshes(streamed, live);
 }
 
 namespace {
