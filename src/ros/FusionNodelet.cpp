@@ -484,7 +484,8 @@ bool FusionNodelet::clearRegion(const MapRegion& region, Response* res) {
     cleared_regions_.push_back(cleared);
     window_->clearRegion(region, cleared.stamp.toSec());  // a loop closure's re-fusion repeats it
     const ClearResult result = mapper_->clearRegion(region, MeshTiming::kDeferred);
-    ++regions_cleared_;
+    clear_log_.emplace_back(++regions_cleared_, region);
+    if (clear_log_.size() > kMaxClearedRegions) clear_log_.pop_front();
     res->success = true;
     res->voxels_cleared = result.voxels_cleared;
     res->blocks_changed = result.blocks_changed;

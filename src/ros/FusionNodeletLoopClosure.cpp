@@ -76,7 +76,7 @@ void FusionNodelet::correctionLoop() {
     std::vector<uint8_t> base;
     std::vector<TimedRegion> clears;
     PoseCorrection correction;
-    uint64_t snapshot_added = 0;
+    uint64_t snapshot_added = 0, snapshot_clears = 0;
     const uint64_t generation = correction_generation_.load();
     {
       std::lock_guard<std::mutex> lock(map_mutex_);
@@ -96,6 +96,7 @@ void FusionNodelet::correctionLoop() {
       base = window_->baseBytes();
       clears = window_->clears();
       snapshot_added = window_frames_added_;
+      snapshot_clears = regions_cleared_.load();
     }
     NODELET_INFO("stereo_fusion: trajectory of %zu poses moves the kept frames by up to %.3f m / %.2f deg: "
                  "fusing %zu frames again",
@@ -125,6 +126,9 @@ void FusionNodelet::correctionLoop() {
         }
         const uint64_t missing = window_frames_added_ - snapshot_added;
         if (missing == 0) {
+          // Regions cleared while the frames were fused again.
+          for (const auto& [number, region] : clear_log_)
+            if (number > snapshot_clears) rebuilt->clearRegion(region, MeshTiming::kDeferred);
           rebuilt->updateMesh();
           last_correction_frames_ = refused;
           adoptCorrectedMapLocked(std::move(rebuilt), correction);

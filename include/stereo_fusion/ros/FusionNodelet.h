@@ -196,6 +196,9 @@ class FusionNodelet : public nodelet::Nodelet {
   static constexpr size_t kMaxClearedRegions = 256;
   std::deque<ClearedRegion> cleared_regions_;  // guarded by map_mutex_, oldest first
   std::atomic<uint64_t> regions_cleared_{0}, frames_recleared_{0}, clears_forgotten_{0};
+  /// The last kMaxClearedRegions clears, numbered by regions_cleared_ after each (guarded by
+  /// map_mutex_): what a loop closure's re-fusion that started earlier must clear again.
+  std::deque<std::pair<uint64_t, MapRegion>> clear_log_;
   /// A trajectory waiting for the correction thread (the newest supersedes an older one).
   struct PendingTrajectory {
     std::vector<StampedPose> poses;  ///< camera poses in world_frame, by stamp
