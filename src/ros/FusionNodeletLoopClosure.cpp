@@ -51,8 +51,7 @@ void FusionNodelet::onTrajectory(const nav_msgs::Path::ConstPtr& path) {
     pending.poses.push_back({p.header.stamp.toSec(), T_world_trajectory * T_trajectory_camera});
   }
   if (pending.poses.empty()) return reject("it holds no pose");
-  std::sort(pending.poses.begin(), pending.poses.end(),
-            [](const StampedPose& a, const StampedPose& b) { return a.stamp_s < b.stamp_s; });
+  sortByStamp(&pending.poses);
   {
     std::lock_guard<std::mutex> lock(correction_mutex_);
     pending_trajectory_ = std::move(pending);  // a newer trajectory supersedes one not yet applied
@@ -80,10 +79,11 @@ void FusionNodelet::correctionLoop() {
     const uint64_t generation = correction_generation_.load();
     {
       std::lock_guard<std::mutex> lock(map_mutex_);
-      correction = PoseCorrection(window_->originalPoses(), trajectory.poses, trajectory.fused_until_s);
+      const std::vector<StampedPose> originals = window_->originalPoses();
+      correction = PoseCorrection(originals, trajectory.poses, trajectory.fused_until_s);
       frames.assign(window_->frames().begin(), window_->frames().end());
       double shift_m = 0.0, turn_deg = 0.0;
-      correctionMagnitude(frames, correction, &shift_m, &turn_deg);
+      correctionMagnitude(originals, correction, &shift_m, &turn_deg);
       if (correction.empty() || (shift_m < kMinCorrectionM && turn_deg < kMinCorrectionDeg)) {
         // Nothing kept moves (or no pose matched a kept frame): frames leaving the window still
         // take this correction.

@@ -69,7 +69,7 @@ bool CorrectionWindow::clear(const std::vector<uint8_t>& base_bytes, std::string
 std::vector<StampedPose> CorrectionWindow::originalPoses() const {
   std::vector<StampedPose> poses;
   for (const StereoFrame& f : frames_) poses.push_back({f.timestamp_s, f.T_world_camera});
-  std::sort(poses.begin(), poses.end(), [](const StampedPose& a, const StampedPose& b) { return a.stamp_s < b.stamp_s; });
+  sortByStamp(&poses);
   return poses;
 }
 
@@ -114,18 +114,6 @@ std::unique_ptr<Mapper> refuseWindow(const MapperConfig& config, const std::vect
   clearBefore(previous_s, std::numeric_limits<double>::infinity());
   mapper->updateMesh();
   return mapper;
-}
-
-void correctionMagnitude(const std::vector<StereoFrame>& frames, const PoseCorrection& correction, double* shift_m,
-                         double* rotation_deg) {
-  *shift_m = 0.0;
-  *rotation_deg = 0.0;
-  for (const StereoFrame& f : frames) {
-    const Eigen::Isometry3d moved = correction.corrected(f.timestamp_s, f.T_world_camera);
-    *shift_m = std::max(*shift_m, (moved.translation() - f.T_world_camera.translation()).norm());
-    const Eigen::AngleAxisd turn((moved.linear() * f.T_world_camera.linear().transpose()).eval());
-    *rotation_deg = std::max(*rotation_deg, std::abs(turn.angle()) * 180.0 / M_PI);
-  }
 }
 
 }  // namespace stereo_fusion

@@ -1,8 +1,13 @@
 #include "stereo_fusion/trajectory/PoseCorrection.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace stereo_fusion {
+
+void sortByStamp(std::vector<StampedPose>* poses) {
+  std::sort(poses->begin(), poses->end(), [](const StampedPose& a, const StampedPose& b) { return a.stamp_s < b.stamp_s; });
+}
 
 Eigen::Isometry3d interpolatePose(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, double alpha) {
   const Eigen::Quaterniond qa(a.rotation()), qb(b.rotation());
@@ -57,6 +62,18 @@ Eigen::Isometry3d PoseCorrection::correctionAt(double stamp_s) const {
   const double span_s = after->stamp_s - before->stamp_s;
   const double alpha = span_s > 0.0 ? (stamp_s - before->stamp_s) / span_s : 0.0;
   return interpolatePose(before->T_world_camera, after->T_world_camera, alpha);
+}
+
+void correctionMagnitude(const std::vector<StampedPose>& originals, const PoseCorrection& correction, double* shift_m,
+                         double* rotation_deg) {
+  *shift_m = 0.0;
+  *rotation_deg = 0.0;
+  for (const StampedPose& original : originals) {
+    const Eigen::Isometry3d moved = correction.corrected(original.stamp_s, original.T_world_camera);
+    *shift_m = std::max(*shift_m, (moved.translation() - original.T_world_camera.translation()).norm());
+    const Eigen::AngleAxisd turn((moved.linear() * original.T_world_camera.linear().transpose()).eval());
+    *rotation_deg = std::max(*rotation_deg, std::abs(turn.angle()) * 180.0 / M_PI);
+  }
 }
 
 }  // namespace stereo_fusion

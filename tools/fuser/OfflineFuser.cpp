@@ -152,7 +152,7 @@ bool readTrajectory(const std::string& path, std::vector<StampedPose>* poses, st
   if (!readTumPoses(path, &lines, error)) return false;
   for (const DatasetFrameInfo& line : lines)
     if (line.pose_error.empty()) poses->push_back({line.timestamp_s, line.T_world_camera});
-  std::sort(poses->begin(), poses->end(), [](const StampedPose& a, const StampedPose& b) { return a.stamp_s < b.stamp_s; });
+  sortByStamp(poses);
   if (poses->empty()) {
     *error = path + ": no usable pose";
     return false;
@@ -174,11 +174,12 @@ bool applyTrajectory(const FuseOptions& options, FrameSource* reader, const std:
   Timer timer;
   std::vector<StampedPose> originals;
   for (const FusedFrame& f : fused) originals.push_back(f.original);
-  std::sort(originals.begin(), originals.end(), [](const StampedPose& a, const StampedPose& b) { return a.stamp_s < b.stamp_s; });
+  sortByStamp(&originals);
   // Offline the trajectory comes after every frame: all of them share the drift it removes.
   const PoseCorrection correction(originals, trajectory, std::numeric_limits<double>::infinity());
   report->trajectory_poses = trajectory.size();
   report->matched_poses = correction.corrections().size();
+  correctionMagnitude(originals, correction, &report->max_shift_m, &report->max_rotation_deg);
   if (correction.empty()) {
     *error = options.trajectory + ": none of its " + std::to_string(trajectory.size()) +
              " stamps lies within 0.5 s of a fused frame (stamps must match poses.txt's / the bag's)";
@@ -194,11 +195,6 @@ bool applyTrajectory(const FuseOptions& options, FrameSource* reader, const std:
     StereoFrame frame;
     if (!reader->load(fused[k].index, &frame, error)) return false;  // it loaded a moment ago
     frame.T_world_camera = correction.corrected(fused[k].original.stamp_s, fused[k].original.T_world_camera);
-    const Eigen::Isometry3d delta = frame.T_world_camera * fused[k].original.T_world_camera.inverse();
-    report->max_shift_m = std::max(report->max_shift_m, (frame.T_world_camera.translation() -
-                                                         fused[k].original.T_world_camera.translation()).norm());
-    report->max_rotation_deg =
-        std::max(report->max_rotation_deg, Eigen::AngleAxisd(delta.linear()).angle() * 180.0 / M_PI);
     ++report->frames_refused;
     if (!corrected->integrate(frame, MeshTiming::kDeferred).accepted) ++report->frames_rejected;
     if (options.progress) showProgress(k + 1, fused.size(), timer.elapsedMs() / 1000.0, terminal, &last_decile);

@@ -82,8 +82,4 @@ std::unique_ptr<Mapper> refuseWindow(const MapperConfig& config, const std::vect
                                      const std::function<bool()>& cancelled, size_t* rejected, std::string* error,
                                      const std::vector<TimedRegion>& clears = {});
 
-/// The largest move of a camera centre (m) and rotation (deg) that `correction` gives `frames`.
-void correctionMagnitude(const std::vector<StereoFrame>& frames, const PoseCorrection& correction, double* shift_m,
-                         double* rotation_deg);
-
 }  // namespace stereo_fusion

@@ -10,6 +10,9 @@ struct StampedPose {
   Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();
 };
 
+/// Sorts `poses` by increasing stamp (what PoseCorrection and originalPoseAt() expect).
+void sortByStamp(std::vector<StampedPose>* poses);
+
 /// The pose halfway between `a` and `b` at `alpha` ∈ [0, 1]: translation linear, rotation slerp.
 Eigen::Isometry3d interpolatePose(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, double alpha);
 
@@ -56,5 +59,9 @@ class PoseCorrection {
 /// needs (before the first or after the last frame by more than max_gap_s, or in a gap of the
 /// frames wider than 2·max_gap_s).
 bool originalPoseAt(const std::vector<StampedPose>& fused, double stamp_s, double max_gap_s, Eigen::Isometry3d* pose);
+
+/// The largest move of a camera centre (m) and rotation (deg) that `correction` gives `originals`.
+void correctionMagnitude(const std::vector<StampedPose>& originals, const PoseCorrection& correction, double* shift_m,
+                         double* rotation_deg);
 
 }  // namespace stereo_fusion

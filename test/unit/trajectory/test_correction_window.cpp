@@ -67,7 +67,7 @@ TEST(CorrectionWindow, RefusingTheWindowEqualsFusingTheFramesAtTheirCorrectedPos
     EXPECT_TRUE(correction.corrected(frames[i].timestamp_s, frames[i].T_world_camera).isApprox(floorAndSphereView(i), 1e-9));
   double shift_m = 0, rotation_deg = 0;
   const std::vector<StereoFrame> kept(window.frames().begin(), window.frames().end());
-  correctionMagnitude(kept, correction, &shift_m, &rotation_deg);
+  correctionMagnitude(window.originalPoses(), correction, &shift_m, &rotation_deg);
   EXPECT_NEAR(rotation_deg, 3.5, 1e-6);  // frame 7: 0.5° per frame
   EXPECT_GT(shift_m, 0.07);
 
