@@ -27,6 +27,33 @@
 
 using namespace stereo_fusion;
 
+namespace {
+/// Waits (at most `timeout_s`) until the nodelet has fused all `frames` of the bag; fails the
+/// test, naming the drop counters, if it has not.
+void expectEveryFrameFused(test::DiagnosticsWatcher& diagnostics, long frames, double timeout_s) {
+  auto diag = [&](const char* key) { return diagnostics.value(key); };
+  test::waitFor([&] { return diag("frames fused") >= frames; }, timeout_s);
+  ASSERT_EQ(diag("frames fused"), frames) << "dropped tf " << diag("dropped: tf timeout") << ", queue "
+                                          << diag("dropped: queue full") << ", bad " << diag("dropped: bad input");
+}
+
+/// A simulated room sequence and its bag, as the launch file passes them: the test node's
+/// parameters bag, sequence and seed.
+struct SimulatedRoom {
+  std::string bag, sequence;
+  std::optional<sim::ScenePreset> room;  ///< the room preset of that seed: the static truth
+};
+
+void readSimulatedRoom(SimulatedRoom* out) {
+  ros::NodeHandle pnh("~");
+  int seed = 0;
+  ASSERT_TRUE(pnh.getParam("bag", out->bag));
+  ASSERT_TRUE(pnh.getParam("sequence", out->sequence));
+  ASSERT_TRUE(pnh.getParam("seed", seed));
+  out->room = sim::makePreset("room", static_cast<uint32_t>(seed));
+  ASSERT_TRUE(out->room);
+}
+}  // namespace
 
 TEST(Replay, BagThroughTheNodeletEqualsTheOfflinePipeline) {
   ros::NodeHandle pnh("~");
@@ -39,10 +66,7 @@ TEST(Replay, BagThroughTheNodeletEqualsTheOfflinePipeline) {
   ASSERT_GT(frames, 5);
 
   test::DiagnosticsWatcher diagnostics;
-  auto diag = [&](const char* key) { return diagnostics.value(key); };
-  test::waitFor([&] { return diag("frames fused") >= frames; }, 120.0);
-  ASSERT_EQ(diag("frames fused"), frames) << "dropped tf " << diag("dropped: tf timeout") << ", queue "
-                                          << diag("dropped: queue full") << ", bad " << diag("dropped: bad input");
+  ASSERT_NO_FATAL_FAILURE(expectEveryFrameFused(diagnostics, frames, 120.0));
 
   // The same parameters as the nodelet, read the way the nodelet reads them.
   MapperConfig config;
@@ -183,16 +207,10 @@ size_t ghostVertices(const Mesh& mesh, const std::vector<Eigen::AlignedBox3d>& r
 // top of the person, seen at the image's edge in the first lap, is not looked at again), and
 // gives the offline pipeline's mesh.
 TEST(DynamicReplay, APersonWhoLeftIsClearedFromTheLiveMesh) {
-  ros::NodeHandle pnh("~");
-  std::string bag_path, sequence;
-  ASSERT_TRUE(pnh.getParam("bag", bag_path));
-  ASSERT_TRUE(pnh.getParam("sequence", sequence));
-  const std::vector<Eigen::AlignedBox3d> regions = ghostRegions(sequence);
-  ASSERT_EQ(regions.size(), 1u) << sequence << "/dynamic.txt";
-  int seed = 0;
-  ASSERT_TRUE(pnh.getParam("seed", seed));
-  const std::optional<sim::ScenePreset> room = sim::makePreset("room", static_cast<uint32_t>(seed));
-  ASSERT_TRUE(room);
+  SimulatedRoom sim;
+  ASSERT_NO_FATAL_FAILURE(readSimulatedRoom(&sim));
+  const std::vector<Eigen::AlignedBox3d> regions = ghostRegions(sim.sequence);
+  ASSERT_EQ(regions.size(), 1u) << sim.sequence << "/dynamic.txt";
   // The stream, as a base station receives it from the first update on (the bag starts 2 s
   // after the launch): carving empties the person's submeshes, which must arrive as removals.
   std::mutex stream_mutex;
@@ -209,15 +227,12 @@ TEST(DynamicReplay, APersonWhoLeftIsClearedFromTheLiveMesh) {
     applied_ok &= applyMeshUpdate(*u, &streamed);
   });
   std::string error;
-  auto bag = BagSequence::open(bag_path, BagTopics{}, &error);
+  auto bag = BagSequence::open(sim.bag, BagTopics{}, &error);
   ASSERT_TRUE(bag) << error;
   const long frames = static_cast<long>(bag->size());
 
   test::DiagnosticsWatcher diagnostics;
-  auto diag = [&](const char* key) { return diagnostics.value(key); };
-  test::waitFor([&] { return diag("frames fused") >= frames; }, 150.0);
-  ASSERT_EQ(diag("frames fused"), frames) << "dropped tf " << diag("dropped: tf timeout") << ", queue "
-                                          << diag("dropped: queue full");
+  ASSERT_NO_FATAL_FAILURE(expectEveryFrameFused(diagnostics, frames, 150.0));
 
   MapperConfig config;
   NodeConfig node;
@@ -247,8 +262,8 @@ TEST(DynamicReplay, APersonWhoLeftIsClearedFromTheLiveMesh) {
   ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", full));
   std::unordered_map<BlockKey, SubMesh, BlockKeyHash> live;
   ASSERT_TRUE(applyMeshUpdate(full.response.mesh, &live));
-  const size_t ghost_off = ghostVertices(without_carving->mesh().submeshes(), regions, room->scene, second_lap);
-  const size_t ghost_live = ghostVertices(live, regions, room->scene, second_lap);
+  const size_t ghost_off = ghostVertices(without_carving->mesh().submeshes(), regions, sim.room->scene, second_lap);
+  const size_t ghost_live = ghostVertices(live, regions, sim.room->scene, second_lap);
   std::printf("[dynamic replay] %ld frames: ghost vertices %zu without carving, %zu live with it\n", frames,
               ghost_off, ghost_live);
   ASSERT_GT(ghost_off, 300u) << "the person must leave a ghost when nothing clears it";
@@ -299,22 +314,16 @@ typename M::ConstPtr latest(const std::string& topic, double timeout_s) {
 // it goes on fusing: its final mesh is the offline pipeline's at the corrected poses, lies as close
 // to the truth as fusing at the true poses (within 1.25×), and ~camera_path is corrected.
 TEST(LoopClosureReplay, TheLiveMapFollowsTheCorrectedTrajectory) {
-  ros::NodeHandle pnh("~");
-  std::string bag_path, sequence, error;
-  int seed = 0;
-  ASSERT_TRUE(pnh.getParam("bag", bag_path));
-  ASSERT_TRUE(pnh.getParam("sequence", sequence));
-  ASSERT_TRUE(pnh.getParam("seed", seed));
-  const std::optional<sim::ScenePreset> room = sim::makePreset("room", static_cast<uint32_t>(seed));
-  ASSERT_TRUE(room);
-  auto bag = BagSequence::open(bag_path, BagTopics{}, &error);
+  SimulatedRoom sim;
+  ASSERT_NO_FATAL_FAILURE(readSimulatedRoom(&sim));
+  std::string error;
+  auto bag = BagSequence::open(sim.bag, BagTopics{}, &error);
   ASSERT_TRUE(bag) << error;
   const long frames = static_cast<long>(bag->size());
 
   test::DiagnosticsWatcher diagnostics;
   auto diag = [&](const char* key) { return diagnostics.value(key); };
-  test::waitFor([&] { return diag("frames fused") >= frames; }, 150.0);
-  ASSERT_EQ(diag("frames fused"), frames) << "dropped tf " << diag("dropped: tf timeout");
+  ASSERT_NO_FATAL_FAILURE(expectEveryFrameFused(diagnostics, frames, 150.0));
   // Two trajectories: the first may be superseded by the second while it is re-fused; the
   // second, after the last frame, is applied.
   ASSERT_TRUE(test::waitFor([&] {
@@ -338,7 +347,7 @@ TEST(LoopClosureReplay, TheLiveMapFollowsTheCorrectedTrajectory) {
   }
   std::vector<StampedPose> trajectory;
   {
-    rosbag::Bag raw(bag_path, rosbag::bagmode::Read);
+    rosbag::Bag raw(sim.bag, rosbag::bagmode::Read);
     for (const rosbag::MessageInstance& m : rosbag::View(raw, rosbag::TopicQuery(std::string("/trajectory")))) {
       const auto path = m.instantiate<nav_msgs::Path>();
       ASSERT_TRUE(path);
@@ -352,7 +361,7 @@ TEST(LoopClosureReplay, TheLiveMapFollowsTheCorrectedTrajectory) {
   }
   ASSERT_GT(trajectory.size(), 10u);
   std::vector<DatasetFrameInfo> truth_lines;
-  ASSERT_TRUE(readTumPoses(sequence + "/poses_true.txt", &truth_lines, &error)) << error;
+  ASSERT_TRUE(readTumPoses(sim.sequence + "/poses_true.txt", &truth_lines, &error)) << error;
   ASSERT_EQ(truth_lines.size(), loaded.size());
   const PoseCorrection correction(originals, trajectory, loaded.back().timestamp_s);
   auto fuse = [&](auto pose_of) {
@@ -375,9 +384,9 @@ TEST(LoopClosureReplay, TheLiveMapFollowsTheCorrectedTrajectory) {
   ASSERT_TRUE(applyMeshUpdate(full.response.mesh, &live));
   test::expectSameSubmeshes(live, corrected->mesh().submeshes());
 
-  const auto [live_median, live_p90] = vertexErrors(live, room->scene);
-  const auto [drift_median, drift_p90] = vertexErrors(drifting->mesh().submeshes(), room->scene);
-  const auto [true_median, true_p90] = vertexErrors(at_truth->mesh().submeshes(), room->scene);
+  const auto [live_median, live_p90] = vertexErrors(live, sim.room->scene);
+  const auto [drift_median, drift_p90] = vertexErrors(drifting->mesh().submeshes(), sim.room->scene);
+  const auto [true_median, true_p90] = vertexErrors(at_truth->mesh().submeshes(), sim.room->scene);
   std::printf("[loop closure] vertex error median / p90 (mm): drifting %.1f / %.1f, live corrected %.1f / %.1f, "
               "true poses %.1f / %.1f\n", 1e3 * drift_median, 1e3 * drift_p90, 1e3 * live_median, 1e3 * live_p90,
               1e3 * true_median, 1e3 * true_p90);
