@@ -139,11 +139,7 @@ void FusionNodelet::correctionLoop() {
         newer.assign(window_->frames().end() - take, window_->frames().end());
         snapshot_added = window_frames_added_;
       }
-      for (const StereoFrame& original : newer) {
-        StereoFrame frame = original;
-        frame.T_world_camera = correction.corrected(original.timestamp_s, original.T_world_camera);
-        rebuilt->integrate(frame, MeshTiming::kDeferred);
-      }
+      for (const StereoFrame& original : newer) rebuilt->integrate(correction.corrected(original), MeshTiming::kDeferred);
       refused += newer.size();
     }
     if (dropped) continue;

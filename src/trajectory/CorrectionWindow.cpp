@@ -25,12 +25,11 @@ void CorrectionWindow::add(const StereoFrame& frame) {
   frames_.push_back(frame);
   bytes_ += imageBytes(frame);
   while (frames_.size() > max_frames_) {
-    StereoFrame oldest = frames_.front();
+    const StereoFrame oldest = frames_.front();
     frames_.pop_front();
     bytes_ -= imageBytes(oldest);
     if (!base_) base_ = std::make_unique<Mapper>(config_);
-    oldest.T_world_camera = correction_.corrected(oldest.timestamp_s, oldest.T_world_camera);
-    base_->integrate(oldest, MeshTiming::kDeferred);
+    base_->integrate(correction_.corrected(oldest), MeshTiming::kDeferred);
     ++frames_frozen_;
   }
   // Clears older than every kept frame were repeated into the base already.
@@ -107,9 +106,7 @@ std::unique_ptr<Mapper> refuseWindow(const MapperConfig& config, const std::vect
     }
     clearBefore(previous_s, original.timestamp_s);
     previous_s = original.timestamp_s;
-    StereoFrame frame = original;
-    frame.T_world_camera = correction.corrected(original.timestamp_s, original.T_world_camera);
-    if (!mapper->integrate(frame, MeshTiming::kDeferred).accepted && rejected) ++*rejected;
+    if (!mapper->integrate(correction.corrected(original), MeshTiming::kDeferred).accepted && rejected) ++*rejected;
   }
   clearBefore(previous_s, std::numeric_limits<double>::infinity());
   mapper->updateMesh();

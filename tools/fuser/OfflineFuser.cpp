@@ -194,9 +194,8 @@ bool applyTrajectory(const FuseOptions& options, FrameSource* reader, const std:
   for (size_t k = 0; k < fused.size(); ++k) {
     StereoFrame frame;
     if (!reader->load(fused[k].index, &frame, error)) return false;  // it loaded a moment ago
-    frame.T_world_camera = correction.corrected(fused[k].original.stamp_s, fused[k].original.T_world_camera);
-    ++report->frames_refused;
-    if (!corrected->integrate(frame, MeshTiming::kDeferred).accepted) ++report->frames_rejected;
+    ++report->frames_refused;  // the frame loads at its original pose again
+    if (!corrected->integrate(correction.corrected(frame), MeshTiming::kDeferred).accepted) ++report->frames_rejected;
     if (options.progress) showProgress(k + 1, fused.size(), timer.elapsedMs() / 1000.0, terminal, &last_decile);
   }
   corrected->updateMesh();

@@ -2,6 +2,8 @@
 #include <Eigen/Geometry>
 #include <vector>
 
+#include "stereo_fusion/integration/StereoFrame.h"
+
 namespace stereo_fusion {
 
 /// A camera pose at a time: T_world_camera at `stamp_s`.
@@ -45,6 +47,12 @@ class PoseCorrection {
   /// C(stamp_s) · T_world_camera_original.
   Eigen::Isometry3d corrected(double stamp_s, const Eigen::Isometry3d& T_world_camera_original) const {
     return correctionAt(stamp_s) * T_world_camera_original;
+  }
+  /// `frame` (fused at its pose) at its corrected pose; the images are shared, not copied.
+  StereoFrame corrected(const StereoFrame& frame) const {
+    StereoFrame moved = frame;
+    moved.T_world_camera = corrected(frame.timestamp_s, frame.T_world_camera);
+    return moved;
   }
   /// The corrections C_k, by stamp (for tests and logs).
   const std::vector<StampedPose>& corrections() const { return corrections_; }
