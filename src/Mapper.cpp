@@ -87,6 +87,8 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
                                    format("%.1f %%", 100.0 * config_.min_coherent_pixel_share) +
                                    "): a broken matcher or a wrong topic?");
   }
+  // After the coherence check: rejection would leave a random frame's few coherent pixels.
+  result.rejected = outlier_rejection_.apply(frame.disparity_px, config_, &measurements_);
   result.lookup = lookup_.run(frame, measurements_, &octree_, &queue_, &missing_);
   result.lookup_ms = lookup_timer.elapsedMs();
   // The lookup only reads the map: a frame over its allocation budget leaves it untouched.

@@ -189,6 +189,30 @@ const std::vector<Accessor>& accessors() {
                             "steps (DisparityImage.delta_d) uses at least their rounding error "
                             "delta_d/√12 (0.29 px for whole pixels).",
                             member(&MapperConfig::disparity_noise_px)));
+    t.push_back(intParam("speckle_max_area_px", "px", 0, 1 << 20,
+                         "Outlier rejection: a blob of at most this many pixels whose 4-neighbours' "
+                         "disparities differ by at most speckle_max_diff_px is rejected as an isolated "
+                         "mismatch (OpenCV filterSpeckles). 0 (default) = off: OpenCV SGBM and "
+                         "stereo_image_proc filter speckles themselves (on their frames the pass found "
+                         "~10 more pixels per 640×480 frame, for 1.5 ms); ~100 suits a matcher that "
+                         "does not.",
+                         member(&MapperConfig::speckle_max_area_px)));
+    t.push_back(doubleParam("speckle_max_diff_px", "px", 0.0, false, 100.0,
+                            "Outlier rejection: neighbouring disparities within this of each other "
+                            "belong to one blob (speckle_max_area_px).",
+                            member(&MapperConfig::speckle_max_diff_px)));
+    t.push_back(intParam("edge_reject_radius_px", "px", 0, 16,
+                         "Outlier rejection at depth edges: a pixel with a usable neighbour within this "
+                         "radius (square window) whose disparity is smaller by more than "
+                         "edge_reject_jump_px is rejected: the near side of an edge, where block "
+                         "matching lends the foreground's disparity to the background (fattening) and "
+                         "leaves surface floating in front of it. 0 = off.",
+                         member(&MapperConfig::edge_reject_radius_px)));
+    t.push_back(doubleParam("edge_reject_jump_px", "px", 0.0, false, 1000.0,
+                            "Disparity step that counts as a depth edge for edge_reject_radius_px. A "
+                            "plane's disparity changes by at most b/D px per pixel (D: its distance from "
+                            "the camera centre), so planes farther than radius·b/jump are never cut.",
+                            member(&MapperConfig::edge_reject_jump_px)));
     t.push_back(doubleParam("scale2_min_depth_m", "m", 0.0, false, 1000.0,
                             "level_mode depth: depth from which a measurement is fused at the 4³ "
                             "level and coarser (eq. 3.2; thesis: 2 m).",

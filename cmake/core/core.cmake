@@ -5,7 +5,7 @@
 # a tool without that build failing.
 #
 # The includer sets STEREO_FUSION_ROOT (the repository) and STEREO_FUSION_CORE_TESTS, and has found
-# Eigen3, OpenCV (core imgproc imgcodecs), yaml-cpp, Threads and ZLIB; with the tests also GTest
+# Eigen3, OpenCV (core imgproc imgcodecs calib3d), yaml-cpp, Threads and ZLIB; with the tests also GTest
 # and include(GoogleTest).
 #
 #   stereo_fusion_core         the library
@@ -35,6 +35,7 @@ add_library(stereo_fusion_core STATIC
   ${STEREO_FUSION_ROOT}/src/integration/FreeSpaceCarver.cpp
   ${STEREO_FUSION_ROOT}/src/integration/MeasurementImage.cpp
   ${STEREO_FUSION_ROOT}/src/integration/DisparityCoherence.cpp
+  ${STEREO_FUSION_ROOT}/src/integration/OutlierRejection.cpp
   ${STEREO_FUSION_ROOT}/src/integration/LevelSelection.cpp
   ${STEREO_FUSION_ROOT}/src/integration/DepthTiles.cpp
   ${STEREO_FUSION_ROOT}/src/integration/FusionKernels.cpp
@@ -58,7 +59,7 @@ add_library(stereo_fusion_core STATIC
 target_include_directories(stereo_fusion_core PUBLIC ${STEREO_FUSION_ROOT}/include ${EIGEN3_INCLUDE_DIR}
                                                      ${OpenCV_INCLUDE_DIRS})
 # The OpenCV modules the core uses (the includer may have found more for the tools).
-target_link_libraries(stereo_fusion_core PUBLIC opencv_core opencv_imgproc opencv_imgcodecs yaml-cpp
+target_link_libraries(stereo_fusion_core PUBLIC opencv_core opencv_imgproc opencv_imgcodecs opencv_calib3d yaml-cpp
                                                 Threads::Threads ZLIB::ZLIB)
 
 # Analytic scenes and ray casting: ground truth for tests, the simulator and the evaluator.

@@ -9,6 +9,7 @@
 #include "stereo_fusion/integration/BlockLookup.h"
 #include "stereo_fusion/integration/FrameGate.h"
 #include "stereo_fusion/integration/FreeSpaceCarver.h"
+#include "stereo_fusion/integration/OutlierRejection.h"
 #include "stereo_fusion/integration/StereoFrame.h"
 #include "stereo_fusion/integration/SurfaceFuser.h"
 #include "stereo_fusion/io/MapFile.h"
@@ -50,6 +51,7 @@ struct IntegrationResult {
   double lookup_ms = 0.0;  ///< converting the frame's disparities to depths and colours, then the lookup
   double fusion_ms = 0.0;
   double carve_ms = 0.0;  ///< free-space carving (FreeSpaceCarver), included in nothing else
+  OutlierRejectionStats rejected;  ///< usable pixels the outlier rejection dropped (counted, not fused)
   LookupStats lookup;
   FusionStats fusion;
   CarveStats carve;
@@ -160,6 +162,7 @@ class Mapper {
   ThreadPool pool_;
   BlockOctree octree_;
   MeasurementImage measurements_;  // the frame's depths and colours, read by lookup and fusion
+  OutlierRejection outlier_rejection_;
   BlockLookup lookup_;
   SurfaceFuser fuser_;
   FreeSpaceCarver carver_;

@@ -35,6 +35,10 @@ struct MapperConfig {
   double max_depth_m = 8.0;            ///< Disparities giving a farther depth are ignored.
   LevelMode level_mode = LevelMode::kNoise;  ///< Switch depths from the camera's depth error, or the fixed ones below.
   double disparity_noise_px = 0.15;    ///< σ_d: expected disparity error (1σ) of the source, for LevelMode::kNoise.
+  int speckle_max_area_px = 0;         ///< Disparity blobs of at most this many pixels are rejected (OutlierRejection). 0 = off.
+  double speckle_max_diff_px = 1.0;    ///< Neighbours within this disparity difference belong to one blob.
+  int edge_reject_radius_px = 1;       ///< Near side of a depth edge: pixels with a farther neighbour within this radius are rejected. 0 = off.
+  double edge_reject_jump_px = 1.0;    ///< ... farther by more than this disparity.
   LevelThresholds levels;              ///< eq. 3.2 switch depths for LevelMode::kDepth.
   WeightMode weight_mode = WeightMode::kSteinbruecker;
   double weight_falloff_start_vox = 1.0;  ///< δ of eq. 3.10, in voxels of the measurement's level.

@@ -121,4 +121,20 @@ void MeasurementImage::build(const StereoFrame& frame, const MapperConfig& confi
   levels_ = levelThresholdsFor(config, camera.fx() * camera.baseline(), frame.disparity_step_px);
 }
 
+uint64_t MeasurementImage::invalidate(const cv::Mat& reject) {
+  CV_Assert(reject.type() == CV_8UC1 && reject.rows == height_ && reject.cols == width_);
+  const float no_measurement = std::numeric_limits<float>::quiet_NaN();
+  uint64_t invalidated = 0;
+  for (int v = 0; v < height_; ++v) {
+    const uint8_t* row = reject.ptr<uint8_t>(v);
+    float* depth = &depth_m_[static_cast<size_t>(v) * width_];
+    for (int u = 0; u < width_; ++u) {
+      if (row[u] == 0 || depth[u] != depth[u]) continue;
+      depth[u] = no_measurement;
+      ++invalidated;
+    }
+  }
+  return invalidated;
+}
+
 }  // namespace stereo_fusion

@@ -258,6 +258,8 @@ void FusionNodelet::processFrame(const QueuedFrame& f) {
     }
     blocks_evicted_ += result.evicted_blocks.size();
     if (result.accepted) {
+      pixels_rejected_speckle_ += result.rejected.speckle_pixels;
+      pixels_rejected_edge_ += result.rejected.edge_pixels;
       window_->add(frame);  // kept for a loop closure (shares the images)
       ++window_frames_added_;
       camera_frame_ = header.frame_id;
@@ -651,6 +653,8 @@ void FusionNodelet::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
   status.add("dropped: timestamp jump", dropped_timestamp_jump_.load());
   status.add("dropped: allocation budget", dropped_allocation_budget_.load());
   status.add("dropped: incoherent disparity", dropped_incoherent_.load());
+  status.add("pixels rejected: speckles", pixels_rejected_speckle_.load());
+  status.add("pixels rejected: near side of depth edges", pixels_rejected_edge_.load());
   status.add("dropped: bad timestamp", dropped_bad_stamp_.load());
   status.add("re-anchored (relocalisation or clock reset)", reanchored_.load());
   status.add("dropped: superseded by reset/load", dropped_superseded_.load());

@@ -278,6 +278,8 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
       } else {
         ++report->frames_used;
         if (!trajectory.empty()) fused.push_back({i, {frame.timestamp_s, frame.T_world_camera}});
+        report->pixels_rejected.speckle_pixels += r.rejected.speckle_pixels;
+        report->pixels_rejected.edge_pixels += r.rejected.edge_pixels;
         if (r.reanchored) {
           ++report->frames_reanchored;
           std::fprintf(stderr, "%sframe %zu: %s\n", terminal && options.progress ? "\n" : "", i, r.note.c_str());
@@ -365,6 +367,8 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   j["frames"]["total"] = report.frames_total;
   j["frames"]["used"] = report.frames_used;
   j["frames"]["reanchored"] = report.frames_reanchored;
+  j["pixels_rejected"]["speckle"] = report.pixels_rejected.speckle_pixels;
+  j["pixels_rejected"]["depth_edge"] = report.pixels_rejected.edge_pixels;
   size_t skipped = 0;
   for (const auto& [reason, n] : report.skipped) skipped += n;
   j["frames"]["skipped"] = skipped;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "stereo_fusion/MapperConfig.h"
+#include "stereo_fusion/integration/OutlierRejection.h"
 #include "stereo_fusion/map/BlockOctree.h"
 #include "stereo_fusion/ros/BagSequence.h"
 
@@ -61,6 +62,7 @@ struct FuseReport {
   size_t frames_total = 0;
   size_t frames_used = 0;
   size_t frames_reanchored = 0;  ///< of those, accepted as a relocalisation / clock reset (FrameGate)
+  OutlierRejectionStats pixels_rejected;  ///< summed over the used frames (OutlierRejection)
   std::map<std::string, size_t> skipped;        ///< reason → count
   std::vector<std::string> skipped_examples;    ///< the first few messages, verbatim
   std::vector<StageTimings> timings;            ///< one per used frame

@@ -184,6 +184,7 @@ class FusionNodelet : public nodelet::Nodelet {
   std::atomic<uint64_t> dropped_backwards_{0}, dropped_duplicate_{0}, dropped_pose_jump_{0};
   std::atomic<uint64_t> dropped_timestamp_jump_{0};
   std::atomic<uint64_t> dropped_incoherent_{0};  // disparities agreeing with no neighbour: a broken matcher?
+  std::atomic<uint64_t> pixels_rejected_speckle_{0}, pixels_rejected_edge_{0};  // OutlierRejection, fused frames
   std::atomic<uint64_t> dropped_allocation_budget_{0};  // bands reaching more than max_new_blocks_per_frame new blocks
   std::atomic<uint64_t> dropped_bad_stamp_{0};  // stamped 0, or too far ahead of the clock
   std::atomic<uint64_t> reanchored_{0};  // frames the gate accepted as a relocalisation / clock reset
