@@ -176,9 +176,9 @@ const std::vector<Accessor>& accessors() {
     t.push_back(enumParam<LevelMode>(
         "level_mode", {{"noise", LevelMode::kNoise}, {"depth", LevelMode::kDepth}},
         "Where measurements switch to the coarser levels (eq. 3.2). noise: from the camera, at the "
-        "depth where the stereo depth error z²·σ_d/(f·b) reaches the finest voxel edge: the 4³ level "
-        "from √(voxel_size_m·f·b/σ_d), 2³ from twice that depth, where the error is 4 voxel edges "
-        "(σ_d = disparity_noise_px), so a precise or long-baseline camera stays fine farther. depth: at scale2_min_depth_m and "
+        "depth where the stereo depth error z²·σ_d/(f·b) exceeds a level's voxel edge: the 4³ level "
+        "from √(voxel_size_m·f·b/σ_d), 2³ from √2 times that (σ_d = disparity_noise_px), so a "
+        "precise or long-baseline camera stays fine farther. depth: at scale2_min_depth_m and "
         "scale4_min_depth_m whatever the camera (the thesis).",
         member(&MapperConfig::level_mode)));
     t.push_back(doubleParam("disparity_noise_px", "px", 0.0, false, 100.0,

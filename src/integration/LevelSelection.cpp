@@ -13,11 +13,11 @@ double disparityNoisePx(const MapperConfig& config, double disparity_step_px) {
 
 LevelThresholds levelThresholdsFor(const MapperConfig& config, double fb_px_m, double disparity_step_px) {
   if (config.level_mode == LevelMode::kDepth) return config.levels;
-  // σ_z(z) = k · v  ⇔  z = sqrt(k · v · f · b / σ_d): 4³ from k = 1, 2³ from k = 4.
+  // σ_z(z) = v · 2^(l−1)  ⇔  z = sqrt(2^(l−1) · v · f · b / σ_d)
   const double per_voxel = config.voxel_size_m * fb_px_m / disparityNoisePx(config, disparity_step_px);
   LevelThresholds t;
   t.scale2_min_depth_m = std::sqrt(per_voxel);
-  t.scale4_min_depth_m = std::sqrt(4.0 * per_voxel);
+  t.scale4_min_depth_m = std::sqrt(2.0 * per_voxel);
   return t;
 }
 

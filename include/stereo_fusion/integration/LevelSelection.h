@@ -27,12 +27,10 @@ inline double depthNoiseM(double depth_m, double fb_px_m, double disparity_noise
 double disparityNoisePx(const MapperConfig& config, double disparity_step_px);
 
 /// The switch depths a frame from a camera with f · b = `fb_px_m` uses. kDepth: the configured
-/// ones. kNoise: the 4³ level starts where the depth error σ_z reaches the finest voxel edge v,
-/// z_1 = sqrt(v · f · b / σ_d), the 2³ level where it reaches 4 v, z_2 = 2 z_1 (not 2 v: on the
-/// far-range hall the 2³ level between the two lost furniture, floor and wall surface that
-/// the 4³ level keeps, for no memory saved), with σ_d = disparityNoisePx(config,
-/// disparity_step_px): a precise camera (long baseline, small σ_d) stays fine farther, a noisy
-/// one goes coarse sooner.
+/// ones. kNoise: a measurement is fused at the finest level whose voxel edge (voxel_size_m · 2^l)
+/// is at least its depth error, so level l starts at z_l = sqrt(2^(l−1) · voxel_size_m · f · b /
+/// σ_d) with σ_d = disparityNoisePx(config, disparity_step_px): a precise camera (long
+/// baseline, small σ_d) stays fine farther, a noisy one goes coarse sooner.
 LevelThresholds levelThresholdsFor(const MapperConfig& config, double fb_px_m, double disparity_step_px = 0.0);
 
 }  // namespace stereo_fusion

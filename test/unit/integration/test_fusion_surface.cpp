@@ -199,10 +199,9 @@ TEST(FusionSurface, CoarseLevelsGetABandOfTheirOwnVoxels) {
 }
 
 TEST(FusionSurface, FarMeasurementsOnlyReachCoarseLevels) {
-  // A wall at 6 m is fused at level 2 only (s = 4; from 5.29 m for this camera at 2 cm): the 8³
-  // and 4³ levels stay unobserved.
+  // A wall at 5 m is fused at level 2 only (s = 4): the 8³ and 4³ levels stay unobserved.
   sim::AnalyticScene scene;
-  scene.add(sim::makePlane({0, 0, 6.0}, {0, 0, -1}));
+  scene.add(sim::makePlane({0, 0, 5.0}, {0, 0, -1}));
   Mapper mapper(testConfig());
   ASSERT_TRUE(mapper.integrate(renderFrame(scene, vgaCamera(), Eigen::Isometry3d::Identity())).accepted);
   size_t observed[kNumLevels] = {0, 0, 0};
@@ -220,7 +219,7 @@ TEST(FusionSurface, FarMeasurementsOnlyReachCoarseLevels) {
   }
   // The coarse surface is still accurate to a tenth of its voxel.
   PlaneScene far_plane;
-  far_plane.point = {0, 0, 6.0};
+  far_plane.point = {0, 0, 5.0};
   far_plane.normal = {0, 0, -1};
   const auto errors = crossingErrorsVox(mapper.map(), far_plane, 2, {0, 0, 0}, false);
   ASSERT_GT(errors.size(), 100u);

@@ -10,17 +10,17 @@
 using namespace stereo_fusion;
 using namespace stereo_fusion::test;
 
-TEST(LevelSelection, NoiseModeSwitchesWhereTheDepthErrorReachesOneAndFourVoxelEdges) {
+TEST(LevelSelection, NoiseModeSwitchesWhereTheDepthErrorReachesTheVoxelEdge) {
   MapperConfig config;  // level_mode noise
   config.voxel_size_m = 0.02;
   config.disparity_noise_px = 0.15;
-  // f·b = 576 · 0.12 = 69.12: z1 = sqrt(0.02 · 69.12 / 0.15) = sqrt(9.216), z2 = sqrt(36.864)
+  // f·b = 576 · 0.12 = 69.12: z1 = sqrt(0.02 · 69.12 / 0.15) = sqrt(9.216), z2 = sqrt(18.432)
   const LevelThresholds t = levelThresholdsFor(config, 69.12);
   EXPECT_NEAR(t.scale2_min_depth_m, 3.035787, 1e-6);
-  EXPECT_NEAR(t.scale4_min_depth_m, 6.071573, 1e-6);
-  // The depth error at the switches: one finest voxel edge (2 cm), four (8 cm).
+  EXPECT_NEAR(t.scale4_min_depth_m, 4.293251, 1e-6);
+  // At each switch the depth error equals that level's voxel edge: 2 cm and 4 cm.
   EXPECT_NEAR(depthNoiseM(t.scale2_min_depth_m, 69.12, 0.15), 0.02, 1e-12);
-  EXPECT_NEAR(depthNoiseM(t.scale4_min_depth_m, 69.12, 0.15), 0.08, 1e-12);
+  EXPECT_NEAR(depthNoiseM(t.scale4_min_depth_m, 69.12, 0.15), 0.04, 1e-12);
   // A long-baseline camera (KITTI: f·b ≈ 386) at 10 cm stays fine to 16 m; a noisier source
   // (σ_d four times larger) goes coarse at half the depth.
   config.voxel_size_m = 0.10;
@@ -38,11 +38,11 @@ TEST(LevelSelection, CoarseDisparityStepsRaiseTheNoiseToTheirRoundingError) {
   EXPECT_EQ(levelThresholdsFor(config, 69.12, 1.0 / 16.0).scale2_min_depth_m,
             levelThresholdsFor(config, 69.12).scale2_min_depth_m);
   // Whole-pixel disparities: σ_d = 1/√12 = 0.288675 px, so z1 = sqrt(0.02 · 69.12 / 0.288675)
-  // = sqrt(4.788774) = 2.188327 m and z2 = sqrt(19.155096) = 4.376654 m.
+  // = sqrt(4.788774) = 2.188327 m and z2 = sqrt(9.577548) = 3.094761 m.
   EXPECT_NEAR(disparityNoisePx(config, 1.0), 0.2886751, 1e-7);
   const LevelThresholds whole = levelThresholdsFor(config, 69.12, 1.0);
   EXPECT_NEAR(whole.scale2_min_depth_m, 2.188327, 1e-6);
-  EXPECT_NEAR(whole.scale4_min_depth_m, 4.376654, 1e-6);
+  EXPECT_NEAR(whole.scale4_min_depth_m, 3.094761, 1e-6);
   // The configured depths ignore it.
   config.level_mode = LevelMode::kDepth;
   EXPECT_EQ(levelThresholdsFor(config, 69.12, 1.0).scale2_min_depth_m, config.levels.scale2_min_depth_m);
@@ -86,9 +86,7 @@ TEST(LevelSelection, TheMapperFusesAtTheLevelTheFramesCameraSelects) {
   frame.disparity_step_px = 1.0;
   EXPECT_EQ(levelsAllocated(noise_mode), 0b110) << "rounded disparities at 2.5 m go to 4³";
   frame.disparity_step_px = 0.0;
-  noise_mode.disparity_noise_px = 0.6;  // level 1 from 1.52 m, level 2 from 3.04 m
-  EXPECT_EQ(levelsAllocated(noise_mode), 0b110);
-  noise_mode.disparity_noise_px = 2.4;  // level 1 from 0.76 m, level 2 from 1.52 m
+  noise_mode.disparity_noise_px = 0.6;  // level 1 from 1.52 m, level 2 from 2.15 m
   EXPECT_EQ(levelsAllocated(noise_mode), 0b100);
   // A step that is no resolution is refused with the frame.
   for (double step : {-1.0, 5.0, std::nan("")}) {
