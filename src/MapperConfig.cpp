@@ -266,8 +266,11 @@ const std::vector<Accessor>& accessors() {
                          "Edge of the square image regions of Algorithm 2 and the histogram filter.",
                          member(&MapperConfig::lookup_region_px)));
     t.push_back(intParam("histogram_min_points", "points", 0, 1 << 20,
-                         "Histogram filter: a block reached by fewer points of one region is not "
-                         "updated from that region; 0 disables the filter.",
+                         "Histogram filter (Alg. 2): a block reached by fewer points of one image "
+                         "region is not queued from that region. The threshold is scaled by the share "
+                         "of the region's pixels that hold a measurement (at least 1), so a sparsely "
+                         "matched region (weak texture, far surfaces) keeps its blocks while a dense "
+                         "one drops its isolated outliers; 0 disables the filter.",
                          member(&MapperConfig::histogram_min_points)));
     t.push_back(intParam("num_threads", "", 0, 256,
                          "Threads for lookup and fusion, the caller included; 0 = all cores.",

@@ -349,10 +349,20 @@ void BlockLookup::gatherHistogram(const MeasurementImage& m, const cv::Rect& reg
   forEachBlockCount(s, [s](const BlockKey& key, int count) { s->key_counts.emplace_back(key, count); });
 }
 
-bool BlockLookup::passesFilter(const RegionScratch& s, const BlockKey& key) const {
-  if (config_.histogram_min_points <= 0) return true;
+int BlockLookup::regionMinPoints(const cv::Rect& region, uint64_t valid_points) const {
+  // Scaled by the share of the region's pixels that hold a measurement: a dense region keeps
+  // the full threshold against its few outliers, while a sparsely matched one (weak texture,
+  // far surfaces: 1 pixel in 16 leaves ~4 points per block) keeps its blocks. At least 1.
+  const int min_points = config_.histogram_min_points;
+  if (min_points <= 0) return 0;
+  const uint64_t pixels = static_cast<uint64_t>(region.area());
+  return static_cast<int>(std::max<uint64_t>(1, (min_points * valid_points + pixels - 1) / pixels));
+}
+
+bool BlockLookup::passesFilter(const RegionScratch& s, const BlockKey& key, int min_points) const {
+  if (min_points <= 0) return true;
   for (const auto& [k, count] : s.key_counts)
-    if (k == key) return count >= config_.histogram_min_points;
+    if (k == key) return count >= min_points;
   return false;
 }
 
@@ -361,7 +371,7 @@ void BlockLookup::runRegionAccelerated(const MeasurementImage& m, const cv::Rect
   // The histogram straight into the filter: no per-block list in between.
   countRegionBoxes(m, region, s);
   s->passing.clear();
-  const int min_points = config_.histogram_min_points;
+  const int min_points = regionMinPoints(region, s->stats.valid_points);
   forEachBlockCount(s, [s, min_points](const BlockKey& key, int count) {
     if (min_points > 0 && count < min_points) {
       ++s->stats.blocks_filtered;
@@ -405,10 +415,11 @@ void BlockLookup::collectSortedDistinctKeys(size_t num_regions) {
 void BlockLookup::runRegionNaive(const MeasurementImage& m, const cv::Rect& region, BlockOctree* octree,
                                  bool allocate, RegionScratch* s) const {
   const bool filter = config_.histogram_min_points > 0;
+  int min_points = 0;
   if (filter) {
     gatherHistogram(m, region, s);
-    for (const auto& [key, count] : s->key_counts)
-      s->stats.blocks_filtered += count < config_.histogram_min_points;
+    min_points = regionMinPoints(region, s->stats.valid_points);
+    for (const auto& [key, count] : s->key_counts) s->stats.blocks_filtered += count < min_points;
     s->stats.valid_points = 0;  // counted again below
   }
   for (int v = region.y; v < region.y + region.height; ++v) {
@@ -418,7 +429,7 @@ void BlockLookup::runRegionNaive(const MeasurementImage& m, const cv::Rect& regi
       if (!bandBoxOfPixel(depth_row, u, v, &box)) continue;
       ++s->stats.valid_points;
       forEachKeyInBox(box.lo, box.hi, [&](const BlockKey& key) {
-        if (filter && !passesFilter(*s, key)) return;
+        if (filter && !passesFilter(*s, key, min_points)) return;
         bool allocated = false;
         ++s->stats.octree_searches;
         VoxelBlock* block = allocate ? octree->findOrAllocate(key, &allocated) : octree->find(key);

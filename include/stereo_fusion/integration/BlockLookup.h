@@ -32,7 +32,8 @@ struct LookupStats {
 /// band a near measurement leaves in coarse levels are fused where some band brings their block.
 /// So the queue follows the surface, not the volume of a ±Φ cube around each point (a cube
 /// queues ~25× the blocks at far range, where Φ spans several blocks). The histogram filter,
-/// when on, drops per image region the blocks reached by fewer than `histogram_min_points` points.
+/// when on, drops per image region the blocks reached by fewer than `histogram_min_points` points,
+/// scaled by the share of the region's pixels that hold a measurement (regionMinPoints()).
 ///
 /// Per pixel the box is float arithmetic relative to the block holding the camera (so its
 /// precision does not depend on how far the camera is from the world origin): the ray
@@ -131,7 +132,10 @@ class BlockLookup {
   void forEachBlockCount(RegionScratch* s, Visit&& visit) const;
   /// s->boxes, then s->key_counts: the region's histogram.
   void gatherHistogram(const MeasurementImage& m, const cv::Rect& region, RegionScratch* s) const;
-  bool passesFilter(const RegionScratch& s, const BlockKey& key) const;
+  /// The histogram filter's threshold in `region` (both lookup modes): histogram_min_points
+  /// scaled by the share of its pixels with a measurement, rounded up, at least 1; 0 = off.
+  int regionMinPoints(const cv::Rect& region, uint64_t valid_points) const;
+  bool passesFilter(const RegionScratch& s, const BlockKey& key, int min_points) const;
   void runRegionAccelerated(const MeasurementImage& m, const cv::Rect& region, RegionScratch* s) const;
   /// frame_keys_ ← the distinct `passing` keys of the first `num_regions` regions, sorted.
   void collectSortedDistinctKeys(size_t num_regions);

@@ -573,3 +573,25 @@ TEST(BlockLookup, NaiveAndAcceleratedAgreeWhenTheFrameSpansTooManyBlocksForTheBi
     EXPECT_FALSE(bitmap.reset(lo, hi)) << "box " << lo << " – " << hi;
   }
 }
+
+TEST(BlockLookup, HistogramFilterKeepsAFarSparseTrueSurface) {
+  // A wall at 7.5 m (the 2³ level, 16 cm blocks), matched on one pixel in 16 (every 4th row and
+  // column: weak texture). A 16×16 region sees 16 of its points, spread over the 2 × 2 blocks
+  // its footprint (23 cm) straddles: about 4 points per block and region, the filter's
+  // threshold. The filter is for isolated outliers, not for a sparse surface: every block the
+  // unfiltered bands reach must stay queued.
+  sim::AnalyticScene scene;
+  scene.add(sim::makePlane({0, 0, 7.5}, {0, 0, -1}));
+  StereoFrame frame = renderFrame(scene, vgaCamera(), Eigen::Isometry3d::Identity());
+  for (int v = 0; v < frame.disparity_px.rows; ++v)
+    for (int u = 0; u < frame.disparity_px.cols; ++u)
+      if (v % 4 != 0 || u % 4 != 0) frame.disparity_px.at<float>(v, u) = 0.0f;
+  MapperConfig config;  // histogram_min_points 4
+  ASSERT_EQ(config.histogram_min_points, 4);
+  BlockOctree filtered_tree(config.blockSizeM());
+  const LookupRun filtered = runLookup(config, frame, &filtered_tree);
+  config.histogram_min_points = 0;
+  BlockOctree all_tree(config.blockSizeM());
+  const LookupRun all = runLookup(config, frame, &all_tree);
+  EXPECT_EQ(keysOf(filtered.queue), keysOf(all.queue)) << filtered.stats.blocks_filtered << " (region, block) pairs dropped";
+}
