@@ -28,7 +28,9 @@ struct OutlierRejectionStats {
 ///    by more than edge_reject_jump_px lies on the near side of a depth edge and is dropped; the
 ///    far side is kept. A plane's disparity changes by at most b/D px per px (D: the plane's
 ///    distance from the camera centre; 0.33 px for a road 1.65 m below a 0.54 m baseline), so
-///    the default 1 px over 2 px keeps every plane farther than the baseline from the camera.
+///    the default jump of 1 px over a radius of 1 px keeps every plane farther from the camera
+///    than the baseline (radius · b / jump); an object at most 2 · radius pixels wide is
+///    dropped whole.
 ///
 /// Buffers are kept across frames. The result depends only on the images and the config.
 class OutlierRejection {
