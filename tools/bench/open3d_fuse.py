@@ -17,29 +17,8 @@ import cv2
 import numpy as np
 import open3d as o3d
 
-
-def read_calibration(path):
-    calib = {}
-    with open(path) as f:
-        for line in f:
-            if ":" in line and not line.lstrip().startswith(("#", "%")):
-                key, value = line.split(":", 1)
-                calib[key.strip()] = float(value.split("#")[0])
-    return calib
-
-
-def read_poses(path):
-    poses = []
-    with open(path) as f:
-        for line in f:
-            if not line.strip() or line.lstrip().startswith("#"):
-                continue
-            _, tx, ty, tz, qx, qy, qz, qw = map(float, line.split())
-            T = np.eye(4)
-            T[:3, :3] = o3d.geometry.get_rotation_matrix_from_quaternion([qw, qx, qy, qz])
-            T[:3, 3] = [tx, ty, tz]
-            poses.append(T)
-    return poses
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "evaluator"))
+from sequence_io import read_calibration, read_poses  # noqa: E402
 
 
 def main():

@@ -18,7 +18,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from plyio import read_ply  # noqa: E402
-from view_consistency import read_calibration, rotation  # noqa: E402
+from sequence_io import read_calibration, read_disparity, read_poses  # noqa: E402
 
 
 def main():
@@ -30,12 +30,10 @@ def main():
     cal = read_calibration(seq + "/calibration.yaml")
     width, height = int(cal["width"]), int(cal["height"])
     fx, fy, cx, cy, fb = cal["fx"], cal["fy"], cal["cx"], cal["cy"], cal["fx"] * cal["baseline"]
-    pose = [list(map(float, line.split())) for line in open(seq + "/poses.txt") if line.strip()][index]
-    R, t = rotation(*pose[4:8]), np.array(pose[1:4])
+    T = read_poses(seq + "/poses.txt")[index]
+    R, t = T[:3, :3], T[:3, 3]
     name = sorted(os.listdir(seq + "/disparity"))[index]
-    d = cv2.imread(seq + "/disparity/" + name, cv2.IMREAD_UNCHANGED).astype(np.float32)
-    if name.endswith(".png"):
-        d /= 256.0
+    d = read_disparity(seq + "/disparity/" + name)
     z_meas = np.where(d > 0, fb / np.maximum(d, 1e-6), 0.0)
     z_meas[(z_meas > max_depth) | ~np.isfinite(z_meas)] = 0.0
 

@@ -12,27 +12,13 @@ floating in front of the farther ones.
 
 usage: view_consistency.py <seq-folder> [max_depth_m]
 """
+import os
 import sys
 
-import cv2
 import numpy as np
 
-
-def read_calibration(path):
-    calib = {}
-    with open(path) as f:
-        for line in f:
-            if ":" in line and not line.lstrip().startswith(("#", "%")):
-                key, value = line.split(":", 1)
-                calib[key.strip()] = float(value.split("#")[0])
-    return calib
-
-
-def rotation(qx, qy, qz, qw):
-    x, y, z, w = qx, qy, qz, qw
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from sequence_io import read_calibration, read_disparity, read_poses  # noqa: E402
 
 
 def main():
@@ -43,19 +29,17 @@ def main():
     cal = read_calibration(seq + "/calibration.yaml")
     fx, fy, cx, cy, fb = cal["fx"], cal["fy"], cal["cx"], cal["cy"], cal["fx"] * cal["baseline"]
     width, height = int(cal["width"]), int(cal["height"])
-    poses = [list(map(float, line.split())) for line in open(seq + "/poses.txt") if line.strip()]
-    names = sorted(__import__("os").listdir(seq + "/disparity"))
+    poses = read_poses(seq + "/poses.txt")
+    names = sorted(os.listdir(seq + "/disparity"))
 
     def depth(i):
-        d = cv2.imread(seq + "/disparity/" + names[i], cv2.IMREAD_UNCHANGED).astype(np.float32)
-        if names[i].endswith(".png"):
-            d /= 256.0
+        d = read_disparity(seq + "/disparity/" + names[i])
         z = np.where(d > 0, fb / np.maximum(d, 1e-6), 0.0)
         z[(z > max_depth) | ~np.isfinite(z)] = 0.0
         return z
 
     def pose(i):
-        return rotation(*poses[i][4:8]), np.array(poses[i][1:4])
+        return poses[i][:3, :3], poses[i][:3, 3]
 
     edges = np.linspace(0.0, max_depth, 6)
     residuals = [[] for _ in range(len(edges) - 1)]
