@@ -1,10 +1,13 @@
 #pragma once
 // The reconstruction coloured by each vertex's distance to the ground truth, to see where the
-// error is (stereo_fusion_evaluate --error-ply).
+// error is (stereo_fusion_evaluate --error-ply), and the ground-truth samples coloured by their
+// distance to the reconstruction, to see where it is incomplete (--missing-ply).
 
+#include <Eigen/Core>
 #include <array>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "evaluator/TriangleBvh.h"
 #include "stereo_fusion/mesh/SubMesh.h"
@@ -29,5 +32,17 @@ TriangleMesh errorColouredMesh(const TriangleMesh& reconstruction, const Triangl
 bool writeErrorColouredPly(const std::string& path, const TriangleMesh& reconstruction,
                            const TriangleMesh& ground_truth, double tolerance_m, int num_threads,
                            std::string* error);
+
+/// The points of `points_m` whose `mask` entry is non-zero (all when `mask` is empty) as a point
+/// cloud (no faces, zero normals), each coloured by errorColour() of its distance to `surface`:
+/// blue where the surface covers it, red where it is 2 × tolerance or more away.
+TriangleMesh errorColouredPoints(const std::vector<Eigen::Vector3d>& points_m, const std::vector<uint8_t>& mask,
+                                 const TriangleBvh& surface, double tolerance_m, ThreadPool* pool);
+
+/// Writes errorColouredPoints() of the ground-truth samples against `reconstruction` to `path`
+/// as binary PLY, whole or not at all. False with a message naming the file on failure.
+bool writeMissingPly(const std::string& path, const std::vector<Eigen::Vector3d>& gt_samples_m,
+                     const std::vector<uint8_t>& gt_visible, const TriangleMesh& reconstruction,
+                     double tolerance_m, int num_threads, std::string* error);
 
 }  // namespace stereo_fusion::eval

@@ -34,6 +34,9 @@ std::string evaluateUsage() {
          "                    as binary PLY coloured by each vertex's distance to the ground\n"
          "                    truth: blue 0, green tolerance/2, yellow tolerance, red 2 x\n"
          "                    tolerance and beyond, linear in between\n"
+         "  --missing-ply FILE  ground-truth mode: also write the evaluated ground-truth\n"
+         "                    samples as a binary PLY point cloud, coloured the same way by\n"
+         "                    their distance to the mesh: red where the mesh is missing\n"
          "  --held-out SPEC   held-out frames: odd | even | i,j,k (default odd); forces\n"
          "                    held-out mode on a folder that has gt_mesh.ply\n"
          "  --samples N       surface samples per mesh in ground-truth mode (default 1000000)\n"
@@ -75,6 +78,8 @@ bool parseEvaluateArguments(const std::vector<std::string>& args, EvaluateArgume
       parsed->json_path = value;
     } else if (arg == "--error-ply") {
       parsed->error_ply_path = value;
+    } else if (arg == "--missing-ply") {
+      parsed->missing_ply_path = value;
     } else if (arg == "--held-out") {
       parsed->held_out_spec = value;
       parsed->held_out_given = true;

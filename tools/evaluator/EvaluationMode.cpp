@@ -40,8 +40,8 @@ ModeError chooseEvaluationMode(const EvaluateArguments& args, EvaluationMode* mo
     mode->ground_truth = true;
     mode->ground_truth_path = args.reference_path;
   }
-  if (!mode->ground_truth && !args.error_ply_path.empty()) {
-    *error = "--error-ply needs a ground truth (a .ply, or a sequence folder holding gt_mesh.ply "
+  if (!mode->ground_truth && (!args.error_ply_path.empty() || !args.missing_ply_path.empty())) {
+    *error = std::string(args.error_ply_path.empty() ? "--missing-ply" : "--error-ply") + " needs a ground truth (a .ply, or a sequence folder holding gt_mesh.ply "
              "without --held-out); " +
              args.reference_path + " is evaluated in held-out mode";
     return ModeError::kBadArguments;

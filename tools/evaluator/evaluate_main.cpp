@@ -134,6 +134,15 @@ void runGroundTruth(const EvaluateArguments& args, const std::string& gt_path,
   std::cout << formatTable(report);
   writeJsonOrFail(args.json_path, toJson(report));
   writeErrorPlyOrFail(args, reconstruction, ground_truth);
+  if (!args.missing_ply_path.empty()) {
+    std::string error;
+    if (!writeMissingPly(args.missing_ply_path, gt_samples.points_m, report.visibility.visible, reconstruction,
+                         args.tolerance_m, args.threads, &error)) {
+      throw Failure{kExitUnreadable, error};
+    }
+    std::fprintf(stderr, "[evaluate] wrote the ground-truth samples coloured by distance to %s\n",
+                 args.missing_ply_path.c_str());
+  }
 }
 
 void runHeldOut(const EvaluateArguments& args) {
@@ -187,6 +196,7 @@ void run(const EvaluateArguments& args) {
   }
   checkOutputFolderOrFail(args.json_path);
   checkOutputFolderOrFail(args.error_ply_path);
+  checkOutputFolderOrFail(args.missing_ply_path);
   if (mode.ground_truth) {
     runGroundTruth(args, mode.ground_truth_path, mode.sequence_path);
   } else {

@@ -30,7 +30,9 @@ def read_ply(path):
     bo = '<' if 'little' in fmt else '>'
     off = end
     for name, n, props in elems:
-        if any(pr[1] == 'list' for pr in props):
+        if any(pr[1] == 'list' for pr in props) and n == 0:
+            out[name] = np.zeros((0, 3), dtype=np.int64)
+        elif any(pr[1] == 'list' for pr in props):
             pr = props[0]
             ct, it = _T[pr[2]], _T[pr[3]]
             cnt = np.frombuffer(data, dtype=bo+ct, count=1, offset=off)[0]

@@ -391,6 +391,35 @@ TEST(EvaluatorErrorColour, WrittenMeshReadsBackWithColoursByDistance) {
   EXPECT_NE(error.find("directory"), std::string::npos) << error;
 }
 
+TEST(EvaluatorErrorColour, MissingPlyColoursTheMaskedTruthSamplesByTheirDistanceToTheMesh) {
+  // Reconstruction: the unit square at z = 0. Truth samples above its centre at 0, 2, 4 cm
+  // (tolerance 4 cm: blue, green, yellow), one 3 cm beside its edge (x = 1.03: green-yellow),
+  // one far off (red), and one masked out.
+  TriangleMesh reconstruction = planeMesh(0, 1, 0, 1, 0.0, 1);
+  const std::vector<Vector3d> samples = {
+      {0.5, 0.5, 0.0}, {0.5, 0.5, 0.02}, {0.5, 0.5, 0.04}, {1.03, 0.5, 0.0}, {0.5, 0.5, 1.0}, {0.5, 0.5, 0.01}};
+  const std::vector<uint8_t> visible = {1, 1, 1, 1, 1, 0};
+  const std::string path = testing::TempDir() + "stereo_fusion_evaluator_missing.ply";
+  std::string error;
+  ASSERT_TRUE(writeMissingPly(path, samples, visible, reconstruction, 0.04, 2, &error)) << error;
+  TriangleMesh read;
+  ASSERT_TRUE(readPly(path, &read, &error)) << error;
+  EXPECT_TRUE(read.triangles.empty());
+  ASSERT_EQ(read.positions.size(), 5u);
+  for (size_t i = 0; i < 5; ++i) EXPECT_EQ(read.positions[i], samples[i].cast<float>());
+  ASSERT_EQ(read.colors.size(), 5u);
+  EXPECT_EQ(read.colors[0], (Rgb{0, 0, 255}));
+  EXPECT_EQ(read.colors[1], (Rgb{0, 255, 0}));
+  EXPECT_EQ(read.colors[2], (Rgb{255, 255, 0}));
+  EXPECT_EQ(read.colors[3], (Rgb{128, 255, 0}));  // 3 cm = 0.75 tolerances
+  EXPECT_EQ(read.colors[4], (Rgb{255, 0, 0}));
+  std::filesystem::remove(path);
+
+  // No mask: every sample.
+  ThreadPool pool(1);
+  EXPECT_EQ(errorColouredPoints(samples, {}, TriangleBvh(reconstruction), 0.04, &pool).positions.size(), 6u);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Frames built with the camera model: a plane n·x = c seen from T_world_camera.
 // ---------------------------------------------------------------------------------------------
@@ -585,6 +614,8 @@ TEST(EvaluatorArguments, ErrorPlyOnlyInGroundTruthMode) {
   ASSERT_TRUE(parseEvaluateArguments({"m.ply", "seq", "--error-ply", "e.ply"}, &args, &error)) << error;
   EXPECT_EQ(args.error_ply_path, "e.ply");
   EXPECT_FALSE(parseEvaluateArguments({"m.ply", "seq", "--error-ply"}, &args, &error));
+  ASSERT_TRUE(parseEvaluateArguments({"m.ply", "seq", "--missing-ply", "t.ply"}, &args, &error)) << error;
+  EXPECT_EQ(args.missing_ply_path, "t.ply");
 
   const fs::path folder = fs::path(testing::TempDir()) / "stereo_fusion_evaluator_mode";
   fs::remove_all(folder);
@@ -601,6 +632,8 @@ TEST(EvaluatorArguments, ErrorPlyOnlyInGroundTruthMode) {
   EXPECT_FALSE(mode.ground_truth);
   EXPECT_EQ(choose({"m.ply", folder.string(), "--error-ply", "e.ply"}, &mode), ModeError::kBadArguments);
   EXPECT_NE(error.find("--error-ply needs a ground truth"), std::string::npos) << error;
+  EXPECT_EQ(choose({"m.ply", folder.string(), "--missing-ply", "t.ply"}, &mode), ModeError::kBadArguments);
+  EXPECT_NE(error.find("--missing-ply needs a ground truth"), std::string::npos) << error;
 
   // With gt_mesh.ply it is ground-truth mode, unless --held-out forces held-out mode.
   std::ofstream(folder / "gt_mesh.ply") << "ply\n";
