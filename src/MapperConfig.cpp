@@ -221,6 +221,14 @@ const std::vector<Accessor>& accessors() {
                             "level_mode depth: depth from which a measurement is fused at the 2³ "
                             "level only (eq. 3.2; thesis: 4 m).",
                             [](MapperConfig& c) -> double& { return c.levels.scale4_min_depth_m; }));
+    t.push_back(boolParam("update_allocated_finer_level",
+                          "A measurement also updates the next finer level of a block where that level "
+                          "is already allocated (by nearer views), with its own band and a quarter of its "
+                          "weight (its depth error is up to twice the level's own); it never allocates a "
+                          "level. Surfaces seen near and then from farther, at grazing angles or past a "
+                          "level switch, stay complete at the fine level; memory is unchanged. false: a "
+                          "measurement updates its own level and the coarser ones only (the thesis).",
+                          member(&MapperConfig::update_allocated_finer_level)));
     t.push_back(enumParam<WeightMode>(
         "weight_mode",
         {{"constant", WeightMode::kConstant},

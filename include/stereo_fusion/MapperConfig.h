@@ -40,6 +40,7 @@ struct MapperConfig {
   int edge_reject_radius_px = 1;       ///< Near side of a depth edge: pixels with a farther neighbour within this radius are rejected. 0 = off.
   double edge_reject_jump_px = 1.0;    ///< ... farther by more than this disparity.
   LevelThresholds levels;              ///< eq. 3.2 switch depths for LevelMode::kDepth.
+  bool update_allocated_finer_level = true;  ///< A measurement also updates the next finer level where a block already holds it (never allocates it).
   WeightMode weight_mode = WeightMode::kSteinbruecker;
   double weight_falloff_start_vox = 1.0;  ///< δ of eq. 3.10, in voxels of the measurement's level.
   double depth_weight_reference_m = 1.0;  ///< z_ref of the depth-aware weight (w = 1 at this depth).

@@ -15,32 +15,33 @@
 namespace stereo_fusion {
 namespace {
 
-/// Largest depth of pixel columns [u0, u1) of `rows` rows below `level0_end_m` (the smaller of
-/// the two level switches: a depth updates level 0 iff it is below both). Comparisons are false
-/// for NaN, so pixels without a measurement never count.
-float tileMaxScalar(const float* depth_m, int width_px, int rows, int u0, int u1, float level0_end_m) {
+/// Largest depth of pixel columns [u0, u1) of `rows` rows below `end_m` (for level-0
+/// measurements the smaller of the two level switches: a depth is of level 0 iff it is below
+/// both; for levels 0 and 1 the level-2 switch). Comparisons are false for NaN, so pixels
+/// without a measurement never count.
+float tileMaxScalar(const float* depth_m, int width_px, int rows, int u0, int u1, float end_m) {
   float max_m = -INFINITY;
   for (int r = 0; r < rows; ++r) {
     const float* row = depth_m + static_cast<size_t>(r) * width_px;
     for (int u = u0; u < u1; ++u)
-      if (row[u] < level0_end_m) max_m = std::max(max_m, row[u]);
+      if (row[u] < end_m) max_m = std::max(max_m, row[u]);
   }
   return max_m;
 }
 
 #ifdef STEREO_FUSION_HAVE_AVX2_TILES
 /// tileMaxScalar() for an 8-pixel-wide tile, one vector per row (kTilePx == 8). max_ps returns
-/// its second operand when either is NaN, so NaN depths, and the depths of measurements too
-/// coarse for level 0 (set to NaN by OR-ing in their all-ones comparison mask), leave the
-/// running maximum unchanged without a blend.
+/// its second operand when either is NaN, so NaN depths, and the depths at or beyond `end_m`
+/// (set to NaN by OR-ing in their all-ones comparison mask), leave the running maximum
+/// unchanged without a blend.
 __attribute__((target("avx2"))) float tileMaxAvx2(const float* depth_m, int width_px, int rows, int u0,
-                                                  float level0_end_m) {
-  const __m256 end = _mm256_set1_ps(level0_end_m);
+                                                  float end_m) {
+  const __m256 end = _mm256_set1_ps(end_m);
   __m256 max_m = _mm256_set1_ps(-INFINITY);
   for (int r = 0; r < rows; ++r) {
     const __m256 z = _mm256_loadu_ps(depth_m + static_cast<size_t>(r) * width_px + u0);
-    const __m256 coarser_than_0 = _mm256_cmp_ps(z, end, _CMP_NLT_UQ);  // z ≥ end, or NaN
-    max_m = _mm256_max_ps(_mm256_or_ps(z, coarser_than_0), max_m);
+    const __m256 beyond = _mm256_cmp_ps(z, end, _CMP_NLT_UQ);  // z ≥ end, or NaN
+    max_m = _mm256_max_ps(_mm256_or_ps(z, beyond), max_m);
   }
   return horizontalMax(max_m);
 }
@@ -51,10 +52,12 @@ __attribute__((target("avx2"))) float tileMaxAvx2(const float* depth_m, int widt
 void DepthTiles::build(const float* depth_m, int width_px, int height_px, float level1_min_depth_m,
                        float level2_min_depth_m, ThreadPool* pool) {
   const float level0_end_m = std::min(level1_min_depth_m, level2_min_depth_m);
+  const float level01_end_m = level2_min_depth_m;
   static_assert(kTilePx == 8, "one AVX2 vector per tile row");
   tiles_x_ = (width_px + kTilePx - 1) / kTilePx;
   tiles_y_ = (height_px + kTilePx - 1) / kTilePx;
-  max_depth_m_.resize(static_cast<size_t>(tiles_x_) * tiles_y_);
+  max_level0_depth_m_.resize(static_cast<size_t>(tiles_x_) * tiles_y_);
+  max_level01_depth_m_.resize(max_level0_depth_m_.size());
   bool use_avx2 = false;
 #ifdef STEREO_FUSION_HAVE_AVX2_TILES
   use_avx2 = avx2Supported();
@@ -65,26 +68,30 @@ void DepthTiles::build(const float* depth_m, int width_px, int height_px, float 
       const int v0 = static_cast<int>(ty) * kTilePx;
       const int rows = std::min(kTilePx, height_px - v0);
       const float* band = depth_m + static_cast<size_t>(v0) * width_px;
-      float* out = max_depth_m_.data() + ty * tiles_x_;
+      float* out0 = max_level0_depth_m_.data() + ty * tiles_x_;
+      float* out01 = max_level01_depth_m_.data() + ty * tiles_x_;
       for (int tx = 0; tx < tiles_x_; ++tx) {
         const int u0 = tx * kTilePx, u1 = std::min(u0 + kTilePx, width_px);
 #ifdef STEREO_FUSION_HAVE_AVX2_TILES
         if (use_avx2 && u1 - u0 == kTilePx) {
-          out[tx] = tileMaxAvx2(band, width_px, rows, u0, level0_end_m);
+          out0[tx] = tileMaxAvx2(band, width_px, rows, u0, level0_end_m);
+          out01[tx] = tileMaxAvx2(band, width_px, rows, u0, level01_end_m);
           continue;
         }
 #endif
-        out[tx] = tileMaxScalar(band, width_px, rows, u0, u1, level0_end_m);
+        out0[tx] = tileMaxScalar(band, width_px, rows, u0, u1, level0_end_m);
+        out01[tx] = tileMaxScalar(band, width_px, rows, u0, u1, level01_end_m);
       }
     }
   });
   (void)use_avx2;
 }
 
-float DepthTiles::maxLevel0Depth(int tx0, int ty0, int tx1, int ty1) const {
+float DepthTiles::maxDepth(Measurements which, int tx0, int ty0, int tx1, int ty1) const {
+  const std::vector<float>& max_depth_m = summary(which);
   float max_m = -INFINITY;
   for (int ty = ty0; ty <= ty1; ++ty)
-    for (int tx = tx0; tx <= tx1; ++tx) max_m = std::max(max_m, max_depth_m_[static_cast<size_t>(ty) * tiles_x_ + tx]);
+    for (int tx = tx0; tx <= tx1; ++tx) max_m = std::max(max_m, max_depth_m[static_cast<size_t>(ty) * tiles_x_ + tx]);
   return max_m;
 }
 

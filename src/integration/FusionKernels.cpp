@@ -28,10 +28,12 @@ Eigen::Vector3f blockOriginInCamera(const FusionFrame& f, const BlockOctree& oct
 }
 
 /// Block-level depth test: a voxel is only updated by a surface at depth ≥ z_voxel − Φ
-/// (eq. 3.15 with sdf ≤ Φ), and a level finer than the measurement's is skipped. When even
-/// the block's nearest corner is so far that every possible measurement is coarser than a
-/// level, none of that level's voxels can change: the kernels start at the returned level.
-int firstLevelToVisit(const FusionFrame& f, const Eigen::Vector3f& origin_c) {
+/// (eq. 3.15 with sdf ≤ Φ), and a level finer than the measurement's is skipped unless it is
+/// the next finer one and the block holds it (measurementUpdatesLevel()). When even the
+/// block's nearest corner is so far that every possible measurement is coarser than a level
+/// (and than the level above it the block holds), none of that level's voxels can change: the
+/// kernels start at the returned level.
+int firstLevelToVisit(const FusionFrame& f, const Eigen::Vector3f& origin_c, const VoxelBlock& block) {
   const float block_m = f.voxel_m * kFinestSide;
   float nearest_z = origin_c.z();
   for (int c = 1; c < 8; ++c)
@@ -40,7 +42,12 @@ int firstLevelToVisit(const FusionFrame& f, const Eigen::Vector3f& origin_c) {
                                                             (c & 4 ? f.R_cw(2, 2) : 0.0f)));
   // Margin: the voxel loop computes depths with other float roundings.
   const double nearest_surface_m = static_cast<double>(nearest_z) - f.max_truncation_m - 1e-3;
-  return levelForDepth(nearest_surface_m, f.thresholds);
+  const int coarsest_measurement_level = levelForDepth(nearest_surface_m, f.thresholds);
+  const int finer = coarsest_measurement_level - 1;
+  if (finer >= 0 && measurementUpdatesLevel(coarsest_measurement_level, finer, block.hasLevel(finer),
+                                            f.update_allocated_finer))
+    return finer;
+  return coarsest_measurement_level;
 }
 
 /// Eq. 3.8–3.9 for one voxel, with the colour of `pixel` if colour is fused. `sdf_m` is the
@@ -119,6 +126,7 @@ FusionFrame makeFusionFrame(const StereoFrame& frame, const MapperConfig& config
   f.contradicted_keep = config.free_space_carving ? static_cast<float>(1.0 - config.free_space_decay) : 1.0f;
   f.depth_weight_reference_m = static_cast<float>(config.depth_weight_reference_m);
   f.weight_mode = config.weight_mode;
+  f.update_allocated_finer = config.update_allocated_finer_level;
   f.thresholds = measurements.levels();
   const FloatLevelThresholds float_thresholds(measurements.levels());
   f.level1_min_depth_m = float_thresholds.level1_min_depth_m;
@@ -131,10 +139,11 @@ FusionFrame makeFusionFrame(const StereoFrame& frame, const MapperConfig& config
 uint64_t fuseBlockScalar(const FusionFrame& f, const BlockOctree& octree, VoxelBlock* block) {
   const Eigen::Vector3f origin_c = blockOriginInCamera(f, octree, block->key);
   uint64_t updates = 0;
-  for (int level = firstLevelToVisit(f, origin_c); level < kNumLevels; ++level) {
+  for (int level = firstLevelToVisit(f, origin_c, *block); level < kNumLevels; ++level) {
     const FusionFrame::Level& geometry = f.levels[level];
     const int side = levelSide(level);
     const Eigen::Vector3f first = origin_c + 0.5f * (geometry.ex_m + geometry.ey_m + geometry.ez_m);
+    const bool allocated = block->hasLevel(level);  // before this visit
     LevelTarget target(block, level);
     Voxel* voxels = target.voxels();
     uint64_t level_updates = 0;
@@ -148,13 +157,15 @@ uint64_t fuseBlockScalar(const FusionFrame& f, const BlockOctree& octree, VoxelB
           const float surface_depth = f.depth_m[pixel];
           if (std::isnan(surface_depth)) continue;  // no usable measurement
           const int measurement_level = levelForDepth(surface_depth, f.thresholds);
-          if (level < measurement_level) continue;  // too fine for this measurement
+          if (!measurementUpdatesLevel(measurement_level, level, allocated, f.update_allocated_finer))
+            continue;  // too fine for this measurement
           const float truncation = geometry.truncation_m[measurement_level];
           const float delta = f.delta_m[measurement_level];
           const float sdf = signedDistanceAlongRay(p.x(), p.y(), p.z(), surface_depth);
           if (sdf > truncation) continue;  // far behind the surface: unobserved
           const float w = measurementWeight(f.weight_mode, sdf, delta, truncation, surface_depth,
-                                            f.depth_weight_reference_m);
+                                            f.depth_weight_reference_m) *
+                          (level < measurement_level ? kFinerLevelWeightScale : 1.0f);
           if (!(w > 0.0f)) continue;
           updateVoxel(f, pixel, sdf, truncation, w, &voxels[i + j * side + k * side * side]);
           ++level_updates;
@@ -318,9 +329,10 @@ SF_AVX2 __m256 selectByLevel(const __m256 by_level[kNumLevels], __m256 reaches1,
 }
 
 /// Eq. 3.11–3.15 and 3.10 for eight voxels at camera points (px, py, pz); fuses the observed
-/// ones into voxels[0..7]. Returns the number of updates.
+/// ones into voxels[0..7]. `finer_updated`: measurements of the next coarser level update this
+/// one too (measurementUpdatesLevel() with the level allocated). Returns the number of updates.
 SF_AVX2 uint64_t fuseEightAvx2(const FusionFrame& f, const Avx2Constants& c, const Avx2Band& band,
-                               int level, __m256 px, __m256 py, __m256 pz, Voxel* voxels) {
+                               int level, bool finer_updated, __m256 px, __m256 py, __m256 pz, Voxel* voxels) {
   const __m256 in_front = _mm256_cmp_ps(pz, c.zero, _CMP_GT_OQ);
   if (_mm256_testz_ps(in_front, in_front)) return 0;
   // Eq. 3.12–3.14, as fx·x/z + cx in the scalar order (no reciprocal: x/z ≠ x·(1/z)).
@@ -347,9 +359,11 @@ SF_AVX2 uint64_t fuseEightAvx2(const FusionFrame& f, const Avx2Constants& c, con
   __m256 keep = _mm256_cmp_ps(surface_depth, surface_depth, _CMP_ORD_Q);
   const __m256 reaches1 = _mm256_cmp_ps(surface_depth, c.level1_min_depth, _CMP_GE_OQ);
   const __m256 reaches2 = _mm256_cmp_ps(surface_depth, c.level2_min_depth, _CMP_GE_OQ);
-  // Too fine for the measurement (level < measurement level).
-  if (level == 0) keep = _mm256_andnot_ps(_mm256_or_ps(reaches1, reaches2), keep);
-  if (level == 1) keep = _mm256_andnot_ps(reaches2, keep);
+  // Too fine for the measurement (measurementUpdatesLevel(): level < measurement level, unless
+  // the level is the next finer one and allocated). Level 2 iff reaches2, level 1 iff
+  // reaches1 and not reaches2.
+  if (level == 0) keep = _mm256_andnot_ps(finer_updated ? reaches2 : _mm256_or_ps(reaches1, reaches2), keep);
+  if (level == 1 && !finer_updated) keep = _mm256_andnot_ps(reaches2, keep);
   if (_mm256_testz_ps(keep, keep)) return 0;
   const __m256 truncation = selectByLevel(band.truncation, reaches1, reaches2);
   // Eq. 3.15: sqrt(x² + y² + z²) · (1 − z_s / z), in signedDistanceAlongRay()'s order.
@@ -371,6 +385,10 @@ SF_AVX2 uint64_t fuseEightAvx2(const FusionFrame& f, const Avx2Constants& c, con
       const __m256 ratio = _mm256_div_ps(c.depth_weight_reference, surface_depth);
       weight = _mm256_mul_ps(_mm256_mul_ps(weight, ratio), ratio);
     }
+  }
+  if (finer_updated) {  // lanes whose measurement is of the next coarser level: kFinerLevelWeightScale
+    const __m256 coarser = level == 0 ? reaches1 : reaches2;
+    weight = _mm256_blendv_ps(weight, _mm256_mul_ps(weight, _mm256_set1_ps(kFinerLevelWeightScale)), coarser);
   }
   keep = _mm256_and_ps(keep, _mm256_cmp_ps(weight, c.zero, _CMP_GT_OQ));
   const int lanes = _mm256_movemask_ps(keep);
@@ -394,7 +412,8 @@ double positionErrorBound(const FusionFrame::Level& geometry, const Eigen::Vecto
 /// Conservative pre-test for a group of level-0 voxels whose centres span the parallelepiped
 /// first + [0, 1]·edge_a + [0, 1]·edge_b + [0, 1]·edge_c: false only if the frame provably
 /// updates none of them, i.e. every voxel projects outside the image, or onto a pixel with no
-/// measurement, one coarser than level 0, or one farther than Φ in front of it
+/// measurement, one too coarse for level 0 (coarser than level 0, or with `finer_updated`
+/// than level 1), or one farther than Φ in front of it
 /// (sdf > Φ, eq. 3.15; sufficient: z_c − z > Φ since ‖x_c‖ ≥ z_c). The projection of a convex
 /// set with z_c > 0 has its extreme x/z, y/z at the corners, so eight corners bound the
 /// footprint; the margins below cover the float roundings of both the corners and the
@@ -403,7 +422,7 @@ double positionErrorBound(const FusionFrame::Level& geometry, const Eigen::Vecto
 /// `position_error_m` bounds, per coordinate, how far any voxel centre of the group as the
 /// kernel computes it, and any corner as computed here, are from the exact points
 /// (positionErrorBound()).
-SF_AVX2 bool groupMayBeUpdated(const FusionFrame& f, const Eigen::Vector3f& first,
+SF_AVX2 bool groupMayBeUpdated(const FusionFrame& f, bool finer_updated, const Eigen::Vector3f& first,
                                const Eigen::Vector3f& edge_a, const Eigen::Vector3f& edge_b,
                                const Eigen::Vector3f& edge_c, double position_error_m) {
   const __m256 in_a = _mm256_castsi256_ps(_mm256_setr_epi32(0, -1, 0, -1, 0, -1, 0, -1));
@@ -440,14 +459,18 @@ SF_AVX2 bool groupMayBeUpdated(const FusionFrame& f, const Eigen::Vector3f& firs
   int u0, u1, v0, v1;
   if (!pixel_range(f.fx_px, f.cx_px, qx_min, qx_max, f.width_px, &u0, &u1)) return false;  // outside
   if (!pixel_range(f.fy_px, f.cy_px, qy_min, qy_max, f.height_px, &v0, &v1)) return false;
-  // Only level-0 measurements update level-0 voxels: their band.
-  const double truncation_m = f.levels[0].truncation_m[0];
+  // Level-0 measurements update level-0 voxels, and level-1 ones where the block holds level 0
+  // (finer_updated): the widest of their bands.
+  const double truncation_m = finer_updated ? std::max(f.levels[0].truncation_m[0], f.levels[0].truncation_m[1])
+                                            : f.levels[0].truncation_m[0];
+  const DepthTiles::Measurements which =
+      finer_updated ? DepthTiles::Measurements::kLevel0And1 : DepthTiles::Measurements::kLevel0;
   // sdf as the kernel rounds it is ≥ (z_c − z)(1 − 1e-6) − 1e-7·z_c: a margin of 1e-4 m plus
   // 1e-5 of the depths covers that many times over.
   const double limit_m = z_min_m - truncation_m - (1e-4 + 1e-5 * (truncation_m + z_max_m));
   const float limit_f = std::nextafter(static_cast<float>(limit_m), -INFINITY);  // ≤ limit_m
   const int tile = DepthTiles::kTilePx;
-  return !f.tiles->allBelow(u0 / tile, v0 / tile, u1 / tile, v1 / tile, limit_f);
+  return !f.tiles->allBelow(which, u0 / tile, v0 / tile, u1 / tile, v1 / tile, limit_f);
 }
 
 /// Per-level lane terms of the voxel centres: first + i·ex for i = 0..7 (lanes beyond the
@@ -472,7 +495,7 @@ SF_AVX2 Avx2Steps avx2Steps(const FusionFrame::Level& geometry, const Eigen::Vec
 /// groupMayBeUpdated(): at 2 cm it drops about two thirds of the level-0 visits and a fifth of
 /// the remaining slices. (Tried at level 1 too: per block it skipped ~23% of the visits, per
 /// slice ~10%, and cost more CPU time than it saved.)
-__attribute__((target("avx2"), noinline)) uint64_t fuseLevel0Avx2(const FusionFrame& f, const Avx2Constants& c, const Avx2Band& band,
+__attribute__((target("avx2"), noinline)) uint64_t fuseLevel0Avx2(const FusionFrame& f, const Avx2Constants& c, const Avx2Band& band, bool finer_updated,
                                 const Avx2Steps& s, const FusionFrame::Level& geometry,
                                 const Eigen::Vector3f& first, Voxel* voxels) {
   const bool pre_test = f.tiles != nullptr;
@@ -480,7 +503,7 @@ __attribute__((target("avx2"), noinline)) uint64_t fuseLevel0Avx2(const FusionFr
   const Eigen::Vector3f slice_edge = static_cast<float>(kFinestSide - 1) * geometry.ey_m;
   const Eigen::Vector3f depth_edge = static_cast<float>(kFinestSide - 1) * geometry.ez_m;
   const double position_error_m = pre_test ? positionErrorBound(geometry, first, 0) : 0.0;
-  if (pre_test && !groupMayBeUpdated(f, first, row_edge, slice_edge, depth_edge, position_error_m))
+  if (pre_test && !groupMayBeUpdated(f, finer_updated, first, row_edge, slice_edge, depth_edge, position_error_m))
     return 0;  // no voxel of level 0 can change
   alignas(32) float j_terms[3][8], k_terms[3][8];
   for (int axis = 0; axis < 3; ++axis) {
@@ -489,7 +512,7 @@ __attribute__((target("avx2"), noinline)) uint64_t fuseLevel0Avx2(const FusionFr
   }
   uint64_t updates = 0;
   for (int k = 0; k < kFinestSide; ++k) {
-    if (pre_test && !groupMayBeUpdated(f, first + static_cast<float>(k) * geometry.ez_m, row_edge, slice_edge,
+    if (pre_test && !groupMayBeUpdated(f, finer_updated, first + static_cast<float>(k) * geometry.ez_m, row_edge, slice_edge,
                                        Eigen::Vector3f::Zero(), position_error_m))
       continue;  // no voxel of this k-slice (eight steps) can change
     for (int j = 0; j < kFinestSide; ++j) {
@@ -497,14 +520,14 @@ __attribute__((target("avx2"), noinline)) uint64_t fuseLevel0Avx2(const FusionFr
       for (int axis = 0; axis < 3; ++axis)
         p[axis] = _mm256_add_ps(_mm256_add_ps(s.a[axis], _mm256_set1_ps(j_terms[axis][j])),
                                 _mm256_set1_ps(k_terms[axis][k]));
-      updates += fuseEightAvx2(f, c, band, 0, p[0], p[1], p[2], &voxels[kFinestSide * (j + kFinestSide * k)]);
+      updates += fuseEightAvx2(f, c, band, 0, finer_updated, p[0], p[1], p[2], &voxels[kFinestSide * (j + kFinestSide * k)]);
     }
   }
   return updates;
 }
 
 /// Level 1, two rows per step: lane n is voxel (n mod 4, 2h + n / 4, k) of step 2k + h.
-__attribute__((target("avx2"), noinline)) uint64_t fuseLevel1Avx2(const FusionFrame& f, const Avx2Constants& c, const Avx2Band& band,
+__attribute__((target("avx2"), noinline)) uint64_t fuseLevel1Avx2(const FusionFrame& f, const Avx2Constants& c, const Avx2Band& band, bool finer_updated,
                                 const Avx2Steps& s, Voxel* voxels) {
   __m256 i_terms[3], j_terms[2][3];
   for (int axis = 0; axis < 3; ++axis) {
@@ -519,7 +542,7 @@ __attribute__((target("avx2"), noinline)) uint64_t fuseLevel1Avx2(const FusionFr
       for (int axis = 0; axis < 3; ++axis)
         p[axis] = _mm256_add_ps(_mm256_add_ps(i_terms[axis], j_terms[h][axis]),
                                 _mm256_permutevar8x32_ps(s.c[axis], _mm256_set1_epi32(k)));
-      updates += fuseEightAvx2(f, c, band, 1, p[0], p[1], p[2], &voxels[8 * (2 * k + h)]);
+      updates += fuseEightAvx2(f, c, band, 1, finer_updated, p[0], p[1], p[2], &voxels[8 * (2 * k + h)]);
     }
   }
   return updates;
@@ -534,7 +557,7 @@ __attribute__((target("avx2"), noinline)) uint64_t fuseLevel2Avx2(const FusionFr
         _mm256_add_ps(_mm256_permutevar8x32_ps(s.a[axis], _mm256_setr_epi32(0, 1, 0, 1, 0, 1, 0, 1)),
                       _mm256_permutevar8x32_ps(s.b[axis], _mm256_setr_epi32(0, 0, 1, 1, 0, 0, 1, 1))),
         _mm256_permutevar8x32_ps(s.c[axis], _mm256_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1)));
-  return fuseEightAvx2(f, c, band, 2, p[0], p[1], p[2], voxels);
+  return fuseEightAvx2(f, c, band, 2, false, p[0], p[1], p[2], voxels);
 }
 
 }  // namespace
@@ -545,15 +568,18 @@ __attribute__((target("avx2"))) uint64_t fuseBlockAvx2(const FusionFrame& f, con
   const Eigen::Vector3f origin_c = blockOriginInCamera(f, octree, block->key);
   const Avx2Constants c = avx2Constants(f);
   uint64_t updates = 0;
-  for (int level = firstLevelToVisit(f, origin_c); level < kNumLevels; ++level) {
+  for (int level = firstLevelToVisit(f, origin_c, *block); level < kNumLevels; ++level) {
     const FusionFrame::Level& geometry = f.levels[level];
     const Eigen::Vector3f first = origin_c + 0.5f * (geometry.ex_m + geometry.ey_m + geometry.ez_m);
     const Avx2Steps s = avx2Steps(geometry, first);
     const Avx2Band band = avx2Band(f, level);
+    // Whether the next coarser level's measurements update this one (before this visit).
+    const bool finer_updated = level + 1 < kNumLevels &&
+                               measurementUpdatesLevel(level + 1, level, block->hasLevel(level), f.update_allocated_finer);
     LevelTarget target(block, level);
     Voxel* voxels = target.voxels();
-    if (level == 0) updates += target.commit(fuseLevel0Avx2(f, c, band, s, geometry, first, voxels));
-    if (level == 1) updates += target.commit(fuseLevel1Avx2(f, c, band, s, voxels));
+    if (level == 0) updates += target.commit(fuseLevel0Avx2(f, c, band, finer_updated, s, geometry, first, voxels));
+    if (level == 1) updates += target.commit(fuseLevel1Avx2(f, c, band, finer_updated, s, voxels));
     if (level == 2) updates += target.commit(fuseLevel2Avx2(f, c, band, s, voxels));
   }
   return updates;

@@ -49,6 +49,9 @@ struct FusionFrame {
   float depth_weight_reference_m = 0;
   WeightMode weight_mode = WeightMode::kSteinbruecker;
   LevelThresholds thresholds;
+  /// MapperConfig::update_allocated_finer_level: a measurement also updates the next finer
+  /// level of a block that already holds it (measurementUpdatesLevel()).
+  bool update_allocated_finer = false;
   /// FloatLevelThresholds of `thresholds`: a float comparison decides levelForDepth() exactly.
   float level1_min_depth_m = 0, level2_min_depth_m = 0;
   Level levels[kNumLevels];

@@ -43,6 +43,13 @@ inline float measurementWeight(WeightMode mode, float sdf_m, float delta_m, floa
   return 0.0f;
 }
 
+/// Factor on the weight of a measurement that updates a level finer than its own
+/// (measurementUpdatesLevel()). Its depth error is up to twice that of the level's own
+/// measurements (levelThresholdsFor(): the level switches where σ_z doubles), so inverse-variance
+/// weighting gives it a quarter: it fills what nearer views left unobserved and moves what they
+/// observed only a little. A power of two, so the product is exact in either kernel.
+constexpr float kFinerLevelWeightScale = 0.25f;
+
 /// The weight W a voxel brings into eq. 3.8 when a measurement contradicts it by more than the
 /// band, |D − d| > Φ (d already truncated to [−Φ, Φ]): the world changed there — an object left
 /// or arrived — or one of the two is an outlier. It keeps `keep` (1 − free_space_decay) of

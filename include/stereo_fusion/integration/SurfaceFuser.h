@@ -26,7 +26,8 @@ struct FusionStats {
 /// (eq. 3.10) into the running average (eq. 3.8–3.9).
 ///
 /// The level of a measurement follows the surface depth z (eq. 3.2): it updates its own level
-/// and every coarser one (see VoxelBlock), with Φ = TruncationBand::updateM(): truncation_vox
+/// and every coarser one, and the next finer one where the block holds it
+/// (measurementUpdatesLevel(), see VoxelBlock), with Φ = TruncationBand::updateM(): truncation_vox
 /// voxels of the measurement's level, but never less than 2 voxels of the level being updated.
 /// Behind the surface, voxels farther than Φ are left untouched (unobserved); in front, the
 /// distance is clamped to −Φ (observed free space).

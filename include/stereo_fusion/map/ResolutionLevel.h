@@ -32,6 +32,19 @@ inline int levelForDepth(double depth_m, const LevelThresholds& t) {
   return 0;
 }
 
+/// Whether a measurement of `measurement_level` updates the voxels of `voxel_level` in a block:
+/// its own level and every coarser one (eq. 3.2 and the thesis' multi-level update); with
+/// `update_allocated_finer` also the next finer level when the block already holds it
+/// (`voxel_level_allocated`: allocated before the frame's visit). With level_mode noise such a
+/// measurement's depth error is below two voxels of that finer level (levelThresholdsFor());
+/// it keeps its own band there and a quarter of its weight (kFinerLevelWeightScale), so it
+/// fills in and refines what nearer views built without allocating anything.
+inline bool measurementUpdatesLevel(int measurement_level, int voxel_level, bool voxel_level_allocated,
+                                    bool update_allocated_finer) {
+  if (voxel_level >= measurement_level) return true;
+  return update_allocated_finer && voxel_level_allocated && voxel_level == measurement_level - 1;
+}
+
 /// levelForDepth() for float depths, with float compares only: each threshold becomes the
 /// smallest float at or above it, so for every float z, z ≥ level1_min_depth_m ⇔
 /// (double)z ≥ scale2_min_depth_m (likewise level 2) and levelOf(z) == levelForDepth(z).

@@ -65,9 +65,11 @@ static_assert(NeighbourLinks::opposite(NeighbourLinks::slot(1, -1, 0)) == Neighb
 /// writable*() accessors, which allocate.
 ///
 /// Level consistency rule: a measurement whose depth selects level L (eq. 3.2) is fused
-/// into level L *and every coarser level* of the block. So the coarsest level holds every
-/// measurement that reached the block, and a finer level holds exactly the measurements
-/// close enough to deserve it. All levels therefore sample the same fused surface; the
+/// into level L *and every coarser level* of the block, and, with
+/// update_allocated_finer_level, into level L − 1 where the block already holds it (at a
+/// quarter weight, measurementUpdatesLevel()). So the coarsest level holds every
+/// measurement that reached the block, and a finer level holds the measurements close enough
+/// to deserve it plus, once it exists, those one level coarser. All levels therefore sample the same fused surface; the
 /// mesher picks the finest level with enough observation and can read any coarser level of
 /// a neighbour to close a seam.
 struct VoxelBlock {

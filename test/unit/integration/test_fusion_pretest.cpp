@@ -20,22 +20,22 @@
 namespace stereo_fusion {
 namespace {
 
-/// The largest depth among pixels [u0, u1) × [v0, v1) whose measurement level is 0
-/// (levelForDepth() with float thresholds); −inf if none.
+/// The largest depth among pixels [u0, u1) × [v0, v1) whose measurement level is at most
+/// `max_level` (levelForDepth() with float thresholds); −inf if none.
 float bruteForceMax(const std::vector<float>& depth_m, int width, int u0, int v0, int u1, int v1, float t1,
-                    float t2) {
+                    float t2, int max_level = 0) {
   float max_m = -std::numeric_limits<float>::infinity();
   for (int v = v0; v < v1; ++v)
     for (int u = u0; u < u1; ++u) {
       const float z = depth_m[static_cast<size_t>(v) * width + u];
       if (std::isnan(z)) continue;
       const int m = z >= t2 ? 2 : (z >= t1 ? 1 : 0);
-      if (m == 0) max_m = std::max(max_m, z);
+      if (m <= max_level) max_m = std::max(max_m, z);
     }
   return max_m;
 }
 
-TEST(DepthTiles, MaxLevel0DepthFollowsThePerPixelRule) {
+TEST(DepthTiles, MaxDepthFollowsThePerPixelRule) {
   // Sizes that are no multiple of the tile, depths on and around the thresholds, NaN, and a
   // level-2 threshold below the level-1 one (allowed by the configuration).
   std::mt19937 rng(7);
@@ -61,19 +61,29 @@ TEST(DepthTiles, MaxLevel0DepthFollowsThePerPixelRule) {
       tiles.build(depth_m.data(), width, height, t1, t2, &pool);
       ASSERT_EQ(tiles.tilesX(), (width + 7) / 8);
       ASSERT_EQ(tiles.tilesY(), (height + 7) / 8);
-      for (int ty = 0; ty < tiles.tilesY(); ++ty)
-        for (int tx = 0; tx < tiles.tilesX(); ++tx) {
-          const float want = bruteForceMax(depth_m, width, 8 * tx, 8 * ty, std::min(8 * tx + 8, width),
-                                           std::min(8 * ty + 8, height), t1, t2);
-          ASSERT_EQ(tiles.maxLevel0Depth(tx, ty, tx, ty), want) << width << "x" << height << " tile " << tx << "," << ty;
-          EXPECT_EQ(tiles.allBelow(tx, ty, tx, ty, std::nextafter(want, INFINITY)), true);
-          EXPECT_EQ(tiles.allBelow(tx, ty, tx, ty, want), false);
-        }
-      // A query over several tiles is the maximum over their pixels.
-      const float want = bruteForceMax(depth_m, width, 0, 0, width, height, t1, t2);
-      EXPECT_EQ(tiles.maxLevel0Depth(0, 0, tiles.tilesX() - 1, tiles.tilesY() - 1), want);
+      using Which = DepthTiles::Measurements;
+      for (const auto [which, max_level] : {std::pair{Which::kLevel0, 0}, std::pair{Which::kLevel0And1, 1}}) {
+        for (int ty = 0; ty < tiles.tilesY(); ++ty)
+          for (int tx = 0; tx < tiles.tilesX(); ++tx) {
+            const float want = bruteForceMax(depth_m, width, 8 * tx, 8 * ty, std::min(8 * tx + 8, width),
+                                             std::min(8 * ty + 8, height), t1, t2, max_level);
+            ASSERT_EQ(tiles.maxDepth(which, tx, ty, tx, ty), want)
+                << width << "x" << height << " tile " << tx << "," << ty << " levels <= " << max_level;
+            EXPECT_EQ(tiles.allBelow(which, tx, ty, tx, ty, std::nextafter(want, INFINITY)), true);
+            EXPECT_EQ(tiles.allBelow(which, tx, ty, tx, ty, want), false);
+          }
+        // A query over several tiles is the maximum over their pixels.
+        const float want = bruteForceMax(depth_m, width, 0, 0, width, height, t1, t2, max_level);
+        EXPECT_EQ(tiles.maxDepth(which, 0, 0, tiles.tilesX() - 1, tiles.tilesY() - 1), want);
+      }
     }
   }
+  // The summaries differ where they should: a tile of level-1 depths has none of level 0.
+  std::vector<float> depth_m(64, 3.0f);
+  DepthTiles tiles;
+  tiles.build(depth_m.data(), 8, 8, 2.0f, 4.0f, &pool);
+  EXPECT_EQ(tiles.maxDepth(DepthTiles::Measurements::kLevel0, 0, 0, 0, 0), -INFINITY);
+  EXPECT_EQ(tiles.maxDepth(DepthTiles::Measurements::kLevel0And1, 0, 0, 0, 0), 3.0f);
 }
 
 /// A small camera (fast to fuse thousands of times) whose 8-pixel tiles each cover a few
@@ -105,9 +115,17 @@ class KernelPair {
 
   const BlockOctree& octree() const { return octree_; }
 
-  uint64_t expectAgree(const StereoFrame& frame, const BlockKey& key) {
+  /// `held_levels`: bit l set allocates level l of both blocks (all unobserved) before fusion,
+  /// as nearer views would have, so measurements of level l + 1 update it too
+  /// (measurementUpdatesLevel()).
+  uint64_t expectAgree(const StereoFrame& frame, const BlockKey& key, int held_levels = 0) {
     VoxelBlock want, got;
     want.key = got.key = key;
+    for (int level = 0; level < kNumLevels; ++level)
+      if (held_levels & (1 << level)) {
+        want.writableLevel(level);
+        got.writableLevel(level);
+      }
     std::vector<VoxelBlock*> updated;
     MeasurementImage measurements;
     measurements.build(frame, config_, &pool_);
@@ -121,11 +139,18 @@ class KernelPair {
         ADD_FAILURE() << "voxel " << v << ": weight " << got.voxel(v).weight << " vs " << want.voxel(v).weight;
         break;
       }
+    level0_observed_ = 0;
+    if (want.hasLevel(0))
+      for (int v = 0; v < levelVoxelCount(0); ++v) level0_observed_ += want.level(0)[v].weight > 0.0f;
     return want_updates;
   }
 
+  /// Observed level-0 voxels after the last expectAgree().
+  int level0Observed() const { return level0_observed_; }
+
  private:
   MapperConfig config_;
+  int level0_observed_ = 0;
   ThreadPool pool_{1};
   BlockOctree octree_;
   SurfaceFuser scalar_, avx2_;
@@ -234,6 +259,77 @@ TEST(FusionPreTest, NeverSkipsAtTheLevelThresholds) {
         for (int n = 0; n < 6; ++n) disparity = std::nextafter(disparity, INFINITY);
         for (int n = 0; n < 12; ++n, disparity = std::nextafter(disparity, 0.0f))
           total_updates += kernels.expectAgree(planeFrame(cam, T_world_camera, disparity), key);
+        if (HasFailure()) return;
+      }
+    }
+  }
+  EXPECT_GT(total_updates, 1000u);
+}
+
+TEST(FusionPreTest, NeverSkipsAHeldFinerLevelUpdatedByCoarserMeasurements) {
+  // A block that holds level 0 gets level-1 measurements (the 4³ switch at 1 m, the block at
+  // 1.5 m): they update its level-0 voxels with their own band Φ₁ = updateM(1, 0), so the
+  // pre-test must use the level-0-and-1 tiles and that band. The surface sweeps through
+  // z_c − Φ₁ of every level-0 slice; the same without the held level updates no level-0 voxel.
+  if (!avx2Supported()) GTEST_SKIP() << "no AVX2 kernel on this CPU";
+  MapperConfig config;
+  config.level_mode = LevelMode::kDepth;
+  config.levels.scale2_min_depth_m = 1.0;
+  config.levels.scale4_min_depth_m = 4.0;
+  ASSERT_TRUE(config.update_allocated_finer_level);
+  KernelPair kernels(config);
+  const StereoCamera cam = smallCamera();
+  const double truncation_m = config.truncationBand().updateM(1, 0);
+  int sweeps_with_partial_updates = 0, level0_observed = 0;
+  for (const Eigen::Isometry3d& T_world_camera : testPoses()) {
+    const BlockKey key = kernels.octree().keyForPoint(T_world_camera * Eigen::Vector3d(0.12, -0.05, 1.5));
+    const Eigen::Isometry3d T_camera_world = T_world_camera.inverse();
+    for (int k = 0; k < levelSide(0); ++k) {
+      double z_near_m = INFINITY;
+      for (int c = 0; c < 4; ++c) {
+        const Eigen::Vector3d centre =
+            kernels.octree().blockOrigin(key) +
+            config.voxel_size_m * Eigen::Vector3d((c & 1) * (levelSide(0) - 1) + 0.5, (c >> 1) * (levelSide(0) - 1) + 0.5, k + 0.5);
+        z_near_m = std::min(z_near_m, (T_camera_world * centre).z());
+      }
+      int previous = 0;
+      bool partial = false;
+      for (double offset_m : {-2e-3, -1e-4, -1e-5, -1e-6, 0.0, 1e-6, 1e-5, 1e-4, 2e-3}) {
+        const StereoFrame frame = planeFrame(cam, T_world_camera, disparityForDepth(cam, z_near_m - truncation_m + offset_m));
+        kernels.expectAgree(frame, key, /*held_levels=*/0b001);
+        const int observed = kernels.level0Observed();
+        partial |= observed != previous && previous != 0;
+        previous = observed;
+        level0_observed += observed;
+        kernels.expectAgree(frame, key, /*held_levels=*/0);
+        EXPECT_EQ(kernels.level0Observed(), 0) << "level 0 is not held: no level-1 measurement allocates it";
+      }
+      sweeps_with_partial_updates += partial;
+      if (HasFailure()) return;
+    }
+  }
+  EXPECT_GT(level0_observed, 1000);
+  EXPECT_GT(sweeps_with_partial_updates, 0);
+}
+
+TEST(FusionPreTest, NeverSkipsAtTheLevelThresholdsWithHeldFinerLevels) {
+  // NeverSkipsAtTheLevelThresholds with levels 0 and 1 held: a measurement one ulp beyond a
+  // threshold now updates the finer level too.
+  if (!avx2Supported()) GTEST_SKIP() << "no AVX2 kernel on this CPU";
+  MapperConfig config;
+  config.level_mode = LevelMode::kDepth;
+  KernelPair kernels(config);
+  const StereoCamera cam = smallCamera();
+  uint64_t total_updates = 0;
+  for (const Eigen::Isometry3d& T_world_camera : testPoses()) {
+    for (double threshold_m : {config.levels.scale2_min_depth_m, config.levels.scale4_min_depth_m}) {
+      for (double block_offset_m : {-0.1, 0.0, 0.1}) {
+        const BlockKey key =
+            kernels.octree().keyForPoint(T_world_camera * Eigen::Vector3d(0.05, 0.02, threshold_m + block_offset_m));
+        float disparity = disparityForDepth(cam, threshold_m);
+        for (int n = 0; n < 4; ++n) disparity = std::nextafter(disparity, INFINITY);
+        for (int n = 0; n < 8; ++n, disparity = std::nextafter(disparity, 0.0f))
+          total_updates += kernels.expectAgree(planeFrame(cam, T_world_camera, disparity), key, 0b011);
         if (HasFailure()) return;
       }
     }

@@ -1,6 +1,7 @@
 // SurfaceFuser against a reference transcription of the thesis equations that visits every
 // voxel of every level of every queued block, with none of the fuser's shortcuts (block-level
-// depth test, level skipping). Voxel values must agree bit for bit, so any shortcut that
+// depth test, level skipping, depth-tile pre-test); it states the level rule
+// (measurementUpdatesLevel()) in its own words. Voxel values must agree bit for bit, so any shortcut that
 // drops a real update, or updates what it should not, fails here.
 
 #include <gtest/gtest.h>
@@ -36,6 +37,8 @@ void referenceFuseBlock(const StereoFrame& frame, const BlockOctree& octree, con
   const LevelThresholds thresholds = levelThresholdsFor(config, cam.fx() * cam.baseline());  // the frame's
   const float fb = static_cast<float>(cam.fx() * cam.baseline());
   const float voxel = static_cast<float>(config.voxel_size_m);
+  bool allocated_before[kNumLevels];
+  for (int level = 0; level < kNumLevels; ++level) allocated_before[level] = block->hasLevel(level);
   for (int level = 0; level < kNumLevels; ++level) {
     const int side = levelSide(level);
     const float level_voxel = voxel * levelScale(level);
@@ -57,7 +60,9 @@ void referenceFuseBlock(const StereoFrame& frame, const BlockOctree& octree, con
           const float z = fb / d;
           if (!(z >= static_cast<float>(config.min_depth_m) && z <= static_cast<float>(config.max_depth_m))) continue;
           const int m = levelForDepth(z, thresholds);
-          if (level < m) continue;
+          // Its own level and coarser ones; the next finer one too where the block held it.
+          const bool finer_held = config.update_allocated_finer_level && allocated_before[level] && level == m - 1;
+          if (level < m && !finer_held) continue;
           const float scale = static_cast<float>(levelScale(m));
           const float truncation = std::max(static_cast<float>(config.truncation_vox) * scale * voxel,
                                             TruncationBand::kMinVoxelsOfUpdatedLevel * level_voxel);
@@ -65,7 +70,8 @@ void referenceFuseBlock(const StereoFrame& frame, const BlockOctree& octree, con
           const float sdf = signedDistanceAlongRay(p.x(), p.y(), p.z(), z);
           if (sdf > truncation) continue;
           const float w = measurementWeight(config.weight_mode, sdf, delta, truncation, z,
-                                            static_cast<float>(config.depth_weight_reference_m));
+                                            static_cast<float>(config.depth_weight_reference_m)) *
+                          (finer_held ? 0.25f : 1.0f);
           if (!(w > 0.0f)) continue;
           const uint8_t* rgb = nullptr;
           uint8_t grey[3];
@@ -238,6 +244,7 @@ TEST(FusionReference, KernelsEqualReferenceOnRandomFramesAndBlocks) {
     config.levels.scale2_min_depth_m = rng() % 2 ? 2.0 : 2.0000001;
     config.levels.scale4_min_depth_m = rng() % 2 ? 4.0 : 1.0 + 5.0 * unit(rng);  // may be below level 1's
     config.use_color = rng() % 4 != 0;
+    config.update_allocated_finer_level = trial % 4 != 0;
     const int width = widths[rng() % std::size(widths)], height = heights[rng() % std::size(heights)];
     const double f_px = 30.0 + 800.0 * unit(rng);
     const StereoCamera cam = *StereoCamera::create(width, height, f_px, f_px * (0.9 + 0.2 * unit(rng)),

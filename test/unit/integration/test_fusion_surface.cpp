@@ -225,3 +225,58 @@ TEST(FusionSurface, FarMeasurementsOnlyReachCoarseLevels) {
   ASSERT_GT(errors.size(), 100u);
   EXPECT_LE(*std::max_element(errors.begin(), errors.end()), 0.1);
 }
+
+TEST(FusionSurface, AFartherViewRefinesTheFineLevelANearViewAllocated) {
+  // A wall at z = 1.8 m seen from the origin (level 0, the thesis' 2 m switch) and then from
+  // 0.5 m farther back (2.3 m: level 1). With update_allocated_finer_level the second view
+  // also updates the level-0 voxels the first one allocated, with its own band Φ₁ = 8 voxels
+  // and a quarter of its weight (kFinerLevelWeightScale): those it observes get weight
+  // 1 + 1/4 and keep the wall's exact distance (frontal view, voxels
+  // within δ in front: the along-ray distance is the distance to the wall up to the ray's
+  // slant, ≤ 1.6e-3 of it within 0.1 m of the axis). Without the option they keep weight 1. Neither run
+  // allocates level 0 in a block the first view did not reach.
+  sim::AnalyticScene scene;
+  scene.add(sim::makePlane({0, 0, 1.8}, {0, 0, -1}));
+  for (const bool refine : {true, false}) {
+    SCOPED_TRACE(refine ? "update_allocated_finer_level" : "thesis levels only");
+    MapperConfig config = testConfig();
+    config.level_mode = LevelMode::kDepth;
+    config.update_allocated_finer_level = refine;
+    Mapper mapper(config);
+    Eigen::Isometry3d near_pose = Eigen::Isometry3d::Identity(), far_pose = Eigen::Isometry3d::Identity();
+    far_pose.translation() = Eigen::Vector3d(0, 0, -0.5);
+    ASSERT_TRUE(mapper.integrate(renderFrame(scene, vgaCamera(), near_pose)).accepted);
+    std::vector<BlockKey> level0_blocks;
+    for (const VoxelBlock* b : mapper.map().blocks())
+      if (b->hasLevel(0)) level0_blocks.push_back(b->key);
+    ASSERT_GT(level0_blocks.size(), 100u);
+    ASSERT_TRUE(mapper.integrate(renderFrame(scene, vgaCamera(), far_pose)).accepted);
+    size_t refined = 0, near_only = 0, level0_after = 0;
+    for (const VoxelBlock* b : mapper.map().blocks()) {
+      if (!b->hasLevel(0)) continue;
+      ++level0_after;
+      EXPECT_NE(std::find(level0_blocks.begin(), level0_blocks.end(), b->key), level0_blocks.end()) << b->key;
+      const Eigen::Vector3d origin = mapper.map().blockOrigin(b->key);
+      for (int k = 0; k < 8; ++k)
+        for (int j = 0; j < 8; ++j)
+          for (int i = 0; i < 8; ++i) {
+            const Voxel& v = b->level(0)[VoxelBlock::indexInLevel(8, i, j, k)];
+            const Eigen::Vector3d centre = origin + kVoxel * Eigen::Vector3d(i + 0.5, j + 0.5, k + 0.5);
+            const double wall_distance_m = centre.z() - 1.8;  // negative in front
+            // Within δ = 1 voxel in front of the wall and near the optical axis: weight 1 per view.
+            if (!(wall_distance_m < 0 && wall_distance_m > -kVoxel) || centre.head<2>().norm() > 0.1) continue;
+            if (v.weight == 1.25f) ++refined;
+            if (v.weight == 1.0f) ++near_only;
+            EXPECT_NEAR(v.sdf_m, wall_distance_m, 2e-3 * std::abs(wall_distance_m) + 1e-6);
+          }
+    }
+    EXPECT_EQ(level0_after, level0_blocks.size());
+    if (refine) {
+      EXPECT_GT(refined, 60u);  // the ~79 voxels of the 0.1 m disc
+      EXPECT_EQ(near_only, 0u);
+    } else {
+      EXPECT_EQ(refined, 0u);
+      EXPECT_GT(near_only, 60u);
+    }
+  }
+}

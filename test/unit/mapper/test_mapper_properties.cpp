@@ -38,8 +38,40 @@ std::vector<StereoFrame> orbitFrames(int n, double noise_px = 0.0, const StereoC
 
 }  // namespace
 
-TEST(MapperProperties, FusingTheSameFrameTwiceKeepsTheSurface) {
+TEST(MapperProperties, FusingTheSameFrameTwiceWithRefinementKeepsEveryCrossing) {
+  // With update_allocated_finer_level (the default) the second pass of the same frame also
+  // lets its level-1 pixels update the level-0 voxels that its level-0 pixels allocated in the
+  // first: every crossing of the first pass stays where it was and new ones may appear, no
+  // block and no level is added.
   MapperConfig config;
+  ASSERT_TRUE(config.update_allocated_finer_level);
+  Mapper mapper(config);
+  const StereoFrame frame = orbitFrames(1, 0.3)[0];
+  ASSERT_TRUE(mapper.integrate(frame).accepted);
+  const MapSnapshot once = snapshot(mapper.map());
+  const auto crossings_once = zeroCrossings(mapper.map(), 0, 2);
+  ASSERT_GT(crossings_once.size(), 500u);
+  ASSERT_TRUE(mapper.integrate(frame).accepted);
+  const auto crossings_twice = zeroCrossings(mapper.map(), 0, 2);
+  EXPECT_GE(crossings_twice.size(), crossings_once.size());
+  double worst = 0;
+  for (const Eigen::Vector3d& p : crossings_once) {
+    double nearest = INFINITY;
+    for (const Eigen::Vector3d& q : crossings_twice) nearest = std::min(nearest, (p - q).norm());
+    worst = std::max(worst, nearest);
+  }
+  EXPECT_LT(worst, 1e-6);
+  const MapSnapshot twice = snapshot(mapper.map());
+  EXPECT_EQ(twice.keys, once.keys);
+  EXPECT_EQ(twice.level_masks, once.level_masks);
+}
+
+TEST(MapperProperties, FusingTheSameFrameTwiceKeepsTheSurface) {
+  // With the thesis' level rule the second pass updates exactly the voxels of the first.
+  // (update_allocated_finer_level lets the second pass also refine the level-0 voxels that
+  // the first pass allocated: FusingTheSameFrameTwiceWithRefinementKeepsEveryCrossing.)
+  MapperConfig config;
+  config.update_allocated_finer_level = false;
   Mapper mapper(config);
   const StereoFrame frame = orbitFrames(1, 0.3)[0];
   ASSERT_TRUE(mapper.integrate(frame).accepted);
