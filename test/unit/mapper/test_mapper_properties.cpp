@@ -38,6 +38,26 @@ std::vector<StereoFrame> orbitFrames(int n, double noise_px = 0.0, const StereoC
 
 }  // namespace
 
+/// One orbit frame fused twice with `config`: the map and its level-0 zero crossings after
+/// each pass.
+struct FusedTwice {
+  MapSnapshot once, twice;
+  std::vector<Eigen::Vector3d> crossings_once, crossings_twice;
+};
+
+FusedTwice fuseOneFrameTwice(const MapperConfig& config) {
+  Mapper mapper(config);
+  const StereoFrame frame = orbitFrames(1, 0.3)[0];
+  FusedTwice result;
+  EXPECT_TRUE(mapper.integrate(frame).accepted);
+  result.once = snapshot(mapper.map());
+  result.crossings_once = zeroCrossings(mapper.map(), 0, 2);
+  EXPECT_TRUE(mapper.integrate(frame).accepted);
+  result.twice = snapshot(mapper.map());
+  result.crossings_twice = zeroCrossings(mapper.map(), 0, 2);
+  return result;
+}
+
 TEST(MapperProperties, FusingTheSameFrameTwiceWithRefinementKeepsEveryCrossing) {
   // With update_allocated_finer_level (the default) the second pass of the same frame also
   // lets its level-1 pixels update the level-0 voxels that its level-0 pixels allocated in the
@@ -45,25 +65,18 @@ TEST(MapperProperties, FusingTheSameFrameTwiceWithRefinementKeepsEveryCrossing) 
   // block and no level is added.
   MapperConfig config;
   ASSERT_TRUE(config.update_allocated_finer_level);
-  Mapper mapper(config);
-  const StereoFrame frame = orbitFrames(1, 0.3)[0];
-  ASSERT_TRUE(mapper.integrate(frame).accepted);
-  const MapSnapshot once = snapshot(mapper.map());
-  const auto crossings_once = zeroCrossings(mapper.map(), 0, 2);
-  ASSERT_GT(crossings_once.size(), 500u);
-  ASSERT_TRUE(mapper.integrate(frame).accepted);
-  const auto crossings_twice = zeroCrossings(mapper.map(), 0, 2);
-  EXPECT_GE(crossings_twice.size(), crossings_once.size());
+  const FusedTwice fused = fuseOneFrameTwice(config);
+  ASSERT_GT(fused.crossings_once.size(), 500u);
+  EXPECT_GE(fused.crossings_twice.size(), fused.crossings_once.size());
   double worst = 0;
-  for (const Eigen::Vector3d& p : crossings_once) {
+  for (const Eigen::Vector3d& p : fused.crossings_once) {
     double nearest = INFINITY;
-    for (const Eigen::Vector3d& q : crossings_twice) nearest = std::min(nearest, (p - q).norm());
+    for (const Eigen::Vector3d& q : fused.crossings_twice) nearest = std::min(nearest, (p - q).norm());
     worst = std::max(worst, nearest);
   }
   EXPECT_LT(worst, 1e-6);
-  const MapSnapshot twice = snapshot(mapper.map());
-  EXPECT_EQ(twice.keys, once.keys);
-  EXPECT_EQ(twice.level_masks, once.level_masks);
+  EXPECT_EQ(fused.twice.keys, fused.once.keys);
+  EXPECT_EQ(fused.twice.level_masks, fused.once.level_masks);
 }
 
 TEST(MapperProperties, FusingTheSameFrameTwiceKeepsTheSurface) {
@@ -72,25 +85,20 @@ TEST(MapperProperties, FusingTheSameFrameTwiceKeepsTheSurface) {
   // the first pass allocated: FusingTheSameFrameTwiceWithRefinementKeepsEveryCrossing.)
   MapperConfig config;
   config.update_allocated_finer_level = false;
-  Mapper mapper(config);
-  const StereoFrame frame = orbitFrames(1, 0.3)[0];
-  ASSERT_TRUE(mapper.integrate(frame).accepted);
-  const MapSnapshot once = snapshot(mapper.map());
-  const auto crossings_once = zeroCrossings(mapper.map(), 0, 2);
+  const FusedTwice fused = fuseOneFrameTwice(config);
+  const auto& crossings_once = fused.crossings_once;
+  const auto& crossings_twice = fused.crossings_twice;
   ASSERT_GT(crossings_once.size(), 500u);
-  ASSERT_TRUE(mapper.integrate(frame).accepted);
-  const auto crossings_twice = zeroCrossings(mapper.map(), 0, 2);
   ASSERT_EQ(crossings_once.size(), crossings_twice.size());
   double worst = 0;
   for (size_t i = 0; i < crossings_once.size(); ++i)
     worst = std::max(worst, (crossings_once[i] - crossings_twice[i]).norm());
   EXPECT_LT(worst, 1e-6);  // float rounding of the average only
   // Same blocks, and every observed voxel's weight has grown (none exceeds the cap here).
-  const MapSnapshot twice = snapshot(mapper.map());
-  ASSERT_EQ(twice.keys, once.keys);
-  EXPECT_EQ(twice.level_masks, once.level_masks);
-  const std::vector<Voxel>& before = once.voxels;
-  const std::vector<Voxel>& after = twice.voxels;
+  ASSERT_EQ(fused.twice.keys, fused.once.keys);
+  EXPECT_EQ(fused.twice.level_masks, fused.once.level_masks);
+  const std::vector<Voxel>& before = fused.once.voxels;
+  const std::vector<Voxel>& after = fused.twice.voxels;
   size_t observed = 0;
   for (size_t i = 0; i < before.size(); ++i) {
     if (before[i].weight <= 0) continue;
