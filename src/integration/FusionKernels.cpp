@@ -30,9 +30,9 @@ Eigen::Vector3f blockOriginInCamera(const FusionFrame& f, const BlockOctree& oct
 /// Block-level depth test: a voxel is only updated by a surface at depth ≥ z_voxel − Φ
 /// (eq. 3.15 with sdf ≤ Φ), and a level finer than the measurement's is skipped unless it is
 /// the next finer one and the block holds it (measurementUpdatesLevel()). When even the
-/// block's nearest corner is so far that every possible measurement is coarser than a level
-/// (and than the level above it the block holds), none of that level's voxels can change: the
-/// kernels start at the returned level.
+/// block's nearest corner is so far that every possible measurement is of level m or coarser,
+/// the levels finer than m cannot change, except m − 1 where the block holds it: the kernels
+/// start at the returned level.
 int firstLevelToVisit(const FusionFrame& f, const Eigen::Vector3f& origin_c, const VoxelBlock& block) {
   const float block_m = f.voxel_m * kFinestSide;
   float nearest_z = origin_c.z();
@@ -42,12 +42,12 @@ int firstLevelToVisit(const FusionFrame& f, const Eigen::Vector3f& origin_c, con
                                                             (c & 4 ? f.R_cw(2, 2) : 0.0f)));
   // Margin: the voxel loop computes depths with other float roundings.
   const double nearest_surface_m = static_cast<double>(nearest_z) - f.max_truncation_m - 1e-3;
-  const int coarsest_measurement_level = levelForDepth(nearest_surface_m, f.thresholds);
-  const int finer = coarsest_measurement_level - 1;
-  if (finer >= 0 && measurementUpdatesLevel(coarsest_measurement_level, finer, block.hasLevel(finer),
+  const int finest_measurement_level = levelForDepth(nearest_surface_m, f.thresholds);
+  const int finer = finest_measurement_level - 1;
+  if (finer >= 0 && measurementUpdatesLevel(finest_measurement_level, finer, block.hasLevel(finer),
                                             f.update_allocated_finer))
     return finer;
-  return coarsest_measurement_level;
+  return finest_measurement_level;
 }
 
 /// Eq. 3.8–3.9 for one voxel, with the colour of `pixel` if colour is fused. `sdf_m` is the
