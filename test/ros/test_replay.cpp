@@ -29,12 +29,17 @@ using namespace stereo_fusion;
 
 namespace {
 /// Waits (at most `timeout_s`) until the nodelet has fused all `frames` of the bag; fails the
-/// test, naming the drop counters, if it has not.
+/// test, naming where frames were lost, if it has not. The launch files make the player wait
+/// for the nodelet's subscriptions: a frame published before them is lost uncounted.
 void expectEveryFrameFused(test::DiagnosticsWatcher& diagnostics, long frames, double timeout_s) {
   auto diag = [&](const char* key) { return diagnostics.value(key); };
   test::waitFor([&] { return diag("frames fused") >= frames; }, timeout_s);
-  ASSERT_EQ(diag("frames fused"), frames) << "dropped tf " << diag("dropped: tf timeout") << ", queue "
-                                          << diag("dropped: queue full") << ", bad " << diag("dropped: bad input");
+  ASSERT_EQ(diag("frames fused"), frames)
+      << "disparities received " << diag("disparities received") << ", missed upstream "
+      << diag("disparities missed upstream (header.seq gaps)") << ", not synchronised "
+      << diag("dropped: not synchronised (no matching image / camera_info yet)") << ", dropped tf "
+      << diag("dropped: tf timeout") << ", queue " << diag("dropped: queue full") << ", bad "
+      << diag("dropped: bad input");
 }
 
 /// A simulated room sequence and its bag, as the launch file passes them: the test node's
@@ -211,7 +216,7 @@ TEST(DynamicReplay, APersonWhoLeftIsClearedFromTheLiveMesh) {
   ASSERT_NO_FATAL_FAILURE(readSimulatedRoom(&sim));
   const std::vector<Eigen::AlignedBox3d> regions = ghostRegions(sim.sequence);
   ASSERT_EQ(regions.size(), 1u) << sim.sequence << "/dynamic.txt";
-  // The stream, as a base station receives it from the first update on (the bag starts 2 s
+  // The stream, as a base station receives it from the first update on (the bag starts at least 2 s
   // after the launch): carving empties the person's submeshes, which must arrive as removals.
   std::mutex stream_mutex;
   std::unordered_map<BlockKey, SubMesh, BlockKeyHash> streamed;
