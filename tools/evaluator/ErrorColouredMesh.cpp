@@ -51,29 +51,30 @@ bool writeErrorColouredPly(const std::string& path, const TriangleMesh& reconstr
   return writeThroughTemporary(path, "cannot write the error-coloured mesh", write, error);
 }
 
-TriangleMesh errorColouredPoints(const std::vector<Eigen::Vector3d>& points_m, const std::vector<uint8_t>& mask,
-                                 const TriangleBvh& surface, double tolerance_m, ThreadPool* pool) {
-  std::vector<Eigen::Vector3d> kept_m;
-  kept_m.reserve(points_m.size());
-  for (size_t i = 0; i < points_m.size(); ++i)
-    if (mask.empty() || mask[i] != 0) kept_m.push_back(points_m[i]);
-  const std::vector<double> distances_m = distancesToSurface(surface, kept_m, pool);
-  TriangleMesh cloud;
-  cloud.positions.reserve(kept_m.size());
-  for (size_t i = 0; i < kept_m.size(); ++i) {
-    cloud.positions.push_back(kept_m[i].cast<float>());
-    cloud.normals.emplace_back(Eigen::Vector3f::Zero());
-    cloud.colors.push_back(errorColour(distances_m[i], tolerance_m));
+bool errorColouredPoints(const std::vector<Eigen::Vector3d>& points_m, const std::vector<uint8_t>& mask,
+                         const std::vector<double>& distances_m, double tolerance_m, TriangleMesh* cloud) {
+  if (distances_m.size() != points_m.size() || (!mask.empty() && mask.size() != points_m.size())) return false;
+  *cloud = TriangleMesh{};
+  for (size_t i = 0; i < points_m.size(); ++i) {
+    if (!mask.empty() && mask[i] == 0) continue;
+    cloud->positions.push_back(points_m[i].cast<float>());
+    cloud->normals.emplace_back(Eigen::Vector3f::Zero());
+    cloud->colors.push_back(errorColour(distances_m[i], tolerance_m));
   }
-  return cloud;
+  return true;
 }
 
 bool writeMissingPly(const std::string& path, const std::vector<Eigen::Vector3d>& gt_samples_m,
-                     const std::vector<uint8_t>& gt_visible, const TriangleMesh& reconstruction,
-                     double tolerance_m, int num_threads, std::string* error) {
-  ThreadPool pool(num_threads);
-  const TriangleMesh cloud =
-      errorColouredPoints(gt_samples_m, gt_visible, TriangleBvh(reconstruction), tolerance_m, &pool);
+                     const std::vector<uint8_t>& gt_visible, const std::vector<double>& distances_m,
+                     double tolerance_m, std::string* error) {
+  TriangleMesh cloud;
+  if (!errorColouredPoints(gt_samples_m, gt_visible, distances_m, tolerance_m, &cloud)) {
+    if (error)
+      *error = path + ": " + std::to_string(gt_samples_m.size()) + " ground-truth samples, " +
+               std::to_string(distances_m.size()) + " distances, " + std::to_string(gt_visible.size()) +
+               " visibility flags: they must match";
+    return false;
+  }
   const auto write = [&](const std::string& temporary, std::string* why) { return writePly(temporary, cloud, why); };
   return writeThroughTemporary(path, "cannot write the ground-truth samples", write, error);
 }

@@ -34,15 +34,16 @@ bool writeErrorColouredPly(const std::string& path, const TriangleMesh& reconstr
                            std::string* error);
 
 /// The points of `points_m` whose `mask` entry is non-zero (all when `mask` is empty) as a point
-/// cloud (no faces, zero normals), each coloured by errorColour() of its distance to `surface`:
-/// blue where the surface covers it, red where it is 2 × tolerance or more away.
-TriangleMesh errorColouredPoints(const std::vector<Eigen::Vector3d>& points_m, const std::vector<uint8_t>& mask,
-                                 const TriangleBvh& surface, double tolerance_m, ThreadPool* pool);
+/// cloud (no faces, zero normals), each coloured by errorColour() of its distance to the
+/// reconstruction, `distances_m[i]` (GroundTruthResult::gt_sample_distances_m): blue where the
+/// surface covers it, red where it is 2 × tolerance or more away. False when the sizes differ.
+bool errorColouredPoints(const std::vector<Eigen::Vector3d>& points_m, const std::vector<uint8_t>& mask,
+                         const std::vector<double>& distances_m, double tolerance_m, TriangleMesh* cloud);
 
-/// Writes errorColouredPoints() of the ground-truth samples against `reconstruction` to `path`
-/// as binary PLY, whole or not at all. False with a message naming the file on failure.
+/// Writes errorColouredPoints() of the ground-truth samples to `path` as binary PLY, whole or
+/// not at all. False with a message naming the file (or the size mismatch) on failure.
 bool writeMissingPly(const std::string& path, const std::vector<Eigen::Vector3d>& gt_samples_m,
-                     const std::vector<uint8_t>& gt_visible, const TriangleMesh& reconstruction,
-                     double tolerance_m, int num_threads, std::string* error);
+                     const std::vector<uint8_t>& gt_visible, const std::vector<double>& distances_m,
+                     double tolerance_m, std::string* error);
 
 }  // namespace stereo_fusion::eval

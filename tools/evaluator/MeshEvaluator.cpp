@@ -73,6 +73,7 @@ GroundTruthResult evaluateAgainstGroundTruthSamples(const TriangleMesh& reconstr
   result.completeness = evaluated.empty() ? 0.0 : shareWithin(evaluated, options.tolerance_m);
   result.completion = summarizeDistances(std::move(evaluated));
   result.f_score = fScore(result.precision, result.completeness);
+  result.gt_sample_distances_m = std::move(to_recon);
   return result;
 }
 

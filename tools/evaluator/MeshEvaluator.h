@@ -53,6 +53,9 @@ struct GroundTruthResult {
   /// Area of reconstruction surface inside GroundTruthOptions::ghost_regions_m and farther than
   /// the tolerance from the truth (NaN without regions).
   double ghost_area_m2 = NAN;
+  /// Distance of every ground-truth sample (visible or not, in the order given) to the
+  /// reconstruction: what `completion` summarises, kept for a per-sample picture (--missing-ply).
+  std::vector<double> gt_sample_distances_m;
 };
 
 /// Draws `options.samples` points from each mesh and scores `reconstruction` against

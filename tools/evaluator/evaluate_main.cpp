@@ -136,8 +136,8 @@ void runGroundTruth(const EvaluateArguments& args, const std::string& gt_path,
   writeErrorPlyOrFail(args, reconstruction, ground_truth);
   if (!args.missing_ply_path.empty()) {
     std::string error;
-    if (!writeMissingPly(args.missing_ply_path, gt_samples.points_m, report.visibility.visible, reconstruction,
-                         args.tolerance_m, args.threads, &error)) {
+    if (!writeMissingPly(args.missing_ply_path, gt_samples.points_m, report.visibility.visible,
+                         report.result.gt_sample_distances_m, args.tolerance_m, &error)) {
       throw Failure{kExitUnreadable, error};
     }
     std::fprintf(stderr, "[evaluate] wrote the ground-truth samples coloured by distance to %s\n",

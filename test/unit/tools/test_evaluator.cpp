@@ -399,9 +399,18 @@ TEST(EvaluatorErrorColour, MissingPlyColoursTheMaskedTruthSamplesByTheirDistance
   const std::vector<Vector3d> samples = {
       {0.5, 0.5, 0.0}, {0.5, 0.5, 0.02}, {0.5, 0.5, 0.04}, {1.03, 0.5, 0.0}, {0.5, 0.5, 1.0}, {0.5, 0.5, 0.01}};
   const std::vector<uint8_t> visible = {1, 1, 1, 1, 1, 0};
+  // The distances as the evaluator keeps them for its completeness.
+  GroundTruthOptions options;
+  options.samples = 1000;
+  const GroundTruthResult result =
+      evaluateAgainstGroundTruthSamples(reconstruction, reconstruction, samples, 1.0, visible, options);
+  const std::vector<double>& distances = result.gt_sample_distances_m;
+  ASSERT_EQ(distances.size(), samples.size());
+  EXPECT_NEAR(distances[3], 0.03, 1e-12);
+  EXPECT_NEAR(distances[5], 0.01, 1e-12);  // masked out of the completeness, still measured
   const std::string path = testing::TempDir() + "stereo_fusion_evaluator_missing.ply";
   std::string error;
-  ASSERT_TRUE(writeMissingPly(path, samples, visible, reconstruction, 0.04, 2, &error)) << error;
+  ASSERT_TRUE(writeMissingPly(path, samples, visible, distances, 0.04, &error)) << error;
   TriangleMesh read;
   ASSERT_TRUE(readPly(path, &read, &error)) << error;
   EXPECT_TRUE(read.triangles.empty());
@@ -416,8 +425,13 @@ TEST(EvaluatorErrorColour, MissingPlyColoursTheMaskedTruthSamplesByTheirDistance
   std::filesystem::remove(path);
 
   // No mask: every sample.
-  ThreadPool pool(1);
-  EXPECT_EQ(errorColouredPoints(samples, {}, TriangleBvh(reconstruction), 0.04, &pool).positions.size(), 6u);
+  TriangleMesh cloud;
+  ASSERT_TRUE(errorColouredPoints(samples, {}, distances, 0.04, &cloud));
+  EXPECT_EQ(cloud.positions.size(), 6u);
+  // Distances that do not belong to the samples are refused, and nothing is written.
+  EXPECT_FALSE(writeMissingPly(path, samples, visible, {0.0, 0.1}, 0.04, &error));
+  EXPECT_NE(error.find("must match"), std::string::npos) << error;
+  EXPECT_FALSE(std::filesystem::exists(path));
 }
 
 // ---------------------------------------------------------------------------------------------
