@@ -39,6 +39,9 @@ std::string evaluateUsage() {
          "                    their distance to the mesh: red where the mesh is missing\n"
          "  --held-out SPEC   held-out frames: odd | even | i,j,k (default odd); forces\n"
          "                    held-out mode on a folder that has gt_mesh.ply\n"
+         "  --held-out-depth DIR  held-out mode: also write the mesh's depth as each held-out\n"
+         "                    frame sees it, DIR/<frame index>.tiff (32-bit float metres, 0 =\n"
+         "                    no mesh), to compare two meshes pixel by pixel\n"
          "  --samples N       surface samples per mesh in ground-truth mode (default 1000000)\n"
          "  --seed K          sampling seed (default 1)\n"
          "  --min-depth-m X   held-out: ignore measurements nearer than X (default 0.1)\n"
@@ -80,6 +83,8 @@ bool parseEvaluateArguments(const std::vector<std::string>& args, EvaluateArgume
       parsed->error_ply_path = value;
     } else if (arg == "--missing-ply") {
       parsed->missing_ply_path = value;
+    } else if (arg == "--held-out-depth") {
+      parsed->held_out_depth_folder = value;
     } else if (arg == "--held-out") {
       parsed->held_out_spec = value;
       parsed->held_out_given = true;

@@ -46,6 +46,11 @@ ModeError chooseEvaluationMode(const EvaluateArguments& args, EvaluationMode* mo
              args.reference_path + " is evaluated in held-out mode";
     return ModeError::kBadArguments;
   }
+  if (mode->ground_truth && !args.held_out_depth_folder.empty()) {
+    *error = "--held-out-depth needs held-out mode (a sequence folder without gt_mesh.ply, or --held-out); " +
+             args.reference_path + " is evaluated against its ground truth";
+    return ModeError::kBadArguments;
+  }
   return ModeError::kNone;
 }
 

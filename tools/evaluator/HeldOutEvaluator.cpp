@@ -4,6 +4,8 @@
 #include <memory>
 #include <mutex>
 
+#include <opencv2/imgcodecs.hpp>
+
 #include "evaluator/DepthRasterizer.h"
 #include "evaluator/DistanceStats.h"
 #include "evaluator/ResidualHistogram.h"
@@ -40,11 +42,23 @@ HeldOutCounts compareFrame(const cv::Mat& mesh_depth, const StereoFrame& frame,
   return counts;
 }
 
+bool writeDepth(const std::string& path, const cv::Mat& depth_m) {
+  try {
+    return cv::imwrite(path, depth_m);
+  } catch (const cv::Exception&) {  // OpenCV throws for some unwritable targets
+    return false;
+  }
+}
+
 double ratio(uint64_t numerator, uint64_t denominator) {
   return denominator == 0 ? NAN : static_cast<double>(numerator) / static_cast<double>(denominator);
 }
 
 }  // namespace
+
+std::string renderedDepthPath(const std::string& folder, size_t frame_index) {
+  return folder + "/" + std::to_string(frame_index) + ".tiff";
+}
 
 HeldOutResult evaluateHeldOut(const TriangleMesh& mesh, const FrameSource& frames,
                               const std::vector<size_t>& held_out, const HeldOutOptions& options) {
@@ -82,6 +96,13 @@ HeldOutResult evaluateHeldOut(const TriangleMesh& mesh, const FrameSource& frame
         continue;
       }
       const cv::Mat rendered = rasterizeDepth(mesh, frame.camera, frame.T_world_camera);
+      if (!options.rendered_depth_folder.empty()) {
+        const std::string path = renderedDepthPath(options.rendered_depth_folder, held_out[i]);
+        if (!writeDepth(path, rendered)) {
+          outcome.error = "frame " + std::to_string(held_out[i]) + ": cannot write " + path;
+          continue;
+        }
+      }
       outcome.counts = compareFrame(rendered, frame, options, local.get());
       outcome.ok = true;
     }

@@ -21,6 +21,10 @@ struct HeldOutOptions {
   double max_depth_m = 8.0;
   /// Frames rendered in parallel, the caller included; 0 = all cores.
   int num_threads = 0;
+  /// Non-empty: an existing folder that receives each evaluated frame's rendered mesh depth as
+  /// <frame index>.tiff (CV_32FC1 metres, 0 = no mesh). A frame whose file cannot be written is
+  /// skipped with that reason.
+  std::string rendered_depth_folder;
 };
 
 /// Pixel counts of one frame (or of all frames summed).
@@ -50,6 +54,9 @@ struct HeldOutResult {
   size_t frames_skipped = 0;
   std::vector<std::string> skipped;  ///< reasons, first few only
 };
+
+/// Where HeldOutOptions::rendered_depth_folder receives frame `frame_index`'s rendered depth.
+std::string renderedDepthPath(const std::string& folder, size_t frame_index);
 
 /// Renders `mesh` into every frame of `frames` listed in `held_out` (z-buffer, pose
 /// T_world_camera) and compares with the frame's measured depth z = f·b/d pixel by pixel.

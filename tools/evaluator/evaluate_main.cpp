@@ -155,6 +155,7 @@ void runHeldOut(const EvaluateArguments& args) {
   report.options.min_depth_m = args.min_depth_m;
   report.options.max_depth_m = args.max_depth_m;
   report.options.num_threads = args.threads;
+  report.options.rendered_depth_folder = args.held_out_depth_folder;
 
   const TriangleMesh mesh = readMeshOrFail(args.mesh_path, "mesh");
   const DatasetReader frames = openSequenceOrFail(args.reference_path);
@@ -197,6 +198,7 @@ void run(const EvaluateArguments& args) {
   checkOutputFolderOrFail(args.json_path);
   checkOutputFolderOrFail(args.error_ply_path);
   checkOutputFolderOrFail(args.missing_ply_path);
+  checkOutputFolderOrFail(args.held_out_depth_folder.empty() ? "" : args.held_out_depth_folder + "/0.tiff");
   if (mode.ground_truth) {
     runGroundTruth(args, mode.ground_truth_path, mode.sequence_path);
   } else {

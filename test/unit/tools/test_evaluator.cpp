@@ -4,6 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
 #include <Eigen/Geometry>
 #include <cmath>
 #include <filesystem>
@@ -545,6 +548,34 @@ TEST(EvaluatorHeldOut, MeshFiveCentimetresInFrontIsFloating) {
   EXPECT_EQ(with_missing.frames_evaluated.size(), 1u);
 }
 
+TEST(EvaluatorHeldOut, WritesTheRenderedDepthOfEachEvaluatedFrame) {
+  const StereoFrame frame = planeFrame({0, 0, 1}, 2.0, Eigen::Isometry3d::Identity());
+  const StereoFrame tilted = planeFrame({0, 0, 1}, 2.0, cameraPose({0.2, 0.1, -0.3}, 0.2));
+  const InMemoryFrameSource source({frame, tilted});
+  const TriangleMesh nearer = planeMesh(-4, 4, -3, 3, 2.0 - 0.05);
+  const std::string folder = testing::TempDir() + "stereo_fusion_held_out_depth";
+  std::filesystem::remove_all(folder);
+  std::filesystem::create_directories(folder);
+  HeldOutOptions options;
+  options.rendered_depth_folder = folder;
+  const HeldOutResult r = evaluateHeldOut(nearer, source, {1}, options);
+  ASSERT_EQ(r.frames_evaluated, (std::vector<size_t>{1}));
+  EXPECT_FALSE(std::filesystem::exists(renderedDepthPath(folder, 0))) << "frame 0 was not held out";
+  const cv::Mat written = cv::imread(renderedDepthPath(folder, 1), cv::IMREAD_UNCHANGED);
+  ASSERT_EQ(written.type(), CV_32FC1);
+  const cv::Mat expected = rasterizeDepth(nearer, tilted.camera, tilted.T_world_camera);
+  ASSERT_EQ(written.size(), expected.size());
+  EXPECT_EQ(cv::norm(written, expected, cv::NORM_INF), 0.0);
+  EXPECT_GT(cv::countNonZero(written), 0);
+  // A folder that does not exist: the frame is skipped, saying which file could not be written.
+  options.rendered_depth_folder = folder + "/missing";
+  const HeldOutResult unwritable = evaluateHeldOut(nearer, source, {1}, options);
+  EXPECT_EQ(unwritable.frames_skipped, 1u);
+  ASSERT_EQ(unwritable.skipped.size(), 1u);
+  EXPECT_NE(unwritable.skipped[0].find("cannot write"), std::string::npos) << unwritable.skipped[0];
+  std::filesystem::remove_all(folder);
+}
+
 TEST(EvaluatorHeldOut, SelectionParsing) {
   std::vector<size_t> frames;
   std::string error;
@@ -658,6 +689,12 @@ TEST(EvaluatorArguments, ErrorPlyOnlyInGroundTruthMode) {
   EXPECT_EQ(choose({"m.ply", folder.string(), "--held-out", "odd", "--error-ply", "e.ply"}, &mode),
             ModeError::kBadArguments);
   EXPECT_NE(error.find("--error-ply"), std::string::npos) << error;
+  // The rendered depths of held-out frames: held-out mode only.
+  EXPECT_EQ(choose({"m.ply", folder.string(), "--held-out-depth", "d"}, &mode), ModeError::kBadArguments);
+  EXPECT_NE(error.find("--held-out-depth needs held-out mode"), std::string::npos) << error;
+  EXPECT_EQ(choose({"m.ply", folder.string(), "--held-out", "odd", "--held-out-depth", "d"}, &mode),
+            ModeError::kNone);
+  EXPECT_FALSE(mode.ground_truth);
 
   // A ground-truth .ply directly: ground truth without visibility.
   EXPECT_EQ(choose({"m.ply", (folder / "gt_mesh.ply").string(), "--error-ply", "e.ply"}, &mode),
