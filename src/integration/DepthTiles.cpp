@@ -15,35 +15,44 @@
 namespace stereo_fusion {
 namespace {
 
-/// Largest depth of pixel columns [u0, u1) of `rows` rows below `end_m` (for level-0
+/// The two summaries of one tile, read in one pass.
+struct TileMaxima {
+  float level0_m = -INFINITY;   ///< largest depth below `level0_end_m`
+  float level01_m = -INFINITY;  ///< largest depth below `level01_end_m`
+};
+
+/// Largest depths of pixel columns [u0, u1) of `rows` rows below `level0_end_m` (for level-0
 /// measurements the smaller of the two level switches: a depth is of level 0 iff it is below
-/// both; for levels 0 and 1 the level-2 switch). Comparisons are false for NaN, so pixels
-/// without a measurement never count.
-float tileMaxScalar(const float* depth_m, int width_px, int rows, int u0, int u1, float end_m) {
-  float max_m = -INFINITY;
+/// both) and below `level01_end_m` (levels 0 and 1: the level-2 switch). Comparisons are false
+/// for NaN, so pixels without a measurement never count.
+TileMaxima tileMaxScalar(const float* depth_m, int width_px, int rows, int u0, int u1, float level0_end_m,
+                         float level01_end_m) {
+  TileMaxima max;
   for (int r = 0; r < rows; ++r) {
     const float* row = depth_m + static_cast<size_t>(r) * width_px;
-    for (int u = u0; u < u1; ++u)
-      if (row[u] < end_m) max_m = std::max(max_m, row[u]);
+    for (int u = u0; u < u1; ++u) {
+      if (row[u] < level0_end_m) max.level0_m = std::max(max.level0_m, row[u]);
+      if (row[u] < level01_end_m) max.level01_m = std::max(max.level01_m, row[u]);
+    }
   }
-  return max_m;
+  return max;
 }
 
 #ifdef STEREO_FUSION_HAVE_AVX2_TILES
 /// tileMaxScalar() for an 8-pixel-wide tile, one vector per row (kTilePx == 8). max_ps returns
-/// its second operand when either is NaN, so NaN depths, and the depths at or beyond `end_m`
-/// (set to NaN by OR-ing in their all-ones comparison mask), leave the running maximum
-/// unchanged without a blend.
-__attribute__((target("avx2"))) float tileMaxAvx2(const float* depth_m, int width_px, int rows, int u0,
-                                                  float end_m) {
-  const __m256 end = _mm256_set1_ps(end_m);
-  __m256 max_m = _mm256_set1_ps(-INFINITY);
+/// its second operand when either is NaN, so NaN depths, and the depths at or beyond a
+/// threshold (set to NaN by OR-ing in their all-ones comparison mask), leave the running
+/// maximum unchanged without a blend.
+__attribute__((target("avx2"))) TileMaxima tileMaxAvx2(const float* depth_m, int width_px, int rows, int u0,
+                                                       float level0_end_m, float level01_end_m) {
+  const __m256 end0 = _mm256_set1_ps(level0_end_m), end01 = _mm256_set1_ps(level01_end_m);
+  __m256 max0 = _mm256_set1_ps(-INFINITY), max01 = max0;
   for (int r = 0; r < rows; ++r) {
     const __m256 z = _mm256_loadu_ps(depth_m + static_cast<size_t>(r) * width_px + u0);
-    const __m256 beyond = _mm256_cmp_ps(z, end, _CMP_NLT_UQ);  // z ≥ end, or NaN
-    max_m = _mm256_max_ps(_mm256_or_ps(z, beyond), max_m);
+    max0 = _mm256_max_ps(_mm256_or_ps(z, _mm256_cmp_ps(z, end0, _CMP_NLT_UQ)), max0);  // z ≥ end, or NaN
+    max01 = _mm256_max_ps(_mm256_or_ps(z, _mm256_cmp_ps(z, end01, _CMP_NLT_UQ)), max01);
   }
-  return horizontalMax(max_m);
+  return {horizontalMax(max0), horizontalMax(max01)};
 }
 #endif
 
@@ -72,15 +81,15 @@ void DepthTiles::build(const float* depth_m, int width_px, int height_px, float 
       float* out01 = max_level01_depth_m_.data() + ty * tiles_x_;
       for (int tx = 0; tx < tiles_x_; ++tx) {
         const int u0 = tx * kTilePx, u1 = std::min(u0 + kTilePx, width_px);
+        TileMaxima max;
 #ifdef STEREO_FUSION_HAVE_AVX2_TILES
-        if (use_avx2 && u1 - u0 == kTilePx) {
-          out0[tx] = tileMaxAvx2(band, width_px, rows, u0, level0_end_m);
-          out01[tx] = tileMaxAvx2(band, width_px, rows, u0, level01_end_m);
-          continue;
-        }
+        if (use_avx2 && u1 - u0 == kTilePx)
+          max = tileMaxAvx2(band, width_px, rows, u0, level0_end_m, level01_end_m);
+        else
 #endif
-        out0[tx] = tileMaxScalar(band, width_px, rows, u0, u1, level0_end_m);
-        out01[tx] = tileMaxScalar(band, width_px, rows, u0, u1, level01_end_m);
+          max = tileMaxScalar(band, width_px, rows, u0, u1, level0_end_m, level01_end_m);
+        out0[tx] = max.level0_m;
+        out01[tx] = max.level01_m;
       }
     }
   });
