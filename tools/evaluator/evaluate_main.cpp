@@ -198,7 +198,7 @@ void run(const EvaluateArguments& args) {
   checkOutputFolderOrFail(args.json_path);
   checkOutputFolderOrFail(args.error_ply_path);
   checkOutputFolderOrFail(args.missing_ply_path);
-  checkOutputFolderOrFail(args.held_out_depth_folder.empty() ? "" : args.held_out_depth_folder + "/0.tiff");
+  checkOutputFolderOrFail(args.held_out_depth_folder.empty() ? "" : args.held_out_depth_folder + "/");
   if (mode.ground_truth) {
     runGroundTruth(args, mode.ground_truth_path, mode.sequence_path);
   } else {
