@@ -96,7 +96,8 @@ void FusionNodelet::onInit() {
     exact_sync_->registerCallback(&FusionNodelet::onFrame, this);
   }
 
-  disparity_sub_.subscribe(nh, "disparity", 5);
+  // Callbacks first, subscriptions after: a message arriving in between would reach no callback
+  // and be lost uncounted (a player that starts on the first subscription sends one at once).
   disparity_sub_.registerCallback([this](const DisparityMsg::ConstPtr& disparity) {
     ++disparities_in_;
     disparities_missed_ += disparity_seq_.next(disparity->header.seq);
@@ -110,16 +111,17 @@ void FusionNodelet::onInit() {
     }
     addToSync<0>(disparity);
   });
-  image_sub_.subscribe(nh, "image", 5);
   image_sub_.registerCallback([this](const ImageMsg::ConstPtr& image) {
     if (passToSync(&image_stamps_, image->header.stamp)) addToSync<1>(image);
     else ++ignored_duplicate_parts_;
   });
-  info_sub_.subscribe(nh, "camera_info", 5);
   info_sub_.registerCallback([this](const InfoMsg::ConstPtr& info) {
     if (passToSync(&info_stamps_, info->header.stamp)) addToSync<2>(info);
     else ++ignored_duplicate_parts_;
   });
+  disparity_sub_.subscribe(nh, "disparity", 5);
+  image_sub_.subscribe(nh, "image", 5);
+  info_sub_.subscribe(nh, "camera_info", 5);
   NODELET_INFO("stereo_fusion: fusing %s + %s + %s into frame '%s' (voxel %.3f m, %d threads)",
                disparity_sub_.getTopic().c_str(), image_sub_.getTopic().c_str(), info_sub_.getTopic().c_str(),
                node_config_.world_frame.c_str(), mapper_config_.voxel_size_m, mapper_config_.num_threads);

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <ros/ros.h>
+#include <std_srvs/SetBool.h>
 #include <tf2_msgs/TFMessage.h>
 #include <tf2_ros/transform_broadcaster.h>
 
@@ -124,6 +125,18 @@ bool waitFor(F&& done, double timeout_s) {
 inline bool waitForTfSubscriber(double timeout_s) {
   const ros::Publisher tf_pub = ros::NodeHandle().advertise<tf2_msgs::TFMessage>("/tf", 100);
   return waitFor([&] { return tf_pub.getNumSubscribers() > 0; }, timeout_s);
+}
+
+/// Starts the bag of a replay.launch run with start_paused:=true once the fusion nodelet runs:
+/// two reports of its diagnostics (its callback queue has been running for a second), then
+/// /player/pause_playback(false). With wait_for_subscribers:=true the player also waits for a
+/// subscriber on each of its topics, so no frame leaves before the nodelet listens.
+inline bool startPausedPlayer(DiagnosticsWatcher& diagnostics, double timeout_s = 60.0) {
+  if (!diagnostics.waitForNextReport(timeout_s) || !diagnostics.waitForNextReport(timeout_s)) return false;
+  if (!ros::service::waitForService("/player/pause_playback", ros::Duration(timeout_s))) return false;
+  std_srvs::SetBool play;
+  play.request.data = false;
+  return ros::service::call("/player/pause_playback", play);
 }
 
 /// gtest + a ROS node with a two-thread spinner, then every test.

@@ -71,6 +71,7 @@ TEST(Replay, BagThroughTheNodeletEqualsTheOfflinePipeline) {
   ASSERT_GT(frames, 5);
 
   test::DiagnosticsWatcher diagnostics;
+  ASSERT_TRUE(test::startPausedPlayer(diagnostics));
   ASSERT_NO_FATAL_FAILURE(expectEveryFrameFused(diagnostics, frames, 120.0));
 
   // The same parameters as the nodelet, read the way the nodelet reads them.
@@ -120,9 +121,10 @@ TEST(ReplayFast, EveryFrameOfTheBagIsFusedOrCountedAsLost) {
     fused = diag("frames fused");
     dropped = diagnostics.droppedTotal();
   };
-  // The bag is played once the counters stop moving. Losses at its very end would leave no gap
-  // behind them, so one more numbered disparity follows, alone (it finds no image: it is counted
-  // as received and not synchronised).
+  // The node counts a lost disparity from the gap it leaves between two numbers it received, so
+  // losses at the bag's very start or end would go unseen: numbered disparities of this test
+  // bracket the bag, seq 0 before it (the bag starts at 1) and frames + 1 once its counters stop
+  // moving. Each finds no image: it is counted as received and not synchronised.
   ros::NodeHandle nh;
   // Like rosbag play, a publisher without the header flag: roscpp keeps the seq set below
   // instead of numbering this publisher's messages from 0.
@@ -130,13 +132,19 @@ TEST(ReplayFast, EveryFrameOfTheBagIsFusedOrCountedAsLost) {
       "/stereo/disparity", 1, ros::SubscriberStatusCallback(), ros::SubscriberStatusCallback(), ros::VoidConstPtr(),
       nullptr);
   options.has_header = false;
-  ros::Publisher last_pub = nh.advertise(options);
-  ASSERT_TRUE(test::waitFor([&] { return last_pub.getNumSubscribers() > 0; }, 30.0));
+  ros::Publisher bracket_pub = nh.advertise(options);
+  ASSERT_TRUE(test::waitFor([&] { return bracket_pub.getNumSubscribers() > 0; }, 30.0));
+  stereo_msgs::DisparityImage first;
+  first.header.seq = 0;
+  first.header.stamp = ros::Time(0, 1000000);  // 1 ms: before the bag's first stamp, on none of them
+  bracket_pub.publish(first);
+  ASSERT_TRUE(test::waitFor([&] { return diag("disparities received") >= 1; }, 30.0));
+  ASSERT_TRUE(test::startPausedPlayer(diagnostics));
   long settled = -1;
   ASSERT_TRUE(test::waitFor([&] {
     read();
     const long now = received + missed;
-    const bool still = now > 0 && now == settled;
+    const bool still = now > 1 && now == settled;  // more than the first bracket: the bag has begun
     settled = now;
     if (!still) ros::WallDuration(2.0).sleep();
     return still;
@@ -144,14 +152,14 @@ TEST(ReplayFast, EveryFrameOfTheBagIsFusedOrCountedAsLost) {
   stereo_msgs::DisparityImage last;
   last.header.seq = static_cast<uint32_t>(frames + 1);
   last.header.stamp = ros::Time::now() + ros::Duration(1.0);
-  last_pub.publish(last);
-  test::waitFor([&] { read(); return received + missed >= frames + 1 && fused + dropped >= received; }, 60.0);
+  bracket_pub.publish(last);
+  test::waitFor([&] { read(); return received + missed >= frames + 2 && fused + dropped >= received; }, 60.0);
   ros::WallDuration(2.0).sleep();
   ASSERT_TRUE(diagnostics.waitForNextReport(10.0));
   read();
-  std::printf("[replay 50x] %ld frames in the bag + 1: %ld received, %ld missed upstream, %ld fused, %ld dropped\n",
+  std::printf("[replay 50x] %ld frames in the bag + 2: %ld received, %ld missed upstream, %ld fused, %ld dropped\n",
               frames, received, missed, fused, dropped);
-  EXPECT_EQ(received + missed, frames + 1);
+  EXPECT_EQ(received + missed, frames + 2);
   EXPECT_EQ(fused + dropped, received);
   EXPECT_GT(fused, 0);
 }
@@ -216,8 +224,8 @@ TEST(DynamicReplay, APersonWhoLeftIsClearedFromTheLiveMesh) {
   ASSERT_NO_FATAL_FAILURE(readSimulatedRoom(&sim));
   const std::vector<Eigen::AlignedBox3d> regions = ghostRegions(sim.sequence);
   ASSERT_EQ(regions.size(), 1u) << sim.sequence << "/dynamic.txt";
-  // The stream, as a base station receives it from the first update on (the bag starts at least 2 s
-  // after the launch): carving empties the person's submeshes, which must arrive as removals.
+  // The stream, as a base station receives it from the first update on (the bag starts once it
+  // is connected): carving empties the person's submeshes, which must arrive as removals.
   std::mutex stream_mutex;
   std::unordered_map<BlockKey, SubMesh, BlockKeyHash> streamed;
   uint64_t first_sequence = 0, last_sequence = 0, sequence_gaps = 0, removals = 0;
@@ -237,6 +245,8 @@ TEST(DynamicReplay, APersonWhoLeftIsClearedFromTheLiveMesh) {
   const long frames = static_cast<long>(bag->size());
 
   test::DiagnosticsWatcher diagnostics;
+  ASSERT_TRUE(test::waitFor([&] { return stream.getNumPublishers() > 0; }, 60.0)) << "no ~mesh_update publisher";
+  ASSERT_TRUE(test::startPausedPlayer(diagnostics));
   ASSERT_NO_FATAL_FAILURE(expectEveryFrameFused(diagnostics, frames, 150.0));
 
   MapperConfig config;
@@ -328,6 +338,7 @@ TEST(LoopClosureReplay, TheLiveMapFollowsTheCorrectedTrajectory) {
 
   test::DiagnosticsWatcher diagnostics;
   auto diag = [&](const char* key) { return diagnostics.value(key); };
+  ASSERT_TRUE(test::startPausedPlayer(diagnostics));
   ASSERT_NO_FATAL_FAILURE(expectEveryFrameFused(diagnostics, frames, 150.0));
   // Two trajectories: the first may be superseded by the second while it is re-fused; the
   // second, after the last frame, is applied.
