@@ -50,7 +50,12 @@ Mapper::Mapper(const MapperConfig& config)
                             ? std::optional<BlockChangeLog::Consumer>(mesh_changes_.subscribe("textures"))
                             : std::nullopt),
       gate_(FrameGateLimits{config_.max_pose_jump_m, config_.max_timestamp_gap_s,
-                            config_.require_increasing_timestamps}) {}
+                            config_.require_increasing_timestamps}) {
+  if (config_.planning_enabled) {
+    planning_.emplace(PlanningConfig::from(config_), &pool_);
+    planning_consumer_ = map_changes_.subscribe("planning");
+  }
+}
 
 IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_timing) {
   IntegrationResult result;
@@ -154,12 +159,29 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
                         result.evicted_blocks.end(), std::back_inserter(kept));
     result.updated_blocks.swap(kept);
   }
+  if (planning_) {
+    Timer free_space_timer;
+    result.free_space = planning_->recordFreeSpace(frame, measurements_);
+    if (config_.max_distance_from_camera_m > 0.0)
+      planning_->dropFartherThan(frame.T_world_camera.translation(), config_.max_distance_from_camera_m);
+    result.free_space_ms = free_space_timer.elapsedMs();
+  }
   if (mesh_timing == MeshTiming::kNow) {
     MeshPass pass = updateMesh();
     result.mesh = std::move(pass.mesh);
     result.texture = pass.texture;
   }
   return result;
+}
+
+PlanningPass Mapper::updatePlanning() {
+  PlanningPass pass;
+  if (!planning_) return pass;
+  Timer timer;
+  const BlockChangeLog::Changes changes = map_changes_.take(*planning_consumer_);
+  pass.stats = planning_->update(octree_, changes.updated, changes.erased);
+  pass.esdf_ms = timer.elapsedMs();
+  return pass;
 }
 
 MeshPass Mapper::updateMesh() {
@@ -241,6 +263,10 @@ MeshChanges Mapper::adoptMap(BlockOctree* loaded, const MapFileInfo& info) {
   voxel_bytes_ = octree_.memoryUse().voxelBytes();
   // The map file holds no texture patches: the loaded map starts with vertex colours.
   texture_store_.clear();
+  if (planning_) {
+    planning_->clear();
+    planning_->rebuild(octree_);
+  }
   // A rebuild over the kept store reports the old map's vanished submeshes as removed.
   MeshChanges rebuilt;
   if (config_.mesh_enabled) {
@@ -259,6 +285,8 @@ ClearResult Mapper::clearRegion(const MapRegion& region, MeshTiming mesh_timing)
   if (!result.error.empty()) return result;
   result.accepted = true;
   Timer timer;
+  // Its seen-free cells become unknown now; its TSDF cells follow through the map log.
+  if (planning_) planning_->clearRegion(region);
   const RegionClearing clearing = clearRegionVoxels(region, &octree_);
   result.blocks_visited = clearing.blocks_visited;
   result.blocks_changed = clearing.changed.size();
@@ -291,6 +319,7 @@ void Mapper::reset() {
   texture_store_.clear();
   eviction_.clear();
   map_changes_.clear();
+  if (planning_) planning_->clear();
   // The mesh's consumers learn that every submesh is gone, after whatever they have not taken.
   recordMeshChanges(dropped);
   if (texture_consumer_) mesh_changes_.take(*texture_consumer_);

@@ -358,6 +358,33 @@ const std::vector<Accessor>& accessors() {
                           "frames that agree with each other are accepted as a clock reset. Timestamp 0 means unknown "
                           "and is not checked (the nodelet drops ROS messages stamped 0).",
                           member(&MapperConfig::require_increasing_timestamps)));
+    t.push_back(boolParam("planning_enabled",
+                          "Keep the planning layer (planning/): the space each frame saw empty, an "
+                          "occupied / free / unknown state per cell, and a Euclidean signed distance "
+                          "field (ESDF) over it, for distance queries, the occupancy grid and esdf.ply. "
+                          "false: the map holds surfaces only.",
+                          member(&MapperConfig::planning_enabled)));
+    t.push_back(doubleParam("esdf_voxel_size_m", "m", 0.0, true, 1.0,
+                            "Cell edge of the planning layer (free space, occupancy, ESDF): "
+                            "voxel_size_m times 1, 2, 4 or 8. 0 = auto: the one of those nearest to "
+                            "8 cm (4 voxels at 2 cm, 8 at 1 cm, 1 at 10 cm).",
+                            member(&MapperConfig::esdf_voxel_size_m)));
+    t.push_back(doubleParam("esdf_max_distance_m", "m", 0.0, false, 100.0,
+                            "The ESDF is exact up to this distance from the nearest obstacle; "
+                            "farther cells read this value (\"at least\"). At most 100 cells.",
+                            member(&MapperConfig::esdf_max_distance_m)));
+    t.push_back(doubleParam("free_space_unmeasured_range_m", "m", 0.0, true, 1000.0,
+                            "Pixels without a measurement count as seeing free space up to this "
+                            "depth (a sky, a far open field the matcher cannot reach). 0 = off: only "
+                            "rays with a measurement mark space free, up to their depth minus the band.",
+                            member(&MapperConfig::free_space_unmeasured_range_m)));
+    t.push_back(doubleParam("grid_min_z_m", "m", -1e4, true, 1e4,
+                            "Lower bound of the height band (world z) that the 2D occupancy grid "
+                            "(occupancy.pgm, ~occupancy_grid) projects.",
+                            member(&MapperConfig::grid_min_z_m)));
+    t.push_back(doubleParam("grid_max_z_m", "m", -1e4, true, 1e4,
+                            "Upper bound of the occupancy grid's height band (world z).",
+                            member(&MapperConfig::grid_max_z_m)));
     return t;
   }();
   return table;
@@ -370,6 +397,16 @@ const Accessor* findAccessor(const std::string& name) {
 }
 
 }  // namespace
+
+double MapperConfig::planningCellSizeM() const {
+  if (esdf_voxel_size_m > 0.0) return esdf_voxel_size_m;
+  constexpr double kAutoPlanningCellM = 0.08;
+  double best = voxel_size_m;
+  for (int n : {2, 4, 8})
+    if (std::abs(std::log(n * voxel_size_m / kAutoPlanningCellM)) < std::abs(std::log(best / kAutoPlanningCellM)))
+      best = n * voxel_size_m;
+  return best;
+}
 
 const std::vector<ParameterSpec>& mapperParameterSpecs() {
   static const std::vector<ParameterSpec> specs = [] {
@@ -416,6 +453,15 @@ std::vector<std::string> validateMapperConfig(const MapperConfig& config) {
   if (config.max_distance_from_camera_m > 0.0 && config.max_distance_from_camera_m < config.max_depth_m)
     errors.push_back("max_distance_from_camera_m must be 0 (off) or >= max_depth_m, else blocks fused "
                      "from a frame are evicted by the same frame");
+  if (config.esdf_voxel_size_m > 0.0) {
+    const double n = config.esdf_voxel_size_m / config.voxel_size_m;
+    const double nearest = std::round(n);
+    if (std::abs(n - nearest) > 1e-6 * n || (nearest != 1 && nearest != 2 && nearest != 4 && nearest != 8))
+      errors.push_back("esdf_voxel_size_m must be 0 (auto) or voxel_size_m times 1, 2, 4 or 8");
+  }
+  if (config.planning_enabled && config.esdf_max_distance_m > 100.0 * config.planningCellSizeM())
+    errors.push_back("esdf_max_distance_m must be at most 100 planning cells (esdf_voxel_size_m)");
+  if (config.grid_min_z_m >= config.grid_max_z_m) errors.push_back("grid_min_z_m must be < grid_max_z_m");
   return errors;
 }
 

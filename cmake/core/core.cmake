@@ -45,6 +45,10 @@ add_library(stereo_fusion_core STATIC
   ${STEREO_FUSION_ROOT}/src/mesh/MeshStore.cpp
   ${STEREO_FUSION_ROOT}/src/mesh/TexturePatch.cpp
   ${STEREO_FUSION_ROOT}/src/mesh/TextureStore.cpp
+  ${STEREO_FUSION_ROOT}/src/planning/TsdfOccupancy.cpp
+  ${STEREO_FUSION_ROOT}/src/planning/FreeSpaceRecorder.cpp
+  ${STEREO_FUSION_ROOT}/src/planning/EsdfPropagator.cpp
+  ${STEREO_FUSION_ROOT}/src/planning/PlanningMap.cpp
   ${STEREO_FUSION_ROOT}/src/io/TextureAtlas.cpp
   ${STEREO_FUSION_ROOT}/src/io/MeshExport.cpp
   ${STEREO_FUSION_ROOT}/src/io/ObjWriter.cpp
@@ -69,7 +73,7 @@ target_link_libraries(stereo_fusion_sim PUBLIC stereo_fusion_core)
 
 # The core's unit tests: one gtest binary (one link, parallel compile); every test case is its own
 # ctest entry so the summary counts cases. The helpers (TestSupport.h, ...) are in test/unit/.
-set(STEREO_FUSION_CORE_TEST_FOLDERS camera map integration mesh io util mapper trajectory)
+set(STEREO_FUSION_CORE_TEST_FOLDERS camera map integration mesh io util mapper trajectory planning)
 if(STEREO_FUSION_CORE_TESTS)
   set(_core_test_globs)
   foreach(folder ${STEREO_FUSION_CORE_TEST_FOLDERS})

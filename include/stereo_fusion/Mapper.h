@@ -19,6 +19,7 @@
 #include "stereo_fusion/map/MapRegion.h"
 #include "stereo_fusion/mesh/MeshStore.h"
 #include "stereo_fusion/mesh/TextureStore.h"
+#include "stereo_fusion/planning/PlanningMap.h"
 #include "stereo_fusion/util/ThreadPool.h"
 
 namespace stereo_fusion {
@@ -31,6 +32,12 @@ struct MeshPass {
   TextureStats texture;
   /// Blocks fusion or eviction changed since the previous pass: what this pass meshed around.
   size_t blocks_changed = 0;
+};
+
+/// What one planning update (Mapper::updatePlanning()) did.
+struct PlanningPass {
+  PlanningUpdateStats stats;
+  double esdf_ms = 0.0;  ///< re-reading the changed TSDF blocks' cells and updating the ESDF
 };
 
 /// When integrate() brings the mesh up to date.
@@ -51,6 +58,8 @@ struct IntegrationResult {
   double lookup_ms = 0.0;  ///< converting the frame's disparities to depths and colours, then the lookup
   double fusion_ms = 0.0;
   double carve_ms = 0.0;  ///< free-space carving (FreeSpaceCarver), included in nothing else
+  double free_space_ms = 0.0;  ///< recording the space the frame saw empty (planning layer), included in nothing else
+  FreeSpaceStats free_space;
   OutlierRejectionStats rejected;  ///< usable pixels the outlier rejection dropped (counted, not fused)
   LookupStats lookup;
   FusionStats fusion;
@@ -96,6 +105,14 @@ class Mapper {
   /// Meshes around every block changed since the last pass (nothing when meshing is disabled)
   /// and, with texture = patches, textures the changed submeshes from the latest frame.
   MeshPass updateMesh();
+  /// Brings the planning layer's occupancy and distance field up to date with every TSDF change
+  /// since the previous call (nothing without planning_enabled). Like updateMesh(), at the
+  /// caller's rate: between calls the free space is recorded every frame, the rest waits in the
+  /// map log.
+  PlanningPass updatePlanning();
+  /// The planning layer (free / occupied / unknown, the ESDF); nullptr without planning_enabled.
+  /// Its readers are safe to call from any thread while this Mapper integrates.
+  const PlanningMap* planning() const { return planning_ ? &*planning_ : nullptr; }
   /// Block changes (one per block and frame) recorded by fusion or eviction that the mesher has
   /// not caught up with yet. A caller that integrates with MeshTiming::kDeferred must call
   /// updateMesh() now and then: the changes wait in memory until it does.
@@ -169,9 +186,11 @@ class Mapper {
   MeshStore mesh_store_;
   TextureStore texture_store_;
   EvictionPolicy eviction_;
+  std::optional<PlanningMap> planning_;  // with planning_enabled only
   /// Blocks fusion updated and eviction erased, for the stages after fusion.
   BlockChangeLog map_changes_;
   BlockChangeLog::Consumer mesh_consumer_, eviction_consumer_;
+  std::optional<BlockChangeLog::Consumer> planning_consumer_;  // with planning_enabled only
   /// Submeshes the mesher changed, for the texture pass and outside consumers.
   BlockChangeLog mesh_changes_;
   std::optional<BlockChangeLog::Consumer> texture_consumer_;  // with texture = patches only

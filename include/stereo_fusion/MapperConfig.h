@@ -66,9 +66,18 @@ struct MapperConfig {
   double max_pose_jump_m = 100.0;      ///< A camera more than this from the last fused frame's camera is rejected. 0 = no check.
   double max_timestamp_gap_s = 3600.0;  ///< A timestamp more than this after the last fused frame's is rejected. 0 = no check.
   bool require_increasing_timestamps = true;  ///< Reject frames whose (non-zero) timestamp is not after the last fused frame's.
+  bool planning_enabled = true;        ///< Keep the planning layer: seen-free space, occupancy and the ESDF (planning/).
+  double esdf_voxel_size_m = 0.0;      ///< Cell edge of the planning layer; 0 = auto (planningCellSizeM()).
+  double esdf_max_distance_m = 2.0;    ///< Distances are exact up to this; farther cells read "at least this".
+  double free_space_unmeasured_range_m = 0.0;  ///< Rays without a measurement count as free up to this range. 0 = off.
+  double grid_min_z_m = 0.1;           ///< Height band of the 2D occupancy grid (world z), lower bound.
+  double grid_max_z_m = 1.5;           ///< ... upper bound.
 
   /// Block edge length in metres.
   double blockSizeM() const { return 8.0 * voxel_size_m; }
+  /// Edge of a planning-layer cell: esdf_voxel_size_m, or with 0 the multiple voxel_size_m · n
+  /// (n = 1, 2, 4 or 8) nearest to kAutoPlanningCellM (8 cm: 4 voxels at 2 cm, 8 at 1 cm).
+  double planningCellSizeM() const;
   /// Φ by level, as every stage applies it.
   TruncationBand truncationBand() const { return TruncationBand(voxel_size_m, truncation_vox); }
 };

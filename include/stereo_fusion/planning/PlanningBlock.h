@@ -1,0 +1,116 @@
+#pragma once
+#include <array>
+#include <cmath>
+#include <cstdint>
+
+#include <Eigen/Core>
+
+#include "stereo_fusion/map/BlockKey.h"
+
+namespace stereo_fusion {
+
+/// Integer coordinates of a planning cell: cell (x, y, z) covers [x, x+1) × [y, y+1) × [z, z+1)
+/// in units of the cell edge (MapperConfig::planningCellSizeM()).
+struct CellIndex {
+  int32_t x = 0, y = 0, z = 0;
+  friend bool operator==(const CellIndex& a, const CellIndex& b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
+  friend bool operator!=(const CellIndex& a, const CellIndex& b) { return !(a == b); }
+  CellIndex offset(int dx, int dy, int dz) const { return {x + dx, y + dy, z + dz}; }
+};
+
+/// What the map knows of a cell.
+enum class CellState : uint8_t {
+  kUnknown = 0,   ///< never seen: neither a surface nor space a frame saw empty
+  kFree = 1,      ///< seen empty (a ray passed through it short of its surface, or the TSDF's
+                  ///< observed voxels in it all lie in front of a surface)
+  kOccupied = 2,  ///< holds a surface or the space just behind one (an observed TSDF voxel with sdf ≥ 0)
+};
+const char* cellStateName(CellState state);
+
+/// 8³ planning cells: the unit of allocation of the planning layer (its own sparse grid, keyed
+/// like the TSDF's blocks but at the planning cell size). Bits per cell say what frames saw;
+/// the ESDF fields hold each cell's nearest site (EsdfPropagator).
+struct PlanningBlock {
+  static constexpr int kSide = 8;
+  static constexpr int kCells = kSide * kSide * kSide;
+  using Bits = std::array<uint64_t, kCells / 64>;
+  /// "No site within esdf_max_distance_m": the distance reads as that maximum.
+  static constexpr uint16_t kNoSite = 0xFFFF;
+
+  static constexpr int index(int i, int j, int k) { return i + kSide * (j + kSide * k); }
+  static bool test(const Bits& bits, int cell) { return (bits[cell >> 6] >> (cell & 63)) & 1u; }
+  static void set(Bits* bits, int cell, bool value) {
+    const uint64_t mask = uint64_t{1} << (cell & 63);
+    (*bits)[cell >> 6] = value ? ((*bits)[cell >> 6] | mask) : ((*bits)[cell >> 6] & ~mask);
+  }
+  static bool any(const Bits& bits) {
+    for (uint64_t word : bits)
+      if (word) return true;
+    return false;
+  }
+
+  /// A frame saw the cell empty (FreeSpaceRecorder).
+  Bits seen_free{};
+  /// The TSDF holds an observed voxel in the cell (TsdfOccupancy).
+  Bits tsdf_observed{};
+  /// ... and the finest such level has one with sdf ≥ 0 (TsdfOccupancy).
+  Bits occupied{};
+  /// ESDF (EsdfPropagator): per cell the squared distance, in cells², to its site — the nearest
+  /// occupied cell for a cell that is not occupied, the nearest cell that is not for an
+  /// occupied one — and the site as an offset from the cell; kNoSite beyond the max distance.
+  std::array<uint16_t, kCells> dist2;
+  std::array<std::array<int8_t, 3>, kCells> site;
+
+  PlanningBlock() { dist2.fill(kNoSite); }
+
+  bool known(int cell) const { return test(seen_free, cell) || test(tsdf_observed, cell); }
+  bool anyKnown() const {
+    for (size_t w = 0; w < seen_free.size(); ++w)
+      if (seen_free[w] | tsdf_observed[w]) return true;
+    return false;
+  }
+  CellState state(int cell) const {
+    if (test(occupied, cell)) return CellState::kOccupied;
+    return known(cell) ? CellState::kFree : CellState::kUnknown;
+  }
+};
+
+inline int32_t floorDiv(int32_t a, int32_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
+/// The planning block holding `cell`, and the cell's index inside it.
+inline BlockKey planningBlockOf(const CellIndex& cell) {
+  return {floorDiv(cell.x, PlanningBlock::kSide), floorDiv(cell.y, PlanningBlock::kSide),
+          floorDiv(cell.z, PlanningBlock::kSide)};
+}
+inline int cellInBlock(const CellIndex& cell) {
+  auto local = [](int32_t v) { return v - PlanningBlock::kSide * floorDiv(v, PlanningBlock::kSide); };
+  return PlanningBlock::index(local(cell.x), local(cell.y), local(cell.z));
+}
+inline CellIndex cellOf(const BlockKey& block, int cell) {
+  const int s = PlanningBlock::kSide;
+  return {block.x * s + cell % s, block.y * s + (cell / s) % s, block.z * s + cell / (s * s)};
+}
+
+/// Cell geometry: world point ↔ cell.
+struct PlanningGrid {
+  double cell_m = 0.08;
+  /// The cell holding `p_world`; false if it lies beyond the grid's range (±2²⁸ cells) or is
+  /// not finite.
+  bool cellFor(const Eigen::Vector3d& p_world, CellIndex* cell) const {
+    const double limit = static_cast<double>(1 << 28);
+    int32_t c[3];
+    for (int a = 0; a < 3; ++a) {
+      const double v = std::floor(p_world[a] / cell_m);
+      if (!(std::abs(v) < limit)) return false;
+      c[a] = static_cast<int32_t>(v);
+    }
+    *cell = {c[0], c[1], c[2]};
+    return true;
+  }
+  Eigen::Vector3d centre(const CellIndex& cell) const {
+    return {(cell.x + 0.5) * cell_m, (cell.y + 0.5) * cell_m, (cell.z + 0.5) * cell_m};
+  }
+  double blockM() const { return cell_m * PlanningBlock::kSide; }
+};
+
+}  // namespace stereo_fusion

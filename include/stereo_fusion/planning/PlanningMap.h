@@ -1,0 +1,121 @@
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <shared_mutex>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "stereo_fusion/MapperConfig.h"
+#include "stereo_fusion/map/BlockOctree.h"
+#include "stereo_fusion/map/MapRegion.h"
+#include "stereo_fusion/planning/EsdfPropagator.h"
+#include "stereo_fusion/planning/FreeSpaceRecorder.h"
+#include "stereo_fusion/planning/PlanningBlock.h"
+
+namespace stereo_fusion {
+
+/// The planning layer's parameters, read from MapperConfig (the registry's planning_* / esdf_* /
+/// grid_* entries).
+struct PlanningConfig {
+  double cell_m = 0.08;             ///< MapperConfig::planningCellSizeM()
+  int voxels_per_cell = 4;          ///< cell_m / voxel_size_m: 1, 2, 4 or 8
+  double max_distance_m = 2.0;      ///< esdf_max_distance_m
+  double unmeasured_range_m = 0.0;  ///< free_space_unmeasured_range_m
+  TruncationBand band{0.02, 4.0};
+  static PlanningConfig from(const MapperConfig& config);
+};
+
+/// One answer of the distance field at a point.
+struct EsdfSample {
+  CellState state = CellState::kUnknown;
+  /// Signed distance in metres between the cell's centre and its site's (positive outside
+  /// obstacles, negative inside); NaN where the state is unknown; ±max_distance_m where no site
+  /// lies within it.
+  double distance_m = 0.0;
+  /// Trilinear interpolation of the 8 cell centres around the point and its gradient, when all
+  /// 8 are known (`interpolated`); otherwise distance_m and a zero gradient.
+  double interpolated_m = 0.0;
+  Eigen::Vector3d gradient = Eigen::Vector3d::Zero();
+  bool interpolated = false;
+};
+
+struct PlanningUpdateStats {
+  uint64_t tsdf_blocks = 0;  ///< TSDF blocks whose cells were re-read
+  uint64_t blocks_allocated = 0, blocks_erased = 0;
+  EsdfStats esdf;
+};
+
+/// The planning layer: for every planning cell of space the frames have seen, what it is
+/// (occupied / free / unknown, PlanningBlock) and its signed distance to the nearest obstacle
+/// (EsdfPropagator). A layer beside the mesher: it follows the TSDF through the map log (the
+/// TSDF blocks changed since its last update), and adds what only the frames know — the space
+/// they saw empty beyond the TSDF's bands (FreeSpaceRecorder).
+///
+/// Writers run on the integrating thread; readers (state(), sample(), sampleBatch(), the
+/// visitors) may run on any thread at any time: a shared lock guards the blocks, and each
+/// writer holds it exclusively only while it changes them.
+class PlanningMap {
+ public:
+  PlanningMap(const PlanningConfig& config, ThreadPool* pool);
+
+  const PlanningConfig& config() const { return config_; }
+  const PlanningGrid& grid() const { return grid_; }
+
+  // Writers.
+  /// Records the space `frame` saw empty; returns the work done.
+  FreeSpaceStats recordFreeSpace(const StereoFrame& frame, const MeasurementImage& measurements);
+  /// Re-reads the cells of TSDF blocks `updated` (present in `octree`) and `erased`, then brings
+  /// the distance field up to date with every change since the previous update.
+  PlanningUpdateStats update(const BlockOctree& octree, const std::vector<BlockKey>& updated,
+                             const std::vector<BlockKey>& erased);
+  /// Re-reads every TSDF block and recomputes the distance field from scratch.
+  PlanningUpdateStats rebuild(const BlockOctree& octree);
+  /// Forgets the free space seen in `region` (cells whose centre lies in it). The TSDF's own
+  /// clearing reaches the layer through update().
+  void clearRegion(const MapRegion& region);
+  /// Drops planning blocks whose centre lies farther than `max_distance_m` from `point`.
+  void dropFartherThan(const Eigen::Vector3d& point_m, double max_distance_m);
+  void clear();
+
+  // Readers (thread-safe).
+  CellState state(const Eigen::Vector3d& p_world) const;
+  EsdfSample sample(const Eigen::Vector3d& p_world) const;
+  void sampleBatch(const std::vector<Eigen::Vector3d>& points, std::vector<EsdfSample>* out) const;
+  /// Calls `fn(cell, state, signed distance m)` for every known cell (unknown cells skipped), in
+  /// key order of their blocks.
+  void forEachKnownCell(const std::function<void(const CellIndex&, CellState, double)>& fn) const;
+  /// Blocks and their seen-free bits, for the map file.
+  std::vector<std::pair<BlockKey, PlanningBlock::Bits>> seenFree() const;
+  /// Adds seen-free bits (a map file's); the next update() or rebuild() allocates their ESDF.
+  void addSeenFree(const std::vector<std::pair<BlockKey, PlanningBlock::Bits>>& seen_free);
+
+  size_t blockCount() const;
+  /// Bytes of the free/occupied bits with their block keys and table entries, and of the ESDF's
+  /// per-cell distance and site.
+  size_t freeSpaceBytes() const;
+  size_t esdfBytes() const;
+
+ private:
+  PlanningBlock* allocate(const BlockKey& key);
+  double signedDistance(const PlanningBlock& block, int cell) const;
+  EsdfSample sampleLocked(const Eigen::Vector3d& p_world) const;
+
+  PlanningConfig config_;
+  PlanningGrid grid_;
+  ThreadPool* pool_;
+  FreeSpaceRecorder recorder_;
+  EsdfPropagator propagator_;
+  uint32_t max_dist2_ = 0;
+  mutable std::shared_mutex mutex_;
+  PlanningBlockMap blocks_;
+  /// Since the previous update(): blocks allocated (their cells have no site yet).
+  std::vector<BlockKey> fresh_;
+  /// Since the previous update(): occupied cells of dropped blocks (flips for the ESDF), and
+  /// blocks that may have lost their last known cell (erased at the update if so).
+  std::vector<CellIndex> pending_flips_;
+  std::vector<BlockKey> maybe_empty_;
+  std::vector<std::pair<BlockKey, PlanningBlock::Bits>> seen_scratch_;
+};
+
+}  // namespace stereo_fusion

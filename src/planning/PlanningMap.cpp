@@ -1,0 +1,323 @@
+#include "stereo_fusion/planning/PlanningMap.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <mutex>
+
+#include "stereo_fusion/planning/TsdfOccupancy.h"
+
+namespace stereo_fusion {
+
+const char* cellStateName(CellState state) {
+  switch (state) {
+    case CellState::kFree: return "free";
+    case CellState::kOccupied: return "occupied";
+    default: return "unknown";
+  }
+}
+
+PlanningConfig PlanningConfig::from(const MapperConfig& config) {
+  PlanningConfig p;
+  p.cell_m = config.planningCellSizeM();
+  p.voxels_per_cell = static_cast<int>(std::lround(p.cell_m / config.voxel_size_m));
+  p.max_distance_m = config.esdf_max_distance_m;
+  p.unmeasured_range_m = config.free_space_unmeasured_range_m;
+  p.band = config.truncationBand();
+  return p;
+}
+
+PlanningMap::PlanningMap(const PlanningConfig& config, ThreadPool* pool)
+    : config_(config),
+      grid_{config.cell_m},
+      pool_(pool),
+      recorder_(FreeSpaceRecorder::Params{config.cell_m, config.unmeasured_range_m, config.band}, pool) {
+  const double cells = config.max_distance_m / config.cell_m;
+  max_dist2_ = static_cast<uint32_t>(std::floor(cells * cells + 1e-9));
+}
+
+PlanningBlock* PlanningMap::allocate(const BlockKey& key) {
+  auto& slot = blocks_[key];
+  if (!slot) {
+    slot = std::make_unique<PlanningBlock>();
+    fresh_.push_back(key);
+  }
+  return slot.get();
+}
+
+FreeSpaceStats PlanningMap::recordFreeSpace(const StereoFrame& frame, const MeasurementImage& measurements) {
+  const FreeSpaceStats stats = recorder_.record(frame, measurements, &seen_scratch_);
+  std::unique_lock lock(mutex_);
+  for (const auto& [key, bits] : seen_scratch_) {
+    PlanningBlock* block = allocate(key);
+    for (size_t w = 0; w < bits.size(); ++w) block->seen_free[w] |= bits[w];
+  }
+  return stats;
+}
+
+namespace {
+/// The TSDF's cell states of `keys`, computed in parallel (reads the octree only).
+std::vector<std::vector<TsdfCellState>> readTsdfCells(const BlockOctree& octree, const std::vector<BlockKey>& keys,
+                                                      int voxels_per_cell, ThreadPool* pool) {
+  std::vector<std::vector<TsdfCellState>> states(keys.size());
+  pool->parallelFor(keys.size(), 16, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) tsdfCellStates(keys[i], octree.find(keys[i]), voxels_per_cell, &states[i]);
+  });
+  return states;
+}
+}  // namespace
+
+PlanningUpdateStats PlanningMap::update(const BlockOctree& octree, const std::vector<BlockKey>& updated,
+                                        const std::vector<BlockKey>& erased) {
+  PlanningUpdateStats stats;
+  std::vector<BlockKey> keys = updated;
+  keys.insert(keys.end(), erased.begin(), erased.end());
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  stats.tsdf_blocks = keys.size();
+  const auto states = readTsdfCells(octree, keys, config_.voxels_per_cell, pool_);
+
+  std::unique_lock lock(mutex_);
+  const size_t fresh_before = fresh_.size();
+  std::vector<CellIndex> flipped;
+  std::vector<BlockKey> maybe_empty;
+  flipped.swap(pending_flips_);
+  maybe_empty.swap(maybe_empty_);
+  for (const auto& block_states : states)
+    for (const TsdfCellState& s : block_states) {
+      const BlockKey key = planningBlockOf(s.cell);
+      const int cell = cellInBlock(s.cell);
+      PlanningBlock* block;
+      if (s.observed) {
+        block = allocate(key);
+      } else {
+        const auto it = blocks_.find(key);
+        if (it == blocks_.end()) continue;
+        block = it->second.get();
+        maybe_empty.push_back(key);
+      }
+      PlanningBlock::set(&block->tsdf_observed, cell, s.observed);
+      if (PlanningBlock::test(block->occupied, cell) != s.occupied) {
+        PlanningBlock::set(&block->occupied, cell, s.occupied);
+        flipped.push_back(s.cell);
+      }
+    }
+  stats.blocks_allocated = fresh_.size() - fresh_before;
+  stats.esdf = propagator_.update(&blocks_, flipped, fresh_, max_dist2_);
+  fresh_.clear();
+  std::sort(maybe_empty.begin(), maybe_empty.end());
+  maybe_empty.erase(std::unique(maybe_empty.begin(), maybe_empty.end()), maybe_empty.end());
+  for (const BlockKey& key : maybe_empty) {
+    const auto it = blocks_.find(key);
+    if (it != blocks_.end() && !it->second->anyKnown()) {
+      blocks_.erase(it);
+      ++stats.blocks_erased;
+    }
+  }
+  return stats;
+}
+
+PlanningUpdateStats PlanningMap::rebuild(const BlockOctree& octree) {
+  PlanningUpdateStats stats;
+  const std::vector<VoxelBlock*> tsdf = octree.blocksSortedByKey();
+  std::vector<BlockKey> keys;
+  keys.reserve(tsdf.size());
+  for (const VoxelBlock* b : tsdf) keys.push_back(b->key);
+  stats.tsdf_blocks = keys.size();
+  const auto states = readTsdfCells(octree, keys, config_.voxels_per_cell, pool_);
+  std::unique_lock lock(mutex_);
+  for (auto& [key, block] : blocks_) {
+    block->tsdf_observed.fill(0);
+    block->occupied.fill(0);
+  }
+  for (const auto& block_states : states)
+    for (const TsdfCellState& s : block_states) {
+      if (!s.observed) continue;
+      PlanningBlock* block = allocate(planningBlockOf(s.cell));
+      const int cell = cellInBlock(s.cell);
+      PlanningBlock::set(&block->tsdf_observed, cell, true);
+      PlanningBlock::set(&block->occupied, cell, s.occupied);
+    }
+  for (auto it = blocks_.begin(); it != blocks_.end();) {
+    if (it->second->anyKnown()) {
+      ++it;
+    } else {
+      it = blocks_.erase(it);
+      ++stats.blocks_erased;
+    }
+  }
+  stats.blocks_allocated = fresh_.size();
+  fresh_.clear();
+  pending_flips_.clear();
+  maybe_empty_.clear();
+  stats.esdf = propagator_.rebuild(&blocks_, max_dist2_);
+  return stats;
+}
+
+void PlanningMap::clearRegion(const MapRegion& region) {
+  std::unique_lock lock(mutex_);
+  const double block_m = grid_.blockM();
+  for (auto& [key, block] : blocks_) {
+    const Eigen::Vector3d origin(key.x * block_m, key.y * block_m, key.z * block_m);
+    if (!region.intersects(Eigen::AlignedBox3d(origin, origin + Eigen::Vector3d::Constant(block_m)))) continue;
+    for (int cell = 0; cell < PlanningBlock::kCells; ++cell)
+      if (region.contains(grid_.centre(cellOf(key, cell)))) PlanningBlock::set(&block->seen_free, cell, false);
+    maybe_empty_.push_back(key);
+  }
+}
+
+void PlanningMap::dropFartherThan(const Eigen::Vector3d& point_m, double max_distance_m) {
+  std::unique_lock lock(mutex_);
+  const double block_m = grid_.blockM();
+  for (auto& [key, block] : blocks_) {
+    const Eigen::Vector3d centre((key.x + 0.5) * block_m, (key.y + 0.5) * block_m, (key.z + 0.5) * block_m);
+    if ((centre - point_m).norm() <= max_distance_m) continue;
+    // Its occupied cells go through the ESDF as flips at the next update, which then erases it.
+    for (int cell = 0; cell < PlanningBlock::kCells; ++cell)
+      if (PlanningBlock::test(block->occupied, cell)) pending_flips_.push_back(cellOf(key, cell));
+    block->seen_free.fill(0);
+    block->tsdf_observed.fill(0);
+    block->occupied.fill(0);
+    maybe_empty_.push_back(key);
+  }
+}
+
+void PlanningMap::clear() {
+  std::unique_lock lock(mutex_);
+  blocks_.clear();
+  fresh_.clear();
+  pending_flips_.clear();
+  maybe_empty_.clear();
+}
+
+double PlanningMap::signedDistance(const PlanningBlock& block, int cell) const {
+  const uint16_t d2 = block.dist2[cell];
+  const double distance = d2 == PlanningBlock::kNoSite ? config_.max_distance_m : std::sqrt(double(d2)) * grid_.cell_m;
+  return PlanningBlock::test(block.occupied, cell) ? -distance : distance;
+}
+
+CellState PlanningMap::state(const Eigen::Vector3d& p_world) const {
+  CellIndex cell;
+  if (!grid_.cellFor(p_world, &cell)) return CellState::kUnknown;
+  std::shared_lock lock(mutex_);
+  const auto it = blocks_.find(planningBlockOf(cell));
+  return it == blocks_.end() ? CellState::kUnknown : it->second->state(cellInBlock(cell));
+}
+
+EsdfSample PlanningMap::sampleLocked(const Eigen::Vector3d& p_world) const {
+  EsdfSample s;
+  s.distance_m = s.interpolated_m = std::numeric_limits<double>::quiet_NaN();
+  CellIndex cell;
+  if (!grid_.cellFor(p_world, &cell)) return s;
+  const auto it = blocks_.find(planningBlockOf(cell));
+  if (it == blocks_.end()) return s;
+  const int index = cellInBlock(cell);
+  s.state = it->second->state(index);
+  if (s.state == CellState::kUnknown) return s;
+  s.distance_m = s.interpolated_m = signedDistance(*it->second, index);
+  // Trilinear over the 8 cell centres around the point, all of them known.
+  const Eigen::Vector3d q = p_world / grid_.cell_m - Eigen::Vector3d::Constant(0.5);
+  const Eigen::Vector3d base = q.array().floor();
+  const Eigen::Vector3d t = q - base;
+  double corner[2][2][2];
+  const PlanningBlock* cached = nullptr;
+  BlockKey cached_key;
+  for (int k = 0; k < 2; ++k)
+    for (int j = 0; j < 2; ++j)
+      for (int i = 0; i < 2; ++i) {
+        const CellIndex c{static_cast<int32_t>(base.x()) + i, static_cast<int32_t>(base.y()) + j,
+                          static_cast<int32_t>(base.z()) + k};
+        const BlockKey key = planningBlockOf(c);
+        if (!cached || !(key == cached_key)) {
+          const auto found = blocks_.find(key);
+          if (found == blocks_.end()) return s;
+          cached = found->second.get();
+          cached_key = key;
+        }
+        if (cached->state(cellInBlock(c)) == CellState::kUnknown) return s;
+        corner[k][j][i] = signedDistance(*cached, cellInBlock(c));
+      }
+  double value = 0.0;
+  Eigen::Vector3d gradient = Eigen::Vector3d::Zero();
+  for (int k = 0; k < 2; ++k)
+    for (int j = 0; j < 2; ++j)
+      for (int i = 0; i < 2; ++i) {
+        const double wx = i ? t.x() : 1 - t.x(), wy = j ? t.y() : 1 - t.y(), wz = k ? t.z() : 1 - t.z();
+        const double v = corner[k][j][i];
+        value += wx * wy * wz * v;
+        gradient.x() += (i ? 1 : -1) * wy * wz * v;
+        gradient.y() += (j ? 1 : -1) * wx * wz * v;
+        gradient.z() += (k ? 1 : -1) * wx * wy * v;
+      }
+  s.interpolated_m = value;
+  s.gradient = gradient / grid_.cell_m;
+  s.interpolated = true;
+  return s;
+}
+
+EsdfSample PlanningMap::sample(const Eigen::Vector3d& p_world) const {
+  std::shared_lock lock(mutex_);
+  return sampleLocked(p_world);
+}
+
+void PlanningMap::sampleBatch(const std::vector<Eigen::Vector3d>& points, std::vector<EsdfSample>* out) const {
+  out->resize(points.size());
+  std::shared_lock lock(mutex_);
+  // Not on the pool: a reader may run while the integrating thread uses it.
+  for (size_t i = 0; i < points.size(); ++i) (*out)[i] = sampleLocked(points[i]);
+}
+
+void PlanningMap::forEachKnownCell(const std::function<void(const CellIndex&, CellState, double)>& fn) const {
+  std::shared_lock lock(mutex_);
+  std::vector<BlockKey> keys;
+  keys.reserve(blocks_.size());
+  for (const auto& [key, block] : blocks_) keys.push_back(key);
+  std::sort(keys.begin(), keys.end());
+  for (const BlockKey& key : keys) {
+    const PlanningBlock& block = *blocks_.at(key);
+    for (int cell = 0; cell < PlanningBlock::kCells; ++cell) {
+      const CellState state = block.state(cell);
+      if (state != CellState::kUnknown) fn(cellOf(key, cell), state, signedDistance(block, cell));
+    }
+  }
+}
+
+std::vector<std::pair<BlockKey, PlanningBlock::Bits>> PlanningMap::seenFree() const {
+  std::shared_lock lock(mutex_);
+  std::vector<std::pair<BlockKey, PlanningBlock::Bits>> out;
+  for (const auto& [key, block] : blocks_)
+    if (PlanningBlock::any(block->seen_free)) out.emplace_back(key, block->seen_free);
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  return out;
+}
+
+void PlanningMap::addSeenFree(const std::vector<std::pair<BlockKey, PlanningBlock::Bits>>& seen_free) {
+  std::unique_lock lock(mutex_);
+  for (const auto& [key, bits] : seen_free) {
+    PlanningBlock* block = allocate(key);
+    for (size_t w = 0; w < bits.size(); ++w) block->seen_free[w] |= bits[w];
+  }
+}
+
+size_t PlanningMap::blockCount() const {
+  std::shared_lock lock(mutex_);
+  return blocks_.size();
+}
+
+namespace {
+// Per block: key, pointer and hash-node overhead of the table entry.
+constexpr size_t kEntryBytes = sizeof(BlockKey) + sizeof(void*) * 3;
+constexpr size_t kBitsBytes = 3 * sizeof(PlanningBlock::Bits);
+}  // namespace
+
+size_t PlanningMap::freeSpaceBytes() const {
+  std::shared_lock lock(mutex_);
+  return blocks_.size() * (kEntryBytes + kBitsBytes) + blocks_.bucket_count() * sizeof(void*);
+}
+
+size_t PlanningMap::esdfBytes() const {
+  std::shared_lock lock(mutex_);
+  return blocks_.size() * (sizeof(PlanningBlock) - kBitsBytes);
+}
+
+}  // namespace stereo_fusion
