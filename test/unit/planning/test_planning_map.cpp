@@ -1,0 +1,195 @@
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <tuple>
+
+#include "TestSupport.h"
+#include "stereo_fusion/Mapper.h"
+
+namespace stereo_fusion {
+namespace {
+
+using test::renderFrame;
+using test::vgaCamera;
+
+MapperConfig planningConfig(int threads = 0) {
+  MapperConfig c;
+  c.voxel_size_m = 0.02;
+  c.max_depth_m = 6.0;
+  c.num_threads = threads;
+  c.mesh_enabled = false;
+  return c;
+}
+
+/// A box room 4 × 4 × 3 m (floor at z = 0) with a sphere of radius 0.4 m.
+sim::AnalyticScene roomWithSphere() {
+  sim::AnalyticScene scene;
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = Eigen::Vector3d(0, 0, 1.5);
+  scene.add(sim::makeRoom(T, Eigen::Vector3d(2.0, 2.0, 1.5)));
+  scene.add(sim::makeSphere(Eigen::Vector3d(0.8, 0.3, 1.0), 0.4));
+  return scene;
+}
+
+/// Cameras on a circle of radius 1.2 m at 1.2 m height, looking outwards.
+std::vector<Eigen::Isometry3d> circlePoses(int n) {
+  std::vector<Eigen::Isometry3d> poses;
+  for (int i = 0; i < n; ++i) {
+    const double a = 2.0 * M_PI * i / n;
+    const Eigen::Vector3d eye(-0.6 * std::cos(a), -0.6 * std::sin(a), 1.2);
+    poses.push_back(sim::lookAt(eye, eye + Eigen::Vector3d(std::cos(a), std::sin(a), -0.15)));
+  }
+  return poses;
+}
+
+struct CellRecord {
+  CellState state;
+  double distance_m;
+};
+using CellKey = std::tuple<int, int, int>;
+
+std::map<CellKey, CellRecord> cells(const PlanningMap& planning) {
+  std::map<CellKey, CellRecord> out;
+  planning.forEachKnownCell([&](const CellIndex& c, CellState s, double d) { out[{c.x, c.y, c.z}] = {s, d}; });
+  return out;
+}
+
+// One frame of a wall 3 m ahead: the space in front of it is free, the wall occupied, what lies
+// behind it, beside the view and behind the camera unknown.
+TEST(PlanningMap, OneFrameSeesFreeSpaceInFrontOfAWallAndNothingElse) {
+  sim::AnalyticScene scene;
+  scene.add(sim::makePlane(Eigen::Vector3d(3.0, 0, 0), Eigen::Vector3d(-1, 0, 0)));
+  Mapper mapper(planningConfig());
+  const Eigen::Isometry3d pose = sim::lookAt(Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(3, 0, 1));
+  ASSERT_TRUE(mapper.integrate(renderFrame(scene, vgaCamera(), pose)).accepted);
+  mapper.updatePlanning();
+  const PlanningMap& planning = *mapper.planning();
+  EXPECT_EQ(planning.state({1.5, 0.0, 1.0}), CellState::kFree);
+  EXPECT_EQ(planning.state({2.5, 0.3, 1.2}), CellState::kFree);
+  EXPECT_EQ(planning.state({3.0, 0.0, 1.0}), CellState::kOccupied);
+  EXPECT_EQ(planning.state({3.6, 0.0, 1.0}), CellState::kUnknown);   // behind the wall
+  EXPECT_EQ(planning.state({1.0, 2.5, 1.0}), CellState::kUnknown);   // outside the view
+  EXPECT_EQ(planning.state({-1.0, 0.0, 1.0}), CellState::kUnknown);  // behind the camera
+  // Distances in front of the wall: to the nearest occupied cell centre, within a cell and a band.
+  const EsdfSample s = planning.sample({2.0, 0.0, 1.0});
+  EXPECT_EQ(s.state, CellState::kFree);
+  EXPECT_NEAR(s.distance_m, 1.0, 0.2);
+  EXPECT_TRUE(s.interpolated);
+  EXPECT_NEAR(s.gradient.x(), -1.0, 0.2);  // the distance grows away from the wall (−x)
+}
+
+// The ESDF of a fused room with a sphere: every free cell's distance equals the brute-force
+// distance to the nearest occupied cell within half a cell, and the analytic clearance within
+// half a cell diagonal at the median (cell centres against surfaces anywhere in a cell).
+TEST(PlanningMap, EsdfOfAFusedRoomMatchesBruteForceAndTheAnalyticScene) {
+  const sim::AnalyticScene scene = roomWithSphere();
+  Mapper mapper(planningConfig());
+  for (const Eigen::Isometry3d& pose : circlePoses(12)) {
+    ASSERT_TRUE(mapper.integrate(renderFrame(scene, vgaCamera(), pose)).accepted);
+    mapper.updatePlanning();
+  }
+  const PlanningMap& planning = *mapper.planning();
+  const double cell_m = planning.config().cell_m, max_m = planning.config().max_distance_m;
+  std::vector<Eigen::Vector3d> occupied;
+  std::vector<std::pair<Eigen::Vector3d, double>> free_cells;
+  planning.forEachKnownCell([&](const CellIndex& c, CellState s, double d) {
+    if (s == CellState::kOccupied) occupied.push_back(planning.grid().centre(c));
+    if (s == CellState::kFree) free_cells.emplace_back(planning.grid().centre(c), d);
+  });
+  ASSERT_GT(occupied.size(), 1000u);
+  ASSERT_GT(free_cells.size(), 10000u);
+  double worst_brute = 0.0;
+  std::vector<double> analytic_errors;
+  for (size_t i = 0; i < free_cells.size(); i += 7) {
+    const auto& [p, d] = free_cells[i];
+    double brute = max_m;
+    for (const Eigen::Vector3d& o : occupied) brute = std::min(brute, (o - p).norm());
+    worst_brute = std::max(worst_brute, std::abs(d - brute));
+    if (d < max_m - cell_m) analytic_errors.push_back(std::abs(d - scene.clearance(p)));
+  }
+  EXPECT_LE(worst_brute, 0.5 * cell_m);
+  ASSERT_GT(analytic_errors.size(), 1000u);
+  std::sort(analytic_errors.begin(), analytic_errors.end());
+  // Cells near the sphere's unseen far side read farther than the clearance: a share of them.
+  EXPECT_LE(analytic_errors[analytic_errors.size() / 2], 0.5 * std::sqrt(3.0) * cell_m);
+  EXPECT_LE(analytic_errors[analytic_errors.size() * 95 / 100], 1.5 * cell_m);
+}
+
+// Updating the planning layer after every frame or once at the end, with one thread or two,
+// gives the same cells, states and distances.
+TEST(PlanningMap, IncrementalEqualsOneUpdateAndDoesNotDependOnThreads) {
+  const sim::AnalyticScene scene = roomWithSphere();
+  Mapper every_frame(planningConfig(1)), once(planningConfig(2));
+  for (const Eigen::Isometry3d& pose : circlePoses(8)) {
+    const StereoFrame frame = renderFrame(scene, vgaCamera(), pose, 0.1, 7);
+    ASSERT_TRUE(every_frame.integrate(frame).accepted);
+    every_frame.updatePlanning();
+    ASSERT_TRUE(once.integrate(frame).accepted);
+  }
+  once.updatePlanning();
+  const auto a = cells(*every_frame.planning()), b = cells(*once.planning());
+  ASSERT_EQ(a.size(), b.size());
+  size_t differing = 0;
+  for (const auto& [key, record] : a) {
+    const auto it = b.find(key);
+    ASSERT_TRUE(it != b.end());
+    differing += record.state != it->second.state || record.distance_m != it->second.distance_m;
+  }
+  EXPECT_EQ(differing, 0u);
+}
+
+// A clear makes its region unknown (free cells and surfaces alike); a later frame fills it again.
+TEST(PlanningMap, ClearMakesTheRegionUnknownUntilSeenAgain) {
+  const sim::AnalyticScene scene = roomWithSphere();
+  Mapper mapper(planningConfig());
+  const auto poses = circlePoses(8);
+  for (const Eigen::Isometry3d& pose : poses) ASSERT_TRUE(mapper.integrate(renderFrame(scene, vgaCamera(), pose)).accepted);
+  mapper.updatePlanning();
+  const PlanningMap& planning = *mapper.planning();
+  const Eigen::Vector3d free_point(0.0, 0.0, 1.2), wall_point(-2.03, 0.0, 1.0);
+  ASSERT_EQ(planning.state(free_point), CellState::kFree);
+  ASSERT_EQ(planning.state(wall_point), CellState::kOccupied);
+  ASSERT_TRUE(mapper.clearRegion(MapRegion::box({-0.3, -0.3, 0.9}, {0.3, 0.3, 1.5})).accepted);
+  ASSERT_TRUE(mapper.clearRegion(MapRegion::box({-2.3, -0.3, 0.7}, {-1.7, 0.3, 1.3})).accepted);
+  mapper.updatePlanning();
+  EXPECT_EQ(planning.state(free_point), CellState::kUnknown);
+  EXPECT_EQ(planning.state(wall_point), CellState::kUnknown);
+  EXPECT_TRUE(std::isnan(planning.sample(free_point).distance_m));
+  // The wall's cells are gone from the distance field too: a free cell near it now reads farther.
+  const EsdfSample near_wall = planning.sample({-1.4, 0.0, 1.0});
+  EXPECT_GT(near_wall.distance_m, 0.5);
+  ASSERT_TRUE(mapper.integrate(renderFrame(scene, vgaCamera(), poses[4])).accepted);
+  mapper.updatePlanning();
+  EXPECT_EQ(planning.state(wall_point), CellState::kOccupied);
+  EXPECT_LE(planning.sample({-1.4, 0.0, 1.0}).distance_m, 0.65);
+}
+
+// A box that was there and has gone: carving turns its cells free, and the distance field follows.
+TEST(PlanningMap, AnObjectThatLeftBecomesFree) {
+  sim::AnalyticScene with_box;
+  with_box.add(sim::makePlane(Eigen::Vector3d(3.0, 0, 0), Eigen::Vector3d(-1, 0, 0)));
+  Eigen::Isometry3d T_box = Eigen::Isometry3d::Identity();
+  T_box.translation() = Eigen::Vector3d(1.5, 0.0, 1.0);
+  with_box.add(sim::makeBox(T_box, Eigen::Vector3d(0.2, 0.2, 0.2)));
+  sim::AnalyticScene without_box;
+  without_box.add(sim::makePlane(Eigen::Vector3d(3.0, 0, 0), Eigen::Vector3d(-1, 0, 0)));
+  Mapper mapper(planningConfig());
+  const Eigen::Isometry3d pose = sim::lookAt(Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(3, 0, 1));
+  for (int i = 0; i < 5; ++i) ASSERT_TRUE(mapper.integrate(renderFrame(with_box, vgaCamera(), pose, 0.0)).accepted);
+  mapper.updatePlanning();
+  const PlanningMap& planning = *mapper.planning();
+  ASSERT_EQ(planning.state({1.3, 0.0, 1.0}), CellState::kOccupied);
+  for (int i = 0; i < 30; ++i) {
+    StereoFrame frame = renderFrame(without_box, vgaCamera(), pose, 0.0);
+    frame.timestamp_s = 1.0 + i;
+    ASSERT_TRUE(mapper.integrate(frame).accepted);
+  }
+  mapper.updatePlanning();
+  EXPECT_EQ(planning.state({1.3, 0.0, 1.0}), CellState::kFree);
+  EXPECT_GT(planning.sample({1.0, 0.0, 1.0}).distance_m, 1.5);
+}
+
+}  // namespace
+}  // namespace stereo_fusion
