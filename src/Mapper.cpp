@@ -184,6 +184,16 @@ PlanningPass Mapper::updatePlanning() {
   return pass;
 }
 
+PlanningPass Mapper::rebuildPlanning() {
+  PlanningPass pass;
+  if (!planning_) return pass;
+  Timer timer;
+  map_changes_.take(*planning_consumer_);  // the rebuild covers them
+  pass.stats = planning_->rebuild(octree_);
+  pass.esdf_ms = timer.elapsedMs();
+  return pass;
+}
+
 MeshPass Mapper::updateMesh() {
   MeshPass pass;
   const BlockChangeLog::Changes changes = map_changes_.take(mesh_consumer_);

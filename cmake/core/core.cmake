@@ -49,6 +49,8 @@ add_library(stereo_fusion_core STATIC
   ${STEREO_FUSION_ROOT}/src/planning/FreeSpaceRecorder.cpp
   ${STEREO_FUSION_ROOT}/src/planning/EsdfPropagator.cpp
   ${STEREO_FUSION_ROOT}/src/planning/PlanningMap.cpp
+  ${STEREO_FUSION_ROOT}/src/planning/OccupancyGrid2D.cpp
+  ${STEREO_FUSION_ROOT}/src/io/PlanningExport.cpp
   ${STEREO_FUSION_ROOT}/src/io/TextureAtlas.cpp
   ${STEREO_FUSION_ROOT}/src/io/MeshExport.cpp
   ${STEREO_FUSION_ROOT}/src/io/ObjWriter.cpp

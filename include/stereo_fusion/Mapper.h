@@ -110,6 +110,9 @@ class Mapper {
   /// caller's rate: between calls the free space is recorded every frame, the rest waits in the
   /// map log.
   PlanningPass updatePlanning();
+  /// Re-reads every TSDF block into the planning layer and recomputes its distance field from
+  /// scratch (the same result as the incremental updates); returns its work.
+  PlanningPass rebuildPlanning();
   /// The planning layer (free / occupied / unknown, the ESDF); nullptr without planning_enabled.
   /// Its readers are safe to call from any thread while this Mapper integrates.
   const PlanningMap* planning() const { return planning_ ? &*planning_ : nullptr; }

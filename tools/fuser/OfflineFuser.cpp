@@ -10,10 +10,12 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 
+#include "fuser/OctomapExport.h"
 #include "readers/DatasetReader.h"
 #include "stereo_fusion/Mapper.h"
 #include "stereo_fusion/io/ConfigFile.h"
 #include "stereo_fusion/io/ObjWriter.h"
+#include "stereo_fusion/io/PlanningExport.h"
 #include "stereo_fusion/io/PlyWriter.h"
 #include "stereo_fusion/ros/BagSequence.h"
 #include "stereo_fusion/trajectory/PoseCorrection.h"
@@ -44,15 +46,16 @@ bool parseFuseArguments(const std::vector<std::string>& args, FuseOptions* optio
       const std::string* v = value("--set");
       if (!v) return false;
       sets.push_back(*v);
-    } else if (a == "--frames" || a == "--mesh-every") {
+    } else if (a == "--frames" || a == "--mesh-every" || a == "--esdf-every") {
       const std::string* v = value(a.c_str());
       if (!v) return false;
-      const bool mesh_every = a == "--mesh-every";
+      const bool mesh_every = a != "--frames";  // a period: at least 1
       try {
         size_t used = 0;
         const long n = std::stol(*v, &used);
         if (used != v->size() || n < (mesh_every ? 1 : 0)) throw std::invalid_argument("");
-        (mesh_every ? options->mesh_every : options->max_frames) = static_cast<size_t>(n);
+        (a == "--mesh-every" ? options->mesh_every : a == "--esdf-every" ? options->esdf_every : options->max_frames) =
+            static_cast<size_t>(n);
       } catch (...) {
         *error = a + ": '" + *v + "' is not a " + (mesh_every ? "frame count ≥ 1" : "frame count");
         return false;
@@ -206,6 +209,36 @@ bool applyTrajectory(const FuseOptions& options, FrameSource* reader, const std:
 }
 }  // namespace
 
+namespace {
+/// esdf.ply, occupancy.pgm + .yaml and octomap.bt of the planning layer, and its figures.
+bool writePlanningOutputs(const std::string& out_dir, Mapper* mapper, FuseReport::Planning* report,
+                          std::string* error) {
+  const PlanningMap* planning = mapper->planning();
+  if (!planning) return true;
+  report->enabled = true;
+  report->cell_m = planning->grid().cell_m;
+  report->max_distance_m = planning->config().max_distance_m;
+  report->blocks = planning->blockCount();
+  report->free_space_bytes = planning->freeSpaceBytes();
+  report->esdf_bytes = planning->esdfBytes();
+  planning->forEachKnownCell([&](const CellIndex&, CellState state, double) {
+    (state == CellState::kOccupied ? report->cells_occupied : report->cells_free) += 1;
+  });
+  const fs::path dir(out_dir);
+  if (!writeEsdfPly((dir / "esdf.ply").string(), *planning, error)) return false;
+  const MapperConfig& config = mapper->config();
+  const OccupancyGrid2D grid = projectOccupancy(*planning, config.grid_min_z_m, config.grid_max_z_m);
+  if (!writeOccupancyMap((dir / "occupancy.pgm").string(), (dir / "occupancy.yaml").string(), grid, error))
+    return false;
+  if (!writeOctomap((dir / "octomap.bt").string(), *planning, &report->octomap_cells_skipped, error)) return false;
+  // What a batch rebuild costs (it recomputes the same layer: incremental == batch).
+  Timer rebuild;
+  mapper->rebuildPlanning();
+  report->rebuild_ms = rebuild.elapsedMs();
+  return true;
+}
+}  // namespace
+
 bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::string* error) {
   *report = FuseReport{};
   std::unique_ptr<FrameSource> reader;
@@ -284,9 +317,15 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
           ++report->frames_reanchored;
           std::fprintf(stderr, "%sframe %zu: %s\n", terminal && options.progress ? "\n" : "", i, r.note.c_str());
         }
-        report->timings.push_back(
-            {r.lookup_ms, r.fusion_ms, r.carve_ms, r.mesh.meshing_ms, r.texture.texture_ms, frame_timer.elapsedMs(),
-             mesh_now});
+        StageTimings timings{r.lookup_ms, r.fusion_ms, r.carve_ms, r.mesh.meshing_ms, r.texture.texture_ms, 0.0,
+                             mesh_now};
+        timings.free_space_ms = r.free_space_ms;
+        if (mapper->planning() && report->frames_used % options.esdf_every == 0) {
+          timings.esdf_ms = mapper->updatePlanning().esdf_ms;
+          timings.esdf_updated = true;
+        }
+        timings.total_ms = frame_timer.elapsedMs();
+        report->timings.push_back(timings);
         report->work.push_back({static_cast<double>(r.lookup.valid_points), static_cast<double>(r.lookup.octree_searches),
                                 static_cast<double>(r.lookup.blocks_queued), static_cast<double>(r.fusion.blocks_updated),
                                 static_cast<double>(r.fusion.voxels_updated), static_cast<double>(r.mesh.blocks_meshed),
@@ -308,9 +347,16 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
       last.meshed = true;
     }
   }
+  if (mapper->planning() && !report->timings.empty() && !report->timings.back().esdf_updated) {
+    StageTimings& last = report->timings.back();  // the frames since the last planning update
+    last.esdf_ms = mapper->updatePlanning().esdf_ms;
+    last.total_ms += last.esdf_ms;
+    last.esdf_updated = true;
+  }
   if (!trajectory.empty() && !fused.empty()) {
     if (!applyTrajectory(options, reader.get(), fused, trajectory, &owner, &report->correction, error)) return false;
     mapper = owner.get();
+    mapper->updatePlanning();
   }
   report->wall_time_s = wall.elapsedMs() / 1000.0;
 
@@ -353,6 +399,7 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
       return false;
     report->atlas_count = info.files.size() - 2;  // besides the .obj and the .mtl
   }
+  if (!writePlanningOutputs(options.out_dir, mapper, &report->planning, error)) return false;
   std::ofstream stats(fs::path(options.out_dir) / "stats.json");
   stats << statsJson(*report, options.config) << "\n";
   if (!stats) {
@@ -361,6 +408,7 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
   }
   return true;
 }
+
 
 std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   nlohmann::ordered_json j;
@@ -419,6 +467,14 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   j["timings_ms"]["carve"] = stage(&StageTimings::carve_ms, false);
   j["timings_ms"]["meshing"] = stage(&StageTimings::meshing_ms, true);
   j["timings_ms"]["texture"] = stage(&StageTimings::texture_ms, true);
+  j["timings_ms"]["free_space"] = stage(&StageTimings::free_space_ms, false);
+  {
+    std::vector<double> v;
+    for (const StageTimings& t : report.timings)
+      if (t.esdf_updated) v.push_back(t.esdf_ms);
+    const Summary s = summarize(v);
+    j["timings_ms"]["esdf"] = {{"mean", s.mean}, {"p50", s.p50}, {"p99", s.p99}, {"per", "planning update"}};
+  }
   j["timings_ms"]["total"] = stage(&StageTimings::total_ms, false);
   size_t mesh_calls = 0;
   for (const StageTimings& t : report.timings) mesh_calls += t.meshed;
@@ -449,6 +505,20 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
     j["trajectory"]["max_shift_m"] = c.max_shift_m;
     j["trajectory"]["max_rotation_deg"] = c.max_rotation_deg;
     j["trajectory"]["ms"] = c.ms;
+  }
+  if (report.planning.enabled) {
+    const FuseReport::Planning& p = report.planning;
+    j["planning"]["cell_m"] = p.cell_m;
+    j["planning"]["max_distance_m"] = p.max_distance_m;
+    j["planning"]["blocks"] = p.blocks;
+    j["planning"]["cells_free"] = p.cells_free;
+    j["planning"]["cells_occupied"] = p.cells_occupied;
+    j["planning"]["rebuild_ms"] = p.rebuild_ms;
+    j["planning"]["octomap_cells_skipped"] = p.octomap_cells_skipped;
+    j["memory"]["free_space_bytes"] = p.free_space_bytes;
+    j["memory"]["free_space_megabytes"] = p.free_space_bytes / 1048576.0;
+    j["memory"]["esdf_bytes"] = p.esdf_bytes;
+    j["memory"]["esdf_megabytes"] = p.esdf_bytes / 1048576.0;
   }
   j["wall_time_s"] = report.wall_time_s;
   for (const ParameterSpec& p : mapperParameterSpecs()) j["config"][p.name] = getMapperParameter(config, p.name);

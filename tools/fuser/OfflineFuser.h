@@ -23,6 +23,9 @@ struct FuseOptions {
   /// Bring the mesh up to date after every N-th fused frame (and after the last): 1 = every
   /// frame, as the nodelet with mesh_publish_rate_hz 0.
   size_t mesh_every = 1;
+  /// The planning layer's occupancy and ESDF are brought up to date after every N-th fused
+  /// frame and after the last (--esdf-every).
+  size_t esdf_every = 1;
   std::string load_map;  ///< map file to start from (empty = an empty map); `input` may then be empty
   std::string save_map;  ///< where to save the map after the last frame (empty = not saved)
   bool progress = true;   ///< progress bar on stderr (a line per 10 % when not a terminal)
@@ -48,6 +51,9 @@ struct CorrectionReport {
 struct StageTimings {
   double lookup_ms = 0, fusion_ms = 0, carve_ms = 0, meshing_ms = 0, texture_ms = 0, total_ms = 0;
   bool meshed = false;
+  double free_space_ms = 0;  ///< recording the space the frame saw empty (planning layer)
+  double esdf_ms = 0;        ///< the planning update after this frame (with `esdf_updated`)
+  bool esdf_updated = false;
 };
 
 /// How much work one frame made each stage do (what the timings above are spent on).
@@ -85,6 +91,15 @@ struct FuseReport {
   size_t atlas_count = 0;            ///< atlas PNGs written with mesh.obj
   double wall_time_s = 0;
   CorrectionReport correction;
+  /// The planning layer at the end (planning_enabled).
+  struct Planning {
+    bool enabled = false;
+    double cell_m = 0, max_distance_m = 0;
+    size_t blocks = 0, cells_free = 0, cells_occupied = 0;
+    size_t free_space_bytes = 0, esdf_bytes = 0;
+    double rebuild_ms = 0;   ///< a batch rebuild of the whole layer, timed once at the end
+    size_t octomap_cells_skipped = 0;
+  } planning;
 };
 
 /// Parses `fuse <input> <out-dir> [--config FILE] [--set key=value ...] [--frames N] [--quiet]
