@@ -1,7 +1,7 @@
 #include "stereo_fusion/planning/EsdfPropagator.h"
 
 #include <algorithm>
-#include <queue>
+#include <array>
 #include <tuple>
 
 namespace stereo_fusion {
@@ -21,26 +21,52 @@ uint32_t squaredDistance(const CellIndex& a, const CellIndex& b) {
   return d2 > 0xFFFFFF ? 0xFFFFFFu : static_cast<uint32_t>(d2);
 }
 
-struct Entry {
-  uint32_t dist2;
-  CellIndex cell;
-  bool operator>(const Entry& o) const { return dist2 > o.dist2; }
+/// Cells waiting to offer their sites, by squared distance: a bucket per value (at most
+/// max_dist2 + 1 of them), so a push and a pop cost O(1) instead of a heap's O(log n).
+class BucketQueue {
+ public:
+  explicit BucketQueue(uint32_t max_dist2) : buckets_(max_dist2 + 1) {}
+  void push(uint32_t dist2, const CellIndex& cell) {
+    buckets_[dist2].push_back(cell);
+    lowest_ = std::min(lowest_, dist2);
+    ++size_;
+  }
+  bool empty() const { return size_ == 0; }
+  /// The cell with the smallest key (any of them), and that key.
+  CellIndex pop(uint32_t* dist2) {
+    while (buckets_[lowest_].empty()) ++lowest_;
+    const CellIndex cell = buckets_[lowest_].back();
+    buckets_[lowest_].pop_back();
+    --size_;
+    *dist2 = lowest_;
+    return cell;
+  }
+
+ private:
+  std::vector<std::vector<CellIndex>> buckets_;
+  uint32_t lowest_ = 0;
+  size_t size_ = 0;
 };
 
 /// The propagation over one PlanningBlockMap: cell access with a one-block cache.
 class Propagation {
  public:
-  Propagation(PlanningBlockMap* blocks, uint32_t max_dist2) : blocks_(blocks), max_dist2_(max_dist2) {}
+  Propagation(PlanningBlockMap* blocks, uint32_t max_dist2)
+      : blocks_(blocks), max_dist2_(max_dist2), open_(max_dist2) {}
 
   Ref at(const CellIndex& c) {
     const BlockKey key = planningBlockOf(c);
-    if (!(key == cached_key_) || !cached_valid_) {
+    // A direct-mapped cache of blocks (present or absent): a cell's 26 neighbours and their
+    // sites lie in a handful of blocks, and the table is not changed while this runs.
+    CacheEntry& entry = cache_[(static_cast<uint32_t>(key.x) * 7u + static_cast<uint32_t>(key.y) * 13u +
+                                static_cast<uint32_t>(key.z) * 31u) & (kCacheSize - 1)];
+    if (!entry.valid || !(entry.key == key)) {
       const auto it = blocks_->find(key);
-      cached_block_ = it == blocks_->end() ? nullptr : it->second.get();
-      cached_key_ = key;
-      cached_valid_ = true;
+      entry.block = it == blocks_->end() ? nullptr : it->second.get();
+      entry.key = key;
+      entry.valid = true;
     }
-    return {cached_block_, cellInBlock(c)};
+    return {entry.block, cellInBlock(c)};
   }
   static bool occupied(const Ref& r) { return r.block && PlanningBlock::test(r.block->occupied, r.cell); }
   static CellIndex siteOf(const CellIndex& c, const Ref& r) {
@@ -59,13 +85,11 @@ class Propagation {
     const uint32_t d2 = squaredDistance(candidate, n);
     if (d2 > max_dist2_) return;
     const uint16_t current = rn.block->dist2[rn.cell];
-    if (current != PlanningBlock::kNoSite &&
-        !(d2 < current || (d2 == current && lexLess(candidate, siteOf(n, rn)))))
-      return;
+    if (current != PlanningBlock::kNoSite && d2 >= current) return;
     rn.block->dist2[rn.cell] = static_cast<uint16_t>(d2);
     rn.block->site[rn.cell] = {static_cast<int8_t>(candidate.x - n.x), static_cast<int8_t>(candidate.y - n.y),
                                static_cast<int8_t>(candidate.z - n.z)};
-    open_.push({d2, n});
+    open_.push(d2, n);
     ++lowered_;
   }
 
@@ -76,12 +100,18 @@ class Propagation {
     const bool own = occupied(rc);
     const bool has_site = siteValid(c, rc);
     const CellIndex site = has_site ? siteOf(c, rc) : c;
+    const int s = PlanningBlock::kSide;
+    const int li = rc.cell % s, lj = (rc.cell / s) % s, lk = rc.cell / (s * s);
     for (int dz = -1; dz <= 1; ++dz)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dx = -1; dx <= 1; ++dx) {
           if (!(dx | dy | dz)) continue;
           const CellIndex n = c.offset(dx, dy, dz);
-          const Ref rn = at(n);
+          // Most neighbours share c's block: no lookup for them.
+          const int i = li + dx, j = lj + dy, k = lk + dz;
+          const Ref rn = (i >= 0 && i < s && j >= 0 && j < s && k >= 0 && k < s)
+                             ? Ref{rc.block, PlanningBlock::index(i, j, k)}
+                             : at(n);
           if (!rn.block) continue;
           if (occupied(rn) != own)
             consider(n, rn, c);
@@ -116,11 +146,11 @@ class Propagation {
 
   void lower() {
     while (!open_.empty()) {
-      const Entry e = open_.top();
-      open_.pop();
-      const Ref r = at(e.cell);
-      if (!r.block || r.block->dist2[r.cell] != e.dist2) continue;  // superseded
-      offerToNeighbours(e.cell);
+      uint32_t dist2;
+      const CellIndex cell = open_.pop(&dist2);
+      const Ref r = at(cell);
+      if (!r.block || r.block->dist2[r.cell] != dist2) continue;  // superseded
+      offerToNeighbours(cell);
     }
   }
 
@@ -145,16 +175,19 @@ class Propagation {
     return cleared;
   }
 
-  void invalidateCache() { cached_valid_ = false; }
   uint64_t lowered() const { return lowered_; }
 
  private:
+  struct CacheEntry {
+    BlockKey key;
+    PlanningBlock* block = nullptr;
+    bool valid = false;
+  };
+  static constexpr uint32_t kCacheSize = 64;
   PlanningBlockMap* blocks_;
   uint32_t max_dist2_;
-  BlockKey cached_key_;
-  bool cached_valid_ = false;
-  PlanningBlock* cached_block_ = nullptr;
-  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> open_;
+  std::array<CacheEntry, kCacheSize> cache_{};
+  BucketQueue open_;
   uint64_t lowered_ = 0;
 };
 

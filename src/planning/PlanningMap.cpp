@@ -6,6 +6,7 @@
 #include <mutex>
 
 #include "stereo_fusion/planning/TsdfOccupancy.h"
+#include "stereo_fusion/util/Timer.h"
 
 namespace stereo_fusion {
 
@@ -75,7 +76,9 @@ PlanningUpdateStats PlanningMap::update(const BlockOctree& octree, const std::ve
   std::sort(keys.begin(), keys.end());
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
   stats.tsdf_blocks = keys.size();
+  Timer read_timer;
   const auto states = readTsdfCells(octree, keys, config_.voxels_per_cell, pool_);
+  stats.read_ms = read_timer.elapsedMs();
 
   std::unique_lock lock(mutex_);
   const size_t fresh_before = fresh_.size();
@@ -103,7 +106,9 @@ PlanningUpdateStats PlanningMap::update(const BlockOctree& octree, const std::ve
       }
     }
   stats.blocks_allocated = fresh_.size() - fresh_before;
+  Timer propagate_timer;
   stats.esdf = propagator_.update(&blocks_, flipped, fresh_, max_dist2_);
+  stats.propagate_ms = propagate_timer.elapsedMs();
   fresh_.clear();
   std::sort(maybe_empty.begin(), maybe_empty.end());
   maybe_empty.erase(std::unique(maybe_empty.begin(), maybe_empty.end()), maybe_empty.end());

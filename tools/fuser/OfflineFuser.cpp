@@ -320,9 +320,17 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
         StageTimings timings{r.lookup_ms, r.fusion_ms, r.carve_ms, r.mesh.meshing_ms, r.texture.texture_ms, 0.0,
                              mesh_now};
         timings.free_space_ms = r.free_space_ms;
+        timings.free_space_nodes = static_cast<double>(r.free_space.nodes_visited);
         if (mapper->planning() && report->frames_used % options.esdf_every == 0) {
-          timings.esdf_ms = mapper->updatePlanning().esdf_ms;
+          const PlanningPass pass = mapper->updatePlanning();
+          timings.esdf_ms = pass.esdf_ms;
           timings.esdf_updated = true;
+          timings.esdf_read_ms = pass.stats.read_ms;
+          timings.esdf_propagate_ms = pass.stats.propagate_ms;
+          timings.esdf_tsdf_blocks = static_cast<double>(pass.stats.tsdf_blocks);
+          timings.esdf_flipped = static_cast<double>(pass.stats.esdf.cells_flipped);
+          timings.esdf_raised = static_cast<double>(pass.stats.esdf.cells_raised);
+          timings.esdf_lowered = static_cast<double>(pass.stats.esdf.cells_lowered);
         }
         timings.total_ms = frame_timer.elapsedMs();
         report->timings.push_back(timings);
@@ -474,6 +482,21 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
       if (t.esdf_updated) v.push_back(t.esdf_ms);
     const Summary s = summarize(v);
     j["timings_ms"]["esdf"] = {{"mean", s.mean}, {"p50", s.p50}, {"p99", s.p99}, {"per", "planning update"}};
+    auto p50 = [&](double StageTimings::*field) {
+      std::vector<double> w;
+      for (const StageTimings& t : report.timings)
+        if (t.esdf_updated) w.push_back(t.*field);
+      return summarize(w).p50;
+    };
+    j["planning_work_p50"]["read_ms"] = p50(&StageTimings::esdf_read_ms);
+    j["planning_work_p50"]["propagate_ms"] = p50(&StageTimings::esdf_propagate_ms);
+    j["planning_work_p50"]["tsdf_blocks"] = p50(&StageTimings::esdf_tsdf_blocks);
+    j["planning_work_p50"]["cells_flipped"] = p50(&StageTimings::esdf_flipped);
+    j["planning_work_p50"]["cells_raised"] = p50(&StageTimings::esdf_raised);
+    j["planning_work_p50"]["cells_lowered"] = p50(&StageTimings::esdf_lowered);
+    std::vector<double> nodes;
+    for (const StageTimings& t : report.timings) nodes.push_back(t.free_space_nodes);
+    j["planning_work_p50"]["free_space_nodes"] = summarize(nodes).p50;
   }
   j["timings_ms"]["total"] = stage(&StageTimings::total_ms, false);
   size_t mesh_calls = 0;

@@ -20,8 +20,9 @@ struct EsdfStats {
 /// (Lau et al. 2013, in 3D over 26-neighbourhoods): every cell holds its site — the nearest
 /// occupied cell for a cell that is not occupied, the nearest cell that is not occupied for an
 /// occupied one — and its distance is the exact Euclidean distance to that site, |cell − site|
-/// in cells (squared, integer: no rounding, so the result does not depend on the order of
-/// updates beyond the choice of site). Ties between sites are broken by the site's coordinates.
+/// in cells (squared, integer: no rounding). Among sites at the same distance a cell keeps the
+/// first it was offered (breaking ties by coordinates re-propagated every tie and cost 20 %
+/// more on the hall; the distances, which the tests compare with a rebuild, are the same).
 ///
 /// When cells flip (occupied ↔ not), a raise wavefront clears every cell whose site is no
 /// longer of the opposite kind, then a lower wavefront (a priority queue by distance) offers

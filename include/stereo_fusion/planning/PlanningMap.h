@@ -44,6 +44,8 @@ struct PlanningUpdateStats {
   uint64_t tsdf_blocks = 0;  ///< TSDF blocks whose cells were re-read
   uint64_t blocks_allocated = 0, blocks_erased = 0;
   EsdfStats esdf;
+  double read_ms = 0.0;       ///< re-reading the TSDF blocks' cells
+  double propagate_ms = 0.0;  ///< the ESDF's wavefronts
 };
 
 /// The planning layer: for every planning cell of space the frames have seen, what it is
