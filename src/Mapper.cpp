@@ -241,8 +241,14 @@ bool Mapper::saveMap(const std::string& path, std::string* error) const {
 }
 
 std::vector<uint8_t> Mapper::encodeMap() const {
+  SeenFreeSpace free_space;
+  if (planning_) {
+    free_space.cell_m = planning_->grid().cell_m;
+    free_space.blocks = planning_->seenFree();
+  }
   return encodeMapFileUnsealed(octree_, config_, frames_integrated_,
-                               [this](const VoxelBlock& block) { return eviction_.lastUpdateFrame(block); });
+                               [this](const VoxelBlock& block) { return eviction_.lastUpdateFrame(block); },
+                               free_space);
 }
 
 bool Mapper::loadMap(const std::string& path, MeshChanges* changes, std::string* error) {
@@ -274,7 +280,10 @@ MeshChanges Mapper::adoptMap(BlockOctree* loaded, const MapFileInfo& info) {
   // The map file holds no texture patches: the loaded map starts with vertex colours.
   texture_store_.clear();
   if (planning_) {
+    // The file's seen-free cells if they are of this layer's size (else its free space is
+    // unknown, as with an older file), then the rest from the TSDF.
     planning_->clear();
+    if (info.free_space.cell_m == planning_->grid().cell_m) planning_->addSeenFree(info.free_space.blocks);
     planning_->rebuild(octree_);
   }
   // A rebuild over the kept store reports the old map's vanished submeshes as removed.

@@ -124,19 +124,22 @@ std::string number(double v) {
 }  // namespace
 
 std::vector<uint8_t> encodeMapFile(const BlockOctree& map, const MapperConfig& config, uint64_t frames_integrated,
-                                   const LastUpdateFrameOf& last_update_frame) {
-  std::vector<uint8_t> file = encodeMapFileUnsealed(map, config, frames_integrated, last_update_frame);
+                                   const LastUpdateFrameOf& last_update_frame, const SeenFreeSpace& free_space) {
+  std::vector<uint8_t> file = encodeMapFileUnsealed(map, config, frames_integrated, last_update_frame, free_space);
   sealMapFile(&file);
   return file;
 }
 
 std::vector<uint8_t> encodeMapFileUnsealed(const BlockOctree& map, const MapperConfig& config,
-                                           uint64_t frames_integrated, const LastUpdateFrameOf& last_update_frame) {
+                                           uint64_t frames_integrated, const LastUpdateFrameOf& last_update_frame,
+                                           const SeenFreeSpace& free_space) {
   static_assert(kMapFileV1RecordBytes == kMapFileRecordHeadBytes + VoxelBlock::kVoxelCount * kVoxelRecordBytes,
                 "record layout");
   const std::vector<VoxelBlock*> blocks = map.blocksSortedByKey();
   size_t payload_bytes = 0;
   for (const VoxelBlock* b : blocks) payload_bytes += kMapFileRecordHeadBytes + levelBytes(levelMask(*b));
+  const size_t free_space_bytes = 16 + free_space.blocks.size() * kMapFileFreeSpaceRecordBytes;
+  payload_bytes += free_space_bytes;
   std::vector<uint8_t> file(kMapFileHeaderBytes + payload_bytes);
   uint8_t* record = file.data() + kMapFileHeaderBytes;
   for (const VoxelBlock* b : blocks) {
@@ -152,6 +155,17 @@ std::vector<uint8_t> encodeMapFileUnsealed(const BlockOctree& map, const MapperC
       storeVoxels(b->level(l), levelVoxelCount(l), record);
       record += levelVoxelCount(l) * kVoxelRecordBytes;
     }
+  }
+  storeF64(record, free_space.cell_m);
+  storeU64(record + 8, free_space.blocks.size());
+  record += 16;
+  for (const auto& [key, bits] : free_space.blocks) {
+    storeU32(record, static_cast<uint32_t>(key.x));
+    storeU32(record + 4, static_cast<uint32_t>(key.y));
+    storeU32(record + 8, static_cast<uint32_t>(key.z));
+    storeU32(record + 12, 0);
+    for (size_t w = 0; w < bits.size(); ++w) storeU64(record + 16 + 8 * w, bits[w]);
+    record += kMapFileFreeSpaceRecordBytes;
   }
   uint8_t* header = file.data();
   std::memcpy(header, kMagic, 8);
@@ -193,8 +207,8 @@ bool decodeMapHeader(const uint8_t* data, size_t available, size_t file_size, Ma
   }
   // The version comes first, so a newer file is named as such whatever its layout.
   info->version = getU32(data + 8);
-  if (info->version != kMapFileVersion && info->version != 1) {
-    *error = "map file version " + std::to_string(info->version) + " is not supported (this build reads versions 1 and " +
+  if (info->version < 1 || info->version > kMapFileVersion) {
+    *error = "map file version " + std::to_string(info->version) + " is not supported (this build reads versions 1 to " +
              std::to_string(kMapFileVersion) + ")";
     return false;
   }
@@ -241,11 +255,49 @@ bool decodeMapHeader(const uint8_t* data, size_t available, size_t file_size, Ma
 
 }  // namespace
 
+namespace {
+/// The seen-free section at `*r` (version 3): checked (a finite cell edge ≥ 0, records that fit,
+/// keys in range, sorted and unique, only bits of cells), `*r` moved past it.
+bool decodeFreeSpace(const uint8_t** r, const uint8_t* end, SeenFreeSpace* out, std::string* error) {
+  if (end - *r < 16) {
+    *error = "invalid map file: the seen-free section runs past the end of the file";
+    return false;
+  }
+  out->cell_m = getF64(*r);
+  const uint64_t count = getU64(*r + 8);
+  *r += 16;
+  if (!std::isfinite(out->cell_m) || out->cell_m < 0.0 || (out->cell_m == 0.0 && count != 0)) {
+    *error = "invalid map file: seen-free cell edge " + number(out->cell_m);
+    return false;
+  }
+  if (count > static_cast<uint64_t>(end - *r) / kMapFileFreeSpaceRecordBytes) {
+    *error = "invalid map file: " + std::to_string(count) + " seen-free blocks run past the end of the file";
+    return false;
+  }
+  out->blocks.reserve(count);
+  for (uint64_t n = 0; n < count; ++n) {
+    const BlockKey key{static_cast<int32_t>(getU32(*r)), static_cast<int32_t>(getU32(*r + 4)),
+                       static_cast<int32_t>(getU32(*r + 8))};
+    PlanningBlock::Bits bits;
+    for (size_t w = 0; w < bits.size(); ++w) bits[w] = getU64(*r + 16 + 8 * w);
+    const bool ordered = out->blocks.empty() || out->blocks.back().first < key;
+    if (getU32(*r + 12) != 0 || !BlockOctree::keyInRange(key) || !ordered) {
+      *error = "invalid map file: seen-free block " + std::to_string(n) + " is out of range, out of order or padded";
+      return false;
+    }
+    out->blocks.emplace_back(key, bits);
+    *r += kMapFileFreeSpaceRecordBytes;
+  }
+  return true;
+}
+}  // namespace
+
 bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config, BlockOctree* out,
                    MapFileInfo* info, std::string* error) {
   size_t header_bytes = 0;
   if (!decodeMapHeader(data, size, size, info, &header_bytes, error)) return false;
   info->last_update_frames.clear();
+  info->free_space = SeenFreeSpace();
   const bool v1 = info->version == 1;
   const size_t payload_crc_at = v1 ? 64 : 72;
   const size_t payload_bytes = size - header_bytes;
@@ -339,6 +391,7 @@ bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config,
     for (int l = 0; l < kNumLevels; ++l)
       if (!kept[l].empty()) block->adoptLevel(l, kept[l].data());
   }
+  if (info->version >= 3 && !decodeFreeSpace(&r, payload_end, &info->free_space, error)) return false;
   if (r != payload_end) {
     *error = "invalid map file: " + std::to_string(payload_end - r) + " bytes after the last of " +
              std::to_string(info->block_count) + " blocks";

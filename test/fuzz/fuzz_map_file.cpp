@@ -23,7 +23,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const bool current = info.version == kMapFileVersion;
     if (current ? map.blockCount() != info.block_count : map.blockCount() > info.block_count) std::abort();
     if (info.last_update_frames.size() != map.blockCount()) std::abort();
-    const std::vector<uint8_t> again = encodeMapFile(map, config, info.frames_integrated);
+    const std::vector<uint8_t> again = encodeMapFile(map, config, info.frames_integrated, {}, info.free_space);
     if (current && again.size() != size) std::abort();
     if (info.version != kMapFileVersion) {
       BlockOctree reread(config.blockSizeM());

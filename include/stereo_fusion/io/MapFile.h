@@ -8,10 +8,11 @@
 
 #include "stereo_fusion/MapperConfig.h"
 #include "stereo_fusion/map/BlockOctree.h"
+#include "stereo_fusion/planning/PlanningBlock.h"
 
 namespace stereo_fusion {
 
-/// Map file format, version 2 (all numbers little-endian):
+/// Map file format, version 3 (all numbers little-endian):
 ///
 ///   header, 80 bytes:
 ///     0  char[8] magic "SFUSEMAP"       8  u32 version (kMapFileVersion)   12 u32 header bytes (80)
@@ -25,6 +26,12 @@ namespace stereo_fusion {
 ///   then the voxels of each stored level, level 0 first, in index order (eq. 3.4), each
 ///     f32 sdf_m, f32 weight, u8 r, g, b, reserved.
 ///   So a block seen only at 2³ takes 24 + 96 bytes.
+///   then the planning layer's seen-free space: f64 planning cell edge (0: none saved), u64
+///     count, and count records sorted by key of 80 bytes: i32 x, y, z, u32 0, u64[8] one bit per
+///     cell (PlanningBlock::seen_free). The rest of the planning layer is derived from the TSDF.
+///
+/// Version 2 (still read): the same without the seen-free section (it loads with its free space
+/// unknown).
 ///
 /// Version 1 (still read): a 72-byte header without the payload size (payload CRC at 64,
 /// header CRC of bytes 0..67 at 68), and records of all 584 voxels whose head held i8
@@ -33,7 +40,14 @@ namespace stereo_fusion {
 ///
 /// voxel_size_m and truncation_vox must equal the loading mapper's: they fix the block grid
 /// and the SDF's clamp. The level thresholds are recorded for information only.
-constexpr uint32_t kMapFileVersion = 2;
+constexpr uint32_t kMapFileVersion = 3;
+constexpr size_t kMapFileFreeSpaceRecordBytes = 80;
+
+/// The planning layer's seen-free cells as the map file keeps them.
+struct SeenFreeSpace {
+  double cell_m = 0.0;  ///< 0: the file holds none
+  std::vector<std::pair<BlockKey, PlanningBlock::Bits>> blocks;
+};
 constexpr size_t kMapFileHeaderBytes = 80;
 constexpr size_t kMapFileRecordHeadBytes = 24;
 constexpr size_t kMapFileV1HeaderBytes = 72;
@@ -51,6 +65,8 @@ struct MapFileInfo {
   uint64_t block_count = 0;  ///< as the header announces (a version-1 file's blocks without observations are not loaded)
   /// Each block's last update frame as the file records it, in key order.
   std::vector<std::pair<BlockKey, uint64_t>> last_update_frames;
+  /// Version 3: the seen-free space saved with the map (cell_m 0 for older versions).
+  SeenFreeSpace free_space;
 };
 
 /// The last update frame the map file records for a block (0: unknown).
@@ -58,11 +74,13 @@ using LastUpdateFrameOf = std::function<uint64_t(const VoxelBlock&)>;
 
 /// The file bytes for `map`, built with `config`, after `frames_integrated` frames.
 std::vector<uint8_t> encodeMapFile(const BlockOctree& map, const MapperConfig& config, uint64_t frames_integrated,
-                                   const LastUpdateFrameOf& last_update_frame = {});
+                                   const LastUpdateFrameOf& last_update_frame = {},
+                                   const SeenFreeSpace& free_space = {});
 /// encodeMapFile() without its two checksums (left zero): the part that reads the map, so a
 /// caller that locks the map holds the lock only for it. sealMapFile() completes the bytes.
 std::vector<uint8_t> encodeMapFileUnsealed(const BlockOctree& map, const MapperConfig& config,
-                                           uint64_t frames_integrated, const LastUpdateFrameOf& last_update_frame = {});
+                                           uint64_t frames_integrated, const LastUpdateFrameOf& last_update_frame = {},
+                                           const SeenFreeSpace& free_space = {});
 /// Fills in both checksums of bytes from encodeMapFileUnsealed() (again, on sealed bytes: the
 /// same values).
 void sealMapFile(std::vector<uint8_t>* file);

@@ -87,14 +87,17 @@ TEST(MapFile, OneBlockEncodesToTheDocumentedBytesHandWorked) {
   block->writableVoxel(583) = Voxel{-0.25f, 1.0f, 1, 2, 3, 0};    // 0xbe800000, 0x3f800000
   const std::vector<uint8_t> file = encodeMapFile(map, config, 12, [](const VoxelBlock&) { return 0x0102030405060708ull; });
   const size_t record_bytes = 24 + (512 + 8) * 12;
-  ASSERT_EQ(file.size(), kMapFileHeaderBytes + record_bytes);
+  ASSERT_EQ(file.size(), kMapFileHeaderBytes + record_bytes + 16);  // + an empty seen-free section
   auto bytes = [&](size_t offset, std::initializer_list<int> want) {
     size_t k = offset;
     for (int b : want) EXPECT_EQ(file[k++], b) << "byte " << k - 1;
   };
-  bytes(0, {'S', 'F', 'U', 'S', 'E', 'M', 'A', 'P', 2, 0, 0, 0, 80, 0, 0, 0});
+  bytes(0, {'S', 'F', 'U', 'S', 'E', 'M', 'A', 'P', 3, 0, 0, 0, 80, 0, 0, 0});
+  // No seen-free space: cell edge 0.0 and count 0.
+  bytes(kMapFileHeaderBytes + record_bytes, {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0});
   bytes(48, {12, 0, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0});  // frames, block count
-  bytes(64, {int(record_bytes & 0xff), int(record_bytes >> 8), 0, 0, 0, 0, 0, 0});  // payload bytes
+  const size_t payload_bytes = record_bytes + 16;
+  bytes(64, {int(payload_bytes & 0xff), int(payload_bytes >> 8), 0, 0, 0, 0, 0, 0});  // payload bytes
   const size_t record = kMapFileHeaderBytes;
   bytes(record, {1, 0, 0, 0, 0xfe, 0xff, 0xff, 0xff, 3, 0, 0, 0});    // key
   bytes(record + 12, {8, 7, 6, 5, 4, 3, 2, 1, 5, 0, 0, 0});           // last update frame, levels 0 and 2, 0, 0, 0
@@ -102,7 +105,7 @@ TEST(MapFile, OneBlockEncodesToTheDocumentedBytesHandWorked) {
   bytes(record + 24 + 512 * 12 + 7 * 12, {0, 0, 0x80, 0xbe, 0, 0, 0x80, 0x3f, 1, 2, 3, 0});  // last of level 2
   bytes(record + 36, {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0});  // an untouched voxel
   // Both checksums as documented: payload at 72, header bytes 0..75 at 76.
-  const uint32_t payload_crc = crc32(file.data() + record, record_bytes);
+  const uint32_t payload_crc = crc32(file.data() + record, payload_bytes);
   const uint32_t header_crc = crc32(file.data(), 76);
   bytes(72, {int(payload_crc & 0xff), int(payload_crc >> 8 & 0xff), int(payload_crc >> 16 & 0xff), int(payload_crc >> 24)});
   bytes(76, {int(header_crc & 0xff), int(header_crc >> 8 & 0xff), int(header_crc >> 16 & 0xff), int(header_crc >> 24)});
@@ -164,11 +167,11 @@ TEST(MapFile, VersionOneFilesStillLoadWithOnlyTheirObservedLevels) {
   size_t blocks_without_level0 = 0;
   for (const VoxelBlock* b : loaded.blocks()) blocks_without_level0 += !b->hasLevel(0);
   EXPECT_GT(blocks_without_level0, 0u);
-  // Saved again, it is a version-2 file of the same map.
+  // Saved again, it is a current file of the same map.
   BlockOctree again(config.blockSizeM());
   const std::vector<uint8_t> new_file = encodeMapFile(loaded, config, info.frames_integrated);
   ASSERT_TRUE(decodeMapFile(new_file.data(), new_file.size(), config, &again, &info, &error)) << error;
-  EXPECT_EQ(info.version, 2u);
+  EXPECT_EQ(info.version, kMapFileVersion);
   EXPECT_TRUE(snapshot(again) == snapshot(original->map()));
   EXPECT_LT(new_file.size(), old_file.size());
 }
@@ -182,7 +185,9 @@ TEST(MapFile, SaveLoadGivesTheIdenticalMapAndByteIdenticalMesh) {
   ASSERT_TRUE(original->saveMap(map_path, &error)) << error;
   size_t voxel_bytes = 0;
   for (const VoxelBlock* b : original->map().blocks()) voxel_bytes += b->voxelBytes();
-  EXPECT_EQ(fs::file_size(map_path), kMapFileHeaderBytes + original->map().blockCount() * kMapFileRecordHeadBytes + voxel_bytes);
+  const size_t free_space_bytes = 16 + original->planning()->seenFree().size() * kMapFileFreeSpaceRecordBytes;
+  EXPECT_EQ(fs::file_size(map_path), kMapFileHeaderBytes + original->map().blockCount() * kMapFileRecordHeadBytes +
+                                         voxel_bytes + free_space_bytes);
 
   Mapper loaded(config);
   MeshChanges changes;
@@ -225,9 +230,10 @@ TEST(MapFile, EncodeThenWriteAndReadThenAdoptEqualSaveAndLoad) {
   ASSERT_TRUE(original->saveMap(saved, &error)) << error;
   // encodeMap() leaves the checksums to writeMapFileBytes(), which fills them in place.
   std::vector<uint8_t> bytes = original->encodeMap();
+  const SeenFreeSpace free_space{original->planning()->grid().cell_m, original->planning()->seenFree()};
   const std::vector<uint8_t> sealed =
       encodeMapFile(original->map(), config, original->framesIntegrated(),
-                    [&](const VoxelBlock& block) { return original->lastUpdateFrame(block); });
+                    [&](const VoxelBlock& block) { return original->lastUpdateFrame(block); }, free_space);
   ASSERT_EQ(bytes.size(), sealed.size());
   EXPECT_TRUE(std::equal(bytes.begin(), bytes.begin() + 72, sealed.begin()));  // header before the checksums
   EXPECT_TRUE(std::equal(bytes.begin() + kMapFileHeaderBytes, bytes.end(), sealed.begin() + kMapFileHeaderBytes));
@@ -299,7 +305,7 @@ TEST(MapFile, FusingOnAfterLoadContinuesTheSameMap) {
 TEST(MapFile, EveryTruncationAndEveryFlippedByteFailsCleanly) {
   const MapperConfig config;
   const std::vector<uint8_t> good = tinyMapFile(config);
-  ASSERT_EQ(good.size(), kMapFileHeaderBytes + 3 * kAllLevelsRecordBytes);
+  ASSERT_EQ(good.size(), kMapFileHeaderBytes + 3 * kAllLevelsRecordBytes + 16);
   ASSERT_EQ(decodeError(good, config), "");
   for (size_t n = 0; n < good.size(); ++n) {
     const std::vector<uint8_t> cut(good.begin(), good.begin() + n);
@@ -328,8 +334,8 @@ TEST(MapFile, VersionParametersAndContentAreChecked) {
   const MapperConfig config;
   const std::vector<uint8_t> good = tinyMapFile(config);
   std::vector<uint8_t> bad = good;
-  bad[8] = 3;  // version 3
-  EXPECT_EQ(decodeError(bad, config), "map file version 3 is not supported (this build reads versions 1 and 2)");
+  bad[8] = 4;  // version 4
+  EXPECT_EQ(decodeError(bad, config), "map file version 4 is not supported (this build reads versions 1 to 3)");
   bad = good;
   bad[0] = 'X';
   EXPECT_EQ(decodeError(bad, config), "not a stereo_fusion map file (bad magic)");

@@ -193,3 +193,57 @@ TEST(PlanningMap, AnObjectThatLeftBecomesFree) {
 
 }  // namespace
 }  // namespace stereo_fusion
+
+namespace stereo_fusion {
+namespace {
+
+std::map<std::tuple<int, int, int>, std::pair<CellState, double>> cellMap(const PlanningMap& planning) {
+  std::map<std::tuple<int, int, int>, std::pair<CellState, double>> out;
+  planning.forEachKnownCell([&](const CellIndex& c, CellState s, double d) { out[{c.x, c.y, c.z}] = {s, d}; });
+  return out;
+}
+
+// The map file keeps the seen-free space: a loaded map answers every cell as the saved one did.
+// A version-2 file (no seen-free section) loads with only the TSDF's cells known.
+TEST(PlanningMapFile, SavedAndLoadedLayerIsTheSameAndOlderFilesLoadWithFreeSpaceUnknown) {
+  sim::AnalyticScene scene;
+  scene.add(sim::makePlane(Eigen::Vector3d(3.0, 0, 0), Eigen::Vector3d(-1, 0, 0)));
+  MapperConfig config;
+  config.mesh_enabled = false;
+  Mapper original(config);
+  const Eigen::Isometry3d pose = sim::lookAt(Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(3, 0, 1));
+  ASSERT_TRUE(original.integrate(test::renderFrame(scene, test::vgaCamera(), pose)).accepted);
+  original.updatePlanning();
+  const auto saved_cells = cellMap(*original.planning());
+  ASSERT_EQ(original.planning()->state({1.0, 0.0, 1.0}), CellState::kFree);  // seen free, far from the band
+
+  std::vector<uint8_t> bytes = original.encodeMap();
+  sealMapFile(&bytes);
+  BlockOctree octree(config.blockSizeM());
+  MapFileInfo info;
+  std::string error;
+  ASSERT_TRUE(decodeMapFile(bytes.data(), bytes.size(), config, &octree, &info, &error)) << error;
+  EXPECT_EQ(info.free_space.cell_m, original.planning()->grid().cell_m);
+  EXPECT_EQ(info.free_space.blocks, original.planning()->seenFree());
+  Mapper loaded(config);
+  loaded.adoptMap(&octree, info);
+  EXPECT_TRUE(cellMap(*loaded.planning()) == saved_cells);
+
+  // The same file as version 2: drop the section, fix the version and the payload size.
+  std::vector<uint8_t> v2(bytes.begin(), bytes.end() - (16 + info.free_space.blocks.size() * kMapFileFreeSpaceRecordBytes));
+  v2[8] = 2;
+  const uint64_t payload = v2.size() - kMapFileHeaderBytes;
+  for (int b = 0; b < 8; ++b) v2[64 + b] = static_cast<uint8_t>(payload >> (8 * b));
+  sealMapFile(&v2);
+  BlockOctree octree2(config.blockSizeM());
+  ASSERT_TRUE(decodeMapFile(v2.data(), v2.size(), config, &octree2, &info, &error)) << error;
+  EXPECT_EQ(info.free_space.cell_m, 0.0);
+  Mapper older(config);
+  older.adoptMap(&octree2, info);
+  EXPECT_EQ(older.planning()->state({1.0, 0.0, 1.0}), CellState::kUnknown);
+  EXPECT_EQ(older.planning()->state({3.0, 0.0, 1.0}), CellState::kOccupied);
+  EXPECT_LT(cellMap(*older.planning()).size(), saved_cells.size());
+}
+
+}  // namespace
+}  // namespace stereo_fusion
