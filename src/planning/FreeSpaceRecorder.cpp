@@ -11,7 +11,7 @@ namespace {
 
 constexpr int kTilePx = 8;
 /// Edge of the octree's roots in cells: 4³ planning blocks.
-constexpr int kRootCells = 32;
+constexpr int kRootCells = 16;
 constexpr int kRootBlocks = kRootCells / PlanningBlock::kSide;
 
 struct RootOutput {
@@ -118,61 +118,87 @@ FreeSpaceStats FreeSpaceRecorder::record(const StereoFrame& frame, const Measure
         roots.push_back({static_cast<int32_t>(x * kRootCells), static_cast<int32_t>(y * kRootCells),
                          static_cast<int32_t>(z * kRootCells)});
 
-  const double half_diagonal = 0.5 * std::sqrt(3.0) * cell_m;
   const int top_level = static_cast<int>(pyramid_.size()) - 1;
   std::vector<RootOutput> outputs(roots.size());
   pool_->parallelFor(roots.size(), 1, [&](size_t begin, size_t end) {
     for (size_t r = begin; r < end; ++r) {
       RootOutput& out = outputs[r];
       const CellIndex root = roots[r];
+      // A block's bits are one 64-bit word per z slice, a byte per row of x (PlanningBlock::index()).
       auto markFree = [&](const CellIndex& o, int size) {
-        for (int z = o.z; z < o.z + size; ++z)
-          for (int y = o.y; y < o.y + size; ++y)
-            for (int x = o.x; x < o.x + size; ++x) {
-              const int lx = x - root.x, ly = y - root.y, lz = z - root.z;
-              const int b = lx / 8 + kRootBlocks * (ly / 8 + kRootBlocks * (lz / 8));
-              PlanningBlock::set(&out.blocks[b], PlanningBlock::index(lx % 8, ly % 8, lz % 8), true);
-            }
+        const int lx = o.x - root.x, ly = o.y - root.y, lz = o.z - root.z;
+        if (size >= PlanningBlock::kSide) {  // whole blocks
+          for (int bz = lz / 8; bz < (lz + size) / 8; ++bz)
+            for (int by = ly / 8; by < (ly + size) / 8; ++by)
+              for (int bx = lx / 8; bx < (lx + size) / 8; ++bx)
+                out.blocks[bx + kRootBlocks * (by + kRootBlocks * bz)].fill(~uint64_t{0});
+        } else {  // inside one block
+          PlanningBlock::Bits& bits = out.blocks[lx / 8 + kRootBlocks * (ly / 8 + kRootBlocks * (lz / 8))];
+          const uint64_t row = ((uint64_t{1} << size) - 1) << (lx % 8);
+          uint64_t slice = 0;
+          for (int y = ly % 8; y < ly % 8 + size; ++y) slice |= row << (8 * y);
+          for (int z = lz % 8; z < lz % 8 + size; ++z) bits[z] |= slice;
+        }
         out.stats.cells_seen_free += static_cast<uint64_t>(size) * size * size;
         out.any = true;
       };
-      // Depth-first over the node's octants.
-      auto visit = [&](auto&& self, const CellIndex& o, int size) -> void {
+      // Depth-first over the node's octants. A node is its minimum corner in camera
+      // coordinates (float, relative to the camera: precise far from the world origin too) and
+      // its edge. The frustum's five planes (image borders at ±0.5 px, z ≥ kMinDepthM) classify
+      // it with a dot product each — outside one: nothing of it is seen; inside all: its
+      // footprint and depth range come from its extent in camera coordinates.
+      const Eigen::Matrix3f R = T_camera_world.linear().cast<float>();
+      const Eigen::Vector3f axis_x = R.col(0) * static_cast<float>(cell_m), axis_y = R.col(1) * static_cast<float>(cell_m),
+                            axis_z = R.col(2) * static_cast<float>(cell_m);
+      const float fxf = static_cast<float>(fx), fyf = static_cast<float>(fy), cxf = static_cast<float>(cx),
+                  cyf = static_cast<float>(cy), far_f = static_cast<float>(far_m);
+      // Half extent of a one-cell node along each camera axis.
+      const Eigen::Vector3f half_extent = 0.5f * (axis_x.cwiseAbs() + axis_y.cwiseAbs() + axis_z.cwiseAbs());
+      constexpr float kMinDepthM = 1e-3f;
+      const std::array<Eigen::Vector4f, 5> planes = {
+          Eigen::Vector4f(fxf, 0.0f, cxf + 0.5f, 0.0f), Eigen::Vector4f(-fxf, 0.0f, width - 0.5f - cxf, 0.0f),
+          Eigen::Vector4f(0.0f, fyf, cyf + 0.5f, 0.0f), Eigen::Vector4f(0.0f, -fyf, height - 0.5f - cyf, 0.0f),
+          Eigen::Vector4f(0.0f, 0.0f, 1.0f, -kMinDepthM)};
+      std::array<float, 5> plane_extent;  // a one-cell node's extent along each plane's normal
+      for (int p = 0; p < 5; ++p) plane_extent[p] = planes[p].head<3>().cwiseAbs().dot(half_extent);
+      auto visit = [&](auto&& self, const CellIndex& o, const Eigen::Vector3f& corner_c, int size) -> void {
         ++out.stats.nodes_visited;
-        const Eigen::Vector3d centre_w((o.x + 0.5 * size) * cell_m, (o.y + 0.5 * size) * cell_m,
-                                       (o.z + 0.5 * size) * cell_m);
-        const Eigen::Vector3d c = T_camera_world * centre_w;
-        const double radius = size * half_diagonal;
-        const double z_near = c.z() - radius, z_far = c.z() + radius;
-        if (z_far <= 0.0 || z_near >= far_m) return;
+        const float s = static_cast<float>(size);
+        const Eigen::Vector3f c = corner_c + 0.5f * s * (axis_x + axis_y + axis_z);
+        const float z_near = c.z() - s * half_extent.z(), z_far = c.z() + s * half_extent.z();
+        if (z_far <= 0.0f || z_near >= far_f) return;
+        bool inside = true;
+        for (int p = 0; p < 5; ++p) {
+          const float d = planes[p].head<3>().dot(c) + planes[p].w(), r = s * plane_extent[p];
+          if (d + r < 0.0f) return;  // out of view
+          inside = inside && d - r >= 0.0f;
+        }
         auto split = [&] {
           const int h = size / 2;
+          const float hs = static_cast<float>(h);
           for (int k = 0; k < 2; ++k)
             for (int j = 0; j < 2; ++j)
-              for (int i = 0; i < 2; ++i) self(self, o.offset(i * h, j * h, k * h), h);
+              for (int i = 0; i < 2; ++i)
+                self(self, o.offset(i * h, j * h, k * h),
+                     corner_c + hs * (float(i) * axis_x + float(j) * axis_y + float(k) * axis_z), h);
         };
-        if (z_near < 1e-3) {
-          if (size > 1) split();
-          return;
-        }
-        // The bounding sphere's footprint: u = fx·x/z + cx over x ∈ [c.x ± r], z ∈ [z_near, z_far].
-        auto extent = [z_near, z_far](double f, double principal, double lo_x, double hi_x, double* lo_px,
-                                      double* hi_px) {
-          *lo_px = f * lo_x / (lo_x >= 0.0 ? z_far : z_near) + principal;
-          *hi_px = f * hi_x / (hi_x >= 0.0 ? z_near : z_far) + principal;
-        };
-        double u_lo, u_hi, v_lo, v_hi;
-        extent(fx, cx, c.x() - radius, c.x() + radius, &u_lo, &u_hi);
-        extent(fy, cy, c.y() - radius, c.y() + radius, &v_lo, &v_hi);
-        if (u_hi < -0.5 || v_hi < -0.5 || u_lo > width - 0.5 || v_lo > height - 0.5) return;  // out of view
-        if (u_lo < -0.5 || v_lo < -0.5 || u_hi > width - 0.5 || v_hi > height - 0.5) {
+        if (!inside) {
           if (size > 1) split();  // partly out of view: its parts inside may still be free
           return;
         }
-        const int px0 = std::clamp(static_cast<int>(std::floor(u_lo + 0.5)), 0, width - 1);
-        const int px1 = std::clamp(static_cast<int>(std::floor(u_hi + 0.5)), 0, width - 1);
-        const int py0 = std::clamp(static_cast<int>(std::floor(v_lo + 0.5)), 0, height - 1);
-        const int py1 = std::clamp(static_cast<int>(std::floor(v_hi + 0.5)), 0, height - 1);
+        // Footprint: u = fx·x/z + cx over the node's extent x ∈ [c.x ± ·], z ∈ [z_near, z_far] (> 0).
+        const float x_lo = c.x() - s * half_extent.x(), x_hi = c.x() + s * half_extent.x();
+        const float y_lo = c.y() - s * half_extent.y(), y_hi = c.y() + s * half_extent.y();
+        const float inv_near = 1.0f / z_near, inv_far = 1.0f / z_far;
+        const float u_lo = fxf * x_lo * (x_lo >= 0.0f ? inv_far : inv_near) + cxf;
+        const float u_hi = fxf * x_hi * (x_hi >= 0.0f ? inv_near : inv_far) + cxf;
+        const float v_lo = fyf * y_lo * (y_lo >= 0.0f ? inv_far : inv_near) + cyf;
+        const float v_hi = fyf * y_hi * (y_hi >= 0.0f ? inv_near : inv_far) + cyf;
+        // Inside the frustum every u, v lies in [−0.5, size − 0.5]: + 0.5 truncates as floor.
+        const int px0 = std::clamp(static_cast<int>(u_lo + 0.5f), 0, width - 1);
+        const int px1 = std::clamp(static_cast<int>(u_hi + 0.5f), 0, width - 1);
+        const int py0 = std::clamp(static_cast<int>(v_lo + 0.5f), 0, height - 1);
+        const int py1 = std::clamp(static_cast<int>(v_hi + 0.5f), 0, height - 1);
         int level = 0;
         while (level < top_level && ((px1 / pyramid_[level].tile_px - px0 / pyramid_[level].tile_px > 3) ||
                                      (py1 / pyramid_[level].tile_px - py0 / pyramid_[level].tile_px > 3)))
@@ -192,7 +218,9 @@ FreeSpaceStats FreeSpaceRecorder::record(const StereoFrame& frame, const Measure
         if (max_free <= z_near) return;  // behind every free depth it can see
         if (size > 1) split();
       };
-      visit(visit, root, kRootCells);
+      const Eigen::Vector3f root_c =
+          (T_camera_world * Eigen::Vector3d(root.x * cell_m, root.y * cell_m, root.z * cell_m)).cast<float>();
+      visit(visit, root, root_c, kRootCells);
     }
   });
   for (size_t r = 0; r < roots.size(); ++r) {
