@@ -23,6 +23,7 @@ set(EVALUATOR_SOURCES
   ${EVALUATOR_DIR}/EvaluationMode.cpp
   ${EVALUATOR_DIR}/EvaluationReport.cpp
   ${EVALUATOR_DIR}/ErrorColouredMesh.cpp
+  ${EVALUATOR_DIR}/EsdfAccuracy.cpp
 )
 
 add_library(stereo_fusion_evaluator STATIC ${EVALUATOR_SOURCES})
@@ -31,6 +32,14 @@ target_link_libraries(stereo_fusion_evaluator PUBLIC stereo_fusion_core PRIVATE 
 
 add_executable(stereo_fusion_evaluate ${EVALUATOR_DIR}/evaluate_main.cpp)
 target_link_libraries(stereo_fusion_evaluate stereo_fusion_evaluator stereo_fusion_readers)
+
+# stereo_fusion_evaluate_esdf: an esdf.ply against the brute force (PCL's reader and exact k-d
+# tree) and a ground-truth mesh.
+find_package(PCL REQUIRED COMPONENTS common io kdtree)
+add_executable(stereo_fusion_evaluate_esdf ${EVALUATOR_DIR}/esdf_main.cpp)
+target_include_directories(stereo_fusion_evaluate_esdf SYSTEM PRIVATE ${PCL_INCLUDE_DIRS})
+target_link_libraries(stereo_fusion_evaluate_esdf stereo_fusion_evaluator stereo_fusion_readers ${PCL_LIBRARIES}
+                      nlohmann_json::nlohmann_json)
 
 if(CATKIN_ENABLE_TESTING)
   target_link_libraries(stereo_fusion_tool_tests stereo_fusion_evaluator)
