@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <random>
 #include <nlohmann/json.hpp>
 
 #include "fuser/OctomapExport.h"
@@ -221,9 +222,22 @@ bool writePlanningOutputs(const std::string& out_dir, Mapper* mapper, FuseReport
   report->blocks = planning->blockCount();
   report->free_space_bytes = planning->freeSpaceBytes();
   report->esdf_bytes = planning->esdfBytes();
-  planning->forEachKnownCell([&](const CellIndex&, CellState state, double) {
+  Eigen::AlignedBox3d known;
+  planning->forEachKnownCell([&](const CellIndex& cell, CellState state, double) {
     (state == CellState::kOccupied ? report->cells_occupied : report->cells_free) += 1;
+    known.extend(planning->grid().centre(cell));
   });
+  if (!known.isEmpty()) {  // what a planner's batch query of 100 000 points costs
+    std::mt19937 rng(1);
+    std::vector<Eigen::Vector3d> points(100000);
+    for (Eigen::Vector3d& p : points)
+      for (int a = 0; a < 3; ++a)
+        p[a] = std::uniform_real_distribution<double>(known.min()[a], known.max()[a])(rng);
+    std::vector<EsdfSample> samples;
+    Timer query;
+    planning->sampleBatch(points, &samples);
+    report->query_100k_ms = query.elapsedMs();
+  }
   const fs::path dir(out_dir);
   if (!writeEsdfPly((dir / "esdf.ply").string(), *planning, error)) return false;
   const MapperConfig& config = mapper->config();
@@ -537,6 +551,7 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
     j["planning"]["cells_free"] = p.cells_free;
     j["planning"]["cells_occupied"] = p.cells_occupied;
     j["planning"]["rebuild_ms"] = p.rebuild_ms;
+    j["planning"]["query_100k_ms"] = p.query_100k_ms;
     j["planning"]["octomap_cells_skipped"] = p.octomap_cells_skipped;
     j["memory"]["free_space_bytes"] = p.free_space_bytes;
     j["memory"]["free_space_megabytes"] = p.free_space_bytes / 1048576.0;

@@ -102,6 +102,7 @@ struct FuseReport {
     size_t blocks = 0, cells_free = 0, cells_occupied = 0;
     size_t free_space_bytes = 0, esdf_bytes = 0;
     double rebuild_ms = 0;   ///< a batch rebuild of the whole layer, timed once at the end
+    double query_100k_ms = 0;  ///< PlanningMap::sampleBatch() of 100 000 points in the known cells' box
     size_t octomap_cells_skipped = 0;
   } planning;
 };
