@@ -182,11 +182,12 @@ FreeSpaceStats FreeSpaceRecorder::record(const StereoFrame& frame, const Measure
                 self(self, o.offset(i * h, j * h, k * h),
                      corner_c + hs * (float(i) * axis_x + float(j) * axis_y + float(k) * axis_z), h);
         };
-        if (!inside) {
-          if (size > 1) split();  // partly out of view: its parts inside may still be free
+        // Footprint: u = fx·x/z + cx over the node's extent x ∈ [c.x ± ·], z ∈ [z_near, z_far];
+        // clipped to the image for a node partly out of view.
+        if (!inside && (size == 1 || z_near <= kMinDepthM)) {
+          if (size > 1) split();  // reaches the camera plane: no footprint
           return;
         }
-        // Footprint: u = fx·x/z + cx over the node's extent x ∈ [c.x ± ·], z ∈ [z_near, z_far] (> 0).
         const float x_lo = c.x() - s * half_extent.x(), x_hi = c.x() + s * half_extent.x();
         const float y_lo = c.y() - s * half_extent.y(), y_hi = c.y() + s * half_extent.y();
         const float inv_near = 1.0f / z_near, inv_far = 1.0f / z_far;
@@ -194,11 +195,13 @@ FreeSpaceStats FreeSpaceRecorder::record(const StereoFrame& frame, const Measure
         const float u_hi = fxf * x_hi * (x_hi >= 0.0f ? inv_near : inv_far) + cxf;
         const float v_lo = fyf * y_lo * (y_lo >= 0.0f ? inv_far : inv_near) + cyf;
         const float v_hi = fyf * y_hi * (y_hi >= 0.0f ? inv_near : inv_far) + cyf;
-        // Inside the frustum every u, v lies in [−0.5, size − 0.5]: + 0.5 truncates as floor.
-        const int px0 = std::clamp(static_cast<int>(u_lo + 0.5f), 0, width - 1);
-        const int px1 = std::clamp(static_cast<int>(u_hi + 0.5f), 0, width - 1);
-        const int py0 = std::clamp(static_cast<int>(v_lo + 0.5f), 0, height - 1);
-        const int py1 = std::clamp(static_cast<int>(v_hi + 0.5f), 0, height - 1);
+        // Clamped in float first (a node near the camera plane projects far beyond int); then
+        // + 0.5 truncates as floor (≥ 0).
+        auto pixel = [](float coordinate_px, int size_px) {
+          return static_cast<int>(std::clamp(coordinate_px + 0.5f, 0.0f, static_cast<float>(size_px - 1)));
+        };
+        const int px0 = pixel(u_lo, width), px1 = pixel(u_hi, width);
+        const int py0 = pixel(v_lo, height), py1 = pixel(v_hi, height);
         int level = 0;
         while (level < top_level && ((px1 / pyramid_[level].tile_px - px0 / pyramid_[level].tile_px > 3) ||
                                      (py1 / pyramid_[level].tile_px - py0 / pyramid_[level].tile_px > 3)))
@@ -211,11 +214,15 @@ FreeSpaceStats FreeSpaceRecorder::record(const StereoFrame& frame, const Measure
             min_free = std::min(min_free, tiles.min_free_m[t]);
             max_free = std::max(max_free, tiles.max_free_m[t]);
           }
+        if (max_free <= z_near) return;  // behind every free depth it can see
+        if (!inside) {
+          split();  // partly out of view: its parts inside may still be free
+          return;
+        }
         if (min_free > z_far) {
           markFree(o, size);
           return;
         }
-        if (max_free <= z_near) return;  // behind every free depth it can see
         if (size > 1) split();
       };
       const Eigen::Vector3f root_c =
