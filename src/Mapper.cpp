@@ -165,6 +165,12 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
     if (config_.max_distance_from_camera_m > 0.0)
       planning_->dropFartherThan(frame.T_world_camera.translation(), config_.max_distance_from_camera_m);
     result.free_space_ms = free_space_timer.elapsedMs();
+    // A caller that never updates the planning layer must not make the map log grow without
+    // bound: past a few changes per block of the map, the update runs here.
+    if (map_changes_.pending(*planning_consumer_) > std::max<size_t>(kMaxPendingPlanningChanges, 4 * octree_.blockCount())) {
+      result.planning_catch_up = true;
+      result.planning_catch_up_ms = updatePlanning().esdf_ms;
+    }
   }
   if (mesh_timing == MeshTiming::kNow) {
     MeshPass pass = updateMesh();

@@ -40,6 +40,10 @@ struct PlanningPass {
   double esdf_ms = 0.0;  ///< re-reading the changed TSDF blocks' cells and updating the ESDF
 };
 
+/// Block changes the planning layer may leave waiting in the map log (or 4 per block of the
+/// map, if more) before integrate() updates it itself.
+constexpr size_t kMaxPendingPlanningChanges = 1 << 16;
+
 /// When integrate() brings the mesh up to date.
 enum class MeshTiming {
   kNow,       ///< right after the frame (updateMesh()): the mesh always matches the map
@@ -60,6 +64,10 @@ struct IntegrationResult {
   double carve_ms = 0.0;  ///< free-space carving (FreeSpaceCarver), included in nothing else
   double free_space_ms = 0.0;  ///< recording the space the frame saw empty (planning layer), included in nothing else
   FreeSpaceStats free_space;
+  /// The planning layer was updated after this frame because its changes had piled up
+  /// (kMaxPendingPlanningChanges), taking planning_catch_up_ms.
+  bool planning_catch_up = false;
+  double planning_catch_up_ms = 0.0;
   OutlierRejectionStats rejected;  ///< usable pixels the outlier rejection dropped (counted, not fused)
   LookupStats lookup;
   FusionStats fusion;
@@ -108,7 +116,7 @@ class Mapper {
   /// Brings the planning layer's occupancy and distance field up to date with every TSDF change
   /// since the previous call (nothing without planning_enabled). Like updateMesh(), at the
   /// caller's rate: between calls the free space is recorded every frame, the rest waits in the
-  /// map log.
+  /// map log (integrate() runs it when more than kMaxPendingPlanningChanges wait).
   PlanningPass updatePlanning();
   /// Re-reads every TSDF block into the planning layer and recomputes its distance field from
   /// scratch (the same result as the incremental updates); returns its work.

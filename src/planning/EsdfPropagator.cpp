@@ -48,7 +48,16 @@ class BucketQueue {
   size_t size_ = 0;
 };
 
-/// The propagation over one PlanningBlockMap: cell access with a one-block cache.
+/// Calls fn(n) for the 26 neighbours n of `c` (faces, edges, corners).
+template <typename Fn>
+void forEachNeighbour(const CellIndex& c, Fn&& fn) {
+  for (int dz = -1; dz <= 1; ++dz)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx)
+        if (dx | dy | dz) fn(c.offset(dx, dy, dz));
+}
+
+/// The propagation over one PlanningBlockMap: cell access through a small block cache.
 class Propagation {
  public:
   Propagation(PlanningBlockMap* blocks, uint32_t max_dist2)
@@ -125,23 +134,17 @@ class Propagation {
     const Ref rc = at(c);
     if (!rc.block) return;
     const bool own = occupied(rc);
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          if (!(dx | dy | dz)) continue;
-          const CellIndex n = c.offset(dx, dy, dz);
-          const Ref rn = at(n);
-          if (!rn.block) {
-            if (own) consider(c, at(c), n);  // outside every block: not occupied
-            continue;
-          }
-          if (occupied(rn) != own) {
-            consider(c, at(c), n);
-          } else if (siteValid(n, rn)) {
-            const CellIndex s = siteOf(n, rn);
-            consider(c, at(c), s);
-          }
-        }
+    forEachNeighbour(c, [&](const CellIndex& n) {
+      const Ref rn = at(n);
+      if (!rn.block) {
+        if (own) consider(c, at(c), n);  // outside every block: not occupied
+      } else if (occupied(rn) != own) {
+        consider(c, at(c), n);
+      } else if (siteValid(n, rn)) {
+        const CellIndex s = siteOf(n, rn);
+        consider(c, at(c), s);
+      }
+    });
   }
 
   void lower() {
@@ -159,18 +162,12 @@ class Propagation {
   std::vector<CellIndex> raise(const std::vector<CellIndex>& seeds) {
     std::vector<CellIndex> cleared = seeds;
     for (size_t i = 0; i < cleared.size(); ++i) {
-      const CellIndex c = cleared[i];
-      for (int dz = -1; dz <= 1; ++dz)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dx = -1; dx <= 1; ++dx) {
-            if (!(dx | dy | dz)) continue;
-            const CellIndex n = c.offset(dx, dy, dz);
-            const Ref rn = at(n);
-            if (!rn.block || rn.block->dist2[rn.cell] == PlanningBlock::kNoSite) continue;
-            if (siteValid(n, rn)) continue;
-            clearSite(at(n));
-            cleared.push_back(n);
-          }
+      forEachNeighbour(cleared[i], [&](const CellIndex& n) {
+        const Ref rn = at(n);
+        if (!rn.block || rn.block->dist2[rn.cell] == PlanningBlock::kNoSite || siteValid(n, rn)) return;
+        clearSite(at(n));
+        cleared.push_back(n);
+      });
     }
     return cleared;
   }

@@ -327,6 +327,9 @@ void FusionNodelet::catchUpMeshLocked() {
   if (mapper_->blocksAwaitingMesh() == 0) return;
   const MeshPass pass = mapper_->updateMesh();
   recordMeshPassLocked(pass.mesh.meshing_ms, pass.texture.texture_ms);
+  // The planning layer follows the map at the mesh's rate (its topics and services are the
+  // planning-on-ROS work's); it reads the same changes.
+  mapper_->updatePlanning();
 }
 
 void FusionNodelet::publishPending(const ros::Time& stamp, bool force) {

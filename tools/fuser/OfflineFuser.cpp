@@ -491,26 +491,22 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   j["timings_ms"]["texture"] = stage(&StageTimings::texture_ms, true);
   j["timings_ms"]["free_space"] = stage(&StageTimings::free_space_ms, false);
   {
-    std::vector<double> v;
-    for (const StageTimings& t : report.timings)
-      if (t.esdf_updated) v.push_back(t.esdf_ms);
-    const Summary s = summarize(v);
-    j["timings_ms"]["esdf"] = {{"mean", s.mean}, {"p50", s.p50}, {"p99", s.p99}, {"per", "planning update"}};
-    auto p50 = [&](double StageTimings::*field) {
-      std::vector<double> w;
+    // Over the frames after which the planning layer was updated.
+    auto overUpdates = [&](double StageTimings::*field) {
+      std::vector<double> v;
       for (const StageTimings& t : report.timings)
-        if (t.esdf_updated) w.push_back(t.*field);
-      return summarize(w).p50;
+        if (t.esdf_updated) v.push_back(t.*field);
+      return summarize(v);
     };
-    j["planning_work_p50"]["read_ms"] = p50(&StageTimings::esdf_read_ms);
-    j["planning_work_p50"]["propagate_ms"] = p50(&StageTimings::esdf_propagate_ms);
-    j["planning_work_p50"]["tsdf_blocks"] = p50(&StageTimings::esdf_tsdf_blocks);
-    j["planning_work_p50"]["cells_flipped"] = p50(&StageTimings::esdf_flipped);
-    j["planning_work_p50"]["cells_raised"] = p50(&StageTimings::esdf_raised);
-    j["planning_work_p50"]["cells_lowered"] = p50(&StageTimings::esdf_lowered);
-    std::vector<double> nodes;
-    for (const StageTimings& t : report.timings) nodes.push_back(t.free_space_nodes);
-    j["planning_work_p50"]["free_space_nodes"] = summarize(nodes).p50;
+    const Summary s = overUpdates(&StageTimings::esdf_ms);
+    j["timings_ms"]["esdf"] = {{"mean", s.mean}, {"p50", s.p50}, {"p99", s.p99}, {"per", "planning update"}};
+    j["planning_work_p50"]["read_ms"] = overUpdates(&StageTimings::esdf_read_ms).p50;
+    j["planning_work_p50"]["propagate_ms"] = overUpdates(&StageTimings::esdf_propagate_ms).p50;
+    j["planning_work_p50"]["tsdf_blocks"] = overUpdates(&StageTimings::esdf_tsdf_blocks).p50;
+    j["planning_work_p50"]["cells_flipped"] = overUpdates(&StageTimings::esdf_flipped).p50;
+    j["planning_work_p50"]["cells_raised"] = overUpdates(&StageTimings::esdf_raised).p50;
+    j["planning_work_p50"]["cells_lowered"] = overUpdates(&StageTimings::esdf_lowered).p50;
+    j["planning_work_p50"]["free_space_nodes"] = stage(&StageTimings::free_space_nodes, false)["p50"];
   }
   j["timings_ms"]["total"] = stage(&StageTimings::total_ms, false);
   size_t mesh_calls = 0;

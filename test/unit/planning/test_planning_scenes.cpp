@@ -103,7 +103,9 @@ TEST(PlanningScenes, EvictionMakesForgottenSpaceUnknown) {
     frame.timestamp_s = 1.0 + i;
     ASSERT_TRUE(mapper.integrate(frame).accepted);
     mapper.updatePlanning();
-    if (i == 2) ASSERT_EQ(mapper.planning()->state({2.0, 1.5, 1.0}), CellState::kOccupied);
+    if (i == 2) {
+      ASSERT_EQ(mapper.planning()->state({2.0, 1.5, 1.0}), CellState::kOccupied);
+    }
   }
   const PlanningMap& planning = *mapper.planning();
   EXPECT_EQ(planning.state({2.0, 1.5, 1.0}), CellState::kUnknown);  // 13 m behind the camera
@@ -158,6 +160,36 @@ TEST(PlanningScenes, QueriesWhileFusingAreSafe) {
   EXPECT_EQ(bad.load(), 0u);
   EXPECT_EQ(planning->state({1.2, 0.1, 1.2}), CellState::kFree);   // in front of the first camera
   EXPECT_EQ(planning->state({0.0, 0.0, 1.2}), CellState::kUnknown);  // behind every camera
+}
+
+}  // namespace
+}  // namespace stereo_fusion
+
+namespace stereo_fusion {
+namespace {
+
+// A caller that never calls updatePlanning() (a tool that only wants the mesh) does not make the
+// map log grow without bound: integrate() updates the layer once too many changes wait, and the
+// layer then answers as if it had been updated all along.
+TEST(PlanningScenes, ChangesDoNotPileUpWhenNobodyUpdatesTheLayer) {
+  sim::AnalyticScene scene;
+  scene.add(sim::makePlane(Eigen::Vector3d(3.0, 0, 0), Eigen::Vector3d(-1, 0, 0)));
+  MapperConfig config;
+  config.mesh_enabled = false;
+  Mapper mapper(config);
+  size_t catch_ups = 0;
+  // A frame of the wall changes hundreds of blocks: within these frames more than the 65 536
+  // changes allowed would wait.
+  for (int i = 0; i < 100; ++i) {
+    const Eigen::Vector3d eye(0.0, 0.02 * i, 1.0);
+    StereoFrame frame = test::renderFrame(scene, test::vgaCamera(), sim::lookAt(eye, eye + Eigen::Vector3d::UnitX()));
+    frame.timestamp_s = 1.0 + i;
+    const IntegrationResult r = mapper.integrate(frame);
+    ASSERT_TRUE(r.accepted);
+    catch_ups += r.planning_catch_up;
+  }
+  EXPECT_GT(catch_ups, 0u);
+  EXPECT_EQ(mapper.planning()->state({3.0, 0.5, 1.0}), CellState::kOccupied);
 }
 
 }  // namespace
