@@ -110,6 +110,7 @@ std::unique_ptr<Mapper> refuseWindow(const MapperConfig& config, const std::vect
   }
   clearBefore(previous_s, std::numeric_limits<double>::infinity());
   mapper->updateMesh();
+  mapper->updatePlanning();  // swapped in ready: occupancy and distances of the corrected map
   return mapper;
 }
 

@@ -74,7 +74,7 @@ class CorrectionWindow {
 
 /// Fuses `frames` (in order) at the poses `correction` gives into a new mapper that starts from
 /// `base_bytes` (a sealed map file, empty for an empty map), clearing each of `clears` after the
-/// last frame stamped before it, meshes it, and returns it; nullptr with `error` if the base
+/// last frame stamped before it, meshes it and updates its planning layer, and returns it; nullptr with `error` if the base
 /// cannot be read or `cancelled()` turns true between frames. `rejected` (optional) counts frames
 /// the new mapper refused (its FrameGate).
 std::unique_ptr<Mapper> refuseWindow(const MapperConfig& config, const std::vector<uint8_t>& base_bytes,

@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include "MeshTestSupport.h"
+#include <tuple>
+
 #include "stereo_fusion/trajectory/CorrectionWindow.h"
 
 using namespace stereo_fusion;
@@ -86,6 +88,21 @@ TEST(CorrectionWindow, RefusingTheWindowEqualsFusingTheFramesAtTheirCorrectedPos
   EXPECT_FALSE(snapshot(refused->map()) == snapshot(live.map())) << "the correction must move the map";
   EXPECT_TRUE(triangleSets(refused->mesh()) == triangleSets(reference.mesh()));
   expectMeshEqualsRebuild(*refused);
+  // The planning layer swapped in with it is the reference's too: the same cells, states and
+  // distances, though the reference updated it after every frame and the refusal once.
+  reference.updatePlanning();
+  live.updatePlanning();
+  auto cells = [](const Mapper& m) {
+    std::vector<std::tuple<int, int, int, int, double>> out;
+    m.planning()->forEachKnownCell([&](const CellIndex& c, CellState s, double d) {
+      out.emplace_back(c.x, c.y, c.z, static_cast<int>(s), d);
+    });
+    return out;
+  };
+  const auto refused_cells = cells(*refused);
+  EXPECT_FALSE(refused_cells.empty());
+  EXPECT_TRUE(refused_cells == cells(reference));
+  EXPECT_FALSE(refused_cells == cells(live)) << "the correction must move the planning layer";
 }
 
 TEST(CorrectionWindow, FramesThatLeftTheWindowStayWhereTheBaseFusedThem) {
