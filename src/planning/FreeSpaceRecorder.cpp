@@ -161,31 +161,47 @@ FreeSpaceStats FreeSpaceRecorder::record(const StereoFrame& frame, const Measure
           Eigen::Vector4f(0.0f, 0.0f, 1.0f, -kMinDepthM)};
       std::array<float, 5> plane_extent;  // a one-cell node's extent along each plane's normal
       for (int p = 0; p < 5; ++p) plane_extent[p] = planes[p].head<3>().cwiseAbs().dot(half_extent);
-      auto visit = [&](auto&& self, const CellIndex& o, const Eigen::Vector3f& corner_c, int size) -> void {
+      // `bounds`: for a child of a node inside the view, that node's free-depth range. The
+      // child's footprint lies within its parent's, so a depth beyond the parent's largest free
+      // depth is behind for the child too, and one before its smallest is free: most children of
+      // a node astride a surface are decided without a footprint of their own.
+      struct ParentBounds {
+        float min_free_m, max_free_m;
+      };
+      auto visit = [&](auto&& self, const CellIndex& o, const Eigen::Vector3f& corner_c, int size,
+                       const ParentBounds* bounds) -> void {
         ++out.stats.nodes_visited;
         const float s = static_cast<float>(size);
         const Eigen::Vector3f c = corner_c + 0.5f * s * (axis_x + axis_y + axis_z);
         const float z_near = c.z() - s * half_extent.z(), z_far = c.z() + s * half_extent.z();
         if (z_far <= 0.0f || z_near >= far_f) return;
         bool inside = true;
-        for (int p = 0; p < 5; ++p) {
-          const float d = planes[p].head<3>().dot(c) + planes[p].w(), r = s * plane_extent[p];
-          if (d + r < 0.0f) return;  // out of view
-          inside = inside && d - r >= 0.0f;
+        if (bounds) {  // inside the view like its parent
+          if (z_near >= bounds->max_free_m) return;
+          if (z_far < bounds->min_free_m) {
+            markFree(o, size);
+            return;
+          }
+        } else {
+          for (int p = 0; p < 5; ++p) {
+            const float d = planes[p].head<3>().dot(c) + planes[p].w(), r = s * plane_extent[p];
+            if (d + r < 0.0f) return;  // out of view
+            inside = inside && d - r >= 0.0f;
+          }
         }
-        auto split = [&] {
+        auto split = [&](const ParentBounds* child_bounds) {
           const int h = size / 2;
           const float hs = static_cast<float>(h);
           for (int k = 0; k < 2; ++k)
             for (int j = 0; j < 2; ++j)
               for (int i = 0; i < 2; ++i)
                 self(self, o.offset(i * h, j * h, k * h),
-                     corner_c + hs * (float(i) * axis_x + float(j) * axis_y + float(k) * axis_z), h);
+                     corner_c + hs * (float(i) * axis_x + float(j) * axis_y + float(k) * axis_z), h, child_bounds);
         };
         // Footprint: u = fx·x/z + cx over the node's extent x ∈ [c.x ± ·], z ∈ [z_near, z_far];
         // clipped to the image for a node partly out of view.
         if (!inside && (size == 1 || z_near <= kMinDepthM)) {
-          if (size > 1) split();  // reaches the camera plane: no footprint
+          if (size > 1) split(nullptr);  // reaches the camera plane: no footprint
           return;
         }
         const float x_lo = c.x() - s * half_extent.x(), x_hi = c.x() + s * half_extent.x();
@@ -216,18 +232,19 @@ FreeSpaceStats FreeSpaceRecorder::record(const StereoFrame& frame, const Measure
           }
         if (max_free <= z_near) return;  // behind every free depth it can see
         if (!inside) {
-          split();  // partly out of view: its parts inside may still be free
+          split(nullptr);  // partly out of view: its parts inside may still be free
           return;
         }
         if (min_free > z_far) {
           markFree(o, size);
           return;
         }
-        if (size > 1) split();
+        const ParentBounds mine{min_free, max_free};
+        if (size > 1) split(&mine);
       };
       const Eigen::Vector3f root_c =
           (T_camera_world * Eigen::Vector3d(root.x * cell_m, root.y * cell_m, root.z * cell_m)).cast<float>();
-      visit(visit, root, root_c, kRootCells);
+      visit(visit, root, root_c, kRootCells, nullptr);
     }
   });
   for (size_t r = 0; r < roots.size(); ++r) {
