@@ -48,9 +48,10 @@ class BucketQueue {
   size_t size_ = 0;
 };
 
-/// Calls fn(n) for the 26 neighbours n of `c` (faces, edges, corners).
+/// Calls fn(n) for the 26 neighbours n of `c` (faces, edges, corners). `c` by value: `fn` may
+/// grow the container it came from.
 template <typename Fn>
-void forEachNeighbour(const CellIndex& c, Fn&& fn) {
+void forEachNeighbour(const CellIndex c, Fn&& fn) {
   for (int dz = -1; dz <= 1; ++dz)
     for (int dy = -1; dy <= 1; ++dy)
       for (int dx = -1; dx <= 1; ++dx)
