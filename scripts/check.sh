@@ -147,7 +147,7 @@ if [ "$mode" != --asan ]; then
     threaded='ThreadPool.*:BlockOctree.ConcurrentAllocationCreatesEachBlockOnce'
     threaded+=':BlockOctreeLinks.EqualSearchesAfterRandomAllocateEraseClearSwap'
     threaded+=':BlockLookup.ResultDoesNotDependOnThreadsOrRegionSize:MapperProperties.ThreadCountDoesNotChangeTheMap'
-    threaded+=':BlockMesher.ThreadCountDoesNotChangeTheMesh'
+    threaded+=':BlockMesher.ThreadCountDoesNotChangeTheMesh:PlanningScenes.QueriesWhileFusingAreSafe'
     run_gtest tsan_thread_tests "$bin" "$threaded" || failed=1
     run_rostests tsan_ros "$dir" "$ROS_TESTS" || failed=1
   else
