@@ -33,6 +33,10 @@ std::optional<StereoCamera> StereoCamera::create(int width_px, int height_px, do
   } else if (!(fx_px / fy_px >= 1.0 / kMaxFocalRatio && fx_px / fy_px <= kMaxFocalRatio)) {
     why << "fx / fy = " << fx_px / fy_px << " is implausible (pixels more than " << kMaxFocalRatio
         << " times wider than high, or the reverse)";
+  } else if (std::max(std::abs(cx_px), std::abs(width_px - cx_px)) > kMaxRayTangent * fx_px ||
+             std::max(std::abs(cy_px), std::abs(height_px - cy_px)) > kMaxRayTangent * fy_px) {
+    why << "principal point cx=" << cx_px << " cy=" << cy_px << " px is implausible for a " << width_px << "x"
+        << height_px << " image with fx=" << fx_px << " fy=" << fy_px << " (rays more than 85.4° off the optical axis)";
   }
   const std::string reason = why.str();
   if (!reason.empty()) {

@@ -21,11 +21,18 @@ class StereoCamera {
   static constexpr double kMinFocalPerImageSize = 0.04;
   /// Largest accepted fx / fy (or fy / fx).
   static constexpr double kMaxFocalRatio = 10.0;
+  /// Largest |u − cx| / fx (and |v − cy| / fy) of any pixel: the half image over the smallest
+  /// focal length kMinFocalPerImageSize allows, 12.5 = tan 85.4°, a ray within the field of
+  /// view of the widest lens accepted. The principal point may lie outside the
+  /// image (a crop, a shifted rectification), but one kilometres away (K[2] = 1e9) makes every
+  /// ray nearly parallel to the image plane and the lookup walk a frustum of absurd size.
+  static constexpr double kMaxRayTangent = 0.5 / kMinFocalPerImageSize;
 
   /// Returns the camera, or std::nullopt with a human-readable reason in `error`.
   /// Rejects non-finite, zero or negative fx, fy, baseline; non-finite cx, cy;
   /// non-positive image size; and implausible calibrations: a focal length below
-  /// kMinFocalPerImageSize × the larger image side, fx / fy beyond kMaxFocalRatio.
+  /// kMinFocalPerImageSize × the larger image side, fx / fy beyond kMaxFocalRatio, pixels whose
+  /// rays lie more than 85.4° off the optical axis (kMaxRayTangent).
   static std::optional<StereoCamera> create(int width_px, int height_px, double fx_px, double fy_px,
                                             double cx_px, double cy_px, double baseline_m,
                                             std::string* error = nullptr);

@@ -99,4 +99,15 @@ TEST(StereoCamera, RejectsImplausibleCalibrations) {
   EXPECT_FALSE(StereoCamera::create(640, 480, 5000, 450, 320, 240, 0.1, &error));
   EXPECT_NE(error.find("fx / fy = 11.1"), std::string::npos) << error;
   EXPECT_TRUE(StereoCamera::create(640, 480, 500, 51, 320, 240, 0.1));
+  // The principal point may lie outside the image (a crop) while every pixel's ray stays within
+  // 85.4° of the optical axis: |u − cx| ≤ 12.5 · f = 12.5 · 525 = 6562.5 px.
+  EXPECT_FALSE(StereoCamera::create(640, 480, 525, 525, 1e9, 240, 0.1, &error));
+  EXPECT_NE(error.find("principal point cx=1e+09 cy=240 px is implausible for a 640x480 image with fx=525"),
+            std::string::npos)
+      << error;
+  EXPECT_TRUE(StereoCamera::create(640, 480, 525, 525, -5922, 240, 0.1));   // farthest pixel 6562 px away
+  EXPECT_FALSE(StereoCamera::create(640, 480, 525, 525, -5923, 240, 0.1));  // 6563 px
+  EXPECT_TRUE(StereoCamera::create(640, 480, 525, 525, 320, 6562, 0.1));
+  EXPECT_FALSE(StereoCamera::create(640, 480, 525, 525, 320, 6563, 0.1));
+  EXPECT_TRUE(StereoCamera::create(32, 32, 500, 500, -300, -300, 0.1));  // a crop 31–34° off axis
 }

@@ -69,6 +69,8 @@ TEST(BadInput, CameraInfoAndDisparityCalibrationAreChecked) {
       {"CameraInfo size differs", [](Messages* m) { m->info.width = 640; }, "CameraInfo is 640x240"},
       {"CameraInfo fy = 1e-3", [](Messages* m) { m->info.P[5] = 1e-3; m->info.K[4] = 1e-3; },
        "px are implausible for a 320x240 image"},
+      {"CameraInfo principal point 1e9 (K and P)", [](Messages* m) { m->info.P[2] = 1e9; m->info.K[2] = 1e9; },
+       "is implausible for a 320x240 image"},
       {"DisparityImage min_disparity NaN", [](Messages* m) { m->disparity.min_disparity = NAN; }, "is not a range"},
       {"DisparityImage max_disparity inf", [](Messages* m) { m->disparity.max_disparity = INFINITY; }, "is not a range"},
       {"DisparityImage max < min", [](Messages* m) { m->disparity.min_disparity = 50; m->disparity.max_disparity = 10; },
