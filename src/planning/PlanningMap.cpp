@@ -10,14 +10,6 @@
 
 namespace stereo_fusion {
 
-const char* cellStateName(CellState state) {
-  switch (state) {
-    case CellState::kFree: return "free";
-    case CellState::kOccupied: return "occupied";
-    default: return "unknown";
-  }
-}
-
 PlanningConfig PlanningConfig::from(const MapperConfig& config) {
   PlanningConfig p;
   p.cell_m = config.planningCellSizeM();
@@ -48,11 +40,7 @@ PlanningBlock* PlanningMap::allocate(const BlockKey& key) {
 
 FreeSpaceStats PlanningMap::recordFreeSpace(const StereoFrame& frame, const MeasurementImage& measurements) {
   const FreeSpaceStats stats = recorder_.record(frame, measurements, &seen_scratch_);
-  std::unique_lock lock(mutex_);
-  for (const auto& [key, bits] : seen_scratch_) {
-    PlanningBlock* block = allocate(key);
-    for (size_t w = 0; w < bits.size(); ++w) block->seen_free[w] |= bits[w];
-  }
+  addSeenFree(seen_scratch_);
   return stats;
 }
 

@@ -118,8 +118,8 @@ int main(int argc, char** argv) {
   pcl::PointCloud<pcl::PointXYZ>::Ptr occupied(new pcl::PointCloud<pcl::PointXYZ>);
   for (const Eigen::Vector3d& p : cells.occupied_centres) occupied->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
   double cell_m = INFINITY;  // the grid's spacing: the nearest other occupied centre
+  pcl::KdTreeFLANN<pcl::PointXYZ> tree;  // a single k-d tree searched exactly
   if (!occupied->empty()) {
-    pcl::KdTreeFLANN<pcl::PointXYZ> tree;  // a single k-d tree searched exactly
     tree.setInputCloud(occupied);
     std::vector<int> index(2);
     std::vector<float> squared(2);
@@ -151,8 +151,6 @@ int main(int argc, char** argv) {
     // The same where the nearest true surface point lies in an occupied cell (within half a
     // cell diagonal of its centre): what the ESDF's grid costs where the map saw the surface.
     if (!occupied->empty()) {
-      pcl::KdTreeFLANN<pcl::PointXYZ> tree;
-      tree.setInputCloud(occupied);
       std::vector<int> index(1);
       std::vector<float> squared(1);
       const double reach = diagonal + 1e-6;

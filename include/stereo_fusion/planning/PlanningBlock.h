@@ -25,7 +25,6 @@ enum class CellState : uint8_t {
                   ///< observed voxels in it all lie in front of a surface)
   kOccupied = 2,  ///< holds a surface or the space just behind one (an observed TSDF voxel with sdf ≥ 0)
 };
-const char* cellStateName(CellState state);
 
 /// 8³ planning cells: the unit of allocation of the planning layer (its own sparse grid, keyed
 /// like the TSDF's blocks but at the planning cell size). Bits per cell say what frames saw;

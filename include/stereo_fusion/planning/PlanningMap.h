@@ -89,7 +89,8 @@ class PlanningMap {
   void forEachKnownCell(const std::function<void(const CellIndex&, CellState, double)>& fn) const;
   /// Blocks and their seen-free bits, for the map file.
   std::vector<std::pair<BlockKey, PlanningBlock::Bits>> seenFree() const;
-  /// Adds seen-free bits (a map file's); the next update() or rebuild() allocates their ESDF.
+  /// Adds seen-free bits (a frame's, a map file's); the next update() or rebuild() gives their new
+  /// blocks distances.
   void addSeenFree(const std::vector<std::pair<BlockKey, PlanningBlock::Bits>>& seen_free);
 
   size_t blockCount() const;
