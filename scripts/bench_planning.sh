@@ -46,7 +46,7 @@ for s in "${SEQS[@]}"; do
   case "$s" in room|hall|noisy-hall) seq="$(simulated "$s")" ;; *) seq="$s" ;; esac
   name="$(basename "$seq")"
   for every in 1 10; do
-    "$BIN/stereo_fusion_fuse" "$seq" "$WORK/out_${name}_e$every" --quiet --esdf-every "$every" "${SETS[@]}" >&2
+    "$BIN/stereo_fusion_fuse" "$seq" "$WORK/out_${name}_e$every" --quiet --time-planning --esdf-every "$every" "${SETS[@]}" >&2
   done
   bf="-"
   if "$BIN/stereo_fusion_evaluate_esdf" "$WORK/out_${name}_e10/esdf.ply" $([ -f "$seq/gt_mesh.ply" ] && echo "$seq") \

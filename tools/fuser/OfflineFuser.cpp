@@ -75,6 +75,8 @@ bool parseFuseArguments(const std::vector<std::string>& args, FuseOptions* optio
       (a == "--load-map" ? options->load_map : a == "--save-map" ? options->save_map : options->trajectory) = *v;
     } else if (a == "--quiet") {
       options->progress = false;
+    } else if (a == "--time-planning") {
+      options->time_planning = true;
     } else if (!a.empty() && a[0] == '-') {
       *error = "unknown option '" + a + "'";
       return false;
@@ -212,8 +214,8 @@ bool applyTrajectory(const FuseOptions& options, FrameSource* reader, const std:
 
 namespace {
 /// esdf.ply, occupancy.pgm + .yaml and octomap.bt of the planning layer, and its figures.
-bool writePlanningOutputs(const std::string& out_dir, Mapper* mapper, FuseReport::Planning* report,
-                          std::string* error) {
+bool writePlanningOutputs(const std::string& out_dir, Mapper* mapper, bool time_queries,
+                          FuseReport::Planning* report, std::string* error) {
   const PlanningMap* planning = mapper->planning();
   if (!planning) return true;
   report->enabled = true;
@@ -227,7 +229,7 @@ bool writePlanningOutputs(const std::string& out_dir, Mapper* mapper, FuseReport
     (state == CellState::kOccupied ? report->cells_occupied : report->cells_free) += 1;
     known.extend(planning->grid().centre(cell));
   });
-  if (!known.isEmpty()) {  // what a planner's batch query of 100 000 points costs
+  if (time_queries && !known.isEmpty()) {  // what a planner's batch query of 100 000 points costs
     std::mt19937 rng(1);
     std::vector<Eigen::Vector3d> points(100000);
     for (Eigen::Vector3d& p : points)
@@ -245,10 +247,11 @@ bool writePlanningOutputs(const std::string& out_dir, Mapper* mapper, FuseReport
   if (!writeOccupancyMap((dir / "occupancy.pgm").string(), (dir / "occupancy.yaml").string(), grid, error))
     return false;
   if (!writeOctomap((dir / "octomap.bt").string(), *planning, &report->octomap_cells_skipped, error)) return false;
-  // What a batch rebuild costs (it recomputes the same layer: incremental == batch).
-  Timer rebuild;
-  mapper->rebuildPlanning();
-  report->rebuild_ms = rebuild.elapsedMs();
+  if (time_queries) {  // what a batch rebuild costs (it recomputes the same layer: incremental == batch)
+    Timer rebuild;
+    mapper->rebuildPlanning();
+    report->rebuild_ms = rebuild.elapsedMs();
+  }
   return true;
 }
 }  // namespace
@@ -421,7 +424,7 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
       return false;
     report->atlas_count = info.files.size() - 2;  // besides the .obj and the .mtl
   }
-  if (!writePlanningOutputs(options.out_dir, mapper, &report->planning, error)) return false;
+  if (!writePlanningOutputs(options.out_dir, mapper, options.time_planning, &report->planning, error)) return false;
   std::ofstream stats(fs::path(options.out_dir) / "stats.json");
   stats << statsJson(*report, options.config) << "\n";
   if (!stats) {
@@ -546,8 +549,10 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
     j["planning"]["blocks"] = p.blocks;
     j["planning"]["cells_free"] = p.cells_free;
     j["planning"]["cells_occupied"] = p.cells_occupied;
-    j["planning"]["rebuild_ms"] = p.rebuild_ms;
-    j["planning"]["query_100k_ms"] = p.query_100k_ms;
+    if (p.rebuild_ms > 0.0) {  // --time-planning
+      j["planning"]["rebuild_ms"] = p.rebuild_ms;
+      j["planning"]["query_100k_ms"] = p.query_100k_ms;
+    }
     j["planning"]["octomap_cells_skipped"] = p.octomap_cells_skipped;
     j["memory"]["free_space_bytes"] = p.free_space_bytes;
     j["memory"]["free_space_megabytes"] = p.free_space_bytes / 1048576.0;

@@ -30,6 +30,9 @@ struct FuseOptions {
   std::string load_map;  ///< map file to start from (empty = an empty map); `input` may then be empty
   std::string save_map;  ///< where to save the map after the last frame (empty = not saved)
   bool progress = true;   ///< progress bar on stderr (a line per 10 % when not a terminal)
+  /// --time-planning: after the outputs, time a 100 000-point batch query and a batch rebuild of
+  /// the planning layer (stats.json planning.query_100k_ms, rebuild_ms; scripts/bench_planning.sh).
+  bool time_planning = false;
   /// A SLAM's corrected camera poses (TUM lines, stamps matching the frames'), applied after the
   /// last frame: the frames are fused again at their corrected poses (empty = none).
   std::string trajectory;
@@ -101,13 +104,14 @@ struct FuseReport {
     double cell_m = 0, max_distance_m = 0;
     size_t blocks = 0, cells_free = 0, cells_occupied = 0;
     size_t free_space_bytes = 0, esdf_bytes = 0;
-    double rebuild_ms = 0;   ///< a batch rebuild of the whole layer, timed once at the end
-    double query_100k_ms = 0;  ///< PlanningMap::sampleBatch() of 100 000 points in the known cells' box
+    double rebuild_ms = 0;   ///< with --time-planning: a batch rebuild of the whole layer
+    double query_100k_ms = 0;  ///< with --time-planning: sampleBatch() of 100 000 points in the known cells' box
     size_t octomap_cells_skipped = 0;
   } planning;
 };
 
-/// Parses `fuse <input> <out-dir> [--config FILE] [--set key=value ...] [--frames N] [--quiet]
+/// Parses `fuse <input> <out-dir> [--config FILE] [--set key=value ...] [--frames N] [--mesh-every N]
+/// [--esdf-every N] [--time-planning] [--quiet]
 /// [--disparity-topic T] [--image-topic T] [--camera-info-topic T] [--world-frame F]
 /// [--load-map FILE] [--save-map FILE] [--trajectory FILE]`; with --load-map the input may be left out
 /// (`fuse <out-dir> --load-map FILE` meshes a saved map).
