@@ -5,20 +5,6 @@
 
 namespace stereo_fusion {
 
-const char* rejectReasonName(RejectReason reason) {
-  switch (reason) {
-    case RejectReason::kNone: return "none";
-    case RejectReason::kInvalidFrame: return "invalid";
-    case RejectReason::kTimestampBackwards: return "timestamp_backwards";
-    case RejectReason::kDuplicateTimestamp: return "duplicate";
-    case RejectReason::kPoseJump: return "pose_jump";
-    case RejectReason::kTimestampJump: return "timestamp_jump";
-    case RejectReason::kAllocationBudget: return "allocation_budget";
-    case RejectReason::kIncoherentDisparity: return "incoherent_disparity";
-  }
-  return "unknown";
-}
-
 FrameGate::FrameGate(const FrameGateLimits& limits) : limits_(limits) {}
 
 RejectReason FrameGate::judge(const Seen& reference, const Seen& frame, std::string* why) const {

@@ -4,24 +4,10 @@
 #include <string>
 #include <vector>
 
+#include "stereo_fusion/integration/RejectReason.h"
 #include "stereo_fusion/integration/StereoFrame.h"
 
 namespace stereo_fusion {
-
-/// Why a frame was not fused; the ROS diagnostics and stats.json count frames by this.
-enum class RejectReason {
-  kNone,                ///< accepted
-  kInvalidFrame,        ///< validateFrame() failed: images, camera or pose malformed
-  kTimestampBackwards,  ///< timestamp before the last fused frame's
-  kDuplicateTimestamp,  ///< timestamp equal to the last fused frame's
-  kPoseJump,            ///< camera moved more than max_pose_jump_m since the last fused frame
-  kTimestampJump,       ///< timestamp more than max_timestamp_gap_s after the last fused frame's
-  kAllocationBudget,    ///< its bands reach more new blocks than max_new_blocks_per_frame
-  kIncoherentDisparity,  ///< fewer usable disparities agree with a neighbour than min_coherent_pixel_share
-};
-
-/// Short stable name of a reason, e.g. "timestamp_backwards" (counter keys, stats.json).
-const char* rejectReasonName(RejectReason reason);
 
 /// Limits of FrameGate; 0 (or false) disables a check.
 struct FrameGateLimits {
