@@ -27,9 +27,13 @@ add_library(stereo_fusion_core STATIC
   ${STEREO_FUSION_ROOT}/src/map/MapRegion.cpp
   ${STEREO_FUSION_ROOT}/src/map/RegionClearing.cpp
   ${STEREO_FUSION_ROOT}/src/trajectory/PoseCorrection.cpp
-  ${STEREO_FUSION_ROOT}/src/trajectory/CorrectionWindow.cpp
+  ${STEREO_FUSION_ROOT}/src/trajectory/UnitQuaternion.cpp
+  ${STEREO_FUSION_ROOT}/src/session/EditTimeline.cpp
+  ${STEREO_FUSION_ROOT}/src/session/MappingSession.cpp
+  ${STEREO_FUSION_ROOT}/src/session/TrajectoryOutcome.cpp
   ${STEREO_FUSION_ROOT}/src/integration/StereoFrame.cpp
   ${STEREO_FUSION_ROOT}/src/integration/FrameGate.cpp
+  ${STEREO_FUSION_ROOT}/src/integration/RejectReason.cpp
   ${STEREO_FUSION_ROOT}/src/integration/BlockLookup.cpp
   ${STEREO_FUSION_ROOT}/src/integration/SurfaceFuser.cpp
   ${STEREO_FUSION_ROOT}/src/integration/FreeSpaceCarver.cpp
@@ -75,7 +79,7 @@ target_link_libraries(stereo_fusion_sim PUBLIC stereo_fusion_core)
 
 # The core's unit tests: one gtest binary (one link, parallel compile); every test case is its own
 # ctest entry so the summary counts cases. The helpers (TestSupport.h, ...) are in test/unit/.
-set(STEREO_FUSION_CORE_TEST_FOLDERS camera map integration mesh io util mapper trajectory planning)
+set(STEREO_FUSION_CORE_TEST_FOLDERS camera map integration mesh io util mapper trajectory planning session)
 if(STEREO_FUSION_CORE_TESTS)
   set(_core_test_globs)
   foreach(folder ${STEREO_FUSION_CORE_TEST_FOLDERS})

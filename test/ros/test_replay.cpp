@@ -345,7 +345,11 @@ TEST(LoopClosureReplay, TheLiveMapFollowsTheCorrectedTrajectory) {
   ASSERT_TRUE(test::waitFor([&] {
     return diag("corrections applied") >= 1 &&
            diag("corrections applied") + diag("corrections superseded by a newer trajectory") >= 2;
-  }, 120.0)) << diag("corrections applied") << " applied, " << diag("trajectories rejected") << " rejected";
+  }, 120.0)) << diag("corrections applied") << " applied, " << diag("trajectories rejected") << " rejected, "
+      << diag("trajectories received") << " received, " << diag("corrections superseded by a newer trajectory")
+      << " superseded, " << diag("trajectories taken without re-fusion") << " taken without re-fusion, "
+      << diag("corrections dropped by reset/load") << " dropped by reset/load, "
+      << diag("loop closure: frames kept") << " frames kept";
   EXPECT_EQ(diag("trajectories received"), 2);
   EXPECT_EQ(diag("trajectories rejected"), 0);
   std::printf("[loop closure] %ld frames; last correction: %ld frames fused again in %ld ms\n", frames,

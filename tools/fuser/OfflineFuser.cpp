@@ -19,6 +19,7 @@
 #include "stereo_fusion/io/PlanningExport.h"
 #include "stereo_fusion/io/PlyWriter.h"
 #include "stereo_fusion/ros/BagSequence.h"
+#include "stereo_fusion/session/MappingSession.h"
 #include "stereo_fusion/trajectory/PoseCorrection.h"
 #include "stereo_fusion/util/Percentile.h"
 #include "stereo_fusion/util/Timer.h"
@@ -166,50 +167,6 @@ bool readTrajectory(const std::string& path, std::vector<StampedPose>* poses, st
   return true;
 }
 
-/// A fused frame: where it is in the input and the pose it was fused at.
-struct FusedFrame {
-  size_t index = 0;
-  StampedPose original;
-};
-
-/// Fuses the frames again at the poses `trajectory` implies (PoseCorrection) into a new mapper
-/// (starting from `load_map` when given), which then replaces `*mapper`.
-bool applyTrajectory(const FuseOptions& options, FrameSource* reader, const std::vector<FusedFrame>& fused,
-                     const std::vector<StampedPose>& trajectory, std::unique_ptr<Mapper>* mapper,
-                     CorrectionReport* report, std::string* error) {
-  Timer timer;
-  std::vector<StampedPose> originals;
-  for (const FusedFrame& f : fused) originals.push_back(f.original);
-  sortByStamp(&originals);
-  // Offline the trajectory comes after every frame: all of them share the drift it removes.
-  const PoseCorrection correction(originals, trajectory, std::numeric_limits<double>::infinity());
-  report->trajectory_poses = trajectory.size();
-  report->matched_poses = correction.corrections().size();
-  correctionMagnitude(originals, correction, &report->max_shift_m, &report->max_rotation_deg);
-  if (correction.empty()) {
-    *error = options.trajectory + ": none of its " + std::to_string(trajectory.size()) +
-             " stamps lies within 0.5 s of a fused frame (stamps must match poses.txt's / the bag's)";
-    return false;
-  }
-  auto corrected = std::make_unique<Mapper>(options.config);
-  if (!options.load_map.empty() && !corrected->loadMap(options.load_map, nullptr, error)) return false;
-  const bool terminal = isatty(STDERR_FILENO);
-  size_t last_decile = 0;
-  if (options.progress) std::fprintf(stderr, "applying %s: fusing %zu frames again at their corrected poses\n",
-                                     options.trajectory.c_str(), fused.size());
-  for (size_t k = 0; k < fused.size(); ++k) {
-    StereoFrame frame;
-    if (!reader->load(fused[k].index, &frame, error)) return false;  // it loaded a moment ago
-    ++report->frames_refused;  // the frame loads at its original pose again
-    if (!corrected->integrate(correction.corrected(frame), MeshTiming::kDeferred).accepted) ++report->frames_rejected;
-    if (options.progress) showProgress(k + 1, fused.size(), timer.elapsedMs() / 1000.0, terminal, &last_decile);
-  }
-  corrected->updateMesh();
-  *mapper = std::move(corrected);
-  report->applied = true;
-  report->ms = timer.elapsedMs();
-  return true;
-}
 }  // namespace
 
 namespace {
@@ -271,12 +228,22 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
   }
   std::vector<StampedPose> trajectory;
   if (!options.trajectory.empty() && !readTrajectory(options.trajectory, &trajectory, error)) return false;
-  std::vector<FusedFrame> fused;  // with --trajectory
-  auto owner = std::make_unique<Mapper>(options.config);
-  Mapper* mapper = owner.get();
+  // The session keeps every frame's stamp and pose for --trajectory (the images are read again
+  // from the input), and its one re-fusion routine applies the trajectory after the last frame.
+  SessionConfig session_config;
+  session_config.loop_closure_max_frames = trajectory.empty() ? 0 : std::numeric_limits<size_t>::max();
+  session_config.background_corrections = false;
+  MappingSession session(options.config, session_config);
+  // Offline, one thread: the mapper is used directly between session calls (a correction
+  // swaps it: take it again after).
+  Mapper* mapper = session.withMapper([](Mapper& m) { return &m; });
   if (!options.load_map.empty()) {
-    if (!mapper->loadMap(options.load_map, nullptr, error)) return false;
-    report->blocks_loaded = mapper->map().blockCount();
+    const MappingSession::LoadOutcome loaded = session.load(options.load_map);
+    if (!loaded.success) {
+      *error = loaded.message;
+      return false;
+    }
+    report->blocks_loaded = loaded.blocks;
   }
   std::error_code ec;
   fs::create_directories(options.out_dir, ec);
@@ -291,8 +258,8 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
   const bool terminal = isatty(STDERR_FILENO);
   size_t last_decile = 0;
   Timer wall;
-  auto skip = [&](const std::string& reason, const std::string& message) {
-    ++report->skipped[reason];
+  auto skip = [&](RejectReason reason, const std::string& message) {
+    ++report->skipped[rejectReasonName(reason)];
     if (report->skipped_examples.size() < 5) report->skipped_examples.push_back(message);
     std::fprintf(stderr, "%sskipping frame: %s\n", terminal && options.progress ? "\n" : "", message.c_str());
   };
@@ -306,28 +273,30 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
       why = "frame " + std::to_string(i) + ": " + e.what();
     }
     if (!loaded) {
-      skip("unreadable", why);
+      skip(RejectReason::kUnreadable, why);
     } else {
       Timer frame_timer;
-      IntegrationResult r;
       // Mesh after every mesh_every-th fused frame; the last frame's pass comes after the loop.
       const bool mesh_now = (report->frames_used + 1) % options.mesh_every == 0;
-      try {
-        r = mapper->integrate(frame, mesh_now ? MeshTiming::kNow : MeshTiming::kDeferred);
-      } catch (const std::bad_alloc&) {
-        // Out of memory mid-frame: this frame's blocks may be half fused; stop cleanly with what
-        // we have rather than crash. Set max_blocks to stay within memory.
-        *error = "out of memory at frame " + std::to_string(i) + " with " +
+      FrameLoader reload;
+      if (!trajectory.empty()) {
+        FrameSource* source = reader.get();
+        reload = [source, i](StereoFrame* again, std::string* why) { return source->load(i, again, why); };
+      }
+      const MappingSession::FrameOutcome out =
+          session.fuse(frame, session.arrive(), mesh_now ? MeshTiming::kNow : MeshTiming::kDeferred, reload);
+      const IntegrationResult& r = out.result;
+      if (out.reason == RejectReason::kError) {
+        // Out of memory mid-frame: stop cleanly with what we have rather than crash. Set
+        // max_blocks to stay within memory.
+        *error = "frame " + std::to_string(i) + ": " + out.error + " with " +
                  std::to_string(mapper->map().blockCount()) + " blocks; set max_blocks";
         return false;
       }
-      if (!r.accepted) {
-        // Invalid frames keep the historical key "rejected"; order and pose checks name theirs.
-        const std::string reason = r.reason == RejectReason::kInvalidFrame ? "rejected" : rejectReasonName(r.reason);
-        skip(reason, "frame " + std::to_string(i) + ": " + r.error);
+      if (out.reason != RejectReason::kNone) {
+        skip(out.reason, "frame " + std::to_string(i) + ": " + out.error);
       } else {
         ++report->frames_used;
-        if (!trajectory.empty()) fused.push_back({i, {frame.timestamp_s, frame.T_world_camera}});
         report->pixels_rejected.speckle_pixels += r.rejected.speckle_pixels;
         report->pixels_rejected.edge_pixels += r.rejected.edge_pixels;
         if (r.reanchored) {
@@ -378,9 +347,30 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
     last.total_ms += last.esdf_ms;
     last.esdf_updated = true;
   }
-  if (!trajectory.empty() && !fused.empty()) {
-    if (!applyTrajectory(options, reader.get(), fused, trajectory, &owner, &report->correction, error)) return false;
-    mapper = owner.get();
+  if (!trajectory.empty() && report->frames_used > 0) {
+    if (options.progress)
+      std::fprintf(stderr, "applying %s: fusing %zu frames again at their corrected poses\n",
+                   options.trajectory.c_str(), report->frames_used);
+    // Offline the trajectory comes after every frame: all of them share the drift it removes.
+    const std::optional<CorrectionReport> c =
+        session.submitTrajectory(trajectory, std::numeric_limits<double>::infinity());
+    TrajectoryReport& t = report->correction;
+    t.trajectory_poses = trajectory.size();
+    if (c) {
+      t.matched_poses = c->matched_poses;
+      t.max_shift_m = c->max_shift_m;
+      t.max_rotation_deg = c->max_rotation_deg;
+      t.frames_refused = c->frames_refused;
+      t.frames_rejected = c->frames_rejected;
+      t.ms = c->ms;
+      t.applied = c->outcome == TrajectoryOutcome::kApplied || c->outcome == TrajectoryOutcome::kAppliedWithoutRefusion;
+    }
+    if (!t.applied) {
+      *error = options.trajectory + ": " + (c ? c->message : std::string("not applied")) +
+               (c && c->outcome == TrajectoryOutcome::kRejectedNoMatch ? " (poses.txt's / the bag's)" : "");
+      return false;
+    }
+    mapper = session.withMapper([](Mapper& m) { return &m; });
     mapper->updatePlanning();
   }
   report->wall_time_s = wall.elapsedMs() / 1000.0;
@@ -533,7 +523,7 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   j["work_per_frame_p50"]["blocks_created"] = work(&StageWork::blocks_created);
   j["work_per_frame_p50"]["blocks_not_created"] = work(&StageWork::blocks_not_created);
   if (report.correction.applied) {
-    const CorrectionReport& c = report.correction;
+    const TrajectoryReport& c = report.correction;
     j["trajectory"]["poses"] = c.trajectory_poses;
     j["trajectory"]["matched_poses"] = c.matched_poses;
     j["trajectory"]["frames_refused"] = c.frames_refused;

@@ -39,7 +39,7 @@ struct FuseOptions {
 };
 
 /// What --trajectory did.
-struct CorrectionReport {
+struct TrajectoryReport {
   bool applied = false;
   size_t trajectory_poses = 0;  ///< usable lines of the file
   size_t matched_poses = 0;     ///< of those, within 0.5 s of a fused frame (they define the correction)
@@ -97,7 +97,7 @@ struct FuseReport {
   size_t texture_bytes = 0;          ///< memory held by the texture patches
   size_t atlas_count = 0;            ///< atlas PNGs written with mesh.obj
   double wall_time_s = 0;
-  CorrectionReport correction;
+  TrajectoryReport correction;
   /// The planning layer at the end (planning_enabled).
   struct Planning {
     bool enabled = false;

@@ -1,0 +1,108 @@
+#pragma once
+// The node's frame input: DisparityImage + Image + CameraInfo synchronised (the first message
+// of a stamp wins), queued (queue_size, drop_oldest), then on a worker thread the stamp gate,
+// the wait for the camera pose in tf, the conversion and MappingSession::fuse(). Every frame
+// that does not reach the map is counted in the session under its reason.
+#include <message_filters/subscriber.h>
+#include <message_filters/sync_policies/approximate_time.h>
+#include <message_filters/sync_policies/exact_time.h>
+#include <message_filters/synchronizer.h>
+#include <ros/ros.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <stereo_msgs/DisparityImage.h>
+#include <tf2_ros/buffer.h>
+
+#include <atomic>
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "stereo_fusion/ros/NodeStats.h"
+#include "stereo_fusion/ros/MeshPublisher.h"
+#include "stereo_fusion/ros/RecentStamps.h"
+#include "stereo_fusion/ros/RosParameters.h"
+#include "stereo_fusion/ros/SequenceGaps.h"
+#include "stereo_fusion/session/MappingSession.h"
+
+namespace stereo_fusion {
+
+class FrameInput {
+ public:
+  FrameInput(ros::NodeHandle& nh, const NodeConfig& node, MappingSession* session, const tf2_ros::Buffer* tf,
+             MeshPublisher* publisher, NodeStats* stats);
+  /// Stops the worker (the frame in hand is finished or dropped first).
+  ~FrameInput();
+
+  /// The camera frame of the fused disparities ("" before the first).
+  std::string cameraFrame() const;
+  uint64_t disparitiesIn() const { return disparities_in_.load(); }
+  uint64_t disparitiesMissed() const { return disparities_missed_.load(); }
+  uint64_t framesMatched() const { return matched_.load(); }
+  uint64_t ignoredDuplicateParts() const { return ignored_duplicate_parts_.load(); }
+  std::string topics() const;
+
+ private:
+  using DisparityMsg = stereo_msgs::DisparityImage;
+  using ImageMsg = sensor_msgs::Image;
+  using InfoMsg = sensor_msgs::CameraInfo;
+  using ExactPolicy = message_filters::sync_policies::ExactTime<DisparityMsg, ImageMsg, InfoMsg>;
+  using ApproxPolicy = message_filters::sync_policies::ApproximateTime<DisparityMsg, ImageMsg, InfoMsg>;
+  struct QueuedFrame {
+    DisparityMsg::ConstPtr disparity;
+    ImageMsg::ConstPtr image;
+    InfoMsg::ConstPtr info;
+    FrameTicket ticket;  ///< taken on arrival
+  };
+
+  /// False if a message of `stamp` on that topic already waits in the synchroniser.
+  bool passToSync(RecentStamps* stamps, const ros::Time& stamp) {
+    std::lock_guard<std::mutex> lock(stamps_mutex_);
+    return stamps->pass(stamp.toNSec());
+  }
+  /// Hands one message to whichever synchroniser runs (it calls onFrame when a set is complete).
+  template <int I, typename M>
+  void addToSync(const M& msg) {
+    if (exact_sync_) exact_sync_->template add<I>(msg);
+    if (approx_sync_) approx_sync_->template add<I>(msg);
+  }
+  void onFrame(const DisparityMsg::ConstPtr& d, const ImageMsg::ConstPtr& i, const InfoMsg::ConstPtr& c);
+  void workerLoop();
+  void processFrame(const QueuedFrame& frame);
+  /// Counts a frame dropped before the map under `reason` and says why (throttled).
+  void drop(RejectReason reason, const std::string& why);
+  /// Waits (wall time: a paused bag stops the ROS clock) up to tf_timeout_s for the camera pose.
+  bool waitForPose(const std_msgs::Header& header, Eigen::Isometry3d* T_world_camera, std::string* error);
+
+  const NodeConfig& node_;
+  MappingSession* session_;
+  const tf2_ros::Buffer* tf_;
+  MeshPublisher* publisher_;
+  NodeStats* stats_;
+
+  std::mutex queue_mutex_;
+  std::condition_variable queue_cv_;
+  std::deque<QueuedFrame> queue_;
+  bool stopping_ = false;
+  std::thread worker_;
+
+  message_filters::Subscriber<DisparityMsg> disparity_sub_;
+  message_filters::Subscriber<ImageMsg> image_sub_;
+  message_filters::Subscriber<InfoMsg> info_sub_;
+  std::unique_ptr<message_filters::Synchronizer<ExactPolicy>> exact_sync_;
+  std::unique_ptr<message_filters::Synchronizer<ApproxPolicy>> approx_sync_;
+  /// Stamps each topic passed to the synchroniser, not matched yet: the first message of a stamp wins.
+  std::mutex stamps_mutex_;
+  RecentStamps disparity_stamps_{1}, image_stamps_{1}, info_stamps_{1};
+  SequenceGaps disparity_seq_;  // roscpp runs one subscription's callbacks one at a time: no lock
+
+  std::atomic<uint64_t> disparities_in_{0}, disparities_missed_{0}, matched_{0}, ignored_duplicate_parts_{0};
+  mutable std::mutex camera_frame_mutex_;
+  std::string camera_frame_;
+};
+
+}  // namespace stereo_fusion

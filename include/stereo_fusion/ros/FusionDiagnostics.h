@@ -1,0 +1,35 @@
+#pragma once
+// /diagnostics of the node: every counter of the session (frames by reason, trajectories by
+// outcome, clears), of the frame input, and the timings, once a second.
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <ros/ros.h>
+
+#include <memory>
+
+#include "stereo_fusion/ros/FrameInput.h"
+#include "stereo_fusion/ros/NodeStats.h"
+#include "stereo_fusion/ros/RosParameters.h"
+#include "stereo_fusion/ros/TrajectoryInput.h"
+#include "stereo_fusion/session/MappingSession.h"
+
+namespace stereo_fusion {
+
+class FusionDiagnostics {
+ public:
+  FusionDiagnostics(ros::NodeHandle& nh, ros::NodeHandle& pnh, const NodeConfig& node, MappingSession* session,
+                    const FrameInput* frames, const TrajectoryInput* trajectories, const NodeStats* stats);
+
+ private:
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
+
+  const NodeConfig& node_;
+  MappingSession* session_;
+  const FrameInput* frames_;
+  const TrajectoryInput* trajectories_;
+  const NodeStats* stats_;
+  ros::WallTime started_;
+  std::unique_ptr<diagnostic_updater::Updater> updater_;
+  ros::WallTimer timer_;
+};
+
+}  // namespace stereo_fusion

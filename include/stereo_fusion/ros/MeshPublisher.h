@@ -1,0 +1,60 @@
+#pragma once
+// The node's outputs of the map: ~mesh_update (MeshUpdate), ~mesh_markers (rviz), ~camera_path,
+// ~frustum and ~block_bounds; the mesh is brought up to date at mesh_publish_rate_hz.
+#include <nav_msgs/Path.h>
+#include <ros/ros.h>
+#include <stereo_fusion/MeshUpdate.h>
+
+#include <vector>
+
+#include "stereo_fusion/ros/NodeStats.h"
+#include "stereo_fusion/ros/MeshMessages.h"
+#include "stereo_fusion/ros/RosParameters.h"
+#include "stereo_fusion/session/MappingSession.h"
+
+namespace stereo_fusion {
+
+/// Every member is touched only with the session's map lock held (inside withMapper() or the
+/// session's MapReplaced listener): the publisher's place in the mesh's change log moves with
+/// the map it reads.
+class MeshPublisher {
+ public:
+  MeshPublisher(ros::NodeHandle& private_nh, const NodeConfig& node, MappingSession* session, NodeStats* stats);
+
+  /// A frame was fused (path, frustum, latency): call with the map lock held.
+  void frameFusedLocked(const StereoFrame& frame, const std_msgs::Header& header);
+  /// Brings the mesh (and the planning layer) up to date and sends what changed, at most at
+  /// mesh_publish_rate_hz unless `force`. `stamp` 0: the newest fused frame's.
+  void publishPending(const ros::Time& stamp, bool force);
+  /// Meshes what fusion changed since the last pass (map lock held; save_mesh).
+  void catchUpLocked(Mapper& map);
+  /// The whole mesh as one full MeshUpdate whose sequence the published updates continue.
+  MeshUpdate fullMesh();
+  /// The session's listener: the map was replaced wholesale; sends it whole.
+  void onMapReplaced(const MapReplaced& replaced);
+
+ private:
+  void publishFullLocked(Mapper& map, const std::vector<BlockKey>& removed);
+  nav_msgs::Path correctedPathLocked() const;
+
+  const NodeConfig& node_;
+  MappingSession* session_;
+  NodeStats* stats_;
+  ros::Publisher mesh_update_pub_, markers_pub_, path_pub_, frustum_pub_, block_bounds_pub_;
+  /// Its place in the mapper's log of mesh changes: what it has not sent yet.
+  BlockChangeLog::Consumer consumer_ = 0;
+  const Mapper* subscribed_to_ = nullptr;  // the mapper consumer_ belongs to (a correction swaps it)
+  MeshMarkers markers_;
+  bool markers_full_pending_ = false;
+  uint64_t sequence_ = 0;
+  /// MeshUpdate::session of this run (wall clock at start, ns): tells subscribers that a
+  /// restarted nodelet's sequence numbers begin again.
+  uint64_t session_id_ = 0;
+  ros::WallTime last_publish_;
+  static constexpr size_t kMaxPathPoses = 4000;  // ~/camera_path length bound
+  nav_msgs::Path path_;
+  PoseCorrection correction_;  // the latest applied, for the path
+  std::vector<ros::Time> unpublished_stamps_;
+};
+
+}  // namespace stereo_fusion

@@ -1,0 +1,77 @@
+#pragma once
+// What the node measured about its own work, for /diagnostics: stage timings, latencies and
+// per-frame pixel counts, the last 1000 of each.
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <deque>
+#include <mutex>
+#include <vector>
+
+namespace stereo_fusion {
+
+class NodeStats {
+ public:
+  static constexpr size_t kWindow = 1000;
+
+  /// One fused frame: lookup, fusion (with carving), total (with a meshing pass after it).
+  void recordFrame(double lookup_ms, double fusion_ms, double total_ms) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    push(&frame_ms_, {lookup_ms, fusion_ms, total_ms});
+  }
+  void recordMeshPass(double meshing_ms, double texture_ms) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    push(&mesh_pass_ms_, {meshing_ms, texture_ms, 0.0});
+    ++mesh_passes_;
+  }
+  /// Frame stamp → publish of its mesh.
+  void recordLatency(double seconds) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    latencies_s_.push_back(seconds);
+    if (latencies_s_.size() > kWindow) latencies_s_.pop_front();
+  }
+  /// Forgets the timings (reset, load_map: a new map).
+  void clearTimings() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    frame_ms_.clear();
+    mesh_pass_ms_.clear();
+  }
+
+  struct View {
+    std::vector<double> latency_s;
+    std::vector<double> stage_ms[5];  // lookup, fusion, meshing, texture, total
+    uint64_t mesh_passes = 0;
+  };
+  View view() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    View v;
+    v.latency_s.assign(latencies_s_.begin(), latencies_s_.end());
+    for (const auto& s : frame_ms_) {
+      v.stage_ms[0].push_back(s[0]);
+      v.stage_ms[1].push_back(s[1]);
+      v.stage_ms[4].push_back(s[2]);
+    }
+    for (const auto& s : mesh_pass_ms_) {
+      v.stage_ms[2].push_back(s[0]);
+      v.stage_ms[3].push_back(s[1]);
+    }
+    v.mesh_passes = mesh_passes_;
+    return v;
+  }
+
+  std::atomic<uint64_t> pixels_rejected_speckle{0}, pixels_rejected_edge{0};  // OutlierRejection, fused frames
+  std::atomic<uint64_t> reanchored{0};  // frames the gate accepted as a relocalisation / clock reset
+
+ private:
+  using Row = std::array<double, 3>;
+  static void push(std::deque<Row>* rows, const Row& row) {
+    rows->push_back(row);
+    if (rows->size() > kWindow) rows->pop_front();
+  }
+  mutable std::mutex mutex_;
+  std::deque<Row> frame_ms_, mesh_pass_ms_;
+  std::deque<double> latencies_s_;
+  uint64_t mesh_passes_ = 0;
+};
+
+}  // namespace stereo_fusion

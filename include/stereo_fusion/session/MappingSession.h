@@ -1,0 +1,206 @@
+#pragma once
+#include <condition_variable>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "stereo_fusion/Mapper.h"
+#include "stereo_fusion/integration/RejectReason.h"
+#include "stereo_fusion/session/EditTimeline.h"
+#include "stereo_fusion/session/TrajectoryOutcome.h"
+#include "stereo_fusion/trajectory/PoseCorrection.h"
+
+namespace stereo_fusion {
+
+/// What a session keeps beside the map.
+struct SessionConfig {
+  /// Frames kept whole for a loop closure's correction (the node's loop_closure_max_frames);
+  /// 0 keeps none, SIZE_MAX keeps all (offline, with a FrameLoader: only stamps and poses).
+  size_t loop_closure_max_frames = 0;
+  /// Corrections run on a thread of the session's while frames are fused (the node); false:
+  /// submitTrajectory() runs one before it returns (the offline fuser).
+  bool background_corrections = true;
+};
+
+/// Handed out when a frame arrives (MappingSession::arrive()); fuse() needs it.
+struct FrameTicket {
+  uint64_t epoch = 0;   ///< the map epoch: reset and load_map start a new one
+  uint64_t ticket = 0;  ///< arrival order, on the same counter as clears (predates())
+};
+
+/// Why the session replaced the map (or its mesh) wholesale.
+enum class MapChange { kReset, kLoaded, kCorrected, kRecovered };
+
+/// Told to the listener, with the map lock held, whenever the map is replaced wholesale.
+struct MapReplaced {
+  MapChange change;
+  Mapper& map;                            ///< the map now (a correction swaps in a new Mapper)
+  const std::vector<BlockKey>& removed;   ///< submeshes of the old map that are gone
+  const PoseCorrection& correction;       ///< the latest correction applied (path display)
+};
+
+/// What became of one trajectory and its re-fusion.
+struct CorrectionReport {
+  TrajectoryOutcome outcome = TrajectoryOutcome::kApplied;
+  std::string message;
+  size_t trajectory_poses = 0;
+  size_t matched_poses = 0;   ///< trajectory poses within 0.5 s of a kept frame
+  double max_shift_m = 0.0, max_rotation_deg = 0.0;
+  size_t frames_refused = 0;  ///< frames fused again (catch-up included)
+  size_t frames_rejected = 0;  ///< of those, refused by the new map's FrameGate at the corrected pose
+  double ms = 0.0;
+};
+
+/// The ROS-free mapping session: the one owner of the Mapper, the kept frames and the single
+/// timeline of edits (EditTimeline), frame admission by epoch and ticket with one counter set
+/// (RejectCounters), clears with the rule for frames from before them (EditReplay), loop
+/// closures with the one re-fusion routine (replayEdits()), reset and load. The node and the
+/// offline fuser are adapters over it. Every public method is thread-safe; the map lock is
+/// held only inside them (and in withMapper()).
+///
+/// Lock order: the map lock, then the trajectory queue's lock; a re-fusion holds neither while
+/// it fuses, and only the last few catch-up frames run under the map lock.
+class MappingSession {
+ public:
+  /// Throws std::invalid_argument for an invalid `config` (as Mapper).
+  MappingSession(const MapperConfig& config, const SessionConfig& session);
+  ~MappingSession();
+  MappingSession(const MappingSession&) = delete;
+  MappingSession& operator=(const MappingSession&) = delete;
+
+  /// Called (map lock held) after every wholesale change of the map: publish it whole.
+  void setMapReplacedListener(std::function<void(const MapReplaced&)> listener);
+  /// Called (no lock held) with the report of every trajectory the background thread finished.
+  void setCorrectionListener(std::function<void(const CorrectionReport&)> listener);
+
+  // --- frames ---
+  /// A frame arrived: its ticket. Take it when the frame arrives, not when it is fused, so
+  /// that a clear applied while the frame waited (queue, tf) is applied again after it.
+  FrameTicket arrive();
+  /// False once a reset or load_map came after the ticket's arrival.
+  bool isCurrent(const FrameTicket& ticket) const;
+  /// Counts a frame an input dropped before it reached fuse().
+  void countDrop(RejectReason reason) { drops_.count(reason); }
+
+  struct FrameOutcome {
+    RejectReason reason = RejectReason::kNone;  ///< kNone: fused
+    std::string error;                          ///< why not, one sentence
+    IntegrationResult result;
+    bool recleared = false;  ///< a clear it predates was applied again after it
+  };
+  /// Fuses `frame` (the ticket arrive() gave it). `reload` (offline) reads it again for a
+  /// correction instead of keeping its images. Every outcome is counted (drops()).
+  FrameOutcome fuse(const StereoFrame& frame, const FrameTicket& ticket, MeshTiming timing,
+                    FrameLoader reload = {});
+
+  // --- edits ---
+  struct ClearOutcome {
+    bool success = false;
+    std::string message;
+    ClearResult result;
+  };
+  /// Clears `region` at clock `stamp_s` (frames stamped before it, or that arrived before it,
+  /// do not refill it). Refused, the map unchanged, if the region is invalid or more than
+  /// kMaxPendingClears clears wait for frames that may predate them.
+  ClearOutcome clear(const MapRegion& region, double stamp_s);
+  static constexpr size_t kMaxPendingClears = 4096;
+  /// Drops the map, the kept frames and any correction; frames that arrived before count as superseded.
+  void reset();
+  struct LoadOutcome {
+    bool success = false;
+    std::string message;
+    size_t blocks = 0;
+  };
+  /// Replaces the map by the file at `path` (read and checked before the map lock is taken);
+  /// on failure the map is unchanged.
+  LoadOutcome load(const std::string& path);
+
+  // --- loop closures ---
+  /// A corrected trajectory (camera poses in the map's frame, any order). With
+  /// background_corrections it is queued (a newer one supersedes it, counted) and nullopt is
+  /// returned; otherwise it is applied now and its report returned. `fused_until_s`: the
+  /// frames the SLAM had seen (default: the newest kept frame now; offline: +infinity).
+  std::optional<CorrectionReport> submitTrajectory(std::vector<StampedPose> poses,
+                                                   std::optional<double> fused_until_s = std::nullopt);
+  /// Counts a trajectory an input refused before submitTrajectory().
+  void countTrajectory(TrajectoryOutcome outcome) { trajectories_.count(outcome); }
+  /// The latest applied correction's report.
+  CorrectionReport lastCorrection() const;
+  /// The latest correction applied (the identity before any).
+  PoseCorrection correction() const;
+  /// True while a correction re-fuses (tests, diagnostics).
+  bool correcting() const { return correcting_.load(); }
+
+  // --- access ---
+  /// Runs f(Mapper&) with the map lock held: read the map, mesh it, take its changes.
+  template <typename F>
+  auto withMapper(F&& f) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return f(*mapper_);
+  }
+  const MapperConfig& config() const { return config_; }
+  const RejectCounters& drops() const { return drops_; }
+  const TrajectoryCounters& trajectories() const { return trajectories_; }
+  uint64_t framesFused() const { return frames_fused_.load(); }
+  uint64_t framesRecleared() const { return frames_recleared_.load(); }
+  uint64_t regionsCleared() const { return regions_cleared_.load(); }
+  uint64_t clearsRefused() const { return clears_refused_.load(); }
+  uint64_t blocksEvicted() const { return blocks_evicted_.load(); }
+
+  struct KeptStatus {
+    size_t frames = 0, clears = 0, bytes = 0, pending_clears = 0;
+    uint64_t frozen = 0;
+  };
+  KeptStatus kept() const;
+
+ private:
+  struct PendingTrajectory {
+    std::vector<StampedPose> poses;
+    double fused_until_s = 0.0;
+    uint64_t epoch = 0;
+  };
+  /// The correction thread: one queued trajectory at a time.
+  void correctionLoop();
+  /// Re-fuses the kept edits at `trajectory`'s poses, catches up, swaps; its report.
+  CorrectionReport runCorrection(const PendingTrajectory& trajectory);
+  /// Replaces the live map by `rebuilt` (map lock held) and tells the listener.
+  void adoptCorrectedLocked(std::unique_ptr<Mapper> rebuilt, EditReplay replay, const PoseCorrection& correction);
+  /// A new epoch (reset, load): drops the kept edits and any correction (map lock held).
+  void startEpochLocked(const std::vector<uint8_t>& base_bytes);
+  void notifyLocked(MapChange change, const std::vector<BlockKey>& removed);
+
+  const MapperConfig config_;
+  const SessionConfig session_config_;
+
+  mutable std::mutex mutex_;  // the map lock: guards everything up to the trajectory queue
+  std::unique_ptr<Mapper> mapper_;
+  EditReplay live_replay_;
+  EditTimeline timeline_;
+  PoseCorrection correction_;
+  CorrectionReport last_correction_;
+  uint64_t epoch_ = 0;
+  uint64_t next_ticket_ = 1;
+  std::function<void(const MapReplaced&)> listener_;
+  std::function<void(const CorrectionReport&)> correction_listener_;  // set before the thread runs
+
+  std::mutex trajectory_mutex_;
+  std::condition_variable trajectory_cv_;
+  std::optional<PendingTrajectory> pending_trajectory_;  // guarded by trajectory_mutex_
+  bool stopping_ = false;                                // guarded by trajectory_mutex_
+  std::atomic<uint64_t> epoch_seen_{0};  // epoch_, readable without the map lock (cancellation)
+  std::atomic<bool> correcting_{false};
+  std::thread correction_thread_;
+
+  RejectCounters drops_;
+  TrajectoryCounters trajectories_;
+  std::atomic<uint64_t> frames_fused_{0}, frames_recleared_{0}, regions_cleared_{0}, clears_refused_{0};
+  std::atomic<uint64_t> blocks_evicted_{0};
+};
+
+}  // namespace stereo_fusion

@@ -1,0 +1,53 @@
+#pragma once
+#include <array>
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+
+namespace stereo_fusion {
+
+/// What became of a corrected trajectory (a SLAM's loop closure): the one list, counted on
+/// /diagnostics and named in logs. A new outcome is one value and one row in TrajectoryOutcome.cpp.
+enum class TrajectoryOutcome : uint8_t {
+  kApplied,              ///< the kept frames were fused again at the corrected poses, the maps swapped
+  kAppliedWithoutRefusion,  ///< it moves no kept frame visibly: taken for the frames still to leave the window
+  kSuperseded,           ///< a newer trajectory came before it was applied (waiting or being fused again)
+  kDroppedByReset,       ///< a reset or load_map replaced the map it was for
+  kRejectedWrongFrame,   ///< its header's frame is not world_frame
+  kRejectedNothingKept,  ///< loop_closure_max_frames is 0
+  kRejectedNoFrameYet,   ///< no frame has been fused yet
+  kRejectedNoTransform,  ///< no transform from trajectory_frame to the camera
+  kRejectedBadPose,      ///< a pose is not finite or its quaternion is no rotation
+  kRejectedEmpty,        ///< it holds no pose
+  kRejectedNoMatch,      ///< none of its stamps lies near a kept frame's
+  kFailed,               ///< the re-fusion could not read the base or a kept frame: the map is unchanged
+  kCount,                ///< not an outcome: the number of values
+};
+
+constexpr size_t kTrajectoryOutcomeCount = static_cast<size_t>(TrajectoryOutcome::kCount);
+
+struct TrajectoryOutcomeInfo {
+  TrajectoryOutcome outcome;
+  const char* key;    ///< stable snake_case name
+  const char* label;  ///< the /diagnostics key of its counter
+  bool rejected;      ///< counted among "trajectories rejected"
+};
+const TrajectoryOutcomeInfo& trajectoryOutcomeInfo(TrajectoryOutcome outcome);
+
+/// One counter per outcome, safe to bump from any thread.
+class TrajectoryCounters {
+ public:
+  void count(TrajectoryOutcome outcome) { ++counts_[static_cast<size_t>(outcome)]; }
+  uint64_t operator[](TrajectoryOutcome outcome) const { return counts_[static_cast<size_t>(outcome)].load(); }
+  uint64_t rejected() const;
+  template <typename F>
+  void forEach(F&& f) const {
+    for (size_t k = 0; k < kTrajectoryOutcomeCount; ++k)
+      f(trajectoryOutcomeInfo(static_cast<TrajectoryOutcome>(k)), counts_[k].load());
+  }
+
+ private:
+  std::array<std::atomic<uint64_t>, kTrajectoryOutcomeCount> counts_{};
+};
+
+}  // namespace stereo_fusion

@@ -1,0 +1,207 @@
+#include "stereo_fusion/ros/FrameInput.h"
+
+#include <tf2_eigen/tf2_eigen.h>
+
+#include <algorithm>
+
+#include "stereo_fusion/ros/MessageConversions.h"
+
+namespace stereo_fusion {
+
+FrameInput::FrameInput(ros::NodeHandle& nh, const NodeConfig& node, MappingSession* session,
+                       const tf2_ros::Buffer* tf, MeshPublisher* publisher, NodeStats* stats)
+    : node_(node), session_(session), tf_(tf), publisher_(publisher), stats_(stats) {
+  worker_ = std::thread([this] { workerLoop(); });
+  // The synchroniser is fed by hand so that the first message of a stamp on each topic wins: it
+  // would let a second one replace the first while the set is incomplete (see RecentStamps).
+  const size_t stamp_window = static_cast<size_t>(std::max(8, 2 * node_.sync_queue_size));
+  disparity_stamps_ = RecentStamps(stamp_window);
+  image_stamps_ = RecentStamps(stamp_window);
+  info_stamps_ = RecentStamps(stamp_window);
+  if (node_.approximate_sync) {
+    approx_sync_ = std::make_unique<message_filters::Synchronizer<ApproxPolicy>>(ApproxPolicy(node_.sync_queue_size));
+    approx_sync_->registerCallback(&FrameInput::onFrame, this);
+  } else {
+    exact_sync_ = std::make_unique<message_filters::Synchronizer<ExactPolicy>>(ExactPolicy(node_.sync_queue_size));
+    exact_sync_->registerCallback(&FrameInput::onFrame, this);
+  }
+  // Callbacks first, subscriptions after: a message arriving in between would reach no callback
+  // and be lost uncounted (a player that starts on the first subscription sends one at once).
+  disparity_sub_.registerCallback([this](const DisparityMsg::ConstPtr& disparity) {
+    ++disparities_in_;
+    disparities_missed_ += disparity_seq_.next(disparity->header.seq);
+    if (!passToSync(&disparity_stamps_, disparity->header.stamp)) {
+      drop(RejectReason::kSyncDuplicate, "a second disparity stamped " + std::to_string(disparity->header.stamp.toSec()) +
+                                             " arrived before its frame was matched; the first is kept");
+      return;
+    }
+    addToSync<0>(disparity);
+  });
+  image_sub_.registerCallback([this](const ImageMsg::ConstPtr& image) {
+    if (passToSync(&image_stamps_, image->header.stamp)) addToSync<1>(image);
+    else ++ignored_duplicate_parts_;
+  });
+  info_sub_.registerCallback([this](const InfoMsg::ConstPtr& info) {
+    if (passToSync(&info_stamps_, info->header.stamp)) addToSync<2>(info);
+    else ++ignored_duplicate_parts_;
+  });
+  disparity_sub_.subscribe(nh, "disparity", 5);
+  image_sub_.subscribe(nh, "image", 5);
+  info_sub_.subscribe(nh, "camera_info", 5);
+}
+
+FrameInput::~FrameInput() {
+  // The subscribers go first: no callback may queue a frame for a worker that has stopped.
+  disparity_sub_.unsubscribe();
+  image_sub_.unsubscribe();
+  info_sub_.unsubscribe();
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    stopping_ = true;
+  }
+  queue_cv_.notify_all();
+  if (worker_.joinable()) worker_.join();
+}
+
+std::string FrameInput::topics() const {
+  return disparity_sub_.getTopic() + " + " + image_sub_.getTopic() + " + " + info_sub_.getTopic();
+}
+
+std::string FrameInput::cameraFrame() const {
+  std::lock_guard<std::mutex> lock(camera_frame_mutex_);
+  return camera_frame_;
+}
+
+void FrameInput::drop(RejectReason reason, const std::string& why) {
+  session_->countDrop(reason);
+  ROS_WARN_THROTTLE(5.0, "stereo_fusion: frame dropped (%s, %llu so far): %s", rejectReasonName(reason),
+                    static_cast<unsigned long long>(session_->drops()[reason]), why.c_str());
+}
+
+void FrameInput::onFrame(const DisparityMsg::ConstPtr& d, const ImageMsg::ConstPtr& i, const InfoMsg::ConstPtr& c) {
+  ++matched_;
+  {
+    std::lock_guard<std::mutex> lock(stamps_mutex_);
+    disparity_stamps_.forget(d->header.stamp.toNSec());
+    image_stamps_.forget(i->header.stamp.toNSec());
+    info_stamps_.forget(c->header.stamp.toNSec());
+  }
+  const FrameTicket ticket = session_->arrive();
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    if (queue_.size() >= static_cast<size_t>(node_.queue_size)) {
+      drop(RejectReason::kQueueFull, "frame queue full (" + std::to_string(node_.queue_size) + "), dropping the " +
+                                         (node_.drop_oldest ? "oldest" : "newest") + " frame");
+      if (!node_.drop_oldest) return;
+      queue_.pop_front();
+    }
+    queue_.push_back({d, i, c, ticket});
+  }
+  queue_cv_.notify_one();
+}
+
+void FrameInput::workerLoop() {
+  while (true) {
+    QueuedFrame frame;
+    {
+      std::unique_lock<std::mutex> lock(queue_mutex_);
+      queue_cv_.wait_for(lock, std::chrono::milliseconds(100), [this] { return stopping_ || !queue_.empty(); });
+      if (stopping_) return;
+      if (queue_.empty()) {
+        lock.unlock();
+        publisher_->publishPending(ros::Time(0), false);  // flush a rate-limited update
+        continue;
+      }
+      frame = queue_.front();
+      queue_.pop_front();
+    }
+    try {
+      processFrame(frame);
+    } catch (const std::exception& e) {
+      // One bad frame (or an allocation failure) must not take the nodelet manager down.
+      drop(RejectReason::kError, std::string("an error: ") + e.what());
+    }
+  }
+}
+
+bool FrameInput::waitForPose(const std_msgs::Header& header, Eigen::Isometry3d* T_world_camera, std::string* error) {
+  // Wall time: under simulated time a paused or finished bag stops the ROS clock, and a
+  // ROS-time timeout would then never expire. Shutdown interrupts the wait.
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(node_.tf_timeout_s);
+  while (true) {
+    error->clear();
+    if (tf_->canTransform(node_.world_frame, header.frame_id, header.stamp, error)) break;
+    if (ros::WallTime::now() >= deadline) return false;
+    {
+      std::lock_guard<std::mutex> lock(queue_mutex_);
+      if (stopping_) return false;
+    }
+    ros::WallDuration(0.005).sleep();
+  }
+  try {
+    *T_world_camera = tf2::transformToEigen(tf_->lookupTransform(node_.world_frame, header.frame_id, header.stamp));
+  } catch (const tf2::TransformException& e) {
+    *error = e.what();
+    return false;
+  }
+  return true;
+}
+
+void FrameInput::processFrame(const QueuedFrame& f) {
+  const std_msgs::Header& header = f.disparity->header;
+  if (!session_->isCurrent(f.ticket))  // a reset or load_map came while it waited in the queue
+    return session_->countDrop(RejectReason::kSuperseded);
+  // A stamp of 0 would make tf return its latest pose, whatever time the image is from; a stamp
+  // far ahead of the clock is a broken driver clock. Neither may reach the map.
+  const ros::Time now = ros::Time::now();
+  if (header.stamp.isZero())
+    return drop(RejectReason::kBadStamp, "stamped 0 (no time: its pose cannot be looked up)");
+  if (node_.max_stamp_ahead_s > 0.0 && !now.isZero() && (header.stamp - now).toSec() > node_.max_stamp_ahead_s)
+    return drop(RejectReason::kBadStamp, "stamped " + std::to_string(header.stamp.toSec()) +
+                                             " s, ahead of the clock by more than max_stamp_ahead_s");
+  Eigen::Isometry3d T_world_camera;
+  std::string error;
+  if (!waitForPose(header, &T_world_camera, &error)) {
+    {
+      std::lock_guard<std::mutex> lock(queue_mutex_);
+      if (stopping_) return;
+    }
+    return drop(RejectReason::kTfTimeout, "no transform " + node_.world_frame + " <- " + header.frame_id + " at " +
+                                              std::to_string(header.stamp.toSec()) + " within " +
+                                              std::to_string(node_.tf_timeout_s) + " s: " + error);
+  }
+  StereoFrame frame;
+  if (!toStereoFrame(*f.disparity, *f.image, *f.info, T_world_camera, &frame, &error))
+    return drop(RejectReason::kInvalidFrame, "bad input: " + error);
+  // The mesh is brought up to date when it is published (MeshPublisher::publishPending()), at
+  // most mesh_publish_rate_hz; with rate 0, after every frame. Texture patches are cut from the
+  // frame that changed a submesh, so with textures the mesh follows every frame.
+  const bool deferred = node_.mesh_publish_rate_hz > 0 && session_->config().texture != TextureMode::kPatches;
+  const MappingSession::FrameOutcome out =
+      session_->fuse(frame, f.ticket, deferred ? MeshTiming::kDeferred : MeshTiming::kNow);
+  if (out.reason != RejectReason::kNone) {
+    ROS_ERROR_THROTTLE(5.0, "stereo_fusion: frame rejected (%s, %llu so far): %s", rejectReasonName(out.reason),
+                       static_cast<unsigned long long>(session_->drops()[out.reason]), out.error.c_str());
+    return;
+  }
+  const IntegrationResult& r = out.result;
+  stats_->pixels_rejected_speckle += r.rejected.speckle_pixels;
+  stats_->pixels_rejected_edge += r.rejected.edge_pixels;
+  // Free-space carving counts as fusion: it is the frame's update of the map.
+  stats_->recordFrame(r.lookup_ms, r.fusion_ms + r.carve_ms,
+                      r.lookup_ms + r.fusion_ms + r.carve_ms + r.mesh.meshing_ms + r.texture.texture_ms);
+  if (!r.mesh.changed.empty() || !r.mesh.removed.empty() || r.mesh.blocks_meshed > 0)
+    stats_->recordMeshPass(r.mesh.meshing_ms, r.texture.texture_ms);
+  {
+    std::lock_guard<std::mutex> lock(camera_frame_mutex_);
+    camera_frame_ = header.frame_id;
+  }
+  session_->withMapper([&](Mapper&) { publisher_->frameFusedLocked(frame, header); });
+  if (r.reanchored) {
+    ++stats_->reanchored;
+    ROS_WARN("stereo_fusion: %s", r.note.c_str());
+  }
+  publisher_->publishPending(header.stamp, false);
+}
+
+}  // namespace stereo_fusion

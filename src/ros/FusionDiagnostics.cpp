@@ -1,0 +1,91 @@
+#include "stereo_fusion/ros/FusionDiagnostics.h"
+
+#include <algorithm>
+
+#include "stereo_fusion/util/Percentile.h"
+
+namespace stereo_fusion {
+
+FusionDiagnostics::FusionDiagnostics(ros::NodeHandle& nh, ros::NodeHandle& pnh, const NodeConfig& node,
+                                     MappingSession* session, const FrameInput* frames,
+                                     const TrajectoryInput* trajectories, const NodeStats* stats)
+    : node_(node), session_(session), frames_(frames), trajectories_(trajectories), stats_(stats) {
+  started_ = ros::WallTime::now();
+  updater_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
+  updater_->setHardwareID("stereo_fusion");
+  updater_->add("fusion", this, &FusionDiagnostics::diagnose);
+  timer_ = nh.createWallTimer(ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) { updater_->force_update(); });
+}
+
+void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  const double elapsed = std::max(1e-3, (ros::WallTime::now() - started_).toSec());
+  const RejectCounters& drops = session_->drops();
+  const uint64_t disparities_in = frames_->disparitiesIn(), matched = frames_->framesMatched();
+  const uint64_t held_back = drops[RejectReason::kSyncDuplicate];
+  const uint64_t unmatched = disparities_in > matched + held_back ? disparities_in - matched - held_back : 0;
+  // A disparity whose image has not arrived yet is unmatched for a moment in normal operation:
+  // only more than the synchroniser's queue can hold is surely lost.
+  const bool lost_in_sync = unmatched > static_cast<uint64_t>(node_.sync_queue_size);
+  const uint64_t dropped = drops.total() + (lost_in_sync ? unmatched : 0);
+  const uint64_t fused = session_->framesFused();
+  if (matched > 0 && fused == 0)
+    status.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "no frame fused yet; see the drop counters");
+  else if (dropped > 0)
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "frames dropped; see the counters");
+  else
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "fusing");
+  // disparities received = frames fused + every "dropped:" counter + frames in the queue / worker.
+  status.add("disparities received", disparities_in);
+  // Lost before they reached the node (transport queues, the driver): not part of the sum above.
+  status.add("disparities missed upstream (header.seq gaps)", frames_->disparitiesMissed());
+  status.add("frames received", matched);
+  status.add("dropped: not synchronised (no matching image / camera_info yet)", unmatched);
+  status.add("frames fused", fused);
+  status.add("input rate (Hz)", matched / elapsed);
+  drops.forEach([&](const RejectReasonInfo& info, uint64_t n) { status.add(info.label, n); });
+  status.add("ignored: image / camera_info repeating a stamp", frames_->ignoredDuplicateParts());
+  status.add("pixels rejected: speckles", stats_->pixels_rejected_speckle.load());
+  status.add("pixels rejected: near side of depth edges", stats_->pixels_rejected_edge.load());
+  status.add("re-anchored (relocalisation or clock reset)", stats_->reanchored.load());
+  status.add("regions cleared (~clear_box, ~clear_sphere)", session_->regionsCleared());
+  // Frames from before a clear whose fusion refilled the region, which was then cleared again.
+  status.add("frames fused from before a clear (region cleared again)", session_->framesRecleared());
+  status.add("clears refused (too many waiting for older frames)", session_->clearsRefused());
+  const MappingSession::KeptStatus kept = session_->kept();
+  status.add("clears waiting for frames from before them", kept.pending_clears);
+  status.add("loop closure: frames kept", kept.frames);
+  status.add("loop closure: kept frames (MB)", kept.bytes / 1048576.0);
+  // Older frames are fused into the base and no longer moved by a correction.
+  status.add("loop closure: frames beyond the window (frozen)", kept.frozen);
+  status.add("loop closure: clears kept", kept.clears);
+  const CorrectionReport last = session_->lastCorrection();
+  status.add("loop closure: last correction, frames fused again", last.frames_refused);
+  status.add("loop closure: last correction (ms)", last.ms);
+  status.add("loop closure: last correction, largest move (m)", last.max_shift_m);
+  status.add("loop closure: last correction, largest turn (deg)", last.max_rotation_deg);
+  status.add("trajectories received", trajectories_->received());
+  status.add("trajectories rejected", session_->trajectories().rejected());
+  session_->trajectories().forEach([&](const TrajectoryOutcomeInfo& info, uint64_t n) { status.add(info.label, n); });
+  const NodeStats::View v = stats_->view();
+  status.add("latency p50 (s)", percentile(v.latency_s, 0.5));
+  status.add("latency p99 (s)", percentile(v.latency_s, 0.99));
+  const char* names[5] = {"lookup", "fusion", "meshing", "texture", "total"};
+  for (int k = 0; k < 5; ++k) {
+    status.add(std::string(names[k]) + " p50 (ms)", percentile(v.stage_ms[k], 0.5));
+    status.add(std::string(names[k]) + " p99 (ms)", percentile(v.stage_ms[k], 0.99));
+  }
+  status.add("timings", "lookup, fusion, total: per frame; meshing, texture: per meshing pass");
+  status.add("meshing passes", v.mesh_passes);
+  size_t blocks = 0, memory = 0, awaiting_mesh = 0;
+  session_->withMapper([&](Mapper& map) {
+    awaiting_mesh = map.blocksAwaitingMesh();
+    blocks = map.map().blockCount();
+    memory = map.memoryBytes();
+  });
+  status.add("block changes awaiting meshing", awaiting_mesh);
+  status.add("blocks", blocks);
+  status.add("blocks evicted", session_->blocksEvicted());
+  status.add("memory (MB)", memory / 1048576.0);
+}
+
+}  // namespace stereo_fusion

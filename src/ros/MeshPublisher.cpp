@@ -1,0 +1,196 @@
+#include "stereo_fusion/ros/MeshPublisher.h"
+
+#include <tf2_eigen/tf2_eigen.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <algorithm>
+
+#include "stereo_fusion/ros/DebugMarkers.h"
+
+namespace stereo_fusion {
+
+namespace {
+std::vector<BlockKey> allBlocks(const Mapper& map) {
+  std::vector<BlockKey> all;
+  for (const auto& [key, sub] : map.mesh().submeshes()) all.push_back(key);
+  std::sort(all.begin(), all.end());
+  return all;
+}
+}  // namespace
+
+MeshPublisher::MeshPublisher(ros::NodeHandle& pnh, const NodeConfig& node, MappingSession* session,
+                             NodeStats* stats)
+    : node_(node), session_(session), stats_(stats) {
+  session_id_ = ros::WallTime::now().toNSec();
+  last_publish_ = ros::WallTime(0, 0);
+  session_->withMapper([&](Mapper& map) {
+    consumer_ = map.subscribeToMeshChanges("mesh_update publisher");
+    subscribed_to_ = &map;
+  });
+  mesh_update_pub_ = pnh.advertise<MeshUpdate>("mesh_update", 10);
+  // A new rviz gets the whole mesh, not only the blocks that change after it connects.
+  markers_pub_ = pnh.advertise<visualization_msgs::MarkerArray>(
+      "mesh_markers", 10, [this](const ros::SingleSubscriberPublisher&) {
+        session_->withMapper([&](Mapper&) { markers_full_pending_ = true; });
+      });
+  if (node_.publish_path) path_pub_ = pnh.advertise<nav_msgs::Path>("camera_path", 1, true);
+  path_.header.frame_id = node_.world_frame;
+  if (node_.publish_frustum) frustum_pub_ = pnh.advertise<visualization_msgs::Marker>("frustum", 1, true);
+  if (node_.publish_block_bounds) block_bounds_pub_ = pnh.advertise<visualization_msgs::Marker>("block_bounds", 1, true);
+}
+
+void MeshPublisher::frameFusedLocked(const StereoFrame& frame, const std_msgs::Header& header) {
+  unpublished_stamps_.push_back(header.stamp);
+  if (node_.publish_path) {
+    geometry_msgs::PoseStamped pose;
+    pose.header = header;
+    pose.header.frame_id = node_.world_frame;
+    pose.pose = tf2::toMsg(frame.T_world_camera);
+    path_.poses.push_back(pose);
+    // Bounded: keep the newest kMaxPathPoses, thinning the older half when full.
+    if (path_.poses.size() > kMaxPathPoses) {
+      std::vector<geometry_msgs::PoseStamped> thinned;
+      for (size_t k = 0; k < path_.poses.size() / 2; k += 2) thinned.push_back(path_.poses[k]);
+      thinned.insert(thinned.end(), path_.poses.begin() + path_.poses.size() / 2, path_.poses.end());
+      path_.poses.swap(thinned);
+    }
+    path_.header.stamp = header.stamp;
+    if (path_pub_.getNumSubscribers() > 0) path_pub_.publish(correctedPathLocked());
+  }
+  if (node_.publish_frustum) {
+    std_msgs::Header world_header = header;
+    world_header.frame_id = node_.world_frame;
+    frustum_pub_.publish(frustumMarker(frame.camera, frame.T_world_camera, node_.frustum_depth_m, world_header));
+  }
+}
+
+void MeshPublisher::catchUpLocked(Mapper& map) {
+  if (map.blocksAwaitingMesh() == 0) return;
+  const MeshPass pass = map.updateMesh();
+  stats_->recordMeshPass(pass.mesh.meshing_ms, pass.texture.texture_ms);
+  // The planning layer follows the map at the mesh's rate; it reads the same changes.
+  map.updatePlanning();
+}
+
+void MeshPublisher::publishPending(const ros::Time& stamp, bool force) {
+  session_->withMapper([&](Mapper& map) {
+    if (map.blocksAwaitingMesh() == 0 && map.pendingMeshChanges(consumer_) == 0 && !markers_full_pending_) return;
+    const ros::WallTime now = ros::WallTime::now();
+    if (!force && node_.mesh_publish_rate_hz > 0 && (now - last_publish_).toSec() < 1.0 / node_.mesh_publish_rate_hz)
+      return;
+    last_publish_ = now;
+    catchUpLocked(map);
+    std_msgs::Header header;
+    header.frame_id = node_.world_frame;
+    header.stamp = stamp.isZero() && !unpublished_stamps_.empty() ? unpublished_stamps_.back() : stamp;
+    const BlockChangeLog::Changes pending = map.takeMeshChanges(consumer_);
+    const std::vector<BlockKey>& changed = pending.updated;
+    const std::vector<BlockKey>& removed = pending.erased;
+    const double voxel_size_m = map.config().voxel_size_m;
+    // Every flush of changes gets a sequence number, sent or not: a subscriber that was not
+    // connected for one sees the gap and asks ~get_full_mesh. Publish only what someone hears.
+    if (!changed.empty() || !removed.empty()) {
+      ++sequence_;
+      if (mesh_update_pub_.getNumSubscribers() > 0) {
+        MeshUpdate update = toMeshUpdate(map.mesh().submeshes(), changed, removed, header, voxel_size_m, sequence_,
+                                         false, node_.mesh_encoding, &map.textures());
+        update.session = session_id_;
+        mesh_update_pub_.publish(update);
+      }
+    }
+    if (node_.publish_markers && markers_pub_.getNumSubscribers() > 0) {
+      const bool full = markers_full_pending_;
+      markers_pub_.publish(markers_.build(map.mesh().submeshes(), full ? allBlocks(map) : changed, removed, header));
+      markers_full_pending_ = false;
+    }
+    // Latched and opt-in (debug): published even unheard, so a display ticked later shows it.
+    if (node_.publish_block_bounds)
+      block_bounds_pub_.publish(blockBoundsMarker(map.mesh().submeshes(), 8.0 * voxel_size_m, header));
+    const ros::Time ros_now = ros::Time::now();
+    for (const ros::Time& t : unpublished_stamps_) stats_->recordLatency((ros_now - t).toSec());
+    unpublished_stamps_.clear();
+  });
+}
+
+MeshUpdate MeshPublisher::fullMesh() {
+  // Frames already fused are in the answer even if their meshing waits for the publish rate:
+  // their changes go out as an update first, so the full mesh's sequence covers them.
+  publishPending(ros::Time(0), true);
+  return session_->withMapper([&](Mapper& map) {
+    std_msgs::Header header;
+    header.frame_id = node_.world_frame;
+    header.stamp = ros::Time::now();
+    // The sequence of the last published update: apply updates with a larger sequence on top.
+    MeshUpdate mesh = toMeshUpdate(map.mesh().submeshes(), allBlocks(map), {}, header, map.config().voxel_size_m,
+                                   sequence_, true, node_.mesh_encoding, &map.textures());
+    mesh.session = session_id_;
+    return mesh;
+  });
+}
+
+void MeshPublisher::onMapReplaced(const MapReplaced& replaced) {
+  Mapper& map = replaced.map;
+  if (&map != subscribed_to_) {  // a correction swapped in a new mapper
+    consumer_ = map.subscribeToMeshChanges("mesh_update publisher");
+    subscribed_to_ = &map;
+  }
+  correction_ = replaced.correction;
+  switch (replaced.change) {
+    case MapChange::kReset: {
+      path_.poses.clear();
+      stats_->clearTimings();
+      map.takeMeshChanges(consumer_);  // the empty full update below says it all
+      unpublished_stamps_.clear();
+      std_msgs::Header header;
+      header.frame_id = node_.world_frame;
+      header.stamp = ros::Time::now();
+      markers_pub_.publish(markers_.clear(header));
+      MeshUpdate empty = toMeshUpdate(map.mesh().submeshes(), {}, {}, header, map.config().voxel_size_m,
+                                      ++sequence_, true);
+      empty.session = session_id_;
+      mesh_update_pub_.publish(empty);
+      return;
+    }
+    case MapChange::kLoaded:
+      path_.poses.clear();
+      stats_->clearTimings();
+      publishFullLocked(map, replaced.removed);
+      return;
+    case MapChange::kCorrected:
+      // One full update: cheaper to build than a diff of every submesh, and a correction moves most.
+      publishFullLocked(map, replaced.removed);
+      if (node_.publish_path) path_pub_.publish(correctedPathLocked());
+      return;
+    case MapChange::kRecovered:
+      publishFullLocked(map, replaced.removed);
+      return;
+  }
+}
+
+void MeshPublisher::publishFullLocked(Mapper& map, const std::vector<BlockKey>& removed) {
+  map.takeMeshChanges(consumer_);  // a full update replaces whatever was pending
+  unpublished_stamps_.clear();
+  std_msgs::Header header;
+  header.frame_id = node_.world_frame;
+  header.stamp = ros::Time::now();
+  const std::vector<BlockKey> all = allBlocks(map);
+  // A full update replaces whatever a subscriber held; markers: drop the gone blocks, draw all.
+  MeshUpdate update = toMeshUpdate(map.mesh().submeshes(), all, {}, header, map.config().voxel_size_m, ++sequence_,
+                                   true, node_.mesh_encoding, &map.textures());
+  update.session = session_id_;
+  mesh_update_pub_.publish(update);
+  if (node_.publish_markers) markers_pub_.publish(markers_.build(map.mesh().submeshes(), all, removed, header));
+}
+
+nav_msgs::Path MeshPublisher::correctedPathLocked() const {
+  if (correction_.empty()) return path_;
+  nav_msgs::Path corrected = path_;
+  for (geometry_msgs::PoseStamped& p : corrected.poses) {
+    Eigen::Isometry3d T;
+    tf2::fromMsg(p.pose, T);
+    p.pose = tf2::toMsg(correction_.corrected(p.header.stamp.toSec(), T));
+  }
+  return corrected;
+}
+
+}  // namespace stereo_fusion
