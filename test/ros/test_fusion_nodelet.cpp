@@ -7,6 +7,7 @@
 #include <stereo_fusion/MeshUpdate.h>
 #include <stereo_fusion/SaveMap.h>
 #include <stereo_fusion/SaveMesh.h>
+#include <nav_msgs/Path.h>
 #include <tf2_ros/transform_broadcaster.h>
 
 #include <unistd.h>
@@ -316,6 +317,53 @@ TEST_F(NodeletFixture, OutOfOrderDuplicateJumpingAndFutureTfFramesAreDroppedByRe
   EXPECT_EQ(diag("dropped: pose jump"), 1);
   EXPECT_EQ(diag("dropped: tf timeout"), tf_before + 1) << "a late tf within tf_timeout_s must not drop the frame";
   EXPECT_EQ(diag("blocks evicted"), 0);
+}
+
+TEST_F(NodeletFixture, APathWhosePosesCarryNoRotationIsRefusedWholeAndTheMapStays) {
+  const sim::AnalyticScene s = scene();
+  const long fused_before = std::max(0L, diag("frames fused"));
+  for (int i = 0; i < 2; ++i) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translation().x() = 0.01 * i;
+    publish(test::renderFrame(s, qvga(), T), "left_optical", true);
+  }
+  ASSERT_TRUE(waitFor([&] { return diag("frames fused") >= fused_before + 2; }, 30.0));
+  GetFullMesh before;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", before));
+  ros::NodeHandle nh;
+  ros::Publisher trajectory_pub = nh.advertise<nav_msgs::Path>("/trajectory", 5);
+  ASSERT_TRUE(waitFor([&] { return trajectory_pub.getNumSubscribers() > 0; }, 30.0));
+  const long bad_before = std::max(0L, diag("trajectories rejected: bad pose"));
+  const long applied_before = std::max(0L, diag("corrections applied"));
+  auto path = [&](double qx, double qy, double qz, double qw) {
+    nav_msgs::Path p;
+    p.header.frame_id = "world";
+    p.header.stamp = ros::Time::now();
+    geometry_msgs::PoseStamped pose;
+    pose.header.frame_id = "world";
+    pose.header.stamp = before.response.mesh.header.stamp;
+    pose.pose.orientation.w = 1.0;
+    p.poses.push_back(pose);  // a good first pose: the second one names the path's fault
+    pose.pose.position.x = 0.3;
+    pose.pose.orientation.x = qx;
+    pose.pose.orientation.y = qy;
+    pose.pose.orientation.z = qz;
+    pose.pose.orientation.w = qw;
+    p.poses.push_back(pose);
+    return p;
+  };
+  trajectory_pub.publish(path(0, 0, 0, 0));  // was taken as the identity
+  trajectory_pub.publish(path(0, 0, 0, 2));  // |q| = 2: was taken as a scaled matrix
+  trajectory_pub.publish(path(0, 0, NAN, 1));
+  ASSERT_TRUE(waitFor([&] { return diag("trajectories rejected: bad pose") >= bad_before + 3; }, 30.0))
+      << diag("trajectories rejected: bad pose");
+  ros::WallDuration(0.5).sleep();
+  EXPECT_EQ(diag("corrections applied"), applied_before);
+  GetFullMesh after;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", after));
+  ASSERT_EQ(after.response.mesh.blocks.size(), before.response.mesh.blocks.size()) << "a bad path changed the map";
+  for (size_t b = 0; b < before.response.mesh.blocks.size(); ++b)
+    EXPECT_EQ(after.response.mesh.blocks[b].vertices, before.response.mesh.blocks[b].vertices);
 }
 
 TEST_F(NodeletFixture, ASecondDisparityOfAStampArrivingBeforeItsFrameIsMatchedIsHeldBack) {
