@@ -18,6 +18,8 @@ PACKAGES=(
   libeigen3-dev libopencv-dev libyaml-cpp-dev nlohmann-json3-dev zlib1g-dev
   # the offline fuser's octomap.bt
   liboctomap-dev
+  # the tools' OBJ reader (tools/readers/ObjReader.cpp)
+  libtinyobjloader-dev
   # ROS 1 from Debian (catkin, messages, nodelet, tf2, synchronisation, images, bags)
   catkin ros-message-generation ros-message-runtime libroscpp-dev libnodeletlib-dev
   libmessage-filters-dev libtf2-dev libtf2-msgs-dev libtf2-ros-dev libtf2-eigen-dev libstd-msgs-dev

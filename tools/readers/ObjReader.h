@@ -1,6 +1,6 @@
 #pragma once
-// A small Wavefront OBJ + MTL reader: enough to read back what ObjWriter writes (and common
-// triangle/polygon OBJ files), for round-trip tests and tools.
+// Wavefront OBJ + MTL through tinyobjloader (Debian's libtinyobjloader-dev), into the arrays the
+// tools and the round-trip tests of ObjWriter use.
 
 #include <Eigen/Core>
 #include <array>
@@ -21,13 +21,14 @@ struct ObjFace {
 /// A material of the MTL file.
 struct ObjMaterial {
   std::string name;
-  std::string diffuse_map;  ///< map_Kd resolved against the MTL's folder; empty = none
+  std::string diffuse_map;  ///< map_Kd resolved against the OBJ's folder (where its MTL is); empty = none
 };
 
-/// The content of an OBJ file. Polygons are split into triangle fans.
+/// The content of an OBJ file. Polygons are split into triangles (tinyobjloader: a quad along its
+/// shorter diagonal).
 struct ObjMesh {
   std::vector<Eigen::Vector3f> positions;
-  std::vector<Eigen::Vector3f> colors;  ///< per position, from `v x y z r g b`; empty if none had one
+  std::vector<Eigen::Vector3f> colors;  ///< per position, from `v x y z r g b`; empty unless all have one
   std::vector<Eigen::Vector2f> uvs;     ///< `vt` as written (OBJ convention: v up)
   std::vector<Eigen::Vector3f> normals;
   std::vector<ObjFace> faces;
@@ -35,8 +36,10 @@ struct ObjMesh {
   std::vector<std::string> objects;
 };
 
-/// Reads `path` and the MTL libraries it names. False with a message (file and line) on I/O
-/// errors, malformed numbers, indices out of range or unknown materials.
+/// Reads `path` and the MTL libraries it names (looked up in the OBJ's folder). False with a
+/// message naming the file on I/O errors, indices out of range, faces with fewer than three
+/// corners or unknown materials (tinyobjloader's warnings are taken as errors). Numbers it cannot
+/// parse read as 0, as tinyobjloader reads them.
 bool readObj(const std::string& path, ObjMesh* mesh, std::string* error);
 
 }  // namespace stereo_fusion

@@ -19,7 +19,8 @@ namespace stereo_fusion {
 /// Returns false with a message naming the file for a missing, truncated or malformed file, an
 /// unsupported format, non-finite coordinates or a vertex index out of range; element counts
 /// are checked against the file size before anything is allocated, so garbage never crashes
-/// or exhausts memory.
+/// or exhausts memory. Hand-written rather than PCL's loadPLYFile: measured 1.8× faster on the
+/// bench's meshes, and PCL accepts malformed files this refuses (doc/offline_tools.md).
 bool readPly(const std::string& path, TriangleMesh* mesh, std::string* error);
 
 }  // namespace stereo_fusion

@@ -99,6 +99,48 @@ TEST(EvaluatorTriangleDistance, DegenerateTrianglesActAsSegments) {
   EXPECT_NEAR(std::sqrt(squaredDistanceToTriangle({1, 1, 0}, a, b, c)), 1.0, 1e-12);
   EXPECT_NEAR(std::sqrt(squaredDistanceToTriangle({3, 0, 0}, a, b, c)), 1.0, 1e-12);
   EXPECT_NEAR(std::sqrt(squaredDistanceToTriangle({0, 0, 2}, a, a, a)), 2.0, 1e-12);  // a point
+  // The same segment with its corners in the other order, queried over its middle: (1.75, 1, 0)
+  // is 1 above (1.75, 0, 0). (CGAL 5.5's AABB tree gets this one wrong: it returns the corner
+  // (2, 0, 0), √1.0625 away; see doc/offline_tools.md.)
+  EXPECT_NEAR(std::sqrt(squaredDistanceToTriangle({1.75, 1, 0}, c, b, a)), 1.0, 1e-12);
+  EXPECT_TRUE(closestPointOnTriangle({1.75, 1, 0}, c, b, a).isApprox(Vector3d(1.75, 0, 0)));
+  // Two coincident corners: the segment from (0, 0, 0) to (0, 2, 0); (1, 1, 0) is 1 from (0, 1, 0).
+  EXPECT_NEAR(std::sqrt(squaredDistanceToTriangle({1, 1, 0}, a, a, Vector3d(0, 2, 0))), 1.0, 1e-12);
+}
+
+TEST(EvaluatorBvh, HandWorkedDistancesToASquare) {
+  // The unit square in z = 0 as 4 × 4 × 2 triangles.
+  const TriangleMesh square = planeMesh(0, 1, 0, 1, 0, 4);
+  const TriangleBvh bvh(square);
+  ASSERT_EQ(bvh.size(), 32u);
+  const struct {
+    Vector3d query, closest;
+    double distance;
+  } cases[] = {
+      {{0.5, 0.5, 0.3}, {0.5, 0.5, 0}, 0.3},   // above the face
+      {{0.3, 0.6, -2}, {0.3, 0.6, 0}, 2.0},    // below it
+      {{2, 0.5, 0}, {1, 0.5, 0}, 1.0},         // beyond an edge, in the plane
+      {{-3, -4, 0}, {0, 0, 0}, 5.0},           // beyond a corner: 3-4-5
+      {{1.5, 2, 1}, {1, 1, 0}, 1.5},           // beyond the opposite corner: √(0.25 + 1 + 1)
+      {{0.25, -1, 1}, {0.25, 0, 0}, std::sqrt(2.0)},  // beyond an edge, above the plane
+  };
+  for (const auto& c : cases) {
+    NearestSurfacePoint hit;
+    ASSERT_TRUE(bvh.nearest(c.query, &hit)) << c.query.transpose();
+    EXPECT_NEAR(hit.distance_m, c.distance, 1e-9) << c.query.transpose();
+    EXPECT_NEAR((hit.point_m - c.closest).norm(), 0.0, 1e-7) << c.query.transpose();
+    EXPECT_NEAR(bvh.distance(c.query), c.distance, 1e-9);
+    // The triangle it names holds the closest point.
+    const auto& t = square.triangles[hit.triangle];
+    EXPECT_NEAR(squaredDistanceToTriangle(hit.point_m, square.positions[t[0]].cast<double>(),
+                                          square.positions[t[1]].cast<double>(),
+                                          square.positions[t[2]].cast<double>()),
+                0.0, 1e-14);
+  }
+  // The bound is exclusive: nothing strictly closer than 0.3 to a point 0.3 above the square.
+  NearestSurfacePoint hit;
+  EXPECT_FALSE(bvh.nearest({0.5, 0.5, 0.3}, &hit, 0.3 - 1e-9));
+  EXPECT_TRUE(bvh.nearest({0.5, 0.5, 0.3}, &hit, 0.3 + 1e-9));
 }
 
 TEST(EvaluatorBvh, MatchesBruteForceOnATriangleSoup) {

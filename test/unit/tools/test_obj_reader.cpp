@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -137,16 +138,88 @@ TEST(ObjExport, TexturedMeshRoundTripsThroughObjMtlAndPng) {
   fs::remove_all(dir);
 }
 
-TEST(ObjReader, ReportsBadIndicesWithFileAndLine) {
-  const fs::path dir = tempFolder("obj_reader_bad");
-  std::ofstream(dir / "bad.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n";
+TEST(ObjReader, ReadsAHandWrittenFileWithEveryElement) {
+  // Two objects, a material with a texture, colours on every vertex, UVs, normals, a negative
+  // (relative) index, a quad and a comment; the numbers below are read off the file.
+  const fs::path dir = tempFolder("obj_reader_hand");
+  std::ofstream(dir / "scene.mtl") << "newmtl plain\nKd 1 1 1\nnewmtl wood\nmap_Kd wood.png\n";
+  std::ofstream(dir / "scene.obj") << "# hand written\nmtllib scene.mtl\n"
+                                      "v 0 0 0 1 0 0\nv 2 0 0 0 1 0\nv 2 1 0.5 0 0 1\nv 0 1 0.5 0.25 0.5 0.75\n"
+                                      "vt 0 0\nvt 1 0\nvt 1 1\nvn 0 0 1\n"
+                                      "o first\nusemtl wood\nf 1/1/1 2/2/1 3/3/1\n"
+                                      "o second\nusemtl plain\nf 1//1 3//1 -1//1\nf 1 2 3 4\n";
   ObjMesh obj;
   std::string error;
-  EXPECT_FALSE(readObj((dir / "bad.obj").string(), &obj, &error));
-  EXPECT_NE(error.find("bad.obj:4"), std::string::npos) << error;
-  std::ofstream(dir / "quad.obj") << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";
-  ASSERT_TRUE(readObj((dir / "quad.obj").string(), &obj, &error)) << error;
-  EXPECT_EQ(obj.faces.size(), 2u);
+  ASSERT_TRUE(readObj((dir / "scene.obj").string(), &obj, &error)) << error;
+  ASSERT_EQ(obj.positions.size(), 4u);
+  EXPECT_EQ(obj.positions[1], Eigen::Vector3f(2, 0, 0));
+  EXPECT_EQ(obj.positions[3], Eigen::Vector3f(0, 1, 0.5f));
+  ASSERT_EQ(obj.colors.size(), 4u);
+  EXPECT_EQ(obj.colors[3], Eigen::Vector3f(0.25f, 0.5f, 0.75f));
+  ASSERT_EQ(obj.uvs.size(), 3u);
+  EXPECT_EQ(obj.uvs[2], Eigen::Vector2f(1, 1));
+  ASSERT_EQ(obj.normals.size(), 1u);
+  EXPECT_EQ(obj.normals[0], Eigen::Vector3f(0, 0, 1));
+  ASSERT_EQ(obj.materials.size(), 2u);
+  EXPECT_EQ(obj.materials[0].name, "plain");
+  EXPECT_TRUE(obj.materials[0].diffuse_map.empty());
+  EXPECT_EQ(obj.materials[1].name, "wood");
+  EXPECT_EQ(fs::path(obj.materials[1].diffuse_map), dir / "wood.png");
+  EXPECT_EQ(obj.objects, (std::vector<std::string>{"first", "second"}));
+  // 1 + 1 + the quad's 2 triangles.
+  ASSERT_EQ(obj.faces.size(), 4u);
+  const ObjFace& first = obj.faces[0];
+  EXPECT_EQ(first.v, (std::array<int, 3>{0, 1, 2}));
+  EXPECT_EQ(first.vt, (std::array<int, 3>{0, 1, 2}));
+  EXPECT_EQ(first.vn, (std::array<int, 3>{0, 0, 0}));
+  EXPECT_EQ(obj.materials[first.material].name, "wood");
+  EXPECT_EQ(obj.objects[first.object], "first");
+  const ObjFace& relative = obj.faces[1];
+  EXPECT_EQ(relative.v, (std::array<int, 3>{0, 2, 3}));  // -1 is the last vertex so far
+  EXPECT_EQ(relative.vt, (std::array<int, 3>{-1, -1, -1}));
+  EXPECT_EQ(obj.materials[relative.material].name, "plain");
+  EXPECT_EQ(obj.objects[relative.object], "second");
+  // The quad (a 2 × √1.25 rectangle) is two triangles on its four corners covering its area, √5.
+  double area = 0.0;
+  std::set<int> corners;
+  for (size_t f = 2; f < 4; ++f) {
+    const ObjFace& face = obj.faces[f];
+    EXPECT_EQ(face.vn, (std::array<int, 3>{-1, -1, -1}));
+    EXPECT_EQ(obj.objects[face.object], "second");
+    corners.insert(face.v.begin(), face.v.end());
+    const Eigen::Vector3f& a = obj.positions[face.v[0]];
+    area += 0.5 * (obj.positions[face.v[1]] - a).cross(obj.positions[face.v[2]] - a).norm();
+  }
+  EXPECT_EQ(corners, (std::set<int>{0, 1, 2, 3}));
+  EXPECT_NEAR(area, std::sqrt(5.0), 1e-6);
+  fs::remove_all(dir);
+}
+
+TEST(ObjReader, RefusesBadIndicesUnknownMaterialsAndShortFacesNamingTheFile) {
+  const fs::path dir = tempFolder("obj_reader_bad");
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"index past the end", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n"},
+      {"quad past the end", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3 9\n"},
+      {"uv past the end", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/2 3/1\n"},
+      {"unknown material", "v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl nowhere\nf 1 2 3\n"},
+      {"two corners", "v 0 0 0\nv 1 0 0\nf 1 2\n"},
+  };
+  for (const auto& [name, text] : cases) {
+    const fs::path path = dir / "bad.obj";
+    std::ofstream(path) << text;
+    ObjMesh obj;
+    std::string error;
+    EXPECT_FALSE(readObj(path.string(), &obj, &error)) << name;
+    EXPECT_EQ(error.rfind(path.string() + ": ", 0), 0u) << name << ": " << error;
+  }
+  ObjMesh obj;
+  std::string error;
+  EXPECT_FALSE(readObj((dir / "missing.obj").string(), &obj, &error));
+  EXPECT_NE(error.find("missing.obj"), std::string::npos) << error;
+  // Without a colour on every vertex there are no colours (tinyobjloader would fill in white).
+  std::ofstream(dir / "plain.obj") << "v 0 0 0\nv 1 0 0 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  ASSERT_TRUE(readObj((dir / "plain.obj").string(), &obj, &error)) << error;
+  EXPECT_EQ(obj.faces.size(), 1u);
   EXPECT_TRUE(obj.colors.empty());
   fs::remove_all(dir);
 }
