@@ -57,7 +57,26 @@ Mapper::Mapper(const MapperConfig& config)
   }
 }
 
+const char* mapperStageName(MapperStage stage) {
+  switch (stage) {
+    case MapperStage::kIdle: return "idle";
+    case MapperStage::kValidate: return "validation";
+    case MapperStage::kLookup: return "lookup";
+    case MapperStage::kFusion: return "fusion";
+    case MapperStage::kCarving: return "carving";
+    case MapperStage::kEviction: return "eviction";
+    case MapperStage::kFreeSpace: return "free space";
+    case MapperStage::kPlanning: return "planning";
+    case MapperStage::kMeshing: return "meshing";
+    case MapperStage::kTexture: return "texture";
+    case MapperStage::kClear: return "clear";
+    case MapperStage::kLoad: return "load";
+  }
+  return "unknown";
+}
+
 IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_timing) {
+  StageScope stage(monitor_, MapperStage::kValidate);
   IntegrationResult result;
   result.error = validateFrame(frame, config_.blockSizeM());
   if (!result.error.empty()) {
@@ -79,6 +98,7 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
     result.note.clear();
     return result;
   };
+  stage.enter(MapperStage::kLookup);
   Timer lookup_timer;
   measurements_.build(frame, config_, &pool_);
   if (config_.min_coherent_pixel_share > 0.0) {
@@ -107,6 +127,7 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
   ++frames_integrated_;
   if (texture_consumer_) last_frame_ = frame;  // shares the images: what a deferred texture pass projects into
 
+  stage.enter(MapperStage::kFusion);
   Timer fusion_timer;
   result.fusion = fuser_.fuse(frame, measurements_, octree_, queue_, missing_, &updated_, &created_);
   voxel_bytes_ += result.fusion.level_bytes_allocated;
@@ -114,6 +135,7 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
   result.fusion_ms = fusion_timer.elapsedMs();
   if (config_.free_space_carving) {
     // Before the created blocks join the map: they are the frame's own, fusion updated them.
+    stage.enter(MapperStage::kCarving);
     Timer carve_timer;
     result.carve = carver_.carve(frame, measurements_, octree_, queue_, &carved_);
     std::vector<BlockKey> keys;
@@ -124,6 +146,7 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
     result.updated_blocks.swap(merged);
     result.carve_ms = carve_timer.elapsedMs();
   }
+  stage.enter(MapperStage::kFusion);
   Timer insert_timer;
   map_changes_.recordUpdated(result.updated_blocks);
   // The blocks the frame created join the map now, in key order (allocation kept apart from the
@@ -145,6 +168,7 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
   result.fusion_ms += insert_timer.elapsedMs();
 
   // Memory bound, between fusion and meshing: nothing else touches the octree now.
+  stage.enter(MapperStage::kEviction);
   eviction_.recordUpdates(octree_, map_changes_.take(eviction_consumer_).updated, frames_integrated_);
   const EvictionLimits limits{static_cast<size_t>(config_.max_blocks), config_.max_distance_from_camera_m};
   result.evicted_blocks = eviction_.select(octree_, frame.T_world_camera.translation(), limits);
@@ -160,6 +184,7 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
     result.updated_blocks.swap(kept);
   }
   if (planning_) {
+    stage.enter(MapperStage::kFreeSpace);
     Timer free_space_timer;
     result.free_space = planning_->recordFreeSpace(frame, measurements_);
     if (config_.max_distance_from_camera_m > 0.0)
@@ -183,6 +208,7 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
 PlanningPass Mapper::updatePlanning() {
   PlanningPass pass;
   if (!planning_) return pass;
+  StageScope stage(monitor_, MapperStage::kPlanning);
   Timer timer;
   const BlockChangeLog::Changes changes = map_changes_.take(*planning_consumer_);
   pass.stats = planning_->update(octree_, changes.updated, changes.erased);
@@ -193,6 +219,7 @@ PlanningPass Mapper::updatePlanning() {
 PlanningPass Mapper::rebuildPlanning() {
   PlanningPass pass;
   if (!planning_) return pass;
+  StageScope stage(monitor_, MapperStage::kPlanning);
   Timer timer;
   map_changes_.take(*planning_consumer_);  // the rebuild covers them
   pass.stats = planning_->rebuild(octree_);
@@ -205,9 +232,11 @@ MeshPass Mapper::updateMesh() {
   const BlockChangeLog::Changes changes = map_changes_.take(mesh_consumer_);
   pass.blocks_changed = changes.updated.size() + changes.erased.size();
   if (!config_.mesh_enabled || changes.empty()) return pass;
+  StageScope stage(monitor_, MapperStage::kMeshing);
   pass.mesh = mesh_store_.update(octree_, changes.updated, &pool_, changes.erased);
   recordMeshChanges(pass.mesh);
   if (texture_consumer_) {
+    stage.enter(MapperStage::kTexture);
     const BlockChangeLog::Changes retexture = mesh_changes_.take(*texture_consumer_);
     MeshChanges submeshes;
     submeshes.changed = retexture.updated;
@@ -230,6 +259,7 @@ void Mapper::recordMeshChanges(const MeshChanges& changes) {
 }
 
 MeshChanges Mapper::rebuildMesh() {
+  StageScope stage(monitor_, MapperStage::kMeshing);
   map_changes_.take(mesh_consumer_);  // the rebuild covers them
   MeshChanges changes = mesh_store_.rebuild(octree_, &pool_);
   recordMeshChanges(changes);
@@ -267,6 +297,7 @@ bool Mapper::loadMap(const std::string& path, MeshChanges* changes, std::string*
 }
 
 MeshChanges Mapper::adoptMap(BlockOctree* loaded, const MapFileInfo& info) {
+  StageScope stage(monitor_, MapperStage::kLoad);
   octree_.swap(*loaded);
   queue_.clear();
   missing_.clear();
@@ -305,6 +336,7 @@ MeshChanges Mapper::adoptMap(BlockOctree* loaded, const MapFileInfo& info) {
 }
 
 ClearResult Mapper::clearRegion(const MapRegion& region, MeshTiming mesh_timing) {
+  StageScope stage(monitor_, MapperStage::kClear);
   ClearResult result;
   result.error = region.validate();
   if (!result.error.empty()) return result;

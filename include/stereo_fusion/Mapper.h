@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "stereo_fusion/MapperConfig.h"
+#include "stereo_fusion/MapperStage.h"
 #include "stereo_fusion/integration/BlockLookup.h"
 #include "stereo_fusion/integration/FrameGate.h"
 #include "stereo_fusion/integration/FreeSpaceCarver.h"
@@ -181,6 +182,9 @@ class Mapper {
   /// for this mapper's config() (`loaded` then holds the old map), and re-meshes it. A caller
   /// holding a lock around the map can so read the file before taking it.
   MeshChanges adoptMap(BlockOctree* loaded, const MapFileInfo& info);
+  /// Reports every operation's stage into `monitor` (nullptr: none) for a watchdog on another
+  /// thread; the caller keeps it alive while this Mapper works.
+  void setStageMonitor(StageMonitor* monitor) { monitor_ = monitor; }
 
  private:
   /// Records a meshing pass's (or rebuild's) changes for the mesh's consumers.
@@ -212,6 +216,7 @@ class Mapper {
   StereoFrame last_frame_;
   uint64_t frames_integrated_ = 0;
   uint64_t blocks_evicted_ = 0;
+  StageMonitor* monitor_ = nullptr;
   FrameGate gate_;
   std::vector<VoxelBlock*> queue_;    // reused across frames
   std::vector<BlockKey> missing_;     // reused across frames

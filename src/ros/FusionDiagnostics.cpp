@@ -28,7 +28,14 @@ void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   const bool lost_in_sync = unmatched > static_cast<uint64_t>(node_.sync_queue_size);
   const uint64_t dropped = drops.total() + (lost_in_sync ? unmatched : 0);
   const uint64_t fused = session_->framesFused();
-  if (matched > 0 && fused == 0)
+  // The watchdog: a single operation (a frame, a meshing pass) holding the map this long stalls
+  // everything behind it.
+  const double busy_s = session_->busySeconds();
+  const std::string stage = mapperStageName(session_->stage());
+  if (busy_s > kStalledAfterS)
+    status.summary(diagnostic_msgs::DiagnosticStatus::ERROR,
+                   "the map has been in " + stage + " for " + std::to_string(busy_s) + " s");
+  else if (matched > 0 && fused == 0)
     status.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "no frame fused yet; see the drop counters");
   else if (dropped > 0)
     status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "frames dropped; see the counters");
@@ -41,6 +48,8 @@ void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   status.add("frames received", matched);
   status.add("dropped: not synchronised (no matching image / camera_info yet)", unmatched);
   status.add("frames fused", fused);
+  status.add("map busy: stage", stage);
+  status.add("map busy: for (s)", busy_s);
   status.add("input rate (Hz)", matched / elapsed);
   drops.forEach([&](const RejectReasonInfo& info, uint64_t n) { status.add(info.label, n); });
   status.add("ignored: image / camera_info repeating a stamp", frames_->ignoredDuplicateParts());
@@ -51,14 +60,17 @@ void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   // Frames from before a clear whose fusion refilled the region, which was then cleared again.
   status.add("frames fused from before a clear (region cleared again)", session_->framesRecleared());
   status.add("clears refused (too many waiting for older frames)", session_->clearsRefused());
-  const MappingSession::KeptStatus kept = session_->kept();
+  // Read under the map lock, but never waiting long for it: the report must come even while a
+  // frame stalls (then the last values it read stand).
+  if (const std::optional<MappingSession::MapStatus> now = session_->tryStatus(0.2)) map_status_ = *now;
+  const MappingSession::KeptStatus& kept = map_status_.kept;
   status.add("clears waiting for frames from before them", kept.pending_clears);
   status.add("loop closure: frames kept", kept.frames);
   status.add("loop closure: kept frames (MB)", kept.bytes / 1048576.0);
   // Older frames are fused into the base and no longer moved by a correction.
   status.add("loop closure: frames beyond the window (frozen)", kept.frozen);
   status.add("loop closure: clears kept", kept.clears);
-  const CorrectionReport last = session_->lastCorrection();
+  const CorrectionReport& last = map_status_.last_correction;
   status.add("loop closure: last correction, frames fused again", last.frames_refused);
   status.add("loop closure: last correction (ms)", last.ms);
   status.add("loop closure: last correction, largest move (m)", last.max_shift_m);
@@ -76,16 +88,10 @@ void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   }
   status.add("timings", "lookup, fusion, total: per frame; meshing, texture: per meshing pass");
   status.add("meshing passes", v.mesh_passes);
-  size_t blocks = 0, memory = 0, awaiting_mesh = 0;
-  session_->withMapper([&](Mapper& map) {
-    awaiting_mesh = map.blocksAwaitingMesh();
-    blocks = map.map().blockCount();
-    memory = map.memoryBytes();
-  });
-  status.add("block changes awaiting meshing", awaiting_mesh);
-  status.add("blocks", blocks);
+  status.add("block changes awaiting meshing", map_status_.awaiting_mesh);
+  status.add("blocks", map_status_.blocks);
   status.add("blocks evicted", session_->blocksEvicted());
-  status.add("memory (MB)", memory / 1048576.0);
+  status.add("memory (MB)", map_status_.memory_bytes / 1048576.0);
 }
 
 }  // namespace stereo_fusion

@@ -20,11 +20,17 @@ bool MapServices::saveMesh(SaveMesh::Request& req, SaveMesh::Response& res) {
   // disk, or a target that blocks, must not stop fusion).
   std::unordered_map<BlockKey, SubMesh, BlockKeyHash> submeshes;
   std::unordered_map<BlockKey, TexturePatch, BlockKeyHash> patches;
-  session_->withMapper([&](Mapper& map) {
+  const bool got = session_->tryWithMapper([&](Mapper& map) {
     publisher_->catchUpLocked(map);  // the mesh of every frame fused so far
     submeshes = map.mesh().submeshes();
     patches = map.textures().patches();
   });
+  if (!got) {
+    res.success = false;
+    res.message = session_->busyMessage();
+    ROS_WARN("stereo_fusion: save_mesh: %s", res.message.c_str());
+    return true;
+  }
   res.success = exportMesh(req.path, submeshes, patches, &res.message);
   if (res.success)
     ROS_INFO("stereo_fusion: save_mesh: %s", res.message.c_str());
@@ -34,13 +40,21 @@ bool MapServices::saveMesh(SaveMesh::Request& req, SaveMesh::Response& res) {
 }
 
 bool MapServices::getFullMesh(GetFullMesh::Request&, GetFullMesh::Response& res) {
-  res.mesh = publisher_->fullMesh();
+  std::optional<MeshUpdate> mesh = publisher_->tryFullMesh();
+  if (!mesh) {  // the response has no success field: the call fails, the caller retries
+    ROS_WARN("stereo_fusion: get_full_mesh: %s", session_->busyMessage().c_str());
+    return false;
+  }
+  res.mesh = std::move(*mesh);
   return true;
 }
 
 bool MapServices::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
-  session_->reset();  // the publisher sends the empty map (MapReplaced)
-  ROS_INFO("stereo_fusion: map reset");
+  if (!session_->reset()) {  // std_srvs/Empty has no message: the call fails, the caller retries
+    ROS_WARN("stereo_fusion: reset: %s", session_->busyMessage().c_str());
+    return false;
+  }
+  ROS_INFO("stereo_fusion: map reset");  // the publisher sent the empty map (MapReplaced)
   return true;
 }
 
@@ -50,12 +64,18 @@ bool MapServices::saveMap(SaveMap::Request& req, SaveMap::Response& res) {
   double locked_ms = 0.0;
   // Only the copy of the blocks holds the map (at memory speed, 0.3–7 KB per block); the
   // checksums, the write and the fsync run while frames are fused.
-  session_->withMapper([&](Mapper& map) {
+  const bool got = session_->tryWithMapper([&](Mapper& map) {
     const ros::WallTime locked = ros::WallTime::now();
     bytes = map.encodeMap();
     res.blocks = map.map().blockCount();
     locked_ms = (ros::WallTime::now() - locked).toSec() * 1e3;
   });
+  if (!got) {
+    res.success = false;
+    res.message = session_->busyMessage();
+    ROS_WARN("stereo_fusion: save_map: %s", res.message.c_str());
+    return true;
+  }
   std::string error;
   res.success = writeMapFileBytes(req.path, &bytes, &error);
   const double total_ms = (ros::WallTime::now() - start).toSec() * 1e3;

@@ -73,7 +73,11 @@ void MeshPublisher::catchUpLocked(Mapper& map) {
 }
 
 void MeshPublisher::publishPending(const ros::Time& stamp, bool force) {
-  session_->withMapper([&](Mapper& map) {
+  session_->withMapper([&](Mapper& map) { publishPendingLocked(map, stamp, force); });
+}
+
+void MeshPublisher::publishPendingLocked(Mapper& map, const ros::Time& stamp, bool force) {
+  {
     if (map.blocksAwaitingMesh() == 0 && map.pendingMeshChanges(consumer_) == 0 && !markers_full_pending_) return;
     const ros::WallTime now = ros::WallTime::now();
     if (!force && node_.mesh_publish_rate_hz > 0 && (now - last_publish_).toSec() < 1.0 / node_.mesh_publish_rate_hz)
@@ -109,23 +113,24 @@ void MeshPublisher::publishPending(const ros::Time& stamp, bool force) {
     const ros::Time ros_now = ros::Time::now();
     for (const ros::Time& t : unpublished_stamps_) stats_->recordLatency((ros_now - t).toSec());
     unpublished_stamps_.clear();
-  });
+  }
 }
 
-MeshUpdate MeshPublisher::fullMesh() {
-  // Frames already fused are in the answer even if their meshing waits for the publish rate:
-  // their changes go out as an update first, so the full mesh's sequence covers them.
-  publishPending(ros::Time(0), true);
-  return session_->withMapper([&](Mapper& map) {
+std::optional<MeshUpdate> MeshPublisher::tryFullMesh() {
+  std::optional<MeshUpdate> mesh;
+  session_->tryWithMapper([&](Mapper& map) {
+    // Frames already fused are in the answer even if their meshing waits for the publish rate:
+    // their changes go out as an update first, so the full mesh's sequence covers them.
+    publishPendingLocked(map, ros::Time(0), true);
     std_msgs::Header header;
     header.frame_id = node_.world_frame;
     header.stamp = ros::Time::now();
     // The sequence of the last published update: apply updates with a larger sequence on top.
-    MeshUpdate mesh = toMeshUpdate(map.mesh().submeshes(), allBlocks(map), {}, header, map.config().voxel_size_m,
-                                   sequence_, true, node_.mesh_encoding, &map.textures());
-    mesh.session = session_id_;
-    return mesh;
+    mesh = toMeshUpdate(map.mesh().submeshes(), allBlocks(map), {}, header, map.config().voxel_size_m, sequence_,
+                        true, node_.mesh_encoding, &map.textures());
+    mesh->session = session_id_;
   });
+  return mesh;
 }
 
 void MeshPublisher::onMapReplaced(const MapReplaced& replaced) {

@@ -29,6 +29,7 @@ MappingSession::MappingSession(const MapperConfig& config, const SessionConfig& 
       session_config_(session),
       mapper_(std::make_unique<Mapper>(config)),
       timeline_(config, session.loop_closure_max_frames) {
+  mapper_->setStageMonitor(&monitor_);
   if (session_config_.background_corrections) correction_thread_ = std::thread([this] { correctionLoop(); });
 }
 
@@ -42,7 +43,7 @@ MappingSession::~MappingSession() {
 }
 
 void MappingSession::setMapReplacedListener(std::function<void(const MapReplaced&)> listener) {
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::lock_guard<std::timed_mutex> lock(mutex_);
   listener_ = std::move(listener);
 }
 
@@ -56,7 +57,7 @@ void MappingSession::notifyLocked(MapChange change, const std::vector<BlockKey>&
 }
 
 FrameTicket MappingSession::arrive() {
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::lock_guard<std::timed_mutex> lock(mutex_);
   return {epoch_, next_ticket_++};
 }
 
@@ -65,7 +66,7 @@ bool MappingSession::isCurrent(const FrameTicket& ticket) const { return ticket.
 MappingSession::FrameOutcome MappingSession::fuse(const StereoFrame& frame, const FrameTicket& ticket,
                                                   MeshTiming timing, FrameLoader reload) {
   FrameOutcome out;
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::lock_guard<std::timed_mutex> lock(mutex_);
   if (ticket.epoch != epoch_) {
     out.reason = RejectReason::kSuperseded;
     out.error = "it arrived before a reset or load_map";
@@ -118,9 +119,19 @@ MappingSession::FrameOutcome MappingSession::fuse(const StereoFrame& frame, cons
   return out;
 }
 
+std::string MappingSession::busyMessage() const {
+  return "busy: the map has been held for more than " + std::to_string(session_config_.max_request_wait_s) +
+         " s (" + mapperStageName(stage()) + " for " + std::to_string(busySeconds()) +
+         " s); nothing was done, retry";
+}
+
 MappingSession::ClearOutcome MappingSession::clear(const MapRegion& region, double stamp_s) {
   ClearOutcome out;
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::unique_lock<std::timed_mutex> lock(mutex_, std::defer_lock);
+  if (!lock.try_lock_for(requestWait())) {
+    out.message = busyMessage();
+    return out;
+  }
   const std::string invalid = region.validate();
   if (!invalid.empty()) {
     out.message = invalid + " (the map is unchanged)";
@@ -163,14 +174,16 @@ void MappingSession::startEpochLocked(const std::vector<uint8_t>& base_bytes) {
   }
 }
 
-void MappingSession::reset() {
-  std::lock_guard<std::mutex> lock(mutex_);
+bool MappingSession::reset() {
+  std::unique_lock<std::timed_mutex> lock(mutex_, std::defer_lock);
+  if (!lock.try_lock_for(requestWait())) return false;
   std::vector<BlockKey> removed;
   for (const auto& [key, sub] : mapper_->mesh().submeshes()) removed.push_back(key);
   std::sort(removed.begin(), removed.end());
   mapper_->reset();
   startEpochLocked({});
   notifyLocked(MapChange::kReset, removed);
+  return true;
 }
 
 MappingSession::LoadOutcome MappingSession::load(const std::string& path) {
@@ -181,7 +194,11 @@ MappingSession::LoadOutcome MappingSession::load(const std::string& path) {
   MapFileInfo info;
   std::string error;
   const bool read = readMapFile(path, config_, &loaded, &info, &error);
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::unique_lock<std::timed_mutex> lock(mutex_, std::defer_lock);
+  if (!lock.try_lock_for(requestWait())) {
+    out.message = busyMessage() + " (the current map is unchanged)";
+    return out;
+  }
   if (!read) {
     out.blocks = mapper_->map().blockCount();
     out.message = error + " (the current map is unchanged)";
@@ -219,7 +236,7 @@ std::optional<CorrectionReport> MappingSession::submitTrajectory(std::vector<Sta
   sortByStamp(&poses);
   PendingTrajectory pending;
   {
-    std::lock_guard<std::mutex> lock(mutex_);
+    std::lock_guard<std::timed_mutex> lock(mutex_);
     if (timeline_.frames() == 0) return refuse(TrajectoryOutcome::kRejectedNoFrameYet, "no frame has been fused yet");
     pending.fused_until_s = fused_until_s ? *fused_until_s : timeline_.newestFrameStamp();
     pending.epoch = epoch_;
@@ -271,7 +288,7 @@ CorrectionReport MappingSession::runCorrection(const PendingTrajectory& trajecto
   EditTimeline::Snapshot snapshot;
   PoseCorrection correction;
   {
-    std::lock_guard<std::mutex> lock(mutex_);
+    std::lock_guard<std::timed_mutex> lock(mutex_);
     if (trajectory.epoch != epoch_) return finish(TrajectoryOutcome::kDroppedByReset, "a reset or load_map came first");
     const std::vector<StampedPose> originals = timeline_.originalPoses();
     correction = PoseCorrection(originals, trajectory.poses, trajectory.fused_until_s);
@@ -292,7 +309,7 @@ CorrectionReport MappingSession::runCorrection(const PendingTrajectory& trajecto
   }
   correcting_ = true;
   auto unpin = [&] {
-    std::lock_guard<std::mutex> lock(mutex_);
+    std::lock_guard<std::timed_mutex> lock(mutex_);
     if (trajectory.epoch == epoch_) timeline_.unpin();  // a new epoch cleared the timeline and its pin
     correcting_ = false;
   };
@@ -325,7 +342,7 @@ CorrectionReport MappingSession::runCorrection(const PendingTrajectory& trajecto
   for (int round = 1;; ++round) {
     std::vector<Edit> newer;
     {
-      std::lock_guard<std::mutex> lock(mutex_);
+      std::lock_guard<std::timed_mutex> lock(mutex_);
       if (trajectory.epoch != epoch_) {
         correcting_ = false;
         return finish(TrajectoryOutcome::kDroppedByReset, "a reset or load_map came while it was fused again");
@@ -367,6 +384,8 @@ void MappingSession::adoptCorrectedLocked(std::unique_ptr<Mapper> rebuilt, EditR
   for (const auto& [key, sub] : mapper_->mesh().submeshes())
     if (!kept.count(key)) removed.push_back(key);
   std::sort(removed.begin(), removed.end());
+  mapper_->setStageMonitor(nullptr);
+  rebuilt->setStageMonitor(&monitor_);
   mapper_ = std::move(rebuilt);
   live_replay_ = std::move(replay);
   timeline_.setCorrection(correction);
@@ -375,17 +394,33 @@ void MappingSession::adoptCorrectedLocked(std::unique_ptr<Mapper> rebuilt, EditR
 }
 
 CorrectionReport MappingSession::lastCorrection() const {
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::lock_guard<std::timed_mutex> lock(mutex_);
   return last_correction_;
 }
 
 PoseCorrection MappingSession::correction() const {
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::lock_guard<std::timed_mutex> lock(mutex_);
   return correction_;
 }
 
 MappingSession::KeptStatus MappingSession::kept() const {
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::lock_guard<std::timed_mutex> lock(mutex_);
+  return keptLocked();
+}
+
+std::optional<MappingSession::MapStatus> MappingSession::tryStatus(double wait_s) const {
+  std::unique_lock<std::timed_mutex> lock(mutex_, std::defer_lock);
+  if (!lock.try_lock_for(std::chrono::duration<double>(wait_s))) return std::nullopt;
+  MapStatus s;
+  s.kept = keptLocked();
+  s.last_correction = last_correction_;
+  s.blocks = mapper_->map().blockCount();
+  s.memory_bytes = mapper_->memoryBytes();
+  s.awaiting_mesh = mapper_->blocksAwaitingMesh();
+  return s;
+}
+
+MappingSession::KeptStatus MappingSession::keptLocked() const {
   KeptStatus s;
   s.frames = timeline_.frames();
   s.clears = timeline_.clears();

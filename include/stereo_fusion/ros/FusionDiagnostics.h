@@ -22,12 +22,16 @@ class FusionDiagnostics {
  private:
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
 
+  /// An operation holding the map longer than this is reported as an ERROR, naming its stage.
+  static constexpr double kStalledAfterS = 1.0;
+
   const NodeConfig& node_;
   MappingSession* session_;
   const FrameInput* frames_;
   const TrajectoryInput* trajectories_;
   const NodeStats* stats_;
   ros::WallTime started_;
+  MappingSession::MapStatus map_status_;  // the last read (only the diagnostics thread uses it)
   std::unique_ptr<diagnostic_updater::Updater> updater_;
   ros::WallTimer timer_;
 };

@@ -5,6 +5,7 @@
 #include <ros/ros.h>
 #include <stereo_fusion/MeshUpdate.h>
 
+#include <optional>
 #include <vector>
 
 #include "stereo_fusion/ros/NodeStats.h"
@@ -28,12 +29,14 @@ class MeshPublisher {
   void publishPending(const ros::Time& stamp, bool force);
   /// Meshes what fusion changed since the last pass (map lock held; save_mesh).
   void catchUpLocked(Mapper& map);
-  /// The whole mesh as one full MeshUpdate whose sequence the published updates continue.
-  MeshUpdate fullMesh();
+  /// The whole mesh as one full MeshUpdate whose sequence the published updates continue;
+  /// nullopt if the map stayed busy (MappingSession::tryWithMapper()).
+  std::optional<MeshUpdate> tryFullMesh();
   /// The session's listener: the map was replaced wholesale; sends it whole.
   void onMapReplaced(const MapReplaced& replaced);
 
  private:
+  void publishPendingLocked(Mapper& map, const ros::Time& stamp, bool force);
   void publishFullLocked(Mapper& map, const std::vector<BlockKey>& removed);
   nav_msgs::Path correctedPathLocked() const;
 

@@ -1,4 +1,5 @@
 #pragma once
+#include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <functional>
@@ -26,6 +27,9 @@ struct SessionConfig {
   /// Corrections run on a thread of the session's while frames are fused (the node); false:
   /// submitTrajectory() runs one before it returns (the offline fuser).
   bool background_corrections = true;
+  /// How long a request (clear, reset, load, tryWithMapper) waits for the map lock before it
+  /// answers "busy" instead (a frame or a meshing pass holds it; frames themselves always wait).
+  double max_request_wait_s = 2.0;
 };
 
 /// Handed out when a frame arrives (MappingSession::arrive()); fuse() needs it.
@@ -110,8 +114,9 @@ class MappingSession {
   /// kMaxPendingClears clears wait for frames that may predate them.
   ClearOutcome clear(const MapRegion& region, double stamp_s);
   static constexpr size_t kMaxPendingClears = 4096;
-  /// Drops the map, the kept frames and any correction; frames that arrived before count as superseded.
-  void reset();
+  /// Drops the map, the kept frames and any correction; frames that arrived before count as
+  /// superseded. False (nothing done) if the map stayed busy for max_request_wait_s.
+  bool reset();
   struct LoadOutcome {
     bool success = false;
     std::string message;
@@ -141,9 +146,23 @@ class MappingSession {
   /// Runs f(Mapper&) with the map lock held: read the map, mesh it, take its changes.
   template <typename F>
   auto withMapper(F&& f) {
-    std::lock_guard<std::mutex> lock(mutex_);
+    std::lock_guard<std::timed_mutex> lock(mutex_);
     return f(*mapper_);
   }
+  /// The same for a request: false, f not run, if the map stayed busy for max_request_wait_s.
+  template <typename F>
+  bool tryWithMapper(F&& f) {
+    std::unique_lock<std::timed_mutex> lock(mutex_, std::defer_lock);
+    if (!lock.try_lock_for(requestWait())) return false;
+    f(*mapper_);
+    return true;
+  }
+  /// The answer of a request that found the map busy.
+  std::string busyMessage() const;
+  /// Seconds the live map's current operation has run (0 while idle) and its stage: read
+  /// without the map lock (a watchdog).
+  double busySeconds() const { return monitor_.busySeconds(); }
+  MapperStage stage() const { return monitor_.stage.load(); }
   const MapperConfig& config() const { return config_; }
   const RejectCounters& drops() const { return drops_; }
   const TrajectoryCounters& trajectories() const { return trajectories_; }
@@ -158,6 +177,13 @@ class MappingSession {
     uint64_t frozen = 0;
   };
   KeptStatus kept() const;
+  /// What /diagnostics reports of the map, or nullopt if it stayed busy for `wait_s`.
+  struct MapStatus {
+    KeptStatus kept;
+    CorrectionReport last_correction;
+    size_t blocks = 0, memory_bytes = 0, awaiting_mesh = 0;
+  };
+  std::optional<MapStatus> tryStatus(double wait_s) const;
 
  private:
   struct PendingTrajectory {
@@ -174,11 +200,17 @@ class MappingSession {
   /// A new epoch (reset, load): drops the kept edits and any correction (map lock held).
   void startEpochLocked(const std::vector<uint8_t>& base_bytes);
   void notifyLocked(MapChange change, const std::vector<BlockKey>& removed);
+  KeptStatus keptLocked() const;
+  std::chrono::steady_clock::duration requestWait() const {
+    return std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+        std::chrono::duration<double>(session_config_.max_request_wait_s));
+  }
 
   const MapperConfig config_;
   const SessionConfig session_config_;
 
-  mutable std::mutex mutex_;  // the map lock: guards everything up to the trajectory queue
+  mutable std::timed_mutex mutex_;  // the map lock: guards everything up to the trajectory queue
+  StageMonitor monitor_;            // the live mapper's (a correction's rebuilt one gets it at the swap)
   std::unique_ptr<Mapper> mapper_;
   EditReplay live_replay_;
   EditTimeline timeline_;

@@ -290,3 +290,36 @@ TEST(MappingSession, OfflineFramesAreReadAgainForACorrectionAndAnUnreadableOneLe
   EXPECT_EQ(applied->outcome, TrajectoryOutcome::kApplied) << applied->message;
   EXPECT_FALSE(mapOf(session) == before);
 }
+
+TEST(MappingSession, ARequestFindingTheMapBusyAnswersBusyInBoundedTimeAndChangesNothing) {
+  SessionConfig config = keepAll(false);
+  config.max_request_wait_s = 0.2;
+  MappingSession session(sessionTestConfig(), config);
+  ASSERT_EQ(session.fuse(driftingFrame(0), session.arrive(), MeshTiming::kNow).reason, RejectReason::kNone);
+  const MapSnapshot before = mapOf(session);
+  std::atomic<bool> holding{false}, release{false};
+  std::thread holder([&] {
+    session.withMapper([&](Mapper&) {  // a long frame or meshing pass
+      holding = true;
+      while (!release) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    });
+  });
+  ASSERT_TRUE(waitFor([&] { return holding.load(); }, 10.0));
+  const auto start = std::chrono::steady_clock::now();
+  const MappingSession::ClearOutcome clear = session.clear(kBall, 100.0);
+  EXPECT_FALSE(clear.success);
+  EXPECT_NE(clear.message.find("busy"), std::string::npos) << clear.message;
+  EXPECT_FALSE(session.reset());
+  EXPECT_FALSE(session.load("/nonexistent.sfmap").success);
+  EXPECT_FALSE(session.tryWithMapper([](Mapper&) {}));
+  EXPECT_FALSE(session.tryStatus(0.05).has_value());
+  const double waited_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_LT(waited_s, 30.0) << "four requests of 0.2 s each";  // bounded, however loaded the machine
+  EXPECT_GE(waited_s, 0.6);  // each waited its bound, none gave up at once
+  release = true;
+  holder.join();
+  EXPECT_TRUE(mapOf(session) == before);
+  EXPECT_EQ(session.regionsCleared(), 0u);
+  EXPECT_TRUE(session.clear(kBall, 100.0).success) << "free again";
+  EXPECT_TRUE(session.tryStatus(1.0).has_value());
+}
