@@ -638,7 +638,7 @@ struct BlockMesher::Context {
   }
 };
 
-BlockMesher::BlockMesher(const MeshingParams& params) : params_(params) {}
+BlockMesher::BlockMesher(const MeshingParams& params, MesherPaths paths) : params_(params), paths_(paths) {}
 
 bool BlockMesher::samplePoint(const Context& ctx, int qx, int qy, int qz, PointSample* out) const {
   const int q[3] = {qx, qy, qz};
@@ -1002,35 +1002,73 @@ void BlockMesher::mesh(const BlockOctree& map, const MeshStates& states, const V
   }
   ctx.truncated_abs = static_cast<float>(0.99 * TruncationBand(params_.voxel_size_m, params_.truncation_vox)
                                                      .measurementM(coarsest_level));
-  // Every value the mesher uses is a convex combination of observed voxels in these regions:
-  // with one sign only, no cell can change sign.
-  if (params_.fast_paths && (!any_negative || !any_positive)) return;
-  if (params_.fast_paths) {
-    // A +neighbour with nothing observed where the owner reads it adds only points that are
-    // unobserved, present or not: every box with such a point — its own boxes, and any box
-    // whose edges or faces it would tile with hanging points (their corners on the shared line
-    // weigh it) — gives up either way. Meshing as if it were absent gives the same bits, and a
-    // neighbourhood that differed only by it takes the uniform path. (truncated_abs above still
-    // counts it: that is what the general path uses.)
+  // Once the neighbourhood is final: whether it is uniform, and the owner's sample grid.
+  auto prepareBoxes = [&] {
     for (int d = 1; d < 8; ++d)
-      if (ctx.nb[d] && (states[*ctx.nb[d]].sign_bits & (meshSignBit(d, false) | meshSignBit(d, true))) == 0)
-        ctx.nb[d] = nullptr;
+      if (ctx.nb[d] && ctx.level[d] != owner_level) ctx.uniform = false;
+    ctx.buildSampleGrid();
+  };
+  // The one place the paths part. Both give the same bits (test_block_mesher_fast_paths).
+  switch (paths_) {
+    case MesherPaths::kGeneralOnly:
+      prepareBoxes();
+      meshEveryBox(ctx);
+      break;
+    case MesherPaths::kFast:
+      // Every value the mesher uses is a convex combination of observed voxels in these
+      // regions: with one sign only, no cell can change sign.
+      if (!any_negative || !any_positive) return;
+      // A +neighbour with nothing observed where the owner reads it adds only points that are
+      // unobserved, present or not: every box with such a point — its own boxes, and any box
+      // whose edges or faces it would tile with hanging points (their corners on the shared
+      // line weigh it) — gives up either way. Meshing as if it were absent gives the same
+      // bits, and a neighbourhood that differed only by it takes the uniform path.
+      // (truncated_abs above still counts it: that is what the general path uses.)
+      for (int d = 1; d < 8; ++d)
+        if (ctx.nb[d] && (states[*ctx.nb[d]].sign_bits & (meshSignBit(d, false) | meshSignBit(d, true))) == 0)
+          ctx.nb[d] = nullptr;
+      prepareBoxes();
+      if (ctx.uniform)
+        meshUniformBoxes(ctx);
+      else
+        meshMixedBoxes(ctx);
+      break;
   }
-  for (int d = 1; d < 8; ++d)
-    if (ctx.nb[d] && ctx.level[d] != owner_level) ctx.uniform = false;
-  ctx.buildSampleGrid();
-  if (ctx.uniform)
-    meshUniformBoxes(ctx);
-  else
-    meshMixedBoxes(ctx);
   computeVertexNormals(out);
 }
 
-void BlockMesher::meshUniformBoxes(Context& ctx) const {
-  if (!params_.fast_paths) {
-    meshMixedBoxes(ctx);  // the general path, for tests comparing the two
-    return;
+void BlockMesher::meshEveryBox(Context& ctx) const {
+  ctx.buildLinePoints();
+  std::pair<int, int> intervals[3][kFinestSide];
+  int interval_count[3];
+  for (int d = 0; d < 8; ++d) {
+    if (ctx.nb[d] == nullptr) continue;
+    const int step = ctx.step[d];
+    const int side = kFinestSide / step;
+    for (int a = 0; a < 3; ++a) {
+      int& n = interval_count[a];
+      n = 0;
+      if ((d >> a) & 1) {
+        intervals[a][n++] = {kBlockUnits, kBlockUnits + step};  // neighbour's low skin
+      } else {
+        for (int i = 0; i + 1 < side; ++i) intervals[a][n++] = {step * (2 * i + 1), step * (2 * i + 3)};
+        intervals[a][n++] = {step * (2 * side - 1), kBlockUnits};  // own high skin
+      }
+    }
+    for (int iz = 0; iz < interval_count[2]; ++iz)
+      for (int iy = 0; iy < interval_count[1]; ++iy)
+        for (int ix = 0; ix < interval_count[0]; ++ix) {
+          const int lo[3] = {intervals[0][ix].first, intervals[1][iy].first, intervals[2][iz].first};
+          const int hi[3] = {intervals[0][ix].second, intervals[1][iy].second, intervals[2][iz].second};
+          const bool core = d == 0 && hi[0] < kBlockUnits && hi[1] < kBlockUnits && hi[2] < kBlockUnits;
+          // Most boxes: no voxel-level sign change, decided exactly on the corner voxels.
+          if (core && ctx.coreBoxIsEmpty(lo)) continue;
+          meshBox(ctx, lo, hi);
+        }
   }
+}
+
+void BlockMesher::meshUniformBoxes(Context& ctx) const {
   ctx.buildRowMasks();
   ctx.uniform_weight = 1.0f / static_cast<float>(ctx.step[0]);
   const size_t stride_y = ctx.grid_dim[0], stride_z = stride_y * ctx.grid_dim[1];
@@ -1108,14 +1146,14 @@ void BlockMesher::meshMixedBoxes(Context& ctx) const {
         // Most boxes: no voxel-level sign change. The exact corner signs decide here, so
         // the mask pre-test below could not reject a box that passes.
         if (ctx.coreBoxIsEmpty(lo)) return;
-      } else if (params_.fast_paths && mixedBoxIsEmpty(ctx, lo, hi)) {
+      } else if (mixedBoxIsEmpty(ctx, lo, hi)) {
         return;
       }
       meshBox(ctx, lo, hi);
     };
     for (int iz = 0; iz < interval_count[2]; ++iz)
       for (int iy = 0; iy < interval_count[1]; ++iy) {
-        if (d == 0 && params_.fast_paths && iy + 1 < interval_count[1] && iz + 1 < interval_count[2]) {
+        if (d == 0 && iy + 1 < interval_count[1] && iz + 1 < interval_count[2]) {
           // A row of core boxes and the skin box ending it: only the core boxes whose corners'
           // voxel masks allow a surface (coreCandidates()), in the same x order.
           for (unsigned bits = ctx.coreCandidates(iy, iz); bits != 0; bits &= bits - 1) visit(__builtin_ctz(bits), iy, iz);
