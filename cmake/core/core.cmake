@@ -45,6 +45,13 @@ add_library(stereo_fusion_core STATIC
   ${STEREO_FUSION_ROOT}/src/integration/FusionKernels.cpp
   ${STEREO_FUSION_ROOT}/src/mesh/CellPolygonizer.cpp
   ${STEREO_FUSION_ROOT}/src/mesh/BlockMesher.cpp
+  ${STEREO_FUSION_ROOT}/src/mesh/MesherContext.cpp
+  ${STEREO_FUSION_ROOT}/src/mesh/MesherGeneralPath.cpp
+  ${STEREO_FUSION_ROOT}/src/mesh/MesherMixedPath.cpp
+  ${STEREO_FUSION_ROOT}/src/mesh/MesherSampling.cpp
+  ${STEREO_FUSION_ROOT}/src/mesh/MesherTables.cpp
+  ${STEREO_FUSION_ROOT}/src/mesh/MesherUniformPath.cpp
+  ${STEREO_FUSION_ROOT}/src/mesh/VertexNormals.cpp
   ${STEREO_FUSION_ROOT}/src/mesh/MeshLevel.cpp
   ${STEREO_FUSION_ROOT}/src/mesh/MeshStore.cpp
   ${STEREO_FUSION_ROOT}/src/mesh/TexturePatch.cpp

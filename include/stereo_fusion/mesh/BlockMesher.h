@@ -24,10 +24,6 @@ struct MeshingParams {
   /// (see fillFacesFromCoarserLevels()). false: such voxels stay unobserved (cells touching
   /// them are skipped and leave a hole where a fine block meets a coarse one).
   bool fill_faces_from_coarser_levels = true;
-  /// Test switch: false meshes every neighbourhood through the general path (every box
-  /// visited, every point sampled by samplePoint(); no owner skipped on its sign bits). The fast paths must produce the same
-  /// bits; test_block_mesher_fast_paths compares the two.
-  bool fast_paths = true;
 };
 
 /// What the mesher keeps per block, in a BlockColumn that MeshStore owns: derived from the
@@ -122,6 +118,15 @@ void refreshMeshLevelScalar(const VoxelBlock& block, const MeshingParams& params
 /// each level once and reading signs of the meshed voxels only. Only call it when avx2Supported().
 void refreshMeshLevelAvx2(const VoxelBlock& block, const MeshingParams& params, MeshBlockState* state);
 
+/// Which of BlockMesher's paths mesh a neighbourhood. Production meshes with kFast; kGeneralOnly
+/// exists for tests: every box of every neighbourhood through the general path (every point
+/// sampled by the general sampler, no owner skipped on its sign bits), the reference the fast
+/// paths must match bit for bit (test_block_mesher_fast_paths).
+enum class MesherPaths {
+  kFast,         // uniform and mixed fast paths, owners skipped on their sign bits
+  kGeneralOnly,  // tests only: the general path alone
+};
+
 /// Marching cubes for one block (thesis §3.6, Algorithm 3), crack-free across blocks of any
 /// levels.
 ///
@@ -157,10 +162,15 @@ void refreshMeshLevelAvx2(const VoxelBlock& block, const MeshingParams& params, 
 /// sample voxels by index; mixed ones reject boxes with an unobserved corner or one sign on
 /// per-block voxel masks before sampling; edge → vertex is a flat stamped table (in uniform
 /// neighbourhoods a direct one indexed by grid point and axis, and only the crossing edges
-/// are tested for the truncation band). The general path stays reachable (MeshingParams::fast_paths) and a test compares the two.
+/// are tested for the truncation band). The general path stays reachable for tests
+/// (MesherPaths::kGeneralOnly), which compare the two.
+///
+/// Sources: BlockMesher.cpp (the neighbourhood and the choice of path) over src/mesh/Mesher*:
+/// the lattice and its tables, the per-thread scratch and per-owner context, the sampler, the
+/// general, uniform and mixed paths.
 class BlockMesher {
  public:
-  explicit BlockMesher(const MeshingParams& params);
+  explicit BlockMesher(const MeshingParams& params, MesherPaths paths = MesherPaths::kFast);
 
   /// Meshes everything `owner` owns; neighbours are looked up in `map`. The states of the
   /// owner and its neighbours must be current. `seam_fills` (optional) holds the face-filled
@@ -169,47 +179,8 @@ class BlockMesher {
             const SeamFills* seam_fills = nullptr) const;
 
  private:
-  struct Context;
- public:
-  /// One lattice point's fused value (public only for the per-thread scratch buffers).
-  struct PointSample {
-    float sdf = 0.0f;
-    float rgb[3] = {0, 0, 0};
-  };
-
- private:
-  /// Boxes of a neighbourhood whose blocks all share the owner's level: only the boxes whose
-  /// support centres are observed and change sign are visited (row bit masks), and points
-  /// are sampled by voxel index. With MeshingParams::fast_paths off: meshMixedBoxes().
-  void meshUniformBoxes(Context& ctx) const;
-  /// Boxes of a neighbourhood with several levels (hanging points on shared faces). With
-  /// MeshingParams::fast_paths on, boxes are pre-tested on voxel masks (mixedBoxIsEmpty()).
-  void meshMixedBoxes(Context& ctx) const;
-  /// True if meshBox() would certainly add nothing for this box of a mixed neighbourhood
-  /// (an unobserved corner, a plain box with one sign at all corners, or a box whose corners
-  /// and every voxel its points may weigh share one sign), decided on voxel bit masks
-  /// without sampling; false when in doubt.
-  bool mixedBoxIsEmpty(Context& ctx, const int lo[3], const int hi[3]) const;
-  bool samplePoint(const Context& ctx, int qx, int qy, int qz, PointSample* out) const;
-  bool cachedSample(Context& ctx, const int q[3], PointSample* out) const;
-  bool boxHasNoSurface(Context& ctx, const int lo[3], const int hi[3]) const;
-  bool boxIsPlain(const Context& ctx, const int lo[3], const int hi[3]) const;
-  void meshUniformBox(Context& ctx, const int lo[3], const int hi[3], const int grid_lo[3]) const;
-  void meshPlainBox(Context& ctx, const int corner[8][3], const PointSample s[8]) const;
-  void meshGenericBox(Context& ctx, const int lo[3], const int hi[3]) const;
-  void meshBox(Context& ctx, const int lo[3], const int hi[3]) const;
-  void collectHangingPoints(const Context& ctx, int axis, const int fixed[3], int u0, int u1,
-                            std::vector<int>* points) const;
-  void faceGridLines(const Context& ctx, int normal_axis, int line_axis, const int lo[3],
-                     const int hi[3], std::vector<int>* lines) const;
-  static void faceInteriorLine(int normal_axis, int line_axis, const int lo[3], int fixed[3]);
-  uint32_t vertexOnEdge(Context& ctx, const int p[3], const PointSample& sp, const int q[3],
-                        const PointSample& sq) const;
-  /// Appends the surface vertex on edge a → b (a before b lexicographically) to the submesh.
-  static void appendVertex(Context& ctx, const int a[3], const PointSample& sa, const int b[3],
-                           const PointSample& sb);
-
   MeshingParams params_;
+  MesherPaths paths_;
 };
 
 }  // namespace stereo_fusion

@@ -1,5 +1,5 @@
 // The mesher's fast paths (uniform-neighbourhood sampling by voxel index, box pre-tests on
-// voxel bit masks) against its general path (MeshingParams::fast_paths = false), bit for bit,
+// voxel bit masks) against its general path (MesherPaths::kGeneralOnly), bit for bit,
 // on random neighbourhoods built to hit their edge cases: absent blocks, unobserved voxels,
 // ±0, values too small to keep their sign through the weighted sums, values at the
 // truncation threshold of every level.
@@ -103,10 +103,8 @@ void runTrial(uint32_t seed, bool uniform_levels, Trial* totals, double noise_vo
         refreshMeshLevel(*block, MeshingParams{kVoxel, kTruncationVox, 1e-6}, &states[*block]);
         totals->face_filled_blocks += states[*block].seam_filled;
       }
-  MeshingParams fast_params{kVoxel, kTruncationVox, 1e-6};
-  MeshingParams general_params = fast_params;
-  general_params.fast_paths = false;
-  const BlockMesher fast(fast_params), general(general_params);
+  const MeshingParams params{kVoxel, kTruncationVox, 1e-6};
+  const BlockMesher fast(params), general(params, MesherPaths::kGeneralOnly);
   for (VoxelBlock* owner : map.blocks()) {
     SubMesh a, b;
     fast.mesh(map, states, *owner, &a);
