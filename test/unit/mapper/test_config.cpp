@@ -112,3 +112,57 @@ TEST(Config, YamlFileErrorsNameFileLineAndParameter) {
   EXPECT_DOUBLE_EQ(c.voxel_size_m, 0.01);
   EXPECT_EQ(c.weight_mode, WeightMode::kConstant);
 }
+
+// Each stage gets the parameters it uses (LookupConfig, FusionConfig, CarveConfig), built from
+// MapperConfig in one place: every field must come from its MapperConfig parameter, and a
+// default-constructed one must hold MapperConfig's defaults.
+TEST(Config, StageConfigsCarryTheirParameters) {
+  MapperConfig c;  // every value differs from its default
+  c.voxel_size_m = 0.013;
+  c.truncation_vox = 5.5;
+  c.lookup_mode = LookupMode::kNaive;
+  c.lookup_region_px = 23;
+  c.histogram_min_points = 7;
+  c.weight_mode = WeightMode::kDepthAware;
+  c.weight_falloff_start_vox = 1.75;
+  c.depth_weight_reference_m = 2.25;
+  c.max_weight = 37.0;
+  c.update_allocated_finer_level = false;
+  c.free_space_carving = false;
+  c.free_space_decay = 0.35;
+  c.use_color = false;
+  c.free_space_window_px = 3;
+  const LookupConfig lookup = lookupConfig(c);
+  EXPECT_EQ(lookup.voxel_size_m, 0.013);
+  EXPECT_EQ(lookup.truncation_vox, 5.5);
+  EXPECT_EQ(lookup.lookup_mode, LookupMode::kNaive);
+  EXPECT_EQ(lookup.lookup_region_px, 23);
+  EXPECT_EQ(lookup.histogram_min_points, 7);
+  EXPECT_EQ(lookup.truncationBand().maxM(), c.truncationBand().maxM());
+  const FusionConfig fusion = fusionConfig(c);
+  EXPECT_EQ(fusion.voxel_size_m, 0.013);
+  EXPECT_EQ(fusion.truncation_vox, 5.5);
+  EXPECT_EQ(fusion.weight_mode, WeightMode::kDepthAware);
+  EXPECT_EQ(fusion.weight_falloff_start_vox, 1.75);
+  EXPECT_EQ(fusion.depth_weight_reference_m, 2.25);
+  EXPECT_EQ(fusion.max_weight, 37.0);
+  EXPECT_FALSE(fusion.update_allocated_finer_level);
+  EXPECT_FALSE(fusion.free_space_carving);
+  EXPECT_EQ(fusion.free_space_decay, 0.35);
+  EXPECT_FALSE(fusion.use_color);
+  const CarveConfig carve = carveConfig(c);
+  EXPECT_EQ(carve.free_space_window_px, 3);
+  EXPECT_EQ(carve.fusion.free_space_decay, 0.35);
+  EXPECT_EQ(carve.fusion.weight_mode, WeightMode::kDepthAware);
+  EXPECT_EQ(carve.fusion.max_weight, 37.0);
+
+  const MapperConfig defaults;
+  const LookupConfig default_lookup;
+  EXPECT_EQ(default_lookup.voxel_size_m, defaults.voxel_size_m);
+  EXPECT_EQ(default_lookup.lookup_mode, defaults.lookup_mode);
+  EXPECT_EQ(default_lookup.histogram_min_points, defaults.histogram_min_points);
+  const CarveConfig default_carve;
+  EXPECT_EQ(default_carve.free_space_window_px, defaults.free_space_window_px);
+  EXPECT_EQ(default_carve.fusion.free_space_decay, defaults.free_space_decay);
+  EXPECT_EQ(default_carve.fusion.weight_mode, defaults.weight_mode);
+}
