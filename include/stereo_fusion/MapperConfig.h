@@ -2,6 +2,7 @@
 #include <string>
 #include <vector>
 
+#include "stereo_fusion/ParameterTable.h"
 #include "stereo_fusion/integration/LevelSelection.h"
 #include "stereo_fusion/map/ResolutionLevel.h"
 #include "stereo_fusion/map/TruncationBand.h"
@@ -129,20 +130,12 @@ LookupConfig lookupConfig(const MapperConfig& config);
 FusionConfig fusionConfig(const MapperConfig& config);
 CarveConfig carveConfig(const MapperConfig& config);
 
-/// Description of one parameter, for validation, --set, YAML loading and the table in doc/parameters.md.
-struct ParameterSpec {
-  std::string name;
-  std::string type;         ///< "double", "int", "bool" or "enum"
-  std::string unit;         ///< "m", "px", "vox", "" ...
-  std::string range;        ///< human-readable range, e.g. "[0.002, 1]" or "naive | accelerated"
-  std::string description;
-};
-
-/// All parameters of MapperConfig, in the order of config/default.yaml.
+/// All parameters of MapperConfig (ParameterSpec: ParameterTable.h), in the order of config/default.yaml.
 const std::vector<ParameterSpec>& mapperParameterSpecs();
 
 /// Sets parameter `name` from its textual value. Returns false with a message naming the
-/// parameter when the name is unknown, the value does not parse, or it is out of range.
+/// parameter (and its range and unit) when the name is unknown, the value does not parse, or it
+/// is out of range.
 bool setMapperParameter(MapperConfig* config, const std::string& name, const std::string& value,
                         std::string* error);
 /// Textual value of parameter `name` (as setMapperParameter accepts it); empty if unknown.
