@@ -1,11 +1,6 @@
 #include "stereo_fusion/MapperConfig.h"
 
-#include <cctype>
 #include <cmath>
-#include <cstdlib>
-#include <functional>
-#include <limits>
-#include <sstream>
 
 #include "stereo_fusion/integration/FrameGate.h"
 
@@ -13,387 +8,246 @@ namespace stereo_fusion {
 
 namespace {
 
-template <typename T>
-using Field = std::function<T&(MapperConfig&)>;
+using Table = ParameterTable<MapperConfig>;
 
 template <typename T>
-Field<T> member(T MapperConfig::*m) {
-  return [m](MapperConfig& c) -> T& { return c.*m; };
+Table::Field<T> member(T MapperConfig::*m) {
+  return Table::member(m);
 }
 
-template <typename T>
-const T& read(const Field<T>& field, const MapperConfig& c) {
-  return field(const_cast<MapperConfig&>(c));  // the field lambdas only select, never write
-}
-
-struct Accessor {
-  ParameterSpec spec;
-  std::function<bool(MapperConfig*, const std::string&, std::string*)> set;
-  std::function<std::string(const MapperConfig&)> get;
-};
-
-std::string formatDouble(double v) {
-  std::ostringstream os;
-  os.precision(std::numeric_limits<double>::max_digits10);
-  os << v;
-  // Print 0.02 rather than 0.020000000000000000416 when the short form round-trips.
-  std::ostringstream shortest;
-  shortest << v;
-  // strtod, not stod: stod throws for subnormal values that are valid doubles.
-  return std::strtod(shortest.str().c_str(), nullptr) == v ? shortest.str() : os.str();
-}
-
-bool parseDouble(const std::string& text, double* out) {
-  if (text.empty() || std::isspace(static_cast<unsigned char>(text[0]))) return false;
-  char* end = nullptr;
-  const double v = std::strtod(text.c_str(), &end);  // subnormals parse (stod would throw)
-  if (end != text.c_str() + text.size()) return false;
-  *out = v;
-  return true;
-}
-
-bool parseInt(const std::string& text, int* out) {
-  try {
-    size_t used = 0;
-    const long v = std::stol(text, &used);
-    if (used != text.size() || v < std::numeric_limits<int>::min() ||
-        v > std::numeric_limits<int>::max())
-      return false;
-    *out = static_cast<int>(v);
-    return true;
-  } catch (...) {
-    return false;
-  }
-}
-
-/// A double parameter with an inclusive or exclusive lower bound and an inclusive upper bound.
-Accessor doubleParam(std::string name, std::string unit, double lo, bool lo_inclusive, double hi,
-                     std::string description, Field<double> field) {
-  Accessor a;
-  const std::string range =
-      (lo_inclusive ? "[" : "(") + formatDouble(lo) + ", " + formatDouble(hi) + "]";
-  a.spec = {name, "double", unit, range, std::move(description)};
-  a.set = [=](MapperConfig* c, const std::string& text, std::string* error) {
-    double v = 0;
-    if (!parseDouble(text, &v) || !std::isfinite(v)) {
-      *error = "parameter '" + name + "': '" + text + "' is not a finite number";
-      return false;
-    }
-    if ((lo_inclusive ? v < lo : v <= lo) || v > hi) {
-      *error = "parameter '" + name + "' = " + text + " is out of range " + range;
-      return false;
-    }
-    field(*c) = v;
-    return true;
-  };
-  a.get = [field](const MapperConfig& c) { return formatDouble(read(field, c)); };
-  return a;
-}
-
-Accessor intParam(std::string name, std::string unit, int lo, int hi, std::string description,
-                  Field<int> field) {
-  Accessor a;
-  const std::string range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
-  a.spec = {name, "int", unit, range, std::move(description)};
-  a.set = [=](MapperConfig* c, const std::string& text, std::string* error) {
-    int v = 0;
-    if (!parseInt(text, &v)) {
-      *error = "parameter '" + name + "': '" + text + "' is not an integer";
-      return false;
-    }
-    if (v < lo || v > hi) {
-      *error = "parameter '" + name + "' = " + text + " is out of range " + range;
-      return false;
-    }
-    field(*c) = v;
-    return true;
-  };
-  a.get = [field](const MapperConfig& c) { return std::to_string(read(field, c)); };
-  return a;
-}
-
-template <typename Enum>
-Accessor enumParam(std::string name, std::vector<std::pair<std::string, Enum>> values,
-                   std::string description, Field<Enum> field) {
-  Accessor a;
-  std::string range;
-  for (const auto& [label, value] : values) range += (range.empty() ? "" : " | ") + label;
-  a.spec = {name, "enum", "", range, std::move(description)};
-  a.set = [=](MapperConfig* c, const std::string& text, std::string* error) {
-    for (const auto& [label, value] : values) {
-      if (label == text) {
-        field(*c) = value;
-        return true;
-      }
-    }
-    *error = "parameter '" + name + "': '" + text + "' is not one of " + range;
-    return false;
-  };
-  a.get = [=](const MapperConfig& c) {
-    for (const auto& [label, value] : values)
-      if (value == read(field, c)) return label;
-    return std::string();
-  };
-  return a;
-}
-
-Accessor boolParam(std::string name, std::string description, Field<bool> field) {
-  Accessor a;
-  a.spec = {name, "bool", "", "true | false", std::move(description)};
-  a.set = [=](MapperConfig* c, const std::string& text, std::string* error) {
-    if (text == "true" || text == "1") {
-      field(*c) = true;
-    } else if (text == "false" || text == "0") {
-      field(*c) = false;
-    } else {
-      *error = "parameter '" + name + "': '" + text + "' is not true or false";
-      return false;
-    }
-    return true;
-  };
-  a.get = [field](const MapperConfig& c) { return std::string(read(field, c) ? "true" : "false"); };
-  return a;
-}
-
-const std::vector<Accessor>& accessors() {
-  static const std::vector<Accessor> table = [] {
-    std::vector<Accessor> t;
-    t.push_back(doubleParam("voxel_size_m", "m", 0.002, true, 1.0,
-                            "Edge of a finest-level (8³) voxel; a block is 8 voxels wide.",
-                            member(&MapperConfig::voxel_size_m)));
-    t.push_back(doubleParam("truncation_vox", "vox", 1.0, true, 8.0,
-                            "Truncation distance Φ in voxels of the measurement's level: "
-                            "Φ = truncation_vox · s · voxel_size_m (s = 1, 2, 4), at least 2 voxels "
-                            "of the level being updated. At most 8: beyond, a far point's band "
-                            "spans dozens of blocks.",
-                            member(&MapperConfig::truncation_vox)));
-    t.push_back(doubleParam("min_depth_m", "m", 0.0, true, 1000.0,
-                            "Measurements nearer than this are ignored.",
-                            member(&MapperConfig::min_depth_m)));
-    t.push_back(doubleParam("max_depth_m", "m", 0.0, false, 1000.0,
-                            "Measurements farther than this are ignored (stereo error grows as z²).",
-                            member(&MapperConfig::max_depth_m)));
-    t.push_back(enumParam<LevelMode>(
+const Table& table() {
+  static const Table parameters = [] {
+    Table t;
+    t.addDouble("voxel_size_m", "m", 0.002, true, 1.0,
+                "Edge of a finest-level (8³) voxel; a block is 8 voxels wide.",
+                member(&MapperConfig::voxel_size_m));
+    t.addDouble("truncation_vox", "vox", 1.0, true, 8.0,
+                "Truncation distance Φ in voxels of the measurement's level: "
+                "Φ = truncation_vox · s · voxel_size_m (s = 1, 2, 4), at least 2 voxels "
+                "of the level being updated. At most 8: beyond, a far point's band "
+                "spans dozens of blocks.",
+                member(&MapperConfig::truncation_vox));
+    t.addDouble("min_depth_m", "m", 0.0, true, 1000.0,
+                "Measurements nearer than this are ignored.",
+                member(&MapperConfig::min_depth_m));
+    t.addDouble("max_depth_m", "m", 0.0, false, 1000.0,
+                "Measurements farther than this are ignored (stereo error grows as z²).",
+                member(&MapperConfig::max_depth_m));
+    t.addEnum<LevelMode>(
         "level_mode", {{"noise", LevelMode::kNoise}, {"depth", LevelMode::kDepth}},
         "Where measurements switch to the coarser levels (eq. 3.2). noise: from the camera, at the "
         "depth where the stereo depth error z²·σ_d/(f·b) exceeds a level's voxel edge: the 4³ level "
         "from √(voxel_size_m·f·b/σ_d), 2³ from √2 times that (σ_d = disparity_noise_px), so a "
         "precise or long-baseline camera stays fine farther. depth: at scale2_min_depth_m and "
         "scale4_min_depth_m whatever the camera (the thesis).",
-        member(&MapperConfig::level_mode)));
-    t.push_back(doubleParam("disparity_noise_px", "px", 0.0, false, 100.0,
-                            "Expected disparity error (1σ) of the disparity source, for "
-                            "level_mode noise. 0.15 suits OpenCV SGBM on well-textured images and "
-                            "depth cameras converted to disparity; raise it for noisier matching "
-                            "(coarser levels sooner). A source whose disparities come in coarse "
-                            "steps (DisparityImage.delta_d) uses at least their rounding error "
-                            "delta_d/√12 (0.29 px for whole pixels).",
-                            member(&MapperConfig::disparity_noise_px)));
-    t.push_back(intParam("speckle_max_area_px", "px", 0, 1 << 20,
-                         "Outlier rejection: a blob of at most this many pixels whose 4-neighbours' "
-                         "disparities differ by at most speckle_max_diff_px is rejected as an isolated "
-                         "mismatch (OpenCV filterSpeckles). 0 (default) = off: OpenCV SGBM and "
-                         "stereo_image_proc filter speckles themselves (on their frames the pass found "
-                         "~10 more pixels per 640×480 frame, for 1.5 ms); ~100 suits a matcher that "
-                         "does not.",
-                         member(&MapperConfig::speckle_max_area_px)));
-    t.push_back(doubleParam("speckle_max_diff_px", "px", 0.0, false, 100.0,
-                            "Outlier rejection: neighbouring disparities within this of each other "
-                            "belong to one blob (speckle_max_area_px).",
-                            member(&MapperConfig::speckle_max_diff_px)));
-    t.push_back(intParam("edge_reject_radius_px", "px", 0, 16,
-                         "Outlier rejection at depth edges: a pixel with a usable neighbour within this "
-                         "radius (square window) whose disparity is smaller by more than "
-                         "edge_reject_jump_px is rejected: the near side of an edge, where block "
-                         "matching lends the foreground's disparity to the background (fattening) and "
-                         "leaves surface floating in front of it. 0 = off.",
-                         member(&MapperConfig::edge_reject_radius_px)));
-    t.push_back(doubleParam("edge_reject_jump_px", "px", 0.0, false, 1000.0,
-                            "Disparity step that counts as a depth edge for edge_reject_radius_px. A "
-                            "plane's disparity changes by at most b/D px per pixel (D: its distance from "
-                            "the camera centre), so planes farther than radius·b/jump are never cut.",
-                            member(&MapperConfig::edge_reject_jump_px)));
-    t.push_back(doubleParam("scale2_min_depth_m", "m", 0.0, false, 1000.0,
-                            "level_mode depth: depth from which a measurement is fused at the 4³ "
-                            "level and coarser (eq. 3.2; thesis: 2 m).",
-                            [](MapperConfig& c) -> double& { return c.levels.scale2_min_depth_m; }));
-    t.push_back(doubleParam("scale4_min_depth_m", "m", 0.0, false, 1000.0,
-                            "level_mode depth: depth from which a measurement is fused at the 2³ "
-                            "level only (eq. 3.2; thesis: 4 m).",
-                            [](MapperConfig& c) -> double& { return c.levels.scale4_min_depth_m; }));
-    t.push_back(boolParam("update_allocated_finer_level",
-                          "A measurement also updates the next finer level of a block where that level "
-                          "is already allocated (by nearer views), with its own band and a quarter of its "
-                          "weight (its depth error is up to twice the level's own); it never allocates a "
-                          "level. Surfaces seen near and then from farther, at grazing angles or past a "
-                          "level switch, stay complete at the fine level; memory is unchanged. false: a "
-                          "measurement updates its own level and the coarser ones only (the thesis).",
-                          member(&MapperConfig::update_allocated_finer_level)));
-    t.push_back(enumParam<WeightMode>(
+        member(&MapperConfig::level_mode));
+    t.addDouble("disparity_noise_px", "px", 0.0, false, 100.0,
+                "Expected disparity error (1σ) of the disparity source, for "
+                "level_mode noise. 0.15 suits OpenCV SGBM on well-textured images and "
+                "depth cameras converted to disparity; raise it for noisier matching "
+                "(coarser levels sooner). A source whose disparities come in coarse "
+                "steps (DisparityImage.delta_d) uses at least their rounding error "
+                "delta_d/√12 (0.29 px for whole pixels).",
+                member(&MapperConfig::disparity_noise_px));
+    t.addInt("speckle_max_area_px", "px", 0, 1 << 20,
+             "Outlier rejection: a blob of at most this many pixels whose 4-neighbours' "
+             "disparities differ by at most speckle_max_diff_px is rejected as an isolated "
+             "mismatch (OpenCV filterSpeckles). 0 (default) = off: OpenCV SGBM and "
+             "stereo_image_proc filter speckles themselves (on their frames the pass found "
+             "~10 more pixels per 640×480 frame, for 1.5 ms); ~100 suits a matcher that "
+             "does not.",
+             member(&MapperConfig::speckle_max_area_px));
+    t.addDouble("speckle_max_diff_px", "px", 0.0, false, 100.0,
+                "Outlier rejection: neighbouring disparities within this of each other "
+                "belong to one blob (speckle_max_area_px).",
+                member(&MapperConfig::speckle_max_diff_px));
+    t.addInt("edge_reject_radius_px", "px", 0, 16,
+             "Outlier rejection at depth edges: a pixel with a usable neighbour within this "
+             "radius (square window) whose disparity is smaller by more than "
+             "edge_reject_jump_px is rejected: the near side of an edge, where block "
+             "matching lends the foreground's disparity to the background (fattening) and "
+             "leaves surface floating in front of it. 0 = off.",
+             member(&MapperConfig::edge_reject_radius_px));
+    t.addDouble("edge_reject_jump_px", "px", 0.0, false, 1000.0,
+                "Disparity step that counts as a depth edge for edge_reject_radius_px. A "
+                "plane's disparity changes by at most b/D px per pixel (D: its distance from "
+                "the camera centre), so planes farther than radius·b/jump are never cut.",
+                member(&MapperConfig::edge_reject_jump_px));
+    t.addDouble("scale2_min_depth_m", "m", 0.0, false, 1000.0,
+                "level_mode depth: depth from which a measurement is fused at the 4³ "
+                "level and coarser (eq. 3.2; thesis: 2 m).",
+                [](MapperConfig& c) -> double& { return c.levels.scale2_min_depth_m; });
+    t.addDouble("scale4_min_depth_m", "m", 0.0, false, 1000.0,
+                "level_mode depth: depth from which a measurement is fused at the 2³ "
+                "level only (eq. 3.2; thesis: 4 m).",
+                [](MapperConfig& c) -> double& { return c.levels.scale4_min_depth_m; });
+    t.addBool("update_allocated_finer_level",
+              "A measurement also updates the next finer level of a block where that level "
+              "is already allocated (by nearer views), with its own band and a quarter of its "
+              "weight (its depth error is up to twice the level's own); it never allocates a "
+              "level. Surfaces seen near and then from farther, at grazing angles or past a "
+              "level switch, stay complete at the fine level; memory is unchanged. false: a "
+              "measurement updates its own level and the coarser ones only (the thesis).",
+              member(&MapperConfig::update_allocated_finer_level));
+    t.addEnum<WeightMode>(
         "weight_mode",
         {{"constant", WeightMode::kConstant},
          {"steinbruecker", WeightMode::kSteinbruecker},
          {"depth_aware", WeightMode::kDepthAware}},
         "Measurement weight: constant 1; Steinbrücker fall-off behind the surface (eq. 3.10); "
         "or that fall-off × (depth_weight_reference_m / z)².",
-        member(&MapperConfig::weight_mode)));
-    t.push_back(doubleParam("weight_falloff_start_vox", "vox", 0.0, true, 8.0,
-                            "δ of eq. 3.10: behind the surface the weight falls linearly from 1 at δ "
-                            "to 0 at Φ (voxels of the measurement's level; must be < truncation_vox).",
-                            member(&MapperConfig::weight_falloff_start_vox)));
-    t.push_back(doubleParam("depth_weight_reference_m", "m", 0.0, false, 100.0,
-                            "Depth at which the depth-aware weight equals 1.",
-                            member(&MapperConfig::depth_weight_reference_m)));
-    t.push_back(doubleParam("max_weight", "", 0.0, false, 1e6,
-                            "Cap on a voxel's cumulative weight, so the map keeps adapting.",
-                            member(&MapperConfig::max_weight)));
-    t.push_back(boolParam("free_space_carving",
-                          "Free-space evidence: the observed voxels of blocks in view that lie in front of "
-                          "the measured surface by more than fusion's band are updated towards free space, "
-                          "at every level, so people who walked on and stereo floaters fade (FreeSpaceCarver); "
-                          "fusion lets contradicted voxels decay (free_space_decay). false: the thesis' plain "
-                          "running average.",
-                          member(&MapperConfig::free_space_carving)));
-    t.push_back(doubleParam("free_space_decay", "", 0.0, true, 0.99,
-                            "Share of a voxel's weight that one frame seeing through it removes before "
-                            "fusing -Φ, and that fusion removes where a measurement contradicts the stored "
-                            "value by more than the band (|D - d| > Φ): recent evidence wins, a surface seen "
-                            "through ~10-15 times is gone whatever its history. 0: plain averaging.",
-                            member(&MapperConfig::free_space_decay)));
-    t.push_back(intParam("free_space_window_px", "px", 0, 16,
-                         "A voxel counts as seen through only if every pixel within this radius of its "
-                         "projection has a measurement beyond it: depth edges, thin structures and the "
-                         "matcher's gaps are not carved.",
-                         member(&MapperConfig::free_space_window_px)));
-    t.push_back(enumParam<LookupMode>(
+        member(&MapperConfig::weight_mode));
+    t.addDouble("weight_falloff_start_vox", "vox", 0.0, true, 8.0,
+                "δ of eq. 3.10: behind the surface the weight falls linearly from 1 at δ "
+                "to 0 at Φ (voxels of the measurement's level; must be < truncation_vox).",
+                member(&MapperConfig::weight_falloff_start_vox));
+    t.addDouble("depth_weight_reference_m", "m", 0.0, false, 100.0,
+                "Depth at which the depth-aware weight equals 1.",
+                member(&MapperConfig::depth_weight_reference_m));
+    t.addDouble("max_weight", "", 0.0, false, 1e6,
+                "Cap on a voxel's cumulative weight, so the map keeps adapting.",
+                member(&MapperConfig::max_weight));
+    t.addBool("free_space_carving",
+              "Free-space evidence: the observed voxels of blocks in view that lie in front of "
+              "the measured surface by more than fusion's band are updated towards free space, "
+              "at every level, so people who walked on and stereo floaters fade (FreeSpaceCarver); "
+              "fusion lets contradicted voxels decay (free_space_decay). false: the thesis' plain "
+              "running average.",
+              member(&MapperConfig::free_space_carving));
+    t.addDouble("free_space_decay", "", 0.0, true, 0.99,
+                "Share of a voxel's weight that one frame seeing through it removes before "
+                "fusing -Φ, and that fusion removes where a measurement contradicts the stored "
+                "value by more than the band (|D - d| > Φ): recent evidence wins, a surface seen "
+                "through ~10-15 times is gone whatever its history. 0: plain averaging.",
+                member(&MapperConfig::free_space_decay));
+    t.addInt("free_space_window_px", "px", 0, 16,
+             "A voxel counts as seen through only if every pixel within this radius of its "
+             "projection has a measurement beyond it: depth edges, thin structures and the "
+             "matcher's gaps are not carved.",
+             member(&MapperConfig::free_space_window_px));
+    t.addEnum<LookupMode>(
         "lookup_mode", {{"naive", LookupMode::kNaive}, {"accelerated", LookupMode::kAccelerated}},
         "Octree lookup: Algorithm 1 (search per pixel) or Algorithm 2 (search per distinct block "
         "per image region).",
-        member(&MapperConfig::lookup_mode)));
-    t.push_back(intParam("lookup_region_px", "px", 1, 512,
-                         "Edge of the square image regions of Algorithm 2 and the histogram filter.",
-                         member(&MapperConfig::lookup_region_px)));
-    t.push_back(intParam("histogram_min_points", "points", 0, 1 << 20,
-                         "Histogram filter (Alg. 2): a block reached by fewer points of one image "
-                         "region is not queued from that region. The threshold is scaled by the share "
-                         "of the region's pixels that hold a measurement (at least 1), so a sparsely "
-                         "matched region (weak texture, far surfaces) keeps its blocks while a dense "
-                         "one drops its isolated outliers; 0 disables the filter.",
-                         member(&MapperConfig::histogram_min_points)));
-    t.push_back(intParam("num_threads", "", 0, 256,
-                         "Threads for lookup and fusion, the caller included; 0 = all cores.",
-                         member(&MapperConfig::num_threads)));
-    t.push_back(boolParam("use_color", "Fuse the colour image into per-voxel colour.",
-                          member(&MapperConfig::use_color)));
-    t.push_back(boolParam("mesh_enabled",
-                          "Re-mesh the changed blocks after every frame (incremental marching cubes).",
-                          member(&MapperConfig::mesh_enabled)));
-    t.push_back(doubleParam("mesh_level_min_coverage", "", 0.0, false, 1.0,
-                            "A block is meshed at the finest level whose observed surface area is at "
-                            "least this share of the largest among its three levels.",
-                            member(&MapperConfig::mesh_level_min_coverage)));
-    t.push_back(boolParam("mesh_fill_seams",
-                          "Where a block is meshed at a finer level than it holds, its unobserved face "
-                          "voxels take the value of its own coarser levels, so a fine block meets a "
-                          "coarser neighbour without a hole. false: those cells are skipped (the "
-                          "thesis).",
-                          member(&MapperConfig::mesh_fill_seams)));
-    t.push_back(enumParam<TextureMode>(
+        member(&MapperConfig::lookup_mode));
+    t.addInt("lookup_region_px", "px", 1, 512,
+             "Edge of the square image regions of Algorithm 2 and the histogram filter.",
+             member(&MapperConfig::lookup_region_px));
+    t.addInt("histogram_min_points", "points", 0, 1 << 20,
+             "Histogram filter (Alg. 2): a block reached by fewer points of one image "
+             "region is not queued from that region. The threshold is scaled by the share "
+             "of the region's pixels that hold a measurement (at least 1), so a sparsely "
+             "matched region (weak texture, far surfaces) keeps its blocks while a dense "
+             "one drops its isolated outliers; 0 disables the filter.",
+             member(&MapperConfig::histogram_min_points));
+    t.addInt("num_threads", "", 0, 256,
+             "Threads for lookup and fusion, the caller included; 0 = all cores.",
+             member(&MapperConfig::num_threads));
+    t.addBool("use_color", "Fuse the colour image into per-voxel colour.",
+              member(&MapperConfig::use_color));
+    t.addBool("mesh_enabled",
+              "Re-mesh the changed blocks after every frame (incremental marching cubes).",
+              member(&MapperConfig::mesh_enabled));
+    t.addDouble("mesh_level_min_coverage", "", 0.0, false, 1.0,
+                "A block is meshed at the finest level whose observed surface area is at "
+                "least this share of the largest among its three levels.",
+                member(&MapperConfig::mesh_level_min_coverage));
+    t.addBool("mesh_fill_seams",
+              "Where a block is meshed at a finer level than it holds, its unobserved face "
+              "voxels take the value of its own coarser levels, so a fine block meets a "
+              "coarser neighbour without a hole. false: those cells are skipped (the "
+              "thesis).",
+              member(&MapperConfig::mesh_fill_seams));
+    t.addEnum<TextureMode>(
         "texture", {{"off", TextureMode::kOff}, {"patches", TextureMode::kPatches}},
         "Colour of the exported / published mesh: vertex colours only, or also one image patch "
         "per submesh cut from the best view (thesis §3.6 method B); patches add mesh.obj + .mtl + "
         "atlas PNGs to scripts/fuse.sh and textures to ~mesh_update. Needs mesh_enabled.",
-        member(&MapperConfig::texture)));
-    t.push_back(intParam("texture_border_px", "px", 0, 1000,
-                         "A frame textures a block only if every vertex of its submesh projects at "
-                         "least this far inside the image (thesis: 24 px), so border submeshes are "
-                         "fully covered.",
-                         member(&MapperConfig::texture_border_px)));
-    t.push_back(intParam("texture_max_patch_px", "px", 4, 1024,
-                         "Cap on a texture patch's width and height; larger crops are downscaled. "
-                         "Bounds texture memory to 3 · cap² bytes per block.",
-                         member(&MapperConfig::texture_max_patch_px)));
-    t.push_back(intParam("max_blocks", "blocks", 0, 100000000,
-                         "Memory budget: after each frame, while the map holds more blocks (0.3–7 KB "
-                         "each by the levels they hold), the least recently updated ones (farthest "
-                         "first among equals) are evicted and their submeshes removed. 0 = unlimited.",
-                         member(&MapperConfig::max_blocks)));
-    t.push_back(doubleParam("min_coherent_pixel_share", "", 0.0, true, 1.0,
-                            "A frame is rejected before the lookup, the map unchanged, when fewer of "
-                            "its usable disparities than this share agree within 0.5 px with one of "
-                            "their 8 neighbours: random values from a broken matcher or a wrong topic "
-                            "(about 12 % agree over 0–64 px) would put a point anywhere along every "
-                            "ray. Real stereo and depth cameras measure 99.8–100 %. Frames with fewer "
-                            "than 64 usable pixels are not judged. 0 = no check.",
-                            member(&MapperConfig::min_coherent_pixel_share)));
-    t.push_back(intParam("max_new_blocks_per_frame", "blocks", 0, 100000000,
-                         "Allocation budget of one frame: a frame whose truncation bands reach more "
-                         "blocks that are not yet in the map is rejected before fusion, the map "
-                         "unchanged (so a frame allocates at most this many blocks, 0.3–7 KB each). "
-                         "A real 640×480 frame at 1 cm adds up to ~10 000 (first frame); raise it for "
-                         "larger images or finer voxels (it grows with pixels / voxel²). 0 = no limit.",
-                         member(&MapperConfig::max_new_blocks_per_frame)));
-    t.push_back(doubleParam("max_distance_from_camera_m", "m", 0.0, true, 1e6,
-                            "After each frame, blocks whose centre is farther than this from the "
-                            "camera are evicted and their submeshes removed. 0 = unlimited; "
-                            "otherwise at least max_depth_m.",
-                            member(&MapperConfig::max_distance_from_camera_m)));
+        member(&MapperConfig::texture));
+    t.addInt("texture_border_px", "px", 0, 1000,
+             "A frame textures a block only if every vertex of its submesh projects at "
+             "least this far inside the image (thesis: 24 px), so border submeshes are "
+             "fully covered.",
+             member(&MapperConfig::texture_border_px));
+    t.addInt("texture_max_patch_px", "px", 4, 1024,
+             "Cap on a texture patch's width and height; larger crops are downscaled. "
+             "Bounds texture memory to 3 · cap² bytes per block.",
+             member(&MapperConfig::texture_max_patch_px));
+    t.addInt("max_blocks", "blocks", 0, 100000000,
+             "Memory budget: after each frame, while the map holds more blocks (0.3–7 KB "
+             "each by the levels they hold), the least recently updated ones (farthest "
+             "first among equals) are evicted and their submeshes removed. 0 = unlimited.",
+             member(&MapperConfig::max_blocks));
+    t.addDouble("min_coherent_pixel_share", "", 0.0, true, 1.0,
+                "A frame is rejected before the lookup, the map unchanged, when fewer of "
+                "its usable disparities than this share agree within 0.5 px with one of "
+                "their 8 neighbours: random values from a broken matcher or a wrong topic "
+                "(about 12 % agree over 0–64 px) would put a point anywhere along every "
+                "ray. Real stereo and depth cameras measure 99.8–100 %. Frames with fewer "
+                "than 64 usable pixels are not judged. 0 = no check.",
+                member(&MapperConfig::min_coherent_pixel_share));
+    t.addInt("max_new_blocks_per_frame", "blocks", 0, 100000000,
+             "Allocation budget of one frame: a frame whose truncation bands reach more "
+             "blocks that are not yet in the map is rejected before fusion, the map "
+             "unchanged (so a frame allocates at most this many blocks, 0.3–7 KB each). "
+             "A real 640×480 frame at 1 cm adds up to ~10 000 (first frame); raise it for "
+             "larger images or finer voxels (it grows with pixels / voxel²). 0 = no limit.",
+             member(&MapperConfig::max_new_blocks_per_frame));
+    t.addDouble("max_distance_from_camera_m", "m", 0.0, true, 1e6,
+                "After each frame, blocks whose centre is farther than this from the "
+                "camera are evicted and their submeshes removed. 0 = unlimited; "
+                "otherwise at least max_depth_m.",
+                member(&MapperConfig::max_distance_from_camera_m));
     // The frame gate's rule, stated where it is documented (FrameGate::kFramesToReanchor).
     const std::string reanchor_frames = std::to_string(FrameGate::kFramesToReanchor);
-    t.push_back(doubleParam("max_pose_jump_m", "m", 0.0, true, 1e6,
-                            "A frame whose camera is farther than this from the last fused frame's "
-                            "camera is rejected (a SLAM glitch); a rejected frame never becomes the "
-                            "reference, and after " + reanchor_frames + " rejected frames that agree with "
-                            "each other (a relocalisation) the last is fused and becomes it. 0 = no check.",
-                            member(&MapperConfig::max_pose_jump_m)));
-    t.push_back(doubleParam("max_timestamp_gap_s", "s", 0.0, true, 1e9,
-                            "A frame stamped more than this after the last fused frame is rejected "
-                            "(a stamp far in the future would otherwise make every later frame go "
-                            "\"backwards\"); " + reanchor_frames + " consecutive frames that agree with "
-                            "each other are accepted as a clock jump. 0 = no check.",
-                            member(&MapperConfig::max_timestamp_gap_s)));
-    t.push_back(boolParam("require_increasing_timestamps",
-                          "Reject a frame whose timestamp is before (backwards) or equal to "
-                          "(duplicate) the last fused frame's; " + reanchor_frames + " consecutive later "
-                          "frames that agree with each other are accepted as a clock reset. Timestamp 0 means unknown "
-                          "and is not checked (the nodelet drops ROS messages stamped 0).",
-                          member(&MapperConfig::require_increasing_timestamps)));
-    t.push_back(boolParam("planning_enabled",
-                          "Keep the planning layer (planning/): the space each frame saw empty, an "
-                          "occupied / free / unknown state per cell, and a Euclidean signed distance "
-                          "field (ESDF) over it, for distance queries, the occupancy grid and esdf.ply. "
-                          "false: the map holds surfaces only.",
-                          member(&MapperConfig::planning_enabled)));
-    t.push_back(doubleParam("esdf_voxel_size_m", "m", 0.0, true, 1.0,
-                            "Cell edge of the planning layer (free space, occupancy, ESDF): "
-                            "voxel_size_m times 1, 2, 4 or 8. 0 = auto: the one of those nearest to "
-                            "8 cm (4 voxels at 2 cm, 8 at 1 cm, 1 at 10 cm).",
-                            member(&MapperConfig::esdf_voxel_size_m)));
-    t.push_back(doubleParam("esdf_max_distance_m", "m", 0.0, false, 100.0,
-                            "The ESDF is exact up to this distance from the nearest obstacle; "
-                            "farther cells read this value (\"at least\"). At most 100 cells.",
-                            member(&MapperConfig::esdf_max_distance_m)));
-    t.push_back(doubleParam("free_space_unmeasured_range_m", "m", 0.0, true, 1000.0,
-                            "Pixels without a measurement count as seeing free space up to this "
-                            "depth (a sky, a far open field the matcher cannot reach). 0 = off: only "
-                            "rays with a measurement mark space free, up to their depth minus the band.",
-                            member(&MapperConfig::free_space_unmeasured_range_m)));
-    t.push_back(doubleParam("grid_min_z_m", "m", -1e4, true, 1e4,
-                            "Lower bound of the height band (world z) that the 2D occupancy grid "
-                            "(occupancy.pgm, ~occupancy_grid) projects.",
-                            member(&MapperConfig::grid_min_z_m)));
-    t.push_back(doubleParam("grid_max_z_m", "m", -1e4, true, 1e4,
-                            "Upper bound of the occupancy grid's height band (world z).",
-                            member(&MapperConfig::grid_max_z_m)));
+    t.addDouble("max_pose_jump_m", "m", 0.0, true, 1e6,
+                "A frame whose camera is farther than this from the last fused frame's "
+                "camera is rejected (a SLAM glitch); a rejected frame never becomes the "
+                "reference, and after " + reanchor_frames + " rejected frames that agree with "
+                "each other (a relocalisation) the last is fused and becomes it. 0 = no check.",
+                member(&MapperConfig::max_pose_jump_m));
+    t.addDouble("max_timestamp_gap_s", "s", 0.0, true, 1e9,
+                "A frame stamped more than this after the last fused frame is rejected "
+                "(a stamp far in the future would otherwise make every later frame go "
+                "\"backwards\"); " + reanchor_frames + " consecutive frames that agree with "
+                "each other are accepted as a clock jump. 0 = no check.",
+                member(&MapperConfig::max_timestamp_gap_s));
+    t.addBool("require_increasing_timestamps",
+              "Reject a frame whose timestamp is before (backwards) or equal to "
+              "(duplicate) the last fused frame's; " + reanchor_frames + " consecutive later "
+              "frames that agree with each other are accepted as a clock reset. Timestamp 0 means unknown "
+              "and is not checked (the nodelet drops ROS messages stamped 0).",
+              member(&MapperConfig::require_increasing_timestamps));
+    t.addBool("planning_enabled",
+              "Keep the planning layer (planning/): the space each frame saw empty, an "
+              "occupied / free / unknown state per cell, and a Euclidean signed distance "
+              "field (ESDF) over it, for distance queries, the occupancy grid and esdf.ply. "
+              "false: the map holds surfaces only.",
+              member(&MapperConfig::planning_enabled));
+    t.addDouble("esdf_voxel_size_m", "m", 0.0, true, 1.0,
+                "Cell edge of the planning layer (free space, occupancy, ESDF): "
+                "voxel_size_m times 1, 2, 4 or 8. 0 = auto: the one of those nearest to "
+                "8 cm (4 voxels at 2 cm, 8 at 1 cm, 1 at 10 cm).",
+                member(&MapperConfig::esdf_voxel_size_m));
+    t.addDouble("esdf_max_distance_m", "m", 0.0, false, 100.0,
+                "The ESDF is exact up to this distance from the nearest obstacle; "
+                "farther cells read this value (\"at least\"). At most 100 cells.",
+                member(&MapperConfig::esdf_max_distance_m));
+    t.addDouble("free_space_unmeasured_range_m", "m", 0.0, true, 1000.0,
+                "Pixels without a measurement count as seeing free space up to this "
+                "depth (a sky, a far open field the matcher cannot reach). 0 = off: only "
+                "rays with a measurement mark space free, up to their depth minus the band.",
+                member(&MapperConfig::free_space_unmeasured_range_m));
+    t.addDouble("grid_min_z_m", "m", -1e4, true, 1e4,
+                "Lower bound of the height band (world z) that the 2D occupancy grid "
+                "(occupancy.pgm, ~occupancy_grid) projects.",
+                member(&MapperConfig::grid_min_z_m));
+    t.addDouble("grid_max_z_m", "m", -1e4, true, 1e4,
+                "Upper bound of the occupancy grid's height band (world z).",
+                member(&MapperConfig::grid_max_z_m));
     return t;
   }();
-  return table;
-}
-
-const Accessor* findAccessor(const std::string& name) {
-  for (const Accessor& a : accessors())
-    if (a.spec.name == name) return &a;
-  return nullptr;
+  return parameters;
 }
 
 }  // namespace
@@ -408,38 +262,52 @@ double MapperConfig::planningCellSizeM() const {
   return best;
 }
 
-const std::vector<ParameterSpec>& mapperParameterSpecs() {
-  static const std::vector<ParameterSpec> specs = [] {
-    std::vector<ParameterSpec> s;
-    for (const Accessor& a : accessors()) s.push_back(a.spec);
-    return s;
-  }();
-  return specs;
+LookupConfig lookupConfig(const MapperConfig& config) {
+  LookupConfig c;
+  c.voxel_size_m = config.voxel_size_m;
+  c.truncation_vox = config.truncation_vox;
+  c.lookup_mode = config.lookup_mode;
+  c.lookup_region_px = config.lookup_region_px;
+  c.histogram_min_points = config.histogram_min_points;
+  return c;
 }
+
+FusionConfig fusionConfig(const MapperConfig& config) {
+  FusionConfig c;
+  c.voxel_size_m = config.voxel_size_m;
+  c.truncation_vox = config.truncation_vox;
+  c.weight_mode = config.weight_mode;
+  c.weight_falloff_start_vox = config.weight_falloff_start_vox;
+  c.depth_weight_reference_m = config.depth_weight_reference_m;
+  c.max_weight = config.max_weight;
+  c.update_allocated_finer_level = config.update_allocated_finer_level;
+  c.free_space_carving = config.free_space_carving;
+  c.free_space_decay = config.free_space_decay;
+  c.use_color = config.use_color;
+  return c;
+}
+
+CarveConfig carveConfig(const MapperConfig& config) {
+  CarveConfig c;
+  c.fusion = fusionConfig(config);
+  c.free_space_window_px = config.free_space_window_px;
+  return c;
+}
+
+const std::vector<ParameterSpec>& mapperParameterSpecs() { return table().specs(); }
 
 bool setMapperParameter(MapperConfig* config, const std::string& name, const std::string& value,
                         std::string* error) {
-  const Accessor* a = findAccessor(name);
-  if (a == nullptr) {
-    *error = "unknown parameter '" + name + "'";
-    return false;
-  }
-  return a->set(config, value, error);
+  return table().set(config, name, value, error);
 }
 
 std::string getMapperParameter(const MapperConfig& config, const std::string& name) {
-  const Accessor* a = findAccessor(name);
-  return a ? a->get(config) : std::string();
+  return table().get(config, name);
 }
 
 std::vector<std::string> validateMapperConfig(const MapperConfig& config) {
-  std::vector<std::string> errors;
   // Range checks: re-apply every value through its setter, which owns the range.
-  for (const Accessor& a : accessors()) {
-    MapperConfig scratch;
-    std::string error;
-    if (!a.set(&scratch, a.get(config), &error)) errors.push_back(error);
-  }
+  std::vector<std::string> errors = table().rangeErrors(config);
   if (config.min_depth_m >= config.max_depth_m)
     errors.push_back("min_depth_m must be < max_depth_m");
   if (config.levels.scale2_min_depth_m > config.levels.scale4_min_depth_m)

@@ -1,5 +1,6 @@
-// Prints doc/parameters.md (markdown, the default) or the default YAML, from the one registry in
-// MapperConfig.cpp, so the documentation cannot drift from the code.
+// Prints doc/parameters.md (markdown, the default: the mapping and the node parameters) or the
+// default YAML of the mapping parameters (config/default.yaml's keys), from the registries in
+// MapperConfig.cpp and ros/RosParameters.cpp, so the documentation cannot drift from the code.
 //   stereo_fusion_parameters [--markdown | --yaml]
 #include <cstdio>
 #include <cstring>

@@ -17,6 +17,7 @@
 #                              defined by the catkin package)
 
 add_library(stereo_fusion_core STATIC
+  ${STEREO_FUSION_ROOT}/src/ParameterTable.cpp
   ${STEREO_FUSION_ROOT}/src/MapperConfig.cpp
   ${STEREO_FUSION_ROOT}/src/Mapper.cpp
   ${STEREO_FUSION_ROOT}/src/camera/StereoCamera.cpp

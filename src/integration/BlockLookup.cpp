@@ -17,7 +17,7 @@
 
 namespace stereo_fusion {
 
-BlockLookup::BlockLookup(const MapperConfig& config, ThreadPool* pool, bool allow_simd)
+BlockLookup::BlockLookup(const LookupConfig& config, ThreadPool* pool, bool allow_simd)
     : config_(config), pool_(pool), use_avx2_(allow_simd && avx2Supported()) {}
 
 void BlockLookup::setPixelGeometry(const StereoFrame& frame, const MeasurementImage& measurements,

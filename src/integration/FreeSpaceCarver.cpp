@@ -55,7 +55,7 @@ std::array<Eigen::Vector3f, 8> boxCornersInCamera(const Eigen::Isometry3d& T_cam
 
 }  // namespace
 
-FreeSpaceCarver::FreeSpaceCarver(const MapperConfig& config, ThreadPool* pool) : config_(config), pool_(pool) {}
+FreeSpaceCarver::FreeSpaceCarver(const CarveConfig& config, ThreadPool* pool) : config_(config), pool_(pool) {}
 
 float FreeSpaceCarver::freeDepth(const float* depth_m, int width_px, int height_px, int window_px, int u, int v) {
   float smallest = std::numeric_limits<float>::infinity();
@@ -94,7 +94,7 @@ CarveStats FreeSpaceCarver::carve(const StereoFrame& frame, const MeasurementIma
                                   std::vector<VoxelBlock*>* carved) {
   carved->clear();
   CarveStats stats;
-  const FusionFrame f = makeFusionFrame(frame, config_, measurements);
+  const FusionFrame f = makeFusionFrame(frame, config_.fusion, measurements);
   buildTileMaxima(f.depth_m, f.width_px, f.height_px);
   float far_m = 0.0f;
   for (float t : tile_max_depth_m_) far_m = std::max(far_m, t);
@@ -154,7 +154,7 @@ CarveStats FreeSpaceCarver::carve(const StereoFrame& frame, const MeasurementIma
                     candidates_.end());
   stats.blocks_visited = candidates_.size();
 
-  const float keep = static_cast<float>(1.0 - config_.free_space_decay);
+  const float keep = static_cast<float>(1.0 - config_.fusion.free_space_decay);
   const int window = config_.free_space_window_px;
   block_updates_.assign(candidates_.size(), 0);
   pool_->parallelFor(candidates_.size(), 8, [&](size_t begin, size_t end) {

@@ -93,7 +93,7 @@ class LevelTarget {
 
 }  // namespace
 
-FusionFrame makeFusionFrame(const StereoFrame& frame, const MapperConfig& config,
+FusionFrame makeFusionFrame(const StereoFrame& frame, const FusionConfig& config,
                             const MeasurementImage& measurements) {
   const StereoCamera& cam = frame.camera;
   FusionFrame f;

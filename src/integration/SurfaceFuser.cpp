@@ -6,7 +6,7 @@
 
 namespace stereo_fusion {
 
-SurfaceFuser::SurfaceFuser(const MapperConfig& config, ThreadPool* pool)
+SurfaceFuser::SurfaceFuser(const FusionConfig& config, ThreadPool* pool)
     : config_(config), pool_(pool), use_avx2_(avx2Supported()) {}
 
 void SurfaceFuser::setKernel(Kernel kernel) {

@@ -2,13 +2,85 @@
 
 #include <XmlRpcValue.h>
 
+#include <functional>
 #include <sstream>
 
 namespace stereo_fusion {
 
 namespace {
 
-/// The textual form setMapperParameter() parses, whatever type the YAML gave the value.
+using Table = ParameterTable<NodeConfig>;
+
+template <typename T>
+Table::Field<T> member(T NodeConfig::*m) {
+  return Table::member(m);
+}
+
+/// The node parameter registry: one definition per parameter (the defaults are NodeConfig's).
+const Table& table() {
+  static const Table parameters = [] {
+    Table t;
+    t.addString("world_frame", false, "a tf frame, not empty",
+                "Fixed frame of the map, the mesh, the path and the clear services' corners; tf must "
+                "give it → the disparity's frame_id.",
+                member(&NodeConfig::world_frame));
+    t.addInt("queue_size", "frames", 1, 1000, "Frames waiting for the worker that fuses them.",
+             member(&NodeConfig::queue_size));
+    t.addEnum<bool>("queue_policy", {{"drop_oldest", true}, {"drop_newest", false}},
+                    "Which frame a full queue drops (counted as `dropped: queue full`): the oldest "
+                    "waiting one, or the one arriving.",
+                    member(&NodeConfig::drop_oldest));
+    t.addBool("approximate_sync",
+              "Synchronise disparity, image and camera_info with ApproximateTime instead of ExactTime "
+              "(for drivers without hardware sync).",
+              member(&NodeConfig::approximate_sync));
+    t.addInt("sync_queue_size", "messages", 1, 1000, "Queue of the message_filters synchroniser.",
+             member(&NodeConfig::sync_queue_size));
+    t.addDouble("tf_timeout_s", "s", 0.0, true, 10.0,
+                "How long the worker waits for T_world_camera at the disparity's stamp before it drops "
+                "the frame (`dropped: tf timeout`).",
+                member(&NodeConfig::tf_timeout_s));
+    t.addDouble("max_stamp_ahead_s", "s", 0.0, true, 1e6,
+                "A frame stamped more than this ahead of the node's clock is dropped (`dropped: bad "
+                "timestamp`). 0 = no check.",
+                member(&NodeConfig::max_stamp_ahead_s));
+    t.addDouble("mesh_publish_rate_hz", "Hz", 0.0, true, 1000.0,
+                "Rate of meshing and of `~mesh_update` / `~mesh_markers`. 0 = mesh and publish after "
+                "every frame; with texture = patches it meshes after every frame whatever the rate (a "
+                "patch is cut from the frame that changed its submesh).",
+                member(&NodeConfig::mesh_publish_rate_hz));
+    t.addBool("publish_markers", "Publish `~mesh_markers` (rviz).", member(&NodeConfig::publish_markers));
+    t.addBool("publish_path", "Publish `~camera_path`, the poses of the fused frames.",
+              member(&NodeConfig::publish_path));
+    t.addBool("publish_frustum", "Publish `~frustum`, the newest fused frame's view.",
+              member(&NodeConfig::publish_frustum));
+    t.addDouble("frustum_depth_m", "m", 0.0, false, 100.0, "Depth at which `~frustum` is drawn.",
+                member(&NodeConfig::frustum_depth_m));
+    t.addBool("publish_block_bounds",
+              "Publish `~block_bounds` (debug; costs a pass over all blocks per update).",
+              member(&NodeConfig::publish_block_bounds));
+    // The labels parseMeshEncoding() accepts (test: NodeParameters.MeshEncodingLabelsAreTheMessages).
+    t.addEnum<MeshEncoding>("mesh_encoding", {{"float32", MeshEncoding::kFloat32}, {"compact", MeshEncoding::kCompact}},
+                            "How `~mesh_update` and `~get_full_mesh` carry the mesh: float32, or compact "
+                            "(quantised, about half the bytes; see [Messages](ros_interface.md#messages)).",
+                            member(&NodeConfig::mesh_encoding));
+    t.addInt("loop_closure_max_frames", "frames", 0, 100000,
+             "Frames kept so that a trajectory can move them (their disparity and colour images: 2.1 MB "
+             "per 640×480 frame, 0.53 MB at 320×240); older frames are fused into a base map once more at "
+             "the best pose known when they leave and are no longer moved. 0 = keep none (the trajectory "
+             "is ignored).",
+             member(&NodeConfig::loop_closure_max_frames));
+    t.addString("trajectory_frame", true, "a tf frame, or empty",
+                "The frame whose poses `trajectory` carries; empty = the camera frame of the disparity "
+                "messages. Another frame (e.g. base_link, the IMU) is related to the camera through tf "
+                "(its static transform).",
+                member(&NodeConfig::trajectory_frame));
+    return t;
+  }();
+  return parameters;
+}
+
+/// The textual form the registries parse, whatever type the YAML gave the value.
 bool toText(XmlRpc::XmlRpcValue& v, std::string* text) {
   std::ostringstream os;
   os.precision(17);
@@ -23,10 +95,19 @@ bool toText(XmlRpc::XmlRpcValue& v, std::string* text) {
   return true;
 }
 
-}  // namespace
+/// A registry's message names the parameter as 'name': name it as ROS knows it (with its namespace).
+std::string withResolvedName(const ros::NodeHandle& nh, const std::string& name, std::string message) {
+  const std::string local = "'" + name + "'";
+  const size_t at = message.find(local);
+  if (at != std::string::npos) message.replace(at, local.size(), "'" + nh.resolveName(name) + "'");
+  return message;
+}
 
-bool loadParameters(const ros::NodeHandle& nh, MapperConfig* mapper, NodeConfig* node, std::string* error) {
-  for (const ParameterSpec& spec : mapperParameterSpecs()) {
+/// Reads every parameter of one registry that `nh` holds through `set`.
+bool readRegistry(const ros::NodeHandle& nh, const std::vector<ParameterSpec>& specs,
+                  const std::function<bool(const std::string&, const std::string&, std::string*)>& set,
+                  std::string* error) {
+  for (const ParameterSpec& spec : specs) {
     XmlRpc::XmlRpcValue value;
     if (!nh.getParam(spec.name, value)) continue;
     std::string text;
@@ -34,55 +115,57 @@ bool loadParameters(const ros::NodeHandle& nh, MapperConfig* mapper, NodeConfig*
       *error = "parameter '" + nh.resolveName(spec.name) + "' must be a single value";
       return false;
     }
-    if (!setMapperParameter(mapper, spec.name, text, error)) {
-      // Name the parameter as ROS knows it (with its namespace).
-      const std::string local = "'" + spec.name + "'";
-      const size_t at = error->find(local);
-      if (at != std::string::npos) error->replace(at, local.size(), "'" + nh.resolveName(spec.name) + "'");
+    if (!set(spec.name, text, error)) {
+      *error = withResolvedName(nh, spec.name, *error);
       return false;
     }
   }
-  for (const std::string& e : validateMapperConfig(*mapper)) {
+  return true;
+}
+
+}  // namespace
+
+const std::vector<ParameterSpec>& nodeParameterSpecs() { return table().specs(); }
+
+bool setNodeParameter(NodeConfig* config, const std::string& name, const std::string& value, std::string* error) {
+  return table().set(config, name, value, error);
+}
+
+std::string getNodeParameter(const NodeConfig& config, const std::string& name) { return table().get(config, name); }
+
+std::vector<std::string> validateNodeConfig(const NodeConfig& config) { return table().rangeErrors(config); }
+
+bool loadParameters(const ros::NodeHandle& nh, MapperConfig* mapper, NodeConfig* node, std::string* error) {
+  MapperConfig mapper_read = *mapper;
+  NodeConfig node_read = *node;
+  const bool read =
+      readRegistry(nh, mapperParameterSpecs(),
+                   [&](const std::string& name, const std::string& text, std::string* why) {
+                     return setMapperParameter(&mapper_read, name, text, why);
+                   },
+                   error) &&
+      readRegistry(nh, nodeParameterSpecs(),
+                   [&](const std::string& name, const std::string& text, std::string* why) {
+                     return setNodeParameter(&node_read, name, text, why);
+                   },
+                   error);
+  if (!read) return false;
+  for (const std::string& e : validateMapperConfig(mapper_read)) {
     *error = e;
     return false;
   }
-  nh.param("world_frame", node->world_frame, node->world_frame);
-  nh.param("queue_size", node->queue_size, node->queue_size);
-  std::string policy = node->drop_oldest ? "drop_oldest" : "drop_newest";
-  nh.param("queue_policy", policy, policy);
-  nh.param("approximate_sync", node->approximate_sync, node->approximate_sync);
-  nh.param("sync_queue_size", node->sync_queue_size, node->sync_queue_size);
-  nh.param("tf_timeout_s", node->tf_timeout_s, node->tf_timeout_s);
-  nh.param("max_stamp_ahead_s", node->max_stamp_ahead_s, node->max_stamp_ahead_s);
-  nh.param("mesh_publish_rate_hz", node->mesh_publish_rate_hz, node->mesh_publish_rate_hz);
-  nh.param("publish_markers", node->publish_markers, node->publish_markers);
-  nh.param("publish_path", node->publish_path, node->publish_path);
-  nh.param("publish_frustum", node->publish_frustum, node->publish_frustum);
-  nh.param("frustum_depth_m", node->frustum_depth_m, node->frustum_depth_m);
-  nh.param("publish_block_bounds", node->publish_block_bounds, node->publish_block_bounds);
-  std::string encoding = node->mesh_encoding == MeshEncoding::kCompact ? "compact" : "float32";
-  nh.param("mesh_encoding", encoding, encoding);
-  nh.param("loop_closure_max_frames", node->loop_closure_max_frames, node->loop_closure_max_frames);
-  nh.param("trajectory_frame", node->trajectory_frame, node->trajectory_frame);
-  auto fail = [&](const std::string& name, const std::string& why) {
-    *error = "parameter '" + nh.resolveName(name) + "' " + why;
+  const std::vector<std::string> node_errors = validateNodeConfig(node_read);
+  if (!node_errors.empty()) {
+    *error = node_errors.front();
+    for (const ParameterSpec& spec : nodeParameterSpecs()) {
+      if (error->find("'" + spec.name + "'") == std::string::npos) continue;
+      *error = withResolvedName(nh, spec.name, *error);
+      break;
+    }
     return false;
-  };
-  if (node->world_frame.empty()) return fail("world_frame", "must not be empty");
-  if (node->queue_size < 1 || node->queue_size > 1000) return fail("queue_size", "must be in [1, 1000]");
-  if (policy != "drop_oldest" && policy != "drop_newest") return fail("queue_policy", "must be drop_oldest or drop_newest");
-  node->drop_oldest = policy == "drop_oldest";
-  if (node->sync_queue_size < 1 || node->sync_queue_size > 1000) return fail("sync_queue_size", "must be in [1, 1000]");
-  if (!(node->tf_timeout_s >= 0.0 && node->tf_timeout_s <= 10.0)) return fail("tf_timeout_s", "must be in [0, 10] s");
-  if (!(node->max_stamp_ahead_s >= 0.0 && node->max_stamp_ahead_s <= 1e6))
-    return fail("max_stamp_ahead_s", "must be in [0, 1e6] s");
-  if (!(node->mesh_publish_rate_hz >= 0.0 && node->mesh_publish_rate_hz <= 1000.0))
-    return fail("mesh_publish_rate_hz", "must be in [0, 1000] Hz");
-  if (!(node->frustum_depth_m > 0.0 && node->frustum_depth_m <= 100.0))
-    return fail("frustum_depth_m", "must be in (0, 100] m");
-  if (!parseMeshEncoding(encoding, &node->mesh_encoding)) return fail("mesh_encoding", "must be float32 or compact");
-  if (node->loop_closure_max_frames < 0 || node->loop_closure_max_frames > 100000)
-    return fail("loop_closure_max_frames", "must be in [0, 100000]");
+  }
+  *mapper = mapper_read;
+  *node = node_read;
   return true;
 }
 

@@ -667,9 +667,31 @@ TEST(NodeParameters, OutOfRangeValuesAtStartUpNameTheParameter) {
       {"max_pose_jump_m", [](const std::string& ns) { ros::param::set(ns + "/max_pose_jump_m", -5.0); }, "is out of range [0, 1e+06]"},
       {"voxel_size_m", [](const std::string& ns) { ros::param::set(ns + "/voxel_size_m", std::string("abc")); }, "is not a finite number"},
       {"depths", [](const std::string& ns) { ros::param::set(ns + "/min_depth_m", 9.0); }, "min_depth_m must be < max_depth_m"},
-      {"queue_size", [](const std::string& ns) { ros::param::set(ns + "/queue_size", 0); }, "queue_size' must be in [1, 1000]"},
-      {"tf_timeout_s", [](const std::string& ns) { ros::param::set(ns + "/tf_timeout_s", -1.0); }, "tf_timeout_s' must be in [0, 10] s"},
+      {"queue_size", [](const std::string& ns) { ros::param::set(ns + "/queue_size", 0); },
+       "parameter '/bad_queue_size/queue_size' = 0 is out of range [1, 1000] frames"},
+      {"negative_queue_size", [](const std::string& ns) { ros::param::set(ns + "/queue_size", -4); },
+       "parameter '/bad_negative_queue_size/queue_size' = -4 is out of range [1, 1000] frames"},
+      {"fractional_queue_size", [](const std::string& ns) { ros::param::set(ns + "/queue_size", 2.5); },
+       "parameter '/bad_fractional_queue_size/queue_size': '2.5' is not an integer"},
+      {"tf_timeout_s", [](const std::string& ns) { ros::param::set(ns + "/tf_timeout_s", -1.0); },
+       "parameter '/bad_tf_timeout_s/tf_timeout_s' = -1 is out of range [0, 10] s"},
+      {"mesh_publish_rate_hz", [](const std::string& ns) { ros::param::set(ns + "/mesh_publish_rate_hz", 5000); },
+       "mesh_publish_rate_hz' = 5000 is out of range [0, 1000] Hz"},
+      {"queue_policy", [](const std::string& ns) { ros::param::set(ns + "/queue_policy", std::string("drop_all")); },
+       "parameter '/bad_queue_policy/queue_policy': 'drop_all' is not one of drop_oldest | drop_newest"},
+      {"sync_mode", [](const std::string& ns) { ros::param::set(ns + "/approximate_sync", std::string("sometimes")); },
+       "parameter '/bad_sync_mode/approximate_sync': 'sometimes' is not true or false"},
+      {"sync_queue_size", [](const std::string& ns) { ros::param::set(ns + "/sync_queue_size", 0); },
+       "sync_queue_size' = 0 is out of range [1, 1000] messages"},
+      {"mesh_encoding", [](const std::string& ns) { ros::param::set(ns + "/mesh_encoding", std::string("png")); },
+       "mesh_encoding': 'png' is not one of float32 | compact"},
+      {"world_frame", [](const std::string& ns) { ros::param::set(ns + "/world_frame", std::string()); },
+       "parameter '/bad_world_frame/world_frame' must not be empty"},
+      {"loop_closure_max_frames", [](const std::string& ns) { ros::param::set(ns + "/loop_closure_max_frames", -1); },
+       "loop_closure_max_frames' = -1 is out of range [0, 100000] frames"},
       {"list", [](const std::string& ns) { ros::param::set(ns + "/max_weight", std::vector<double>{1, 2}); }, "must be a single value"},
+      {"node_list", [](const std::string& ns) { ros::param::set(ns + "/frustum_depth_m", std::vector<double>{1, 2}); },
+       "parameter '/bad_node_list/frustum_depth_m' must be a single value"},
   };
   for (const Case& c : cases) {
     const std::string ns = std::string("/bad_") + c.name;
@@ -679,11 +701,75 @@ TEST(NodeParameters, OutOfRangeValuesAtStartUpNameTheParameter) {
     std::string error;
     EXPECT_FALSE(loadParameters(ros::NodeHandle(ns), &mapper, &node, &error)) << c.name;
     EXPECT_NE(error.find(c.message), std::string::npos) << c.name << ": " << error;
+    EXPECT_EQ(node.queue_size, NodeConfig{}.queue_size) << c.name << ": a refused load changes nothing";
+    EXPECT_EQ(node.world_frame, NodeConfig{}.world_frame) << c.name;
   }
   MapperConfig mapper;
   NodeConfig node;
   std::string error;
   EXPECT_TRUE(loadParameters(ros::NodeHandle("/no_parameters_here"), &mapper, &node, &error)) << error;
+}
+
+// Every node parameter is read from the master through its registry, with the types YAML would
+// give the values (an int where a double is expected, a double holding a whole number of frames).
+TEST(NodeParameters, EveryNodeParameterIsReadThroughTheRegistry) {
+  const std::string ns = "/all_node_parameters";
+  ros::param::set(ns + "/world_frame", std::string("map"));
+  ros::param::set(ns + "/queue_size", 12.0);
+  ros::param::set(ns + "/queue_policy", std::string("drop_newest"));
+  ros::param::set(ns + "/approximate_sync", true);
+  ros::param::set(ns + "/sync_queue_size", 3);
+  ros::param::set(ns + "/tf_timeout_s", 1);
+  ros::param::set(ns + "/max_stamp_ahead_s", 0.0);
+  ros::param::set(ns + "/mesh_publish_rate_hz", 0.5);
+  ros::param::set(ns + "/publish_markers", false);
+  ros::param::set(ns + "/publish_path", false);
+  ros::param::set(ns + "/publish_frustum", false);
+  ros::param::set(ns + "/frustum_depth_m", 2.5);
+  ros::param::set(ns + "/publish_block_bounds", true);
+  ros::param::set(ns + "/mesh_encoding", std::string("compact"));
+  ros::param::set(ns + "/loop_closure_max_frames", 0);
+  ros::param::set(ns + "/trajectory_frame", std::string("base_link"));
+  ros::param::set(ns + "/voxel_size_m", 0.04);
+  MapperConfig mapper;
+  NodeConfig node;
+  std::string error;
+  ASSERT_TRUE(loadParameters(ros::NodeHandle(ns), &mapper, &node, &error)) << error;
+  EXPECT_EQ(mapper.voxel_size_m, 0.04);
+  EXPECT_EQ(node.world_frame, "map");
+  EXPECT_EQ(node.queue_size, 12);
+  EXPECT_FALSE(node.drop_oldest);
+  EXPECT_TRUE(node.approximate_sync);
+  EXPECT_EQ(node.sync_queue_size, 3);
+  EXPECT_EQ(node.tf_timeout_s, 1.0);
+  EXPECT_EQ(node.max_stamp_ahead_s, 0.0);
+  EXPECT_EQ(node.mesh_publish_rate_hz, 0.5);
+  EXPECT_FALSE(node.publish_markers);
+  EXPECT_FALSE(node.publish_path);
+  EXPECT_FALSE(node.publish_frustum);
+  EXPECT_EQ(node.frustum_depth_m, 2.5);
+  EXPECT_TRUE(node.publish_block_bounds);
+  EXPECT_EQ(node.mesh_encoding, MeshEncoding::kCompact);
+  EXPECT_EQ(node.loop_closure_max_frames, 0);
+  EXPECT_EQ(node.trajectory_frame, "base_link");
+}
+
+// The registry's mesh_encoding labels are the ones the messages' parseMeshEncoding() takes.
+TEST(NodeParameters, MeshEncodingLabelsAreTheMessages) {
+  for (const ParameterSpec& spec : nodeParameterSpecs()) {
+    if (spec.name != "mesh_encoding") continue;
+    EXPECT_EQ(spec.range, "float32 | compact");
+    for (const char* label : {"float32", "compact"}) {
+      NodeConfig node;
+      std::string error;
+      ASSERT_TRUE(setNodeParameter(&node, "mesh_encoding", label, &error)) << error;
+      MeshEncoding parsed = node.mesh_encoding == MeshEncoding::kFloat32 ? MeshEncoding::kCompact : MeshEncoding::kFloat32;
+      ASSERT_TRUE(parseMeshEncoding(label, &parsed)) << label;
+      EXPECT_EQ(parsed, node.mesh_encoding) << label;
+    }
+    return;
+  }
+  FAIL() << "no mesh_encoding in the node registry";
 }
 
 int main(int argc, char** argv) { return test::runRosTests(argc, argv, "stereo_fusion_rostest"); }

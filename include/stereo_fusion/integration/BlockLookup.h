@@ -48,7 +48,7 @@ class BlockLookup {
  public:
   /// `allow_simd` = false keeps to the scalar per-pixel path even where the CPU has AVX2 (the
   /// vector path gives identical results; tests compare the two).
-  BlockLookup(const MapperConfig& config, ThreadPool* pool, bool allow_simd = true);
+  BlockLookup(const LookupConfig& config, ThreadPool* pool, bool allow_simd = true);
 
   /// Whether this lookup uses the AVX2 per-pixel path.
   bool usesSimd() const { return use_avx2_; }
@@ -142,7 +142,7 @@ class BlockLookup {
   void runRegionNaive(const MeasurementImage& m, const cv::Rect& region, BlockOctree* octree, bool allocate,
                       RegionScratch* s) const;
 
-  MapperConfig config_;
+  LookupConfig config_;
   ThreadPool* pool_;
   bool use_avx2_;
   std::vector<RegionScratch> scratch_;  // one per region, reused across frames

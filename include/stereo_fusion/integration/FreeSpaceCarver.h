@@ -40,7 +40,7 @@ struct CarveStats {
 /// and memory does not grow. Blocks are independent (parallel, thread-count independent).
 class FreeSpaceCarver {
  public:
-  FreeSpaceCarver(const MapperConfig& config, ThreadPool* pool);
+  FreeSpaceCarver(const CarveConfig& config, ThreadPool* pool);
 
   /// Carves the frame into the blocks of `octree` in its view, except `queued` (fusion's blocks
   /// for this frame). `carved` receives the blocks that changed, sorted by key.
@@ -55,7 +55,7 @@ class FreeSpaceCarver {
   /// Largest depth per kTilePx² tile (0 where none): bounds the free depth under a footprint.
   void buildTileMaxima(const float* depth_m, int width_px, int height_px);
 
-  MapperConfig config_;
+  CarveConfig config_;
   ThreadPool* pool_;
   std::vector<float> tile_max_depth_m_;   // largest depth per tile, reused across frames
   int tiles_x_ = 0, tiles_y_ = 0;

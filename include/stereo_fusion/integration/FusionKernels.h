@@ -81,7 +81,7 @@ inline bool nearestPixel(const FusionFrame& f, const Eigen::Vector3f& p_c, size_
 
 /// Derives the FusionFrame of `frame`; `measurements` must already hold the frame's depths and,
 /// if colour is fused, its colours.
-FusionFrame makeFusionFrame(const StereoFrame& frame, const MapperConfig& config,
+FusionFrame makeFusionFrame(const StereoFrame& frame, const FusionConfig& config,
                             const MeasurementImage& measurements);
 
 /// Fuses `frame` into every voxel of `block` that it observes; returns the number of voxel

@@ -44,7 +44,7 @@ class SurfaceFuser {
   /// supports. The others let tests hold the paths against each other.
   enum class Kernel { kAuto, kScalar, kAvx2 };
 
-  SurfaceFuser(const MapperConfig& config, ThreadPool* pool);
+  SurfaceFuser(const FusionConfig& config, ThreadPool* pool);
 
   /// Selects the voxel loop; kAvx2 on a CPU without AVX2 throws std::invalid_argument.
   void setKernel(Kernel kernel);
@@ -65,7 +65,7 @@ class SurfaceFuser {
                    std::vector<std::unique_ptr<VoxelBlock>>* created);
 
  private:
-  MapperConfig config_;
+  FusionConfig config_;
   ThreadPool* pool_;
   bool use_avx2_;
   DepthTiles tiles_;                         // reused across frames

@@ -2,13 +2,18 @@
 #include <ros/node_handle.h>
 
 #include <string>
+#include <vector>
 
 #include "stereo_fusion/MapperConfig.h"
+#include "stereo_fusion/ParameterTable.h"
 #include "stereo_fusion/ros/MeshMessages.h"
 
 namespace stereo_fusion {
 
-/// Settings of the ROS node itself (the mapping parameters are in MapperConfig).
+/// Settings of the ROS node itself (the mapping parameters are in MapperConfig). Their names,
+/// units, ranges and meanings are the node parameter registry (nodeParameterSpecs(),
+/// src/ros/RosParameters.cpp); the defaults here are the single source of truth, printed into
+/// doc/parameters.md's node table.
 struct NodeConfig {
   std::string world_frame = "world";       ///< fixed frame of the map and the mesh
   int queue_size = 5;                      ///< frames waiting for the worker (≥ 1)
@@ -33,9 +38,23 @@ struct NodeConfig {
   std::string trajectory_frame;
 };
 
-/// Reads every MapperConfig key and the NodeConfig keys from the private namespace of `nh`
-/// (missing keys keep their defaults). False with a message naming the parameter when a value
-/// has the wrong type or is out of range.
+/// All parameters of NodeConfig, in the order of the node table of doc/parameters.md.
+const std::vector<ParameterSpec>& nodeParameterSpecs();
+
+/// Sets node parameter `name` from its textual value. False with a message naming the parameter
+/// (and its range and unit) when the name is unknown, the value does not parse or is out of range.
+bool setNodeParameter(NodeConfig* config, const std::string& name, const std::string& value, std::string* error);
+/// Textual value of node parameter `name` (as setNodeParameter accepts it); empty if unknown.
+std::string getNodeParameter(const NodeConfig& config, const std::string& name);
+
+/// Checks every node parameter's range. One message per violation (empty = valid).
+std::vector<std::string> validateNodeConfig(const NodeConfig& config);
+
+/// Reads every parameter of both registries (mapperParameterSpecs(), nodeParameterSpecs()) from
+/// the private namespace of `nh` (missing keys keep their values in *mapper and *node) and
+/// validates both. False with a message naming the parameter as ROS knows it (with its
+/// namespace) and its range and unit when a value has the wrong type or is out of range; then
+/// *mapper and *node are unchanged.
 bool loadParameters(const ros::NodeHandle& private_nh, MapperConfig* mapper, NodeConfig* node, std::string* error);
 
 }  // namespace stereo_fusion

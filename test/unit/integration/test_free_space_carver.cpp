@@ -67,7 +67,7 @@ TEST(FreeSpaceCarver, SeenThroughVoxelsAtEveryLevelFadeTowardsMinusPhiHandWorked
   const StereoFrame frame = flatFrame(2.0);
   MeasurementImage measurements;
   measurements.build(frame, config, &pool);
-  FreeSpaceCarver carver(config, &pool);
+  FreeSpaceCarver carver(carveConfig(config), &pool);
   std::vector<VoxelBlock*> carved;
   const CarveStats stats = carver.carve(frame, measurements, map, {}, &carved);
   ASSERT_EQ(carved.size(), 1u);
@@ -106,7 +106,7 @@ TEST(FreeSpaceCarver, LeavesVoxelsInTheBandBehindTheSurfaceNearAGapAndInFusionsQ
   frame.disparity_px.at<float>(v + 1, u - 1) = 0.0f;  // the matcher lost this pixel
   MeasurementImage measurements;
   measurements.build(frame, config, &pool);
-  FreeSpaceCarver carver(config, &pool);
+  FreeSpaceCarver carver(carveConfig(config), &pool);
   std::vector<VoxelBlock*> carved;
   carver.carve(frame, measurements, map, {queued}, &carved);
   EXPECT_TRUE(carved.empty());
@@ -119,7 +119,7 @@ TEST(FreeSpaceCarver, LeavesVoxelsInTheBandBehindTheSurfaceNearAGapAndInFusionsQ
   // Without the window the gap voxel is carved.
   MapperConfig no_window = config;
   no_window.free_space_window_px = 0;
-  FreeSpaceCarver plain(no_window, &pool);
+  FreeSpaceCarver plain(carveConfig(no_window), &pool);
   plain.carve(frame, measurements, map, {queued}, &carved);
   ASSERT_EQ(carved.size(), 1u);
   EXPECT_EQ(carved[0], gap);

@@ -108,7 +108,7 @@ float disparityForDepth(const StereoCamera& cam, double depth_m) {
 class KernelPair {
  public:
   explicit KernelPair(const MapperConfig& config)
-      : config_(config), octree_(config.blockSizeM()), scalar_(config, &pool_), avx2_(config, &pool_) {
+      : config_(config), octree_(config.blockSizeM()), scalar_(fusionConfig(config), &pool_), avx2_(fusionConfig(config), &pool_) {
     scalar_.setKernel(SurfaceFuser::Kernel::kScalar);
     if (avx2Supported()) avx2_.setKernel(SurfaceFuser::Kernel::kAvx2);
   }

@@ -108,8 +108,8 @@ void expectFuserEqualsReferenceAcrossAllLevels(SurfaceFuser::Kernel kernel) {
   config.voxel_size_m = 0.02;
   ThreadPool pool(2);
   BlockOctree octree(config.blockSizeM());
-  BlockLookup lookup(config, &pool);
-  SurfaceFuser fuser(config, &pool);
+  BlockLookup lookup(lookupConfig(config), &pool);
+  SurfaceFuser fuser(fusionConfig(config), &pool);
   fuser.setKernel(kernel);
   Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();
   size_t compared_blocks = 0, updated_voxels = 0;
@@ -253,7 +253,7 @@ TEST(FusionReference, KernelsEqualReferenceOnRandomFramesAndBlocks) {
     BlockOctree octree(config.blockSizeM());
     std::vector<SurfaceFuser> fusers;
     for (SurfaceFuser::Kernel kernel : kernelsToTest()) {
-      fusers.emplace_back(config, &pool);
+      fusers.emplace_back(fusionConfig(config), &pool);
       fusers.back().setKernel(kernel);
     }
     std::vector<std::vector<VoxelBlock>> blocks(fusers.size());

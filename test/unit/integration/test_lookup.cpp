@@ -34,7 +34,7 @@ struct LookupRun {
 
 LookupRun runLookup(const MapperConfig& config, const StereoFrame& frame, BlockOctree* tree) {
   ThreadPool pool(config.num_threads);
-  BlockLookup lookup(config, &pool);
+  BlockLookup lookup(lookupConfig(config), &pool);
   LookupRun run;
   MeasurementImage measurements;
   measurements.build(frame, config, &pool);
@@ -68,7 +68,7 @@ StereoFrame constantDepthFrame(const StereoCamera& camera, float disparity) {
 bool lookupUsesSimd() {
   MapperConfig config;
   ThreadPool pool(1);
-  return BlockLookup(config, &pool).usesSimd();
+  return BlockLookup(lookupConfig(config), &pool).usesSimd();
 }
 
 /// The scalar and the AVX2 lookup on the same frame, each into its own octree.
@@ -79,7 +79,7 @@ struct ScalarAndVector {
 
 ScalarAndVector runScalarAndVector(const MapperConfig& config, const StereoFrame& frame, ThreadPool* pool) {
   BlockOctree scalar_tree(config.blockSizeM()), vector_tree(config.blockSizeM());
-  BlockLookup scalar(config, pool, /*allow_simd=*/false), vector(config, pool);
+  BlockLookup scalar(lookupConfig(config), pool, /*allow_simd=*/false), vector(lookupConfig(config), pool);
   EXPECT_FALSE(scalar.usesSimd());
   std::vector<VoxelBlock*> scalar_queue, vector_queue;
   ScalarAndVector r;
@@ -247,7 +247,7 @@ void expectEveryBlockFusionCanUpdateIsQueued(const Eigen::Vector3d& world_offset
   for (int32_t z = lo.z - 2; z <= hi.z + 2; ++z)
     for (int32_t y = lo.y - 2; y <= hi.y + 2; ++y)
       for (int32_t x = lo.x - 2; x <= hi.x + 2; ++x) every.push_back(all.findOrAllocate({x, y, z}));
-  SurfaceFuser fuser(config, &pool);
+  SurfaceFuser fuser(fusionConfig(config), &pool);
   std::vector<VoxelBlock*> updated;
   MeasurementImage measurements;
   measurements.build(frame, config, &pool);

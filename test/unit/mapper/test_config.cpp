@@ -58,7 +58,7 @@ TEST(Config, RejectsUnknownMalformedAndOutOfRange) {
   EXPECT_FALSE(setMapperParameter(&c, "voxel_size_m", "0.01m", &error));
   EXPECT_FALSE(setMapperParameter(&c, "voxel_size_m", "nan", &error));
   EXPECT_FALSE(setMapperParameter(&c, "voxel_size_m", "0", &error));
-  EXPECT_NE(error.find("out of range [0.002, 1]"), std::string::npos) << error;
+  EXPECT_NE(error.find("parameter 'voxel_size_m' = 0 is out of range [0.002, 1] m"), std::string::npos) << error;
   EXPECT_FALSE(setMapperParameter(&c, "max_depth_m", "0", &error));  // exclusive lower bound
   EXPECT_FALSE(setMapperParameter(&c, "lookup_region_px", "0", &error));
   EXPECT_FALSE(setMapperParameter(&c, "lookup_region_px", "1.5", &error));
@@ -111,4 +111,132 @@ TEST(Config, YamlFileErrorsNameFileLineAndParameter) {
   EXPECT_TRUE(loadMapperConfigText("voxel_size_m: 0.01\nweight_mode: constant\n", "ok.yaml", &c, &error)) << error;
   EXPECT_DOUBLE_EQ(c.voxel_size_m, 0.01);
   EXPECT_EQ(c.weight_mode, WeightMode::kConstant);
+}
+
+// Each stage gets the parameters it uses (LookupConfig, FusionConfig, CarveConfig), built from
+// MapperConfig in one place: every field must come from its MapperConfig parameter, and a
+// default-constructed one must hold MapperConfig's defaults.
+TEST(Config, StageConfigsCarryTheirParameters) {
+  MapperConfig c;  // every value differs from its default
+  c.voxel_size_m = 0.013;
+  c.truncation_vox = 5.5;
+  c.lookup_mode = LookupMode::kNaive;
+  c.lookup_region_px = 23;
+  c.histogram_min_points = 7;
+  c.weight_mode = WeightMode::kDepthAware;
+  c.weight_falloff_start_vox = 1.75;
+  c.depth_weight_reference_m = 2.25;
+  c.max_weight = 37.0;
+  c.update_allocated_finer_level = false;
+  c.free_space_carving = false;
+  c.free_space_decay = 0.35;
+  c.use_color = false;
+  c.free_space_window_px = 3;
+  const LookupConfig lookup = lookupConfig(c);
+  EXPECT_EQ(lookup.voxel_size_m, 0.013);
+  EXPECT_EQ(lookup.truncation_vox, 5.5);
+  EXPECT_EQ(lookup.lookup_mode, LookupMode::kNaive);
+  EXPECT_EQ(lookup.lookup_region_px, 23);
+  EXPECT_EQ(lookup.histogram_min_points, 7);
+  EXPECT_EQ(lookup.truncationBand().maxM(), c.truncationBand().maxM());
+  const FusionConfig fusion = fusionConfig(c);
+  EXPECT_EQ(fusion.voxel_size_m, 0.013);
+  EXPECT_EQ(fusion.truncation_vox, 5.5);
+  EXPECT_EQ(fusion.weight_mode, WeightMode::kDepthAware);
+  EXPECT_EQ(fusion.weight_falloff_start_vox, 1.75);
+  EXPECT_EQ(fusion.depth_weight_reference_m, 2.25);
+  EXPECT_EQ(fusion.max_weight, 37.0);
+  EXPECT_FALSE(fusion.update_allocated_finer_level);
+  EXPECT_FALSE(fusion.free_space_carving);
+  EXPECT_EQ(fusion.free_space_decay, 0.35);
+  EXPECT_FALSE(fusion.use_color);
+  const CarveConfig carve = carveConfig(c);
+  EXPECT_EQ(carve.free_space_window_px, 3);
+  EXPECT_EQ(carve.fusion.free_space_decay, 0.35);
+  EXPECT_EQ(carve.fusion.weight_mode, WeightMode::kDepthAware);
+  EXPECT_EQ(carve.fusion.max_weight, 37.0);
+
+  const MapperConfig defaults;
+  const LookupConfig default_lookup;
+  EXPECT_EQ(default_lookup.voxel_size_m, defaults.voxel_size_m);
+  EXPECT_EQ(default_lookup.lookup_mode, defaults.lookup_mode);
+  EXPECT_EQ(default_lookup.histogram_min_points, defaults.histogram_min_points);
+  const CarveConfig default_carve;
+  EXPECT_EQ(default_carve.free_space_window_px, defaults.free_space_window_px);
+  EXPECT_EQ(default_carve.fusion.free_space_decay, defaults.free_space_decay);
+  EXPECT_EQ(default_carve.fusion.weight_mode, defaults.weight_mode);
+}
+
+// The table behind both registries (mapping and node parameters): every type, the messages
+// naming parameter, range and unit, failed sets changing nothing, and one definition per name.
+TEST(ParameterTable, ParsesChecksAndNamesEveryType) {
+  struct Settings {
+    double rate_hz = 2.0;
+    int queue = 5;
+    bool markers = true;
+    std::string frame = "world";
+    std::string optional_frame;
+    bool keep_oldest = true;
+  };
+  ParameterTable<Settings> table;
+  table.addDouble("rate_hz", "Hz", 0.0, true, 1000.0, "a rate", ParameterTable<Settings>::member(&Settings::rate_hz));
+  table.addInt("queue", "frames", 1, 1000, "a queue", ParameterTable<Settings>::member(&Settings::queue));
+  table.addBool("markers", "markers on", ParameterTable<Settings>::member(&Settings::markers));
+  table.addString("frame", false, "a tf frame", "a frame", ParameterTable<Settings>::member(&Settings::frame));
+  table.addString("optional_frame", true, "a tf frame, or empty", "another",
+                  ParameterTable<Settings>::member(&Settings::optional_frame));
+  table.addEnum<bool>("policy", {{"drop_oldest", true}, {"drop_newest", false}}, "which to drop",
+                      ParameterTable<Settings>::member(&Settings::keep_oldest));
+  ASSERT_EQ(table.specs().size(), 6u);
+  EXPECT_EQ(table.specs()[0].range, "[0, 1000]");
+  EXPECT_EQ(table.specs()[0].unit, "Hz");
+  EXPECT_EQ(table.specs()[3].type, "string");
+  EXPECT_EQ(table.specs()[5].range, "drop_oldest | drop_newest");
+
+  Settings s;
+  std::string error;
+  EXPECT_FALSE(table.set(&s, "queue", "-1", &error));
+  EXPECT_EQ(error, "parameter 'queue' = -1 is out of range [1, 1000] frames");
+  EXPECT_FALSE(table.set(&s, "queue", "2.5", &error));
+  EXPECT_EQ(error, "parameter 'queue': '2.5' is not an integer");
+  EXPECT_FALSE(table.set(&s, "rate_hz", "-0.5", &error));
+  EXPECT_EQ(error, "parameter 'rate_hz' = -0.5 is out of range [0, 1000] Hz");
+  EXPECT_FALSE(table.set(&s, "markers", "maybe", &error));
+  EXPECT_EQ(error, "parameter 'markers': 'maybe' is not true or false");
+  EXPECT_FALSE(table.set(&s, "frame", "", &error));
+  EXPECT_EQ(error, "parameter 'frame' must not be empty (a tf frame)");
+  EXPECT_FALSE(table.set(&s, "policy", "drop_all", &error));
+  EXPECT_EQ(error, "parameter 'policy': 'drop_all' is not one of drop_oldest | drop_newest");
+  EXPECT_FALSE(table.set(&s, "nonsense", "1", &error));
+  EXPECT_EQ(error, "unknown parameter 'nonsense'");
+  EXPECT_EQ(s.queue, 5);
+  EXPECT_EQ(s.frame, "world");
+  EXPECT_TRUE(s.keep_oldest);
+
+  EXPECT_TRUE(table.set(&s, "queue", "7", &error)) << error;
+  EXPECT_TRUE(table.set(&s, "rate_hz", "0.25", &error)) << error;
+  EXPECT_TRUE(table.set(&s, "markers", "0", &error)) << error;
+  EXPECT_TRUE(table.set(&s, "frame", "map", &error)) << error;
+  EXPECT_TRUE(table.set(&s, "optional_frame", "", &error)) << error;
+  EXPECT_TRUE(table.set(&s, "policy", "drop_newest", &error)) << error;
+  EXPECT_EQ(s.queue, 7);
+  EXPECT_EQ(s.rate_hz, 0.25);
+  EXPECT_FALSE(s.markers);
+  EXPECT_EQ(s.frame, "map");
+  EXPECT_FALSE(s.keep_oldest);
+  EXPECT_EQ(table.get(s, "policy"), "drop_newest");
+  EXPECT_EQ(table.get(s, "rate_hz"), "0.25");
+  EXPECT_EQ(table.get(s, "markers"), "false");
+  EXPECT_EQ(table.get(s, "nonsense"), "");
+
+  EXPECT_TRUE(table.rangeErrors(s).empty());
+  s.queue = 0;
+  s.frame.clear();
+  const std::vector<std::string> errors = table.rangeErrors(s);
+  ASSERT_EQ(errors.size(), 2u);
+  EXPECT_EQ(errors[0], "parameter 'queue' = 0 is out of range [1, 1000] frames");
+  EXPECT_EQ(errors[1], "parameter 'frame' must not be empty (a tf frame)");
+
+  EXPECT_THROW(table.addInt("queue", "", 0, 1, "again", ParameterTable<Settings>::member(&Settings::queue)),
+               std::logic_error);
 }

@@ -1,6 +1,6 @@
 // The user documentation stays true to the code and to itself: doc/parameters.md is exactly the
-// page generated from the parameter registry, and every relative link of README.md and doc/
-// resolves (file and heading anchor).
+// page generated from the parameter registries (mapping and node parameters), and every
+// relative link of README.md and doc/ resolves (file and heading anchor).
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -12,6 +12,7 @@
 #include "docs/MarkdownLinks.h"
 #include "docs/ParameterPage.h"
 #include "stereo_fusion/MapperConfig.h"
+#include "stereo_fusion/ros/RosParameters.h"
 
 using namespace stereo_fusion;
 namespace fs = std::filesystem;
@@ -42,8 +43,22 @@ TEST(Docs, ParameterPageIsGeneratedFromTheRegistry) {
   EXPECT_EQ(page, parameterPageMarkdown())
       << "doc/parameters.md differs from the parameter registry: regenerate it with "
          ".build/devel/lib/stereo_fusion/stereo_fusion_parameters --markdown > doc/parameters.md";
+  const size_t node_section = page.find("\n## Node parameters\n");
+  ASSERT_NE(node_section, std::string::npos) << "doc/parameters.md: the node parameters' section";
   for (const ParameterSpec& spec : mapperParameterSpecs())
-    EXPECT_NE(page.find("| `" + spec.name + "` |"), std::string::npos) << spec.name;
+    EXPECT_LT(page.find("| `" + spec.name + "` |"), node_section) << spec.name;
+  // The nodelet's own parameters, from their registry, with their units and ranges.
+  const NodeConfig node_defaults;
+  for (const ParameterSpec& spec : nodeParameterSpecs()) {
+    const std::string value = getNodeParameter(node_defaults, spec.name);
+    const std::string row = "| `" + spec.name + "` | " + (spec.unit.empty() ? "–" : spec.unit) + " | " +
+                            (value.empty() ? "(empty)" : "`" + value + "`") + " | ";
+    const size_t at = page.find(row);
+    EXPECT_NE(at, std::string::npos) << row;
+    EXPECT_GT(at, node_section) << spec.name;
+  }
+  EXPECT_NE(page.find("| `queue_size` | frames | `5` | [1, 1000] |"), std::string::npos);
+  EXPECT_NE(page.find("| `tf_timeout_s` | s | `0.2` | [0, 10] |"), std::string::npos);
 }
 
 TEST(Docs, EveryRelativeLinkResolves) {
