@@ -30,6 +30,8 @@ PACKAGES=(
   libpcl-dev librosbag-dev libdiagnostic-updater-dev
   # tests
   libgtest-dev librostest-dev python3-rostest libnodeletlib-tools
+  # the style check (scripts/check_format.sh)
+  clang-format
   # running: demo, replay, command-line tools
   python3-rosbag python3-rosnode python3-rosservice python3-rostopic python3-rospy
   python3-sensor-msgs python3-stereo-msgs python3-visualization-msgs python3-tf2-msgs

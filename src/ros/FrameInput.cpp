@@ -30,7 +30,15 @@ FrameInput::FrameInput(ros::NodeHandle& nh, const NodeConfig& node, MappingSessi
   disparity_sub_.registerCallback([this](const DisparityMsg::ConstPtr& disparity) {
     ++disparities_in_;
     disparities_missed_ += disparity_seq_.next(disparity->header.seq);
+    // Stamped 0, it could never be fused (its pose cannot be looked up): counted as what it is
+    // at once, rather than as unsynchronised when its image and camera_info carry real stamps.
+    if (disparity->header.stamp.isZero()) {
+      ++disparities_refused_;
+      drop(RejectReason::kBadStamp, "a disparity stamped 0 (no time: its pose cannot be looked up)");
+      return;
+    }
     if (!passToSync(&disparity_stamps_, disparity->header.stamp)) {
+      ++disparities_refused_;
       drop(RejectReason::kSyncDuplicate, "a second disparity stamped " + std::to_string(disparity->header.stamp.toSec()) +
                                              " arrived before its frame was matched; the first is kept");
       return;

@@ -21,8 +21,8 @@ void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   const double elapsed = std::max(1e-3, (ros::WallTime::now() - started_).toSec());
   const RejectCounters& drops = session_->drops();
   const uint64_t disparities_in = frames_->disparitiesIn(), matched = frames_->framesMatched();
-  const uint64_t held_back = drops[RejectReason::kSyncDuplicate];
-  const uint64_t unmatched = disparities_in > matched + held_back ? disparities_in - matched - held_back : 0;
+  const uint64_t refused = frames_->disparitiesRefused();
+  const uint64_t unmatched = disparities_in > matched + refused ? disparities_in - matched - refused : 0;
   // A disparity whose image has not arrived yet is unmatched for a moment in normal operation:
   // only more than the synchroniser's queue can hold is surely lost.
   const bool lost_in_sync = unmatched > static_cast<uint64_t>(node_.sync_queue_size);

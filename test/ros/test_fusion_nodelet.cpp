@@ -297,6 +297,14 @@ TEST_F(NodeletFixture, OutOfOrderDuplicateJumpingAndFutureTfFramesAreDroppedByRe
   EXPECT_EQ(diag("dropped: timestamp backwards"), 1);
   EXPECT_EQ(diag("dropped: pose jump"), 1);
   EXPECT_EQ(diag("dropped: bad timestamp"), 1);
+  // A disparity alone stamped 0 (its image and camera_info carry a real stamp) is a bad stamp,
+  // not a frame waiting for synchronisation.
+  const long unsynchronised = diag("dropped: not synchronised (no matching image / camera_info yet)");
+  publish(frame, "left_optical", true, [](stereo_msgs::DisparityImage* d, sensor_msgs::Image*) {
+    d->header.stamp = ros::Time(0);
+  }, t0 + ros::Duration(0.3));
+  ASSERT_TRUE(waitFor([&] { return diag("dropped: bad timestamp") >= 2; }, 30.0));
+  EXPECT_EQ(diag("dropped: not synchronised (no matching image / camera_info yet)"), unsynchronised);
 
   // Neither the jumped frame nor the future stamp became a reference: the next good frame at the
   // original place is fused (a glitch costs one frame).

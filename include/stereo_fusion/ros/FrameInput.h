@@ -43,6 +43,9 @@ class FrameInput {
   uint64_t disparitiesIn() const { return disparities_in_.load(); }
   uint64_t disparitiesMissed() const { return disparities_missed_.load(); }
   uint64_t framesMatched() const { return matched_.load(); }
+  /// Disparities dropped on arrival, never handed to the synchroniser (each counted under its
+  /// reason): what is neither matched nor refused is waiting, or was lost there.
+  uint64_t disparitiesRefused() const { return disparities_refused_.load(); }
   uint64_t ignoredDuplicateParts() const { return ignored_duplicate_parts_.load(); }
   std::string topics() const;
 
@@ -101,6 +104,7 @@ class FrameInput {
   SequenceGaps disparity_seq_;  // roscpp runs one subscription's callbacks one at a time: no lock
 
   std::atomic<uint64_t> disparities_in_{0}, disparities_missed_{0}, matched_{0}, ignored_duplicate_parts_{0};
+  std::atomic<uint64_t> disparities_refused_{0};
   mutable std::mutex camera_frame_mutex_;
   std::string camera_frame_;
 };
