@@ -25,6 +25,8 @@ PACKAGES=(
   libmessage-filters-dev libtf2-dev libtf2-msgs-dev libtf2-ros-dev libtf2-eigen-dev libstd-msgs-dev
   libgeometry-msgs-dev libimage-transport-dev libstd-srvs-dev ros-std-srvs
   libnav-msgs-dev ros-nav-msgs
+  # the planning topics: map_msgs/OccupancyGridUpdate, point clouds through pcl_conversions
+  libmap-msgs-dev ros-map-msgs libpcl-conversions-dev
   libsensor-msgs-dev libstereo-msgs-dev libvisualization-msgs-dev ros-std-msgs
   ros-geometry-msgs ros-sensor-msgs ros-stereo-msgs ros-visualization-msgs libcv-bridge-dev
   libpcl-dev librosbag-dev libdiagnostic-updater-dev

@@ -75,6 +75,20 @@ const Table& table() {
                 "messages. Another frame (e.g. base_link, the IMU) is related to the camera through tf "
                 "(its static transform).",
                 member(&NodeConfig::trajectory_frame));
+    t.addDouble("planning_publish_rate_hz", "Hz", 0.0, false, 100.0,
+                "Rate of the planning layer's update (occupancy and distances) and of its topics "
+                "(`~occupancy_grid`, `~occupancy_grid_updates`, `~esdf_slice`, `~occupied_voxels`), each "
+                "built only while someone subscribes. The services answer from the latest update.",
+                member(&NodeConfig::planning_publish_rate_hz));
+    t.addDouble("esdf_slice_height_m", "m", -1e4, true, 1e4,
+                "Height (z in world_frame) of the horizontal slice `~esdf_slice` publishes.",
+                member(&NodeConfig::esdf_slice_height_m));
+    t.addInt("planning_max_box_cells", "samples", 1, 100000000,
+             "Largest grid `~get_esdf_box` answers; a larger request gets `success: false`.",
+             member(&NodeConfig::planning_max_box_cells));
+    t.addInt("planning_max_query_points", "points", 1, 100000000,
+             "Most points one `~get_distance` request may ask; more get `success: false`.",
+             member(&NodeConfig::planning_max_query_points));
     return t;
   }();
   return parameters;

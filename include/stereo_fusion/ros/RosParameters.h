@@ -36,6 +36,13 @@ struct NodeConfig {
   /// The frame whose poses the trajectory topic carries; empty = the camera frame of the
   /// disparity messages. Another frame (e.g. base_link) is related to the camera through tf.
   std::string trajectory_frame;
+  /// Rate of the planning layer's update and of its topics (built only while subscribed).
+  double planning_publish_rate_hz = 1.0;
+  /// Height of ~esdf_slice in world_frame (m).
+  double esdf_slice_height_m = 1.0;
+  /// Largest ~get_esdf_box grid (samples) and ~get_distance request (points).
+  int planning_max_box_cells = 1000000;
+  int planning_max_query_points = 1000000;
 };
 
 /// All parameters of NodeConfig, in the order of the node table of doc/parameters.md.
