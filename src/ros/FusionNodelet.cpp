@@ -10,6 +10,8 @@ FusionNodelet::~FusionNodelet() {
   diagnostics_.reset();
   trajectory_input_.reset();
   frame_input_.reset();
+  planning_services_.reset();
+  services_.reset();
   session_.reset();
 }
 
@@ -33,6 +35,7 @@ void FusionNodelet::onInit() {
   // Services run on the manager's multi-threaded queue, not on the single-threaded one of the
   // frame subscribers. Each locks what it touches.
   services_ = std::make_unique<MapServices>(getMTPrivateNodeHandle(), session_.get(), publisher_.get());
+  planning_services_ = std::make_unique<PlanningServices>(getMTPrivateNodeHandle(), node_config_, session_.get());
   frame_input_ = std::make_unique<FrameInput>(nh, node_config_, session_.get(), tf_buffer_.get(), publisher_.get(),
                                               &stats_);
   trajectory_input_ = std::make_unique<TrajectoryInput>(nh, node_config_, session_.get(), tf_buffer_.get(),

@@ -16,6 +16,7 @@
 #include "stereo_fusion/ros/NodeStats.h"
 #include "stereo_fusion/ros/MapServices.h"
 #include "stereo_fusion/ros/MeshPublisher.h"
+#include "stereo_fusion/ros/PlanningServices.h"
 #include "stereo_fusion/ros/RosParameters.h"
 #include "stereo_fusion/ros/TrajectoryInput.h"
 #include "stereo_fusion/session/MappingSession.h"
@@ -39,6 +40,7 @@ class FusionNodelet : public nodelet::Nodelet {
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   std::unique_ptr<MeshPublisher> publisher_;
   std::unique_ptr<MapServices> services_;
+  std::unique_ptr<PlanningServices> planning_services_;
   std::unique_ptr<TrajectoryInput> trajectory_input_;
   std::unique_ptr<FrameInput> frame_input_;
   std::unique_ptr<FusionDiagnostics> diagnostics_;

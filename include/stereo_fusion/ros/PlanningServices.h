@@ -1,0 +1,41 @@
+#pragma once
+// The planning layer's services: ~get_distance (points → distances, gradients, states) and
+// ~get_esdf_box (a dense grid of distances in a box). Both answer from the latest planning
+// update, under the map lock for as long as the sampling takes (≈ 11 ms per 100 000 points),
+// and wait at most max_request_wait_s for it (then "busy").
+#include <ros/ros.h>
+#include <stereo_fusion/GetDistance.h>
+#include <stereo_fusion/GetEsdfBox.h>
+
+#include <atomic>
+#include <vector>
+
+#include "stereo_fusion/ros/RosParameters.h"
+#include "stereo_fusion/session/MappingSession.h"
+
+namespace stereo_fusion {
+
+class PlanningServices {
+ public:
+  PlanningServices(ros::NodeHandle& service_nh, const NodeConfig& node, MappingSession* session);
+
+  uint64_t requests() const { return requests_.load(); }
+  uint64_t refused() const { return refused_.load(); }
+
+ private:
+  bool getDistance(GetDistance::Request& req, GetDistance::Response& res);
+  bool getEsdfBox(GetEsdfBox::Request& req, GetEsdfBox::Response& res);
+  /// Samples `points` under the map lock; false with `why` when there is no planning layer or
+  /// the map stayed busy.
+  bool sample(const std::vector<Eigen::Vector3d>& points, std::vector<EsdfSample>* samples, double* cell_m,
+              std::string* why);
+  template <typename Response>
+  bool refuse(const char* service, const std::string& why, Response* res);
+
+  const NodeConfig& node_;
+  MappingSession* session_;
+  std::atomic<uint64_t> requests_{0}, refused_{0};
+  std::vector<ros::ServiceServer> servers_;
+};
+
+}  // namespace stereo_fusion
