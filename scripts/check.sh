@@ -148,6 +148,8 @@ if [ "$mode" != --asan ]; then
     threaded+=':BlockOctreeLinks.EqualSearchesAfterRandomAllocateEraseClearSwap'
     threaded+=':BlockLookup.ResultDoesNotDependOnThreadsOrRegionSize:MapperProperties.ThreadCountDoesNotChangeTheMap'
     threaded+=':BlockMesher.ThreadCountDoesNotChangeTheMesh:PlanningScenes.QueriesWhileFusingAreSafe'
+    threaded+=':MappingSession.EveryTrajectoryIsAccountedFor*:MappingSession.AResetDropsAWaitingTrajectory*'
+    threaded+=':MappingSession.ARequestFindingTheMapBusy*'
     run_gtest tsan_thread_tests "$bin" "$threaded" || failed=1
     run_rostests tsan_ros "$dir" "$ROS_TESTS" || failed=1
   else
