@@ -23,12 +23,7 @@ constexpr RejectReasonInfo kTable[] = {
 };
 static_assert(sizeof(kTable) / sizeof(kTable[0]) == kRejectReasonCount, "one row per RejectReason");
 
-constexpr bool inEnumOrder() {
-  for (size_t k = 0; k < kRejectReasonCount; ++k)
-    if (static_cast<size_t>(kTable[k].reason) != k) return false;
-  return true;
-}
-static_assert(inEnumOrder(), "kTable's rows follow RejectReason's order");
+static_assert(rowsFollowEnum(kTable, &RejectReasonInfo::reason), "kTable's rows follow RejectReason's order");
 }  // namespace
 
 const RejectReasonInfo& rejectReasonInfo(RejectReason reason) {
@@ -38,7 +33,7 @@ const RejectReasonInfo& rejectReasonInfo(RejectReason reason) {
 
 uint64_t RejectCounters::total() const {
   uint64_t sum = 0;
-  for (size_t k = 1; k < kRejectReasonCount; ++k) sum += counts_[k].load();
+  forEach([&](const RejectReasonInfo&, uint64_t n) { sum += n; });
   return sum;
 }
 

@@ -20,12 +20,7 @@ constexpr TrajectoryOutcomeInfo kTable[] = {
 };
 static_assert(sizeof(kTable) / sizeof(kTable[0]) == kTrajectoryOutcomeCount, "one row per TrajectoryOutcome");
 
-constexpr bool inEnumOrder() {
-  for (size_t k = 0; k < kTrajectoryOutcomeCount; ++k)
-    if (static_cast<size_t>(kTable[k].outcome) != k) return false;
-  return true;
-}
-static_assert(inEnumOrder(), "kTable's rows follow TrajectoryOutcome's order");
+static_assert(rowsFollowEnum(kTable, &TrajectoryOutcomeInfo::outcome), "kTable's rows follow TrajectoryOutcome's order");
 }  // namespace
 
 const TrajectoryOutcomeInfo& trajectoryOutcomeInfo(TrajectoryOutcome outcome) {
@@ -35,8 +30,7 @@ const TrajectoryOutcomeInfo& trajectoryOutcomeInfo(TrajectoryOutcome outcome) {
 
 uint64_t TrajectoryCounters::rejected() const {
   uint64_t sum = 0;
-  for (size_t k = 0; k < kTrajectoryOutcomeCount; ++k)
-    if (kTable[k].rejected) sum += counts_[k].load();
+  forEach([&](const TrajectoryOutcomeInfo& info, uint64_t n) { sum += info.rejected ? n : 0; });
   return sum;
 }
 

@@ -1,8 +1,8 @@
 #pragma once
-#include <array>
-#include <atomic>
 #include <cstddef>
 #include <cstdint>
+
+#include "stereo_fusion/util/EnumCounters.h"
 
 namespace stereo_fusion {
 
@@ -43,21 +43,17 @@ const RejectReasonInfo& rejectReasonInfo(RejectReason reason);
 inline const char* rejectReasonName(RejectReason reason) { return rejectReasonInfo(reason).key; }
 
 /// One counter per reason, safe to bump from any thread.
-class RejectCounters {
+class RejectCounters : public EnumCounters<RejectReason, kRejectReasonCount> {
  public:
-  void count(RejectReason reason, uint64_t n = 1) { counts_[static_cast<size_t>(reason)] += n; }
-  uint64_t operator[](RejectReason reason) const { return counts_[static_cast<size_t>(reason)].load(); }
   /// Every frame dropped, whatever the reason.
   uint64_t total() const;
   /// Calls f(info, count) for every reason but kNone, in the table's order.
   template <typename F>
   void forEach(F&& f) const {
-    for (size_t k = 1; k < kRejectReasonCount; ++k)
-      f(rejectReasonInfo(static_cast<RejectReason>(k)), counts_[k].load());
+    forEachValue([&](RejectReason reason, uint64_t n) {
+      if (reason != RejectReason::kNone) f(rejectReasonInfo(reason), n);
+    });
   }
-
- private:
-  std::array<std::atomic<uint64_t>, kRejectReasonCount> counts_{};
 };
 
 }  // namespace stereo_fusion

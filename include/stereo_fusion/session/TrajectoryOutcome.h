@@ -1,8 +1,8 @@
 #pragma once
-#include <array>
-#include <atomic>
 #include <cstddef>
 #include <cstdint>
+
+#include "stereo_fusion/util/EnumCounters.h"
 
 namespace stereo_fusion {
 
@@ -35,19 +35,15 @@ struct TrajectoryOutcomeInfo {
 const TrajectoryOutcomeInfo& trajectoryOutcomeInfo(TrajectoryOutcome outcome);
 
 /// One counter per outcome, safe to bump from any thread.
-class TrajectoryCounters {
+class TrajectoryCounters : public EnumCounters<TrajectoryOutcome, kTrajectoryOutcomeCount> {
  public:
-  void count(TrajectoryOutcome outcome) { ++counts_[static_cast<size_t>(outcome)]; }
-  uint64_t operator[](TrajectoryOutcome outcome) const { return counts_[static_cast<size_t>(outcome)].load(); }
+  /// The trajectories refused (the outcomes the table marks `rejected`).
   uint64_t rejected() const;
+  /// Calls f(info, count) for every outcome, in the table's order.
   template <typename F>
   void forEach(F&& f) const {
-    for (size_t k = 0; k < kTrajectoryOutcomeCount; ++k)
-      f(trajectoryOutcomeInfo(static_cast<TrajectoryOutcome>(k)), counts_[k].load());
+    forEachValue([&](TrajectoryOutcome outcome, uint64_t n) { f(trajectoryOutcomeInfo(outcome), n); });
   }
-
- private:
-  std::array<std::atomic<uint64_t>, kTrajectoryOutcomeCount> counts_{};
 };
 
 }  // namespace stereo_fusion
