@@ -37,6 +37,14 @@ FrameInput::FrameInput(ros::NodeHandle& nh, const NodeConfig& node, MappingSessi
       drop(RejectReason::kBadStamp, "a disparity stamped 0 (no time: its pose cannot be looked up)");
       return;
     }
+    // The stamp of the newest fused frame: the frame gate would refuse it as a duplicate
+    // whatever else came with it, so it is counted as that now, not left unmatched.
+    if (isNewestFusedStamp(disparity->header.stamp)) {
+      ++disparities_refused_;
+      drop(RejectReason::kDuplicateTimestamp, "a disparity stamped " + std::to_string(disparity->header.stamp.toSec()) +
+                                                  ", the stamp of the newest fused frame");
+      return;
+    }
     if (!passToSync(&disparity_stamps_, disparity->header.stamp)) {
       ++disparities_refused_;
       drop(RejectReason::kSyncDuplicate, "a second disparity stamped " + std::to_string(disparity->header.stamp.toSec()) +
@@ -73,6 +81,11 @@ FrameInput::~FrameInput() {
 
 std::string FrameInput::topics() const {
   return disparity_sub_.getTopic() + " + " + image_sub_.getTopic() + " + " + info_sub_.getTopic();
+}
+
+bool FrameInput::isNewestFusedStamp(const ros::Time& stamp) const {
+  std::lock_guard<std::mutex> lock(camera_frame_mutex_);
+  return newest_fused_.first == session_->epoch() && newest_fused_.second == stamp.toNSec() && !stamp.isZero();
 }
 
 std::string FrameInput::cameraFrame() const {
@@ -203,6 +216,7 @@ void FrameInput::processFrame(const QueuedFrame& f) {
   {
     std::lock_guard<std::mutex> lock(camera_frame_mutex_);
     camera_frame_ = header.frame_id;
+    newest_fused_ = {f.ticket.epoch, header.stamp.toNSec()};
   }
   session_->withMapper([&](Mapper&) { publisher_->frameFusedLocked(frame, header); });
   if (r.reanchored) {

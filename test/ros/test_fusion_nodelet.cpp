@@ -304,6 +304,11 @@ TEST_F(NodeletFixture, OutOfOrderDuplicateJumpingAndFutureTfFramesAreDroppedByRe
     d->header.stamp = ros::Time(0);
   }, t0 + ros::Duration(0.3));
   ASSERT_TRUE(waitFor([&] { return diag("dropped: bad timestamp") >= 2; }, 30.0));
+  // A disparity alone re-using the newest fused frame's stamp is a duplicate frame, not unmatched.
+  publish(frame, "left_optical", true, [&](stereo_msgs::DisparityImage* d, sensor_msgs::Image*) {
+    d->header.stamp = t0;
+  }, t0 + ros::Duration(0.4));
+  ASSERT_TRUE(waitFor([&] { return diag("dropped: duplicate frame") >= 2; }, 30.0));
   EXPECT_EQ(diag("dropped: not synchronised (no matching image / camera_info yet)"), unsynchronised);
 
   // Neither the jumped frame nor the future stamp became a reference: the next good frame at the

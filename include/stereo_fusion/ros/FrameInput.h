@@ -21,6 +21,7 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <utility>
 
 #include "stereo_fusion/ros/NodeStats.h"
 #include "stereo_fusion/ros/MeshPublisher.h"
@@ -105,8 +106,12 @@ class FrameInput {
 
   std::atomic<uint64_t> disparities_in_{0}, disparities_missed_{0}, matched_{0}, ignored_duplicate_parts_{0};
   std::atomic<uint64_t> disparities_refused_{0};
-  mutable std::mutex camera_frame_mutex_;
+  /// True if `stamp` is the newest fused frame's, in the current map epoch.
+  bool isNewestFusedStamp(const ros::Time& stamp) const;
+
+  mutable std::mutex camera_frame_mutex_;  // guards the newest fused frame's camera frame and stamp
   std::string camera_frame_;
+  std::pair<uint64_t, uint64_t> newest_fused_{0, 0};  // {epoch, stamp ns}
 };
 
 }  // namespace stereo_fusion

@@ -89,6 +89,8 @@ class MappingSession {
   FrameTicket arrive();
   /// False once a reset or load_map came after the ticket's arrival.
   bool isCurrent(const FrameTicket& ticket) const;
+  /// The map epoch now (reset and load_map start a new one).
+  uint64_t epoch() const { return epoch_seen_.load(); }
   /// Counts a frame an input dropped before it reached fuse().
   void countDrop(RejectReason reason) { drops_.count(reason); }
 
