@@ -92,6 +92,14 @@ void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   status.add("blocks", map_status_.blocks);
   status.add("blocks evicted", session_->blocksEvicted());
   status.add("memory (MB)", map_status_.memory_bytes / 1048576.0);
+  // The planning layer: updated at planning_publish_rate_hz (timings of the updates that had work).
+  status.add("planning updates", v.planning_updates);
+  status.add("planning update p50 (ms)", percentile(v.planning_ms, 0.5));
+  status.add("planning update p99 (ms)", percentile(v.planning_ms, 0.99));
+  status.add("planning memory: free space (MB)", map_status_.planning_free_space_bytes / 1048576.0);
+  status.add("planning memory: ESDF (MB)", map_status_.planning_esdf_bytes / 1048576.0);
+  status.add("occupancy grid width (cells)", stats_->grid_width.load());
+  status.add("occupancy grid height (cells)", stats_->grid_height.load());
 }
 
 }  // namespace stereo_fusion

@@ -10,6 +10,7 @@ FusionNodelet::~FusionNodelet() {
   diagnostics_.reset();
   trajectory_input_.reset();
   frame_input_.reset();
+  if (planning_) planning_->stop();  // its timer uses the session; the session's thread calls it
   planning_services_.reset();
   services_.reset();
   session_.reset();
@@ -31,7 +32,12 @@ void FusionNodelet::onInit() {
   tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh);
 
   publisher_ = std::make_unique<MeshPublisher>(pnh, node_config_, session_.get(), &stats_);
-  session_->setMapReplacedListener([this](const MapReplaced& replaced) { publisher_->onMapReplaced(replaced); });
+  planning_ = std::make_unique<PlanningPublisher>(getMTPrivateNodeHandle(), node_config_, mapper_config_,
+                                                  session_.get(), &stats_);
+  session_->setMapReplacedListener([this](const MapReplaced& replaced) {
+    publisher_->onMapReplaced(replaced);
+    planning_->onMapReplaced(replaced);
+  });
   // Services run on the manager's multi-threaded queue, not on the single-threaded one of the
   // frame subscribers. Each locks what it touches.
   services_ = std::make_unique<MapServices>(getMTPrivateNodeHandle(), session_.get(), publisher_.get());

@@ -68,8 +68,7 @@ void MeshPublisher::catchUpLocked(Mapper& map) {
   if (map.blocksAwaitingMesh() == 0) return;
   const MeshPass pass = map.updateMesh();
   stats_->recordMeshPass(pass.mesh.meshing_ms, pass.texture.texture_ms);
-  // The planning layer follows the map at the mesh's rate; it reads the same changes.
-  map.updatePlanning();
+  // The planning layer follows at its own rate (PlanningPublisher, planning_publish_rate_hz).
 }
 
 void MeshPublisher::publishPending(const ros::Time& stamp, bool force) {

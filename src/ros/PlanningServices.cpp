@@ -38,6 +38,9 @@ bool PlanningServices::sample(const std::vector<Eigen::Vector3d>& points, std::v
       return;
     }
     *cell_m = planning->grid().cell_m;
+    // The answer is the map as it is now: the TSDF changes since the last planning update
+    // (at most 1 / planning_publish_rate_hz old) reach the distances first.
+    map.updatePlanning();
     planning->sampleBatch(points, samples);
   });
   if (!got) *why = session_->busyMessage();

@@ -417,6 +417,10 @@ std::optional<MappingSession::MapStatus> MappingSession::tryStatus(double wait_s
   s.blocks = mapper_->map().blockCount();
   s.memory_bytes = mapper_->memoryBytes();
   s.awaiting_mesh = mapper_->blocksAwaitingMesh();
+  if (const PlanningMap* planning = mapper_->planning()) {
+    s.planning_free_space_bytes = planning->freeSpaceBytes();
+    s.planning_esdf_bytes = planning->esdfBytes();
+  }
   return s;
 }
 

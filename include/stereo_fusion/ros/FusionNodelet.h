@@ -2,8 +2,8 @@
 // The ROS face of stereo_fusion: wiring only. The mapping session (ROS-free) owns the map, the
 // kept frames, clears and corrections; the adapters around it are FrameInput (synchronised
 // DisparityImage + Image + CameraInfo in, pose from tf2), TrajectoryInput (a SLAM's corrected
-// poses), MeshPublisher (MeshUpdate, rviz markers, path, frustum), MapServices and
-// FusionDiagnostics.
+// poses), MeshPublisher (MeshUpdate, rviz markers, path, frustum), PlanningPublisher (occupancy
+// grid, ESDF slice, occupied cells), MapServices and FusionDiagnostics.
 
 #include <nodelet/nodelet.h>
 #include <tf2_ros/buffer.h>
@@ -17,6 +17,7 @@
 #include "stereo_fusion/ros/MapServices.h"
 #include "stereo_fusion/ros/MeshPublisher.h"
 #include "stereo_fusion/ros/PlanningServices.h"
+#include "stereo_fusion/ros/PlanningPublisher.h"
 #include "stereo_fusion/ros/RosParameters.h"
 #include "stereo_fusion/ros/TrajectoryInput.h"
 #include "stereo_fusion/session/MappingSession.h"
@@ -39,6 +40,7 @@ class FusionNodelet : public nodelet::Nodelet {
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   std::unique_ptr<MeshPublisher> publisher_;
+  std::unique_ptr<PlanningPublisher> planning_;
   std::unique_ptr<MapServices> services_;
   std::unique_ptr<PlanningServices> planning_services_;
   std::unique_ptr<TrajectoryInput> trajectory_input_;

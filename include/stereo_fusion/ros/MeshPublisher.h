@@ -24,7 +24,7 @@ class MeshPublisher {
 
   /// A frame was fused (path, frustum, latency): call with the map lock held.
   void frameFusedLocked(const StereoFrame& frame, const std_msgs::Header& header);
-  /// Brings the mesh (and the planning layer) up to date and sends what changed, at most at
+  /// Brings the mesh up to date and sends what changed, at most at
   /// mesh_publish_rate_hz unless `force`. `stamp` 0: the newest fused frame's.
   void publishPending(const ros::Time& stamp, bool force);
   /// Meshes what fusion changed since the last pass (map lock held; save_mesh).

@@ -24,6 +24,13 @@ class NodeStats {
     push(&mesh_pass_ms_, {meshing_ms, texture_ms, 0.0});
     ++mesh_passes_;
   }
+  /// One planning update that had work (Mapper::updatePlanning(): changed TSDF blocks re-read, ESDF).
+  void recordPlanningUpdate(double ms) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    planning_ms_.push_back(ms);
+    if (planning_ms_.size() > kWindow) planning_ms_.pop_front();
+    ++planning_updates_;
+  }
   /// Frame stamp → publish of its mesh.
   void recordLatency(double seconds) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -35,12 +42,15 @@ class NodeStats {
     std::lock_guard<std::mutex> lock(mutex_);
     frame_ms_.clear();
     mesh_pass_ms_.clear();
+    planning_ms_.clear();
   }
 
   struct View {
     std::vector<double> latency_s;
     std::vector<double> stage_ms[5];  // lookup, fusion, meshing, texture, total
     uint64_t mesh_passes = 0;
+    std::vector<double> planning_ms;
+    uint64_t planning_updates = 0;
   };
   View view() const {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -56,11 +66,15 @@ class NodeStats {
       v.stage_ms[3].push_back(s[1]);
     }
     v.mesh_passes = mesh_passes_;
+    v.planning_ms.assign(planning_ms_.begin(), planning_ms_.end());
+    v.planning_updates = planning_updates_;
     return v;
   }
 
   std::atomic<uint64_t> pixels_rejected_speckle{0}, pixels_rejected_edge{0};  // OutlierRejection, fused frames
   std::atomic<uint64_t> reanchored{0};  // frames the gate accepted as a relocalisation / clock reset
+  // The occupancy grid last built (PlanningPublisher; 0 × 0 until someone subscribed).
+  std::atomic<uint32_t> grid_width{0}, grid_height{0};
 
  private:
   using Row = std::array<double, 3>;
@@ -70,8 +84,8 @@ class NodeStats {
   }
   mutable std::mutex mutex_;
   std::deque<Row> frame_ms_, mesh_pass_ms_;
-  std::deque<double> latencies_s_;
-  uint64_t mesh_passes_ = 0;
+  std::deque<double> latencies_s_, planning_ms_;
+  uint64_t mesh_passes_ = 0, planning_updates_ = 0;
 };
 
 }  // namespace stereo_fusion

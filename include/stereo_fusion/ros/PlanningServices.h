@@ -1,8 +1,9 @@
 #pragma once
 // The planning layer's services: ~get_distance (points → distances, gradients, states) and
-// ~get_esdf_box (a dense grid of distances in a box). Both answer from the latest planning
-// update, under the map lock for as long as the sampling takes (≈ 11 ms per 100 000 points),
-// and wait at most max_request_wait_s for it (then "busy").
+// ~get_esdf_box (a dense grid of distances in a box). Both bring the planning layer up to date
+// with the map first (what changed since the planning publisher's last update) and sample it
+// under the map lock (≈ 11 ms per 100 000 points); they wait at most max_request_wait_s for the
+// lock (then "busy").
 #include <ros/ros.h>
 #include <stereo_fusion/GetDistance.h>
 #include <stereo_fusion/GetEsdfBox.h>

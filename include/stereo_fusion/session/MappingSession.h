@@ -184,6 +184,8 @@ class MappingSession {
     KeptStatus kept;
     CorrectionReport last_correction;
     size_t blocks = 0, memory_bytes = 0, awaiting_mesh = 0;
+    /// The planning layer's bytes (PlanningMap::freeSpaceBytes(), esdfBytes()); 0 without it.
+    size_t planning_free_space_bytes = 0, planning_esdf_bytes = 0;
   };
   std::optional<MapStatus> tryStatus(double wait_s) const;
 

@@ -45,7 +45,9 @@ TEST(NodeParameterRegistry, DefaultsAreNodeConfigsAndValid) {
                                              "sync_queue_size", "tf_timeout_s", "max_stamp_ahead_s",
                                              "mesh_publish_rate_hz", "publish_markers", "publish_path",
                                              "publish_frustum", "frustum_depth_m", "publish_block_bounds",
-                                             "mesh_encoding", "loop_closure_max_frames", "trajectory_frame"}));
+                                             "mesh_encoding", "loop_closure_max_frames", "trajectory_frame",
+                                             "planning_publish_rate_hz", "esdf_slice_height_m",
+                                             "planning_max_box_cells", "planning_max_query_points"}));
   for (const ParameterSpec& spec : nodeParameterSpecs()) {
     EXPECT_FALSE(spec.description.empty()) << spec.name;
     EXPECT_FALSE(spec.range.empty()) << spec.name;
