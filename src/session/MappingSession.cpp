@@ -43,7 +43,7 @@ MappingSession::~MappingSession() {
 }
 
 void MappingSession::setMapReplacedListener(std::function<void(const MapReplaced&)> listener) {
-  std::lock_guard<std::timed_mutex> lock(mutex_);
+  std::lock_guard<std::mutex> lock(mutex_);
   listener_ = std::move(listener);
 }
 
@@ -57,7 +57,7 @@ void MappingSession::notifyLocked(MapChange change, const std::vector<BlockKey>&
 }
 
 FrameTicket MappingSession::arrive() {
-  std::lock_guard<std::timed_mutex> lock(mutex_);
+  std::lock_guard<std::mutex> lock(mutex_);
   return {epoch_, next_ticket_++};
 }
 
@@ -66,7 +66,7 @@ bool MappingSession::isCurrent(const FrameTicket& ticket) const { return ticket.
 MappingSession::FrameOutcome MappingSession::fuse(const StereoFrame& frame, const FrameTicket& ticket,
                                                   MeshTiming timing, FrameLoader reload) {
   FrameOutcome out;
-  std::lock_guard<std::timed_mutex> lock(mutex_);
+  std::lock_guard<std::mutex> lock(mutex_);
   if (ticket.epoch != epoch_) {
     out.reason = RejectReason::kSuperseded;
     out.error = "it arrived before a reset or load_map";
@@ -119,6 +119,15 @@ MappingSession::FrameOutcome MappingSession::fuse(const StereoFrame& frame, cons
   return out;
 }
 
+bool MappingSession::lockWithin(std::unique_lock<std::mutex>* lock, std::chrono::steady_clock::duration wait) {
+  const auto deadline = std::chrono::steady_clock::now() + wait;
+  while (!lock->try_lock()) {
+    if (std::chrono::steady_clock::now() >= deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  return true;
+}
+
 std::string MappingSession::busyMessage() const {
   return "busy: the map has been held for more than " + std::to_string(session_config_.max_request_wait_s) +
          " s (" + mapperStageName(stage()) + " for " + std::to_string(busySeconds()) +
@@ -127,8 +136,8 @@ std::string MappingSession::busyMessage() const {
 
 MappingSession::ClearOutcome MappingSession::clear(const MapRegion& region, double stamp_s) {
   ClearOutcome out;
-  std::unique_lock<std::timed_mutex> lock(mutex_, std::defer_lock);
-  if (!lock.try_lock_for(requestWait())) {
+  std::unique_lock<std::mutex> lock(mutex_, std::defer_lock);
+  if (!lockWithin(&lock, requestWait())) {
     out.message = busyMessage();
     return out;
   }
@@ -175,8 +184,8 @@ void MappingSession::startEpochLocked(const std::vector<uint8_t>& base_bytes) {
 }
 
 bool MappingSession::reset() {
-  std::unique_lock<std::timed_mutex> lock(mutex_, std::defer_lock);
-  if (!lock.try_lock_for(requestWait())) return false;
+  std::unique_lock<std::mutex> lock(mutex_, std::defer_lock);
+  if (!lockWithin(&lock, requestWait())) return false;
   std::vector<BlockKey> removed;
   for (const auto& [key, sub] : mapper_->mesh().submeshes()) removed.push_back(key);
   std::sort(removed.begin(), removed.end());
@@ -194,8 +203,8 @@ MappingSession::LoadOutcome MappingSession::load(const std::string& path) {
   MapFileInfo info;
   std::string error;
   const bool read = readMapFile(path, config_, &loaded, &info, &error);
-  std::unique_lock<std::timed_mutex> lock(mutex_, std::defer_lock);
-  if (!lock.try_lock_for(requestWait())) {
+  std::unique_lock<std::mutex> lock(mutex_, std::defer_lock);
+  if (!lockWithin(&lock, requestWait())) {
     out.message = busyMessage() + " (the current map is unchanged)";
     return out;
   }
@@ -236,7 +245,7 @@ std::optional<CorrectionReport> MappingSession::submitTrajectory(std::vector<Sta
   sortByStamp(&poses);
   PendingTrajectory pending;
   {
-    std::lock_guard<std::timed_mutex> lock(mutex_);
+    std::lock_guard<std::mutex> lock(mutex_);
     if (timeline_.frames() == 0) return refuse(TrajectoryOutcome::kRejectedNoFrameYet, "no frame has been fused yet");
     pending.fused_until_s = fused_until_s ? *fused_until_s : timeline_.newestFrameStamp();
     pending.epoch = epoch_;
@@ -288,7 +297,7 @@ CorrectionReport MappingSession::runCorrection(const PendingTrajectory& trajecto
   EditTimeline::Snapshot snapshot;
   PoseCorrection correction;
   {
-    std::lock_guard<std::timed_mutex> lock(mutex_);
+    std::lock_guard<std::mutex> lock(mutex_);
     if (trajectory.epoch != epoch_) return finish(TrajectoryOutcome::kDroppedByReset, "a reset or load_map came first");
     const std::vector<StampedPose> originals = timeline_.originalPoses();
     correction = PoseCorrection(originals, trajectory.poses, trajectory.fused_until_s);
@@ -309,7 +318,7 @@ CorrectionReport MappingSession::runCorrection(const PendingTrajectory& trajecto
   }
   correcting_ = true;
   auto unpin = [&] {
-    std::lock_guard<std::timed_mutex> lock(mutex_);
+    std::lock_guard<std::mutex> lock(mutex_);
     if (trajectory.epoch == epoch_) timeline_.unpin();  // a new epoch cleared the timeline and its pin
     correcting_ = false;
   };
@@ -342,7 +351,7 @@ CorrectionReport MappingSession::runCorrection(const PendingTrajectory& trajecto
   for (int round = 1;; ++round) {
     std::vector<Edit> newer;
     {
-      std::lock_guard<std::timed_mutex> lock(mutex_);
+      std::lock_guard<std::mutex> lock(mutex_);
       if (trajectory.epoch != epoch_) {
         correcting_ = false;
         return finish(TrajectoryOutcome::kDroppedByReset, "a reset or load_map came while it was fused again");
@@ -394,23 +403,23 @@ void MappingSession::adoptCorrectedLocked(std::unique_ptr<Mapper> rebuilt, EditR
 }
 
 CorrectionReport MappingSession::lastCorrection() const {
-  std::lock_guard<std::timed_mutex> lock(mutex_);
+  std::lock_guard<std::mutex> lock(mutex_);
   return last_correction_;
 }
 
 PoseCorrection MappingSession::correction() const {
-  std::lock_guard<std::timed_mutex> lock(mutex_);
+  std::lock_guard<std::mutex> lock(mutex_);
   return correction_;
 }
 
 MappingSession::KeptStatus MappingSession::kept() const {
-  std::lock_guard<std::timed_mutex> lock(mutex_);
+  std::lock_guard<std::mutex> lock(mutex_);
   return keptLocked();
 }
 
 std::optional<MappingSession::MapStatus> MappingSession::tryStatus(double wait_s) const {
-  std::unique_lock<std::timed_mutex> lock(mutex_, std::defer_lock);
-  if (!lock.try_lock_for(std::chrono::duration<double>(wait_s))) return std::nullopt;
+  std::unique_lock<std::mutex> lock(mutex_, std::defer_lock);
+  if (!lockWithin(&lock, std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(wait_s)))) return std::nullopt;
   MapStatus s;
   s.kept = keptLocked();
   s.last_correction = last_correction_;

@@ -148,14 +148,14 @@ class MappingSession {
   /// Runs f(Mapper&) with the map lock held: read the map, mesh it, take its changes.
   template <typename F>
   auto withMapper(F&& f) {
-    std::lock_guard<std::timed_mutex> lock(mutex_);
+    std::lock_guard<std::mutex> lock(mutex_);
     return f(*mapper_);
   }
   /// The same for a request: false, f not run, if the map stayed busy for max_request_wait_s.
   template <typename F>
   bool tryWithMapper(F&& f) {
-    std::unique_lock<std::timed_mutex> lock(mutex_, std::defer_lock);
-    if (!lock.try_lock_for(requestWait())) return false;
+    std::unique_lock<std::mutex> lock(mutex_, std::defer_lock);
+    if (!lockWithin(&lock, requestWait())) return false;
     f(*mapper_);
     return true;
   }
@@ -205,6 +205,9 @@ class MappingSession {
   void startEpochLocked(const std::vector<uint8_t>& base_bytes);
   void notifyLocked(MapChange change, const std::vector<BlockKey>& removed);
   KeptStatus keptLocked() const;
+  /// Takes `lock`'s mutex within `wait`, polling every millisecond (libstdc++'s timed mutex
+  /// locks through pthread_mutex_clocklock, which ThreadSanitizer does not see).
+  static bool lockWithin(std::unique_lock<std::mutex>* lock, std::chrono::steady_clock::duration wait);
   std::chrono::steady_clock::duration requestWait() const {
     return std::chrono::duration_cast<std::chrono::steady_clock::duration>(
         std::chrono::duration<double>(session_config_.max_request_wait_s));
@@ -213,7 +216,7 @@ class MappingSession {
   const MapperConfig config_;
   const SessionConfig session_config_;
 
-  mutable std::timed_mutex mutex_;  // the map lock: guards everything up to the trajectory queue
+  mutable std::mutex mutex_;         // the map lock: guards everything up to the trajectory queue
   StageMonitor monitor_;            // the live mapper's (a correction's rebuilt one gets it at the swap)
   std::unique_ptr<Mapper> mapper_;
   EditReplay live_replay_;
