@@ -46,9 +46,10 @@ Mapper::Mapper(const MapperConfig& config)
                                    config_.voxel_size_m, config_.truncation_vox}),
       mesh_consumer_(map_changes_.subscribe("mesher")),
       eviction_consumer_(map_changes_.subscribe("eviction")),
-      texture_consumer_(config_.texture == TextureMode::kPatches
-                            ? std::optional<BlockChangeLog::Consumer>(mesh_changes_.subscribe("textures"))
-                            : std::nullopt),
+      texture_consumer_(
+          config_.texture == TextureMode::kPatches
+              ? std::optional<BlockChangeLog::Consumer>(mesh_changes_.subscribe("textures"))
+              : std::nullopt),
       gate_(FrameGateLimits{config_.max_pose_jump_m, config_.max_timestamp_gap_s,
                             config_.require_increasing_timestamps}) {
   if (config_.planning_enabled) {
@@ -102,11 +103,14 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
   Timer lookup_timer;
   measurements_.build(frame, config_, &pool_);
   if (config_.min_coherent_pixel_share > 0.0) {
-    const DisparityCoherence coherence = measureDisparityCoherence(frame.disparity_px, measurements_, &pool_);
-    if (coherence.usable_pixels >= kCoherenceMinUsablePixels && coherence.share() < config_.min_coherent_pixel_share)
+    const DisparityCoherence coherence =
+        measureDisparityCoherence(frame.disparity_px, measurements_, &pool_);
+    if (coherence.usable_pixels >= kCoherenceMinUsablePixels &&
+        coherence.share() < config_.min_coherent_pixel_share)
       return reject_after_gate(RejectReason::kIncoherentDisparity,
                                "only " + format("%.1f %%", 100.0 * coherence.share()) + " of its " +
-                                   std::to_string(coherence.usable_pixels) + " usable disparities agree within " +
+                                   std::to_string(coherence.usable_pixels) +
+                                   " usable disparities agree within " +
                                    format("%g", kCoherenceTolerancePx) +
                                    " px with a neighbour, less than min_coherent_pixel_share (" +
                                    format("%.1f %%", 100.0 * config_.min_coherent_pixel_share) +
@@ -117,19 +121,23 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
   result.lookup = lookup_.run(frame, measurements_, &octree_, &queue_, &missing_);
   result.lookup_ms = lookup_timer.elapsedMs();
   // The lookup only reads the map: a frame over its allocation budget leaves it untouched.
-  if (config_.max_new_blocks_per_frame > 0 && missing_.size() > static_cast<size_t>(config_.max_new_blocks_per_frame))
-    return reject_after_gate(RejectReason::kAllocationBudget,
-                             "its truncation bands reach " + std::to_string(missing_.size()) +
-                                 " blocks not yet in the map, more than max_new_blocks_per_frame (" +
-                                 std::to_string(config_.max_new_blocks_per_frame) + "): noise or a wrong calibration?");
+  if (config_.max_new_blocks_per_frame > 0 &&
+      missing_.size() > static_cast<size_t>(config_.max_new_blocks_per_frame))
+    return reject_after_gate(
+        RejectReason::kAllocationBudget,
+        "its truncation bands reach " + std::to_string(missing_.size()) +
+            " blocks not yet in the map, more than max_new_blocks_per_frame (" +
+            std::to_string(config_.max_new_blocks_per_frame) + "): noise or a wrong calibration?");
   gate_.accepted(frame);
   result.accepted = true;
   ++frames_integrated_;
-  if (texture_consumer_) last_frame_ = frame;  // shares the images: what a deferred texture pass projects into
+  if (texture_consumer_)
+    last_frame_ = frame;  // shares the images: what a deferred texture pass projects into
 
   stage.enter(MapperStage::kFusion);
   Timer fusion_timer;
-  result.fusion = fuser_.fuse(frame, measurements_, octree_, queue_, missing_, &updated_, &created_);
+  result.fusion =
+      fuser_.fuse(frame, measurements_, octree_, queue_, missing_, &updated_, &created_);
   voxel_bytes_ += result.fusion.level_bytes_allocated;
   for (const VoxelBlock* block : updated_) result.updated_blocks.push_back(block->key);
   result.fusion_ms = fusion_timer.elapsedMs();
@@ -141,8 +149,8 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
     std::vector<BlockKey> keys;
     for (const VoxelBlock* block : carved_) keys.push_back(block->key);
     std::vector<BlockKey> merged;
-    std::set_union(result.updated_blocks.begin(), result.updated_blocks.end(), keys.begin(), keys.end(),
-                   std::back_inserter(merged));
+    std::set_union(result.updated_blocks.begin(), result.updated_blocks.end(), keys.begin(),
+                   keys.end(), std::back_inserter(merged));
     result.updated_blocks.swap(merged);
     result.carve_ms = carve_timer.elapsedMs();
   }
@@ -169,8 +177,10 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
 
   // Memory bound, between fusion and meshing: nothing else touches the octree now.
   stage.enter(MapperStage::kEviction);
-  eviction_.recordUpdates(octree_, map_changes_.take(eviction_consumer_).updated, frames_integrated_);
-  const EvictionLimits limits{static_cast<size_t>(config_.max_blocks), config_.max_distance_from_camera_m};
+  eviction_.recordUpdates(octree_, map_changes_.take(eviction_consumer_).updated,
+                          frames_integrated_);
+  const EvictionLimits limits{static_cast<size_t>(config_.max_blocks),
+                              config_.max_distance_from_camera_m};
   result.evicted_blocks = eviction_.select(octree_, frame.T_world_camera.translation(), limits);
   if (!result.evicted_blocks.empty()) {
     queue_.clear();  // their pointers dangle after erase
@@ -179,8 +189,9 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
     blocks_evicted_ += octree_.erase(result.evicted_blocks);
     map_changes_.recordErased(result.evicted_blocks);
     std::vector<BlockKey> kept;
-    std::set_difference(result.updated_blocks.begin(), result.updated_blocks.end(), result.evicted_blocks.begin(),
-                        result.evicted_blocks.end(), std::back_inserter(kept));
+    std::set_difference(result.updated_blocks.begin(), result.updated_blocks.end(),
+                        result.evicted_blocks.begin(), result.evicted_blocks.end(),
+                        std::back_inserter(kept));
     result.updated_blocks.swap(kept);
   }
   if (planning_) {
@@ -188,11 +199,13 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
     Timer free_space_timer;
     result.free_space = planning_->recordFreeSpace(frame, measurements_);
     if (config_.max_distance_from_camera_m > 0.0)
-      planning_->dropFartherThan(frame.T_world_camera.translation(), config_.max_distance_from_camera_m);
+      planning_->dropFartherThan(frame.T_world_camera.translation(),
+                                 config_.max_distance_from_camera_m);
     result.free_space_ms = free_space_timer.elapsedMs();
     // A caller that never updates the planning layer must not make the map log grow without
     // bound: past a few changes per block of the map, the update runs here.
-    if (map_changes_.pending(*planning_consumer_) > std::max<size_t>(kMaxPendingPlanningChanges, 4 * octree_.blockCount())) {
+    if (map_changes_.pending(*planning_consumer_) >
+        std::max<size_t>(kMaxPendingPlanningChanges, 4 * octree_.blockCount())) {
       result.planning_catch_up = true;
       result.planning_catch_up_ms = updatePlanning().esdf_ms;
     }
@@ -241,7 +254,8 @@ MeshPass Mapper::updateMesh() {
     MeshChanges submeshes;
     submeshes.changed = retexture.updated;
     submeshes.removed = retexture.erased;
-    pass.texture = texture_store_.update(mesh_store_, submeshes, last_frame_, frames_integrated_, &pool_);
+    pass.texture =
+        texture_store_.update(mesh_store_, submeshes, last_frame_, frames_integrated_, &pool_);
   }
   return pass;
 }
@@ -282,16 +296,17 @@ std::vector<uint8_t> Mapper::encodeMap() const {
     free_space.cell_m = planning_->grid().cell_m;
     free_space.blocks = planning_->seenFree();
   }
-  return encodeMapFileUnsealed(octree_, config_, frames_integrated_,
-                               [this](const VoxelBlock& block) { return eviction_.lastUpdateFrame(block); },
-                               free_space);
+  return encodeMapFileUnsealed(
+      octree_, config_, frames_integrated_,
+      [this](const VoxelBlock& block) { return eviction_.lastUpdateFrame(block); }, free_space);
 }
 
 bool Mapper::loadMap(const std::string& path, MeshChanges* changes, std::string* error) {
   BlockOctree loaded(config_.blockSizeM());
   MapFileInfo info;
   if (!readMapFile(path, config_, &loaded, &info, error)) return false;
-  MeshChanges adopted = adoptMap(&loaded, info);  // the old map now lives in `loaded`, freed on return
+  MeshChanges adopted =
+      adoptMap(&loaded, info);  // the old map now lives in `loaded`, freed on return
   if (changes) *changes = std::move(adopted);
   return true;
 }
@@ -307,7 +322,8 @@ MeshChanges Mapper::adoptMap(BlockOctree* loaded, const MapFileInfo& info) {
   eviction_.clear();
   frames_integrated_ = info.frames_integrated;
   for (const auto& [key, frame] : info.last_update_frames) {
-    if (const VoxelBlock* block = octree_.find(key)) eviction_.setLastUpdateFrame(octree_, *block, frame);
+    if (const VoxelBlock* block = octree_.find(key))
+      eviction_.setLastUpdateFrame(octree_, *block, frame);
     frames_integrated_ = std::max(frames_integrated_, frame);
   }
   blocks_evicted_ = 0;
@@ -320,7 +336,8 @@ MeshChanges Mapper::adoptMap(BlockOctree* loaded, const MapFileInfo& info) {
     // The file's seen-free cells if they are of this layer's size (else its free space is
     // unknown, as with an older file), then the rest from the TSDF.
     planning_->clear();
-    if (info.free_space.cell_m == planning_->grid().cell_m) planning_->addSeenFree(info.free_space.blocks);
+    if (info.free_space.cell_m == planning_->grid().cell_m)
+      planning_->addSeenFree(info.free_space.blocks);
     planning_->rebuild(octree_);
   }
   // A rebuild over the kept store reports the old map's vanished submeshes as removed.

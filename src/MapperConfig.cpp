@@ -27,8 +27,7 @@ const Table& table() {
                 "of the level being updated. At most 8: beyond, a far point's band "
                 "spans dozens of blocks.",
                 member(&MapperConfig::truncation_vox));
-    t.addDouble("min_depth_m", "m", 0.0, true, 1000.0,
-                "Measurements nearer than this are ignored.",
+    t.addDouble("min_depth_m", "m", 0.0, true, 1000.0, "Measurements nearer than this are ignored.",
                 member(&MapperConfig::min_depth_m));
     t.addDouble("max_depth_m", "m", 0.0, false, 1000.0,
                 "Measurements farther than this are ignored (stereo error grows as z²).",
@@ -36,7 +35,8 @@ const Table& table() {
     t.addEnum<LevelMode>(
         "level_mode", {{"noise", LevelMode::kNoise}, {"depth", LevelMode::kDepth}},
         "Where measurements switch to the coarser levels (eq. 3.2). noise: from the camera, at the "
-        "depth where the stereo depth error z²·σ_d/(f·b) exceeds a level's voxel edge: the 4³ level "
+        "depth where the stereo depth error z²·σ_d/(f·b) exceeds a level's voxel edge: the 4³ "
+        "level "
         "from √(voxel_size_m·f·b/σ_d), 2³ from √2 times that (σ_d = disparity_noise_px), so a "
         "precise or long-baseline camera stays fine farther. depth: at scale2_min_depth_m and "
         "scale4_min_depth_m whatever the camera (the thesis).",
@@ -203,20 +203,27 @@ const Table& table() {
     t.addDouble("max_pose_jump_m", "m", 0.0, true, 1e6,
                 "A frame whose camera is farther than this from the last fused frame's "
                 "camera is rejected (a SLAM glitch); a rejected frame never becomes the "
-                "reference, and after " + reanchor_frames + " rejected frames that agree with "
-                "each other (a relocalisation) the last is fused and becomes it. 0 = no check.",
+                "reference, and after " +
+                    reanchor_frames +
+                    " rejected frames that agree with "
+                    "each other (a relocalisation) the last is fused and becomes it. 0 = no check.",
                 member(&MapperConfig::max_pose_jump_m));
     t.addDouble("max_timestamp_gap_s", "s", 0.0, true, 1e9,
                 "A frame stamped more than this after the last fused frame is rejected "
                 "(a stamp far in the future would otherwise make every later frame go "
-                "\"backwards\"); " + reanchor_frames + " consecutive frames that agree with "
-                "each other are accepted as a clock jump. 0 = no check.",
+                "\"backwards\"); " +
+                    reanchor_frames +
+                    " consecutive frames that agree with "
+                    "each other are accepted as a clock jump. 0 = no check.",
                 member(&MapperConfig::max_timestamp_gap_s));
     t.addBool("require_increasing_timestamps",
               "Reject a frame whose timestamp is before (backwards) or equal to "
-              "(duplicate) the last fused frame's; " + reanchor_frames + " consecutive later "
-              "frames that agree with each other are accepted as a clock reset. Timestamp 0 means unknown "
-              "and is not checked (the nodelet drops ROS messages stamped 0).",
+              "(duplicate) the last fused frame's; " +
+                  reanchor_frames +
+                  " consecutive later "
+                  "frames that agree with each other are accepted as a clock reset. Timestamp 0 "
+                  "means unknown "
+                  "and is not checked (the nodelet drops ROS messages stamped 0).",
               member(&MapperConfig::require_increasing_timestamps));
     t.addBool("planning_enabled",
               "Keep the planning layer (planning/): the space each frame saw empty, an "
@@ -257,7 +264,8 @@ double MapperConfig::planningCellSizeM() const {
   constexpr double kAutoPlanningCellM = 0.08;
   double best = voxel_size_m;
   for (int n : {2, 4, 8})
-    if (std::abs(std::log(n * voxel_size_m / kAutoPlanningCellM)) < std::abs(std::log(best / kAutoPlanningCellM)))
+    if (std::abs(std::log(n * voxel_size_m / kAutoPlanningCellM)) <
+        std::abs(std::log(best / kAutoPlanningCellM)))
       best = n * voxel_size_m;
   return best;
 }
@@ -318,18 +326,22 @@ std::vector<std::string> validateMapperConfig(const MapperConfig& config) {
   if (config.texture == TextureMode::kPatches && !config.mesh_enabled)
     errors.push_back("texture = patches needs mesh_enabled = true");
   // A distance bound below the fusion range would evict surfaces in the frame that fused them.
-  if (config.max_distance_from_camera_m > 0.0 && config.max_distance_from_camera_m < config.max_depth_m)
-    errors.push_back("max_distance_from_camera_m must be 0 (off) or >= max_depth_m, else blocks fused "
-                     "from a frame are evicted by the same frame");
+  if (config.max_distance_from_camera_m > 0.0 &&
+      config.max_distance_from_camera_m < config.max_depth_m)
+    errors.push_back(
+        "max_distance_from_camera_m must be 0 (off) or >= max_depth_m, else blocks fused "
+        "from a frame are evicted by the same frame");
   if (config.esdf_voxel_size_m > 0.0) {
     const double n = config.esdf_voxel_size_m / config.voxel_size_m;
     const double nearest = std::round(n);
-    if (std::abs(n - nearest) > 1e-6 * n || (nearest != 1 && nearest != 2 && nearest != 4 && nearest != 8))
+    if (std::abs(n - nearest) > 1e-6 * n ||
+        (nearest != 1 && nearest != 2 && nearest != 4 && nearest != 8))
       errors.push_back("esdf_voxel_size_m must be 0 (auto) or voxel_size_m times 1, 2, 4 or 8");
   }
   if (config.planning_enabled && config.esdf_max_distance_m > 100.0 * config.planningCellSizeM())
     errors.push_back("esdf_max_distance_m must be at most 100 planning cells (esdf_voxel_size_m)");
-  if (config.grid_min_z_m >= config.grid_max_z_m) errors.push_back("grid_min_z_m must be < grid_max_z_m");
+  if (config.grid_min_z_m >= config.grid_max_z_m)
+    errors.push_back("grid_min_z_m must be < grid_max_z_m");
   return errors;
 }
 

@@ -55,21 +55,24 @@ enum class MeshTiming {
 struct IntegrationResult {
   bool accepted = false;  ///< false: the frame was rejected and the map is unchanged
   RejectReason reason = RejectReason::kNone;  ///< why it was rejected, for counters
-  std::string error;      ///< why it was rejected, one sentence
+  std::string error;                          ///< why it was rejected, one sentence
   /// Accepted only because the frames rejected before it agreed with it (FrameGate: a
   /// relocalisation or a clock reset); `note` says why.
   bool reanchored = false;
   std::string note;
-  double lookup_ms = 0.0;  ///< converting the frame's disparities to depths and colours, then the lookup
+  double lookup_ms =
+      0.0;  ///< converting the frame's disparities to depths and colours, then the lookup
   double fusion_ms = 0.0;
   double carve_ms = 0.0;  ///< free-space carving (FreeSpaceCarver), included in nothing else
-  double free_space_ms = 0.0;  ///< recording the space the frame saw empty (planning layer), included in nothing else
+  double free_space_ms =
+      0.0;  ///< recording the space the frame saw empty (planning layer), included in nothing else
   FreeSpaceStats free_space;
   /// The planning layer was updated after this frame because its changes had piled up
   /// (kMaxPendingPlanningChanges), taking planning_catch_up_ms.
   bool planning_catch_up = false;
   double planning_catch_up_ms = 0.0;
-  OutlierRejectionStats rejected;  ///< usable pixels the outlier rejection dropped (counted, not fused)
+  OutlierRejectionStats
+      rejected;  ///< usable pixels the outlier rejection dropped (counted, not fused)
   LookupStats lookup;
   FusionStats fusion;
   CarveStats carve;
@@ -87,14 +90,16 @@ struct IntegrationResult {
 
 /// What clearRegion() did.
 struct ClearResult {
-  bool accepted = false;  ///< false: the region was invalid (`error` says why) and the map is unchanged
+  bool accepted =
+      false;  ///< false: the region was invalid (`error` says why) and the map is unchanged
   std::string error;
   uint64_t blocks_visited = 0;  ///< blocks of the map the region reaches
   uint64_t blocks_changed = 0;  ///< blocks that lost observed voxels and keep some
   uint64_t blocks_erased = 0;   ///< blocks left without an observed voxel, erased
   uint64_t voxels_cleared = 0;  ///< observed voxels made unobserved, all levels
   double clear_ms = 0.0;
-  /// As IntegrationResult::mesh and ::texture: with MeshTiming::kNow, what the meshing pass changed.
+  /// As IntegrationResult::mesh and ::texture: with MeshTiming::kNow, what the meshing pass
+  /// changed.
   MeshChanges mesh;
   TextureStats texture;
 };
@@ -134,7 +139,8 @@ class Mapper {
   size_t memoryBytes() const;
 
   const BlockOctree& map() const { return octree_; }
-  /// The incrementally maintained mesh, one submesh per block (current as of the last updateMesh()).
+  /// The incrementally maintained mesh, one submesh per block (current as of the last
+  /// updateMesh()).
   const MeshStore& mesh() const { return mesh_store_; }
   /// The whole mesh, submeshes welded into one (for export).
   TriangleMesh extractMesh() const { return weldSubmeshes(mesh_store_.submeshes()); }
@@ -148,7 +154,9 @@ class Mapper {
   /// Blocks evicted by the memory bound since construction, reset() or loadMap().
   uint64_t blocksEvicted() const { return blocks_evicted_; }
   /// The frame that last updated `block` (the eviction order).
-  uint64_t lastUpdateFrame(const VoxelBlock& block) const { return eviction_.lastUpdateFrame(block); }
+  uint64_t lastUpdateFrame(const VoxelBlock& block) const {
+    return eviction_.lastUpdateFrame(block);
+  }
   /// Drops the whole map.
   void reset();
   /// Forgets what the map holds in `region` (world frame): every observed voxel whose centre
@@ -160,11 +168,17 @@ class Mapper {
   /// A consumer of the mesh's changes (submeshes changed / removed by meshing passes, rebuilds,
   /// loads and resets), e.g. a publisher that sends them at its own rate. It must take them
   /// now and then: they wait in memory until it does.
-  BlockChangeLog::Consumer subscribeToMeshChanges(const std::string& name) { return mesh_changes_.subscribe(name); }
+  BlockChangeLog::Consumer subscribeToMeshChanges(const std::string& name) {
+    return mesh_changes_.subscribe(name);
+  }
   /// The submeshes changed (updated) and removed (erased) since `consumer` last took them.
-  BlockChangeLog::Changes takeMeshChanges(BlockChangeLog::Consumer consumer) { return mesh_changes_.take(consumer); }
+  BlockChangeLog::Changes takeMeshChanges(BlockChangeLog::Consumer consumer) {
+    return mesh_changes_.take(consumer);
+  }
   /// Mesh changes recorded for `consumer` and not taken yet.
-  size_t pendingMeshChanges(BlockChangeLog::Consumer consumer) const { return mesh_changes_.pending(consumer); }
+  size_t pendingMeshChanges(BlockChangeLog::Consumer consumer) const {
+    return mesh_changes_.pending(consumer);
+  }
 
   /// Writes the map to `path` (io/MapFile.h format, via a temporary file renamed into place).
   bool saveMap(const std::string& path, std::string* error) const;
@@ -218,10 +232,10 @@ class Mapper {
   uint64_t blocks_evicted_ = 0;
   StageMonitor* monitor_ = nullptr;
   FrameGate gate_;
-  std::vector<VoxelBlock*> queue_;    // reused across frames
-  std::vector<BlockKey> missing_;     // reused across frames
-  std::vector<VoxelBlock*> updated_;  // reused across frames
-  std::vector<VoxelBlock*> carved_;   // reused across frames
+  std::vector<VoxelBlock*> queue_;                    // reused across frames
+  std::vector<BlockKey> missing_;                     // reused across frames
+  std::vector<VoxelBlock*> updated_;                  // reused across frames
+  std::vector<VoxelBlock*> carved_;                   // reused across frames
   std::vector<std::unique_ptr<VoxelBlock>> created_;  // reused across frames
 };
 

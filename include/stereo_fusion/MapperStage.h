@@ -17,8 +17,8 @@ enum class MapperStage : uint8_t {
   kPlanning,   ///< the planning layer's update
   kMeshing,
   kTexture,
-  kClear,      ///< clearRegion()
-  kLoad,       ///< adoptMap() and its re-meshing
+  kClear,  ///< clearRegion()
+  kLoad,   ///< adoptMap() and its re-meshing
 };
 const char* mapperStageName(MapperStage stage);
 
@@ -29,7 +29,8 @@ struct StageMonitor {
   std::atomic<int64_t> busy_since_ns{0};
 
   static int64_t nowNs() {
-    return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(
+               std::chrono::steady_clock::now().time_since_epoch())
         .count();
   }
   /// Seconds the current operation has run; 0 while idle.

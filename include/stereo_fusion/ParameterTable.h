@@ -14,12 +14,13 @@
 
 namespace stereo_fusion {
 
-/// Description of one parameter, for validation, --set, YAML loading and the tables in doc/parameters.md.
+/// Description of one parameter, for validation, --set, YAML loading and the tables in
+/// doc/parameters.md.
 struct ParameterSpec {
   std::string name;
-  std::string type;         ///< "double", "int", "bool", "enum" or "string"
-  std::string unit;         ///< "m", "px", "vox", "" ...
-  std::string range;        ///< human-readable range, e.g. "[0.002, 1]" or "naive | accelerated"
+  std::string type;   ///< "double", "int", "bool", "enum" or "string"
+  std::string unit;   ///< "m", "px", "vox", "" ...
+  std::string range;  ///< human-readable range, e.g. "[0.002, 1]" or "naive | accelerated"
   std::string description;
 };
 
@@ -45,10 +46,11 @@ class ParameterTable {
   }
 
   /// A double in (lo or [lo, hi]; NaN and infinities are refused.
-  void addDouble(std::string name, std::string unit, double lo, bool lo_inclusive, double hi, std::string description,
-                 Field<double> field) {
+  void addDouble(std::string name, std::string unit, double lo, bool lo_inclusive, double hi,
+                 std::string description, Field<double> field) {
     using namespace parameter_text;
-    const std::string range = (lo_inclusive ? "[" : "(") + formatDouble(lo) + ", " + formatDouble(hi) + "]";
+    const std::string range =
+        (lo_inclusive ? "[" : "(") + formatDouble(lo) + ", " + formatDouble(hi) + "]";
     const std::string range_with_unit = withUnit(range, unit);
     Entry e;
     e.spec = {name, "double", std::move(unit), range, std::move(description)};
@@ -70,7 +72,8 @@ class ParameterTable {
   }
 
   /// An int in [lo, hi].
-  void addInt(std::string name, std::string unit, int lo, int hi, std::string description, Field<int> field) {
+  void addInt(std::string name, std::string unit, int lo, int hi, std::string description,
+              Field<int> field) {
     using namespace parameter_text;
     const std::string range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
     const std::string range_with_unit = withUnit(range, unit);
@@ -95,8 +98,8 @@ class ParameterTable {
 
   /// One of the labels in `values` (the first label of a value is the one printed).
   template <typename Enum>
-  void addEnum(std::string name, std::vector<std::pair<std::string, Enum>> values, std::string description,
-               Field<Enum> field) {
+  void addEnum(std::string name, std::vector<std::pair<std::string, Enum>> values,
+               std::string description, Field<Enum> field) {
     std::string range;
     for (const auto& [label, value] : values) range += (range.empty() ? "" : " | ") + label;
     Entry e;
@@ -161,7 +164,8 @@ class ParameterTable {
   /// Sets parameter `name` from its textual value. False with a message naming the parameter
   /// (and its range and unit) when the name is unknown, the value does not parse or is out of
   /// range; *config is then unchanged.
-  bool set(Config* config, const std::string& name, const std::string& value, std::string* error) const {
+  bool set(Config* config, const std::string& name, const std::string& value,
+           std::string* error) const {
     const Entry* e = find(name);
     if (e == nullptr) {
       *error = "unknown parameter '" + name + "'";
@@ -202,7 +206,8 @@ class ParameterTable {
     return unit.empty() ? range : range + " " + unit;
   }
   void add(Entry e) {
-    if (find(e.spec.name) != nullptr) throw std::logic_error("parameter '" + e.spec.name + "' is defined twice");
+    if (find(e.spec.name) != nullptr)
+      throw std::logic_error("parameter '" + e.spec.name + "' is defined twice");
     specs_.push_back(e.spec);
     entries_.push_back(std::move(e));
   }

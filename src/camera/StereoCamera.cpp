@@ -27,16 +27,17 @@ std::optional<StereoCamera> StereoCamera::create(int width_px, int height_px, do
              fy_px < kMinFocalPerImageSize * std::max(width_px, height_px)) {
     // A pinhole's focal length is w / (2 tan(FOV / 2)): 0.044 w at a 170° field of view. A broken
     // CameraInfo (fy = 1e-3) would otherwise stretch one frame's points over kilometres.
-    why << "focal lengths fx=" << fx_px << " fy=" << fy_px << " px are implausible for a " << width_px << "x"
-        << height_px << " image (at least " << kMinFocalPerImageSize << " × " << std::max(width_px, height_px)
-        << " px, a field of view under 170°)";
+    why << "focal lengths fx=" << fx_px << " fy=" << fy_px << " px are implausible for a "
+        << width_px << "x" << height_px << " image (at least " << kMinFocalPerImageSize << " × "
+        << std::max(width_px, height_px) << " px, a field of view under 170°)";
   } else if (!(fx_px / fy_px >= 1.0 / kMaxFocalRatio && fx_px / fy_px <= kMaxFocalRatio)) {
     why << "fx / fy = " << fx_px / fy_px << " is implausible (pixels more than " << kMaxFocalRatio
         << " times wider than high, or the reverse)";
   } else if (std::max(std::abs(cx_px), std::abs(width_px - cx_px)) > kMaxRayTangent * fx_px ||
              std::max(std::abs(cy_px), std::abs(height_px - cy_px)) > kMaxRayTangent * fy_px) {
-    why << "principal point cx=" << cx_px << " cy=" << cy_px << " px is implausible for a " << width_px << "x"
-        << height_px << " image with fx=" << fx_px << " fy=" << fy_px << " (rays more than 85.4° off the optical axis)";
+    why << "principal point cx=" << cx_px << " cy=" << cy_px << " px is implausible for a "
+        << width_px << "x" << height_px << " image with fx=" << fx_px << " fy=" << fy_px
+        << " (rays more than 85.4° off the optical axis)";
   }
   const std::string reason = why.str();
   if (!reason.empty()) {

@@ -36,18 +36,22 @@ void BlockLookup::setPixelGeometry(const StereoFrame& frame, const MeasurementIm
   for (int i = 0; i < 3; ++i) {
     g.column_dir[i].resize(static_cast<size_t>(frame.disparity_px.cols));
     for (int u = 0; u < frame.disparity_px.cols; ++u)
-      g.column_dir[i][u] = static_cast<float>(R_world_camera(i, 0) * ((u - cam.cx()) / cam.fx()) * inv_block_size);
+      g.column_dir[i][u] =
+          static_cast<float>(R_world_camera(i, 0) * ((u - cam.cx()) / cam.fx()) * inv_block_size);
     g.row_dir[i].resize(static_cast<size_t>(frame.disparity_px.rows));
     for (int v = 0; v < frame.disparity_px.rows; ++v)
       g.row_dir[i][v] = static_cast<float>(
-          (R_world_camera(i, 1) * ((v - cam.cy()) / cam.fy()) + R_world_camera(i, 2)) * inv_block_size);
+          (R_world_camera(i, 1) * ((v - cam.cy()) / cam.fy()) + R_world_camera(i, 2)) *
+          inv_block_size);
   }
   g.levels = FloatLevelThresholds(measurements.levels());
   const TruncationBand band = config_.truncationBand();
-  for (int level = 0; level < kNumLevels; ++level) g.band_m[level] = band.measurementM<float>(level);
+  for (int level = 0; level < kNumLevels; ++level)
+    g.band_m[level] = band.measurementM<float>(level);
   // A voxel centre that fusion reads at a pixel projects within half a pixel of its centre on
   // each image axis: within 0.5·√2 pixel footprints of the pixel's ray (0.75 for margin).
-  g.lateral_blocks_per_m = static_cast<float>(kLateralMarginPx / std::min(cam.fx(), cam.fy()) * inv_block_size);
+  g.lateral_blocks_per_m =
+      static_cast<float>(kLateralMarginPx / std::min(cam.fx(), cam.fy()) * inv_block_size);
   g.bands_non_negative = true;
   for (float b : g.band_m) g.bands_non_negative = g.bands_non_negative && b >= 0.0f;
 }
@@ -87,7 +91,9 @@ static void forEachKeyInBox(const BlockKey& lo, const BlockKey& hi, F&& f) {
 
 // Counts one more point in `box`. Neighbouring pixels almost always share a band box, so a
 // comparison with the previous box settles most pixels.
-__attribute__((always_inline)) inline void BlockLookup::countBox(const BandBox& box, RegionScratch* s, size_t* last) const {
+__attribute__((always_inline)) inline void BlockLookup::countBox(const BandBox& box,
+                                                                 RegionScratch* s,
+                                                                 size_t* last) const {
   ++s->stats.valid_points;
   if (*last < s->boxes.size() && s->boxes[*last].box == box) {
     ++s->boxes[*last].count;
@@ -96,7 +102,8 @@ __attribute__((always_inline)) inline void BlockLookup::countBox(const BandBox& 
   *last = countInBoxes(box, s);
 }
 
-__attribute__((always_inline)) inline size_t BlockLookup::countInBoxes(const BandBox& box, RegionScratch* s) const {
+__attribute__((always_inline)) inline size_t BlockLookup::countInBoxes(const BandBox& box,
+                                                                       RegionScratch* s) const {
   // Boxes are distinct, so the search order does not matter; from the newest, since a
   // changed box is most often one just seen (a neighbour in the row or the row above).
   for (size_t i = s->boxes.size(); i-- > 0;) {
@@ -110,7 +117,8 @@ __attribute__((always_inline)) inline size_t BlockLookup::countInBoxes(const Ban
 }
 
 // The reference per-pixel path: every pixel through bandBoxOfPixel().
-void BlockLookup::countRegionBoxesScalar(const MeasurementImage& m, const cv::Rect& region, RegionScratch* s) const {
+void BlockLookup::countRegionBoxesScalar(const MeasurementImage& m, const cv::Rect& region,
+                                         RegionScratch* s) const {
   size_t last = 0;
   for (int v = region.y; v < region.y + region.height; ++v) {
     const float* depth_row = m.depths() + static_cast<size_t>(v) * m.width();
@@ -123,9 +131,11 @@ void BlockLookup::countRegionBoxesScalar(const MeasurementImage& m, const cv::Re
 
 #ifdef STEREO_FUSION_HAVE_AVX2_LOOKUP
 // Bit i set: lane i of `key` (lo x, y, z, hi x, y, z of eight boxes) equals `box` (the same six).
-__attribute__((target("avx2"), always_inline)) static inline int lanesInBox(const __m256i key[6], const int32_t box[6]) {
+__attribute__((target("avx2"), always_inline)) static inline int lanesInBox(const __m256i key[6],
+                                                                            const int32_t box[6]) {
   __m256i equal = _mm256_cmpeq_epi32(key[0], _mm256_set1_epi32(box[0]));
-  for (int k = 1; k < 6; ++k) equal = _mm256_and_si256(equal, _mm256_cmpeq_epi32(key[k], _mm256_set1_epi32(box[k])));
+  for (int k = 1; k < 6; ++k)
+    equal = _mm256_and_si256(equal, _mm256_cmpeq_epi32(key[k], _mm256_set1_epi32(box[k])));
   return _mm256_movemask_ps(_mm256_castsi256_ps(equal));
 }
 
@@ -144,7 +154,8 @@ __attribute__((target("avx2"))) void BlockLookup::countRegionBoxesAvx2(const Mea
                band2 = _mm256_set1_ps(g.band_m[2]);
   const __m256 lateral_per_m = _mm256_set1_ps(g.lateral_blocks_per_m);
   const __m256 sign_bit = _mm256_set1_ps(-0.0f);
-  const __m256 min_blocks = _mm256_set1_ps(-kMaxBlocksFromCamera), max_blocks = _mm256_set1_ps(kMaxBlocksFromCamera);
+  const __m256 min_blocks = _mm256_set1_ps(-kMaxBlocksFromCamera),
+               max_blocks = _mm256_set1_ps(kMaxBlocksFromCamera);
   // keyInRange(): key ≥ −kMaxKey ⇔ key > −kMaxKey − 1, key ≤ kMaxKey ⇔ kMaxKey + 1 > key.
   const __m256i below_min_key = _mm256_set1_epi32(-BlockOctree::kMaxKey - 1),
                 above_max_key = _mm256_set1_epi32(BlockOctree::kMaxKey + 1);
@@ -186,28 +197,33 @@ __attribute__((target("avx2"))) void BlockLookup::countRegionBoxesAvx2(const Mea
     int u = region.x;
     for (; u < u_vector_end; u += 8) {
       const __m256 z = _mm256_loadu_ps(depth_row + u);
-      if (_mm256_movemask_ps(_mm256_cmp_ps(z, z, _CMP_ORD_Q)) == 0) continue;  // no depth in any lane
+      if (_mm256_movemask_ps(_mm256_cmp_ps(z, z, _CMP_ORD_Q)) == 0)
+        continue;  // no depth in any lane
       // Level of eq. 3.2 → band, lane by lane (NaN: level 0, refused below).
-      const __m256 band = _mm256_blendv_ps(_mm256_blendv_ps(band0, band1, _mm256_cmp_ps(z, level1_min, _CMP_GE_OQ)),
-                                           band2, _mm256_cmp_ps(z, level2_min, _CMP_GE_OQ));
+      const __m256 band =
+          _mm256_blendv_ps(_mm256_blendv_ps(band0, band1, _mm256_cmp_ps(z, level1_min, _CMP_GE_OQ)),
+                           band2, _mm256_cmp_ps(z, level2_min, _CMP_GE_OQ));
       const __m256 lateral = _mm256_mul_ps(_mm256_add_ps(z, band), lateral_per_m);
       __m256 valid = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
       __m256i key[6];  // lo x, y, z, hi x, y, z of the eight lanes
       for (int i = 0; i < 3; ++i) {
         const __m256 dir = _mm256_add_ps(_mm256_loadu_ps(g.column_dir[i].data() + u), row_dir[i]);
         const __m256 centre = _mm256_add_ps(_mm256_mul_ps(z, dir), origin_frac[i]);
-        const __m256 half = _mm256_add_ps(_mm256_mul_ps(_mm256_andnot_ps(sign_bit, dir), band), lateral);
+        const __m256 half =
+            _mm256_add_ps(_mm256_mul_ps(_mm256_andnot_ps(sign_bit, dir), band), lateral);
         const __m256 lo_blocks = _mm256_floor_ps(_mm256_sub_ps(centre, half));
         const __m256 hi_blocks = _mm256_floor_ps(_mm256_add_ps(centre, half));
         // With half ≥ 0, lo ≤ hi whenever neither is NaN, so lo ≥ −max and hi ≤ max cover all
         // four bounds (NaN fails both); then both convert exactly, and the same holds for
         // the integer key range test.
-        valid = _mm256_and_ps(valid, _mm256_and_ps(_mm256_cmp_ps(lo_blocks, min_blocks, _CMP_GE_OQ),
-                                                   _mm256_cmp_ps(hi_blocks, max_blocks, _CMP_LE_OQ)));
+        valid =
+            _mm256_and_ps(valid, _mm256_and_ps(_mm256_cmp_ps(lo_blocks, min_blocks, _CMP_GE_OQ),
+                                               _mm256_cmp_ps(hi_blocks, max_blocks, _CMP_LE_OQ)));
         key[i] = _mm256_add_epi32(_mm256_cvttps_epi32(lo_blocks), origin_key[i]);
         key[3 + i] = _mm256_add_epi32(_mm256_cvttps_epi32(hi_blocks), origin_key[i]);
-        valid = _mm256_and_ps(valid, _mm256_castsi256_ps(_mm256_and_si256(_mm256_cmpgt_epi32(key[i], below_min_key),
-                                                                          _mm256_cmpgt_epi32(above_max_key, key[3 + i]))));
+        valid = _mm256_and_ps(valid, _mm256_castsi256_ps(_mm256_and_si256(
+                                         _mm256_cmpgt_epi32(key[i], below_min_key),
+                                         _mm256_cmpgt_epi32(above_max_key, key[3 + i]))));
       }
       const int lanes = _mm256_movemask_ps(valid);
       if (lanes == 0) continue;
@@ -229,7 +245,8 @@ __attribute__((target("avx2"))) void BlockLookup::countRegionBoxesAvx2(const Mea
       const int last_lane = 1 << (31 - __builtin_clz(static_cast<unsigned>(lanes)));
       for (size_t j = s->boxes.size(); remaining != 0 && j-- > 0;) {
         if (j == last && last_count != nullptr) continue;  // done above
-        const int in_box = lanesInBox(key, reinterpret_cast<const int32_t*>(&s->boxes[j].box)) & remaining;
+        const int in_box =
+            lanesInBox(key, reinterpret_cast<const int32_t*>(&s->boxes[j].box)) & remaining;
         if (in_box == 0) continue;
         s->boxes[j].count += __builtin_popcount(in_box);
         remaining &= ~in_box;
@@ -243,8 +260,9 @@ __attribute__((target("avx2"))) void BlockLookup::countRegionBoxesAvx2(const Mea
           const int32_t lane_key[6] = {keys[0][lane], keys[1][lane], keys[2][lane],
                                        keys[3][lane], keys[4][lane], keys[5][lane]};
           const int in_box = lanesInBox(key, lane_key) & remaining;
-          s->boxes.push_back(BoxCount{{{lane_key[0], lane_key[1], lane_key[2]}, {lane_key[3], lane_key[4], lane_key[5]}},
-                                      __builtin_popcount(in_box)});
+          s->boxes.push_back(BoxCount{
+              {{lane_key[0], lane_key[1], lane_key[2]}, {lane_key[3], lane_key[4], lane_key[5]}},
+              __builtin_popcount(in_box)});
           remaining &= ~in_box;
           if (in_box & last_lane) last = s->boxes.size() - 1;
         }
@@ -259,12 +277,14 @@ __attribute__((target("avx2"))) void BlockLookup::countRegionBoxesAvx2(const Mea
 }
 
 #else
-void BlockLookup::countRegionBoxesAvx2(const MeasurementImage& m, const cv::Rect& region, RegionScratch* s) const {
+void BlockLookup::countRegionBoxesAvx2(const MeasurementImage& m, const cv::Rect& region,
+                                       RegionScratch* s) const {
   countRegionBoxesScalar(m, region, s);  // not x86: no vector path
 }
 #endif
 
-void BlockLookup::countRegionBoxes(const MeasurementImage& m, const cv::Rect& region, RegionScratch* s) const {
+void BlockLookup::countRegionBoxes(const MeasurementImage& m, const cv::Rect& region,
+                                   RegionScratch* s) const {
   s->boxes.clear();
   if (use_avx2_ && geometry_.bands_non_negative)
     countRegionBoxesAvx2(m, region, s);
@@ -286,7 +306,8 @@ void BlockLookup::forEachBlockCount(RegionScratch* s, Visit&& visit) const {
   // grid over their union when it is small, which it is unless the region straddles a large
   // depth jump; otherwise merge keys linearly.
   const BlockKey lo = s->boxes_lo, hi = s->boxes_hi;
-  const int64_t nx = int64_t{hi.x} - lo.x + 1, ny = int64_t{hi.y} - lo.y + 1, nz = int64_t{hi.z} - lo.z + 1;
+  const int64_t nx = int64_t{hi.x} - lo.x + 1, ny = int64_t{hi.y} - lo.y + 1,
+                nz = int64_t{hi.z} - lo.z + 1;
   if (nx * ny * nz <= kMaxDenseHistogramCells) {
     // + kDenseRowPadding: a box row of up to 8 cells is added as two runs of four, the cells
     // past its end (the next row's, or this padding) getting + 0.
@@ -296,18 +317,22 @@ void BlockLookup::forEachBlockCount(RegionScratch* s, Visit&& visit) const {
       const BandBox& box = box_count.box;
       const int32_t width = box.hi.x - box.lo.x + 1;
       auto row_of = [&](int32_t y, int32_t z) {
-        return &s->dense_counts[static_cast<size_t>(((z - lo.z) * ny + (y - lo.y)) * nx + (box.lo.x - lo.x))];
+        return &s->dense_counts[static_cast<size_t>(((z - lo.z) * ny + (y - lo.y)) * nx +
+                                                    (box.lo.x - lo.x))];
       };
 #if defined(__SSE2__)
       if (width <= 8) {  // always, unless Φ is over 3.5 blocks
         const __m128i lane = _mm_setr_epi32(0, 1, 2, 3), count = _mm_set1_epi32(box_count.count);
-        const __m128i add_first = _mm_and_si128(count, _mm_cmplt_epi32(lane, _mm_set1_epi32(width)));
-        const __m128i add_second = _mm_and_si128(count, _mm_cmplt_epi32(lane, _mm_set1_epi32(width - 4)));
+        const __m128i add_first =
+            _mm_and_si128(count, _mm_cmplt_epi32(lane, _mm_set1_epi32(width)));
+        const __m128i add_second =
+            _mm_and_si128(count, _mm_cmplt_epi32(lane, _mm_set1_epi32(width - 4)));
         for (int32_t z = box.lo.z; z <= box.hi.z; ++z)
           for (int32_t y = box.lo.y; y <= box.hi.y; ++y) {
             __m128i* cells = reinterpret_cast<__m128i*>(row_of(y, z));
             _mm_storeu_si128(cells, _mm_add_epi32(_mm_loadu_si128(cells), add_first));
-            if (width > 4) _mm_storeu_si128(cells + 1, _mm_add_epi32(_mm_loadu_si128(cells + 1), add_second));
+            if (width > 4)
+              _mm_storeu_si128(cells + 1, _mm_add_epi32(_mm_loadu_si128(cells + 1), add_second));
           }
         continue;
       }
@@ -342,11 +367,13 @@ void BlockLookup::forEachBlockCount(RegionScratch* s, Visit&& visit) const {
   for (const auto& [key, count] : s->sparse_counts) visit(key, count);
 }
 
-void BlockLookup::gatherHistogram(const MeasurementImage& m, const cv::Rect& region, RegionScratch* s) const {
+void BlockLookup::gatherHistogram(const MeasurementImage& m, const cv::Rect& region,
+                                  RegionScratch* s) const {
   // Count points per distinct band box first and expand boxes to blocks after.
   countRegionBoxes(m, region, s);
   s->key_counts.clear();
-  forEachBlockCount(s, [s](const BlockKey& key, int count) { s->key_counts.emplace_back(key, count); });
+  forEachBlockCount(
+      s, [s](const BlockKey& key, int count) { s->key_counts.emplace_back(key, count); });
 }
 
 int BlockLookup::regionMinPoints(const cv::Rect& region, uint64_t valid_points) const {
@@ -412,8 +439,8 @@ void BlockLookup::collectSortedDistinctKeys(size_t num_regions) {
   std::sort(frame_keys_.begin(), frame_keys_.end());
 }
 
-void BlockLookup::runRegionNaive(const MeasurementImage& m, const cv::Rect& region, BlockOctree* octree,
-                                 bool allocate, RegionScratch* s) const {
+void BlockLookup::runRegionNaive(const MeasurementImage& m, const cv::Rect& region,
+                                 BlockOctree* octree, bool allocate, RegionScratch* s) const {
   const bool filter = config_.histogram_min_points > 0;
   int min_points = 0;
   if (filter) {
@@ -434,7 +461,8 @@ void BlockLookup::runRegionNaive(const MeasurementImage& m, const cv::Rect& regi
         ++s->stats.octree_searches;
         VoxelBlock* block = allocate ? octree->findOrAllocate(key, &allocated) : octree->find(key);
         s->stats.blocks_allocated += allocated;
-        if (block != nullptr && (s->found.empty() || s->found.back() != block)) s->found.push_back(block);
+        if (block != nullptr && (s->found.empty() || s->found.back() != block))
+          s->found.push_back(block);
         if (block == nullptr && !allocate && BlockOctree::keyInRange(key) &&
             (s->not_found.empty() || s->not_found.back() != key))
           s->not_found.push_back(key);
@@ -443,8 +471,9 @@ void BlockLookup::runRegionNaive(const MeasurementImage& m, const cv::Rect& regi
   }
 }
 
-LookupStats BlockLookup::run(const StereoFrame& frame, const MeasurementImage& measurements, BlockOctree* octree,
-                             std::vector<VoxelBlock*>* queue, std::vector<BlockKey>* missing) {
+LookupStats BlockLookup::run(const StereoFrame& frame, const MeasurementImage& measurements,
+                             BlockOctree* octree, std::vector<VoxelBlock*>* queue,
+                             std::vector<BlockKey>* missing) {
   const bool allocate = missing == nullptr;
   if (missing) missing->clear();
   const int region_px = config_.lookup_region_px;
@@ -490,7 +519,8 @@ LookupStats BlockLookup::run(const StereoFrame& frame, const MeasurementImage& m
     // Sorted keys in batches: neighbouring keys share most of their octree path.
     pool_->parallelFor(frame_keys_.size(), 64, [&](size_t begin, size_t end) {
       if (allocate)
-        octree->findOrAllocateBatch(&frame_keys_[begin], end - begin, &frame_blocks_[begin], &frame_allocated_[begin]);
+        octree->findOrAllocateBatch(&frame_keys_[begin], end - begin, &frame_blocks_[begin],
+                                    &frame_allocated_[begin]);
       else
         octree->findBatch(&frame_keys_[begin], end - begin, &frame_blocks_[begin]);
     });
@@ -504,7 +534,8 @@ LookupStats BlockLookup::run(const StereoFrame& frame, const MeasurementImage& m
     }
   } else {
     // Regions overlap in blocks: each block once, in key order.
-    for (size_t r = 0; r < num_regions; ++r) queue->insert(queue->end(), scratch_[r].found.begin(), scratch_[r].found.end());
+    for (size_t r = 0; r < num_regions; ++r)
+      queue->insert(queue->end(), scratch_[r].found.begin(), scratch_[r].found.end());
     std::sort(queue->begin(), queue->end(),
               [](const VoxelBlock* a, const VoxelBlock* b) { return a->key < b->key; });
     queue->erase(std::unique(queue->begin(), queue->end()), queue->end());

@@ -25,8 +25,8 @@ struct TileMaxima {
 /// measurements the smaller of the two level switches: a depth is of level 0 iff it is below
 /// both) and below `level01_end_m` (levels 0 and 1: the level-2 switch). Comparisons are false
 /// for NaN, so pixels without a measurement never count.
-TileMaxima tileMaxScalar(const float* depth_m, int width_px, int rows, int u0, int u1, float level0_end_m,
-                         float level01_end_m) {
+TileMaxima tileMaxScalar(const float* depth_m, int width_px, int rows, int u0, int u1,
+                         float level0_end_m, float level01_end_m) {
   TileMaxima max;
   for (int r = 0; r < rows; ++r) {
     const float* row = depth_m + static_cast<size_t>(r) * width_px;
@@ -43,13 +43,15 @@ TileMaxima tileMaxScalar(const float* depth_m, int width_px, int rows, int u0, i
 /// its second operand when either is NaN, so NaN depths, and the depths at or beyond a
 /// threshold (set to NaN by OR-ing in their all-ones comparison mask), leave the running
 /// maximum unchanged without a blend.
-__attribute__((target("avx2"))) TileMaxima tileMaxAvx2(const float* depth_m, int width_px, int rows, int u0,
-                                                       float level0_end_m, float level01_end_m) {
+__attribute__((target("avx2"))) TileMaxima tileMaxAvx2(const float* depth_m, int width_px, int rows,
+                                                       int u0, float level0_end_m,
+                                                       float level01_end_m) {
   const __m256 end0 = _mm256_set1_ps(level0_end_m), end01 = _mm256_set1_ps(level01_end_m);
   __m256 max0 = _mm256_set1_ps(-INFINITY), max01 = max0;
   for (int r = 0; r < rows; ++r) {
     const __m256 z = _mm256_loadu_ps(depth_m + static_cast<size_t>(r) * width_px + u0);
-    max0 = _mm256_max_ps(_mm256_or_ps(z, _mm256_cmp_ps(z, end0, _CMP_NLT_UQ)), max0);  // z ≥ end, or NaN
+    max0 = _mm256_max_ps(_mm256_or_ps(z, _mm256_cmp_ps(z, end0, _CMP_NLT_UQ)),
+                         max0);  // z ≥ end, or NaN
     max01 = _mm256_max_ps(_mm256_or_ps(z, _mm256_cmp_ps(z, end01, _CMP_NLT_UQ)), max01);
   }
   return {horizontalMax(max0), horizontalMax(max01)};
@@ -100,7 +102,8 @@ float DepthTiles::maxDepth(Measurements which, int tx0, int ty0, int tx1, int ty
   const std::vector<float>& max_depth_m = summary(which);
   float max_m = -INFINITY;
   for (int ty = ty0; ty <= ty1; ++ty)
-    for (int tx = tx0; tx <= tx1; ++tx) max_m = std::max(max_m, max_depth_m[static_cast<size_t>(ty) * tiles_x_ + tx]);
+    for (int tx = tx0; tx <= tx1; ++tx)
+      max_m = std::max(max_m, max_depth_m[static_cast<size_t>(ty) * tiles_x_ + tx]);
   return max_m;
 }
 

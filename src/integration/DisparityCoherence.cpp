@@ -5,7 +5,8 @@
 
 namespace stereo_fusion {
 
-DisparityCoherence measureDisparityCoherence(const cv::Mat& disparity_px, const MeasurementImage& measurements,
+DisparityCoherence measureDisparityCoherence(const cv::Mat& disparity_px,
+                                             const MeasurementImage& measurements,
                                              ThreadPool* pool) {
   const int width = measurements.width(), height = measurements.height();
   const float* depth = measurements.depths();

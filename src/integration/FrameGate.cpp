@@ -10,10 +10,11 @@ FrameGate::FrameGate(const FrameGateLimits& limits) : limits_(limits) {}
 RejectReason FrameGate::judge(const Seen& reference, const Seen& frame, std::string* why) const {
   std::ostringstream os;
   os << std::setprecision(9);
-  if (limits_.require_increasing_timestamps && frame.timestamp_s != 0.0 && reference.timestamp_s != 0.0) {
+  if (limits_.require_increasing_timestamps && frame.timestamp_s != 0.0 &&
+      reference.timestamp_s != 0.0) {
     if (frame.timestamp_s < reference.timestamp_s) {
-      os << "timestamp " << frame.timestamp_s << " s goes backwards (last fused frame at " << reference.timestamp_s
-         << " s)";
+      os << "timestamp " << frame.timestamp_s << " s goes backwards (last fused frame at "
+         << reference.timestamp_s << " s)";
       *why = os.str();
       return RejectReason::kTimestampBackwards;
     }
@@ -23,18 +24,20 @@ RejectReason FrameGate::judge(const Seen& reference, const Seen& frame, std::str
       return RejectReason::kDuplicateTimestamp;
     }
   }
-  if (limits_.max_timestamp_gap_s > 0.0 && frame.timestamp_s != 0.0 && reference.timestamp_s != 0.0 &&
+  if (limits_.max_timestamp_gap_s > 0.0 && frame.timestamp_s != 0.0 &&
+      reference.timestamp_s != 0.0 &&
       frame.timestamp_s - reference.timestamp_s > limits_.max_timestamp_gap_s) {
     os << "timestamp " << frame.timestamp_s << " s is " << frame.timestamp_s - reference.timestamp_s
-       << " s after the last fused frame (max_timestamp_gap_s = " << limits_.max_timestamp_gap_s << ")";
+       << " s after the last fused frame (max_timestamp_gap_s = " << limits_.max_timestamp_gap_s
+       << ")";
     *why = os.str();
     return RejectReason::kTimestampJump;
   }
   if (limits_.max_pose_jump_m > 0.0) {
     const double jump_m = (frame.position_m - reference.position_m).norm();
     if (jump_m > limits_.max_pose_jump_m) {
-      os << "camera jumped " << jump_m << " m since the last fused frame (max_pose_jump_m = "
-         << limits_.max_pose_jump_m << ")";
+      os << "camera jumped " << jump_m
+         << " m since the last fused frame (max_pose_jump_m = " << limits_.max_pose_jump_m << ")";
       *why = os.str();
       return RejectReason::kPoseJump;
     }
@@ -57,13 +60,15 @@ RejectReason FrameGate::check(const StereoFrame& frame, std::string* why, bool* 
   // A duplicate is the same moment again, never a new reference.
   if (reason == RejectReason::kDuplicateTimestamp) return reason;
   std::string unused;
-  if (!rejected_run_.empty() && judge(rejected_run_.back(), seen, &unused) != RejectReason::kNone) rejected_run_.clear();
+  if (!rejected_run_.empty() && judge(rejected_run_.back(), seen, &unused) != RejectReason::kNone)
+    rejected_run_.clear();
   rejected_run_.push_back(seen);
   if (static_cast<int>(rejected_run_.size()) < kFramesToReanchor) return reason;
   rejected_run_.clear();
   if (reanchored) *reanchored = true;
   *why += "; the last " + std::to_string(kFramesToReanchor) +
-          " frames agree with each other (a relocalisation or a clock reset): accepted as the new reference";
+          " frames agree with each other (a relocalisation or a clock reset): accepted as the new "
+          "reference";
   return RejectReason::kNone;
 }
 

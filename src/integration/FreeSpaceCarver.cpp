@@ -49,15 +49,19 @@ std::array<Eigen::Vector3f, 8> boxCornersInCamera(const Eigen::Isometry3d& T_cam
                                                   const Eigen::AlignedBox3d& box_world) {
   std::array<Eigen::Vector3f, 8> corners;
   for (int c = 0; c < 8; ++c)
-    corners[c] = (T_camera_world * box_world.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c))).cast<float>();
+    corners[c] =
+        (T_camera_world * box_world.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c)))
+            .cast<float>();
   return corners;
 }
 
 }  // namespace
 
-FreeSpaceCarver::FreeSpaceCarver(const CarveConfig& config, ThreadPool* pool) : config_(config), pool_(pool) {}
+FreeSpaceCarver::FreeSpaceCarver(const CarveConfig& config, ThreadPool* pool)
+    : config_(config), pool_(pool) {}
 
-float FreeSpaceCarver::freeDepth(const float* depth_m, int width_px, int height_px, int window_px, int u, int v) {
+float FreeSpaceCarver::freeDepth(const float* depth_m, int width_px, int height_px, int window_px,
+                                 int u, int v) {
   float smallest = std::numeric_limits<float>::infinity();
   for (int y = std::max(v - window_px, 0); y <= std::min(v + window_px, height_px - 1); ++y)
     for (int x = std::max(u - window_px, 0); x <= std::min(u + window_px, width_px - 1); ++x) {
@@ -122,8 +126,8 @@ CarveStats FreeSpaceCarver::carve(const StereoFrame& frame, const MeasurementIma
   const double block_m = octree.blockSize();
   auto mayBeSeenThrough = [&](const VoxelBlock& block) {
     const Eigen::Vector3d origin = octree.blockOrigin(block.key);
-    const auto corners = boxCornersInCamera(f.T_camera_world,
-                                            Eigen::AlignedBox3d(origin, origin + Eigen::Vector3d::Constant(block_m)));
+    const auto corners = boxCornersInCamera(
+        f.T_camera_world, Eigen::AlignedBox3d(origin, origin + Eigen::Vector3d::Constant(block_m)));
     float z_near = std::numeric_limits<float>::infinity();
     float u_lo = std::numeric_limits<float>::infinity(), u_hi = -u_lo, v_lo = u_lo, v_hi = -u_lo;
     for (const Eigen::Vector3f& c : corners) {
@@ -149,7 +153,8 @@ CarveStats FreeSpaceCarver::carve(const StereoFrame& frame, const MeasurementIma
   };
   candidates_.erase(std::remove_if(candidates_.begin(), candidates_.end(),
                                    [&](const VoxelBlock* b) {
-                                     return queued_stamp_[b->row] == stamp_ || !mayBeSeenThrough(*b);
+                                     return queued_stamp_[b->row] == stamp_ ||
+                                            !mayBeSeenThrough(*b);
                                    }),
                     candidates_.end());
   stats.blocks_visited = candidates_.size();
@@ -160,34 +165,40 @@ CarveStats FreeSpaceCarver::carve(const StereoFrame& frame, const MeasurementIma
   pool_->parallelFor(candidates_.size(), 8, [&](size_t begin, size_t end) {
     for (size_t b = begin; b < end; ++b) {
       VoxelBlock* block = candidates_[b];
-      const Eigen::Vector3f origin_c = (f.T_camera_world * octree.blockOrigin(block->key)).cast<float>();
+      const Eigen::Vector3f origin_c =
+          (f.T_camera_world * octree.blockOrigin(block->key)).cast<float>();
       uint64_t updates = 0;
       for (int level = 0; level < kNumLevels; ++level) {
         Voxel* voxels = block->levelIfAllocated(level);
         if (voxels == nullptr) continue;
         const FusionFrame::Level& geometry = f.levels[level];
         const int side = levelSide(level);
-        const Eigen::Vector3f first = origin_c + 0.5f * (geometry.ex_m + geometry.ey_m + geometry.ez_m);
+        const Eigen::Vector3f first =
+            origin_c + 0.5f * (geometry.ex_m + geometry.ey_m + geometry.ez_m);
         for (int k = 0; k < side; ++k)
           for (int j = 0; j < side; ++j)
             for (int i = 0; i < side; ++i) {
               Voxel& voxel = voxels[VoxelBlock::indexInLevel(side, i, j, k)];
               if (!(voxel.weight > 0.0f)) continue;  // unknown stays unknown
               const Eigen::Vector3f p = first + static_cast<float>(i) * geometry.ex_m +
-                                        static_cast<float>(j) * geometry.ey_m + static_cast<float>(k) * geometry.ez_m;
+                                        static_cast<float>(j) * geometry.ey_m +
+                                        static_cast<float>(k) * geometry.ez_m;
               size_t pixel;  // the pixel fusion would read
               if (!nearestPixel(f, p, &pixel)) continue;
               // The pixel's own depth bounds its free depth: most voxels stop here.
               if (!(f.depth_m[pixel] > p.z())) continue;
-              const int iu = static_cast<int>(pixel % f.width_px), iv = static_cast<int>(pixel / f.width_px);
-              const float free_depth = freeDepth(f.depth_m, f.width_px, f.height_px, window, iu, iv);
+              const int iu = static_cast<int>(pixel % f.width_px),
+                        iv = static_cast<int>(pixel / f.width_px);
+              const float free_depth =
+                  freeDepth(f.depth_m, f.width_px, f.height_px, window, iu, iv);
               if (!(free_depth > p.z())) continue;  // not in front (or no measurement near)
               const int measurement_level = levelForDepth(free_depth, f.thresholds);
               const float truncation = geometry.truncation_m[measurement_level];
               const float sdf = signedDistanceAlongRay(p.x(), p.y(), p.z(), free_depth);
               if (!(sdf < -truncation)) continue;  // within fusion's band: fusion's to decide
-              const float w = measurementWeight(f.weight_mode, -truncation, f.delta_m[measurement_level], truncation,
-                                                free_depth, f.depth_weight_reference_m);
+              const float w =
+                  measurementWeight(f.weight_mode, -truncation, f.delta_m[measurement_level],
+                                    truncation, free_depth, f.depth_weight_reference_m);
               if (!(w > 0.0f)) continue;
               voxel.weight *= keep;
               fuseMeasurement(&voxel, -truncation, w, f.max_weight, nullptr);
@@ -203,7 +214,8 @@ CarveStats FreeSpaceCarver::carve(const StereoFrame& frame, const MeasurementIma
     carved->push_back(candidates_[b]);
   }
   stats.blocks_carved = carved->size();
-  std::sort(carved->begin(), carved->end(), [](const VoxelBlock* a, const VoxelBlock* b) { return a->key < b->key; });
+  std::sort(carved->begin(), carved->end(),
+            [](const VoxelBlock* a, const VoxelBlock* b) { return a->key < b->key; });
   return stats;
 }
 

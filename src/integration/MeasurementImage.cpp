@@ -36,16 +36,19 @@ void convertDepthRow(const float* disparity_px, int width, float fb_px_m, float 
 // convertDepthRow() eight pixels at a time: the same correctly rounded division and ordered
 // comparisons (false on NaN), the same NaN for unusable pixels; the tail goes to the scalar
 // loop. (The larger share of build(): a division and four compares per pixel.)
-__attribute__((target("avx2"))) void convertDepthRowAvx2(const float* disparity_px, int width, float fb_px_m,
-                                                         float min_depth_m, float max_depth_m, float* depth_m) {
-  const __m256 fb = _mm256_set1_ps(fb_px_m), zero = _mm256_setzero_ps(), largest = _mm256_set1_ps(FLT_MAX);
+__attribute__((target("avx2"))) void convertDepthRowAvx2(const float* disparity_px, int width,
+                                                         float fb_px_m, float min_depth_m,
+                                                         float max_depth_m, float* depth_m) {
+  const __m256 fb = _mm256_set1_ps(fb_px_m), zero = _mm256_setzero_ps(),
+               largest = _mm256_set1_ps(FLT_MAX);
   const __m256 min_depth = _mm256_set1_ps(min_depth_m), max_depth = _mm256_set1_ps(max_depth_m);
   const __m256 no_measurement = _mm256_set1_ps(std::numeric_limits<float>::quiet_NaN());
   int u = 0;
   for (; u + 8 <= width; u += 8) {
     const __m256 d = _mm256_loadu_ps(disparity_px + u);
     const __m256 z = _mm256_div_ps(fb, d);
-    __m256 usable = _mm256_and_ps(_mm256_cmp_ps(d, zero, _CMP_GT_OQ), _mm256_cmp_ps(d, largest, _CMP_LE_OQ));
+    __m256 usable =
+        _mm256_and_ps(_mm256_cmp_ps(d, zero, _CMP_GT_OQ), _mm256_cmp_ps(d, largest, _CMP_LE_OQ));
     usable = _mm256_and_ps(usable, _mm256_cmp_ps(z, min_depth, _CMP_GE_OQ));
     usable = _mm256_and_ps(usable, _mm256_cmp_ps(z, max_depth, _CMP_LE_OQ));
     _mm256_storeu_ps(depth_m + u, _mm256_blendv_ps(no_measurement, z, usable));
@@ -69,15 +72,18 @@ void packColourRow(const uint8_t* color, int channels, int width, uint32_t* rgb)
 // ~4 instructions per pixel): pixels 0–3 and 4–7 load into one 128-bit lane each, and one
 // byte shuffle per lane moves each pixel's R, G, B into bytes 0–2 of its word. Grey rows and
 // the tail go to the scalar loop.
-__attribute__((target("avx2"))) void packColourRowAvx2(const uint8_t* color, int channels, int width, uint32_t* rgb) {
+__attribute__((target("avx2"))) void packColourRowAvx2(const uint8_t* color, int channels,
+                                                       int width, uint32_t* rgb) {
   int u = 0;
   if (channels == 3) {
-    const __m256i spread = _mm256_setr_epi8(0, 1, 2, -1, 3, 4, 5, -1, 6, 7, 8, -1, 9, 10, 11, -1,  //
-                                            0, 1, 2, -1, 3, 4, 5, -1, 6, 7, 8, -1, 9, 10, 11, -1);
+    const __m256i spread =
+        _mm256_setr_epi8(0, 1, 2, -1, 3, 4, 5, -1, 6, 7, 8, -1, 9, 10, 11, -1,  //
+                         0, 1, 2, -1, 3, 4, 5, -1, 6, 7, 8, -1, 9, 10, 11, -1);
     // The high lane's 16-byte load reads 4 bytes past pixel u + 7: stop while they are in the row.
     for (; u + 10 <= width; u += 8) {
-      const __m256i bytes = _mm256_loadu2_m128i(reinterpret_cast<const __m128i*>(color + 3 * (u + 4)),
-                                                reinterpret_cast<const __m128i*>(color + 3 * u));
+      const __m256i bytes =
+          _mm256_loadu2_m128i(reinterpret_cast<const __m128i*>(color + 3 * (u + 4)),
+                              reinterpret_cast<const __m128i*>(color + 3 * u));
       _mm256_storeu_si256(reinterpret_cast<__m256i*>(rgb + u), _mm256_shuffle_epi8(bytes, spread));
     }
   }
@@ -108,12 +114,14 @@ void MeasurementImage::build(const cv::Mat& disparity_px, const cv::Mat& color, 
       const int row = static_cast<int>(v);
       convert_depth_row(disparity_px.ptr<float>(row), width_, fb_px_m, min_depth_m, max_depth_m,
                         &depth_m_[v * width_]);
-      if (!color.empty()) pack_colour_row(color.ptr<uint8_t>(row), color.channels(), width_, &rgb_[v * width_]);
+      if (!color.empty())
+        pack_colour_row(color.ptr<uint8_t>(row), color.channels(), width_, &rgb_[v * width_]);
     }
   });
 }
 
-void MeasurementImage::build(const StereoFrame& frame, const MapperConfig& config, ThreadPool* pool) {
+void MeasurementImage::build(const StereoFrame& frame, const MapperConfig& config,
+                             ThreadPool* pool) {
   const StereoCamera& camera = frame.camera;
   build(frame.disparity_px, config.use_color ? frame.color : cv::Mat(),
         static_cast<float>(camera.fx() * camera.baseline()), static_cast<float>(config.min_depth_m),

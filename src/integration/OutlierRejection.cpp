@@ -14,7 +14,8 @@ constexpr int16_t kNoDisparity16 = -16;
 
 }  // namespace
 
-OutlierRejectionStats OutlierRejection::apply(const cv::Mat& disparity_px, const MapperConfig& config,
+OutlierRejectionStats OutlierRejection::apply(const cv::Mat& disparity_px,
+                                              const MapperConfig& config,
                                               MeasurementImage* measurements) {
   OutlierRejectionStats stats;
   CV_Assert(disparity_px.type() == CV_32FC1 && disparity_px.rows == measurements->height() &&
@@ -32,7 +33,8 @@ OutlierRejectionStats OutlierRejection::apply(const cv::Mat& disparity_px, const
     cv::filterSpeckles(fixed_point_, kNoDisparity16, config.speckle_max_area_px,
                        config.speckle_max_diff_px * 16.0, speckle_buffer_);
     cv::compare(fixed_point_, kNoDisparity16, reject_, cv::CMP_EQ);
-    stats.speckle_pixels = measurements->invalidate(reject_);  // counts only pixels that were usable
+    stats.speckle_pixels =
+        measurements->invalidate(reject_);  // counts only pixels that were usable
   }
   if (config.edge_reject_radius_px > 0) {
     masked_.create(height, width, CV_32FC1);

@@ -18,12 +18,14 @@ constexpr RejectReasonInfo kTable[] = {
     {RejectReason::kTfTimeout, "tf_timeout", "dropped: tf timeout"},
     {RejectReason::kBadStamp, "bad_stamp", "dropped: bad timestamp"},
     {RejectReason::kSuperseded, "superseded", "dropped: superseded by reset/load"},
-    {RejectReason::kSyncDuplicate, "sync_duplicate", "dropped: duplicate stamp before synchronisation"},
+    {RejectReason::kSyncDuplicate, "sync_duplicate",
+     "dropped: duplicate stamp before synchronisation"},
     {RejectReason::kError, "error", "dropped: error while fusing"},
 };
 static_assert(sizeof(kTable) / sizeof(kTable[0]) == kRejectReasonCount, "one row per RejectReason");
 
-static_assert(rowsFollowEnum(kTable, &RejectReasonInfo::reason), "kTable's rows follow RejectReason's order");
+static_assert(rowsFollowEnum(kTable, &RejectReasonInfo::reason),
+              "kTable's rows follow RejectReason's order");
 }  // namespace
 
 const RejectReasonInfo& rejectReasonInfo(RejectReason reason) {

@@ -14,7 +14,8 @@ std::string validateFrame(const StereoFrame& frame, double block_size_m) {
   if (frame.disparity_px.empty()) return "disparity image is empty";
   if (!(frame.disparity_step_px >= 0.0 && frame.disparity_step_px <= kMaxDisparityStepPx))
     return "disparity step (DisparityImage.delta_d) of " + std::to_string(frame.disparity_step_px) +
-           " px is not a resolution in [0, " + std::to_string(static_cast<int>(kMaxDisparityStepPx)) + "] px";
+           " px is not a resolution in [0, " +
+           std::to_string(static_cast<int>(kMaxDisparityStepPx)) + "] px";
   if (frame.disparity_px.type() != CV_32FC1)
     return "disparity image must be CV_32FC1 (float pixels), got type " +
            std::to_string(frame.disparity_px.type());
@@ -36,7 +37,8 @@ std::string validateFrame(const StereoFrame& frame, double block_size_m) {
   const Eigen::Matrix4d& m = frame.T_world_camera.matrix();
   if (!m.allFinite()) return "camera pose T_world_camera is not finite";
   const Eigen::Matrix3d r = frame.T_world_camera.linear();
-  const double orthonormality_error = (r.transpose() * r - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  const double orthonormality_error =
+      (r.transpose() * r - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
   if (orthonormality_error > 1e-3 || r.determinant() < 0.0) {
     why << "camera pose rotation is not a rotation (|RᵀR − I| = " << orthonormality_error
         << ", det = " << r.determinant() << ")";

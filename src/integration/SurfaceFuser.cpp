@@ -22,8 +22,8 @@ FusionStats SurfaceFuser::fuse(const StereoFrame& frame, const MeasurementImage&
 }
 
 FusionStats SurfaceFuser::fuse(const StereoFrame& frame, const MeasurementImage& measurements,
-                               const BlockOctree& octree,
-                               const std::vector<VoxelBlock*>& blocks, const std::vector<BlockKey>& missing,
+                               const BlockOctree& octree, const std::vector<VoxelBlock*>& blocks,
+                               const std::vector<BlockKey>& missing,
                                std::vector<VoxelBlock*>* updated,
                                std::vector<std::unique_ptr<VoxelBlock>>* created) {
   FusionStats stats;

@@ -70,7 +70,8 @@ double getF64(const uint8_t* p) {
 // (the map is locked while it is encoded).
 constexpr bool kVoxelIsFileRecord = __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__;
 static_assert(sizeof(Voxel) == 12 && offsetof(Voxel, weight) == 4 && offsetof(Voxel, r) == 8 &&
-                  offsetof(Voxel, g) == 9 && offsetof(Voxel, b) == 10 && offsetof(Voxel, reserved) == 11,
+                  offsetof(Voxel, g) == 9 && offsetof(Voxel, b) == 10 &&
+                  offsetof(Voxel, reserved) == 11,
               "the map file's voxel record is the Voxel's layout");
 constexpr size_t kVoxelRecordBytes = 12;
 
@@ -123,21 +124,27 @@ std::string number(double v) {
 
 }  // namespace
 
-std::vector<uint8_t> encodeMapFile(const BlockOctree& map, const MapperConfig& config, uint64_t frames_integrated,
-                                   const LastUpdateFrameOf& last_update_frame, const SeenFreeSpace& free_space) {
-  std::vector<uint8_t> file = encodeMapFileUnsealed(map, config, frames_integrated, last_update_frame, free_space);
+std::vector<uint8_t> encodeMapFile(const BlockOctree& map, const MapperConfig& config,
+                                   uint64_t frames_integrated,
+                                   const LastUpdateFrameOf& last_update_frame,
+                                   const SeenFreeSpace& free_space) {
+  std::vector<uint8_t> file =
+      encodeMapFileUnsealed(map, config, frames_integrated, last_update_frame, free_space);
   sealMapFile(&file);
   return file;
 }
 
 std::vector<uint8_t> encodeMapFileUnsealed(const BlockOctree& map, const MapperConfig& config,
-                                           uint64_t frames_integrated, const LastUpdateFrameOf& last_update_frame,
+                                           uint64_t frames_integrated,
+                                           const LastUpdateFrameOf& last_update_frame,
                                            const SeenFreeSpace& free_space) {
-  static_assert(kMapFileV1RecordBytes == kMapFileRecordHeadBytes + VoxelBlock::kVoxelCount * kVoxelRecordBytes,
+  static_assert(kMapFileV1RecordBytes ==
+                    kMapFileRecordHeadBytes + VoxelBlock::kVoxelCount * kVoxelRecordBytes,
                 "record layout");
   const std::vector<VoxelBlock*> blocks = map.blocksSortedByKey();
   size_t payload_bytes = 0;
-  for (const VoxelBlock* b : blocks) payload_bytes += kMapFileRecordHeadBytes + levelBytes(levelMask(*b));
+  for (const VoxelBlock* b : blocks)
+    payload_bytes += kMapFileRecordHeadBytes + levelBytes(levelMask(*b));
   const size_t free_space_bytes = 16 + free_space.blocks.size() * kMapFileFreeSpaceRecordBytes;
   payload_bytes += free_space_bytes;
   std::vector<uint8_t> file(kMapFileHeaderBytes + payload_bytes);
@@ -182,7 +189,8 @@ std::vector<uint8_t> encodeMapFileUnsealed(const BlockOctree& map, const MapperC
 }
 
 void sealMapFile(std::vector<uint8_t>* file) {
-  if (file->size() < kMapFileHeaderBytes) return;  // not from encodeMapFileUnsealed(): nothing to seal
+  if (file->size() < kMapFileHeaderBytes)
+    return;  // not from encodeMapFileUnsealed(): nothing to seal
   uint8_t* header = file->data();
   storeU32(header + 72, crc32(header + kMapFileHeaderBytes, file->size() - kMapFileHeaderBytes));
   storeU32(header + 76, crc32(header, 76));
@@ -208,7 +216,8 @@ bool decodeMapHeader(const uint8_t* data, size_t available, size_t file_size, Ma
   // The version comes first, so a newer file is named as such whatever its layout.
   info->version = getU32(data + 8);
   if (info->version < 1 || info->version > kMapFileVersion) {
-    *error = "map file version " + std::to_string(info->version) + " is not supported (this build reads versions 1 to " +
+    *error = "map file version " + std::to_string(info->version) +
+             " is not supported (this build reads versions 1 to " +
              std::to_string(kMapFileVersion) + ")";
     return false;
   }
@@ -221,7 +230,8 @@ bool decodeMapHeader(const uint8_t* data, size_t available, size_t file_size, Ma
              std::to_string(header_bytes);
     return false;
   }
-  if (getU32(data + header_crc_at) != crc32(data, header_crc_at) || getU32(data + 12) != header_bytes) {
+  if (getU32(data + header_crc_at) != crc32(data, header_crc_at) ||
+      getU32(data + 12) != header_bytes) {
     *error = "corrupted map file: header checksum mismatch";
     return false;
   }
@@ -242,8 +252,9 @@ bool decodeMapHeader(const uint8_t* data, size_t available, size_t file_size, Ma
                              : announced_payload_bytes != payload_bytes ||
                                    info->block_count > payload_bytes / kMapFileRecordHeadBytes;
   if (short_file || wrong_size) {
-    *error = std::string(short_file ? "truncated" : "corrupted") + " map file: " + std::to_string(file_size) +
-             " bytes, but the header announces " + std::to_string(info->block_count) + " blocks in " +
+    *error = std::string(short_file ? "truncated" : "corrupted") +
+             " map file: " + std::to_string(file_size) + " bytes, but the header announces " +
+             std::to_string(info->block_count) + " blocks in " +
              (v1 ? std::to_string(info->block_count) + " × " + std::to_string(kMapFileV1RecordBytes)
                  : std::to_string(announced_payload_bytes)) +
              " bytes after a header of " + std::to_string(header_bytes);
@@ -258,7 +269,8 @@ bool decodeMapHeader(const uint8_t* data, size_t available, size_t file_size, Ma
 namespace {
 /// The seen-free section at `*r` (version 3): checked (a finite cell edge ≥ 0, records that fit,
 /// keys in range, sorted and unique, only bits of cells), `*r` moved past it.
-bool decodeFreeSpace(const uint8_t** r, const uint8_t* end, SeenFreeSpace* out, std::string* error) {
+bool decodeFreeSpace(const uint8_t** r, const uint8_t* end, SeenFreeSpace* out,
+                     std::string* error) {
   if (end - *r < 16) {
     *error = "invalid map file: the seen-free section runs past the end of the file";
     return false;
@@ -271,7 +283,8 @@ bool decodeFreeSpace(const uint8_t** r, const uint8_t* end, SeenFreeSpace* out, 
     return false;
   }
   if (count > static_cast<uint64_t>(end - *r) / kMapFileFreeSpaceRecordBytes) {
-    *error = "invalid map file: " + std::to_string(count) + " seen-free blocks run past the end of the file";
+    *error = "invalid map file: " + std::to_string(count) +
+             " seen-free blocks run past the end of the file";
     return false;
   }
   out->blocks.reserve(count);
@@ -282,7 +295,8 @@ bool decodeFreeSpace(const uint8_t** r, const uint8_t* end, SeenFreeSpace* out, 
     for (size_t w = 0; w < bits.size(); ++w) bits[w] = getU64(*r + 16 + 8 * w);
     const bool ordered = out->blocks.empty() || out->blocks.back().first < key;
     if (getU32(*r + 12) != 0 || !BlockOctree::keyInRange(key) || !ordered) {
-      *error = "invalid map file: seen-free block " + std::to_string(n) + " is out of range, out of order or padded";
+      *error = "invalid map file: seen-free block " + std::to_string(n) +
+               " is out of range, out of order or padded";
       return false;
     }
     out->blocks.emplace_back(key, bits);
@@ -307,8 +321,9 @@ bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config,
     return false;
   }
   if (info->voxel_size_m != config.voxel_size_m || info->truncation_vox != config.truncation_vox) {
-    *error = "map file was built with voxel_size_m = " + number(info->voxel_size_m) + ", truncation_vox = " +
-             number(info->truncation_vox) + " but this mapper uses voxel_size_m = " + number(config.voxel_size_m) +
+    *error = "map file was built with voxel_size_m = " + number(info->voxel_size_m) +
+             ", truncation_vox = " + number(info->truncation_vox) +
+             " but this mapper uses voxel_size_m = " + number(config.voxel_size_m) +
              ", truncation_vox = " + number(config.truncation_vox);
     return false;
   }
@@ -320,20 +335,21 @@ bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config,
   const uint8_t* const payload_end = payload + payload_bytes;
   for (uint64_t n = 0; n < info->block_count; ++n) {
     if (static_cast<size_t>(payload_end - r) < kMapFileRecordHeadBytes) {
-      *error = "invalid map file: block " + std::to_string(n) + " of " + std::to_string(info->block_count) +
-               " runs past the end of the file";
+      *error = "invalid map file: block " + std::to_string(n) + " of " +
+               std::to_string(info->block_count) + " runs past the end of the file";
       return false;
     }
     const BlockKey key{static_cast<int32_t>(getU32(r)), static_cast<int32_t>(getU32(r + 4)),
                        static_cast<int32_t>(getU32(r + 8))};
     auto which = [&] {  // only built for an error message
-      return "block " + std::to_string(n) + " (key " + std::to_string(key.x) + ", " + std::to_string(key.y) + ", " +
-             std::to_string(key.z) + ")";
+      return "block " + std::to_string(n) + " (key " + std::to_string(key.x) + ", " +
+             std::to_string(key.y) + ", " + std::to_string(key.z) + ")";
     };
     // Version 1: derived mesh level and sign flags at 20, 21 (checked, then recomputed);
     // version 2: the stored levels at 20, then zeros.
     const uint8_t mask = v1 ? 0b111 : r[20];
-    const bool valid = v1 ? static_cast<int8_t>(r[20]) >= 0 && static_cast<int8_t>(r[20]) < kNumLevels && r[21] <= 3
+    const bool valid = v1 ? static_cast<int8_t>(r[20]) >= 0 &&
+                                static_cast<int8_t>(r[20]) < kNumLevels && r[21] <= 3
                           : mask <= 0b111 && r[21] == 0 && r[22] == 0 && r[23] == 0;
     if (!valid) {
       *error = "invalid map file: " + which() + " has head bytes " + std::to_string(r[20]) + ", " +
@@ -361,13 +377,15 @@ bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config,
       bool observed = false;
       for (const Voxel& voxel : voxels) {
         if (!std::isfinite(voxel.sdf_m) || !std::isfinite(voxel.weight) || voxel.weight < 0.0f) {
-          *error = "invalid map file: " + which() + " holds a non-finite distance or a negative weight";
+          *error =
+              "invalid map file: " + which() + " holds a non-finite distance or a negative weight";
           return false;
         }
         observed = observed || voxel.weight > 0.0f;
       }
       if (!observed && !v1) {
-        *error = "invalid map file: " + which() + " stores level " + std::to_string(l) + " without an observed voxel";
+        *error = "invalid map file: " + which() + " stores level " + std::to_string(l) +
+                 " without an observed voxel";
         return false;
       }
       if (observed) {
@@ -384,14 +402,16 @@ bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config,
     bool allocated = false;
     VoxelBlock* block = out->findOrAllocate(key, &allocated);
     if (block == nullptr || !allocated) {
-      *error = "invalid map file: " + which() + (block ? " appears twice" : " is beyond the map's range");
+      *error = "invalid map file: " + which() +
+               (block ? " appears twice" : " is beyond the map's range");
       return false;
     }
     info->last_update_frames.emplace_back(key, getU64(r - record_bytes + 12));
     for (int l = 0; l < kNumLevels; ++l)
       if (!kept[l].empty()) block->adoptLevel(l, kept[l].data());
   }
-  if (info->version >= 3 && !decodeFreeSpace(&r, payload_end, &info->free_space, error)) return false;
+  if (info->version >= 3 && !decodeFreeSpace(&r, payload_end, &info->free_space, error))
+    return false;
   if (r != payload_end) {
     *error = "invalid map file: " + std::to_string(payload_end - r) + " bytes after the last of " +
              std::to_string(info->block_count) + " blocks";
@@ -436,7 +456,8 @@ bool writeDurably(const std::string& path, const std::vector<uint8_t>& bytes, st
 /// effort: some file systems refuse fsync on directories, and the file itself is already safe).
 void syncParentDirectory(const std::string& path) {
   const size_t slash = path.find_last_of('/');
-  const std::string dir = slash == std::string::npos ? "." : (slash == 0 ? "/" : path.substr(0, slash));
+  const std::string dir =
+      slash == std::string::npos ? "." : (slash == 0 ? "/" : path.substr(0, slash));
   const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (fd < 0) return;
   ::fsync(fd);
@@ -448,20 +469,21 @@ bool writeMapFileBytes(const std::string& path, std::vector<uint8_t>* bytes, std
   sealMapFile(bytes);
   // The temporary is unique per process and per call, so saves to one path from several threads
   // (or nodelets of one manager) never share one; the last rename wins, whole.
-  const bool written = writeThroughTemporary(path, "cannot write the map file",
-                                             [&](const std::string& temporary, std::string* why) {
-                                               std::string reason;
-                                               if (writeDurably(temporary, *bytes, &reason)) return true;
-                                               *why = path + ": cannot write the map file (" + reason + ")";
-                                               return false;
-                                             },
-                                             error);
+  const bool written = writeThroughTemporary(
+      path, "cannot write the map file",
+      [&](const std::string& temporary, std::string* why) {
+        std::string reason;
+        if (writeDurably(temporary, *bytes, &reason)) return true;
+        *why = path + ": cannot write the map file (" + reason + ")";
+        return false;
+      },
+      error);
   if (written) syncParentDirectory(path);
   return written;
 }
 
-bool readMapFile(const std::string& path, const MapperConfig& config, BlockOctree* out, MapFileInfo* info,
-                 std::string* error) {
+bool readMapFile(const std::string& path, const MapperConfig& config, BlockOctree* out,
+                 MapFileInfo* info, std::string* error) {
   // Only regular files: a device such as /dev/zero would be read without end.
   struct stat st;
   if (::stat(path.c_str(), &st) != 0) {

@@ -9,17 +9,22 @@
 
 namespace stereo_fusion {
 
-bool exportMesh(const std::string& path, const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes,
-                const std::unordered_map<BlockKey, TexturePatch, BlockKeyHash>& patches, std::string* message) {
+bool exportMesh(const std::string& path,
+                const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes,
+                const std::unordered_map<BlockKey, TexturePatch, BlockKeyHash>& patches,
+                std::string* message) {
   if (std::filesystem::path(path).extension() == ".obj") {
     ObjExportInfo info;
-    if (!writeTexturedObj(path, submeshes, patches, ObjExportOptions{}, &info, message)) return false;
+    if (!writeTexturedObj(path, submeshes, patches, ObjExportOptions{}, &info, message))
+      return false;
     *message = "wrote " + std::to_string(info.textured_blocks) + " textured and " +
                std::to_string(info.vertex_colour_blocks) + " vertex-coloured blocks to " + path;
     return true;
   }
   const TriangleMesh mesh = weldSubmeshes(submeshes);
-  const auto write_ply = [&](const std::string& temporary, std::string* why) { return writePly(temporary, mesh, why); };
+  const auto write_ply = [&](const std::string& temporary, std::string* why) {
+    return writePly(temporary, mesh, why);
+  };
   if (!writeThroughTemporary(path, "cannot write the mesh", write_ply, message)) return false;
   *message = "wrote " + std::to_string(mesh.triangles.size()) + " triangles to " + path;
   return true;

@@ -30,7 +30,9 @@ cv::Mat bakeVertexColours(const SubMesh& mesh, std::vector<Eigen::Vector2f>* cor
   cv::Mat rgb(2 * rows, 2 * cols, CV_8UC3, cv::Scalar(0, 0, 0));
   corner_uvs->clear();
   corner_uvs->reserve(3 * n);
-  auto colour = [&](uint32_t v) { return Eigen::Vector3i(mesh.colors[v][0], mesh.colors[v][1], mesh.colors[v][2]); };
+  auto colour = [&](uint32_t v) {
+    return Eigen::Vector3i(mesh.colors[v][0], mesh.colors[v][1], mesh.colors[v][2]);
+  };
   auto put = [&](int x, int y, const Eigen::Vector3i& c) {
     const Eigen::Vector3i k = c.cwiseMax(0).cwiseMin(255);
     rgb.at<cv::Vec3b>(y, x) = cv::Vec3b(k[0], k[1], k[2]);
@@ -79,9 +81,11 @@ bool writeTexturedObj(const std::string& obj_path,
   std::vector<std::vector<Eigen::Vector2f>> baked_uvs(keys.size());
   for (size_t i = 0; i < keys.size(); ++i) {
     const auto it = patches.find(keys[i]);
-    has_patch[i] = it != patches.end() && it->second.uvs.size() == submeshes.at(keys[i]).positions.size() &&
+    has_patch[i] = it != patches.end() &&
+                   it->second.uvs.size() == submeshes.at(keys[i]).positions.size() &&
                    !it->second.image_rgb.empty();
-    images.push_back(has_patch[i] ? it->second.image_rgb : bakeVertexColours(submeshes.at(keys[i]), &baked_uvs[i]));
+    images.push_back(has_patch[i] ? it->second.image_rgb
+                                  : bakeVertexColours(submeshes.at(keys[i]), &baked_uvs[i]));
     sizes.push_back(images.back().size());
   }
   const AtlasLayout layout = packAtlas(sizes, options.atlas_edge_px, options.gutter_px);
@@ -90,7 +94,8 @@ bool writeTexturedObj(const std::string& obj_path,
     if (has_patch[i]) info->placements[keys[i]] = layout.placements[i];
 
   std::vector<std::string> atlas_names;
-  for (size_t k = 0; k < atlases.size(); ++k) atlas_names.push_back(stem + "_atlas_" + std::to_string(k) + ".png");
+  for (size_t k = 0; k < atlases.size(); ++k)
+    atlas_names.push_back(stem + "_atlas_" + std::to_string(k) + ".png");
   const std::string mtl_path = (dir / mtl_name).string();
   // Every file is checked before any is written: a FIFO or a device among them stops the export
   // with nothing written.
@@ -122,7 +127,8 @@ bool writeTexturedObj(const std::string& obj_path,
     }
     std::fprintf(mtl.get(), "# stereo_fusion texture atlases\n");
     for (size_t k = 0; k < atlases.size(); ++k)
-      std::fprintf(mtl.get(), "newmtl atlas_%zu\nKa 1 1 1\nKd 1 1 1\nKs 0 0 0\nillum 1\nmap_Kd %s\n\n", k,
+      std::fprintf(mtl.get(),
+                   "newmtl atlas_%zu\nKa 1 1 1\nKd 1 1 1\nKs 0 0 0\nillum 1\nmap_Kd %s\n\n", k,
                    atlas_names[k].c_str());
     if (std::ferror(mtl.get())) {
       *error = mtl_path + ": write failed";
@@ -137,8 +143,9 @@ bool writeTexturedObj(const std::string& obj_path,
     return false;
   }
   std::FILE* f = out.get();
-  std::fprintf(f, "# stereo_fusion textured mesh: %zu blocks, %zu with a texture patch\nmtllib %s\n", keys.size(),
-               info->placements.size(), mtl_name.c_str());
+  std::fprintf(f,
+               "# stereo_fusion textured mesh: %zu blocks, %zu with a texture patch\nmtllib %s\n",
+               keys.size(), info->placements.size(), mtl_name.c_str());
   size_t v_base = 1, vt_base = 1;  // OBJ indices are 1-based and global
   for (size_t i = 0; i < keys.size(); ++i) {
     const BlockKey& key = keys[i];
@@ -153,7 +160,8 @@ bool writeTexturedObj(const std::string& obj_path,
     std::fprintf(f, "o block_%d_%d_%d\n", key.x, key.y, key.z);
     for (size_t v = 0; v < m.positions.size(); ++v)
       std::fprintf(f, "v %.6f %.6f %.6f %.4f %.4f %.4f\n", m.positions[v].x(), m.positions[v].y(),
-                   m.positions[v].z(), m.colors[v][0] / 255.0, m.colors[v][1] / 255.0, m.colors[v][2] / 255.0);
+                   m.positions[v].z(), m.colors[v][0] / 255.0, m.colors[v][1] / 255.0,
+                   m.colors[v][2] / 255.0);
     for (size_t v = 0; v < m.normals.size(); ++v)
       std::fprintf(f, "vn %.5f %.5f %.5f\n", m.normals[v].x(), m.normals[v].y(), m.normals[v].z());
     std::fprintf(f, "usemtl atlas_%d\n", p.atlas);
@@ -161,8 +169,9 @@ bool writeTexturedObj(const std::string& obj_path,
       for (const Eigen::Vector2f& uv : patches.at(key).uvs) write_vt(uv);
       for (const auto& t : m.triangles) {
         const size_t a = t[0], b = t[1], c = t[2];
-        std::fprintf(f, "f %zu/%zu/%zu %zu/%zu/%zu %zu/%zu/%zu\n", v_base + a, vt_base + a, v_base + a, v_base + b,
-                     vt_base + b, v_base + b, v_base + c, vt_base + c, v_base + c);
+        std::fprintf(f, "f %zu/%zu/%zu %zu/%zu/%zu %zu/%zu/%zu\n", v_base + a, vt_base + a,
+                     v_base + a, v_base + b, vt_base + b, v_base + b, v_base + c, vt_base + c,
+                     v_base + c);
       }
       vt_base += m.positions.size();
       ++info->textured_blocks;
@@ -171,8 +180,9 @@ bool writeTexturedObj(const std::string& obj_path,
       for (size_t t = 0; t < m.triangles.size(); ++t) {
         const auto& tri = m.triangles[t];
         const size_t c = vt_base + 3 * t;  // one vt per triangle corner
-        std::fprintf(f, "f %zu/%zu/%zu %zu/%zu/%zu %zu/%zu/%zu\n", v_base + tri[0], c, v_base + tri[0], v_base + tri[1],
-                     c + 1, v_base + tri[1], v_base + tri[2], c + 2, v_base + tri[2]);
+        std::fprintf(f, "f %zu/%zu/%zu %zu/%zu/%zu %zu/%zu/%zu\n", v_base + tri[0], c,
+                     v_base + tri[0], v_base + tri[1], c + 1, v_base + tri[1], v_base + tri[2],
+                     c + 2, v_base + tri[2]);
       }
       vt_base += 3 * m.triangles.size();
       ++info->vertex_colour_blocks;

@@ -34,7 +34,8 @@ AtlasLayout packAtlas(const std::vector<cv::Size>& sizes, int atlas_edge_px, int
       shelf_h = cursor_x = 0;
     }
     if (shelf_y + h > atlas_edge_px) open_atlas();
-    layout.placements[i] = {atlas, cv::Rect(cursor_x + gutter_px, shelf_y + gutter_px, sizes[i].width, sizes[i].height)};
+    layout.placements[i] = {atlas, cv::Rect(cursor_x + gutter_px, shelf_y + gutter_px,
+                                            sizes[i].width, sizes[i].height)};
     cursor_x += w;
     shelf_h = std::max(shelf_h, h);
     used_h = std::max(used_h, shelf_y + shelf_h);
@@ -43,14 +44,18 @@ AtlasLayout packAtlas(const std::vector<cv::Size>& sizes, int atlas_edge_px, int
   return layout;
 }
 
-std::vector<cv::Mat> renderAtlases(const AtlasLayout& layout, const std::vector<cv::Mat>& patches, int gutter_px) {
+std::vector<cv::Mat> renderAtlases(const AtlasLayout& layout, const std::vector<cv::Mat>& patches,
+                                   int gutter_px) {
   std::vector<cv::Mat> atlases;
-  for (const cv::Size& s : layout.atlas_sizes) atlases.emplace_back(s, CV_8UC3, cv::Scalar(0, 0, 0));
+  for (const cv::Size& s : layout.atlas_sizes)
+    atlases.emplace_back(s, CV_8UC3, cv::Scalar(0, 0, 0));
   for (size_t i = 0; i < patches.size(); ++i) {
     const AtlasPlacement& p = layout.placements[i];
     cv::Mat framed;
-    cv::copyMakeBorder(patches[i], framed, gutter_px, gutter_px, gutter_px, gutter_px, cv::BORDER_REPLICATE);
-    framed.copyTo(atlases[p.atlas](cv::Rect(p.rect.x - gutter_px, p.rect.y - gutter_px, framed.cols, framed.rows)));
+    cv::copyMakeBorder(patches[i], framed, gutter_px, gutter_px, gutter_px, gutter_px,
+                       cv::BORDER_REPLICATE);
+    framed.copyTo(atlases[p.atlas](
+        cv::Rect(p.rect.x - gutter_px, p.rect.y - gutter_px, framed.cols, framed.rows)));
   }
   return atlases;
 }

@@ -15,11 +15,11 @@ bool isWritableTarget(const std::string& path, std::string* error) {
   // Absent (or not reachable): the writer creates it, or fails with its own message.
   if (::stat(path.c_str(), &st) != 0) return true;
   if (S_ISREG(st.st_mode)) return true;
-  const char* kind = S_ISFIFO(st.st_mode) ? "a FIFO"
-                     : S_ISDIR(st.st_mode) ? "a directory"
+  const char* kind = S_ISFIFO(st.st_mode)                         ? "a FIFO"
+                     : S_ISDIR(st.st_mode)                        ? "a directory"
                      : S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode) ? "a device"
-                     : S_ISSOCK(st.st_mode) ? "a socket"
-                                            : "not a regular file";
+                     : S_ISSOCK(st.st_mode)                       ? "a socket"
+                                                                  : "not a regular file";
   *error = path + " is " + kind + ": only regular files are written (nothing was written)";
   return false;
 }
@@ -29,9 +29,10 @@ std::string temporaryPathBeside(const std::string& path) {
   return path + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(count++);
 }
 
-bool writeThroughTemporary(const std::string& path, const std::string& what,
-                           const std::function<bool(const std::string& temporary_path, std::string* error)>& write,
-                           std::string* error) {
+bool writeThroughTemporary(
+    const std::string& path, const std::string& what,
+    const std::function<bool(const std::string& temporary_path, std::string* error)>& write,
+    std::string* error) {
   if (!isWritableTarget(path, error)) return false;
   const std::string temporary = temporaryPathBeside(path);
   if (!write(temporary, error)) {

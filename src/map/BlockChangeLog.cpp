@@ -18,7 +18,8 @@ BlockChangeLog::Changes BlockChangeLog::take(Consumer consumer) {
   std::vector<Event> events;
   events.swap(consumers_[consumer].events);
   // Stable: among a key's events the last recorded stays last, and it decides.
-  std::stable_sort(events.begin(), events.end(), [](const Event& a, const Event& b) { return a.key < b.key; });
+  std::stable_sort(events.begin(), events.end(),
+                   [](const Event& a, const Event& b) { return a.key < b.key; });
   Changes changes;
   for (size_t i = 0; i < events.size(); ++i) {
     if (i + 1 < events.size() && events[i + 1].key == events[i].key) continue;

@@ -69,14 +69,17 @@ VoxelBlock* BlockOctree::findBelow(const Node* node, const BlockKey& key) {
   }
 }
 
-void BlockOctree::collectBlocks(const std::function<bool(const Eigen::AlignedBox3d& box_world)>& may_contain,
-                                std::vector<VoxelBlock*>* out) const {
+void BlockOctree::collectBlocks(
+    const std::function<bool(const Eigen::AlignedBox3d& box_world)>& may_contain,
+    std::vector<VoxelBlock*>* out) const {
   const Node* root = root_.load(std::memory_order_acquire);
   if (root == nullptr) return;
   auto box = [this](const std::array<int64_t, 3>& origin, int64_t side) {
     const Eigen::Vector3d lo(static_cast<double>(origin[0]), static_cast<double>(origin[1]),
                              static_cast<double>(origin[2]));
-    return Eigen::AlignedBox3d(lo * block_size_m_, (lo + Eigen::Vector3d::Constant(static_cast<double>(side))) * block_size_m_);
+    return Eigen::AlignedBox3d(
+        lo * block_size_m_,
+        (lo + Eigen::Vector3d::Constant(static_cast<double>(side))) * block_size_m_);
   };
   std::vector<const Node*> stack{root};
   while (!stack.empty()) {
@@ -119,7 +122,8 @@ void BlockOctree::growToContain(const BlockKey& key) {
       if (below || (!above && origin[a] + side / 2 > 0)) origin[a] -= side;
     }
     Node* grown = newNode(origin, root->height + 1);
-    const BlockKey old_corner{static_cast<int32_t>(root->origin[0]), static_cast<int32_t>(root->origin[1]),
+    const BlockKey old_corner{static_cast<int32_t>(root->origin[0]),
+                              static_cast<int32_t>(root->origin[1]),
                               static_cast<int32_t>(root->origin[2])};
     grown->child[grown->octantOf(old_corner)].store(root, std::memory_order_relaxed);
     root_.store(grown, std::memory_order_release);
@@ -142,7 +146,8 @@ VoxelBlock* BlockOctree::insert(std::unique_ptr<VoxelBlock> block) {
   return created ? placed : nullptr;
 }
 
-void BlockOctree::findOrAllocateBatch(const BlockKey* keys, size_t n, VoxelBlock** blocks, uint8_t* allocated) {
+void BlockOctree::findOrAllocateBatch(const BlockKey* keys, size_t n, VoxelBlock** blocks,
+                                      uint8_t* allocated) {
   searchBatch(keys, n, blocks, allocated);
 }
 
@@ -151,7 +156,8 @@ void BlockOctree::findBatch(const BlockKey* keys, size_t n, VoxelBlock** blocks)
   const_cast<BlockOctree*>(this)->searchBatch(keys, n, blocks, nullptr);
 }
 
-void BlockOctree::searchBatch(const BlockKey* keys, size_t n, VoxelBlock** blocks, uint8_t* allocated) {
+void BlockOctree::searchBatch(const BlockKey* keys, size_t n, VoxelBlock** blocks,
+                              uint8_t* allocated) {
   size_t searched = 0;  // as findOrAllocate(): keys out of range are no search
   // path[0] is a root (the current one, or one since grown over: it still holds the same
   // subtree), path[i + 1] a child of path[i]. Nodes are never freed while searches may run,
@@ -193,7 +199,8 @@ void BlockOctree::searchBatch(const BlockKey* keys, size_t n, VoxelBlock** block
   searches_.fetch_add(searched, std::memory_order_relaxed);
 }
 
-VoxelBlock* BlockOctree::allocate(const BlockKey& key, std::unique_ptr<VoxelBlock> fresh, bool* allocated) {
+VoxelBlock* BlockOctree::allocate(const BlockKey& key, std::unique_ptr<VoxelBlock> fresh,
+                                  bool* allocated) {
   // `fresh` is built before the lock: only inserting it needs it.
   std::lock_guard<std::mutex> lock(alloc_mutex_);
   growToContain(key);
@@ -221,7 +228,8 @@ VoxelBlock* BlockOctree::allocate(const BlockKey& key, std::unique_ptr<VoxelBloc
     if (next == nullptr) {
       const int64_t h = node->halfSide();
       const auto c = node->centre();
-      const std::array<int64_t, 3> child_origin{key.x >= c[0] ? c[0] : c[0] - h, key.y >= c[1] ? c[1] : c[1] - h,
+      const std::array<int64_t, 3> child_origin{key.x >= c[0] ? c[0] : c[0] - h,
+                                                key.y >= c[1] ? c[1] : c[1] - h,
                                                 key.z >= c[2] ? c[2] : c[2] - h};
       Node* child = newNode(child_origin, node->height - 1);
       slot.store(child, std::memory_order_release);
@@ -239,7 +247,8 @@ void BlockOctree::link(VoxelBlock* block) {
   const BlockKey& key = block->key;
   const Node* top = root_.load(std::memory_order_relaxed);
   while (top->height > 1) {
-    const auto* child = static_cast<const Node*>(top->child[top->octantOf(key)].load(std::memory_order_relaxed));
+    const auto* child =
+        static_cast<const Node*>(top->child[top->octantOf(key)].load(std::memory_order_relaxed));
     if (!contains(child, key.offset(-1, -1, -1)) || !contains(child, key.offset(1, 1, 1))) break;
     top = child;
   }
@@ -276,11 +285,11 @@ BlockOctree::MemoryUse BlockOctree::memoryUse(bool with_levels) const {
   use.block_bytes = block_storage_.size() * sizeof(VoxelBlock);
   if (with_levels)
     for (const VoxelBlock* b : blocks_)
-    for (int level = 0; level < kNumLevels; ++level)
-      if (b->hasLevel(level)) {
-        use.level_bytes[level] += levelVoxelCount(level) * sizeof(Voxel);
-        ++use.level_blocks[level];
-      }
+      for (int level = 0; level < kNumLevels; ++level)
+        if (b->hasLevel(level)) {
+          use.level_bytes[level] += levelVoxelCount(level) * sizeof(Voxel);
+          ++use.level_blocks[level];
+        }
   use.node_bytes = nodes_.size() * sizeof(Node);
   use.bookkeeping_bytes = blocks_.capacity() * sizeof(VoxelBlock*) +
                           block_storage_.capacity() * sizeof(std::unique_ptr<VoxelBlock>) +
@@ -337,8 +346,9 @@ size_t BlockOctree::erase(const std::vector<BlockKey>& keys) {
     for (auto it = path.rbegin(); it != path.rend(); ++it) {
       Node* n = it->first;
       n->child[it->second].store(nullptr, std::memory_order_release);
-      const bool empty = std::all_of(n->child.begin(), n->child.end(),
-                                     [](const std::atomic<void*>& c) { return c.load(std::memory_order_relaxed) == nullptr; });
+      const bool empty = std::all_of(
+          n->child.begin(), n->child.end(),
+          [](const std::atomic<void*>& c) { return c.load(std::memory_order_relaxed) == nullptr; });
       if (!empty) break;
       doomed_nodes.insert(n);
       if (n == root) root_.store(nullptr, std::memory_order_release);
@@ -354,10 +364,13 @@ size_t BlockOctree::erase(const std::vector<BlockKey>& keys) {
                                [&](const VoxelBlock* b) { return doomed_blocks.count(b) > 0; }),
                 blocks_.end());
   block_storage_.erase(std::remove_if(block_storage_.begin(), block_storage_.end(),
-                                      [&](const std::unique_ptr<VoxelBlock>& b) { return doomed_blocks.count(b.get()) > 0; }),
+                                      [&](const std::unique_ptr<VoxelBlock>& b) {
+                                        return doomed_blocks.count(b.get()) > 0;
+                                      }),
                        block_storage_.end());
-  nodes_.erase(std::remove_if(nodes_.begin(), nodes_.end(),
-                              [&](const std::unique_ptr<Node>& n) { return doomed_nodes.count(n.get()) > 0; }),
+  nodes_.erase(std::remove_if(
+                   nodes_.begin(), nodes_.end(),
+                   [&](const std::unique_ptr<Node>& n) { return doomed_nodes.count(n.get()) > 0; }),
                nodes_.end());
   return doomed_blocks.size();
 }

@@ -13,12 +13,14 @@ void EvictionPolicy::recordUpdates(const BlockOctree& map, const std::vector<Blo
     if (block != nullptr) last_update_frame_[*block] = frame_index;
 }
 
-void EvictionPolicy::setLastUpdateFrame(const BlockOctree& map, const VoxelBlock& block, uint64_t frame_index) {
+void EvictionPolicy::setLastUpdateFrame(const BlockOctree& map, const VoxelBlock& block,
+                                        uint64_t frame_index) {
   last_update_frame_.fit(map);
   last_update_frame_[block] = frame_index;
 }
 
-std::vector<BlockKey> EvictionPolicy::select(const BlockOctree& map, const Eigen::Vector3d& camera_position_m,
+std::vector<BlockKey> EvictionPolicy::select(const BlockOctree& map,
+                                             const Eigen::Vector3d& camera_position_m,
                                              const EvictionLimits& limits) const {
   std::vector<BlockKey> evict;
   const bool by_distance = limits.max_distance_from_camera_m > 0.0;
@@ -43,7 +45,8 @@ std::vector<BlockKey> EvictionPolicy::select(const BlockOctree& map, const Eigen
   if (limits.max_blocks > 0 && keep.size() > limits.max_blocks) {
     const size_t excess = keep.size() - limits.max_blocks;
     auto older = [](const Candidate& a, const Candidate& b) {
-      if (a.last_update_frame != b.last_update_frame) return a.last_update_frame < b.last_update_frame;
+      if (a.last_update_frame != b.last_update_frame)
+        return a.last_update_frame < b.last_update_frame;
       if (a.distance_m != b.distance_m) return a.distance_m > b.distance_m;
       return a.key < b.key;
     };

@@ -22,12 +22,14 @@ MapRegion MapRegion::sphere(const Eigen::Vector3d& centre_m, double radius_m) {
 
 std::string MapRegion::validate() const {
   if (shape == Shape::kBox) {
-    if (!box_m.min().allFinite() || !box_m.max().allFinite()) return "the box's corners must be finite numbers";
+    if (!box_m.min().allFinite() || !box_m.max().allFinite())
+      return "the box's corners must be finite numbers";
     if ((box_m.min().array() > box_m.max().array()).any())
       return "the box's min must not exceed its max on any axis (" + describe() + ")";
     return "";
   }
-  if (!centre_m.allFinite() || !std::isfinite(radius_m)) return "the sphere's centre and radius must be finite numbers";
+  if (!centre_m.allFinite() || !std::isfinite(radius_m))
+    return "the sphere's centre and radius must be finite numbers";
   if (radius_m <= 0.0) return "the sphere's radius must be positive (" + describe() + ")";
   return "";
 }
@@ -46,18 +48,20 @@ bool MapRegion::intersects(const Eigen::AlignedBox3d& other_m) const {
 bool MapRegion::containsBox(const Eigen::AlignedBox3d& other_m) const {
   if (shape == Shape::kBox) return box_m.contains(other_m);
   // The box's corner farthest from the centre.
-  const Eigen::Vector3d far = (other_m.min() - centre_m).cwiseAbs().cwiseMax((other_m.max() - centre_m).cwiseAbs());
+  const Eigen::Vector3d far =
+      (other_m.min() - centre_m).cwiseAbs().cwiseMax((other_m.max() - centre_m).cwiseAbs());
   return far.squaredNorm() <= radius_m * radius_m;
 }
 
 std::string MapRegion::describe() const {
   char text[160];
   if (shape == Shape::kBox)
-    std::snprintf(text, sizeof(text), "box [%g %g %g]-[%g %g %g] m", box_m.min().x(), box_m.min().y(), box_m.min().z(),
-                  box_m.max().x(), box_m.max().y(), box_m.max().z());
+    std::snprintf(text, sizeof(text), "box [%g %g %g]-[%g %g %g] m", box_m.min().x(),
+                  box_m.min().y(), box_m.min().z(), box_m.max().x(), box_m.max().y(),
+                  box_m.max().z());
   else
-    std::snprintf(text, sizeof(text), "sphere centre [%g %g %g] m, radius %g m", centre_m.x(), centre_m.y(),
-                  centre_m.z(), radius_m);
+    std::snprintf(text, sizeof(text), "sphere centre [%g %g %g] m, radius %g m", centre_m.x(),
+                  centre_m.y(), centre_m.z(), radius_m);
   return text;
 }
 

@@ -7,8 +7,8 @@ namespace stereo_fusion {
 namespace {
 /// Clears the voxels of one allocated level whose centres lie in the region; true if the level
 /// still holds an observed voxel afterwards.
-bool clearLevel(const MapRegion& region, const Eigen::Vector3d& origin_m, double voxel_m, int side, Voxel* voxels,
-                uint64_t* cleared) {
+bool clearLevel(const MapRegion& region, const Eigen::Vector3d& origin_m, double voxel_m, int side,
+                Voxel* voxels, uint64_t* cleared) {
   bool observed_left = false;
   for (int k = 0; k < side; ++k)
     for (int j = 0; j < side; ++j)
@@ -29,8 +29,10 @@ bool clearLevel(const MapRegion& region, const Eigen::Vector3d& origin_m, double
 RegionClearing clearRegionVoxels(const MapRegion& region, BlockOctree* map) {
   RegionClearing result;
   std::vector<VoxelBlock*> blocks;
-  map->collectBlocks([&region](const Eigen::AlignedBox3d& box_m) { return region.intersects(box_m); }, &blocks);
-  std::sort(blocks.begin(), blocks.end(), [](const VoxelBlock* a, const VoxelBlock* b) { return a->key < b->key; });
+  map->collectBlocks(
+      [&region](const Eigen::AlignedBox3d& box_m) { return region.intersects(box_m); }, &blocks);
+  std::sort(blocks.begin(), blocks.end(),
+            [](const VoxelBlock* a, const VoxelBlock* b) { return a->key < b->key; });
   result.blocks_visited = blocks.size();
   for (VoxelBlock* block : blocks) {
     const Eigen::Vector3d origin_m = map->blockOrigin(block->key);
@@ -40,7 +42,8 @@ RegionClearing clearRegionVoxels(const MapRegion& region, BlockOctree* map) {
       Voxel* voxels = block->levelIfAllocated(level);
       if (voxels == nullptr) continue;
       const int side = levelSide(level);
-      if (clearLevel(region, origin_m, map->blockSize() / side, side, voxels, &result.voxels_cleared)) {
+      if (clearLevel(region, origin_m, map->blockSize() / side, side, voxels,
+                     &result.voxels_cleared)) {
         observed_left = true;
       } else {
         result.bytes_freed += sizeof(Voxel) * static_cast<size_t>(levelVoxelCount(level));

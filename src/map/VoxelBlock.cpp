@@ -22,7 +22,9 @@ const Voxel* VoxelBlock::unobservedLevel() {
 }
 
 Voxel* VoxelBlock::writableLevel(int level) {
-  if (!levels_[level]) levels_[level] = std::make_unique<Voxel[]>(levelVoxelCount(level));  // value-initialised: unobserved
+  if (!levels_[level])
+    levels_[level] =
+        std::make_unique<Voxel[]>(levelVoxelCount(level));  // value-initialised: unobserved
   return levels_[level].get();
 }
 

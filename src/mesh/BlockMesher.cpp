@@ -26,7 +26,8 @@ void prepareBoxes(MesherContext& ctx, int owner_level) {
 
 }  // namespace
 
-BlockMesher::BlockMesher(const MeshingParams& params, MesherPaths paths) : params_(params), paths_(paths) {}
+BlockMesher::BlockMesher(const MeshingParams& params, MesherPaths paths)
+    : params_(params), paths_(paths) {}
 
 void BlockMesher::mesh(const BlockOctree& map, const MeshStates& states, const VoxelBlock& owner,
                        SubMesh* out, const SeamFills* seam_fills) const {
@@ -61,8 +62,9 @@ void BlockMesher::mesh(const BlockOctree& map, const MeshStates& states, const V
     any_negative |= (states[*ctx.nb[d]].sign_bits & meshSignBit(d, false)) != 0;
     any_positive |= (states[*ctx.nb[d]].sign_bits & meshSignBit(d, true)) != 0;
   }
-  ctx.truncated_abs = static_cast<float>(0.99 * TruncationBand(params_.voxel_size_m, params_.truncation_vox)
-                                                     .measurementM(coarsest_level));
+  ctx.truncated_abs = static_cast<float>(
+      0.99 *
+      TruncationBand(params_.voxel_size_m, params_.truncation_vox).measurementM(coarsest_level));
   // The one place the paths part. Both give the same bits (test_block_mesher_fast_paths).
   switch (paths_) {
     case MesherPaths::kGeneralOnly:
@@ -80,7 +82,8 @@ void BlockMesher::mesh(const BlockOctree& map, const MeshStates& states, const V
       // bits, and a neighbourhood that differed only by it takes the uniform path.
       // (truncated_abs above still counts it: that is what the general path uses.)
       for (int d = 1; d < 8; ++d)
-        if (ctx.nb[d] && (states[*ctx.nb[d]].sign_bits & (meshSignBit(d, false) | meshSignBit(d, true))) == 0)
+        if (ctx.nb[d] &&
+            (states[*ctx.nb[d]].sign_bits & (meshSignBit(d, false) | meshSignBit(d, true))) == 0)
           ctx.nb[d] = nullptr;
       prepareBoxes(ctx, owner_level);
       if (ctx.uniform)

@@ -59,22 +59,31 @@ void polygonizeCell(const std::vector<std::vector<int>>& polygons, const float* 
       if (found == segments.size()) break;  // loop closed (or malformed input)
       current = found;
     }
-    for (size_t i = 1; i + 1 < loop.size(); ++i) triangles->push_back({loop[0], loop[i], loop[i + 1]});
+    for (size_t i = 1; i + 1 < loop.size(); ++i)
+      triangles->push_back({loop[0], loop[i], loop[i + 1]});
   }
 }
 
 const std::array<CubeEdge, 12>& cubeEdges() {
-  static const std::array<CubeEdge, 12> edges = {{{0, 1}, {2, 3}, {4, 5}, {6, 7},    // along x
-                                                 {0, 2}, {1, 3}, {4, 6}, {5, 7},    // along y
-                                                 {0, 4}, {1, 5}, {2, 6}, {3, 7}}};  // along z
+  static const std::array<CubeEdge, 12> edges = {{{0, 1},
+                                                  {2, 3},
+                                                  {4, 5},
+                                                  {6, 7},  // along x
+                                                  {0, 2},
+                                                  {1, 3},
+                                                  {4, 6},
+                                                  {5, 7},  // along y
+                                                  {0, 4},
+                                                  {1, 5},
+                                                  {2, 6},
+                                                  {3, 7}}};  // along z
   return edges;
 }
 
 const std::vector<std::vector<int>>& cubeFaces() {
-  static const std::vector<std::vector<int>> faces = {
-      {0, 4, 6, 2}, {1, 3, 7, 5},   // x = 0, x = 1
-      {0, 1, 5, 4}, {2, 6, 7, 3},   // y = 0, y = 1
-      {0, 2, 3, 1}, {4, 5, 7, 6}};  // z = 0, z = 1
+  static const std::vector<std::vector<int>> faces = {{0, 4, 6, 2}, {1, 3, 7, 5},   // x = 0, x = 1
+                                                      {0, 1, 5, 4}, {2, 6, 7, 3},   // y = 0, y = 1
+                                                      {0, 2, 3, 1}, {4, 5, 7, 6}};  // z = 0, z = 1
   return faces;
 }
 

@@ -66,9 +66,12 @@ bool fillFacesFromCoarserLevels(const VoxelBlock& block, int level, std::vector<
         if (voxels[index].weight > 0.0f) continue;
         for (int coarser = level + 1; coarser < kNumLevels; ++coarser) {
           if (!block.hasLevel(coarser)) continue;
-          // Centre (i + ½)·s_level in finest voxels; in coarser voxel units, centres at whole numbers.
-          const float ratio = static_cast<float>(levelScale(level)) / static_cast<float>(levelScale(coarser));
-          const float position[3] = {(i + 0.5f) * ratio - 0.5f, (j + 0.5f) * ratio - 0.5f, (k + 0.5f) * ratio - 0.5f};
+          // Centre (i + ½)·s_level in finest voxels; in coarser voxel units, centres at whole
+          // numbers.
+          const float ratio =
+              static_cast<float>(levelScale(level)) / static_cast<float>(levelScale(coarser));
+          const float position[3] = {(i + 0.5f) * ratio - 0.5f, (j + 0.5f) * ratio - 0.5f,
+                                     (k + 0.5f) * ratio - 0.5f};
           float sdf, rgb[3];
           if (!linearField(block.level(coarser), levelSide(coarser), position, &sdf, rgb)) continue;
           if (out->empty()) out->assign(voxels, voxels + levelVoxelCount(level));
@@ -86,7 +89,8 @@ bool fillFacesFromCoarserLevels(const VoxelBlock& block, int level, std::vector<
   return !out->empty();
 }
 
-const Voxel* meshVoxels(const VoxelBlock& block, const MeshBlockState& state, std::vector<Voxel>* scratch) {
+const Voxel* meshVoxels(const VoxelBlock& block, const MeshBlockState& state,
+                        std::vector<Voxel>* scratch) {
   if (!state.seam_filled) return block.level(state.level);
   fillFacesFromCoarserLevels(block, state.level, scratch);
   return scratch->data();
@@ -118,9 +122,11 @@ uint16_t meshSignBits(const Voxel* voxels, int level) {
         if (!(v.weight > 0.0f)) continue;
         // A value in [−1e-30, 0) counts as both signs: the mesher's weighted sums can round it
         // to −0, which compares as non-negative.
-        const uint16_t sign = v.sdf_m >= 0.0f ? meshSignBit(0, true)
-                              : v.sdf_m < -1e-30f ? meshSignBit(0, false)
-                                                  : static_cast<uint16_t>(meshSignBit(0, false) | meshSignBit(0, true));
+        const uint16_t sign =
+            v.sdf_m >= 0.0f ? meshSignBit(0, true)
+            : v.sdf_m < -1e-30f
+                ? meshSignBit(0, false)
+                : static_cast<uint16_t>(meshSignBit(0, false) | meshSignBit(0, true));
         seen[near_low_face(i) | 2 * near_low_face(j) | 4 * near_low_face(k)] |= sign;
       }
   // Region r holds the voxels near the low face on every axis of r.
@@ -152,15 +158,17 @@ void refreshMeshLevel(const VoxelBlock& block, const MeshingParams& params, Mesh
 
 namespace {
 /// Sets state->seam_filled for state->level; returns the voxels to take the signs of.
-const Voxel* refreshSeamFill(const VoxelBlock& block, const MeshingParams& params, MeshBlockState* state) {
+const Voxel* refreshSeamFill(const VoxelBlock& block, const MeshingParams& params,
+                             MeshBlockState* state) {
   std::vector<Voxel>& scratch = refreshScratch();
-  state->seam_filled =
-      params.fill_faces_from_coarser_levels && fillFacesFromCoarserLevels(block, state->level, &scratch);
+  state->seam_filled = params.fill_faces_from_coarser_levels &&
+                       fillFacesFromCoarserLevels(block, state->level, &scratch);
   return state->seam_filled ? scratch.data() : block.level(state->level);
 }
 }  // namespace
 
-void refreshMeshLevelScalar(const VoxelBlock& block, const MeshingParams& params, MeshBlockState* state) {
+void refreshMeshLevelScalar(const VoxelBlock& block, const MeshingParams& params,
+                            MeshBlockState* state) {
   state->level = static_cast<int8_t>(chooseMeshLevel(block, params.level_min_coverage));
   state->sign_bits = meshSignBits(refreshSeamFill(block, params, state), state->level);
 }
@@ -179,7 +187,8 @@ struct EightVoxels {
 };
 
 SF_AVX2 EightVoxels loadEight(const Voxel* voxels) {
-  static_assert(sizeof(Voxel) == 12 && offsetof(Voxel, weight) == 4, "voxels are {sdf, weight, rgb} dword triples");
+  static_assert(sizeof(Voxel) == 12 && offsetof(Voxel, weight) == 4,
+                "voxels are {sdf, weight, rgb} dword triples");
   const float* dwords = reinterpret_cast<const float*>(voxels);
   return {_mm256_loadu_ps(dwords), _mm256_loadu_ps(dwords + 8), _mm256_loadu_ps(dwords + 16)};
 }
@@ -188,8 +197,9 @@ SF_AVX2 EightVoxels loadEight(const Voxel* voxels) {
 // collect one field of all eight voxels (voxel n in lane 3n + q mod 8), a permutation puts
 // voxel n into lane n (as the fusion kernel's loadVoxels()).
 SF_AVX2 __m256 sdfLanes(const EightVoxels& e) {
-  return _mm256_permutevar8x32_ps(_mm256_blend_ps(_mm256_blend_ps(e.v0, e.v1, 0b10010010), e.v2, 0b00100100),
-                                  _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5));
+  return _mm256_permutevar8x32_ps(
+      _mm256_blend_ps(_mm256_blend_ps(e.v0, e.v1, 0b10010010), e.v2, 0b00100100),
+      _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5));
 }
 /// The weights, voxel n in lane 3n + 1 mod 8: enough for counting.
 SF_AVX2 __m256 weightsUnordered(const EightVoxels& e) {
@@ -201,7 +211,8 @@ SF_AVX2 __m256 weightLanes(const EightVoxels& e) {
 
 /// −1 in the lanes of eight voxels (in some order) that are observed (weight > 0), else 0.
 SF_AVX2 __m256i observedLanes(const Voxel* voxels) {
-  return _mm256_castps_si256(_mm256_cmp_ps(weightsUnordered(loadEight(voxels)), _mm256_setzero_ps(), _CMP_GT_OQ));
+  return _mm256_castps_si256(
+      _mm256_cmp_ps(weightsUnordered(loadEight(voxels)), _mm256_setzero_ps(), _CMP_GT_OQ));
 }
 
 /// Observed voxels (weight > 0) of `kLevel`, whose voxels start at `voxels`.
@@ -212,7 +223,8 @@ SF_AVX2 int countObservedAvx2(const Voxel* voxels) {
   int n = 0;
   // Sixteen voxels per step: half the loop overhead, and GCC's extra register copy per step.
   for (; n + 16 <= levelVoxelCount(kLevel); n += 16)
-    counts = _mm256_sub_epi32(counts, _mm256_add_epi32(observedLanes(voxels + n), observedLanes(voxels + n + 8)));
+    counts = _mm256_sub_epi32(
+        counts, _mm256_add_epi32(observedLanes(voxels + n), observedLanes(voxels + n + 8)));
   if (n < levelVoxelCount(kLevel)) counts = _mm256_sub_epi32(counts, observedLanes(voxels + n));
   __m128i sum = _mm_add_epi32(_mm256_castsi256_si128(counts), _mm256_extracti128_si256(counts, 1));
   sum = _mm_add_epi32(sum, _mm_shuffle_epi32(sum, 0x4E));
@@ -229,13 +241,13 @@ struct SignLanes {
 SF_AVX2 SignLanes signLanesAvx2(const Voxel* voxels) {
   const EightVoxels e = loadEight(voxels);
   const __m256 sdf = sdfLanes(e);
-  const unsigned observed =
-      static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(weightLanes(e), _mm256_setzero_ps(), _CMP_GT_OQ)));
+  const unsigned observed = static_cast<unsigned>(
+      _mm256_movemask_ps(_mm256_cmp_ps(weightLanes(e), _mm256_setzero_ps(), _CMP_GT_OQ)));
   // !(sdf ≥ 0) and !(sdf < −1e-30): the complements of the scalar tests, NaN included.
-  const unsigned negative =
-      static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(sdf, _mm256_setzero_ps(), _CMP_NGE_UQ)));
-  const unsigned non_negative =
-      static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(sdf, _mm256_set1_ps(-1e-30f), _CMP_NLT_UQ)));
+  const unsigned negative = static_cast<unsigned>(
+      _mm256_movemask_ps(_mm256_cmp_ps(sdf, _mm256_setzero_ps(), _CMP_NGE_UQ)));
+  const unsigned non_negative = static_cast<unsigned>(
+      _mm256_movemask_ps(_mm256_cmp_ps(sdf, _mm256_set1_ps(-1e-30f), _CMP_NLT_UQ)));
   return {negative & observed, non_negative & observed};
 }
 
@@ -243,7 +255,8 @@ SF_AVX2 SignLanes signLanesAvx2(const Voxel* voxels) {
 // refreshMeshSigns() calls near the low face): on x by lane alone; on y and z by group, except
 // in level 2, whose single group holds both halves. Level 0: group j + 8k, lane i. Level 1:
 // group 2k + h, lane i + 4(j − 2h). Level 2: lane i + 2j + 4k.
-constexpr unsigned kLowHalfLanes[kNumLevels][3] = {{0x0F, 0xFF, 0xFF}, {0x33, 0xFF, 0xFF}, {0x55, 0x33, 0x0F}};
+constexpr unsigned kLowHalfLanes[kNumLevels][3] = {
+    {0x0F, 0xFF, 0xFF}, {0x33, 0xFF, 0xFF}, {0x55, 0x33, 0x0F}};
 constexpr bool groupInLowHalf(int level, int group, int axis) {
   if (level == 0) return (axis == 1 ? group % 8 : group / 8) < 4;
   if (level == 1) return axis == 1 ? group % 2 == 0 : group / 2 < 2;
@@ -265,7 +278,8 @@ constexpr bool lowHalfTablesMatchIndices() {
   }
   return true;
 }
-static_assert(lowHalfTablesMatchIndices(), "low-half lane and group tables disagree with VoxelBlock::index()");
+static_assert(lowHalfTablesMatchIndices(),
+              "low-half lane and group tables disagree with VoxelBlock::index()");
 
 /// refreshMeshSigns() for the voxels of `kLevel` starting at `voxels`. (Not inlined: GCC would
 /// keep the counting pass's loads of this level for it, spilled to the stack.)
@@ -302,14 +316,15 @@ __attribute__((target("avx2"), noinline)) uint16_t meshSignBitsAvx2(const Voxel*
 
 }  // namespace
 
-__attribute__((target("avx2"))) void refreshMeshLevelAvx2(const VoxelBlock& block, const MeshingParams& params,
-                                                           MeshBlockState* state) {
+__attribute__((target("avx2"))) void refreshMeshLevelAvx2(const VoxelBlock& block,
+                                                          const MeshingParams& params,
+                                                          MeshBlockState* state) {
   static_assert(levelOffset(1) % 8 == 0 && levelOffset(2) % 8 == 0 && levelVoxelCount(2) == 8,
                 "every level is whole groups of eight voxels");
   // A level never updated has nothing observed: no need to count it.
   const int observed[kNumLevels] = {block.hasLevel(0) ? countObservedAvx2<0>(block.level(0)) : 0,
-                                     block.hasLevel(1) ? countObservedAvx2<1>(block.level(1)) : 0,
-                                     block.hasLevel(2) ? countObservedAvx2<2>(block.level(2)) : 0};
+                                    block.hasLevel(1) ? countObservedAvx2<1>(block.level(1)) : 0,
+                                    block.hasLevel(2) ? countObservedAvx2<2>(block.level(2)) : 0};
   const int level = levelFromObservedCounts(observed, params.level_min_coverage);
   state->level = static_cast<int8_t>(level);
   const Voxel* voxels = refreshSeamFill(block, params, state);
@@ -320,7 +335,8 @@ __attribute__((target("avx2"))) void refreshMeshLevelAvx2(const VoxelBlock& bloc
 
 #else  // not x86: only the scalar path
 
-void refreshMeshLevelAvx2(const VoxelBlock& block, const MeshingParams& params, MeshBlockState* state) {
+void refreshMeshLevelAvx2(const VoxelBlock& block, const MeshingParams& params,
+                          MeshBlockState* state) {
   refreshMeshLevelScalar(block, params, state);
 }
 

@@ -29,7 +29,8 @@ void splitByPresence(const std::vector<BlockKey>& keys, const std::vector<const 
 
 std::vector<MeshStore::Owner> MeshStore::ownersOf(const BlockOctree& map,
                                                   const std::vector<const VoxelBlock*>& present,
-                                                  const std::vector<BlockKey>& absent, BlockKeySet* seen) {
+                                                  const std::vector<BlockKey>& absent,
+                                                  BlockKeySet* seen) {
   // Up to 8 candidates per updated block but ~1.4 distinct owners each: de-duplicate on the
   // way, then sort only the distinct ones.
   seen->reset(8 * present.size() + 7 * absent.size());
@@ -41,20 +42,24 @@ std::vector<MeshStore::Owner> MeshStore::ownersOf(const BlockOctree& map,
       // The key by arithmetic: owner->key would touch one more block's memory per owner.
       const BlockKey owner_key = block->key.offset(dx, dy, dz);
       if (!seen->insert(owner_key)) continue;
-      if (const VoxelBlock* owner = map.neighbour(*block, dx, dy, dz)) owners.push_back({owner_key, owner});
+      if (const VoxelBlock* owner = map.neighbour(*block, dx, dy, dz))
+        owners.push_back({owner_key, owner});
     }
   for (const BlockKey& key : absent)
     for (int d = 1; d < 8; ++d) {
-      const BlockKey owner_key = key.offset(ownerOffset(d, 0), ownerOffset(d, 1), ownerOffset(d, 2));
+      const BlockKey owner_key =
+          key.offset(ownerOffset(d, 0), ownerOffset(d, 1), ownerOffset(d, 2));
       if (!seen->insert(owner_key)) continue;
       if (const VoxelBlock* owner = map.find(owner_key)) owners.push_back({owner_key, owner});
     }
-  std::sort(owners.begin(), owners.end(), [](const Owner& a, const Owner& b) { return a.key < b.key; });
+  std::sort(owners.begin(), owners.end(),
+            [](const Owner& a, const Owner& b) { return a.key < b.key; });
   return owners;
 }
 
 std::vector<BlockKey> MeshStore::affectedOwners(const BlockOctree& map,
-                                                const std::vector<BlockKey>& updated, ThreadPool* pool) {
+                                                const std::vector<BlockKey>& updated,
+                                                ThreadPool* pool) {
   std::vector<const VoxelBlock*> found(updated.size());
   auto search = [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i) found[i] = map.find(updated[i]);
@@ -72,7 +77,8 @@ std::vector<BlockKey> MeshStore::affectedOwners(const BlockOctree& map,
   return keys;
 }
 
-MeshChanges MeshStore::remesh(const BlockOctree& map, const std::vector<Owner>& owners, ThreadPool* pool) {
+MeshChanges MeshStore::remesh(const BlockOctree& map, const std::vector<Owner>& owners,
+                              ThreadPool* pool) {
   Timer timer;
   if (scratch_.size() < owners.size()) scratch_.resize(owners.size());
   // The face-filled copies the owners read, each built once for the pass instead of once per
@@ -82,7 +88,8 @@ MeshChanges MeshStore::remesh(const BlockOctree& map, const std::vector<Owner>& 
   for (const Owner& owner : owners)
     for (int d = 0; d < 8; ++d) {
       const VoxelBlock* block = map.neighbour(*owner.block, d & 1, (d >> 1) & 1, (d >> 2) & 1);
-      if (block == nullptr || !states_[*block].seam_filled || !seam_fills_[*block].empty()) continue;
+      if (block == nullptr || !states_[*block].seam_filled || !seam_fills_[*block].empty())
+        continue;
       seam_fills_[*block].resize(1);  // marks it taken; filled below
       filled.push_back(block);
     }
@@ -91,7 +98,8 @@ MeshChanges MeshStore::remesh(const BlockOctree& map, const std::vector<Owner>& 
       fillFacesFromCoarserLevels(*filled[i], states_[*filled[i]].level, &seam_fills_[*filled[i]]);
   });
   pool->parallelFor(owners.size(), 4, [&](size_t begin, size_t end) {
-    for (size_t i = begin; i < end; ++i) mesher_.mesh(map, states_, *owners[i].block, &scratch_[i], &seam_fills_);
+    for (size_t i = begin; i < end; ++i)
+      mesher_.mesh(map, states_, *owners[i].block, &scratch_[i], &seam_fills_);
   });
   for (const VoxelBlock* block : filled) std::vector<Voxel>().swap(seam_fills_[*block]);
   MeshChanges update;
@@ -110,7 +118,7 @@ MeshChanges MeshStore::remesh(const BlockOctree& map, const std::vector<Owner>& 
 }
 
 MeshChanges MeshStore::update(const BlockOctree& map, const std::vector<BlockKey>& updated,
-                             ThreadPool* pool, const std::vector<BlockKey>& erased) {
+                              ThreadPool* pool, const std::vector<BlockKey>& erased) {
   // The one search per updated block: owners and neighbours are then reached through links.
   std::vector<const VoxelBlock*> found(updated.size());
   states_.fit(map);
@@ -151,7 +159,8 @@ MeshChanges MeshStore::rebuild(const BlockOctree& map, ThreadPool* pool) {
   const std::vector<VoxelBlock*> blocks = map.blocksSortedByKey();
   states_.fit(map);
   pool->parallelFor(blocks.size(), 16, [&](size_t begin, size_t end) {
-    for (size_t i = begin; i < end; ++i) refreshMeshLevel(*blocks[i], params_, &states_[*blocks[i]]);
+    for (size_t i = begin; i < end; ++i)
+      refreshMeshLevel(*blocks[i], params_, &states_[*blocks[i]]);
   });
   for (const VoxelBlock* block : blocks) all.push_back({block->key, block});
   std::vector<BlockKey> stale;
@@ -189,7 +198,8 @@ TriangleMesh weldSubmeshes(const std::unordered_map<BlockKey, SubMesh, BlockKeyH
     for (size_t v = 0; v < sub->positions.size(); ++v) {
       std::array<uint32_t, 3> bits;
       std::memcpy(bits.data(), sub->positions[v].data(), sizeof(bits));
-      auto [it, inserted] = index_of.try_emplace(bits, static_cast<uint32_t>(mesh.positions.size()));
+      auto [it, inserted] =
+          index_of.try_emplace(bits, static_cast<uint32_t>(mesh.positions.size()));
       if (inserted) {
         mesh.positions.push_back(sub->positions[v]);
         mesh.normals.push_back(sub->normals[v]);
@@ -199,7 +209,8 @@ TriangleMesh weldSubmeshes(const std::unordered_map<BlockKey, SubMesh, BlockKeyH
       }
       remap[v] = it->second;
     }
-    for (const auto& t : sub->triangles) mesh.triangles.push_back({remap[t[0]], remap[t[1]], remap[t[2]]});
+    for (const auto& t : sub->triangles)
+      mesh.triangles.push_back({remap[t[0]], remap[t[1]], remap[t[2]]});
   }
   for (Eigen::Vector3f& n : mesh.normals) {
     const float len = n.norm();

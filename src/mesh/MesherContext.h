@@ -18,7 +18,7 @@ struct MesherContext {
   const Voxel* voxels[8] = {};   // what the mesher samples of nb[d]: meshVoxels()
   int level[8] = {};
   int step[8] = {};
-  bool uniform = true;  // every present neighbour has the owner's level
+  bool uniform = true;         // every present neighbour has the owner's level
   float truncated_abs = 0.0f;  // 0.99 · Φ of the coarsest level present
   int64_t origin[3] = {};
   double unit = 0.0;
@@ -30,7 +30,7 @@ struct MesherContext {
   // (The arrays below have no initialisers: each is filled before it is read, and zeroing
   // ~2 KiB per owner showed up in the profile.)
   int8_t grid_index[3][kAxisCoords];  // −1: coordinate not in the grid
-  int grid_coords[3][kAxisCoords];     // grid index → coordinate, ascending
+  int grid_coords[3][kAxisCoords];    // grid index → coordinate, ascending
   int grid_dim[3] = {};
   // Lattice points on lines along each axis, as bit masks over the coordinate u (bit u set:
   // a present block touching the line has a voxel centre at u). Indexed [axis][class of the
@@ -48,7 +48,8 @@ struct MesherContext {
   /// (the segment lies on one side of the block face: u0 ≥ 16 or u1 ≤ 16).
   uint64_t hangingBits(int axis, const int fixed[3], int u0, int u1) const {
     auto cls = [](int q) { return q < kBlockUnits ? 0 : (q == kBlockUnits ? 1 : 2); };
-    const uint64_t line = line_points[axis][cls(fixed[(axis + 1) % 3])][cls(fixed[(axis + 2) % 3])][u0 >= kBlockUnits];
+    const uint64_t line = line_points[axis][cls(fixed[(axis + 1) % 3])][cls(fixed[(axis + 2) % 3])]
+                                     [u0 >= kBlockUnits];
     const uint64_t inside = ((uint64_t{1} << u1) - 1) & ~((uint64_t{2} << u0) - 1);
     return line & inside;
   }
@@ -57,12 +58,13 @@ struct MesherContext {
   /// unobserved, or all corners have one sign (the exact signs of the samples there).
   bool coreBoxIsEmpty(const int lo[3]) const {
     const int level = this->level[0], shift = level + 1;
-    const int i = (lo[0] - step[0]) >> shift, j = (lo[1] - step[0]) >> shift, k = (lo[2] - step[0]) >> shift;
+    const int i = (lo[0] - step[0]) >> shift, j = (lo[1] - step[0]) >> shift,
+              k = (lo[2] - step[0]) >> shift;
     const float w = 1.0f / static_cast<float>(step[0]);
     bool any_negative = false, any_nonnegative = false;
     for (int c = 0; c < 8; ++c) {
-      const Voxel& v =
-          voxels[0][VoxelBlock::indexInLevel(levelSide(level), i + (c & 1), j + ((c >> 1) & 1), k + (c >> 2))];
+      const Voxel& v = voxels[0][VoxelBlock::indexInLevel(levelSide(level), i + (c & 1),
+                                                          j + ((c >> 1) & 1), k + (c >> 2))];
       if (!(v.weight > 0.0f)) return true;
       // samplePoint() yields (0 + w·sdf) / w; dividing by w > 0 (≤ 1) keeps the sign and
       // cannot underflow, and 0 + x ≥ 0 iff x ≥ 0: the sign of w·sdf is the sample's.

@@ -33,8 +33,8 @@ void faceInteriorLine(int normal_axis, int line_axis, const int lo[3], int fixed
   fixed[other] = lo[other] >= kBlockUnits ? kBlockUnits + kBlockUnits / 2 : kBlockUnits / 2;
 }
 
-void faceGridLines(const MesherContext& ctx, int normal_axis, int line_axis, const int lo[3], const int hi[3],
-                   std::vector<int>* lines) {
+void faceGridLines(const MesherContext& ctx, int normal_axis, int line_axis, const int lo[3],
+                   const int hi[3], std::vector<int>* lines) {
   int fixed[3];
   faceInteriorLine(normal_axis, line_axis, lo, fixed);
   collectHangingPoints(ctx, line_axis, fixed, lo[line_axis], hi[line_axis], lines);
@@ -50,8 +50,8 @@ uint32_t vertexOnEdge(MesherContext& ctx, const int p[3], const PointSample& sp,
   const PointSample& sb = swap ? sp : sq;
   const uint64_t key = (packPoint(a) << 18) | packPoint(b);
   bool inserted = false;
-  const uint32_t vertex =
-      ctx.scratch->vertex_of.findOrInsert(key, static_cast<uint32_t>(ctx.out->positions.size()), &inserted);
+  const uint32_t vertex = ctx.scratch->vertex_of.findOrInsert(
+      key, static_cast<uint32_t>(ctx.out->positions.size()), &inserted);
   if (inserted) appendVertex(ctx, a, sa, b, sb);
   return vertex;
 }
@@ -93,7 +93,8 @@ void meshPlainBox(MesherContext& ctx, const int corner[8][3], const PointSample 
       uint32_t& vertex = edge_vertex[tri[v]];
       if (vertex == kNoVertex) {
         const mc::CubeEdge& e = edges[tri[v]];
-        vertex = vertexOnEdge(ctx, corner[e.corner_a], s[e.corner_a], corner[e.corner_b], s[e.corner_b]);
+        vertex =
+            vertexOnEdge(ctx, corner[e.corner_a], s[e.corner_a], corner[e.corner_b], s[e.corner_b]);
       }
       t[v] = vertex;
     }
@@ -109,7 +110,8 @@ void meshGenericBox(MesherContext& ctx, const int lo[3], const int hi[3]) {
   auto pointId = [&](const int q[3]) {
     // Few points per box (corners + hanging points): a linear search beats hashing.
     for (size_t i = 0; i < points.size(); ++i)
-      if (points[i][0] == q[0] && points[i][1] == q[1] && points[i][2] == q[2]) return static_cast<int>(i);
+      if (points[i][0] == q[0] && points[i][1] == q[1] && points[i][2] == q[2])
+        return static_cast<int>(i);
     points.push_back({q[0], q[1], q[2]});
     return static_cast<int>(points.size() - 1);
   };
@@ -154,7 +156,8 @@ void meshGenericBox(MesherContext& ctx, const int lo[3], const int hi[3]) {
             const int edge_axis = cu[c] != cu[n] ? u : v;
             const int from = edge_axis == u ? cu[c] : cv[c];
             const int to = edge_axis == u ? cu[n] : cv[n];
-            collectHangingPoints(ctx, edge_axis, p, std::min(from, to), std::max(from, to), &hanging);
+            collectHangingPoints(ctx, edge_axis, p, std::min(from, to), std::max(from, to),
+                                 &hanging);
             if (from > to) std::reverse(hanging.begin(), hanging.end());
             for (int h : hanging) {
               int hp[3] = {p[0], p[1], p[2]};
@@ -253,7 +256,8 @@ void meshEveryBox(MesherContext& ctx) {
                              intervals.bounds[2][iz].first};
           const int hi[3] = {intervals.bounds[0][ix].second, intervals.bounds[1][iy].second,
                              intervals.bounds[2][iz].second};
-          const bool core = d == 0 && hi[0] < kBlockUnits && hi[1] < kBlockUnits && hi[2] < kBlockUnits;
+          const bool core =
+              d == 0 && hi[0] < kBlockUnits && hi[1] < kBlockUnits && hi[2] < kBlockUnits;
           // Most boxes: no voxel-level sign change, decided exactly on the corner voxels.
           if (core && ctx.coreBoxIsEmpty(lo)) continue;
           meshBox(ctx, lo, hi);

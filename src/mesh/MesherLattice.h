@@ -71,7 +71,8 @@ struct BoxIntervals {
       if ((d >> a) & 1) {
         bounds[a][n++] = {kBlockUnits, kBlockUnits + step};  // neighbour's low skin
       } else {
-        for (int i = 0; i + 1 < side; ++i) bounds[a][n++] = {step * (2 * i + 1), step * (2 * i + 3)};
+        for (int i = 0; i + 1 < side; ++i)
+          bounds[a][n++] = {step * (2 * i + 1), step * (2 * i + 3)};
         bounds[a][n++] = {step * (2 * side - 1), kBlockUnits};  // own high skin
       }
     }

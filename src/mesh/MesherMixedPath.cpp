@@ -52,8 +52,9 @@ struct BlockMaskRows {
         unobs |= unobserved[0][k + dk][j + dj];
         unknown |= ~(negative[0][k + dk][j + dj] | nonnegative[0][k + dk][j + dj]) & 0xFFu;
       }
-    const unsigned pairs = (((neg | (neg >> 1)) & (nonneg | (nonneg >> 1))) | unknown | (unknown >> 1)) &
-                           ~(unobs | (unobs >> 1));
+    const unsigned pairs =
+        (((neg | (neg >> 1)) & (nonneg | (nonneg >> 1))) | unknown | (unknown >> 1)) &
+        ~(unobs | (unobs >> 1));
     return pairs & ((1u << (levelSide(ctx.level[0]) - 1)) - 1);  // core boxes start at 0..side-2
   }
 
@@ -116,7 +117,8 @@ struct BlockMaskRows {
 /// True if meshBox() would certainly add nothing for this box (an unobserved corner, a plain
 /// box with one sign at all corners, or a box whose corners and every voxel its points may
 /// weigh share one sign), decided on voxel bit masks without sampling; false when in doubt.
-bool mixedBoxIsEmpty(const MesherContext& ctx, BlockMaskRows& masks, const int lo[3], const int hi[3]) {
+bool mixedBoxIsEmpty(const MesherContext& ctx, BlockMaskRows& masks, const int lo[3],
+                     const int hi[3]) {
   // meshBox() returns without output at an unobserved corner, and on a plain box whose corners
   // share one sign; both are read off the voxel masks here without summing any sample. A box
   // with hanging points can change sign between its corners, unless every voxel its points
@@ -124,7 +126,8 @@ bool mixedBoxIsEmpty(const MesherContext& ctx, BlockMaskRows& masks, const int l
   switch (masks.classifyBoxCorners(ctx, lo, hi)) {
     case kPointUnobserved: return true;
     case kPointNegative:
-    case kPointNonNegative: return boxIsPlain(ctx, lo, hi) || masks.boxSupportHasOneSign(ctx, lo, hi);
+    case kPointNonNegative:
+      return boxIsPlain(ctx, lo, hi) || masks.boxSupportHasOneSign(ctx, lo, hi);
     default: return false;
   }
 }
@@ -139,7 +142,8 @@ void meshMixedBoxes(MesherContext& ctx) {
     if (ctx.nb[d] == nullptr) continue;
     intervals.build(d, ctx.step[d]);
     auto visit = [&](int ix, int iy, int iz) {
-      const int lo[3] = {intervals.bounds[0][ix].first, intervals.bounds[1][iy].first, intervals.bounds[2][iz].first};
+      const int lo[3] = {intervals.bounds[0][ix].first, intervals.bounds[1][iy].first,
+                         intervals.bounds[2][iz].first};
       const int hi[3] = {intervals.bounds[0][ix].second, intervals.bounds[1][iy].second,
                          intervals.bounds[2][iz].second};
       const bool core = d == 0 && hi[0] < kBlockUnits && hi[1] < kBlockUnits && hi[2] < kBlockUnits;

@@ -20,11 +20,11 @@ bool blockField(const Voxel* voxels, int level, const int local[3], float* sdf, 
   const int shift = level + 1;
   const int mask = den - 1;
   // Most points are voxel centres: read the voxel (what the interpolation below yields).
-  if (((local[0] - step) & mask) == 0 && ((local[1] - step) & mask) == 0 && ((local[2] - step) & mask) == 0 &&
-      local[0] > 0 && local[1] > 0 && local[2] > 0 && local[0] < kBlockUnits &&
-      local[1] < kBlockUnits && local[2] < kBlockUnits) {
-    const Voxel& v = voxels[VoxelBlock::indexInLevel(side, (local[0] - step) >> shift, (local[1] - step) >> shift,
-                                                     (local[2] - step) >> shift)];
+  if (((local[0] - step) & mask) == 0 && ((local[1] - step) & mask) == 0 &&
+      ((local[2] - step) & mask) == 0 && local[0] > 0 && local[1] > 0 && local[2] > 0 &&
+      local[0] < kBlockUnits && local[1] < kBlockUnits && local[2] < kBlockUnits) {
+    const Voxel& v = voxels[VoxelBlock::indexInLevel(
+        side, (local[0] - step) >> shift, (local[1] - step) >> shift, (local[2] - step) >> shift)];
     if (!(v.weight > 0.0f)) return false;
     *sdf = v.sdf_m;
     rgb[0] = v.r;
@@ -48,8 +48,8 @@ bool blockField(const Voxel* voxels, int level, const int local[3], float* sdf, 
   // weight 1. The sums start at +0 as in the loop below, so −0 reads as +0 there too.
   if ((frac[0] == 0.0f || frac[0] == 1.0f) && (frac[1] == 0.0f || frac[1] == 1.0f) &&
       (frac[2] == 0.0f || frac[2] == 1.0f)) {
-    const Voxel& v = voxels[VoxelBlock::indexInLevel(side, i0[0] + (frac[0] == 1.0f), i0[1] + (frac[1] == 1.0f),
-                                                     i0[2] + (frac[2] == 1.0f))];
+    const Voxel& v = voxels[VoxelBlock::indexInLevel(
+        side, i0[0] + (frac[0] == 1.0f), i0[1] + (frac[1] == 1.0f), i0[2] + (frac[2] == 1.0f))];
     if (!(v.weight > 0.0f)) return false;
     *sdf = 0.0f + v.sdf_m;
     rgb[0] = 0.0f + v.r;

@@ -14,7 +14,8 @@ bool samplePoint(const MesherContext& ctx, int qx, int qy, int qz, PointSample* 
 
 /// samplePoint() through the owner's sample grid: each grid point is sampled once per owner.
 inline bool cachedSample(MesherContext& ctx, const int q[3], PointSample* out) {
-  const int gx = ctx.grid_index[0][q[0]], gy = ctx.grid_index[1][q[1]], gz = ctx.grid_index[2][q[2]];
+  const int gx = ctx.grid_index[0][q[0]], gy = ctx.grid_index[1][q[1]],
+            gz = ctx.grid_index[2][q[2]];
   if ((gx | gy | gz) < 0) return samplePoint(ctx, q[0], q[1], q[2], out);  // not expected
   const size_t g = (static_cast<size_t>(gz) * ctx.grid_dim[1] + gy) * ctx.grid_dim[0] + gx;
   MeshScratch& m = *ctx.scratch;

@@ -22,9 +22,9 @@ enum SampleState : uint8_t { kUnknown = 0, kObserved = 1, kUnobserved = 2 };
 
 /// Per-thread buffers reused across mesh() calls (BlockMesher::mesh() keeps one per thread).
 struct MeshScratch {
-  std::vector<Voxel> seam_fills[8];            // face-filled copies of the neighbourhood's blocks
-  std::vector<uint8_t> sample_state;           // SampleState per lattice grid point
-  std::vector<PointSample> samples;            // per grid point, valid when kObserved
+  std::vector<Voxel> seam_fills[8];   // face-filled copies of the neighbourhood's blocks
+  std::vector<uint8_t> sample_state;  // SampleState per lattice grid point
+  std::vector<PointSample> samples;   // per grid point, valid when kObserved
   // Generic-box scratch.
   std::vector<std::array<int, 3>> points;
   std::vector<PointSample> point_samples;  // per entry of `points`
@@ -45,7 +45,8 @@ struct MeshScratch {
 
   /// Readies uniform_edge_vertex for an owner whose sample grid has `points` points.
   void startUniformEdges(size_t points) {
-    if (uniform_edge_vertex.size() < 3 * points) uniform_edge_vertex.resize(3 * points, EdgeVertex{0, 0});
+    if (uniform_edge_vertex.size() < 3 * points)
+      uniform_edge_vertex.resize(3 * points, EdgeVertex{0, 0});
     if (++uniform_edge_stamp == 0) {  // wrapped: stale stamps could match again
       for (EdgeVertex& slot : uniform_edge_vertex) slot.stamp = 0;
       uniform_edge_stamp = 1;

@@ -24,7 +24,8 @@ inline void appendVertex(MesherContext& ctx, const int a[3], const PointSample& 
   ctx.out->positions.push_back(pos.cast<float>());
   std::array<uint8_t, 3> rgb;
   for (int k = 0; k < 3; ++k)
-    rgb[k] = static_cast<uint8_t>(std::clamp(sa.rgb[k] + t * (sb.rgb[k] - sa.rgb[k]) + 0.5f, 0.0f, 255.0f));
+    rgb[k] = static_cast<uint8_t>(
+        std::clamp(sa.rgb[k] + t * (sb.rgb[k] - sa.rgb[k]) + 0.5f, 0.0f, 255.0f));
   ctx.out->colors.push_back(rgb);
 }
 

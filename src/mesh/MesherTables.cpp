@@ -40,7 +40,8 @@ CrossingEdgeTable::CrossingEdgeTable() {
   for (int case_index = 0; case_index < 256; ++case_index)
     for (int e = 0; e < 12; ++e) {
       const mc::CubeEdge& edge = mc::cubeEdges()[e];
-      if (((case_index >> edge.corner_a) ^ (case_index >> edge.corner_b)) & 1) edges[case_index] |= 1u << e;
+      if (((case_index >> edge.corner_a) ^ (case_index >> edge.corner_b)) & 1)
+        edges[case_index] |= 1u << e;
     }
 }
 

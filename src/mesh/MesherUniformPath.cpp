@@ -33,7 +33,8 @@ struct UniformLattice {
   void buildRowMasks(const MesherContext& ctx) {
     const int level = ctx.level[0];
     const int side = levelSide(level);
-    const uint16_t row_bits = static_cast<uint16_t>((1u << side) - 1), face_bit = static_cast<uint16_t>(1u << side);
+    const uint16_t row_bits = static_cast<uint16_t>((1u << side) - 1),
+                   face_bit = static_cast<uint16_t>(1u << side);
     for (int k = 0; k <= side; ++k)
       for (int j = 0; j <= side; ++j) {
         // Centres 0..side-1 of the row come from one block, centre `side` from its +x neighbour.
@@ -41,11 +42,14 @@ struct UniformLattice {
         const int block_j = j == side ? 0 : j, block_k = k == side ? 0 : k;
         VoxelClasses row;
         if (ctx.nb[d] != nullptr)
-          row = classifyVoxels(&ctx.voxels[d][VoxelBlock::indexInLevel(side, 0, block_j, block_k)], side);
+          row = classifyVoxels(&ctx.voxels[d][VoxelBlock::indexInLevel(side, 0, block_j, block_k)],
+                               side);
         else
           row.unobserved = row_bits;
         if (ctx.nb[d + 1] != nullptr)
-          classifyVoxelsScalar(&ctx.voxels[d + 1][VoxelBlock::indexInLevel(side, 0, block_j, block_k)], 1, side, &row);
+          classifyVoxelsScalar(
+              &ctx.voxels[d + 1][VoxelBlock::indexInLevel(side, 0, block_j, block_k)], 1, side,
+              &row);
         else
           row.unobserved |= face_bit;
         row_negative[k][j] = static_cast<uint16_t>(row.negative);
@@ -67,7 +71,8 @@ struct UniformLattice {
         neg |= row_negative[k + dk][j + dj];
         nonneg |= row_nonnegative[k + dk][j + dj];
         unobserved |= row_unobserved[k + dk][j + dj];
-        unknown |= static_cast<uint16_t>(~(row_negative[k + dk][j + dj] | row_nonnegative[k + dk][j + dj]));
+        unknown |= static_cast<uint16_t>(
+            ~(row_negative[k + dk][j + dj] | row_nonnegative[k + dk][j + dj]));
       }
     // Over pairs (i, i+1): a candidate has no unobserved centre, and both signs or a centre
     // too near 0 to classify.
@@ -105,13 +110,16 @@ bool sampleUniformPoint(const MesherContext& ctx, float w, const int q[3], Point
   // The blocks touching q in increasing d (samplePoint()'s z, y, x order), and per axis the
   // voxel index in the offset-0 block (offset-1 blocks are read at index 0).
   int low_index[3];
-  for (int a = 0; a < 3; ++a) low_index[a] = q[a] >= kBlockUnits ? side - 1 : (q[a] - ctx.step[0]) >> shift;
-  const int offset_index[2][3] = {{low_index[0], low_index[1] * side, low_index[2] * side * side}, {0, 0, 0}};
+  for (int a = 0; a < 3; ++a)
+    low_index[a] = q[a] >= kBlockUnits ? side - 1 : (q[a] - ctx.step[0]) >> shift;
+  const int offset_index[2][3] = {{low_index[0], low_index[1] * side, low_index[2] * side * side},
+                                  {0, 0, 0}};
   float weight_sum = 0.0f, acc = 0.0f, acc_rgb[3] = {0, 0, 0};
   for (unsigned blocks = incidentBlocks(q, q); blocks != 0; blocks &= blocks - 1) {
     const int d = __builtin_ctz(blocks);
     if (ctx.nb[d] == nullptr) return false;
-    const Voxel& v = ctx.voxels[d][offset_index[d & 1][0] + offset_index[(d >> 1) & 1][1] + offset_index[d >> 2][2]];
+    const Voxel& v = ctx.voxels[d][offset_index[d & 1][0] + offset_index[(d >> 1) & 1][1] +
+                                   offset_index[d >> 2][2]];
     if (!(v.weight > 0.0f)) return false;
     weight_sum += w;
     acc += w * v.sdf_m;
@@ -128,10 +136,12 @@ bool sampleUniformPoint(const MesherContext& ctx, float w, const int q[3], Point
 /// The general path's meshBox() + its plain-box case for a uniform neighbourhood (every box
 /// plain): corners by cache slot, only the crossing edges tested for the truncation band,
 /// edges → vertices by slot.
-void meshUniformBox(MesherContext& ctx, const UniformLattice& lattice, const int lo[3], const int hi[3],
-                    const int grid_lo[3]) {
+void meshUniformBox(MesherContext& ctx, const UniformLattice& lattice, const int lo[3],
+                    const int hi[3], const int grid_lo[3]) {
   MeshScratch& m = *ctx.scratch;
-  const size_t base = grid_lo[0] + ctx.grid_dim[0] * (grid_lo[1] + static_cast<size_t>(ctx.grid_dim[1]) * grid_lo[2]);
+  const size_t base =
+      grid_lo[0] +
+      ctx.grid_dim[0] * (grid_lo[1] + static_cast<size_t>(ctx.grid_dim[1]) * grid_lo[2]);
   size_t slot[8];
   int case_index = 0;
   for (int c = 0; c < 8; ++c) {
@@ -161,8 +171,10 @@ void meshUniformBox(MesherContext& ctx, const UniformLattice& lattice, const int
       MeshScratch::EdgeVertex& entry = m.uniform_edge_vertex[3 * slot[e.corner_a] + axis];
       if (entry.stamp != m.uniform_edge_stamp) {
         // corner_a is the low end on `axis`: the canonical direction the general path uses.
-        const int a[3] = {(e.corner_a & 1) ? hi[0] : lo[0], (e.corner_a & 2) ? hi[1] : lo[1], (e.corner_a & 4) ? hi[2] : lo[2]};
-        const int b[3] = {(e.corner_b & 1) ? hi[0] : lo[0], (e.corner_b & 2) ? hi[1] : lo[1], (e.corner_b & 4) ? hi[2] : lo[2]};
+        const int a[3] = {(e.corner_a & 1) ? hi[0] : lo[0], (e.corner_a & 2) ? hi[1] : lo[1],
+                          (e.corner_a & 4) ? hi[2] : lo[2]};
+        const int b[3] = {(e.corner_b & 1) ? hi[0] : lo[0], (e.corner_b & 2) ? hi[1] : lo[1],
+                          (e.corner_b & 4) ? hi[2] : lo[2]};
         entry = {m.uniform_edge_stamp, static_cast<uint32_t>(ctx.out->positions.size())};
         appendVertex(ctx, a, m.samples[slot[e.corner_a]], b, m.samples[slot[e.corner_b]]);
       }
@@ -211,7 +223,8 @@ void meshUniformBoxes(MesherContext& ctx) {
       first[a] = (d >> a) & 1 ? side - 1 : 0;
       last[a] = side - 1;
     }
-    const uint16_t x_range = static_cast<uint16_t>(((1u << (last[0] + 1)) - 1) & ~((1u << first[0]) - 1));
+    const uint16_t x_range =
+        static_cast<uint16_t>(((1u << (last[0] + 1)) - 1) & ~((1u << first[0]) - 1));
     for (int k = first[2]; k <= last[2]; ++k)
       for (int j = first[1]; j <= last[1]; ++j)
         for (uint16_t bits = candidates[k][j] & x_range; bits != 0; bits &= bits - 1) {

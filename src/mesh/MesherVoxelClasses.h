@@ -21,8 +21,10 @@ inline void classifyVoxelsScalar(const Voxel* voxels, int count, int first_bit, 
   for (int i = 0; i < count; ++i) {
     const bool observed = voxels[i].weight > 0.0f;
     out->unobserved |= static_cast<unsigned>(!observed) << (first_bit + i);
-    out->nonnegative |= static_cast<unsigned>(observed && voxels[i].sdf_m >= 0.0f) << (first_bit + i);
-    out->negative |= static_cast<unsigned>(observed && voxels[i].sdf_m < -1e-30f) << (first_bit + i);
+    out->nonnegative |= static_cast<unsigned>(observed && voxels[i].sdf_m >= 0.0f)
+                        << (first_bit + i);
+    out->negative |= static_cast<unsigned>(observed && voxels[i].sdf_m < -1e-30f)
+                     << (first_bit + i);
   }
 }
 
@@ -40,15 +42,19 @@ inline VoxelClasses classifyVoxels(const Voxel* voxels, int count) {
       // 4 voxels = 12 floats: s0 w0 c0 s1 | w1 c1 s2 w2 | c2 s3 w3 c3.
       const float* f = &voxels[first].sdf_m;
       const __m128 a = _mm_loadu_ps(f), b = _mm_loadu_ps(f + 4), c = _mm_loadu_ps(f + 8);
-      const __m128 sdf = _mm_insert_ps(_mm_shuffle_ps(a, b, _MM_SHUFFLE(2, 2, 3, 0)), c, (1 << 6) | (3 << 4));
-      const __m128 w123 = _mm_shuffle_ps(b, c, _MM_SHUFFLE(2, 2, 3, 0));              // w1 w2 w3 w3
-      const __m128 w0011 = _mm_shuffle_ps(a, w123, _MM_SHUFFLE(0, 0, 1, 1));          // w0 w0 w1 w1
-      const __m128 weight = _mm_shuffle_ps(w0011, w123, _MM_SHUFFLE(2, 1, 2, 0));     // w0 w1 w2 w3
+      const __m128 sdf =
+          _mm_insert_ps(_mm_shuffle_ps(a, b, _MM_SHUFFLE(2, 2, 3, 0)), c, (1 << 6) | (3 << 4));
+      const __m128 w123 = _mm_shuffle_ps(b, c, _MM_SHUFFLE(2, 2, 3, 0));           // w1 w2 w3 w3
+      const __m128 w0011 = _mm_shuffle_ps(a, w123, _MM_SHUFFLE(0, 0, 1, 1));       // w0 w0 w1 w1
+      const __m128 weight = _mm_shuffle_ps(w0011, w123, _MM_SHUFFLE(2, 1, 2, 0));  // w0 w1 w2 w3
       const __m128 observed = _mm_cmpgt_ps(weight, zero);
       const unsigned observed_bits = static_cast<unsigned>(_mm_movemask_ps(observed));
       out.unobserved |= (~observed_bits & 0xFu) << first;
-      out.nonnegative |= static_cast<unsigned>(_mm_movemask_ps(_mm_and_ps(observed, _mm_cmpge_ps(sdf, zero)))) << first;
-      out.negative |= static_cast<unsigned>(_mm_movemask_ps(_mm_and_ps(observed, _mm_cmplt_ps(sdf, tiny_negative))))
+      out.nonnegative |=
+          static_cast<unsigned>(_mm_movemask_ps(_mm_and_ps(observed, _mm_cmpge_ps(sdf, zero))))
+          << first;
+      out.negative |= static_cast<unsigned>(
+                          _mm_movemask_ps(_mm_and_ps(observed, _mm_cmplt_ps(sdf, tiny_negative))))
                       << first;
     }
     return out;

@@ -15,7 +15,8 @@ Eigen::Vector3f sampleBilinear(const cv::Mat& image, const Eigen::Vector2f& uv) 
     const cv::Vec3b& p = image.at<cv::Vec3b>(r, c);
     return Eigen::Vector3f(p[0], p[1], p[2]);
   };
-  return (1 - ay) * ((1 - ax) * at(y0, x0) + ax * at(y0, x1)) + ay * ((1 - ax) * at(y1, x0) + ax * at(y1, x1));
+  return (1 - ay) * ((1 - ax) * at(y0, x0) + ax * at(y0, x1)) +
+         ay * ((1 - ax) * at(y1, x0) + ax * at(y1, x1));
 }
 
 }  // namespace stereo_fusion

@@ -42,8 +42,8 @@ struct Scratch {
 
 /// Re-scores `patch` for the (possibly changed) vertices of `mesh` and writes their UVs to
 /// `uvs`. False when a vertex leaves the patch or its camera.
-bool reprojectPatch(const TexturePatch& patch, const SubMesh& mesh, std::vector<Eigen::Vector2f>* uvs,
-                    double* score, Scratch* s) {
+bool reprojectPatch(const TexturePatch& patch, const SubMesh& mesh,
+                    std::vector<Eigen::Vector2f>* uvs, double* score, Scratch* s) {
   const size_t n = mesh.positions.size();
   uvs->resize(n);
   s->uv_px.resize(n);
@@ -51,8 +51,10 @@ bool reprojectPatch(const TexturePatch& patch, const SubMesh& mesh, std::vector<
   for (size_t v = 0; v < n; ++v) {
     const Eigen::Vector3d p = patch.T_camera_world * mesh.positions[v].cast<double>();
     if (!(p.z() > 0)) return false;
-    const Eigen::Vector2d px(patch.fx_px * p.x() / p.z() + patch.cx_px, patch.fy_px * p.y() / p.z() + patch.cy_px);
-    const Eigen::Vector2d uv = (px - patch.crop_origin_px + Eigen::Vector2d::Constant(0.5)).cwiseQuotient(patch.crop_size_px);
+    const Eigen::Vector2d px(patch.fx_px * p.x() / p.z() + patch.cx_px,
+                             patch.fy_px * p.y() / p.z() + patch.cy_px);
+    const Eigen::Vector2d uv = (px - patch.crop_origin_px + Eigen::Vector2d::Constant(0.5))
+                                   .cwiseQuotient(patch.crop_size_px);
     if (!(uv.x() >= 0 && uv.x() <= 1 && uv.y() >= 0 && uv.y() <= 1)) return false;
     (*uvs)[v] = uv.cast<float>();
     s->uv_px[v] = px;
@@ -71,14 +73,16 @@ struct Candidate {
   cv::Rect crop;
 };
 
-Candidate evaluateFrame(const SubMesh& mesh, const StereoFrame& frame, const Eigen::Isometry3d& T_camera_world,
-                        const TextureParams& params, Scratch* s) {
+Candidate evaluateFrame(const SubMesh& mesh, const StereoFrame& frame,
+                        const Eigen::Isometry3d& T_camera_world, const TextureParams& params,
+                        Scratch* s) {
   Candidate c;
   const StereoCamera& cam = frame.camera;
   const size_t n = mesh.positions.size();
   s->uv_px.resize(n);
   s->p_camera.resize(n);
-  const double tolerance_m = TruncationBand(params.voxel_size_m, params.truncation_vox).measurementM(mesh.level);
+  const double tolerance_m =
+      TruncationBand(params.voxel_size_m, params.truncation_vox).measurementM(mesh.level);
   Eigen::Vector2d lo(INFINITY, INFINITY), hi(-INFINITY, -INFINITY);
   for (size_t v = 0; v < n; ++v) {
     const Eigen::Vector3d p = T_camera_world * mesh.positions[v].cast<double>();
@@ -86,7 +90,8 @@ Candidate evaluateFrame(const SubMesh& mesh, const StereoFrame& frame, const Eig
     if (!cam.project(p, &uv) || !cam.isInImage(uv, params.border_px)) return c;
     // Occlusion: any measured surface around the vertex's pixel clearly in front of it means
     // this frame sees something else there (the occluder's colour, or its edge blended in).
-    const int pu = static_cast<int>(std::floor(uv.x() + 0.5)), pv = static_cast<int>(std::floor(uv.y() + 0.5));
+    const int pu = static_cast<int>(std::floor(uv.x() + 0.5)),
+              pv = static_cast<int>(std::floor(uv.y() + 0.5));
     for (int y = std::max(pv - 1, 0); y <= std::min(pv + 1, cam.height() - 1); ++y) {
       const float* row = frame.disparity_px.ptr<float>(y);
       for (int x = std::max(pu - 1, 0); x <= std::min(pu + 1, cam.width() - 1); ++x) {
@@ -109,14 +114,16 @@ Candidate evaluateFrame(const SubMesh& mesh, const StereoFrame& frame, const Eig
   const int x1 = std::min(cam.width(), static_cast<int>(std::ceil(hi.x())) + 2);
   const int y1 = std::min(cam.height(), static_cast<int>(std::ceil(hi.y())) + 2);
   c.crop = cv::Rect(x0, y0, x1 - x0, y1 - y0);
-  const double k = std::min(1.0, static_cast<double>(params.max_patch_px) / std::max(c.crop.width, c.crop.height));
+  const double k = std::min(
+      1.0, static_cast<double>(params.max_patch_px) / std::max(c.crop.width, c.crop.height));
   c.score = texelDensity(mesh, s->uv_px, s->p_camera) * k * k;
   c.ok = c.score > 0;
   return c;
 }
 
-TexturePatch cutPatch(const SubMesh& mesh, const StereoFrame& frame, const Eigen::Isometry3d& T_camera_world,
-                      const Candidate& c, uint64_t frame_index, const TextureParams& params, const Scratch& s) {
+TexturePatch cutPatch(const SubMesh& mesh, const StereoFrame& frame,
+                      const Eigen::Isometry3d& T_camera_world, const Candidate& c,
+                      uint64_t frame_index, const TextureParams& params, const Scratch& s) {
   TexturePatch patch;
   const cv::Mat crop = frame.color(c.crop);
   cv::Mat rgb;
@@ -157,23 +164,28 @@ enum class Outcome { kNone, kNew, kReprojected };
 struct BlockResult {
   Outcome outcome = Outcome::kNone;
   bool occluded = false;
-  TexturePatch patch;               // kNew
+  TexturePatch patch;                // kNew
   std::vector<Eigen::Vector2f> uvs;  // kReprojected
   double score = 0;                  // kReprojected
 };
 
 }  // namespace
 
-bool projectIntoPatch(const TexturePatch& patch, const Eigen::Vector3f& p_world, Eigen::Vector2f* uv) {
+bool projectIntoPatch(const TexturePatch& patch, const Eigen::Vector3f& p_world,
+                      Eigen::Vector2f* uv) {
   const Eigen::Vector3d p = patch.T_camera_world * p_world.cast<double>();
   if (!(p.z() > 0)) return false;
-  const Eigen::Vector2d px(patch.fx_px * p.x() / p.z() + patch.cx_px, patch.fy_px * p.y() / p.z() + patch.cy_px);
-  *uv = ((px - patch.crop_origin_px + Eigen::Vector2d::Constant(0.5)).cwiseQuotient(patch.crop_size_px)).cast<float>();
+  const Eigen::Vector2d px(patch.fx_px * p.x() / p.z() + patch.cx_px,
+                           patch.fy_px * p.y() / p.z() + patch.cy_px);
+  *uv = ((px - patch.crop_origin_px + Eigen::Vector2d::Constant(0.5))
+             .cwiseQuotient(patch.crop_size_px))
+            .cast<float>();
   return true;
 }
 
-TextureStats TextureStore::update(const MeshStore& meshes, const MeshChanges& changes, const StereoFrame& frame,
-                                  uint64_t frame_index, ThreadPool* pool) {
+TextureStats TextureStore::update(const MeshStore& meshes, const MeshChanges& changes,
+                                  const StereoFrame& frame, uint64_t frame_index,
+                                  ThreadPool* pool) {
   Timer timer;
   TextureStats stats;
   for (const BlockKey& key : changes.removed) patches_.erase(key);
@@ -236,7 +248,8 @@ void TextureStore::reprojectAll(const MeshStore& meshes) {
     const auto mesh_it = meshes.submeshes().find(it->first);
     std::vector<Eigen::Vector2f> uvs;
     double score = 0;
-    if (mesh_it != meshes.submeshes().end() && reprojectPatch(it->second, mesh_it->second, &uvs, &score, &scratch)) {
+    if (mesh_it != meshes.submeshes().end() &&
+        reprojectPatch(it->second, mesh_it->second, &uvs, &score, &scratch)) {
       it->second.uvs = std::move(uvs);
       it->second.score_px2_per_m2 = score;
       ++it;

@@ -13,7 +13,9 @@ struct Ref {
   int cell = 0;
 };
 
-bool lexLess(const CellIndex& a, const CellIndex& b) { return std::tie(a.z, a.y, a.x) < std::tie(b.z, b.y, b.x); }
+bool lexLess(const CellIndex& a, const CellIndex& b) {
+  return std::tie(a.z, a.y, a.x) < std::tie(b.z, b.y, b.x);
+}
 
 uint32_t squaredDistance(const CellIndex& a, const CellIndex& b) {
   const int64_t dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z;
@@ -68,8 +70,10 @@ class Propagation {
     const BlockKey key = planningBlockOf(c);
     // A direct-mapped cache of blocks (present or absent): a cell's 26 neighbours and their
     // sites lie in a handful of blocks, and the table is not changed while this runs.
-    CacheEntry& entry = cache_[(static_cast<uint32_t>(key.x) * 7u + static_cast<uint32_t>(key.y) * 13u +
-                                static_cast<uint32_t>(key.z) * 31u) & (kCacheSize - 1)];
+    CacheEntry& entry =
+        cache_[(static_cast<uint32_t>(key.x) * 7u + static_cast<uint32_t>(key.y) * 13u +
+                static_cast<uint32_t>(key.z) * 31u) &
+               (kCacheSize - 1)];
     if (!entry.valid || !(entry.key == key)) {
       const auto it = blocks_->find(key);
       entry.block = it == blocks_->end() ? nullptr : it->second.get();
@@ -78,7 +82,9 @@ class Propagation {
     }
     return {entry.block, cellInBlock(c)};
   }
-  static bool occupied(const Ref& r) { return r.block && PlanningBlock::test(r.block->occupied, r.cell); }
+  static bool occupied(const Ref& r) {
+    return r.block && PlanningBlock::test(r.block->occupied, r.cell);
+  }
   static CellIndex siteOf(const CellIndex& c, const Ref& r) {
     const auto& s = r.block->site[r.cell];
     return c.offset(s[0], s[1], s[2]);
@@ -97,7 +103,8 @@ class Propagation {
     const uint16_t current = rn.block->dist2[rn.cell];
     if (current != PlanningBlock::kNoSite && d2 >= current) return;
     rn.block->dist2[rn.cell] = static_cast<uint16_t>(d2);
-    rn.block->site[rn.cell] = {static_cast<int8_t>(candidate.x - n.x), static_cast<int8_t>(candidate.y - n.y),
+    rn.block->site[rn.cell] = {static_cast<int8_t>(candidate.x - n.x),
+                               static_cast<int8_t>(candidate.y - n.y),
                                static_cast<int8_t>(candidate.z - n.z)};
     open_.push(d2, n);
     ++lowered_;
@@ -165,7 +172,8 @@ class Propagation {
     for (size_t i = 0; i < cleared.size(); ++i) {
       forEachNeighbour(cleared[i], [&](const CellIndex& n) {
         const Ref rn = at(n);
-        if (!rn.block || rn.block->dist2[rn.cell] == PlanningBlock::kNoSite || siteValid(n, rn)) return;
+        if (!rn.block || rn.block->dist2[rn.cell] == PlanningBlock::kNoSite || siteValid(n, rn))
+          return;
         clearSite(at(n));
         cleared.push_back(n);
       });

@@ -42,7 +42,8 @@ void FreeSpaceRecorder::buildTiles(const MeasurementImage& measurements) {
       for (int tx = 0; tx < base.tiles_x; ++tx) {
         float lo = std::numeric_limits<float>::infinity(), hi = 0.0f;
         bool said = false, unmeasured_pixel = false;
-        for (int v = static_cast<int>(ty) * kTilePx; v < std::min(static_cast<int>(ty + 1) * kTilePx, height); ++v)
+        for (int v = static_cast<int>(ty) * kTilePx;
+             v < std::min(static_cast<int>(ty + 1) * kTilePx, height); ++v)
           for (int u = tx * kTilePx; u < std::min((tx + 1) * kTilePx, width); ++u) {
             const float z = depth[static_cast<size_t>(v) * width + u];
             if (!(z > 0.0f)) {
@@ -85,8 +86,9 @@ void FreeSpaceRecorder::buildTiles(const MeasurementImage& measurements) {
   }
 }
 
-FreeSpaceStats FreeSpaceRecorder::record(const StereoFrame& frame, const MeasurementImage& measurements,
-                                         std::vector<std::pair<BlockKey, PlanningBlock::Bits>>* seen_free) {
+FreeSpaceStats FreeSpaceRecorder::record(
+    const StereoFrame& frame, const MeasurementImage& measurements,
+    std::vector<std::pair<BlockKey, PlanningBlock::Bits>>* seen_free) {
   seen_free->clear();
   FreeSpaceStats stats;
   if (measurements.width() <= 0 || measurements.height() <= 0) return stats;
@@ -104,7 +106,8 @@ FreeSpaceStats FreeSpaceRecorder::record(const StereoFrame& frame, const Measure
   Eigen::AlignedBox3d box(frame.T_world_camera.translation());
   for (double u : {-0.5, width - 0.5})
     for (double v : {-0.5, height - 0.5})
-      box.extend(frame.T_world_camera * Eigen::Vector3d(far_m * (u - cx) / fx, far_m * (v - cy) / fy, far_m));
+      box.extend(frame.T_world_camera *
+                 Eigen::Vector3d(far_m * (u - cx) / fx, far_m * (v - cy) / fy, far_m));
   const double root_m = kRootCells * cell_m;
   std::array<int64_t, 3> lo, hi;
   for (int a = 0; a < 3; ++a) {
@@ -124,7 +127,8 @@ FreeSpaceStats FreeSpaceRecorder::record(const StereoFrame& frame, const Measure
     for (size_t r = begin; r < end; ++r) {
       RootOutput& out = outputs[r];
       const CellIndex root = roots[r];
-      // A block's bits are one 64-bit word per z slice, a byte per row of x (PlanningBlock::index()).
+      // A block's bits are one 64-bit word per z slice, a byte per row of x
+      // (PlanningBlock::index()).
       auto markFree = [&](const CellIndex& o, int size) {
         const int lx = o.x - root.x, ly = o.y - root.y, lz = o.z - root.z;
         if (size >= PlanningBlock::kSide) {  // whole blocks
@@ -133,7 +137,8 @@ FreeSpaceStats FreeSpaceRecorder::record(const StereoFrame& frame, const Measure
               for (int bx = lx / 8; bx < (lx + size) / 8; ++bx)
                 out.blocks[bx + kRootBlocks * (by + kRootBlocks * bz)].fill(~uint64_t{0});
         } else {  // inside one block
-          PlanningBlock::Bits& bits = out.blocks[lx / 8 + kRootBlocks * (ly / 8 + kRootBlocks * (lz / 8))];
+          PlanningBlock::Bits& bits =
+              out.blocks[lx / 8 + kRootBlocks * (ly / 8 + kRootBlocks * (lz / 8))];
           const uint64_t row = ((uint64_t{1} << size) - 1) << (lx % 8);
           uint64_t slice = 0;
           for (int y = ly % 8; y < ly % 8 + size; ++y) slice |= row << (8 * y);
@@ -148,16 +153,21 @@ FreeSpaceStats FreeSpaceRecorder::record(const StereoFrame& frame, const Measure
       // it with a dot product each — outside one: nothing of it is seen; inside all: its
       // footprint and depth range come from its extent in camera coordinates.
       const Eigen::Matrix3f R = T_camera_world.linear().cast<float>();
-      const Eigen::Vector3f axis_x = R.col(0) * static_cast<float>(cell_m), axis_y = R.col(1) * static_cast<float>(cell_m),
+      const Eigen::Vector3f axis_x = R.col(0) * static_cast<float>(cell_m),
+                            axis_y = R.col(1) * static_cast<float>(cell_m),
                             axis_z = R.col(2) * static_cast<float>(cell_m);
-      const float fxf = static_cast<float>(fx), fyf = static_cast<float>(fy), cxf = static_cast<float>(cx),
-                  cyf = static_cast<float>(cy), far_f = static_cast<float>(far_m);
+      const float fxf = static_cast<float>(fx), fyf = static_cast<float>(fy),
+                  cxf = static_cast<float>(cx), cyf = static_cast<float>(cy),
+                  far_f = static_cast<float>(far_m);
       // Half extent of a one-cell node along each camera axis.
-      const Eigen::Vector3f half_extent = 0.5f * (axis_x.cwiseAbs() + axis_y.cwiseAbs() + axis_z.cwiseAbs());
+      const Eigen::Vector3f half_extent =
+          0.5f * (axis_x.cwiseAbs() + axis_y.cwiseAbs() + axis_z.cwiseAbs());
       constexpr float kMinDepthM = 1e-3f;
       const std::array<Eigen::Vector4f, 5> planes = {
-          Eigen::Vector4f(fxf, 0.0f, cxf + 0.5f, 0.0f), Eigen::Vector4f(-fxf, 0.0f, width - 0.5f - cxf, 0.0f),
-          Eigen::Vector4f(0.0f, fyf, cyf + 0.5f, 0.0f), Eigen::Vector4f(0.0f, -fyf, height - 0.5f - cyf, 0.0f),
+          Eigen::Vector4f(fxf, 0.0f, cxf + 0.5f, 0.0f),
+          Eigen::Vector4f(-fxf, 0.0f, width - 0.5f - cxf, 0.0f),
+          Eigen::Vector4f(0.0f, fyf, cyf + 0.5f, 0.0f),
+          Eigen::Vector4f(0.0f, -fyf, height - 0.5f - cyf, 0.0f),
           Eigen::Vector4f(0.0f, 0.0f, 1.0f, -kMinDepthM)};
       std::array<float, 5> plane_extent;  // a one-cell node's extent along each plane's normal
       for (int p = 0; p < 5; ++p) plane_extent[p] = planes[p].head<3>().cwiseAbs().dot(half_extent);
@@ -196,7 +206,8 @@ FreeSpaceStats FreeSpaceRecorder::record(const StereoFrame& frame, const Measure
             for (int j = 0; j < 2; ++j)
               for (int i = 0; i < 2; ++i)
                 self(self, o.offset(i * h, j * h, k * h),
-                     corner_c + hs * (float(i) * axis_x + float(j) * axis_y + float(k) * axis_z), h, child_bounds);
+                     corner_c + hs * (float(i) * axis_x + float(j) * axis_y + float(k) * axis_z), h,
+                     child_bounds);
         };
         // Footprint: u = fx·x/z + cx over the node's extent x ∈ [c.x ± ·], z ∈ [z_near, z_far];
         // clipped to the image for a node partly out of view.
@@ -214,13 +225,15 @@ FreeSpaceStats FreeSpaceRecorder::record(const StereoFrame& frame, const Measure
         // Clamped in float first (a node near the camera plane projects far beyond int); then
         // + 0.5 truncates as floor (≥ 0).
         auto pixel = [](float coordinate_px, int size_px) {
-          return static_cast<int>(std::clamp(coordinate_px + 0.5f, 0.0f, static_cast<float>(size_px - 1)));
+          return static_cast<int>(
+              std::clamp(coordinate_px + 0.5f, 0.0f, static_cast<float>(size_px - 1)));
         };
         const int px0 = pixel(u_lo, width), px1 = pixel(u_hi, width);
         const int py0 = pixel(v_lo, height), py1 = pixel(v_hi, height);
         int level = 0;
-        while (level < top_level && ((px1 / pyramid_[level].tile_px - px0 / pyramid_[level].tile_px > 3) ||
-                                     (py1 / pyramid_[level].tile_px - py0 / pyramid_[level].tile_px > 3)))
+        while (level < top_level &&
+               ((px1 / pyramid_[level].tile_px - px0 / pyramid_[level].tile_px > 3) ||
+                (py1 / pyramid_[level].tile_px - py0 / pyramid_[level].tile_px > 3)))
           ++level;
         const TileLevel& tiles = pyramid_[level];
         float min_free = std::numeric_limits<float>::infinity(), max_free = 0.0f;
@@ -243,7 +256,8 @@ FreeSpaceStats FreeSpaceRecorder::record(const StereoFrame& frame, const Measure
         if (size > 1) split(&mine);
       };
       const Eigen::Vector3f root_c =
-          (T_camera_world * Eigen::Vector3d(root.x * cell_m, root.y * cell_m, root.z * cell_m)).cast<float>();
+          (T_camera_world * Eigen::Vector3d(root.x * cell_m, root.y * cell_m, root.z * cell_m))
+              .cast<float>();
       visit(visit, root, root_c, kRootCells, nullptr);
     }
   });
@@ -253,7 +267,8 @@ FreeSpaceStats FreeSpaceRecorder::record(const StereoFrame& frame, const Measure
     if (!outputs[r].any) continue;
     for (int b = 0; b < kRootBlocks * kRootBlocks * kRootBlocks; ++b) {
       if (!PlanningBlock::any(outputs[r].blocks[b])) continue;
-      const BlockKey key{roots[r].x / 8 + b % kRootBlocks, roots[r].y / 8 + (b / kRootBlocks) % kRootBlocks,
+      const BlockKey key{roots[r].x / 8 + b % kRootBlocks,
+                         roots[r].y / 8 + (b / kRootBlocks) % kRootBlocks,
                          roots[r].z / 8 + b / (kRootBlocks * kRootBlocks)};
       seen_free->emplace_back(key, outputs[r].blocks[b]);
     }

@@ -14,7 +14,8 @@ OccupancyGrid2D projectOccupancy(const PlanningMap& planning, double min_z_m, do
     CellState state;
   };
   std::vector<Column> columns;
-  int32_t x0 = std::numeric_limits<int32_t>::max(), y0 = x0, x1 = std::numeric_limits<int32_t>::min(), y1 = x1;
+  int32_t x0 = std::numeric_limits<int32_t>::max(), y0 = x0,
+          x1 = std::numeric_limits<int32_t>::min(), y1 = x1;
   planning.forEachKnownCell([&](const CellIndex& c, CellState state, double) {
     const double z = g.centre(c).z();
     if (z < min_z_m || z > max_z_m) return;

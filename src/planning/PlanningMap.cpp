@@ -24,7 +24,8 @@ PlanningMap::PlanningMap(const PlanningConfig& config, ThreadPool* pool)
     : config_(config),
       grid_{config.cell_m},
       pool_(pool),
-      recorder_(FreeSpaceRecorder::Params{config.cell_m, config.unmeasured_range_m, config.band}, pool) {
+      recorder_(FreeSpaceRecorder::Params{config.cell_m, config.unmeasured_range_m, config.band},
+                pool) {
   const double cells = config.max_distance_m / config.cell_m;
   max_dist2_ = static_cast<uint32_t>(std::floor(cells * cells + 1e-9));
 }
@@ -38,7 +39,8 @@ PlanningBlock* PlanningMap::allocate(const BlockKey& key) {
   return slot.get();
 }
 
-FreeSpaceStats PlanningMap::recordFreeSpace(const StereoFrame& frame, const MeasurementImage& measurements) {
+FreeSpaceStats PlanningMap::recordFreeSpace(const StereoFrame& frame,
+                                            const MeasurementImage& measurements) {
   const FreeSpaceStats stats = recorder_.record(frame, measurements, &seen_scratch_);
   addSeenFree(seen_scratch_);
   return stats;
@@ -46,17 +48,20 @@ FreeSpaceStats PlanningMap::recordFreeSpace(const StereoFrame& frame, const Meas
 
 namespace {
 /// The TSDF's cell states of `keys`, computed in parallel (reads the octree only).
-std::vector<std::vector<TsdfCellState>> readTsdfCells(const BlockOctree& octree, const std::vector<BlockKey>& keys,
+std::vector<std::vector<TsdfCellState>> readTsdfCells(const BlockOctree& octree,
+                                                      const std::vector<BlockKey>& keys,
                                                       int voxels_per_cell, ThreadPool* pool) {
   std::vector<std::vector<TsdfCellState>> states(keys.size());
   pool->parallelFor(keys.size(), 16, [&](size_t begin, size_t end) {
-    for (size_t i = begin; i < end; ++i) tsdfCellStates(keys[i], octree.find(keys[i]), voxels_per_cell, &states[i]);
+    for (size_t i = begin; i < end; ++i)
+      tsdfCellStates(keys[i], octree.find(keys[i]), voxels_per_cell, &states[i]);
   });
   return states;
 }
 }  // namespace
 
-PlanningUpdateStats PlanningMap::update(const BlockOctree& octree, const std::vector<BlockKey>& updated,
+PlanningUpdateStats PlanningMap::update(const BlockOctree& octree,
+                                        const std::vector<BlockKey>& updated,
                                         const std::vector<BlockKey>& erased) {
   PlanningUpdateStats stats;
   std::vector<BlockKey> keys = updated;
@@ -152,9 +157,12 @@ void PlanningMap::clearRegion(const MapRegion& region) {
   const double block_m = grid_.blockM();
   for (auto& [key, block] : blocks_) {
     const Eigen::Vector3d origin(key.x * block_m, key.y * block_m, key.z * block_m);
-    if (!region.intersects(Eigen::AlignedBox3d(origin, origin + Eigen::Vector3d::Constant(block_m)))) continue;
+    if (!region.intersects(
+            Eigen::AlignedBox3d(origin, origin + Eigen::Vector3d::Constant(block_m))))
+      continue;
     for (int cell = 0; cell < PlanningBlock::kCells; ++cell)
-      if (region.contains(grid_.centre(cellOf(key, cell)))) PlanningBlock::set(&block->seen_free, cell, false);
+      if (region.contains(grid_.centre(cellOf(key, cell))))
+        PlanningBlock::set(&block->seen_free, cell, false);
     maybe_empty_.push_back(key);
   }
 }
@@ -163,7 +171,8 @@ void PlanningMap::dropFartherThan(const Eigen::Vector3d& point_m, double max_dis
   std::unique_lock lock(mutex_);
   const double block_m = grid_.blockM();
   for (auto& [key, block] : blocks_) {
-    const Eigen::Vector3d centre((key.x + 0.5) * block_m, (key.y + 0.5) * block_m, (key.z + 0.5) * block_m);
+    const Eigen::Vector3d centre((key.x + 0.5) * block_m, (key.y + 0.5) * block_m,
+                                 (key.z + 0.5) * block_m);
     if ((centre - point_m).norm() <= max_distance_m) continue;
     // Its occupied cells go through the ESDF as flips at the next update, which then erases it.
     for (int cell = 0; cell < PlanningBlock::kCells; ++cell)
@@ -185,7 +194,8 @@ void PlanningMap::clear() {
 
 double PlanningMap::signedDistance(const PlanningBlock& block, int cell) const {
   const uint16_t d2 = block.dist2[cell];
-  const double distance = d2 == PlanningBlock::kNoSite ? config_.max_distance_m : std::sqrt(double(d2)) * grid_.cell_m;
+  const double distance =
+      d2 == PlanningBlock::kNoSite ? config_.max_distance_m : std::sqrt(double(d2)) * grid_.cell_m;
   return PlanningBlock::test(block.occupied, cell) ? -distance : distance;
 }
 
@@ -235,7 +245,8 @@ EsdfSample PlanningMap::sampleLocked(const Eigen::Vector3d& p_world) const {
   for (int k = 0; k < 2; ++k)
     for (int j = 0; j < 2; ++j)
       for (int i = 0; i < 2; ++i) {
-        const double wx = i ? t.x() : 1 - t.x(), wy = j ? t.y() : 1 - t.y(), wz = k ? t.z() : 1 - t.z();
+        const double wx = i ? t.x() : 1 - t.x(), wy = j ? t.y() : 1 - t.y(),
+                     wz = k ? t.z() : 1 - t.z();
         const double v = corner[k][j][i];
         value += wx * wy * wz * v;
         gradient.x() += (i ? 1 : -1) * wy * wz * v;
@@ -253,14 +264,16 @@ EsdfSample PlanningMap::sample(const Eigen::Vector3d& p_world) const {
   return sampleLocked(p_world);
 }
 
-void PlanningMap::sampleBatch(const std::vector<Eigen::Vector3d>& points, std::vector<EsdfSample>* out) const {
+void PlanningMap::sampleBatch(const std::vector<Eigen::Vector3d>& points,
+                              std::vector<EsdfSample>* out) const {
   out->resize(points.size());
   std::shared_lock lock(mutex_);
   // Not on the pool: a reader may run while the integrating thread uses it.
   for (size_t i = 0; i < points.size(); ++i) (*out)[i] = sampleLocked(points[i]);
 }
 
-void PlanningMap::forEachKnownCell(const std::function<void(const CellIndex&, CellState, double)>& fn) const {
+void PlanningMap::forEachKnownCell(
+    const std::function<void(const CellIndex&, CellState, double)>& fn) const {
   std::shared_lock lock(mutex_);
   std::vector<BlockKey> keys;
   keys.reserve(blocks_.size());
@@ -284,7 +297,8 @@ std::vector<std::pair<BlockKey, PlanningBlock::Bits>> PlanningMap::seenFree() co
   return out;
 }
 
-void PlanningMap::addSeenFree(const std::vector<std::pair<BlockKey, PlanningBlock::Bits>>& seen_free) {
+void PlanningMap::addSeenFree(
+    const std::vector<std::pair<BlockKey, PlanningBlock::Bits>>& seen_free) {
   std::unique_lock lock(mutex_);
   for (const auto& [key, bits] : seen_free) {
     PlanningBlock* block = allocate(key);

@@ -11,7 +11,8 @@ void tsdfCellStates(const BlockKey& tsdf_key, const VoxelBlock* block, int voxel
   for (int k = 0; k < cells; ++k)
     for (int j = 0; j < cells; ++j)
       for (int i = 0; i < cells; ++i)
-        out->push_back({CellIndex{tsdf_key.x * cells + i, tsdf_key.y * cells + j, tsdf_key.z * cells + k}});
+        out->push_back(
+            {CellIndex{tsdf_key.x * cells + i, tsdf_key.y * cells + j, tsdf_key.z * cells + k}});
   if (block == nullptr) return;
   // Per cell and level: bit 0 observed, bit 1 occupied.
   std::array<std::array<uint8_t, 512>, kNumLevels> flags{};
@@ -36,7 +37,8 @@ void tsdfCellStates(const BlockKey& tsdf_key, const VoxelBlock* block, int voxel
           range(z, &z0, &z1);
           for (int cz = z0; cz <= z1; ++cz)
             for (int cy = y0; cy <= y1; ++cy)
-              for (int cx = x0; cx <= x1; ++cx) flags[level][cx + cells * (cy + cells * cz)] |= bits;
+              for (int cx = x0; cx <= x1; ++cx)
+                flags[level][cx + cells * (cy + cells * cz)] |= bits;
         }
   }
   for (int c = 0; c < cells * cells * cells; ++c)

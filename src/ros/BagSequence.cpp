@@ -29,7 +29,8 @@ std::unique_ptr<BagSequence> BagSequence::open(const std::string& path, const Ba
     seq->tf_ = std::make_unique<tf2::BufferCore>(span);
     std::map<ros::Time, sensor_msgs::Image::ConstPtr> images;
     std::vector<sensor_msgs::CameraInfo::ConstPtr> infos;
-    rosbag::View view(bag, rosbag::TopicQuery({topics.disparity, topics.image, topics.camera_info, "/tf", "/tf_static"}));
+    rosbag::View view(bag, rosbag::TopicQuery({topics.disparity, topics.image, topics.camera_info,
+                                               "/tf", "/tf_static"}));
     for (const rosbag::MessageInstance& m : view) {
       if (m.getTopic() == "/tf" || m.getTopic() == "/tf_static") {
         if (auto tf = m.instantiate<tf2_msgs::TFMessage>()) {
@@ -71,7 +72,8 @@ bool BagSequence::load(size_t i, StereoFrame* frame, std::string* error) const {
     return false;
   }
   const auto& d = *disparities_[i];
-  const std::string where = "frame " + std::to_string(i) + " (stamp " + std::to_string(d.header.stamp.toSec()) + ")";
+  const std::string where =
+      "frame " + std::to_string(i) + " (stamp " + std::to_string(d.header.stamp.toSec()) + ")";
   if (!images_[i]) {
     *error = where + ": no image on " + topics_.image + " with the same stamp";
     return false;
@@ -82,9 +84,11 @@ bool BagSequence::load(size_t i, StereoFrame* frame, std::string* error) const {
   }
   Eigen::Isometry3d T_world_camera;
   try {
-    T_world_camera = tf2::transformToEigen(tf_->lookupTransform(topics_.world_frame, d.header.frame_id, d.header.stamp));
+    T_world_camera = tf2::transformToEigen(
+        tf_->lookupTransform(topics_.world_frame, d.header.frame_id, d.header.stamp));
   } catch (const tf2::TransformException& e) {
-    *error = where + ": no transform " + topics_.world_frame + " <- " + d.header.frame_id + ": " + e.what();
+    *error = where + ": no transform " + topics_.world_frame + " <- " + d.header.frame_id + ": " +
+             e.what();
     return false;
   }
   if (!toStereoFrame(d, *images_[i], *infos_[i], T_world_camera, frame, error)) {

@@ -12,7 +12,8 @@ geometry_msgs::Point toPoint(const Eigen::Vector3d& p) {
   return q;
 }
 
-visualization_msgs::Marker lineList(const std_msgs::Header& header, const char* ns, double width_m) {
+visualization_msgs::Marker lineList(const std_msgs::Header& header, const char* ns,
+                                    double width_m) {
   visualization_msgs::Marker m;
   m.header = header;
   m.ns = ns;
@@ -27,8 +28,9 @@ visualization_msgs::Marker lineList(const std_msgs::Header& header, const char* 
 
 }  // namespace
 
-visualization_msgs::Marker frustumMarker(const StereoCamera& camera, const Eigen::Isometry3d& T_world_camera,
-                                         double depth_m, const std_msgs::Header& header) {
+visualization_msgs::Marker frustumMarker(const StereoCamera& camera,
+                                         const Eigen::Isometry3d& T_world_camera, double depth_m,
+                                         const std_msgs::Header& header) {
   visualization_msgs::Marker m = lineList(header, "frustum", 0.01);
   m.color.r = 0.1f;
   m.color.g = 0.6f;
@@ -38,8 +40,9 @@ visualization_msgs::Marker frustumMarker(const StereoCamera& camera, const Eigen
   const double vs[4] = {-0.5, -0.5, camera.height() - 0.5, camera.height() - 0.5};
   Eigen::Vector3d corners[4];
   for (int k = 0; k < 4; ++k)
-    corners[k] = T_world_camera * Eigen::Vector3d((us[k] - camera.cx()) / camera.fx() * depth_m,
-                                                  (vs[k] - camera.cy()) / camera.fy() * depth_m, depth_m);
+    corners[k] =
+        T_world_camera * Eigen::Vector3d((us[k] - camera.cx()) / camera.fx() * depth_m,
+                                         (vs[k] - camera.cy()) / camera.fy() * depth_m, depth_m);
   const Eigen::Vector3d centre = T_world_camera.translation();
   for (int k = 0; k < 4; ++k) {
     m.points.push_back(toPoint(centre));
@@ -50,10 +53,12 @@ visualization_msgs::Marker frustumMarker(const StereoCamera& camera, const Eigen
   return m;
 }
 
-visualization_msgs::Marker blockBoundsMarker(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes,
-                                             double block_size_m, const std_msgs::Header& header) {
+visualization_msgs::Marker blockBoundsMarker(
+    const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes, double block_size_m,
+    const std_msgs::Header& header) {
   visualization_msgs::Marker m = lineList(header, "blocks", 0.002);
-  static const float kLevelColor[3][3] = {{0.2f, 0.8f, 0.2f}, {0.9f, 0.8f, 0.1f}, {0.9f, 0.2f, 0.2f}};
+  static const float kLevelColor[3][3] = {
+      {0.2f, 0.8f, 0.2f}, {0.9f, 0.8f, 0.1f}, {0.9f, 0.2f, 0.2f}};
   for (const auto& [key, sub] : submeshes) {
     const Eigen::Vector3d o(key.x * block_size_m, key.y * block_size_m, key.z * block_size_m);
     std_msgs::ColorRGBA c;
@@ -66,7 +71,8 @@ visualization_msgs::Marker blockBoundsMarker(const std::unordered_map<BlockKey, 
     for (int corner = 0; corner < 8; ++corner)
       for (int a = 0; a < 3; ++a) {
         if (corner & (1 << a)) continue;
-        const Eigen::Vector3d p0 = o + block_size_m * Eigen::Vector3d(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
+        const Eigen::Vector3d p0 =
+            o + block_size_m * Eigen::Vector3d(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
         Eigen::Vector3d p1 = p0;
         p1[a] += block_size_m;
         m.points.push_back(toPoint(p0));
@@ -75,7 +81,8 @@ visualization_msgs::Marker blockBoundsMarker(const std::unordered_map<BlockKey, 
         m.colors.push_back(c);
       }
   }
-  if (m.points.empty()) m.action = visualization_msgs::Marker::DELETE;  // rviz rejects an empty LINE_LIST
+  if (m.points.empty())
+    m.action = visualization_msgs::Marker::DELETE;  // rviz rejects an empty LINE_LIST
   return m;
 }
 

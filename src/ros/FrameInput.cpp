@@ -19,10 +19,12 @@ FrameInput::FrameInput(ros::NodeHandle& nh, const NodeConfig& node, MappingSessi
   image_stamps_ = RecentStamps(stamp_window);
   info_stamps_ = RecentStamps(stamp_window);
   if (node_.approximate_sync) {
-    approx_sync_ = std::make_unique<message_filters::Synchronizer<ApproxPolicy>>(ApproxPolicy(node_.sync_queue_size));
+    approx_sync_ = std::make_unique<message_filters::Synchronizer<ApproxPolicy>>(
+        ApproxPolicy(node_.sync_queue_size));
     approx_sync_->registerCallback(&FrameInput::onFrame, this);
   } else {
-    exact_sync_ = std::make_unique<message_filters::Synchronizer<ExactPolicy>>(ExactPolicy(node_.sync_queue_size));
+    exact_sync_ = std::make_unique<message_filters::Synchronizer<ExactPolicy>>(
+        ExactPolicy(node_.sync_queue_size));
     exact_sync_->registerCallback(&FrameInput::onFrame, this);
   }
   // Callbacks first, subscriptions after: a message arriving in between would reach no callback
@@ -34,32 +36,39 @@ FrameInput::FrameInput(ros::NodeHandle& nh, const NodeConfig& node, MappingSessi
     // at once, rather than as unsynchronised when its image and camera_info carry real stamps.
     if (disparity->header.stamp.isZero()) {
       ++disparities_refused_;
-      drop(RejectReason::kBadStamp, "a disparity stamped 0 (no time: its pose cannot be looked up)");
+      drop(RejectReason::kBadStamp,
+           "a disparity stamped 0 (no time: its pose cannot be looked up)");
       return;
     }
     // The stamp of the newest fused frame: the frame gate would refuse it as a duplicate
     // whatever else came with it, so it is counted as that now, not left unmatched.
     if (isNewestFusedStamp(disparity->header.stamp)) {
       ++disparities_refused_;
-      drop(RejectReason::kDuplicateTimestamp, "a disparity stamped " + std::to_string(disparity->header.stamp.toSec()) +
+      drop(RejectReason::kDuplicateTimestamp, "a disparity stamped " +
+                                                  std::to_string(disparity->header.stamp.toSec()) +
                                                   ", the stamp of the newest fused frame");
       return;
     }
     if (!passToSync(&disparity_stamps_, disparity->header.stamp)) {
       ++disparities_refused_;
-      drop(RejectReason::kSyncDuplicate, "a second disparity stamped " + std::to_string(disparity->header.stamp.toSec()) +
-                                             " arrived before its frame was matched; the first is kept");
+      drop(RejectReason::kSyncDuplicate,
+           "a second disparity stamped " + std::to_string(disparity->header.stamp.toSec()) +
+               " arrived before its frame was matched; the first is kept");
       return;
     }
     addToSync<0>(disparity);
   });
   image_sub_.registerCallback([this](const ImageMsg::ConstPtr& image) {
-    if (passToSync(&image_stamps_, image->header.stamp)) addToSync<1>(image);
-    else ++ignored_duplicate_parts_;
+    if (passToSync(&image_stamps_, image->header.stamp))
+      addToSync<1>(image);
+    else
+      ++ignored_duplicate_parts_;
   });
   info_sub_.registerCallback([this](const InfoMsg::ConstPtr& info) {
-    if (passToSync(&info_stamps_, info->header.stamp)) addToSync<2>(info);
-    else ++ignored_duplicate_parts_;
+    if (passToSync(&info_stamps_, info->header.stamp))
+      addToSync<2>(info);
+    else
+      ++ignored_duplicate_parts_;
   });
   disparity_sub_.subscribe(nh, "disparity", 5);
   image_sub_.subscribe(nh, "image", 5);
@@ -85,7 +94,8 @@ std::string FrameInput::topics() const {
 
 bool FrameInput::isNewestFusedStamp(const ros::Time& stamp) const {
   std::lock_guard<std::mutex> lock(camera_frame_mutex_);
-  return newest_fused_.first == session_->epoch() && newest_fused_.second == stamp.toNSec() && !stamp.isZero();
+  return newest_fused_.first == session_->epoch() && newest_fused_.second == stamp.toNSec() &&
+         !stamp.isZero();
 }
 
 std::string FrameInput::cameraFrame() const {
@@ -95,11 +105,13 @@ std::string FrameInput::cameraFrame() const {
 
 void FrameInput::drop(RejectReason reason, const std::string& why) {
   session_->countDrop(reason);
-  ROS_WARN_THROTTLE(5.0, "stereo_fusion: frame dropped (%s, %llu so far): %s", rejectReasonName(reason),
+  ROS_WARN_THROTTLE(5.0, "stereo_fusion: frame dropped (%s, %llu so far): %s",
+                    rejectReasonName(reason),
                     static_cast<unsigned long long>(session_->drops()[reason]), why.c_str());
 }
 
-void FrameInput::onFrame(const DisparityMsg::ConstPtr& d, const ImageMsg::ConstPtr& i, const InfoMsg::ConstPtr& c) {
+void FrameInput::onFrame(const DisparityMsg::ConstPtr& d, const ImageMsg::ConstPtr& i,
+                         const InfoMsg::ConstPtr& c) {
   ++matched_;
   {
     std::lock_guard<std::mutex> lock(stamps_mutex_);
@@ -111,7 +123,8 @@ void FrameInput::onFrame(const DisparityMsg::ConstPtr& d, const ImageMsg::ConstP
   {
     std::lock_guard<std::mutex> lock(queue_mutex_);
     if (queue_.size() >= static_cast<size_t>(node_.queue_size)) {
-      drop(RejectReason::kQueueFull, "frame queue full (" + std::to_string(node_.queue_size) + "), dropping the " +
+      drop(RejectReason::kQueueFull, "frame queue full (" + std::to_string(node_.queue_size) +
+                                         "), dropping the " +
                                          (node_.drop_oldest ? "oldest" : "newest") + " frame");
       if (!node_.drop_oldest) return;
       queue_.pop_front();
@@ -126,7 +139,8 @@ void FrameInput::workerLoop() {
     QueuedFrame frame;
     {
       std::unique_lock<std::mutex> lock(queue_mutex_);
-      queue_cv_.wait_for(lock, std::chrono::milliseconds(100), [this] { return stopping_ || !queue_.empty(); });
+      queue_cv_.wait_for(lock, std::chrono::milliseconds(100),
+                         [this] { return stopping_ || !queue_.empty(); });
       if (stopping_) return;
       if (queue_.empty()) {
         lock.unlock();
@@ -145,7 +159,8 @@ void FrameInput::workerLoop() {
   }
 }
 
-bool FrameInput::waitForPose(const std_msgs::Header& header, Eigen::Isometry3d* T_world_camera, std::string* error) {
+bool FrameInput::waitForPose(const std_msgs::Header& header, Eigen::Isometry3d* T_world_camera,
+                             std::string* error) {
   // Wall time: under simulated time a paused or finished bag stops the ROS clock, and a
   // ROS-time timeout would then never expire. Shutdown interrupts the wait.
   const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(node_.tf_timeout_s);
@@ -160,7 +175,8 @@ bool FrameInput::waitForPose(const std_msgs::Header& header, Eigen::Isometry3d* 
     ros::WallDuration(0.005).sleep();
   }
   try {
-    *T_world_camera = tf2::transformToEigen(tf_->lookupTransform(node_.world_frame, header.frame_id, header.stamp));
+    *T_world_camera = tf2::transformToEigen(
+        tf_->lookupTransform(node_.world_frame, header.frame_id, header.stamp));
   } catch (const tf2::TransformException& e) {
     *error = e.what();
     return false;
@@ -177,9 +193,11 @@ void FrameInput::processFrame(const QueuedFrame& f) {
   const ros::Time now = ros::Time::now();
   if (header.stamp.isZero())
     return drop(RejectReason::kBadStamp, "stamped 0 (no time: its pose cannot be looked up)");
-  if (node_.max_stamp_ahead_s > 0.0 && !now.isZero() && (header.stamp - now).toSec() > node_.max_stamp_ahead_s)
-    return drop(RejectReason::kBadStamp, "stamped " + std::to_string(header.stamp.toSec()) +
-                                             " s, ahead of the clock by more than max_stamp_ahead_s");
+  if (node_.max_stamp_ahead_s > 0.0 && !now.isZero() &&
+      (header.stamp - now).toSec() > node_.max_stamp_ahead_s)
+    return drop(RejectReason::kBadStamp,
+                "stamped " + std::to_string(header.stamp.toSec()) +
+                    " s, ahead of the clock by more than max_stamp_ahead_s");
   Eigen::Isometry3d T_world_camera;
   std::string error;
   if (!waitForPose(header, &T_world_camera, &error)) {
@@ -187,7 +205,8 @@ void FrameInput::processFrame(const QueuedFrame& f) {
       std::lock_guard<std::mutex> lock(queue_mutex_);
       if (stopping_) return;
     }
-    return drop(RejectReason::kTfTimeout, "no transform " + node_.world_frame + " <- " + header.frame_id + " at " +
+    return drop(RejectReason::kTfTimeout, "no transform " + node_.world_frame + " <- " +
+                                              header.frame_id + " at " +
                                               std::to_string(header.stamp.toSec()) + " within " +
                                               std::to_string(node_.tf_timeout_s) + " s: " + error);
   }
@@ -197,20 +216,23 @@ void FrameInput::processFrame(const QueuedFrame& f) {
   // The mesh is brought up to date when it is published (MeshPublisher::publishPending()), at
   // most mesh_publish_rate_hz; with rate 0, after every frame. Texture patches are cut from the
   // frame that changed a submesh, so with textures the mesh follows every frame.
-  const bool deferred = node_.mesh_publish_rate_hz > 0 && session_->config().texture != TextureMode::kPatches;
+  const bool deferred =
+      node_.mesh_publish_rate_hz > 0 && session_->config().texture != TextureMode::kPatches;
   const MappingSession::FrameOutcome out =
       session_->fuse(frame, f.ticket, deferred ? MeshTiming::kDeferred : MeshTiming::kNow);
   if (out.reason != RejectReason::kNone) {
-    ROS_ERROR_THROTTLE(5.0, "stereo_fusion: frame rejected (%s, %llu so far): %s", rejectReasonName(out.reason),
-                       static_cast<unsigned long long>(session_->drops()[out.reason]), out.error.c_str());
+    ROS_ERROR_THROTTLE(
+        5.0, "stereo_fusion: frame rejected (%s, %llu so far): %s", rejectReasonName(out.reason),
+        static_cast<unsigned long long>(session_->drops()[out.reason]), out.error.c_str());
     return;
   }
   const IntegrationResult& r = out.result;
   stats_->pixels_rejected_speckle += r.rejected.speckle_pixels;
   stats_->pixels_rejected_edge += r.rejected.edge_pixels;
   // Free-space carving counts as fusion: it is the frame's update of the map.
-  stats_->recordFrame(r.lookup_ms, r.fusion_ms + r.carve_ms,
-                      r.lookup_ms + r.fusion_ms + r.carve_ms + r.mesh.meshing_ms + r.texture.texture_ms);
+  stats_->recordFrame(
+      r.lookup_ms, r.fusion_ms + r.carve_ms,
+      r.lookup_ms + r.fusion_ms + r.carve_ms + r.mesh.meshing_ms + r.texture.texture_ms);
   if (!r.mesh.changed.empty() || !r.mesh.removed.empty() || r.mesh.blocks_meshed > 0)
     stats_->recordMeshPass(r.mesh.meshing_ms, r.texture.texture_ms);
   {

@@ -6,15 +6,17 @@
 
 namespace stereo_fusion {
 
-FusionDiagnostics::FusionDiagnostics(ros::NodeHandle& nh, ros::NodeHandle& pnh, const NodeConfig& node,
-                                     MappingSession* session, const FrameInput* frames,
-                                     const TrajectoryInput* trajectories, const NodeStats* stats)
+FusionDiagnostics::FusionDiagnostics(ros::NodeHandle& nh, ros::NodeHandle& pnh,
+                                     const NodeConfig& node, MappingSession* session,
+                                     const FrameInput* frames, const TrajectoryInput* trajectories,
+                                     const NodeStats* stats)
     : node_(node), session_(session), frames_(frames), trajectories_(trajectories), stats_(stats) {
   started_ = ros::WallTime::now();
   updater_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
   updater_->setHardwareID("stereo_fusion");
   updater_->add("fusion", this, &FusionDiagnostics::diagnose);
-  timer_ = nh.createWallTimer(ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) { updater_->force_update(); });
+  timer_ = nh.createWallTimer(ros::WallDuration(1.0),
+                              [this](const ros::WallTimerEvent&) { updater_->force_update(); });
 }
 
 void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
@@ -22,7 +24,8 @@ void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   const RejectCounters& drops = session_->drops();
   const uint64_t disparities_in = frames_->disparitiesIn(), matched = frames_->framesMatched();
   const uint64_t refused = frames_->disparitiesRefused();
-  const uint64_t unmatched = disparities_in > matched + refused ? disparities_in - matched - refused : 0;
+  const uint64_t unmatched =
+      disparities_in > matched + refused ? disparities_in - matched - refused : 0;
   // A disparity whose image has not arrived yet is unmatched for a moment in normal operation:
   // only more than the synchroniser's queue can hold is surely lost.
   const bool lost_in_sync = unmatched > static_cast<uint64_t>(node_.sync_queue_size);
@@ -36,7 +39,8 @@ void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
     status.summary(diagnostic_msgs::DiagnosticStatus::ERROR,
                    "the map has been in " + stage + " for " + std::to_string(busy_s) + " s");
   else if (matched > 0 && fused == 0)
-    status.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "no frame fused yet; see the drop counters");
+    status.summary(diagnostic_msgs::DiagnosticStatus::ERROR,
+                   "no frame fused yet; see the drop counters");
   else if (dropped > 0)
     status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "frames dropped; see the counters");
   else
@@ -58,11 +62,13 @@ void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   status.add("re-anchored (relocalisation or clock reset)", stats_->reanchored.load());
   status.add("regions cleared (~clear_box, ~clear_sphere)", session_->regionsCleared());
   // Frames from before a clear whose fusion refilled the region, which was then cleared again.
-  status.add("frames fused from before a clear (region cleared again)", session_->framesRecleared());
+  status.add("frames fused from before a clear (region cleared again)",
+             session_->framesRecleared());
   status.add("clears refused (too many waiting for older frames)", session_->clearsRefused());
   // Read under the map lock, but never waiting long for it: the report must come even while a
   // frame stalls (then the last values it read stand).
-  if (const std::optional<MappingSession::MapStatus> now = session_->tryStatus(0.2)) map_status_ = *now;
+  if (const std::optional<MappingSession::MapStatus> now = session_->tryStatus(0.2))
+    map_status_ = *now;
   const MappingSession::KeptStatus& kept = map_status_.kept;
   status.add("clears waiting for frames from before them", kept.pending_clears);
   status.add("loop closure: frames kept", kept.frames);
@@ -77,7 +83,8 @@ void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   status.add("loop closure: last correction, largest turn (deg)", last.max_rotation_deg);
   status.add("trajectories received", trajectories_->received());
   status.add("trajectories rejected", session_->trajectories().rejected());
-  session_->trajectories().forEach([&](const TrajectoryOutcomeInfo& info, uint64_t n) { status.add(info.label, n); });
+  session_->trajectories().forEach(
+      [&](const TrajectoryOutcomeInfo& info, uint64_t n) { status.add(info.label, n); });
   const NodeStats::View v = stats_->view();
   status.add("latency p50 (s)", percentile(v.latency_s, 0.5));
   status.add("latency p99 (s)", percentile(v.latency_s, 0.99));

@@ -32,24 +32,28 @@ void FusionNodelet::onInit() {
   tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh);
 
   publisher_ = std::make_unique<MeshPublisher>(pnh, node_config_, session_.get(), &stats_);
-  planning_ = std::make_unique<PlanningPublisher>(getMTPrivateNodeHandle(), node_config_, mapper_config_,
-                                                  session_.get(), &stats_);
+  planning_ = std::make_unique<PlanningPublisher>(getMTPrivateNodeHandle(), node_config_,
+                                                  mapper_config_, session_.get(), &stats_);
   session_->setMapReplacedListener([this](const MapReplaced& replaced) {
     publisher_->onMapReplaced(replaced);
     planning_->onMapReplaced(replaced);
   });
   // Services run on the manager's multi-threaded queue, not on the single-threaded one of the
   // frame subscribers. Each locks what it touches.
-  services_ = std::make_unique<MapServices>(getMTPrivateNodeHandle(), session_.get(), publisher_.get());
-  planning_services_ = std::make_unique<PlanningServices>(getMTPrivateNodeHandle(), node_config_, session_.get());
-  frame_input_ = std::make_unique<FrameInput>(nh, node_config_, session_.get(), tf_buffer_.get(), publisher_.get(),
-                                              &stats_);
-  trajectory_input_ = std::make_unique<TrajectoryInput>(nh, node_config_, session_.get(), tf_buffer_.get(),
-                                                        [this] { return frame_input_->cameraFrame(); });
-  diagnostics_ = std::make_unique<FusionDiagnostics>(nh, pnh, node_config_, session_.get(), frame_input_.get(),
-                                                     trajectory_input_.get(), &stats_);
-  NODELET_INFO("stereo_fusion: fusing %s into frame '%s' (voxel %.3f m, %d threads)", frame_input_->topics().c_str(),
-               node_config_.world_frame.c_str(), mapper_config_.voxel_size_m, mapper_config_.num_threads);
+  services_ =
+      std::make_unique<MapServices>(getMTPrivateNodeHandle(), session_.get(), publisher_.get());
+  planning_services_ =
+      std::make_unique<PlanningServices>(getMTPrivateNodeHandle(), node_config_, session_.get());
+  frame_input_ = std::make_unique<FrameInput>(nh, node_config_, session_.get(), tf_buffer_.get(),
+                                              publisher_.get(), &stats_);
+  trajectory_input_ =
+      std::make_unique<TrajectoryInput>(nh, node_config_, session_.get(), tf_buffer_.get(),
+                                        [this] { return frame_input_->cameraFrame(); });
+  diagnostics_ = std::make_unique<FusionDiagnostics>(
+      nh, pnh, node_config_, session_.get(), frame_input_.get(), trajectory_input_.get(), &stats_);
+  NODELET_INFO("stereo_fusion: fusing %s into frame '%s' (voxel %.3f m, %d threads)",
+               frame_input_->topics().c_str(), node_config_.world_frame.c_str(),
+               mapper_config_.voxel_size_m, mapper_config_.num_threads);
 }
 
 }  // namespace stereo_fusion

@@ -79,10 +79,11 @@ bool MapServices::saveMap(SaveMap::Request& req, SaveMap::Response& res) {
   std::string error;
   res.success = writeMapFileBytes(req.path, &bytes, &error);
   const double total_ms = (ros::WallTime::now() - start).toSec() * 1e3;
-  res.message = res.success ? "saved " + std::to_string(res.blocks) + " blocks to " + req.path + " (map held " +
-                                  std::to_string(static_cast<long>(locked_ms)) + " ms, " +
-                                  std::to_string(static_cast<long>(total_ms)) + " ms in all)"
-                            : error;
+  res.message = res.success
+                    ? "saved " + std::to_string(res.blocks) + " blocks to " + req.path +
+                          " (map held " + std::to_string(static_cast<long>(locked_ms)) + " ms, " +
+                          std::to_string(static_cast<long>(total_ms)) + " ms in all)"
+                    : error;
   if (res.success)
     ROS_INFO("stereo_fusion: save_map: %s", res.message.c_str());
   else
@@ -121,11 +122,13 @@ bool MapServices::clearRegion(const MapRegion& region, Response* res) {
 }
 
 bool MapServices::clearBox(ClearBox::Request& req, ClearBox::Response& res) {
-  return clearRegion(MapRegion::box({req.min.x, req.min.y, req.min.z}, {req.max.x, req.max.y, req.max.z}), &res);
+  return clearRegion(
+      MapRegion::box({req.min.x, req.min.y, req.min.z}, {req.max.x, req.max.y, req.max.z}), &res);
 }
 
 bool MapServices::clearSphere(ClearSphere::Request& req, ClearSphere::Response& res) {
-  return clearRegion(MapRegion::sphere({req.center.x, req.center.y, req.center.z}, req.radius), &res);
+  return clearRegion(MapRegion::sphere({req.center.x, req.center.y, req.center.z}, req.radius),
+                     &res);
 }
 
 }  // namespace stereo_fusion

@@ -15,14 +15,15 @@ void MeshAssembler::onInit() {
   pnh.param("publish_markers", publish_markers_, publish_markers_);
   pnh.param("full_mesh_timeout_s", full_mesh_timeout_s_, full_mesh_timeout_s_);
   if (!(full_mesh_timeout_s_ > 0.0 && full_mesh_timeout_s_ <= 600.0)) {
-    const std::string error = "parameter '" + pnh.resolveName("full_mesh_timeout_s") + "' must be in (0, 600] s";
+    const std::string error =
+        "parameter '" + pnh.resolveName("full_mesh_timeout_s") + "' must be in (0, 600] s";
     NODELET_FATAL("mesh_assembler: %s", error.c_str());
     throw std::invalid_argument(error);
   }
   const std::string encoding = pnh.param<std::string>("mesh_encoding", "float32");
   if (!parseMeshEncoding(encoding, &encoding_)) {
-    const std::string error = "parameter '" + pnh.resolveName("mesh_encoding") + "' must be float32 or compact, not '" +
-                              encoding + "'";
+    const std::string error = "parameter '" + pnh.resolveName("mesh_encoding") +
+                              "' must be float32 or compact, not '" + encoding + "'";
     NODELET_FATAL("mesh_assembler: %s", error.c_str());
     throw std::invalid_argument(error);
   }
@@ -54,8 +55,8 @@ void MeshAssembler::onInit() {
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
   diagnostics_->setHardwareID("stereo_fusion");
   diagnostics_->add("mesh assembler", this, &MeshAssembler::diagnose);
-  diagnostics_timer_ =
-      nh.createWallTimer(ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) { diagnostics_->force_update(); });
+  diagnostics_timer_ = nh.createWallTimer(
+      ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) { diagnostics_->force_update(); });
   NODELET_INFO("mesh_assembler: assembling %s (full mesh from %s)", update_sub_.getTopic().c_str(),
                full_client_.getService().c_str());
 }
@@ -66,8 +67,10 @@ void MeshAssembler::onUpdate(const MeshUpdate::ConstPtr& update) {
     // The robot's nodelet restarted: its sequence counts from 1 again and its mesh was rebuilt,
     // so sequence numbers say nothing about the mesh held. Start over from its full mesh.
     ++restarts_;
-    NODELET_WARN("mesh_assembler: the robot restarted (session %llu, was %llu): fetching the full mesh",
-                 static_cast<unsigned long long>(update->session), static_cast<unsigned long long>(session_));
+    NODELET_WARN(
+        "mesh_assembler: the robot restarted (session %llu, was %llu): fetching the full mesh",
+        static_cast<unsigned long long>(update->session),
+        static_cast<unsigned long long>(session_));
     synced_ = false;
   }
   if (update->full) {  // the robot was reset (or sends whole meshes): nothing before matters
@@ -92,21 +95,25 @@ void MeshAssembler::onUpdate(const MeshUpdate::ConstPtr& update) {
     // restart): its sequence means nothing here; the next update of the fetched session goes on.
     if (update->session != session_) return;
     if (update->sequence <= last_sequence_) return;  // the full mesh already holds it
-    if (update->sequence != last_sequence_ + 1) {   // still behind: the next update retries
+    if (update->sequence != last_sequence_ + 1) {    // still behind: the next update retries
       synced_ = false;
       return;
     }
   }
-  if (apply(*update)) last_sequence_ = update->sequence;
-  else synced_ = false;  // our copy may now differ: repair from the next update
+  if (apply(*update))
+    last_sequence_ = update->sequence;
+  else
+    synced_ = false;  // our copy may now differ: repair from the next update
 }
 
 void MeshAssembler::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (!synced_)
-    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "not in sync with the robot's mesh (fetching it)");
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN,
+                   "not in sync with the robot's mesh (fetching it)");
   else if (gaps_ > 0 || malformed_ > 0)
-    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "in sync; updates were lost or malformed, see the counters");
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN,
+                   "in sync; updates were lost or malformed, see the counters");
   else
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, "in sync");
   status.add("in sync", synced_);
@@ -122,13 +129,15 @@ void MeshAssembler::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status
 bool MeshAssembler::fetchFullMesh() {
   ++full_requests_;
   if (!full_client_.waitForExistence(ros::Duration(full_mesh_timeout_s_))) {
-    NODELET_WARN_THROTTLE(10.0, "mesh_assembler: %s is not available", full_client_.getService().c_str());
+    NODELET_WARN_THROTTLE(10.0, "mesh_assembler: %s is not available",
+                          full_client_.getService().c_str());
     synced_ = false;
     return false;
   }
   GetFullMesh srv;
   if (!full_client_.call(srv)) {
-    NODELET_WARN_THROTTLE(10.0, "mesh_assembler: calling %s failed", full_client_.getService().c_str());
+    NODELET_WARN_THROTTLE(10.0, "mesh_assembler: calling %s failed",
+                          full_client_.getService().c_str());
     synced_ = false;
     return false;
   }
@@ -159,7 +168,8 @@ bool MeshAssembler::apply(const MeshUpdate& update) {
   std::vector<BlockKey> changed, removed;
   for (const MeshBlock& b : update.blocks) changed.push_back({b.key[0], b.key[1], b.key[2]});
   for (size_t i = 0; i + 2 < update.removed_keys.size(); i += 3)
-    removed.push_back({update.removed_keys[i], update.removed_keys[i + 1], update.removed_keys[i + 2]});
+    removed.push_back(
+        {update.removed_keys[i], update.removed_keys[i + 1], update.removed_keys[i + 2]});
   if (update.full) {
     markers_pub_.publish(markers_.clear(update.header));
     changed.clear();
@@ -175,8 +185,10 @@ bool MeshAssembler::saveMesh(SaveMesh::Request& req, SaveMesh::Response& res) {
     std::lock_guard<std::mutex> lock(mutex_);
     res.success = exportMesh(req.path, mesh_, textures_, &res.message);
   }
-  if (res.success) NODELET_INFO("mesh_assembler: save_mesh: %s", res.message.c_str());
-  else NODELET_ERROR("mesh_assembler: save_mesh: %s", res.message.c_str());
+  if (res.success)
+    NODELET_INFO("mesh_assembler: save_mesh: %s", res.message.c_str());
+  else
+    NODELET_ERROR("mesh_assembler: save_mesh: %s", res.message.c_str());
   return true;
 }
 
@@ -185,7 +197,8 @@ bool MeshAssembler::getFullMesh(GetFullMesh::Request&, GetFullMesh::Response& re
   std::vector<BlockKey> all;
   for (const auto& [key, sub] : mesh_) all.push_back(key);
   std::sort(all.begin(), all.end());
-  res.mesh = toMeshUpdate(mesh_, all, {}, last_header_, voxel_size_m_, last_sequence_, true, encoding_, &textures_);
+  res.mesh = toMeshUpdate(mesh_, all, {}, last_header_, voxel_size_m_, last_sequence_, true,
+                          encoding_, &textures_);
   res.mesh.session = session_;
   return true;
 }

@@ -10,9 +10,12 @@
 namespace stereo_fusion {
 
 bool parseMeshEncoding(const std::string& text, MeshEncoding* encoding) {
-  if (text == "float32") *encoding = MeshEncoding::kFloat32;
-  else if (text == "compact") *encoding = MeshEncoding::kCompact;
-  else return false;
+  if (text == "float32")
+    *encoding = MeshEncoding::kFloat32;
+  else if (text == "compact")
+    *encoding = MeshEncoding::kCompact;
+  else
+    return false;
   return true;
 }
 
@@ -41,22 +44,26 @@ constexpr uint32_t kMaxPatchEdgePx = 1024;
 /// does near it differs between versions; a patch above the cap is a corrupt message anyway.
 bool decodeTexture(const std::vector<uint8_t>& png, cv::Mat* rgb) {
   static const uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-  // Signature (8), then the first chunk must be IHDR: length (4), "IHDR" (4), width, height (4 + 4).
+  // Signature (8), then the first chunk must be IHDR: length (4), "IHDR" (4), width, height (4 +
+  // 4).
   if (png.size() < 24 || !std::equal(kSignature, kSignature + 8, png.begin()) ||
       !std::equal(png.begin() + 12, png.begin() + 16, "IHDR"))
     return false;
   auto bigEndian = [&](size_t at) {
-    return uint32_t{png[at]} << 24 | uint32_t{png[at + 1]} << 16 | uint32_t{png[at + 2]} << 8 | uint32_t{png[at + 3]};
+    return uint32_t{png[at]} << 24 | uint32_t{png[at + 1]} << 16 | uint32_t{png[at + 2]} << 8 |
+           uint32_t{png[at + 3]};
   };
   const uint32_t width = bigEndian(16), height = bigEndian(20);
-  if (width == 0 || height == 0 || width > kMaxPatchEdgePx || height > kMaxPatchEdgePx) return false;
+  if (width == 0 || height == 0 || width > kMaxPatchEdgePx || height > kMaxPatchEdgePx)
+    return false;
   cv::Mat bgr;
   try {
     bgr = cv::imdecode(png, cv::IMREAD_COLOR);
   } catch (const cv::Exception&) {
     return false;  // corrupt data OpenCV refuses by throwing rather than returning an empty image
   }
-  if (bgr.empty() || bgr.type() != CV_8UC3 || bgr.cols != static_cast<int>(width) || bgr.rows != static_cast<int>(height))
+  if (bgr.empty() || bgr.type() != CV_8UC3 || bgr.cols != static_cast<int>(width) ||
+      bgr.rows != static_cast<int>(height))
     return false;
   cv::cvtColor(bgr, *rgb, cv::COLOR_BGR2RGB);
   return true;
@@ -65,9 +72,11 @@ bool decodeTexture(const std::vector<uint8_t>& png, cv::Mat* rgb) {
 /// Fills the compact fields of `b` from `s`; false (b's compact fields then unspecified) when a
 /// vertex is outside the quantised range or there are too many vertices for uint16 indices.
 bool encodeCompact(const SubMesh& s, double block_size_m, MeshBlock* b) {
-  if (!(block_size_m > 0) || s.positions.size() > std::numeric_limits<uint16_t>::max() + size_t{1}) return false;
+  if (!(block_size_m > 0) || s.positions.size() > std::numeric_limits<uint16_t>::max() + size_t{1})
+    return false;
   const double step = compactPositionStep(block_size_m);
-  const Eigen::Vector3d origin(s.key.x * block_size_m, s.key.y * block_size_m, s.key.z * block_size_m);
+  const Eigen::Vector3d origin(s.key.x * block_size_m, s.key.y * block_size_m,
+                               s.key.z * block_size_m);
   b->position_step_m = static_cast<float>(step);
   b->vertices_q.reserve(3 * s.positions.size());
   b->normals_q.reserve(3 * s.normals.size());
@@ -94,7 +103,8 @@ MeshBlock toMeshBlock(const SubMesh& s, MeshEncoding encoding, double block_size
   b.level = static_cast<uint8_t>(s.level);
   b.position_step_m = 0.0f;
   // The texture is independent of how the geometry is encoded: attached on every path.
-  if (patch && patch->uvs.size() == s.positions.size() && !patch->image_rgb.empty()) encodeTexture(*patch, &b);
+  if (patch && patch->uvs.size() == s.positions.size() && !patch->image_rgb.empty())
+    encodeTexture(*patch, &b);
   if (encoding == MeshEncoding::kCompact) {
     if (encodeCompact(s, block_size_m, &b)) {
       b.colors.reserve(3 * s.colors.size());
@@ -123,16 +133,16 @@ MeshBlock toMeshBlock(const SubMesh& s, MeshEncoding encoding, double block_size
 
 MeshUpdate toMeshUpdate(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes,
                         const std::vector<BlockKey>& changed, const std::vector<BlockKey>& removed,
-                        const std_msgs::Header& header, double voxel_size_m, uint64_t sequence, bool full,
-                        MeshEncoding encoding, const TextureStore* textures) {
+                        const std_msgs::Header& header, double voxel_size_m, uint64_t sequence,
+                        bool full, MeshEncoding encoding, const TextureStore* textures) {
   return toMeshUpdate(submeshes, changed, removed, header, voxel_size_m, sequence, full, encoding,
                       textures ? &textures->patches() : nullptr);
 }
 
 MeshUpdate toMeshUpdate(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes,
                         const std::vector<BlockKey>& changed, const std::vector<BlockKey>& removed,
-                        const std_msgs::Header& header, double voxel_size_m, uint64_t sequence, bool full,
-                        MeshEncoding encoding,
+                        const std_msgs::Header& header, double voxel_size_m, uint64_t sequence,
+                        bool full, MeshEncoding encoding,
                         const std::unordered_map<BlockKey, TexturePatch, BlockKeyHash>* patches) {
   MeshUpdate u;
   u.header = header;
@@ -150,11 +160,13 @@ MeshUpdate toMeshUpdate(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash
     }
     u.blocks.push_back(toMeshBlock(it->second, encoding, u.block_size, patch));
   }
-  for (const BlockKey& key : removed) u.removed_keys.insert(u.removed_keys.end(), {key.x, key.y, key.z});
+  for (const BlockKey& key : removed)
+    u.removed_keys.insert(u.removed_keys.end(), {key.x, key.y, key.z});
   return u;
 }
 
-bool applyMeshUpdate(const MeshUpdate& update, std::unordered_map<BlockKey, SubMesh, BlockKeyHash>* mesh,
+bool applyMeshUpdate(const MeshUpdate& update,
+                     std::unordered_map<BlockKey, SubMesh, BlockKeyHash>* mesh,
                      std::unordered_map<BlockKey, TexturePatch, BlockKeyHash>* textures) {
   // Validate everything first: a malformed message leaves the mesh untouched.
   // block_size places compact vertices; a float32 update does not use it, but a non-finite
@@ -165,14 +177,16 @@ bool applyMeshUpdate(const MeshUpdate& update, std::unordered_map<BlockKey, SubM
     size_t n = 0;
     if (b.position_step_m > 0) {
       n = b.vertices_q.size() / 3;
-      if (!(update.block_size > 0) || !std::isfinite(b.position_step_m) || b.vertices_q.size() % 3 ||
-          b.normals_q.size() != 3 * n || b.colors.size() != 3 * n || b.triangles_q.size() % 3)
+      if (!(update.block_size > 0) || !std::isfinite(b.position_step_m) ||
+          b.vertices_q.size() % 3 || b.normals_q.size() != 3 * n || b.colors.size() != 3 * n ||
+          b.triangles_q.size() % 3)
         return false;
       for (uint16_t index : b.triangles_q)
         if (index >= n) return false;
     } else {
       n = b.vertices.size() / 3;
-      if (b.vertices.size() % 3 || b.normals.size() != 3 * n || b.colors.size() != 3 * n || b.triangles.size() % 3)
+      if (b.vertices.size() % 3 || b.normals.size() != 3 * n || b.colors.size() != 3 * n ||
+          b.triangles.size() % 3)
         return false;
       for (uint32_t index : b.triangles)
         if (index >= n) return false;
@@ -195,7 +209,8 @@ bool applyMeshUpdate(const MeshUpdate& update, std::unordered_map<BlockKey, SubM
     if (textures) textures->clear();
   }
   for (size_t i = 0; i < update.removed_keys.size(); i += 3) {
-    const BlockKey key{update.removed_keys[i], update.removed_keys[i + 1], update.removed_keys[i + 2]};
+    const BlockKey key{update.removed_keys[i], update.removed_keys[i + 1],
+                       update.removed_keys[i + 2]};
     mesh->erase(key);
     if (textures) textures->erase(key);
   }
@@ -257,8 +272,9 @@ int MeshMarkers::idOf(const BlockKey& key) {
 }
 
 visualization_msgs::MarkerArray MeshMarkers::build(
-    const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes, const std::vector<BlockKey>& changed,
-    const std::vector<BlockKey>& removed, const std_msgs::Header& header) {
+    const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes,
+    const std::vector<BlockKey>& changed, const std::vector<BlockKey>& removed,
+    const std_msgs::Header& header) {
   visualization_msgs::MarkerArray array;
   for (const BlockKey& key : changed) {
     auto it = submeshes.find(key);

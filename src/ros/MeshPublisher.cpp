@@ -35,8 +35,10 @@ MeshPublisher::MeshPublisher(ros::NodeHandle& pnh, const NodeConfig& node, Mappi
       });
   if (node_.publish_path) path_pub_ = pnh.advertise<nav_msgs::Path>("camera_path", 1, true);
   path_.header.frame_id = node_.world_frame;
-  if (node_.publish_frustum) frustum_pub_ = pnh.advertise<visualization_msgs::Marker>("frustum", 1, true);
-  if (node_.publish_block_bounds) block_bounds_pub_ = pnh.advertise<visualization_msgs::Marker>("block_bounds", 1, true);
+  if (node_.publish_frustum)
+    frustum_pub_ = pnh.advertise<visualization_msgs::Marker>("frustum", 1, true);
+  if (node_.publish_block_bounds)
+    block_bounds_pub_ = pnh.advertise<visualization_msgs::Marker>("block_bounds", 1, true);
 }
 
 void MeshPublisher::frameFusedLocked(const StereoFrame& frame, const std_msgs::Header& header) {
@@ -51,7 +53,8 @@ void MeshPublisher::frameFusedLocked(const StereoFrame& frame, const std_msgs::H
     if (path_.poses.size() > kMaxPathPoses) {
       std::vector<geometry_msgs::PoseStamped> thinned;
       for (size_t k = 0; k < path_.poses.size() / 2; k += 2) thinned.push_back(path_.poses[k]);
-      thinned.insert(thinned.end(), path_.poses.begin() + path_.poses.size() / 2, path_.poses.end());
+      thinned.insert(thinned.end(), path_.poses.begin() + path_.poses.size() / 2,
+                     path_.poses.end());
       path_.poses.swap(thinned);
     }
     path_.header.stamp = header.stamp;
@@ -60,7 +63,8 @@ void MeshPublisher::frameFusedLocked(const StereoFrame& frame, const std_msgs::H
   if (node_.publish_frustum) {
     std_msgs::Header world_header = header;
     world_header.frame_id = node_.world_frame;
-    frustum_pub_.publish(frustumMarker(frame.camera, frame.T_world_camera, node_.frustum_depth_m, world_header));
+    frustum_pub_.publish(
+        frustumMarker(frame.camera, frame.T_world_camera, node_.frustum_depth_m, world_header));
   }
 }
 
@@ -77,15 +81,19 @@ void MeshPublisher::publishPending(const ros::Time& stamp, bool force) {
 
 void MeshPublisher::publishPendingLocked(Mapper& map, const ros::Time& stamp, bool force) {
   {
-    if (map.blocksAwaitingMesh() == 0 && map.pendingMeshChanges(consumer_) == 0 && !markers_full_pending_) return;
+    if (map.blocksAwaitingMesh() == 0 && map.pendingMeshChanges(consumer_) == 0 &&
+        !markers_full_pending_)
+      return;
     const ros::WallTime now = ros::WallTime::now();
-    if (!force && node_.mesh_publish_rate_hz > 0 && (now - last_publish_).toSec() < 1.0 / node_.mesh_publish_rate_hz)
+    if (!force && node_.mesh_publish_rate_hz > 0 &&
+        (now - last_publish_).toSec() < 1.0 / node_.mesh_publish_rate_hz)
       return;
     last_publish_ = now;
     catchUpLocked(map);
     std_msgs::Header header;
     header.frame_id = node_.world_frame;
-    header.stamp = stamp.isZero() && !unpublished_stamps_.empty() ? unpublished_stamps_.back() : stamp;
+    header.stamp =
+        stamp.isZero() && !unpublished_stamps_.empty() ? unpublished_stamps_.back() : stamp;
     const BlockChangeLog::Changes pending = map.takeMeshChanges(consumer_);
     const std::vector<BlockKey>& changed = pending.updated;
     const std::vector<BlockKey>& removed = pending.erased;
@@ -95,20 +103,23 @@ void MeshPublisher::publishPendingLocked(Mapper& map, const ros::Time& stamp, bo
     if (!changed.empty() || !removed.empty()) {
       ++sequence_;
       if (mesh_update_pub_.getNumSubscribers() > 0) {
-        MeshUpdate update = toMeshUpdate(map.mesh().submeshes(), changed, removed, header, voxel_size_m, sequence_,
-                                         false, node_.mesh_encoding, &map.textures());
+        MeshUpdate update =
+            toMeshUpdate(map.mesh().submeshes(), changed, removed, header, voxel_size_m, sequence_,
+                         false, node_.mesh_encoding, &map.textures());
         update.session = session_id_;
         mesh_update_pub_.publish(update);
       }
     }
     if (node_.publish_markers && markers_pub_.getNumSubscribers() > 0) {
       const bool full = markers_full_pending_;
-      markers_pub_.publish(markers_.build(map.mesh().submeshes(), full ? allBlocks(map) : changed, removed, header));
+      markers_pub_.publish(
+          markers_.build(map.mesh().submeshes(), full ? allBlocks(map) : changed, removed, header));
       markers_full_pending_ = false;
     }
     // Latched and opt-in (debug): published even unheard, so a display ticked later shows it.
     if (node_.publish_block_bounds)
-      block_bounds_pub_.publish(blockBoundsMarker(map.mesh().submeshes(), 8.0 * voxel_size_m, header));
+      block_bounds_pub_.publish(
+          blockBoundsMarker(map.mesh().submeshes(), 8.0 * voxel_size_m, header));
     const ros::Time ros_now = ros::Time::now();
     for (const ros::Time& t : unpublished_stamps_) stats_->recordLatency((ros_now - t).toSec());
     unpublished_stamps_.clear();
@@ -125,8 +136,9 @@ std::optional<MeshUpdate> MeshPublisher::tryFullMesh() {
     header.frame_id = node_.world_frame;
     header.stamp = ros::Time::now();
     // The sequence of the last published update: apply updates with a larger sequence on top.
-    mesh = toMeshUpdate(map.mesh().submeshes(), allBlocks(map), {}, header, map.config().voxel_size_m, sequence_,
-                        true, node_.mesh_encoding, &map.textures());
+    mesh =
+        toMeshUpdate(map.mesh().submeshes(), allBlocks(map), {}, header, map.config().voxel_size_m,
+                     sequence_, true, node_.mesh_encoding, &map.textures());
     mesh->session = session_id_;
   });
   return mesh;
@@ -149,8 +161,8 @@ void MeshPublisher::onMapReplaced(const MapReplaced& replaced) {
       header.frame_id = node_.world_frame;
       header.stamp = ros::Time::now();
       markers_pub_.publish(markers_.clear(header));
-      MeshUpdate empty = toMeshUpdate(map.mesh().submeshes(), {}, {}, header, map.config().voxel_size_m,
-                                      ++sequence_, true);
+      MeshUpdate empty = toMeshUpdate(map.mesh().submeshes(), {}, {}, header,
+                                      map.config().voxel_size_m, ++sequence_, true);
       empty.session = session_id_;
       mesh_update_pub_.publish(empty);
       return;
@@ -161,13 +173,12 @@ void MeshPublisher::onMapReplaced(const MapReplaced& replaced) {
       publishFullLocked(map, replaced.removed);
       return;
     case MapChange::kCorrected:
-      // One full update: cheaper to build than a diff of every submesh, and a correction moves most.
+      // One full update: cheaper to build than a diff of every submesh, and a correction moves
+      // most.
       publishFullLocked(map, replaced.removed);
       if (node_.publish_path) path_pub_.publish(correctedPathLocked());
       return;
-    case MapChange::kRecovered:
-      publishFullLocked(map, replaced.removed);
-      return;
+    case MapChange::kRecovered: publishFullLocked(map, replaced.removed); return;
   }
 }
 
@@ -179,11 +190,13 @@ void MeshPublisher::publishFullLocked(Mapper& map, const std::vector<BlockKey>& 
   header.stamp = ros::Time::now();
   const std::vector<BlockKey> all = allBlocks(map);
   // A full update replaces whatever a subscriber held; markers: drop the gone blocks, draw all.
-  MeshUpdate update = toMeshUpdate(map.mesh().submeshes(), all, {}, header, map.config().voxel_size_m, ++sequence_,
-                                   true, node_.mesh_encoding, &map.textures());
+  MeshUpdate update =
+      toMeshUpdate(map.mesh().submeshes(), all, {}, header, map.config().voxel_size_m, ++sequence_,
+                   true, node_.mesh_encoding, &map.textures());
   update.session = session_id_;
   mesh_update_pub_.publish(update);
-  if (node_.publish_markers) markers_pub_.publish(markers_.build(map.mesh().submeshes(), all, removed, header));
+  if (node_.publish_markers)
+    markers_pub_.publish(markers_.build(map.mesh().submeshes(), all, removed, header));
 }
 
 nav_msgs::Path MeshPublisher::correctedPathLocked() const {

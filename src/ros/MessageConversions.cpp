@@ -20,11 +20,13 @@ bool toStereoFrame(const stereo_msgs::DisparityImage& disparity, const sensor_ms
     *error = "disparity encoding must be 32FC1, got '" + d.encoding + "'";
     return false;
   }
-  if (d.width == 0 || d.height == 0 || d.step < d.width * 4 || d.data.size() < size_t{d.step} * d.height) {
+  if (d.width == 0 || d.height == 0 || d.step < d.width * 4 ||
+      d.data.size() < size_t{d.step} * d.height) {
     *error = "disparity image is empty or its data is shorter than step × height";
     return false;
   }
-  if (!(std::isfinite(disparity.f) && disparity.f > 0) || !(std::isfinite(disparity.T) && disparity.T > 0)) {
+  if (!(std::isfinite(disparity.f) && disparity.f > 0) ||
+      !(std::isfinite(disparity.T) && disparity.T > 0)) {
     *error = "DisparityImage needs f > 0 and T > 0 (got f = " + std::to_string(disparity.f) +
              ", T = " + std::to_string(disparity.T) + ")";
     return false;
@@ -33,13 +35,13 @@ bool toStereoFrame(const stereo_msgs::DisparityImage& disparity, const sensor_ms
   const double fx = has_p ? info.P[0] : info.K[0], fy = has_p ? info.P[5] : info.K[4];
   const double cx = has_p ? info.P[2] : info.K[2], cy = has_p ? info.P[6] : info.K[5];
   if (std::abs(fx - disparity.f) > 0.01 * disparity.f) {
-    *error = "CameraInfo fx = " + std::to_string(fx) + " disagrees with DisparityImage f = " +
-             std::to_string(disparity.f);
+    *error = "CameraInfo fx = " + std::to_string(fx) +
+             " disagrees with DisparityImage f = " + std::to_string(disparity.f);
     return false;
   }
   std::string why;
-  auto camera = StereoCamera::create(static_cast<int>(d.width), static_cast<int>(d.height), fx, fy, cx, cy,
-                                     disparity.T, &why);
+  auto camera = StereoCamera::create(static_cast<int>(d.width), static_cast<int>(d.height), fx, fy,
+                                     cx, cy, disparity.T, &why);
   if (!camera) {
     *error = why;
     return false;
@@ -57,9 +59,10 @@ bool toStereoFrame(const stereo_msgs::DisparityImage& disparity, const sensor_ms
   // cv_bridge trusts step and the data length: check them, or a short message is read past its end.
   const bool four_channels = image.encoding == enc::RGBA8 || image.encoding == enc::BGRA8;
   const size_t bytes_per_pixel = image.encoding == enc::MONO8 ? 1 : four_channels ? 4 : 3;
-  if (size_t{image.step} < image.width * bytes_per_pixel || image.data.size() < size_t{image.step} * image.height) {
-    const bool known = image.encoding == enc::RGB8 || image.encoding == enc::BGR8 || four_channels ||
-                       image.encoding == enc::MONO8;
+  if (size_t{image.step} < image.width * bytes_per_pixel ||
+      image.data.size() < size_t{image.step} * image.height) {
+    const bool known = image.encoding == enc::RGB8 || image.encoding == enc::BGR8 ||
+                       four_channels || image.encoding == enc::MONO8;
     if (known) {
       *error = "image data is shorter than step × height";
       return false;
@@ -67,13 +70,14 @@ bool toStereoFrame(const stereo_msgs::DisparityImage& disparity, const sensor_ms
   }
   cv::Mat color;
   try {
-    if (image.encoding == enc::RGB8 || image.encoding == enc::BGR8 || image.encoding == enc::RGBA8 ||
-        image.encoding == enc::BGRA8) {
+    if (image.encoding == enc::RGB8 || image.encoding == enc::BGR8 ||
+        image.encoding == enc::RGBA8 || image.encoding == enc::BGRA8) {
       color = cv_bridge::toCvCopy(image, enc::RGB8)->image;
     } else if (image.encoding == enc::MONO8) {
       color = cv_bridge::toCvCopy(image, enc::MONO8)->image;
     } else {
-      *error = "unsupported image encoding '" + image.encoding + "' (rgb8, bgr8, rgba8, bgra8, mono8)";
+      *error =
+          "unsupported image encoding '" + image.encoding + "' (rgb8, bgr8, rgba8, bgra8, mono8)";
       return false;
     }
   } catch (const cv_bridge::Exception& e) {
@@ -105,8 +109,8 @@ bool toStereoFrame(const stereo_msgs::DisparityImage& disparity, const sensor_ms
   // max_disparity of 0 or less means the producer gave no upper bound.
   if (!std::isfinite(disparity.min_disparity) || !std::isfinite(disparity.max_disparity) ||
       (disparity.max_disparity > 0.0f && disparity.max_disparity < disparity.min_disparity)) {
-    *error = "DisparityImage min_disparity = " + std::to_string(disparity.min_disparity) + ", max_disparity = " +
-             std::to_string(disparity.max_disparity) + " is not a range";
+    *error = "DisparityImage min_disparity = " + std::to_string(disparity.min_disparity) +
+             ", max_disparity = " + std::to_string(disparity.max_disparity) + " is not a range";
     return false;
   }
   const float min_valid = std::max(0.0f, disparity.min_disparity);
@@ -114,7 +118,8 @@ bool toStereoFrame(const stereo_msgs::DisparityImage& disparity, const sensor_ms
   for (int v = 0; v < disparity_px.rows; ++v) {
     float* row = disparity_px.ptr<float>(v);
     for (int u = 0; u < disparity_px.cols; ++u)
-      if (!(row[u] > 0.0f && row[u] >= min_valid && row[u] <= max_valid)) row[u] = 0.0f;  // NaN fails too
+      if (!(row[u] > 0.0f && row[u] >= min_valid && row[u] <= max_valid))
+        row[u] = 0.0f;  // NaN fails too
   }
   frame->timestamp_s = disparity.header.stamp.toSec();
   frame->camera = *camera;
@@ -151,8 +156,8 @@ void toMessages(const StereoFrame& frame, const std_msgs::Header& header, float 
 }
 
 geometry_msgs::TransformStamped toTransform(const Eigen::Isometry3d& T_world_camera,
-                                           const std::string& world_frame,
-                                           const std_msgs::Header& camera_header) {
+                                            const std::string& world_frame,
+                                            const std_msgs::Header& camera_header) {
   geometry_msgs::TransformStamped t = tf2::eigenToTransform(T_world_camera);
   t.header.stamp = camera_header.stamp;
   t.header.frame_id = world_frame;

@@ -14,7 +14,8 @@ namespace stereo_fusion {
 
 namespace {
 
-nav_msgs::OccupancyGrid toMessage(const OccupancyGrid2D& grid, const std::string& frame, const ros::Time& stamp) {
+nav_msgs::OccupancyGrid toMessage(const OccupancyGrid2D& grid, const std::string& frame,
+                                  const ros::Time& stamp) {
   nav_msgs::OccupancyGrid msg;
   msg.header.frame_id = frame;
   msg.header.stamp = stamp;
@@ -52,26 +53,35 @@ OccupancyGrid2D alignGrid(const OccupancyGrid2D& grid, int align) {
   aligned.height = ay1 - ay0;
   aligned.origin_x_m = ax0 * grid.resolution_m;
   aligned.origin_y_m = ay0 * grid.resolution_m;
-  aligned.cells.assign(static_cast<size_t>(aligned.width) * aligned.height, OccupancyGrid2D::kUnknown);
+  aligned.cells.assign(static_cast<size_t>(aligned.width) * aligned.height,
+                       OccupancyGrid2D::kUnknown);
   for (int y = 0; y < grid.height; ++y)
-    std::copy_n(grid.cells.begin() + static_cast<size_t>(y) * grid.width, grid.width,
-                aligned.cells.begin() + static_cast<size_t>(y + y0 - ay0) * aligned.width + (x0 - ax0));
+    std::copy_n(
+        grid.cells.begin() + static_cast<size_t>(y) * grid.width, grid.width,
+        aligned.cells.begin() + static_cast<size_t>(y + y0 - ay0) * aligned.width + (x0 - ax0));
   return aligned;
 }
 
-PlanningPublisher::PlanningPublisher(ros::NodeHandle& pnh, const NodeConfig& node, const MapperConfig& mapper,
-                                     MappingSession* session, NodeStats* stats)
-    : node_(node), grid_min_z_m_(mapper.grid_min_z_m), grid_max_z_m_(mapper.grid_max_z_m), session_(session),
+PlanningPublisher::PlanningPublisher(ros::NodeHandle& pnh, const NodeConfig& node,
+                                     const MapperConfig& mapper, MappingSession* session,
+                                     NodeStats* stats)
+    : node_(node),
+      grid_min_z_m_(mapper.grid_min_z_m),
+      grid_max_z_m_(mapper.grid_max_z_m),
+      session_(session),
       stats_(stats) {
   // Not latched: a subscriber gets the grid as it is when it connects (onGridSubscriber), not
   // the last full one sent, which the updates after it have patched since.
   grid_pub_ = pnh.advertise<nav_msgs::OccupancyGrid>(
-      "occupancy_grid", 1, [this](const ros::SingleSubscriberPublisher& pub) { onGridSubscriber(pub); });
+      "occupancy_grid", 1,
+      [this](const ros::SingleSubscriberPublisher& pub) { onGridSubscriber(pub); });
   grid_updates_pub_ = pnh.advertise<map_msgs::OccupancyGridUpdate>("occupancy_grid_updates", 10);
   slice_pub_ = pnh.advertise<sensor_msgs::PointCloud2>("esdf_slice", 1);
   occupied_pub_ = pnh.advertise<sensor_msgs::PointCloud2>("occupied_voxels", 1);
   if (!mapper.planning_enabled) {
-    ROS_INFO("stereo_fusion: planning_enabled is false: ~occupancy_grid, ~esdf_slice and ~occupied_voxels stay silent");
+    ROS_INFO(
+        "stereo_fusion: planning_enabled is false: ~occupancy_grid, ~esdf_slice and "
+        "~occupied_voxels stay silent");
     return;
   }
   timer_ = pnh.createWallTimer(ros::WallDuration(1.0 / node_.planning_publish_rate_hz),
@@ -88,7 +98,8 @@ void PlanningPublisher::onGridSubscriber(const ros::SingleSubscriberPublisher& p
 void PlanningPublisher::tick() {
   std::unique_lock<std::mutex> tick_lock(tick_mutex_, std::try_to_lock);
   if (!tick_lock.owns_lock()) return;  // the previous tick still runs
-  const bool want_grid = grid_pub_.getNumSubscribers() > 0 || grid_updates_pub_.getNumSubscribers() > 0;
+  const bool want_grid =
+      grid_pub_.getNumSubscribers() > 0 || grid_updates_pub_.getNumSubscribers() > 0;
   const bool want_slice = slice_pub_.getNumSubscribers() > 0;
   const bool want_occupied = occupied_pub_.getNumSubscribers() > 0;
   if (!want_grid) {
@@ -110,7 +121,8 @@ void PlanningPublisher::tick() {
     if (!planning) return;
     have_layer = true;
     const PlanningUpdateStats& s = pass.stats;
-    if (s.tsdf_blocks > 0 || s.blocks_allocated > 0 || s.blocks_erased > 0) stats_->recordPlanningUpdate(pass.esdf_ms);
+    if (s.tsdf_blocks > 0 || s.blocks_allocated > 0 || s.blocks_erased > 0)
+      stats_->recordPlanningUpdate(pass.esdf_ms);
     if (want_grid) {
       grid = projectOccupancy(*planning, grid_min_z_m_, grid_max_z_m_);
       full = replaced_;
@@ -169,7 +181,8 @@ void PlanningPublisher::tick() {
   }
 }
 
-void PlanningPublisher::publishGrid(const OccupancyGrid2D& grid, bool full, const ros::Time& stamp) {
+void PlanningPublisher::publishGrid(const OccupancyGrid2D& grid, bool full,
+                                    const ros::Time& stamp) {
   std::lock_guard<std::mutex> lock(grid_mutex_);
   if (!full && grid_ && sameExtent(*grid_, grid)) {
     // The bounding window of the cells that changed.
@@ -190,7 +203,8 @@ void PlanningPublisher::publishGrid(const OccupancyGrid2D& grid, bool full, cons
     update.height = static_cast<uint32_t>(y1 - y0 + 1);
     update.data.reserve(static_cast<size_t>(update.width) * update.height);
     for (int y = y0; y <= y1; ++y)
-      update.data.insert(update.data.end(), grid.cells.begin() + static_cast<size_t>(y) * grid.width + x0,
+      update.data.insert(update.data.end(),
+                         grid.cells.begin() + static_cast<size_t>(y) * grid.width + x0,
                          grid.cells.begin() + static_cast<size_t>(y) * grid.width + x1 + 1);
     grid_ = grid;
     grid_msg_.data = grid.cells;

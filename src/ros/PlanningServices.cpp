@@ -10,10 +10,13 @@ float distanceOf(const EsdfSample& s) {
   if (s.state == CellState::kUnknown) return std::numeric_limits<float>::quiet_NaN();
   return static_cast<float>(s.interpolated ? s.interpolated_m : s.distance_m);
 }
-bool finite(const geometry_msgs::Point& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
+bool finite(const geometry_msgs::Point& p) {
+  return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+}
 }  // namespace
 
-PlanningServices::PlanningServices(ros::NodeHandle& nh, const NodeConfig& node, MappingSession* session)
+PlanningServices::PlanningServices(ros::NodeHandle& nh, const NodeConfig& node,
+                                   MappingSession* session)
     : node_(node), session_(session) {
   servers_.push_back(nh.advertiseService("get_distance", &PlanningServices::getDistance, this));
   servers_.push_back(nh.advertiseService("get_esdf_box", &PlanningServices::getEsdfBox, this));
@@ -28,8 +31,8 @@ bool PlanningServices::refuse(const char* service, const std::string& why, Respo
   return true;
 }
 
-bool PlanningServices::sample(const std::vector<Eigen::Vector3d>& points, std::vector<EsdfSample>* samples,
-                              double* cell_m, std::string* why) {
+bool PlanningServices::sample(const std::vector<Eigen::Vector3d>& points,
+                              std::vector<EsdfSample>* samples, double* cell_m, std::string* why) {
   bool enabled = true;
   const bool got = session_->tryWithMapper([&](Mapper& map) {
     const PlanningMap* planning = map.planning();
@@ -43,8 +46,10 @@ bool PlanningServices::sample(const std::vector<Eigen::Vector3d>& points, std::v
     map.updatePlanning();
     planning->sampleBatch(points, samples);
   });
-  if (!got) *why = session_->busyMessage();
-  else if (!enabled) *why = "the planning layer is off (planning_enabled: false)";
+  if (!got)
+    *why = session_->busyMessage();
+  else if (!enabled)
+    *why = "the planning layer is off (planning_enabled: false)";
   return got && enabled;
 }
 
@@ -52,14 +57,16 @@ bool PlanningServices::getDistance(GetDistance::Request& req, GetDistance::Respo
   ++requests_;
   if (req.points.size() > static_cast<size_t>(node_.planning_max_query_points))
     return refuse("get_distance",
-                  std::to_string(req.points.size()) + " points, more than planning_max_query_points (" +
+                  std::to_string(req.points.size()) +
+                      " points, more than planning_max_query_points (" +
                       std::to_string(node_.planning_max_query_points) + ")",
                   &res);
   std::vector<Eigen::Vector3d> points;
   points.reserve(req.points.size());
   for (size_t k = 0; k < req.points.size(); ++k) {
     const geometry_msgs::Point& p = req.points[k];
-    if (!finite(p)) return refuse("get_distance", "point " + std::to_string(k) + " is not finite", &res);
+    if (!finite(p))
+      return refuse("get_distance", "point " + std::to_string(k) + " is not finite", &res);
     points.emplace_back(p.x, p.y, p.z);
   }
   std::vector<EsdfSample> samples;
@@ -83,7 +90,8 @@ bool PlanningServices::getDistance(GetDistance::Request& req, GetDistance::Respo
 
 bool PlanningServices::getEsdfBox(GetEsdfBox::Request& req, GetEsdfBox::Response& res) {
   ++requests_;
-  if (!finite(req.min) || !finite(req.max)) return refuse("get_esdf_box", "a corner is not finite", &res);
+  if (!finite(req.min) || !finite(req.max))
+    return refuse("get_esdf_box", "a corner is not finite", &res);
   if (req.min.x > req.max.x || req.min.y > req.max.y || req.min.z > req.max.z)
     return refuse("get_esdf_box", "min is not below max on every axis", &res);
   if (!std::isfinite(req.resolution_m) || req.resolution_m < 0.0)
@@ -91,7 +99,8 @@ bool PlanningServices::getEsdfBox(GetEsdfBox::Request& req, GetEsdfBox::Response
   double cell_m = 0.0;
   std::string why;
   std::vector<EsdfSample> none;
-  if (req.resolution_m == 0.0 && !sample({}, &none, &cell_m, &why)) return refuse("get_esdf_box", why, &res);
+  if (req.resolution_m == 0.0 && !sample({}, &none, &cell_m, &why))
+    return refuse("get_esdf_box", why, &res);
   const double step = req.resolution_m > 0.0 ? req.resolution_m : cell_m;
   const Eigen::Vector3d lo(req.min.x, req.min.y, req.min.z), hi(req.max.x, req.max.y, req.max.z);
   double size[3];
@@ -100,8 +109,10 @@ bool PlanningServices::getEsdfBox(GetEsdfBox::Request& req, GetEsdfBox::Response
   const double cells = size[0] * size[1] * size[2];
   if (!(cells <= node_.planning_max_box_cells))
     return refuse("get_esdf_box",
-                  "the grid would hold " + std::to_string(cells) + " samples, more than planning_max_box_cells (" +
-                      std::to_string(node_.planning_max_box_cells) + "): a coarser resolution_m or a smaller box",
+                  "the grid would hold " + std::to_string(cells) +
+                      " samples, more than planning_max_box_cells (" +
+                      std::to_string(node_.planning_max_box_cells) +
+                      "): a coarser resolution_m or a smaller box",
                   &res);
   res.size_x = static_cast<uint32_t>(size[0]);
   res.size_y = static_cast<uint32_t>(size[1]);
@@ -110,7 +121,8 @@ bool PlanningServices::getEsdfBox(GetEsdfBox::Request& req, GetEsdfBox::Response
   points.reserve(static_cast<size_t>(cells));
   for (uint32_t z = 0; z < res.size_z; ++z)
     for (uint32_t y = 0; y < res.size_y; ++y)
-      for (uint32_t x = 0; x < res.size_x; ++x) points.push_back(lo + step * Eigen::Vector3d(x, y, z));
+      for (uint32_t x = 0; x < res.size_x; ++x)
+        points.push_back(lo + step * Eigen::Vector3d(x, y, z));
   std::vector<EsdfSample> samples;
   if (!sample(points, &samples, &cell_m, &why)) return refuse("get_esdf_box", why, &res);
   res.origin = req.min;
@@ -122,8 +134,8 @@ bool PlanningServices::getEsdfBox(GetEsdfBox::Request& req, GetEsdfBox::Response
     res.states[k] = static_cast<uint8_t>(samples[k].state);
   }
   res.success = true;
-  res.message = std::to_string(res.size_x) + " × " + std::to_string(res.size_y) + " × " + std::to_string(res.size_z) +
-                " samples every " + std::to_string(step) + " m";
+  res.message = std::to_string(res.size_x) + " × " + std::to_string(res.size_y) + " × " +
+                std::to_string(res.size_z) + " samples every " + std::to_string(step) + " m";
   return true;
 }
 

@@ -20,36 +20,42 @@ Table::Field<T> member(T NodeConfig::*m) {
 const Table& table() {
   static const Table parameters = [] {
     Table t;
-    t.addString("world_frame", false, "a tf frame, not empty",
-                "Fixed frame of the map, the mesh, the path and the clear services' corners; tf must "
-                "give it → the disparity's frame_id.",
-                member(&NodeConfig::world_frame));
+    t.addString(
+        "world_frame", false, "a tf frame, not empty",
+        "Fixed frame of the map, the mesh, the path and the clear services' corners; tf must "
+        "give it → the disparity's frame_id.",
+        member(&NodeConfig::world_frame));
     t.addInt("queue_size", "frames", 1, 1000, "Frames waiting for the worker that fuses them.",
              member(&NodeConfig::queue_size));
     t.addEnum<bool>("queue_policy", {{"drop_oldest", true}, {"drop_newest", false}},
                     "Which frame a full queue drops (counted as `dropped: queue full`): the oldest "
                     "waiting one, or the one arriving.",
                     member(&NodeConfig::drop_oldest));
-    t.addBool("approximate_sync",
-              "Synchronise disparity, image and camera_info with ApproximateTime instead of ExactTime "
-              "(for drivers without hardware sync).",
-              member(&NodeConfig::approximate_sync));
+    t.addBool(
+        "approximate_sync",
+        "Synchronise disparity, image and camera_info with ApproximateTime instead of ExactTime "
+        "(for drivers without hardware sync).",
+        member(&NodeConfig::approximate_sync));
     t.addInt("sync_queue_size", "messages", 1, 1000, "Queue of the message_filters synchroniser.",
              member(&NodeConfig::sync_queue_size));
-    t.addDouble("tf_timeout_s", "s", 0.0, true, 10.0,
-                "How long the worker waits for T_world_camera at the disparity's stamp before it drops "
-                "the frame (`dropped: tf timeout`).",
-                member(&NodeConfig::tf_timeout_s));
-    t.addDouble("max_stamp_ahead_s", "s", 0.0, true, 1e6,
-                "A frame stamped more than this ahead of the node's clock is dropped (`dropped: bad "
-                "timestamp`). 0 = no check.",
-                member(&NodeConfig::max_stamp_ahead_s));
-    t.addDouble("mesh_publish_rate_hz", "Hz", 0.0, true, 1000.0,
-                "Rate of meshing and of `~mesh_update` / `~mesh_markers`. 0 = mesh and publish after "
-                "every frame; with texture = patches it meshes after every frame whatever the rate (a "
-                "patch is cut from the frame that changed its submesh).",
-                member(&NodeConfig::mesh_publish_rate_hz));
-    t.addBool("publish_markers", "Publish `~mesh_markers` (rviz).", member(&NodeConfig::publish_markers));
+    t.addDouble(
+        "tf_timeout_s", "s", 0.0, true, 10.0,
+        "How long the worker waits for T_world_camera at the disparity's stamp before it drops "
+        "the frame (`dropped: tf timeout`).",
+        member(&NodeConfig::tf_timeout_s));
+    t.addDouble(
+        "max_stamp_ahead_s", "s", 0.0, true, 1e6,
+        "A frame stamped more than this ahead of the node's clock is dropped (`dropped: bad "
+        "timestamp`). 0 = no check.",
+        member(&NodeConfig::max_stamp_ahead_s));
+    t.addDouble(
+        "mesh_publish_rate_hz", "Hz", 0.0, true, 1000.0,
+        "Rate of meshing and of `~mesh_update` / `~mesh_markers`. 0 = mesh and publish after "
+        "every frame; with texture = patches it meshes after every frame whatever the rate (a "
+        "patch is cut from the frame that changed its submesh).",
+        member(&NodeConfig::mesh_publish_rate_hz));
+    t.addBool("publish_markers", "Publish `~mesh_markers` (rviz).",
+              member(&NodeConfig::publish_markers));
     t.addBool("publish_path", "Publish `~camera_path`, the poses of the fused frames.",
               member(&NodeConfig::publish_path));
     t.addBool("publish_frustum", "Publish `~frustum`, the newest fused frame's view.",
@@ -59,27 +65,34 @@ const Table& table() {
     t.addBool("publish_block_bounds",
               "Publish `~block_bounds` (debug; costs a pass over all blocks per update).",
               member(&NodeConfig::publish_block_bounds));
-    // The labels parseMeshEncoding() accepts (test: NodeParameters.MeshEncodingLabelsAreTheMessages).
-    t.addEnum<MeshEncoding>("mesh_encoding", {{"float32", MeshEncoding::kFloat32}, {"compact", MeshEncoding::kCompact}},
-                            "How `~mesh_update` and `~get_full_mesh` carry the mesh: float32, or compact "
-                            "(quantised, about half the bytes; see [Messages](ros_interface.md#messages)).",
-                            member(&NodeConfig::mesh_encoding));
-    t.addInt("loop_closure_max_frames", "frames", 0, 100000,
-             "Frames kept so that a trajectory can move them (their disparity and colour images: 2.1 MB "
-             "per 640×480 frame, 0.53 MB at 320×240); older frames are fused into a base map once more at "
-             "the best pose known when they leave and are no longer moved. 0 = keep none (the trajectory "
-             "is ignored).",
-             member(&NodeConfig::loop_closure_max_frames));
-    t.addString("trajectory_frame", true, "a tf frame, or empty",
-                "The frame whose poses `trajectory` carries; empty = the camera frame of the disparity "
-                "messages. Another frame (e.g. base_link, the IMU) is related to the camera through tf "
-                "(its static transform).",
-                member(&NodeConfig::trajectory_frame));
-    t.addDouble("planning_publish_rate_hz", "Hz", 0.0, false, 100.0,
-                "Rate of the planning layer's update (occupancy and distances) and of its topics "
-                "(`~occupancy_grid`, `~occupancy_grid_updates`, `~esdf_slice`, `~occupied_voxels`), each "
-                "built only while someone subscribes. The services answer from the latest update.",
-                member(&NodeConfig::planning_publish_rate_hz));
+    // The labels parseMeshEncoding() accepts (test:
+    // NodeParameters.MeshEncodingLabelsAreTheMessages).
+    t.addEnum<MeshEncoding>(
+        "mesh_encoding", {{"float32", MeshEncoding::kFloat32}, {"compact", MeshEncoding::kCompact}},
+        "How `~mesh_update` and `~get_full_mesh` carry the mesh: float32, or compact "
+        "(quantised, about half the bytes; see [Messages](ros_interface.md#messages)).",
+        member(&NodeConfig::mesh_encoding));
+    t.addInt(
+        "loop_closure_max_frames", "frames", 0, 100000,
+        "Frames kept so that a trajectory can move them (their disparity and colour images: 2.1 MB "
+        "per 640×480 frame, 0.53 MB at 320×240); older frames are fused into a base map once more "
+        "at "
+        "the best pose known when they leave and are no longer moved. 0 = keep none (the "
+        "trajectory "
+        "is ignored).",
+        member(&NodeConfig::loop_closure_max_frames));
+    t.addString(
+        "trajectory_frame", true, "a tf frame, or empty",
+        "The frame whose poses `trajectory` carries; empty = the camera frame of the disparity "
+        "messages. Another frame (e.g. base_link, the IMU) is related to the camera through tf "
+        "(its static transform).",
+        member(&NodeConfig::trajectory_frame));
+    t.addDouble(
+        "planning_publish_rate_hz", "Hz", 0.0, false, 100.0,
+        "Rate of the planning layer's update (occupancy and distances) and of its topics "
+        "(`~occupancy_grid`, `~occupancy_grid_updates`, `~esdf_slice`, `~occupied_voxels`), each "
+        "built only while someone subscribes. The services answer from the latest update.",
+        member(&NodeConfig::planning_publish_rate_hz));
     t.addDouble("esdf_slice_height_m", "m", -1e4, true, 1e4,
                 "Height (z in world_frame) of the horizontal slice `~esdf_slice` publishes.",
                 member(&NodeConfig::esdf_slice_height_m));
@@ -109,8 +122,10 @@ bool toText(XmlRpc::XmlRpcValue& v, std::string* text) {
   return true;
 }
 
-/// A registry's message names the parameter as 'name': name it as ROS knows it (with its namespace).
-std::string withResolvedName(const ros::NodeHandle& nh, const std::string& name, std::string message) {
+/// A registry's message names the parameter as 'name': name it as ROS knows it (with its
+/// namespace).
+std::string withResolvedName(const ros::NodeHandle& nh, const std::string& name,
+                             std::string message) {
   const std::string local = "'" + name + "'";
   const size_t at = message.find(local);
   if (at != std::string::npos) message.replace(at, local.size(), "'" + nh.resolveName(name) + "'");
@@ -118,9 +133,10 @@ std::string withResolvedName(const ros::NodeHandle& nh, const std::string& name,
 }
 
 /// Reads every parameter of one registry that `nh` holds through `set`.
-bool readRegistry(const ros::NodeHandle& nh, const std::vector<ParameterSpec>& specs,
-                  const std::function<bool(const std::string&, const std::string&, std::string*)>& set,
-                  std::string* error) {
+bool readRegistry(
+    const ros::NodeHandle& nh, const std::vector<ParameterSpec>& specs,
+    const std::function<bool(const std::string&, const std::string&, std::string*)>& set,
+    std::string* error) {
   for (const ParameterSpec& spec : specs) {
     XmlRpc::XmlRpcValue value;
     if (!nh.getParam(spec.name, value)) continue;
@@ -141,28 +157,35 @@ bool readRegistry(const ros::NodeHandle& nh, const std::vector<ParameterSpec>& s
 
 const std::vector<ParameterSpec>& nodeParameterSpecs() { return table().specs(); }
 
-bool setNodeParameter(NodeConfig* config, const std::string& name, const std::string& value, std::string* error) {
+bool setNodeParameter(NodeConfig* config, const std::string& name, const std::string& value,
+                      std::string* error) {
   return table().set(config, name, value, error);
 }
 
-std::string getNodeParameter(const NodeConfig& config, const std::string& name) { return table().get(config, name); }
+std::string getNodeParameter(const NodeConfig& config, const std::string& name) {
+  return table().get(config, name);
+}
 
-std::vector<std::string> validateNodeConfig(const NodeConfig& config) { return table().rangeErrors(config); }
+std::vector<std::string> validateNodeConfig(const NodeConfig& config) {
+  return table().rangeErrors(config);
+}
 
-bool loadParameters(const ros::NodeHandle& nh, MapperConfig* mapper, NodeConfig* node, std::string* error) {
+bool loadParameters(const ros::NodeHandle& nh, MapperConfig* mapper, NodeConfig* node,
+                    std::string* error) {
   MapperConfig mapper_read = *mapper;
   NodeConfig node_read = *node;
-  const bool read =
-      readRegistry(nh, mapperParameterSpecs(),
-                   [&](const std::string& name, const std::string& text, std::string* why) {
-                     return setMapperParameter(&mapper_read, name, text, why);
-                   },
-                   error) &&
-      readRegistry(nh, nodeParameterSpecs(),
-                   [&](const std::string& name, const std::string& text, std::string* why) {
-                     return setNodeParameter(&node_read, name, text, why);
-                   },
-                   error);
+  const bool read = readRegistry(
+                        nh, mapperParameterSpecs(),
+                        [&](const std::string& name, const std::string& text, std::string* why) {
+                          return setMapperParameter(&mapper_read, name, text, why);
+                        },
+                        error) &&
+                    readRegistry(
+                        nh, nodeParameterSpecs(),
+                        [&](const std::string& name, const std::string& text, std::string* why) {
+                          return setNodeParameter(&node_read, name, text, why);
+                        },
+                        error);
   if (!read) return false;
   for (const std::string& e : validateMapperConfig(mapper_read)) {
     *error = e;

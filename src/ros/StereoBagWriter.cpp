@@ -32,9 +32,10 @@ sensor_msgs::Image monoImage(const std_msgs::Header& header, const cv::Mat& rgb_
 
 }  // namespace
 
-std::unique_ptr<StereoBagWriter> StereoBagWriter::open(const std::string& path, const BagTopics& topics,
-                                                       const std::string& camera_frame, double stamp_offset_s,
-                                                       std::string* error) {
+std::unique_ptr<StereoBagWriter> StereoBagWriter::open(const std::string& path,
+                                                       const BagTopics& topics,
+                                                       const std::string& camera_frame,
+                                                       double stamp_offset_s, std::string* error) {
   std::unique_ptr<StereoBagWriter> writer(new StereoBagWriter());
   writer->topics_ = topics;
   writer->camera_frame_ = camera_frame;
@@ -73,7 +74,8 @@ bool StereoBagWriter::write(const StereoFrame& frame, float max_disparity_px, st
   return true;
 }
 
-bool StereoBagWriter::writeTrajectory(const std::vector<StampedPose>& poses, double stamp_s, std::string* error) {
+bool StereoBagWriter::writeTrajectory(const std::vector<StampedPose>& poses, double stamp_s,
+                                      std::string* error) {
   nav_msgs::Path path;
   path.header.stamp = ros::Time(stamp_s + stamp_offset_s_);
   path.header.frame_id = topics_.world_frame;
@@ -93,8 +95,8 @@ bool StereoBagWriter::writeTrajectory(const std::vector<StampedPose>& poses, dou
   return true;
 }
 
-bool StereoBagWriter::writePair(const StereoFrame& frame, const cv::Mat& right_rgb, const PairTopics& topics,
-                                std::string* error) {
+bool StereoBagWriter::writePair(const StereoFrame& frame, const cv::Mat& right_rgb,
+                                const PairTopics& topics, std::string* error) {
   std_msgs::Header header;
   header.seq = ++frames_written_;
   header.stamp = ros::Time(frame.timestamp_s + stamp_offset_s_);
@@ -105,8 +107,9 @@ bool StereoBagWriter::writePair(const StereoFrame& frame, const cv::Mat& right_r
   toMessages(frame, header, 0.0f, &unused_disparity, &left, &left_info);
   const bool rectified = !topics.left_image_color.empty();
   const sensor_msgs::Image right =
-      rectified ? monoImage(header, right_rgb)
-                : *cv_bridge::CvImage(header, sensor_msgs::image_encodings::RGB8, right_rgb).toImageMsg();
+      rectified
+          ? monoImage(header, right_rgb)
+          : *cv_bridge::CvImage(header, sensor_msgs::image_encodings::RGB8, right_rgb).toImageMsg();
   sensor_msgs::CameraInfo right_info = left_info;
   // The right camera's projection: x_right = fx * (X - baseline) / Z + cx (ROS stereo convention).
   right_info.P[3] = -frame.camera.fx() * frame.camera.baseline();

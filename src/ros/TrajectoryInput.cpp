@@ -6,14 +6,15 @@
 
 namespace stereo_fusion {
 
-TrajectoryInput::TrajectoryInput(ros::NodeHandle& nh, const NodeConfig& node, MappingSession* session,
-                                 const tf2_ros::Buffer* tf, std::function<std::string()> camera_frame)
+TrajectoryInput::TrajectoryInput(ros::NodeHandle& nh, const NodeConfig& node,
+                                 MappingSession* session, const tf2_ros::Buffer* tf,
+                                 std::function<std::string()> camera_frame)
     : node_(node), session_(session), tf_(tf), camera_frame_(std::move(camera_frame)) {
   session_->setCorrectionListener([](const CorrectionReport& report) {
     const TrajectoryOutcomeInfo& info = trajectoryOutcomeInfo(report.outcome);
     if (report.outcome == TrajectoryOutcome::kApplied)
-      ROS_INFO("stereo_fusion: correction applied (up to %.3f m / %.2f deg): %s", report.max_shift_m,
-               report.max_rotation_deg, report.message.c_str());
+      ROS_INFO("stereo_fusion: correction applied (up to %.3f m / %.2f deg): %s",
+               report.max_shift_m, report.max_rotation_deg, report.message.c_str());
     else if (report.outcome == TrajectoryOutcome::kFailed || info.rejected)
       ROS_ERROR("stereo_fusion: trajectory %s: %s", info.key, report.message.c_str());
     else
@@ -25,47 +26,55 @@ TrajectoryInput::TrajectoryInput(ros::NodeHandle& nh, const NodeConfig& node, Ma
 void TrajectoryInput::refuse(TrajectoryOutcome outcome, const std::string& why) {
   session_->countTrajectory(outcome);
   ROS_ERROR_THROTTLE(5.0, "stereo_fusion: trajectory ignored (%llu so far): %s",
-                     static_cast<unsigned long long>(session_->trajectories().rejected()), why.c_str());
+                     static_cast<unsigned long long>(session_->trajectories().rejected()),
+                     why.c_str());
 }
 
 void TrajectoryInput::onTrajectory(const nav_msgs::Path::ConstPtr& path) {
   ++received_;
   if (!path->header.frame_id.empty() && path->header.frame_id != node_.world_frame)
-    return refuse(TrajectoryOutcome::kRejectedWrongFrame,
-                  "it is in frame '" + path->header.frame_id + "', the map in '" + node_.world_frame + "'");
+    return refuse(
+        TrajectoryOutcome::kRejectedWrongFrame,
+        "it is in frame '" + path->header.frame_id + "', the map in '" + node_.world_frame + "'");
   const std::string camera_frame = camera_frame_();
-  if (camera_frame.empty()) return refuse(TrajectoryOutcome::kRejectedNoFrameYet, "no frame has been fused yet");
-  // T_world_camera = T_world_trajectory · T_trajectory_camera (the identity for the camera's own poses).
+  if (camera_frame.empty())
+    return refuse(TrajectoryOutcome::kRejectedNoFrameYet, "no frame has been fused yet");
+  // T_world_camera = T_world_trajectory · T_trajectory_camera (the identity for the camera's own
+  // poses).
   Eigen::Isometry3d T_trajectory_camera = Eigen::Isometry3d::Identity();
   if (!node_.trajectory_frame.empty() && node_.trajectory_frame != camera_frame) {
     try {
-      T_trajectory_camera =
-          tf2::transformToEigen(tf_->lookupTransform(node_.trajectory_frame, camera_frame, ros::Time(0)));
+      T_trajectory_camera = tf2::transformToEigen(
+          tf_->lookupTransform(node_.trajectory_frame, camera_frame, ros::Time(0)));
     } catch (const tf2::TransformException& e) {
-      return refuse(TrajectoryOutcome::kRejectedNoTransform,
-                    "no transform " + node_.trajectory_frame + " <- " + camera_frame + ": " + e.what());
+      return refuse(
+          TrajectoryOutcome::kRejectedNoTransform,
+          "no transform " + node_.trajectory_frame + " <- " + camera_frame + ": " + e.what());
     }
   }
   std::vector<StampedPose> poses;
   for (size_t k = 0; k < path->poses.size(); ++k) {
     const geometry_msgs::Pose& p = path->poses[k].pose;
     std::string why;
-    const std::optional<Eigen::Quaterniond> q = unitQuaternion(p.orientation.x, p.orientation.y, p.orientation.z,
-                                                              p.orientation.w, &why);
+    const std::optional<Eigen::Quaterniond> q =
+        unitQuaternion(p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w, &why);
     const Eigen::Vector3d t(p.position.x, p.position.y, p.position.z);
     if (!q || !t.allFinite() || !std::isfinite(path->poses[k].header.stamp.toSec()))
       return refuse(TrajectoryOutcome::kRejectedBadPose,
-                    "pose " + std::to_string(k) + " of " + std::to_string(path->poses.size()) + ": " +
-                        (q ? "its position is not finite" : why) + " (the whole path is refused)");
+                    "pose " + std::to_string(k) + " of " + std::to_string(path->poses.size()) +
+                        ": " + (q ? "its position is not finite" : why) +
+                        " (the whole path is refused)");
     Eigen::Isometry3d T_world_trajectory = Eigen::Isometry3d::Identity();
     T_world_trajectory.linear() = q->toRotationMatrix();
     T_world_trajectory.translation() = t;
-    poses.push_back({path->poses[k].header.stamp.toSec(), T_world_trajectory * T_trajectory_camera});
+    poses.push_back(
+        {path->poses[k].header.stamp.toSec(), T_world_trajectory * T_trajectory_camera});
   }
   const std::optional<CorrectionReport> refused = session_->submitTrajectory(std::move(poses));
   if (refused)
     ROS_ERROR_THROTTLE(5.0, "stereo_fusion: trajectory ignored (%llu so far): %s",
-                       static_cast<unsigned long long>(session_->trajectories().rejected()), refused->message.c_str());
+                       static_cast<unsigned long long>(session_->trajectories().rejected()),
+                       refused->message.c_str());
 }
 
 }  // namespace stereo_fusion

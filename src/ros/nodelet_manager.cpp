@@ -1,6 +1,7 @@
 // A nodelet manager (what `rosrun nodelet nodelet manager` runs) built with this package's
-// compiler flags. Sanitizer runs (scripts/check.sh --asan / --tsan) start it instead of nodelet's own, so
-// that the instrumented nodelets are loaded into a process whose sanitizer runtime comes first.
+// compiler flags. Sanitizer runs (scripts/check.sh --asan / --tsan) start it instead of nodelet's
+// own, so that the instrumented nodelets are loaded into a process whose sanitizer runtime comes
+// first.
 #include <nodelet/loader.h>
 #include <ros/ros.h>
 

@@ -8,7 +8,8 @@ namespace stereo_fusion {
 
 namespace {
 size_t imageBytes(const StereoFrame& frame) {
-  return frame.disparity_px.total() * frame.disparity_px.elemSize() + frame.color.total() * frame.color.elemSize();
+  return frame.disparity_px.total() * frame.disparity_px.elemSize() +
+         frame.color.total() * frame.color.elemSize();
 }
 }  // namespace
 
@@ -31,7 +32,8 @@ EditReplay::FrameApplied EditReplay::frame(Mapper* map, const StereoFrame& posed
   if (!applied.result.accepted) return applied;  // the map is unchanged: nothing to clear again
   for (const Edit& clear : pending_) {
     if (!predates(edit, clear)) continue;
-    applied.recleared = map->clearRegion(clear.region, timing).voxels_cleared > 0 || applied.recleared;
+    applied.recleared =
+        map->clearRegion(clear.region, timing).voxels_cleared > 0 || applied.recleared;
   }
   while (!pending_.empty() && !predates(edit, pending_.front())) pending_.pop_front();
   return applied;
@@ -53,9 +55,9 @@ const char* refusionStatusName(RefusionStatus status) {
   return "unknown";
 }
 
-RefusionStatus replayEdits(const std::vector<Edit>& edits, const PoseCorrection& correction, Mapper* map,
-                           EditReplay* replay, const std::function<bool()>& cancelled, RefusionProgress* progress,
-                           std::string* error) {
+RefusionStatus replayEdits(const std::vector<Edit>& edits, const PoseCorrection& correction,
+                           Mapper* map, EditReplay* replay, const std::function<bool()>& cancelled,
+                           RefusionProgress* progress, std::string* error) {
   for (const Edit& edit : edits) {
     if (!edit.isFrame()) {
       replay->clear(map, edit, MeshTiming::kDeferred);
@@ -65,24 +67,27 @@ RefusionStatus replayEdits(const std::vector<Edit>& edits, const PoseCorrection&
     StereoFrame original;
     if (!edit.loadFrame(&original, error)) return RefusionStatus::kUnreadableFrame;
     ++progress->frames;
-    if (!replay->frame(map, correction.corrected(original), edit, MeshTiming::kDeferred).result.accepted)
+    if (!replay->frame(map, correction.corrected(original), edit, MeshTiming::kDeferred)
+             .result.accepted)
       ++progress->rejected;
   }
   return RefusionStatus::kDone;
 }
 
-std::unique_ptr<Mapper> mapperFromBase(const MapperConfig& config, const std::vector<uint8_t>& base_bytes,
-                                       std::string* error) {
+std::unique_ptr<Mapper> mapperFromBase(const MapperConfig& config,
+                                       const std::vector<uint8_t>& base_bytes, std::string* error) {
   auto mapper = std::make_unique<Mapper>(config);
   if (base_bytes.empty()) return mapper;
   BlockOctree base(config.blockSizeM());
   MapFileInfo info;
-  if (!decodeMapFile(base_bytes.data(), base_bytes.size(), config, &base, &info, error)) return nullptr;
+  if (!decodeMapFile(base_bytes.data(), base_bytes.size(), config, &base, &info, error))
+    return nullptr;
   mapper->adoptMap(&base, info);
   return mapper;
 }
 
-EditTimeline::EditTimeline(const MapperConfig& config, size_t max_frames) : config_(config), max_frames_(max_frames) {
+EditTimeline::EditTimeline(const MapperConfig& config, size_t max_frames)
+    : config_(config), max_frames_(max_frames) {
   config_.mesh_enabled = false;  // the base is never meshed: only its voxels are copied
   config_.texture = TextureMode::kOff;
 }
@@ -148,7 +153,8 @@ EditTimeline::Snapshot EditTimeline::snapshot() const {
 std::vector<Edit> EditTimeline::editsFrom(uint64_t position) const {
   const uint64_t from = std::max(position, front_position_);
   if (from >= next_position_ || edits_.empty()) return {};
-  return std::vector<Edit>(edits_.begin() + static_cast<std::ptrdiff_t>(from - front_position_), edits_.end());
+  return std::vector<Edit>(edits_.begin() + static_cast<std::ptrdiff_t>(from - front_position_),
+                           edits_.end());
 }
 
 void EditTimeline::pin(uint64_t position) { pin_ = position; }
@@ -177,7 +183,8 @@ bool EditTimeline::clear(const std::vector<uint8_t>& base_bytes, std::string* er
 std::vector<StampedPose> EditTimeline::originalPoses() const {
   std::vector<StampedPose> poses;
   for (size_t k = firstKept(); k < edits_.size(); ++k)
-    if (edits_[k].isFrame()) poses.push_back({edits_[k].frame.timestamp_s, edits_[k].frame.T_world_camera});
+    if (edits_[k].isFrame())
+      poses.push_back({edits_[k].frame.timestamp_s, edits_[k].frame.T_world_camera});
   sortByStamp(&poses);
   return poses;
 }

@@ -20,7 +20,8 @@ constexpr size_t kCatchUpFramesUnderLock = 2;
 constexpr int kMaxCatchUpRounds = 4;
 
 size_t frameCount(const std::vector<Edit>& edits) {
-  return static_cast<size_t>(std::count_if(edits.begin(), edits.end(), [](const Edit& e) { return e.isFrame(); }));
+  return static_cast<size_t>(
+      std::count_if(edits.begin(), edits.end(), [](const Edit& e) { return e.isFrame(); }));
 }
 }  // namespace
 
@@ -30,7 +31,8 @@ MappingSession::MappingSession(const MapperConfig& config, const SessionConfig& 
       mapper_(std::make_unique<Mapper>(config)),
       timeline_(config, session.loop_closure_max_frames) {
   mapper_->setStageMonitor(&monitor_);
-  if (session_config_.background_corrections) correction_thread_ = std::thread([this] { correctionLoop(); });
+  if (session_config_.background_corrections)
+    correction_thread_ = std::thread([this] { correctionLoop(); });
 }
 
 MappingSession::~MappingSession() {
@@ -61,10 +63,13 @@ FrameTicket MappingSession::arrive() {
   return {epoch_, next_ticket_++};
 }
 
-bool MappingSession::isCurrent(const FrameTicket& ticket) const { return ticket.epoch == epoch_seen_.load(); }
+bool MappingSession::isCurrent(const FrameTicket& ticket) const {
+  return ticket.epoch == epoch_seen_.load();
+}
 
-MappingSession::FrameOutcome MappingSession::fuse(const StereoFrame& frame, const FrameTicket& ticket,
-                                                  MeshTiming timing, FrameLoader reload) {
+MappingSession::FrameOutcome MappingSession::fuse(const StereoFrame& frame,
+                                                  const FrameTicket& ticket, MeshTiming timing,
+                                                  FrameLoader reload) {
   FrameOutcome out;
   std::lock_guard<std::mutex> lock(mutex_);
   if (ticket.epoch != epoch_) {
@@ -119,7 +124,8 @@ MappingSession::FrameOutcome MappingSession::fuse(const StereoFrame& frame, cons
   return out;
 }
 
-bool MappingSession::lockWithin(std::unique_lock<std::mutex>* lock, std::chrono::steady_clock::duration wait) {
+bool MappingSession::lockWithin(std::unique_lock<std::mutex>* lock,
+                                std::chrono::steady_clock::duration wait) {
   const auto deadline = std::chrono::steady_clock::now() + wait;
   while (!lock->try_lock()) {
     if (std::chrono::steady_clock::now() >= deadline) return false;
@@ -129,9 +135,9 @@ bool MappingSession::lockWithin(std::unique_lock<std::mutex>* lock, std::chrono:
 }
 
 std::string MappingSession::busyMessage() const {
-  return "busy: the map has been held for more than " + std::to_string(session_config_.max_request_wait_s) +
-         " s (" + mapperStageName(stage()) + " for " + std::to_string(busySeconds()) +
-         " s); nothing was done, retry";
+  return "busy: the map has been held for more than " +
+         std::to_string(session_config_.max_request_wait_s) + " s (" + mapperStageName(stage()) +
+         " for " + std::to_string(busySeconds()) + " s); nothing was done, retry";
 }
 
 MappingSession::ClearOutcome MappingSession::clear(const MapRegion& region, double stamp_s) {
@@ -146,11 +152,13 @@ MappingSession::ClearOutcome MappingSession::clear(const MapRegion& region, doub
     out.message = invalid + " (the map is unchanged)";
     return out;
   }
-  if (live_replay_.pending().size() >= kMaxPendingClears || timeline_.clears() >= kMaxPendingClears) {
+  if (live_replay_.pending().size() >= kMaxPendingClears ||
+      timeline_.clears() >= kMaxPendingClears) {
     ++clears_refused_;
-    out.message = std::to_string(kMaxPendingClears) +
-                  " clears already wait for frames that may predate them (the map is unchanged); retry after "
-                  "frames newer than them were fused";
+    out.message =
+        std::to_string(kMaxPendingClears) +
+        " clears already wait for frames that may predate them (the map is unchanged); retry after "
+        "frames newer than them were fused";
     return out;
   }
   Edit edit;
@@ -162,8 +170,8 @@ MappingSession::ClearOutcome MappingSession::clear(const MapRegion& region, doub
   timeline_.append(std::move(edit));
   ++regions_cleared_;
   out.success = true;
-  out.message = "cleared " + region.describe() + ": " + std::to_string(out.result.voxels_cleared) + " voxels, " +
-                std::to_string(out.result.blocks_erased) + " blocks erased, " +
+  out.message = "cleared " + region.describe() + ": " + std::to_string(out.result.voxels_cleared) +
+                " voxels, " + std::to_string(out.result.blocks_erased) + " blocks erased, " +
                 std::to_string(out.result.blocks_changed) + " changed";
   return out;
 }
@@ -175,7 +183,8 @@ void MappingSession::startEpochLocked(const std::vector<uint8_t>& base_bytes) {
   correction_ = PoseCorrection();
   std::string why;
   if (!timeline_.clear(base_bytes, &why))
-    std::fprintf(stderr, "stereo_fusion: the loop-closure base of the loaded map: %s\n", why.c_str());
+    std::fprintf(stderr, "stereo_fusion: the loop-closure base of the loaded map: %s\n",
+                 why.c_str());
   std::lock_guard<std::mutex> lock(trajectory_mutex_);
   if (pending_trajectory_) {
     trajectories_.count(TrajectoryOutcome::kDroppedByReset);
@@ -229,8 +238,8 @@ MappingSession::LoadOutcome MappingSession::load(const std::string& path) {
   return out;
 }
 
-std::optional<CorrectionReport> MappingSession::submitTrajectory(std::vector<StampedPose> poses,
-                                                                 std::optional<double> fused_until_s) {
+std::optional<CorrectionReport> MappingSession::submitTrajectory(
+    std::vector<StampedPose> poses, std::optional<double> fused_until_s) {
   auto refuse = [&](TrajectoryOutcome outcome, const std::string& why) {
     trajectories_.count(outcome);
     CorrectionReport report;
@@ -240,13 +249,15 @@ std::optional<CorrectionReport> MappingSession::submitTrajectory(std::vector<Sta
     return report;
   };
   if (timeline_.maxFrames() == 0)
-    return refuse(TrajectoryOutcome::kRejectedNothingKept, "loop_closure_max_frames is 0: no frame is kept to correct");
+    return refuse(TrajectoryOutcome::kRejectedNothingKept,
+                  "loop_closure_max_frames is 0: no frame is kept to correct");
   if (poses.empty()) return refuse(TrajectoryOutcome::kRejectedEmpty, "it holds no pose");
   sortByStamp(&poses);
   PendingTrajectory pending;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (timeline_.frames() == 0) return refuse(TrajectoryOutcome::kRejectedNoFrameYet, "no frame has been fused yet");
+    if (timeline_.frames() == 0)
+      return refuse(TrajectoryOutcome::kRejectedNoFrameYet, "no frame has been fused yet");
     pending.fused_until_s = fused_until_s ? *fused_until_s : timeline_.newestFrameStamp();
     pending.epoch = epoch_;
   }
@@ -298,7 +309,8 @@ CorrectionReport MappingSession::runCorrection(const PendingTrajectory& trajecto
   PoseCorrection correction;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (trajectory.epoch != epoch_) return finish(TrajectoryOutcome::kDroppedByReset, "a reset or load_map came first");
+    if (trajectory.epoch != epoch_)
+      return finish(TrajectoryOutcome::kDroppedByReset, "a reset or load_map came first");
     const std::vector<StampedPose> originals = timeline_.originalPoses();
     correction = PoseCorrection(originals, trajectory.poses, trajectory.fused_until_s);
     report.matched_poses = correction.corrections().size();
@@ -306,7 +318,8 @@ CorrectionReport MappingSession::runCorrection(const PendingTrajectory& trajecto
     if (correction.empty())
       return finish(TrajectoryOutcome::kRejectedNoMatch,
                     "none of its " + std::to_string(trajectory.poses.size()) +
-                        " stamps lies within 0.5 s of a fused frame still kept (stamps must match the frames')");
+                        " stamps lies within 0.5 s of a fused frame still kept (stamps must match "
+                        "the frames')");
     if (report.max_shift_m < kMinCorrectionM && report.max_rotation_deg < kMinCorrectionDeg) {
       // Nothing kept moves visibly: frames leaving the window still take this correction.
       timeline_.setCorrection(correction);
@@ -319,7 +332,8 @@ CorrectionReport MappingSession::runCorrection(const PendingTrajectory& trajecto
   correcting_ = true;
   auto unpin = [&] {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (trajectory.epoch == epoch_) timeline_.unpin();  // a new epoch cleared the timeline and its pin
+    if (trajectory.epoch == epoch_)
+      timeline_.unpin();  // a new epoch cleared the timeline and its pin
     correcting_ = false;
   };
   auto cancelled = [&] {
@@ -330,10 +344,12 @@ CorrectionReport MappingSession::runCorrection(const PendingTrajectory& trajecto
     unpin();
     if (status == RefusionStatus::kCancelled)
       return epoch_seen_.load() != trajectory.epoch
-                 ? finish(TrajectoryOutcome::kDroppedByReset, "a reset or load_map came while it was fused again")
-                 : finish(TrajectoryOutcome::kSuperseded, "a newer trajectory came while it was fused again");
-    return finish(TrajectoryOutcome::kFailed, std::string(refusionStatusName(status)) + ": " + error +
-                                                  " (the map is unchanged)");
+                 ? finish(TrajectoryOutcome::kDroppedByReset,
+                          "a reset or load_map came while it was fused again")
+                 : finish(TrajectoryOutcome::kSuperseded,
+                          "a newer trajectory came while it was fused again");
+    return finish(TrajectoryOutcome::kFailed, std::string(refusionStatusName(status)) + ": " +
+                                                  error + " (the map is unchanged)");
   };
 
   std::string error;
@@ -341,7 +357,8 @@ CorrectionReport MappingSession::runCorrection(const PendingTrajectory& trajecto
   if (!rebuilt) return stopped(RefusionStatus::kUnreadableBase, error);
   EditReplay replay(std::move(snapshot.base_pending));
   RefusionProgress progress;
-  RefusionStatus status = replayEdits(snapshot.edits, correction, rebuilt.get(), &replay, cancelled, &progress, &error);
+  RefusionStatus status =
+      replayEdits(snapshot.edits, correction, rebuilt.get(), &replay, cancelled, &progress, &error);
   if (status != RefusionStatus::kDone) return stopped(status, error);
   rebuilt->updateMesh();
   rebuilt->updatePlanning();
@@ -354,7 +371,8 @@ CorrectionReport MappingSession::runCorrection(const PendingTrajectory& trajecto
       std::lock_guard<std::mutex> lock(mutex_);
       if (trajectory.epoch != epoch_) {
         correcting_ = false;
-        return finish(TrajectoryOutcome::kDroppedByReset, "a reset or load_map came while it was fused again");
+        return finish(TrajectoryOutcome::kDroppedByReset,
+                      "a reset or load_map came while it was fused again");
       }
       newer = timeline_.editsFrom(next);
       if (frameCount(newer) <= kCatchUpFramesUnderLock || round >= kMaxCatchUpRounds) {
@@ -362,7 +380,8 @@ CorrectionReport MappingSession::runCorrection(const PendingTrajectory& trajecto
         if (status != RefusionStatus::kDone) {
           timeline_.unpin();
           correcting_ = false;
-          return finish(TrajectoryOutcome::kFailed, std::string(refusionStatusName(status)) + ": " + error);
+          return finish(TrajectoryOutcome::kFailed,
+                        std::string(refusionStatusName(status)) + ": " + error);
         }
         rebuilt->updateMesh();
         rebuilt->updatePlanning();
@@ -419,7 +438,9 @@ MappingSession::KeptStatus MappingSession::kept() const {
 
 std::optional<MappingSession::MapStatus> MappingSession::tryStatus(double wait_s) const {
   std::unique_lock<std::mutex> lock(mutex_, std::defer_lock);
-  if (!lockWithin(&lock, std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(wait_s)))) return std::nullopt;
+  if (!lockWithin(&lock, std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                             std::chrono::duration<double>(wait_s))))
+    return std::nullopt;
   MapStatus s;
   s.kept = keptLocked();
   s.last_correction = last_correction_;

@@ -6,10 +6,12 @@
 namespace stereo_fusion {
 
 void sortByStamp(std::vector<StampedPose>* poses) {
-  std::sort(poses->begin(), poses->end(), [](const StampedPose& a, const StampedPose& b) { return a.stamp_s < b.stamp_s; });
+  std::sort(poses->begin(), poses->end(),
+            [](const StampedPose& a, const StampedPose& b) { return a.stamp_s < b.stamp_s; });
 }
 
-Eigen::Isometry3d interpolatePose(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, double alpha) {
+Eigen::Isometry3d interpolatePose(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b,
+                                  double alpha) {
   const Eigen::Quaterniond qa(a.rotation()), qb(b.rotation());
   Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
   out.linear() = qa.slerp(alpha, qb).normalized().toRotationMatrix();
@@ -21,7 +23,8 @@ namespace {
 bool byStamp(const StampedPose& p, double stamp_s) { return p.stamp_s < stamp_s; }
 }  // namespace
 
-bool originalPoseAt(const std::vector<StampedPose>& fused, double stamp_s, double max_gap_s, Eigen::Isometry3d* pose) {
+bool originalPoseAt(const std::vector<StampedPose>& fused, double stamp_s, double max_gap_s,
+                    Eigen::Isometry3d* pose) {
   if (fused.empty()) return false;
   const auto after = std::lower_bound(fused.begin(), fused.end(), stamp_s, byStamp);
   if (after == fused.begin()) {
@@ -42,7 +45,8 @@ bool originalPoseAt(const std::vector<StampedPose>& fused, double stamp_s, doubl
   return true;
 }
 
-PoseCorrection::PoseCorrection(const std::vector<StampedPose>& fused, const std::vector<StampedPose>& trajectory,
+PoseCorrection::PoseCorrection(const std::vector<StampedPose>& fused,
+                               const std::vector<StampedPose>& trajectory,
                                double extrapolate_until_s, double max_gap_s)
     : extrapolate_until_s_(extrapolate_until_s) {
   for (const StampedPose& corrected : trajectory) {
@@ -57,21 +61,24 @@ Eigen::Isometry3d PoseCorrection::correctionAt(double stamp_s) const {
   const auto after = std::lower_bound(corrections_.begin(), corrections_.end(), stamp_s, byStamp);
   if (after == corrections_.begin()) return after->T_world_camera;
   if (after == corrections_.end())
-    return stamp_s <= extrapolate_until_s_ ? corrections_.back().T_world_camera : Eigen::Isometry3d::Identity();
+    return stamp_s <= extrapolate_until_s_ ? corrections_.back().T_world_camera
+                                           : Eigen::Isometry3d::Identity();
   const auto before = after - 1;
   const double span_s = after->stamp_s - before->stamp_s;
   const double alpha = span_s > 0.0 ? (stamp_s - before->stamp_s) / span_s : 0.0;
   return interpolatePose(before->T_world_camera, after->T_world_camera, alpha);
 }
 
-void correctionMagnitude(const std::vector<StampedPose>& originals, const PoseCorrection& correction, double* shift_m,
-                         double* rotation_deg) {
+void correctionMagnitude(const std::vector<StampedPose>& originals,
+                         const PoseCorrection& correction, double* shift_m, double* rotation_deg) {
   *shift_m = 0.0;
   *rotation_deg = 0.0;
   for (const StampedPose& original : originals) {
     const Eigen::Isometry3d moved = correction.corrected(original.stamp_s, original.T_world_camera);
-    *shift_m = std::max(*shift_m, (moved.translation() - original.T_world_camera.translation()).norm());
-    const Eigen::AngleAxisd turn((moved.linear() * original.T_world_camera.linear().transpose()).eval());
+    *shift_m =
+        std::max(*shift_m, (moved.translation() - original.T_world_camera.translation()).norm());
+    const Eigen::AngleAxisd turn(
+        (moved.linear() * original.T_world_camera.linear().transpose()).eval());
     *rotation_deg = std::max(*rotation_deg, std::abs(turn.angle()) * 180.0 / M_PI);
   }
 }

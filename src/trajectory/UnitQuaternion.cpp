@@ -5,7 +5,8 @@
 
 namespace stereo_fusion {
 
-std::optional<Eigen::Quaterniond> unitQuaternion(double x, double y, double z, double w, std::string* why) {
+std::optional<Eigen::Quaterniond> unitQuaternion(double x, double y, double z, double w,
+                                                 std::string* why) {
   const Eigen::Quaterniond q(w, x, y, z);
   if (!q.coeffs().allFinite()) {
     *why = "its quaternion is not finite";

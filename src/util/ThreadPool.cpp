@@ -56,7 +56,8 @@ void ThreadPool::workerLoop() {
   }
 }
 
-void ThreadPool::parallelFor(size_t n, size_t grain, const std::function<void(size_t, size_t)>& fn) {
+void ThreadPool::parallelFor(size_t n, size_t grain,
+                             const std::function<void(size_t, size_t)>& fn) {
   if (n == 0) return;
   grain = std::max<size_t>(grain, 1);
   if (workers_.empty() || n <= grain) {

@@ -18,7 +18,8 @@ const std::filesystem::path& folder() {
     std::filesystem::create_directories(d / "disparity");
     fuzz::writeFile(d / "poses.txt", "0 0 0 0 0 0 0 1\n");
     std::string error;
-    fuzz::require(writePfm((d / "disparity" / "000000.pfm").string(), cv::Mat(3, 4, CV_32FC1, cv::Scalar(2.0f)), &error));
+    fuzz::require(writePfm((d / "disparity" / "000000.pfm").string(),
+                           cv::Mat(3, 4, CV_32FC1, cv::Scalar(2.0f)), &error));
     return d;
   }();
   return dir;
@@ -40,7 +41,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   fuzz::require(reader->size() == 1);
   StereoFrame frame;
   if (reader->load(0, &frame, &error)) {
-    fuzz::require(frame.disparity_px.cols == camera.width() && frame.disparity_px.rows == camera.height());
+    fuzz::require(frame.disparity_px.cols == camera.width() &&
+                  frame.disparity_px.rows == camera.height());
     fuzz::require(validateFrame(frame, 0.16).empty());
   } else {
     fuzz::require(!error.empty());

@@ -25,7 +25,8 @@ void checkFrame(const DatasetReader& reader, const StereoFrame& frame) {
   const cv::Mat& d = frame.disparity_px;
   fuzz::require(d.type() == CV_32FC1 && d.cols == camera.width() && d.rows == camera.height());
   for (int v = 0; v < d.rows; ++v)
-    for (int u = 0; u < d.cols; ++u) fuzz::require(std::isfinite(d.at<float>(v, u)) && d.at<float>(v, u) >= 0.0f);
+    for (int u = 0; u < d.cols; ++u)
+      fuzz::require(std::isfinite(d.at<float>(v, u)) && d.at<float>(v, u) >= 0.0f);
   if (!frame.color.empty()) {
     fuzz::require(frame.color.type() == CV_8UC3 || frame.color.type() == CV_8UC1);
     fuzz::require(frame.color.size() == d.size());

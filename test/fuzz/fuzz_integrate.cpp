@@ -60,8 +60,7 @@ MapperConfig configFor(int variant) {
     case 4:  // levels from the camera's depth error, a very noisy source: coarse levels from near
       c.disparity_noise_px = 5.0;
       break;
-    default:
-      break;
+    default: break;
   }
   return c;
 }
@@ -93,8 +92,10 @@ Eigen::Isometry3d readPose(fuzz::ByteReader& in, bool raw) {
       for (int c = 0; c < 4; ++c) T.matrix()(r, c) = in.f32();
     return T;
   }
-  const Eigen::Vector3d axis_angle(in.scaled(-M_PI, M_PI), in.scaled(-M_PI, M_PI), in.scaled(-M_PI, M_PI));
-  if (axis_angle.norm() > 0) T.linear() = Eigen::AngleAxisd(axis_angle.norm(), axis_angle.normalized()).toRotationMatrix();
+  const Eigen::Vector3d axis_angle(in.scaled(-M_PI, M_PI), in.scaled(-M_PI, M_PI),
+                                   in.scaled(-M_PI, M_PI));
+  if (axis_angle.norm() > 0)
+    T.linear() = Eigen::AngleAxisd(axis_angle.norm(), axis_angle.normalized()).toRotationMatrix();
   T.translation() = Eigen::Vector3d(in.scaled(-2, 2), in.scaled(-2, 2), in.scaled(-2, 2));
   // Up to 2e8 m: past the map's range (±2.1e7 m at 2 cm voxels), and everything up to its edge,
   // where block keys near 2^28 and float voxel offsets are tested.
@@ -126,7 +127,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     baseline = in.scaled(0.01, 0.5);
   }
   StereoFrame frame;
-  if (auto camera = StereoCamera::create(kWidth, kHeight, fx, fy, cx, cy, baseline)) frame.camera = *camera;
+  if (auto camera = StereoCamera::create(kWidth, kHeight, fx, fy, cx, cy, baseline))
+    frame.camera = *camera;
   std::vector<Eigen::Isometry3d> poses;
   for (int f = 0; f < frames; ++f) poses.push_back(readPose(in, flags & 2));
 

@@ -21,14 +21,17 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     // and a current file re-encodes to the input's size (one record size per block and levels);
     // a version-1 file re-encodes to a current one that decodes to the same number of blocks.
     const bool current = info.version == kMapFileVersion;
-    if (current ? map.blockCount() != info.block_count : map.blockCount() > info.block_count) std::abort();
+    if (current ? map.blockCount() != info.block_count : map.blockCount() > info.block_count)
+      std::abort();
     if (info.last_update_frames.size() != map.blockCount()) std::abort();
-    const std::vector<uint8_t> again = encodeMapFile(map, config, info.frames_integrated, {}, info.free_space);
+    const std::vector<uint8_t> again =
+        encodeMapFile(map, config, info.frames_integrated, {}, info.free_space);
     if (current && again.size() != size) std::abort();
     if (info.version != kMapFileVersion) {
       BlockOctree reread(config.blockSizeM());
       MapFileInfo reread_info;
-      if (!decodeMapFile(again.data(), again.size(), config, &reread, &reread_info, &error)) std::abort();
+      if (!decodeMapFile(again.data(), again.size(), config, &reread, &reread_info, &error))
+        std::abort();
       if (reread.blockCount() != map.blockCount()) std::abort();
     }
   } else if (error.empty()) {

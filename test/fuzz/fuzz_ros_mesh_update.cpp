@@ -28,26 +28,34 @@ MeshBlock readBlock(fuzz::ByteReader* in) {
   for (int k = 0; k < 3; ++k) b.key[k] = static_cast<int8_t>(in->u8());
   b.level = in->u8() % 5;  // 3 and 4 are invalid
   const size_t vertices = in->u8() % 24, triangles = in->u8() % 24;
-  const uint8_t shape = in->u8();  // bit 0: compact; bits 1-3: break one array's size; bit 4: uvs; bit 5: png
+  const uint8_t shape =
+      in->u8();  // bit 0: compact; bits 1-3: break one array's size; bit 4: uvs; bit 5: png
   const bool compact = shape & 1;
   const int broken = (shape >> 1) & 7;  // 0-4: sizes as required, 5-7: one array off by one
   const size_t n = vertices;
   if (compact) {
     b.position_step_m = in->u8() % 4 == 0 ? in->f32() : static_cast<float>(in->scaled(1e-4, 1e-2));
-    for (size_t i = 0; i < 3 * n + (broken == 5); ++i) b.vertices_q.push_back(static_cast<uint16_t>(in->u8() << 4));
-    for (size_t i = 0; i < 3 * n + (broken == 6); ++i) b.normals_q.push_back(static_cast<int8_t>(in->u8()));
-    for (size_t i = 0; i < 3 * triangles; ++i) b.triangles_q.push_back(in->u8() % (n + 2));  // some out of range
+    for (size_t i = 0; i < 3 * n + (broken == 5); ++i)
+      b.vertices_q.push_back(static_cast<uint16_t>(in->u8() << 4));
+    for (size_t i = 0; i < 3 * n + (broken == 6); ++i)
+      b.normals_q.push_back(static_cast<int8_t>(in->u8()));
+    for (size_t i = 0; i < 3 * triangles; ++i)
+      b.triangles_q.push_back(in->u8() % (n + 2));  // some out of range
   } else {
-    for (size_t i = 0; i < 3 * n + (broken == 5); ++i) b.vertices.push_back(in->u8() % 8 == 0 ? in->f32() : in->u8() * 0.01f);
-    for (size_t i = 0; i < 3 * n + (broken == 6); ++i) b.normals.push_back(in->u8() % 8 == 0 ? in->f32() : 0.5f);
+    for (size_t i = 0; i < 3 * n + (broken == 5); ++i)
+      b.vertices.push_back(in->u8() % 8 == 0 ? in->f32() : in->u8() * 0.01f);
+    for (size_t i = 0; i < 3 * n + (broken == 6); ++i)
+      b.normals.push_back(in->u8() % 8 == 0 ? in->f32() : 0.5f);
     for (size_t i = 0; i < 3 * triangles; ++i) b.triangles.push_back(in->u8() % (n + 2));
   }
   for (size_t i = 0; i < 3 * n + (broken == 7); ++i) b.colors.push_back(in->u8());
   if (shape & 16) {
-    for (size_t i = 0; i < 2 * n; ++i) b.uvs.push_back(in->u8() % 16 == 0 ? in->f32() : in->u8() / 255.0f);
+    for (size_t i = 0; i < 2 * n; ++i)
+      b.uvs.push_back(in->u8() % 16 == 0 ? in->f32() : in->u8() / 255.0f);
     if (shape & 32) {
       b.texture.data = smallPng();
-      for (int k = in->u8() % 4; k > 0; --k) b.texture.data[in->u8() % b.texture.data.size()] = in->u8();
+      for (int k = in->u8() % 4; k > 0; --k)
+        b.texture.data[in->u8() % b.texture.data.size()] = in->u8();
     } else {
       for (int k = in->u8() % 32; k > 0; --k) b.texture.data.push_back(in->u8());
     }
@@ -99,8 +107,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }
   for (const auto& [key, patch] : textures) {
     const auto it = mesh.find(key);
-    fuzz::require(it != mesh.end() && patch.uvs.size() == it->second.positions.size() && !patch.image_rgb.empty());
-    for (const auto& uv : patch.uvs) fuzz::require(uv.x() >= 0 && uv.x() <= 1 && uv.y() >= 0 && uv.y() <= 1);
+    fuzz::require(it != mesh.end() && patch.uvs.size() == it->second.positions.size() &&
+                  !patch.image_rgb.empty());
+    for (const auto& uv : patch.uvs)
+      fuzz::require(uv.x() >= 0 && uv.x() <= 1 && uv.y() >= 0 && uv.y() <= 1);
   }
   return 0;
 }

@@ -31,7 +31,8 @@ struct FrameMessages {
 /// `frame` as messages stamped `stamp` (now when zero) in `frame_id`; with `tf`, its pose
 /// world → frame_id is broadcast first. Publishing (and any delay before it) is the caller's.
 inline FrameMessages frameMessages(const StereoFrame& frame, tf2_ros::TransformBroadcaster* tf,
-                                   const std::string& frame_id = "left_optical", ros::Time stamp = ros::Time()) {
+                                   const std::string& frame_id = "left_optical",
+                                   ros::Time stamp = ros::Time()) {
   FrameMessages m;
   m.header.stamp = stamp.isZero() ? ros::Time::now() : stamp;
   m.header.frame_id = frame_id;
@@ -132,8 +133,10 @@ inline bool waitForTfSubscriber(double timeout_s) {
 /// /player/pause_playback(false). With wait_for_subscribers:=true the player also waits for a
 /// subscriber on each of its topics, so no frame leaves before the nodelet listens.
 inline bool startPausedPlayer(DiagnosticsWatcher& diagnostics, double timeout_s = 60.0) {
-  if (!diagnostics.waitForNextReport(timeout_s) || !diagnostics.waitForNextReport(timeout_s)) return false;
-  if (!ros::service::waitForService("/player/pause_playback", ros::Duration(timeout_s))) return false;
+  if (!diagnostics.waitForNextReport(timeout_s) || !diagnostics.waitForNextReport(timeout_s))
+    return false;
+  if (!ros::service::waitForService("/player/pause_playback", ros::Duration(timeout_s)))
+    return false;
   std_srvs::SetBool play;
   play.request.data = false;
   return ros::service::call("/player/pause_playback", play);

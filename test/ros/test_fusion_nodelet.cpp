@@ -49,10 +49,13 @@ class NodeletFixture : public testing::Test {
     image_pub_ = nh.advertise<sensor_msgs::Image>("/stereo/left/image_rect_color", 10);
     info_pub_ = nh.advertise<sensor_msgs::CameraInfo>("/stereo/left/camera_info", 10);
     update_sub_ = nh.subscribe("/stereo_fusion/mesh_update", 100, &NodeletFixture::onUpdate, this);
-    ASSERT_TRUE(waitFor([&] {
-      return disparity_pub_.getNumSubscribers() > 0 && image_pub_.getNumSubscribers() > 0 &&
-             info_pub_.getNumSubscribers() > 0 && update_sub_.getNumPublishers() > 0;
-    }, 30.0)) << "the nodelet did not connect";
+    ASSERT_TRUE(waitFor(
+        [&] {
+          return disparity_pub_.getNumSubscribers() > 0 && image_pub_.getNumSubscribers() > 0 &&
+                 info_pub_.getNumSubscribers() > 0 && update_sub_.getNumPublishers() > 0;
+        },
+        30.0))
+        << "the nodelet did not connect";
     ASSERT_TRUE(test::waitForTfSubscriber(30.0)) << "the nodelet's tf listener did not connect";
     // Each test has its own watcher: without a first report its counters read -1, and a test's
     // baseline ("fused before") would be 0 while the nodelet has fused frames of earlier tests.
@@ -71,9 +74,10 @@ class NodeletFixture : public testing::Test {
   }
 
   /// Publishes `frame` stamped `stamp` (now when zero), with its tf first when `with_tf`.
-  void publish(const StereoFrame& frame, const std::string& frame_id, bool with_tf,
-               const std::function<void(stereo_msgs::DisparityImage*, sensor_msgs::Image*)>& corrupt = {},
-               ros::Time stamp = ros::Time()) {
+  void publish(
+      const StereoFrame& frame, const std::string& frame_id, bool with_tf,
+      const std::function<void(stereo_msgs::DisparityImage*, sensor_msgs::Image*)>& corrupt = {},
+      ros::Time stamp = ros::Time()) {
     test::FrameMessages m = test::frameMessages(frame, with_tf ? &tf_ : nullptr, frame_id, stamp);
     if (corrupt) corrupt(&m.disparity, &m.image);
     ros::WallDuration(0.05).sleep();  // tf first, as a SLAM stack running ahead would
@@ -109,10 +113,12 @@ class NodeletFixture : public testing::Test {
 TEST_F(NodeletFixture, StreamedMeshEqualsFullMeshAndSavedPly) {
   const sim::AnalyticScene s = scene();
   for (int f = 0; f < 4; ++f) {
-    const auto pose = sim::lookAt({-0.15 + 0.1 * f, -0.2, 0.0}, {0.05, 0.1, 1.2}, -Eigen::Vector3d::UnitY());
+    const auto pose =
+        sim::lookAt({-0.15 + 0.1 * f, -0.2, 0.0}, {0.05, 0.1, 1.2}, -Eigen::Vector3d::UnitY());
     publish(test::renderFrame(s, qvga(), pose), "left_optical", true);
   }
-  ASSERT_TRUE(waitFor([&] { return diag("frames fused") >= 4; }, 60.0)) << "fused " << diag("frames fused");
+  ASSERT_TRUE(waitFor([&] { return diag("frames fused") >= 4; }, 60.0))
+      << "fused " << diag("frames fused");
   ros::WallDuration(1.0).sleep();  // let the last update arrive
   EXPECT_EQ(diag("dropped: tf timeout"), 0);
   EXPECT_EQ(diag("dropped: bad input"), 0);
@@ -124,7 +130,8 @@ TEST_F(NodeletFixture, StreamedMeshEqualsFullMeshAndSavedPly) {
   std::unordered_map<BlockKey, TexturePatch, BlockKeyHash> reference_textures;
   ASSERT_TRUE(applyMeshUpdate(full.response.mesh, &reference, &reference_textures));
   ASSERT_GT(reference.size(), 10u);
-  // fusion_nodelet.test turns texture patches on: textured blocks carry a PNG and one UV per vertex.
+  // fusion_nodelet.test turns texture patches on: textured blocks carry a PNG and one UV per
+  // vertex.
   ASSERT_GT(reference_textures.size(), 3u);
   for (const auto& [key, patch] : reference_textures) {
     ASSERT_EQ(patch.uvs.size(), reference.at(key).positions.size()) << key;
@@ -171,7 +178,8 @@ TEST_F(NodeletFixture, StreamedMeshEqualsFullMeshAndSavedPly) {
   EXPECT_EQ(saved.triangles.size(), welded.triangles.size());
 
   // save_mesh with a .obj path writes the textured mesh: OBJ + MTL + atlas PNG.
-  save.request.path = testing::TempDir() + "stereo_fusion_rostest_mesh_" + std::to_string(getpid()) + ".obj";
+  save.request.path =
+      testing::TempDir() + "stereo_fusion_rostest_mesh_" + std::to_string(getpid()) + ".obj";
   ASSERT_TRUE(ros::service::call("/stereo_fusion/save_mesh", save));
   ASSERT_TRUE(save.response.success) << save.response.message;
   ObjMesh obj;
@@ -183,7 +191,8 @@ TEST_F(NodeletFixture, StreamedMeshEqualsFullMeshAndSavedPly) {
   for (const ObjFace& f : obj.faces) textured_faces += f.vt[0] >= 0;
   EXPECT_GT(textured_faces, 0u);
   bool atlas_found = false;
-  for (const ObjMaterial& m : obj.materials) atlas_found |= !m.diffuse_map.empty() && std::ifstream(m.diffuse_map).good();
+  for (const ObjMaterial& m : obj.materials)
+    atlas_found |= !m.diffuse_map.empty() && std::ifstream(m.diffuse_map).good();
   EXPECT_TRUE(atlas_found);
 }
 
@@ -195,10 +204,10 @@ TEST_F(NodeletFixture, MissingTfAndBadInputAreDroppedCountedAndSurvived) {
   GetFullMesh before;
   ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", before));
   publish(frame, "camera_without_tf", false);
-  publish(frame, "left_optical", true, [](stereo_msgs::DisparityImage* d, sensor_msgs::Image*) { d->T = 0.0f; });
-  publish(frame, "left_optical", true, [](stereo_msgs::DisparityImage*, sensor_msgs::Image* i) {
-    i->encoding = "yuv422";
-  });
+  publish(frame, "left_optical", true,
+          [](stereo_msgs::DisparityImage* d, sensor_msgs::Image*) { d->T = 0.0f; });
+  publish(frame, "left_optical", true,
+          [](stereo_msgs::DisparityImage*, sensor_msgs::Image* i) { i->encoding = "yuv422"; });
   publish(frame, "left_optical", true, [](stereo_msgs::DisparityImage* d, sensor_msgs::Image*) {
     d->image.data.resize(d->image.data.size() / 2);  // truncated payload
   });
@@ -212,10 +221,14 @@ TEST_F(NodeletFixture, MissingTfAndBadInputAreDroppedCountedAndSurvived) {
     cv::RNG rng(11);
     for (size_t k = 0; k < d->image.data.size() / 4; ++k) px[k] = rng.uniform(1.0f, 64.0f);
   });
-  ASSERT_TRUE(waitFor([&] {
-    return diag("dropped: tf timeout") >= 1 && diag("dropped: bad input") >= 4 && diag("dropped: incoherent disparity") >= 1;
-  }, 30.0)) << "tf " << diag("dropped: tf timeout") << ", bad " << diag("dropped: bad input") << ", incoherent "
-            << diag("dropped: incoherent disparity");
+  ASSERT_TRUE(waitFor(
+      [&] {
+        return diag("dropped: tf timeout") >= 1 && diag("dropped: bad input") >= 4 &&
+               diag("dropped: incoherent disparity") >= 1;
+      },
+      30.0))
+      << "tf " << diag("dropped: tf timeout") << ", bad " << diag("dropped: bad input")
+      << ", incoherent " << diag("dropped: incoherent disparity");
   // A disparity image full of NaN is valid input with nothing in it: fused, map unchanged.
   const long fused_mid = diag("frames fused");
   publish(frame, "left_optical", true, [](stereo_msgs::DisparityImage* d, sensor_msgs::Image*) {
@@ -225,7 +238,8 @@ TEST_F(NodeletFixture, MissingTfAndBadInputAreDroppedCountedAndSurvived) {
   ASSERT_TRUE(waitFor([&] { return diag("frames fused") >= fused_mid + 1; }, 30.0));
   GetFullMesh after;
   ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", after));
-  ASSERT_EQ(after.response.mesh.blocks.size(), before.response.mesh.blocks.size()) << "bad input changed the map";
+  ASSERT_EQ(after.response.mesh.blocks.size(), before.response.mesh.blocks.size())
+      << "bad input changed the map";
   for (size_t b = 0; b < before.response.mesh.blocks.size(); ++b) {
     EXPECT_EQ(after.response.mesh.blocks[b].key, before.response.mesh.blocks[b].key);
     EXPECT_EQ(after.response.mesh.blocks[b].vertices, before.response.mesh.blocks[b].vertices);
@@ -267,20 +281,23 @@ TEST_F(NodeletFixture, OutOfOrderDuplicateJumpingAndFutureTfFramesAreDroppedByRe
   GetFullMesh before;
   ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", before));
 
-  publish(frame, "left_optical", true, {}, t0);                             // the same stamp again
-  publish(frame, "left_optical", true, {}, t0 - ros::Duration(0.5));        // older than the last fused
+  publish(frame, "left_optical", true, {}, t0);                       // the same stamp again
+  publish(frame, "left_optical", true, {}, t0 - ros::Duration(0.5));  // older than the last fused
   StereoFrame jumped = frame;
-  jumped.T_world_camera.translation().x() += 5000.0;                        // 5 km away
+  jumped.T_world_camera.translation().x() += 5000.0;  // 5 km away
   publish(jumped, "left_optical", true, {}, t0 + ros::Duration(0.1));
   // A broken driver clock (its own frame id: a tf stamp 1000 s ahead would prune left_optical's
   // tf history, which tf2 keeps for 10 s behind its newest stamp).
   publish(frame, "clock_skew_optical", true, {}, ros::Time::now() + ros::Duration(1000.0));
-  ASSERT_TRUE(waitFor([&] {
-    return diag("dropped: duplicate frame") >= 1 && diag("dropped: timestamp backwards") >= 1 &&
-           diag("dropped: pose jump") >= 1 && diag("dropped: bad timestamp") >= 1;
-  }, 30.0)) << "duplicate " << diag("dropped: duplicate frame") << ", backwards "
-            << diag("dropped: timestamp backwards") << ", jump " << diag("dropped: pose jump") << ", bad stamp "
-            << diag("dropped: bad timestamp");
+  ASSERT_TRUE(waitFor(
+      [&] {
+        return diag("dropped: duplicate frame") >= 1 && diag("dropped: timestamp backwards") >= 1 &&
+               diag("dropped: pose jump") >= 1 && diag("dropped: bad timestamp") >= 1;
+      },
+      30.0))
+      << "duplicate " << diag("dropped: duplicate frame") << ", backwards "
+      << diag("dropped: timestamp backwards") << ", jump " << diag("dropped: pose jump")
+      << ", bad stamp " << diag("dropped: bad timestamp");
   // tf only in the future of the frame: no transform at the frame's stamp.
   const long tf_before = std::max(0L, diag("dropped: tf timeout"));
   std_msgs::Header later;
@@ -299,17 +316,21 @@ TEST_F(NodeletFixture, OutOfOrderDuplicateJumpingAndFutureTfFramesAreDroppedByRe
   EXPECT_EQ(diag("dropped: bad timestamp"), 1);
   // A disparity alone stamped 0 (its image and camera_info carry a real stamp) is a bad stamp,
   // not a frame waiting for synchronisation.
-  const long unsynchronised = diag("dropped: not synchronised (no matching image / camera_info yet)");
-  publish(frame, "left_optical", true, [](stereo_msgs::DisparityImage* d, sensor_msgs::Image*) {
-    d->header.stamp = ros::Time(0);
-  }, t0 + ros::Duration(0.3));
+  const long unsynchronised =
+      diag("dropped: not synchronised (no matching image / camera_info yet)");
+  publish(
+      frame, "left_optical", true,
+      [](stereo_msgs::DisparityImage* d, sensor_msgs::Image*) { d->header.stamp = ros::Time(0); },
+      t0 + ros::Duration(0.3));
   ASSERT_TRUE(waitFor([&] { return diag("dropped: bad timestamp") >= 2; }, 30.0));
   // A disparity alone re-using the newest fused frame's stamp is a duplicate frame, not unmatched.
-  publish(frame, "left_optical", true, [&](stereo_msgs::DisparityImage* d, sensor_msgs::Image*) {
-    d->header.stamp = t0;
-  }, t0 + ros::Duration(0.4));
+  publish(
+      frame, "left_optical", true,
+      [&](stereo_msgs::DisparityImage* d, sensor_msgs::Image*) { d->header.stamp = t0; },
+      t0 + ros::Duration(0.4));
   ASSERT_TRUE(waitFor([&] { return diag("dropped: duplicate frame") >= 2; }, 30.0));
-  EXPECT_EQ(diag("dropped: not synchronised (no matching image / camera_info yet)"), unsynchronised);
+  EXPECT_EQ(diag("dropped: not synchronised (no matching image / camera_info yet)"),
+            unsynchronised);
 
   // Neither the jumped frame nor the future stamp became a reference: the next good frame at the
   // original place is fused (a glitch costs one frame).
@@ -324,11 +345,13 @@ TEST_F(NodeletFixture, OutOfOrderDuplicateJumpingAndFutureTfFramesAreDroppedByRe
   publish(frame, "late_optical", false, {}, t1);
   ros::WallDuration(0.1).sleep();  // late, yet well inside tf_timeout_s = 0.5 s
   tf_.sendTransform(toTransform(frame.T_world_camera, "world", late));
-  late.stamp = t1 + ros::Duration(0.5);  // a later transform, so t1 is interpolated, not extrapolated
+  late.stamp =
+      t1 + ros::Duration(0.5);  // a later transform, so t1 is interpolated, not extrapolated
   tf_.sendTransform(toTransform(frame.T_world_camera, "world", late));
   EXPECT_TRUE(waitFor([&] { return diag("frames fused") >= fused_mid + 2; }, 30.0));
   EXPECT_EQ(diag("dropped: pose jump"), 1);
-  EXPECT_EQ(diag("dropped: tf timeout"), tf_before + 1) << "a late tf within tf_timeout_s must not drop the frame";
+  EXPECT_EQ(diag("dropped: tf timeout"), tf_before + 1)
+      << "a late tf within tf_timeout_s must not drop the frame";
   EXPECT_EQ(diag("blocks evicted"), 0);
 }
 
@@ -368,13 +391,15 @@ TEST_F(NodeletFixture, APathWhosePosesCarryNoRotationIsRefusedWholeAndTheMapStay
   trajectory_pub.publish(path(0, 0, 0, 0));  // was taken as the identity
   trajectory_pub.publish(path(0, 0, 0, 2));  // |q| = 2: was taken as a scaled matrix
   trajectory_pub.publish(path(0, 0, NAN, 1));
-  ASSERT_TRUE(waitFor([&] { return diag("trajectories rejected: bad pose") >= bad_before + 3; }, 30.0))
+  ASSERT_TRUE(
+      waitFor([&] { return diag("trajectories rejected: bad pose") >= bad_before + 3; }, 30.0))
       << diag("trajectories rejected: bad pose");
   ros::WallDuration(0.5).sleep();
   EXPECT_EQ(diag("corrections applied"), applied_before);
   GetFullMesh after;
   ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", after));
-  ASSERT_EQ(after.response.mesh.blocks.size(), before.response.mesh.blocks.size()) << "a bad path changed the map";
+  ASSERT_EQ(after.response.mesh.blocks.size(), before.response.mesh.blocks.size())
+      << "a bad path changed the map";
   for (size_t b = 0; b < before.response.mesh.blocks.size(); ++b)
     EXPECT_EQ(after.response.mesh.blocks[b].vertices, before.response.mesh.blocks[b].vertices);
 }
@@ -398,11 +423,14 @@ TEST_F(NodeletFixture, ASecondDisparityOfAStampArrivingBeforeItsFrameIsMatchedIs
   ros::WallDuration(0.05).sleep();  // tf first
   disparity_pub_.publish(good.disparity);
   disparity_pub_.publish(corrupt);
-  // Both disparities are in before the rest of the set, so the synchroniser holds an incomplete set.
-  ASSERT_TRUE(waitFor([&] { return diag("disparities received") >= disparities_before + 2; }, 30.0));
+  // Both disparities are in before the rest of the set, so the synchroniser holds an incomplete
+  // set.
+  ASSERT_TRUE(
+      waitFor([&] { return diag("disparities received") >= disparities_before + 2; }, 30.0));
   image_pub_.publish(good.image);
   info_pub_.publish(good.info);
-  ASSERT_TRUE(waitFor([&] { return diag("frames fused") >= fused_before + 1; }, 30.0)) << diag("frames fused");
+  ASSERT_TRUE(waitFor([&] { return diag("frames fused") >= fused_before + 1; }, 30.0))
+      << diag("frames fused");
   EXPECT_EQ(diag("dropped: duplicate stamp before synchronisation"), held_before + 1);
 
   GetFullMesh full;
@@ -416,23 +444,27 @@ TEST_F(NodeletFixture, ASecondDisparityOfAStampArrivingBeforeItsFrameIsMatchedIs
       ++vertices;
       off_surface += s.distanceToSurface(p.cast<double>()) > 0.03;  // a few at the image border
     }
-  EXPECT_LT(off_surface, vertices / 100) << "of " << vertices << " vertices: the corrupt copy was fused";
+  EXPECT_LT(off_surface, vertices / 100)
+      << "of " << vertices << " vertices: the corrupt copy was fused";
 }
 
 TEST_F(NodeletFixture, SaveMapAndLoadMapRoundTripAndABadFileChangesNothing) {
   const sim::AnalyticScene s = scene();
   const long fused_before = std::max(0L, diag("frames fused"));
   for (int f = 0; f < 3; ++f) {
-    const auto pose = sim::lookAt({-0.1 + 0.1 * f, -0.25, 0.0}, {0.05, 0.1, 1.2}, -Eigen::Vector3d::UnitY());
+    const auto pose =
+        sim::lookAt({-0.1 + 0.1 * f, -0.25, 0.0}, {0.05, 0.1, 1.2}, -Eigen::Vector3d::UnitY());
     publish(test::renderFrame(s, qvga(), pose), "left_optical", true);
   }
   // All three fused before the reference mesh is taken, or save_map would see a later map.
-  ASSERT_TRUE(waitFor([&] { return diag("frames fused") >= fused_before + 3; }, 60.0)) << diag("frames fused");
+  ASSERT_TRUE(waitFor([&] { return diag("frames fused") >= fused_before + 3; }, 60.0))
+      << diag("frames fused");
   GetFullMesh original;
   ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", original));
   ASSERT_GT(original.response.mesh.blocks.size(), 10u);
 
-  const std::string path = testing::TempDir() + "stereo_fusion_rostest_" + std::to_string(::getpid()) + ".sfmap";
+  const std::string path =
+      testing::TempDir() + "stereo_fusion_rostest_" + std::to_string(::getpid()) + ".sfmap";
   SaveMap save;
   save.request.path = path;
   ASSERT_TRUE(ros::service::call("/stereo_fusion/save_map", save));
@@ -456,8 +488,10 @@ TEST_F(NodeletFixture, SaveMapAndLoadMapRoundTripAndABadFileChangesNothing) {
   bad.request.path = truncated;
   ASSERT_TRUE(ros::service::call("/stereo_fusion/load_map", bad));
   EXPECT_FALSE(bad.response.success);
-  EXPECT_NE(bad.response.message.find("truncated map file"), std::string::npos) << bad.response.message;
-  EXPECT_NE(bad.response.message.find("current map is unchanged"), std::string::npos) << bad.response.message;
+  EXPECT_NE(bad.response.message.find("truncated map file"), std::string::npos)
+      << bad.response.message;
+  EXPECT_NE(bad.response.message.find("current map is unchanged"), std::string::npos)
+      << bad.response.message;
   GetFullMesh after_bad;
   ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", after_bad));
   expectSameMesh(original.response.mesh, after_bad.response.mesh);
@@ -473,10 +507,13 @@ TEST_F(NodeletFixture, SaveMapAndLoadMapRoundTripAndABadFileChangesNothing) {
   GetFullMesh loaded;
   ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", loaded));
   expectSameMesh(original.response.mesh, loaded.response.mesh);
-  ASSERT_TRUE(waitFor([&] {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return streamed_.size() == loaded.response.mesh.blocks.size();
-  }, 10.0)) << "the full update after load_map did not arrive";
+  ASSERT_TRUE(waitFor(
+      [&] {
+        std::lock_guard<std::mutex> lock(mutex_);
+        return streamed_.size() == loaded.response.mesh.blocks.size();
+      },
+      10.0))
+      << "the full update after load_map did not arrive";
   {
     std::lock_guard<std::mutex> lock(mutex_);
     EXPECT_TRUE(applied_ok_);
@@ -521,11 +558,13 @@ class NodeletEpoch : public NodeletFixture {
 TEST_F(NodeletEpoch, AFrameWaitingForTfAcrossResetOrLoadMapIsDroppedAsSuperseded) {
   const sim::AnalyticScene s = scene();
   auto frame_at = [&](double x) {
-    return test::renderFrame(s, qvga(), sim::lookAt({x, -0.25, 0.0}, {0.05, 0.1, 1.2}, -Eigen::Vector3d::UnitY()));
+    return test::renderFrame(
+        s, qvga(), sim::lookAt({x, -0.25, 0.0}, {0.05, 0.1, 1.2}, -Eigen::Vector3d::UnitY()));
   };
   for (int f = 0; f < 2; ++f) publish(frame_at(-0.1 + 0.1 * f), "left_optical", true);
   ASSERT_TRUE(waitFor([&] { return diag("frames fused") >= 2; }, 60.0)) << diag("frames fused");
-  const std::string path = testing::TempDir() + "stereo_fusion_epoch_" + std::to_string(::getpid()) + ".sfmap";
+  const std::string path =
+      testing::TempDir() + "stereo_fusion_epoch_" + std::to_string(::getpid()) + ".sfmap";
   SaveMap save;
   save.request.path = path;
   ASSERT_TRUE(ros::service::call("/stereo_fusion/save_map", save));
@@ -545,7 +584,8 @@ TEST_F(NodeletEpoch, AFrameWaitingForTfAcrossResetOrLoadMapIsDroppedAsSuperseded
   ASSERT_TRUE(waitFor([&] { return diag("dropped: superseded by reset/load") >= 1; }, 30.0));
   GetFullMesh after_reset;
   ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", after_reset));
-  EXPECT_TRUE(after_reset.response.mesh.blocks.empty()) << "a frame from before the reset was fused";
+  EXPECT_TRUE(after_reset.response.mesh.blocks.empty())
+      << "a frame from before the reset was fused";
 
   // load_map while a frame waits for its tf: exactly the saved map.
   const StereoFrame held_again = frame_at(0.2);
@@ -576,7 +616,8 @@ size_t verticesNear(const MeshUpdate& full, const Eigen::Vector3d& centre, doubl
   EXPECT_TRUE(applyMeshUpdate(full, &mesh));
   size_t n = 0;
   for (const auto& [key, sub] : mesh)
-    for (const Eigen::Vector3f& p : sub.positions) n += (p.cast<double>() - centre).norm() < radius_m;
+    for (const Eigen::Vector3f& p : sub.positions)
+      n += (p.cast<double>() - centre).norm() < radius_m;
   return n;
 }
 }  // namespace
@@ -589,14 +630,16 @@ TEST_F(NodeletEpoch, ClearedRegionsStayClearOfFramesFromBeforeTheClear) {
   const sim::AnalyticScene s = scene();
   const Eigen::Vector3d ball(0.05, 0.1, 1.2);
   auto frame_at = [&](double x) {
-    return test::renderFrame(s, qvga(), sim::lookAt({x, -0.25, 0.0}, ball, -Eigen::Vector3d::UnitY()));
+    return test::renderFrame(s, qvga(),
+                             sim::lookAt({x, -0.25, 0.0}, ball, -Eigen::Vector3d::UnitY()));
   };
   std_srvs::Empty reset;
   ASSERT_TRUE(ros::service::call("/stereo_fusion/reset", reset));
   const long fused_start = std::max(0L, diag("frames fused"));
   const long superseded_start = std::max(0L, diag("dropped: superseded by reset/load"));
   for (int f = 0; f < 3; ++f) publish(frame_at(-0.1 + 0.1 * f), "left_optical", true);
-  ASSERT_TRUE(waitFor([&] { return diag("frames fused") >= fused_start + 3; }, 60.0)) << diag("frames fused");
+  ASSERT_TRUE(waitFor([&] { return diag("frames fused") >= fused_start + 3; }, 60.0))
+      << diag("frames fused");
   GetFullMesh before;
   ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", before));
   ASSERT_GT(verticesNear(before.response.mesh, ball, 0.25), 200u);
@@ -607,7 +650,8 @@ TEST_F(NodeletEpoch, ClearedRegionsStayClearOfFramesFromBeforeTheClear) {
   bad.request.radius = -0.5;
   ASSERT_TRUE(ros::service::call("/stereo_fusion/clear_sphere", bad));
   EXPECT_FALSE(bad.response.success);
-  EXPECT_NE(bad.response.message.find("radius must be positive"), std::string::npos) << bad.response.message;
+  EXPECT_NE(bad.response.message.find("radius must be positive"), std::string::npos)
+      << bad.response.message;
   GetFullMesh unchanged;
   ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", unchanged));
   expectSameMesh(before.response.mesh, unchanged.response.mesh);
@@ -627,12 +671,16 @@ TEST_F(NodeletEpoch, ClearedRegionsStayClearOfFramesFromBeforeTheClear) {
   GetFullMesh cleared;
   ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", cleared));
   EXPECT_EQ(verticesNear(cleared.response.mesh, ball, 0.34), 0u);
-  EXPECT_GT(verticesNear(cleared.response.mesh, ball, 1.0), 100u) << "the floor around the ball is kept";
+  EXPECT_GT(verticesNear(cleared.response.mesh, ball, 1.0), 100u)
+      << "the floor around the ball is kept";
   // The stream carried the removals: the subscriber's copy equals the full mesh.
-  ASSERT_TRUE(waitFor([&] {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return streamed_.size() == cleared.response.mesh.blocks.size();
-  }, 10.0)) << "the removals did not arrive on ~mesh_update";
+  ASSERT_TRUE(waitFor(
+      [&] {
+        std::lock_guard<std::mutex> lock(mutex_);
+        return streamed_.size() == cleared.response.mesh.blocks.size();
+      },
+      10.0))
+      << "the removals did not arrive on ~mesh_update";
 
   releaseTf(held, "held_clear_optical", held_stamp);
   ASSERT_TRUE(waitFor([&] { return diag("frames fused") >= fused_start + 4; }, 30.0));
@@ -640,7 +688,8 @@ TEST_F(NodeletEpoch, ClearedRegionsStayClearOfFramesFromBeforeTheClear) {
   EXPECT_EQ(diag("frames fused from before a clear (region cleared again)"), 1);
   GetFullMesh after_held;
   ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", after_held));
-  EXPECT_EQ(verticesNear(after_held.response.mesh, ball, 0.34), 0u) << "a frame from before the clear refilled it";
+  EXPECT_EQ(verticesNear(after_held.response.mesh, ball, 0.34), 0u)
+      << "a frame from before the clear refilled it";
 
   // A frame after the clear sees the ball again; a box clears it again.
   publish(frame_at(0.05), "left_optical", true);
@@ -660,9 +709,11 @@ TEST_F(NodeletEpoch, ClearedRegionsStayClearOfFramesFromBeforeTheClear) {
   GetFullMesh boxed;
   ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", boxed));
   EXPECT_EQ(verticesNear(boxed.response.mesh, ball, 0.29), 0u);
-  EXPECT_TRUE(waitFor([&] { return diag("regions cleared (~clear_box, ~clear_sphere)") == 2; }, 10.0))
+  EXPECT_TRUE(
+      waitFor([&] { return diag("regions cleared (~clear_box, ~clear_sphere)") == 2; }, 10.0))
       << diag("regions cleared (~clear_box, ~clear_sphere)");
-  EXPECT_EQ(diag("dropped: superseded by reset/load"), superseded_start) << "a clear drops no frame";
+  EXPECT_EQ(diag("dropped: superseded by reset/load"), superseded_start)
+      << "a clear drops no frame";
 }
 
 TEST(NodeParameters, OutOfRangeValuesAtStartUpNameTheParameter) {
@@ -674,36 +725,64 @@ TEST(NodeParameters, OutOfRangeValuesAtStartUpNameTheParameter) {
     const char* message;
   };
   const std::vector<Case> cases = {
-      {"truncation_vox", [](const std::string& ns) { ros::param::set(ns + "/truncation_vox", 100); },
+      {"truncation_vox",
+       [](const std::string& ns) { ros::param::set(ns + "/truncation_vox", 100); },
        "parameter '/bad_truncation_vox/truncation_vox' = 100 is out of range [1, 8]"},
-      {"max_blocks", [](const std::string& ns) { ros::param::set(ns + "/max_blocks", -1); }, "= -1 is out of range [0, 100000000]"},
-      {"max_pose_jump_m", [](const std::string& ns) { ros::param::set(ns + "/max_pose_jump_m", -5.0); }, "is out of range [0, 1e+06]"},
-      {"voxel_size_m", [](const std::string& ns) { ros::param::set(ns + "/voxel_size_m", std::string("abc")); }, "is not a finite number"},
-      {"depths", [](const std::string& ns) { ros::param::set(ns + "/min_depth_m", 9.0); }, "min_depth_m must be < max_depth_m"},
+      {"max_blocks", [](const std::string& ns) { ros::param::set(ns + "/max_blocks", -1); },
+       "= -1 is out of range [0, 100000000]"},
+      {"max_pose_jump_m",
+       [](const std::string& ns) { ros::param::set(ns + "/max_pose_jump_m", -5.0); },
+       "is out of range [0, 1e+06]"},
+      {"voxel_size_m",
+       [](const std::string& ns) { ros::param::set(ns + "/voxel_size_m", std::string("abc")); },
+       "is not a finite number"},
+      {"depths", [](const std::string& ns) { ros::param::set(ns + "/min_depth_m", 9.0); },
+       "min_depth_m must be < max_depth_m"},
       {"queue_size", [](const std::string& ns) { ros::param::set(ns + "/queue_size", 0); },
        "parameter '/bad_queue_size/queue_size' = 0 is out of range [1, 1000] frames"},
-      {"negative_queue_size", [](const std::string& ns) { ros::param::set(ns + "/queue_size", -4); },
+      {"negative_queue_size",
+       [](const std::string& ns) { ros::param::set(ns + "/queue_size", -4); },
        "parameter '/bad_negative_queue_size/queue_size' = -4 is out of range [1, 1000] frames"},
-      {"fractional_queue_size", [](const std::string& ns) { ros::param::set(ns + "/queue_size", 2.5); },
+      {"fractional_queue_size",
+       [](const std::string& ns) { ros::param::set(ns + "/queue_size", 2.5); },
        "parameter '/bad_fractional_queue_size/queue_size': '2.5' is not an integer"},
       {"tf_timeout_s", [](const std::string& ns) { ros::param::set(ns + "/tf_timeout_s", -1.0); },
        "parameter '/bad_tf_timeout_s/tf_timeout_s' = -1 is out of range [0, 10] s"},
-      {"mesh_publish_rate_hz", [](const std::string& ns) { ros::param::set(ns + "/mesh_publish_rate_hz", 5000); },
+      {"mesh_publish_rate_hz",
+       [](const std::string& ns) { ros::param::set(ns + "/mesh_publish_rate_hz", 5000); },
        "mesh_publish_rate_hz' = 5000 is out of range [0, 1000] Hz"},
-      {"queue_policy", [](const std::string& ns) { ros::param::set(ns + "/queue_policy", std::string("drop_all")); },
-       "parameter '/bad_queue_policy/queue_policy': 'drop_all' is not one of drop_oldest | drop_newest"},
-      {"sync_mode", [](const std::string& ns) { ros::param::set(ns + "/approximate_sync", std::string("sometimes")); },
+      {"queue_policy",
+       [](const std::string& ns) {
+         ros::param::set(ns + "/queue_policy", std::string("drop_all"));
+       },
+       "parameter '/bad_queue_policy/queue_policy': 'drop_all' is not one of drop_oldest | "
+       "drop_newest"},
+      {"sync_mode",
+       [](const std::string& ns) {
+         ros::param::set(ns + "/approximate_sync", std::string("sometimes"));
+       },
        "parameter '/bad_sync_mode/approximate_sync': 'sometimes' is not true or false"},
-      {"sync_queue_size", [](const std::string& ns) { ros::param::set(ns + "/sync_queue_size", 0); },
+      {"sync_queue_size",
+       [](const std::string& ns) { ros::param::set(ns + "/sync_queue_size", 0); },
        "sync_queue_size' = 0 is out of range [1, 1000] messages"},
-      {"mesh_encoding", [](const std::string& ns) { ros::param::set(ns + "/mesh_encoding", std::string("png")); },
+      {"mesh_encoding",
+       [](const std::string& ns) { ros::param::set(ns + "/mesh_encoding", std::string("png")); },
        "mesh_encoding': 'png' is not one of float32 | compact"},
-      {"world_frame", [](const std::string& ns) { ros::param::set(ns + "/world_frame", std::string()); },
+      {"world_frame",
+       [](const std::string& ns) { ros::param::set(ns + "/world_frame", std::string()); },
        "parameter '/bad_world_frame/world_frame' must not be empty"},
-      {"loop_closure_max_frames", [](const std::string& ns) { ros::param::set(ns + "/loop_closure_max_frames", -1); },
+      {"loop_closure_max_frames",
+       [](const std::string& ns) { ros::param::set(ns + "/loop_closure_max_frames", -1); },
        "loop_closure_max_frames' = -1 is out of range [0, 100000] frames"},
-      {"list", [](const std::string& ns) { ros::param::set(ns + "/max_weight", std::vector<double>{1, 2}); }, "must be a single value"},
-      {"node_list", [](const std::string& ns) { ros::param::set(ns + "/frustum_depth_m", std::vector<double>{1, 2}); },
+      {"list",
+       [](const std::string& ns) {
+         ros::param::set(ns + "/max_weight", std::vector<double>{1, 2});
+       },
+       "must be a single value"},
+      {"node_list",
+       [](const std::string& ns) {
+         ros::param::set(ns + "/frustum_depth_m", std::vector<double>{1, 2});
+       },
        "parameter '/bad_node_list/frustum_depth_m' must be a single value"},
   };
   for (const Case& c : cases) {
@@ -714,13 +793,15 @@ TEST(NodeParameters, OutOfRangeValuesAtStartUpNameTheParameter) {
     std::string error;
     EXPECT_FALSE(loadParameters(ros::NodeHandle(ns), &mapper, &node, &error)) << c.name;
     EXPECT_NE(error.find(c.message), std::string::npos) << c.name << ": " << error;
-    EXPECT_EQ(node.queue_size, NodeConfig{}.queue_size) << c.name << ": a refused load changes nothing";
+    EXPECT_EQ(node.queue_size, NodeConfig{}.queue_size)
+        << c.name << ": a refused load changes nothing";
     EXPECT_EQ(node.world_frame, NodeConfig{}.world_frame) << c.name;
   }
   MapperConfig mapper;
   NodeConfig node;
   std::string error;
-  EXPECT_TRUE(loadParameters(ros::NodeHandle("/no_parameters_here"), &mapper, &node, &error)) << error;
+  EXPECT_TRUE(loadParameters(ros::NodeHandle("/no_parameters_here"), &mapper, &node, &error))
+      << error;
 }
 
 // Every node parameter is read from the master through its registry, with the types YAML would
@@ -776,7 +857,8 @@ TEST(NodeParameters, MeshEncodingLabelsAreTheMessages) {
       NodeConfig node;
       std::string error;
       ASSERT_TRUE(setNodeParameter(&node, "mesh_encoding", label, &error)) << error;
-      MeshEncoding parsed = node.mesh_encoding == MeshEncoding::kFloat32 ? MeshEncoding::kCompact : MeshEncoding::kFloat32;
+      MeshEncoding parsed = node.mesh_encoding == MeshEncoding::kFloat32 ? MeshEncoding::kCompact
+                                                                         : MeshEncoding::kFloat32;
       ASSERT_TRUE(parseMeshEncoding(label, &parsed)) << label;
       EXPECT_EQ(parsed, node.mesh_encoding) << label;
     }

@@ -25,20 +25,23 @@ TEST(MemoryBoundNode, BudgetHoldsAndTheStreamedMeshFollowsEvictions) {
   uint64_t last_sequence = 0;
   int gaps = 0;
   bool applied_ok = true;
-  ros::Subscriber sub = nh.subscribe<MeshUpdate>("/stereo_fusion/mesh_update", 100, [&](const MeshUpdate::ConstPtr& u) {
-    std::lock_guard<std::mutex> lock(mutex);
-    if (last_sequence && u->sequence != last_sequence + 1) ++gaps;
-    last_sequence = u->sequence;
-    removed_keys += u->removed_keys.size() / 3;
-    applied_ok &= applyMeshUpdate(*u, &streamed);
-  });
+  ros::Subscriber sub = nh.subscribe<MeshUpdate>(
+      "/stereo_fusion/mesh_update", 100, [&](const MeshUpdate::ConstPtr& u) {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (last_sequence && u->sequence != last_sequence + 1) ++gaps;
+        last_sequence = u->sequence;
+        removed_keys += u->removed_keys.size() / 3;
+        applied_ok &= applyMeshUpdate(*u, &streamed);
+      });
   test::DiagnosticsWatcher diagnostics;
   auto diag = [&](const char* key) { return diagnostics.value(key); };
   tf2_ros::TransformBroadcaster tf;
-  ASSERT_TRUE(test::waitFor([&] {
-    return disparity_pub.getNumSubscribers() > 0 && image_pub.getNumSubscribers() > 0 &&
-           info_pub.getNumSubscribers() > 0 && sub.getNumPublishers() > 0;
-  }, 30.0));
+  ASSERT_TRUE(test::waitFor(
+      [&] {
+        return disparity_pub.getNumSubscribers() > 0 && image_pub.getNumSubscribers() > 0 &&
+               info_pub.getNumSubscribers() > 0 && sub.getNumPublishers() > 0;
+      },
+      30.0));
   ASSERT_TRUE(test::waitForTfSubscriber(30.0)) << "the nodelet's tf listener did not connect";
 
   // A corridor: floor 0.5 m below, wall 2 m ahead; the camera slides 30 cm along it per frame.
@@ -57,7 +60,8 @@ TEST(MemoryBoundNode, BudgetHoldsAndTheStreamedMeshFollowsEvictions) {
     image_pub.publish(m.image);
     info_pub.publish(m.info);
     // One at a time, so the budget is checked after every frame.
-    ASSERT_TRUE(test::waitFor([&] { return diag("frames fused") >= k + 1; }, 30.0)) << "frame " << k;
+    ASSERT_TRUE(test::waitFor([&] { return diag("frames fused") >= k + 1; }, 30.0))
+        << "frame " << k;
     EXPECT_LE(diag("blocks"), 300) << "after frame " << k;
   }
   ros::WallDuration(1.5).sleep();  // diagnostics (1 Hz) and the last update
@@ -78,4 +82,6 @@ TEST(MemoryBoundNode, BudgetHoldsAndTheStreamedMeshFollowsEvictions) {
   test::expectSameSubmeshes(streamed, reference);
 }
 
-int main(int argc, char** argv) { return test::runRosTests(argc, argv, "stereo_fusion_memory_bound_test"); }
+int main(int argc, char** argv) {
+  return test::runRosTests(argc, argv, "stereo_fusion_memory_bound_test");
+}

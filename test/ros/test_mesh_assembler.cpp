@@ -33,12 +33,14 @@ sim::AnalyticScene scene() {
   sim::AnalyticScene s;
   s.add(sim::makePlane({0, 0.3, 0}, {0, -1, 0}), {180, 160, 120});
   s.add(sim::makeSphere({0.05, 0.1, 1.2}, 0.2), {200, 60, 60});
-  s.add(sim::makeBox(Eigen::Isometry3d(Eigen::Translation3d(-0.35, 0.15, 1.0)), {0.1, 0.15, 0.1}), {60, 160, 60});
+  s.add(sim::makeBox(Eigen::Isometry3d(Eigen::Translation3d(-0.35, 0.15, 1.0)), {0.1, 0.15, 0.1}),
+        {60, 160, 60});
   return s;
 }
 
 /// The mesh a service returns, decoded; its sequence in `sequence`, the message in `raw`.
-bool fetch(const std::string& service, SubmeshMap* mesh, uint64_t* sequence, MeshUpdate* raw = nullptr) {
+bool fetch(const std::string& service, SubmeshMap* mesh, uint64_t* sequence,
+           MeshUpdate* raw = nullptr) {
   GetFullMesh srv;
   if (!ros::service::call(service, srv)) return false;
   mesh->clear();
@@ -73,9 +75,13 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   tf2_ros::TransformBroadcaster tf;
   test::DiagnosticsWatcher diagnostics;
   test::DiagnosticsWatcher assembler_diagnostics("mesh assembler");
-  ASSERT_TRUE(test::waitFor([&] {
-    return disparity_pub.getNumSubscribers() > 0 && image_pub.getNumSubscribers() > 0 && info_pub.getNumSubscribers() > 0;
-  }, 30.0)) << "the fusion nodelet did not connect";
+  ASSERT_TRUE(test::waitFor(
+      [&] {
+        return disparity_pub.getNumSubscribers() > 0 && image_pub.getNumSubscribers() > 0 &&
+               info_pub.getNumSubscribers() > 0;
+      },
+      30.0))
+      << "the fusion nodelet did not connect";
   ASSERT_TRUE(test::waitForTfSubscriber(30.0)) << "the nodelet's tf listener did not connect";
 
   MapperConfig config;
@@ -90,11 +96,14 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   auto publishFrame = [&](int f) {
     const double angle = -0.5 + 0.1 * f;
     const Eigen::Vector3d eye(0.05 + 1.0 * std::sin(angle), -0.25, 1.2 - 1.0 * std::cos(angle));
-    const StereoFrame frame = test::renderFrame(s, camera, sim::lookAt(eye, {0.0, 0.1, 1.1}, -Eigen::Vector3d::UnitY()));
+    const StereoFrame frame =
+        test::renderFrame(s, camera, sim::lookAt(eye, {0.0, 0.1, 1.1}, -Eigen::Vector3d::UnitY()));
     const test::FrameMessages m = test::frameMessages(frame, &tf);
     // The offline reference sees exactly what the nodelet sees: the messages, converted back.
     StereoFrame received;
-    ASSERT_TRUE(toStereoFrame(m.disparity, m.image, m.info, frame.T_world_camera, &received, &error)) << error;
+    ASSERT_TRUE(
+        toStereoFrame(m.disparity, m.image, m.info, frame.T_world_camera, &received, &error))
+        << error;
     ASSERT_TRUE(offline.integrate(received).accepted);
     ros::WallDuration(0.05).sleep();  // tf first, as a SLAM stack running ahead would
     disparity_pub.publish(m.disparity);
@@ -105,8 +114,9 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   // First half: nobody at the base station yet.
   for (int f = 0; f < kFrames / 2; ++f) publishFrame(f);
   ASSERT_TRUE(test::waitFor([&] { return diagnostics.value("frames fused") >= kFrames / 2; }, 60.0))
-      << "fused " << diagnostics.value("frames fused") << " of " << diagnostics.value("frames received")
-      << " received; dropped: tf " << diagnostics.value("dropped: tf timeout") << ", queue "
+      << "fused " << diagnostics.value("frames fused") << " of "
+      << diagnostics.value("frames received") << " received; dropped: tf "
+      << diagnostics.value("dropped: tf timeout") << ", queue "
       << diagnostics.value("dropped: queue full");
 
   // The base station joins: MeshAssembler loaded into the running manager, remapped to the robot.
@@ -122,20 +132,26 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   uint64_t joined_sequence = 0, robot_sequence = 0, assembled_sequence = 0;
   ASSERT_TRUE(ros::service::waitForService("/mesh_assembler/get_full_mesh", ros::Duration(30.0)));
   // It fetches the robot's mesh on its own (late join): wait until it holds one.
-  ASSERT_TRUE(test::waitFor([&] {
-    return fetch("/mesh_assembler/get_full_mesh", &assembled, &joined_sequence) && joined_sequence > 0;
-  }, 30.0));
+  ASSERT_TRUE(test::waitFor(
+      [&] {
+        return fetch("/mesh_assembler/get_full_mesh", &assembled, &joined_sequence) &&
+               joined_sequence > 0;
+      },
+      30.0));
   EXPECT_GT(assembled.size(), 5u) << "the full mesh fetched on joining is (nearly) empty";
 
   // Second half: the assembler follows the updates.
   for (int f = kFrames / 2; f < kFrames; ++f) publishFrame(f);
   ASSERT_TRUE(test::waitFor([&] { return diagnostics.value("frames fused") >= kFrames; }, 60.0));
   ASSERT_EQ(diagnostics.value("frames fused"), kFrames);
-  ASSERT_TRUE(test::waitFor([&] {
-    return fetch("/stereo_fusion/get_full_mesh", &robot, &robot_sequence) &&
-           fetch("/mesh_assembler/get_full_mesh", &assembled, &assembled_sequence) &&
-           assembled_sequence == robot_sequence;
-  }, 30.0)) << "assembler at sequence " << assembled_sequence << ", robot at " << robot_sequence;
+  ASSERT_TRUE(test::waitFor(
+      [&] {
+        return fetch("/stereo_fusion/get_full_mesh", &robot, &robot_sequence) &&
+               fetch("/mesh_assembler/get_full_mesh", &assembled, &assembled_sequence) &&
+               assembled_sequence == robot_sequence;
+      },
+      30.0))
+      << "assembler at sequence " << assembled_sequence << ", robot at " << robot_sequence;
   EXPECT_GT(assembled_sequence, joined_sequence) << "no update was applied after joining";
   // Followed incrementally: one full mesh fetched on joining, none since (a refetch per update
   // would reach the same mesh, so only the count tells them apart).
@@ -161,8 +177,10 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
     EXPECT_EQ(got.colors, sub.colors) << key;
     triangles += sub.triangles.size();
     for (size_t v = 0; v < sub.positions.size(); ++v) {
-      worst_m = std::max(worst_m, static_cast<double>((got.positions[v] - sub.positions[v]).cwiseAbs().maxCoeff()));
-      worst_normal = std::max(worst_normal, static_cast<double>((got.normals[v] - sub.normals[v]).norm()));
+      worst_m = std::max(worst_m, static_cast<double>(
+                                      (got.positions[v] - sub.positions[v]).cwiseAbs().maxCoeff()));
+      worst_normal =
+          std::max(worst_normal, static_cast<double>((got.normals[v] - sub.normals[v]).norm()));
     }
   }
   EXPECT_GT(triangles, 2000u);
@@ -175,7 +193,8 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   }
 
   // ~save_mesh on both sides: the same welded PLY (float32: byte for byte).
-  const std::string stem = "/tmp/stereo_fusion_assembler_" + std::to_string(getpid()) + "_" + encoding_name;
+  const std::string stem =
+      "/tmp/stereo_fusion_assembler_" + std::to_string(getpid()) + "_" + encoding_name;
   SaveMesh save_robot, save_base;
   save_robot.request.path = stem + "_robot.ply";
   save_base.request.path = stem + "_base.ply";
@@ -183,10 +202,13 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   ASSERT_TRUE(ros::service::call("/mesh_assembler/save_mesh", save_base));
   ASSERT_TRUE(save_robot.response.success) << save_robot.response.message;
   ASSERT_TRUE(save_base.response.success) << save_base.response.message;
-  const std::string robot_ply = readFile(save_robot.request.path), base_ply = readFile(save_base.request.path);
+  const std::string robot_ply = readFile(save_robot.request.path),
+                    base_ply = readFile(save_base.request.path);
   EXPECT_GT(base_ply.size(), 1000u);
-  if (!compact) EXPECT_TRUE(robot_ply == base_ply) << "the PLYs differ";
-  else EXPECT_EQ(robot_ply.size(), base_ply.size());
+  if (!compact)
+    EXPECT_TRUE(robot_ply == base_ply) << "the PLYs differ";
+  else
+    EXPECT_EQ(robot_ply.size(), base_ply.size());
   std::remove(save_robot.request.path.c_str());
   std::remove(save_base.request.path.c_str());
 
@@ -225,11 +247,13 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
     for (const ObjFace& f : obj.faces) faces_with_uvs += f.vt[0] >= 0;
     EXPECT_EQ(faces_with_uvs, triangles);
     bool atlas_found = false;
-    for (const ObjMaterial& m : obj.materials) atlas_found |= !m.diffuse_map.empty() && std::ifstream(m.diffuse_map).good();
+    for (const ObjMaterial& m : obj.materials)
+      atlas_found |= !m.diffuse_map.empty() && std::ifstream(m.diffuse_map).good();
     EXPECT_TRUE(atlas_found);
     // "wrote <N> textured and <M> vertex-coloured blocks to ...", as the robot's.
     EXPECT_EQ(save_base.response.message.rfind("wrote ", 0), 0u) << save_base.response.message;
-    EXPECT_EQ(std::stoul(save_base.response.message.substr(6)), textured_blocks) << save_base.response.message;
+    EXPECT_EQ(std::stoul(save_base.response.message.substr(6)), textured_blocks)
+        << save_base.response.message;
     if (!compact) {
       // The OBJs differ only in the name of their MTL file (mtllib line).
       std::string robot_obj = readFile(save_robot.request.path);
@@ -238,13 +262,15 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
       robot_obj.replace(mtllib, 6, "_base");
       EXPECT_TRUE(robot_obj == readFile(save_base.request.path)) << "the OBJs differ";
       for (const ObjMaterial& m : obj.materials) {
-        const std::string robot_png = std::string(m.diffuse_map).replace(m.diffuse_map.rfind("_base"), 5, "_robot");
+        const std::string robot_png =
+            std::string(m.diffuse_map).replace(m.diffuse_map.rfind("_base"), 5, "_robot");
         EXPECT_TRUE(readFile(robot_png) == readFile(m.diffuse_map)) << m.diffuse_map;
       }
     }
     for (const ObjMaterial& m : obj.materials) {
       std::remove(m.diffuse_map.c_str());
-      std::remove(std::string(m.diffuse_map).replace(m.diffuse_map.rfind("_base"), 5, "_robot").c_str());
+      std::remove(
+          std::string(m.diffuse_map).replace(m.diffuse_map.rfind("_base"), 5, "_robot").c_str());
     }
     for (const std::string& path : {save_robot.request.path, save_base.request.path}) {
       std::remove(path.c_str());
@@ -274,18 +300,24 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   ASSERT_TRUE(test::waitFor([&] { return injector.getNumSubscribers() > 0; }, 30.0));
   injector.publish(after_gap);
   // It must arrive before the next real update: the assembler counts the gap when it does.
-  ASSERT_TRUE(test::waitFor([&] { return assembler_diagnostics.value("sequence gaps") >= 1; }, 30.0));
+  ASSERT_TRUE(
+      test::waitFor([&] { return assembler_diagnostics.value("sequence gaps") >= 1; }, 30.0));
   publishFrame(kFrames);
-  ASSERT_TRUE(test::waitFor([&] { return diagnostics.value("frames fused") >= kFrames + 1; }, 60.0));
-  ASSERT_TRUE(test::waitFor([&] {
-    return fetch("/stereo_fusion/get_full_mesh", &robot, &robot_sequence) &&
-           fetch("/mesh_assembler/get_full_mesh", &assembled, &assembled_sequence) &&
-           assembled_sequence == robot_sequence;
-  }, 30.0)) << "assembler at sequence " << assembled_sequence << ", robot at " << robot_sequence;
+  ASSERT_TRUE(
+      test::waitFor([&] { return diagnostics.value("frames fused") >= kFrames + 1; }, 60.0));
+  ASSERT_TRUE(test::waitFor(
+      [&] {
+        return fetch("/stereo_fusion/get_full_mesh", &robot, &robot_sequence) &&
+               fetch("/mesh_assembler/get_full_mesh", &assembled, &assembled_sequence) &&
+               assembled_sequence == robot_sequence;
+      },
+      30.0))
+      << "assembler at sequence " << assembled_sequence << ", robot at " << robot_sequence;
   EXPECT_EQ(assembled.count(stray.key), 0u) << "the update after the gap was applied";
   test::expectSameSubmeshes(assembled, robot);
   // Repaired, and not silently: the gap is counted on /diagnostics.
-  EXPECT_TRUE(test::waitFor([&] { return assembler_diagnostics.value("sequence gaps") >= 1; }, 10.0))
+  EXPECT_TRUE(
+      test::waitFor([&] { return assembler_diagnostics.value("sequence gaps") >= 1; }, 10.0))
       << "sequence gaps reported: " << assembler_diagnostics.value("sequence gaps");
 
   // A restart of the robot: its sequence begins again, so a restarted robot's update can carry
@@ -303,7 +335,8 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   restarted.session = robot_raw.session + 1;
   restarted.sequence = robot_sequence + 1;
   injector.publish(restarted);
-  ASSERT_TRUE(test::waitFor([&] { return assembler_diagnostics.value("robot restarts") >= 1; }, 30.0));
+  ASSERT_TRUE(
+      test::waitFor([&] { return assembler_diagnostics.value("robot restarts") >= 1; }, 30.0));
   // And a stale full update of the robot's own session (older than what the assembler holds,
   // e.g. a late reply): ignored, not a replacement of the mesh by an old one.
   MeshUpdate stale_full = after_gap;
@@ -313,19 +346,25 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   injector.publish(stale_full);
   ros::WallDuration(1.0).sleep();  // ignoring leaves no trace to wait for: give it time to arrive
   ASSERT_TRUE(fetch("/mesh_assembler/get_full_mesh", &assembled, &assembled_sequence, &base_raw));
-  EXPECT_EQ(assembled.count(stray.key), 0u) << "an update of another session or a stale full update was applied";
+  EXPECT_EQ(assembled.count(stray.key), 0u)
+      << "an update of another session or a stale full update was applied";
   EXPECT_EQ(base_raw.session, robot_raw.session);
   EXPECT_EQ(assembled_sequence, robot_sequence);
   publishFrame(kFrames + 1);
-  ASSERT_TRUE(test::waitFor([&] { return diagnostics.value("frames fused") >= kFrames + 2; }, 60.0));
-  ASSERT_TRUE(test::waitFor([&] {
-    return fetch("/stereo_fusion/get_full_mesh", &robot, &robot_sequence) &&
-           fetch("/mesh_assembler/get_full_mesh", &assembled, &assembled_sequence) &&
-           assembled_sequence == robot_sequence;
-  }, 30.0)) << "assembler at sequence " << assembled_sequence << ", robot at " << robot_sequence;
+  ASSERT_TRUE(
+      test::waitFor([&] { return diagnostics.value("frames fused") >= kFrames + 2; }, 60.0));
+  ASSERT_TRUE(test::waitFor(
+      [&] {
+        return fetch("/stereo_fusion/get_full_mesh", &robot, &robot_sequence) &&
+               fetch("/mesh_assembler/get_full_mesh", &assembled, &assembled_sequence) &&
+               assembled_sequence == robot_sequence;
+      },
+      30.0))
+      << "assembler at sequence " << assembled_sequence << ", robot at " << robot_sequence;
   EXPECT_EQ(assembled.count(stray.key), 0u);
   test::expectSameSubmeshes(assembled, robot);
-  EXPECT_TRUE(test::waitFor([&] { return assembler_diagnostics.value("robot restarts") >= 1; }, 10.0))
+  EXPECT_TRUE(
+      test::waitFor([&] { return assembler_diagnostics.value("robot restarts") >= 1; }, 10.0))
       << "robot restarts reported: " << assembler_diagnostics.value("robot restarts");
   ASSERT_TRUE(assembler_diagnostics.waitForNextReport(10.0));
   // The join 1; the gap 2 (at the update after the gap, whose fetched mesh is still behind it,
@@ -335,4 +374,6 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   EXPECT_EQ(assembler_diagnostics.value("malformed updates"), 0);
 }
 
-int main(int argc, char** argv) { return test::runRosTests(argc, argv, "stereo_fusion_assembler_test"); }
+int main(int argc, char** argv) {
+  return test::runRosTests(argc, argv, "stereo_fusion_assembler_test");
+}

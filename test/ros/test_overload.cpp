@@ -13,17 +13,18 @@
 
 using namespace stereo_fusion;
 
-
 TEST(Overload, QueueStaysBoundedAndEveryFrameIsCounted) {
   ros::NodeHandle nh;
-  ros::Publisher disparity_pub = nh.advertise<stereo_msgs::DisparityImage>("/stereo/disparity", 100);
+  ros::Publisher disparity_pub =
+      nh.advertise<stereo_msgs::DisparityImage>("/stereo/disparity", 100);
   ros::Publisher image_pub = nh.advertise<sensor_msgs::Image>("/stereo/left/image_rect_color", 100);
   ros::Publisher info_pub = nh.advertise<sensor_msgs::CameraInfo>("/stereo/left/camera_info", 100);
   test::DiagnosticsWatcher diagnostics;
   auto diag = [&](const std::string& key) { return diagnostics.value(key); };
   tf2_ros::TransformBroadcaster tf;
   auto connected = [&] {
-    return disparity_pub.getNumSubscribers() > 0 && image_pub.getNumSubscribers() > 0 && info_pub.getNumSubscribers() > 0;
+    return disparity_pub.getNumSubscribers() > 0 && image_pub.getNumSubscribers() > 0 &&
+           info_pub.getNumSubscribers() > 0;
   };
   for (int i = 0; i < 300 && !connected(); ++i) ros::WallDuration(0.1).sleep();
   ASSERT_TRUE(connected());
@@ -33,7 +34,8 @@ TEST(Overload, QueueStaysBoundedAndEveryFrameIsCounted) {
   sim::AnalyticScene scene;
   scene.add(sim::makePlane({0, 0.4, 0}, {0, -1, 0}));
   scene.add(sim::makeSphere({0, 0, 1.5}, 0.3));
-  const StereoFrame frame = test::renderFrame(scene, test::vgaCamera(), Eigen::Isometry3d::Identity());
+  const StereoFrame frame =
+      test::renderFrame(scene, test::vgaCamera(), Eigen::Isometry3d::Identity());
   const int sent = 40;
   std::vector<std_msgs::Header> headers;
   for (int k = 0; k < sent; ++k) {
@@ -44,14 +46,21 @@ TEST(Overload, QueueStaysBoundedAndEveryFrameIsCounted) {
     info_pub.publish(m.info);
     ros::WallDuration(0.01).sleep();
   }
-  for (const std_msgs::Header& header : headers) tf.sendTransform(toTransform(frame.T_world_camera, "world", header));
+  for (const std_msgs::Header& header : headers)
+    tf.sendTransform(toTransform(frame.T_world_camera, "world", header));
   // Every disparity that reached the node is fused or in exactly one "dropped:" counter.
   auto accounted = [&] { return diag("frames fused") + diagnostics.droppedTotal(); };
-  test::waitFor([&] { return diag("disparities received") > 0 && accounted() >= diag("disparities received"); }, 120.0);
+  test::waitFor(
+      [&] {
+        return diag("disparities received") > 0 && accounted() >= diag("disparities received");
+      },
+      120.0);
   ros::WallDuration(1.5).sleep();  // a last diagnostics update
   const long received = diag("frames received"), disparities = diag("disparities received");
-  std::printf("[overload] %ld disparities received, %ld frames matched, %ld fused, %ld dropped as the queue was full\n",
-              disparities, received, diag("frames fused"), diag("dropped: queue full"));
+  std::printf(
+      "[overload] %ld disparities received, %ld frames matched, %ld fused, %ld dropped as the "
+      "queue was full\n",
+      disparities, received, diag("frames fused"), diag("dropped: queue full"));
   EXPECT_GT(received, sent / 2) << "the synchroniser matched too few frames";
   EXPECT_LE(disparities, sent);
   EXPECT_EQ(accounted(), disparities) << "every disparity received is fused or counted as dropped";
@@ -72,7 +81,8 @@ TEST(Overload, ABurstOfNumberedFramesIsAccountedForFrameByFrame) {
   test::DiagnosticsWatcher diagnostics;
   auto diag = [&](const std::string& key) { return std::max(0L, diagnostics.value(key)); };
   auto connected = [&] {
-    return disparity_pub.getNumSubscribers() > 0 && image_pub.getNumSubscribers() > 0 && info_pub.getNumSubscribers() > 0;
+    return disparity_pub.getNumSubscribers() > 0 && image_pub.getNumSubscribers() > 0 &&
+           info_pub.getNumSubscribers() > 0;
   };
   ASSERT_TRUE(test::waitFor(connected, 30.0));
   // The broadcaster first: waitForTfSubscriber() waits on the /tf publication it shares. Created
@@ -81,7 +91,8 @@ TEST(Overload, ABurstOfNumberedFramesIsAccountedForFrameByFrame) {
   tf2_ros::TransformBroadcaster tf;
   ASSERT_TRUE(test::waitForTfSubscriber(30.0));
   auto dropped = [&] { return diagnostics.droppedTotal(); };
-  const std::string kReceived = "disparities received", kMissed = "disparities missed upstream (header.seq gaps)";
+  const std::string kReceived = "disparities received",
+                    kMissed = "disparities missed upstream (header.seq gaps)";
 
   sim::AnalyticScene scene;
   scene.add(sim::makePlane({0, 0.4, 0}, {0, -1, 0}));
@@ -92,7 +103,8 @@ TEST(Overload, ABurstOfNumberedFramesIsAccountedForFrameByFrame) {
   std::vector<test::FrameMessages> messages;
   // roscpp numbers each publisher's messages (header.seq 0, 1, 2, …) as it sends them.
   for (int k = 0; k <= sent + 1; ++k)  // the primer, the burst, a last frame after it
-    messages.push_back(test::frameMessages(frame, &tf, "left_optical", t0 + ros::Duration(0.001 * k)));
+    messages.push_back(
+        test::frameMessages(frame, &tf, "left_optical", t0 + ros::Duration(0.001 * k)));
   ros::WallDuration(0.5).sleep();  // the transforms reach the nodelet's buffer before the frames
   auto publish = [&](const test::FrameMessages& m) {
     disparity_pub.publish(m.disparity);
@@ -106,9 +118,11 @@ TEST(Overload, ABurstOfNumberedFramesIsAccountedForFrameByFrame) {
   const long before_primer = diag(kReceived);
   publish(messages.front());
   ASSERT_TRUE(test::waitFor([&] { return diag(kReceived) > before_primer; }, 30.0));
-  ASSERT_TRUE(test::waitFor([&] { return diag("frames fused") + dropped() >= diag(kReceived); }, 30.0));
+  ASSERT_TRUE(
+      test::waitFor([&] { return diag("frames fused") + dropped() >= diag(kReceived); }, 30.0));
   ASSERT_TRUE(diagnostics.waitForNextReport(10.0));
-  const long received0 = diag(kReceived), missed0 = diag(kMissed), fused0 = diag("frames fused"), dropped0 = dropped();
+  const long received0 = diag(kReceived), missed0 = diag(kMissed), fused0 = diag("frames fused"),
+             dropped0 = dropped();
   for (int k = 1; k <= sent; ++k) publish(messages[k]);
   // One more frame after a pause: whatever the burst lost at its end shows as a gap before it.
   ros::WallDuration(1.0).sleep();
@@ -122,15 +136,22 @@ TEST(Overload, ABurstOfNumberedFramesIsAccountedForFrameByFrame) {
     lost = dropped() - dropped0;
   };
   // The last frame, sent alone after a pause, arrives: every gap before it is seen.
-  test::waitFor([&] { read(); return received + missed >= numbered && fused + lost >= received; }, 120.0);
+  test::waitFor(
+      [&] {
+        read();
+        return received + missed >= numbered && fused + lost >= received;
+      },
+      120.0);
   ros::WallDuration(2.0).sleep();  // nothing more may arrive
   ASSERT_TRUE(diagnostics.waitForNextReport(10.0));
   read();
-  std::printf("[overload] burst of %d: %ld received, %ld missed upstream, %ld fused, %ld dropped\n", sent, received,
-              missed, fused, lost);
+  std::printf("[overload] burst of %d: %ld received, %ld missed upstream, %ld fused, %ld dropped\n",
+              sent, received, missed, fused, lost);
   EXPECT_EQ(received + missed, numbered) << "every frame sent was received or seen missing";
   EXPECT_EQ(fused + lost, received) << "every frame received was fused or dropped with a reason";
   EXPECT_GT(fused, 0);
 }
 
-int main(int argc, char** argv) { return test::runRosTests(argc, argv, "stereo_fusion_overload_test"); }
+int main(int argc, char** argv) {
+  return test::runRosTests(argc, argv, "stereo_fusion_overload_test");
+}

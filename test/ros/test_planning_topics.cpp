@@ -65,7 +65,8 @@ struct HeldGrid {
       ++updates_before_grid;
       return;
     }
-    if (u.x < 0 || u.y < 0 || u.x + u.width > grid.info.width || u.y + u.height > grid.info.height ||
+    if (u.x < 0 || u.y < 0 || u.x + u.width > grid.info.width ||
+        u.y + u.height > grid.info.height ||
         u.data.size() != static_cast<size_t>(u.width) * u.height) {
       ++bad_updates;
       return;
@@ -80,10 +81,15 @@ struct HeldGrid {
 };
 
 /// Value of the column holding world (x, y) in `data` laid out as `grid`; -2 outside it.
-int cellAt(const nav_msgs::OccupancyGrid& grid, const std::vector<int8_t>& data, double x, double y) {
-  const int i = static_cast<int>(std::floor((x - grid.info.origin.position.x) / grid.info.resolution));
-  const int j = static_cast<int>(std::floor((y - grid.info.origin.position.y) / grid.info.resolution));
-  if (i < 0 || j < 0 || i >= static_cast<int>(grid.info.width) || j >= static_cast<int>(grid.info.height)) return -2;
+int cellAt(const nav_msgs::OccupancyGrid& grid, const std::vector<int8_t>& data, double x,
+           double y) {
+  const int i =
+      static_cast<int>(std::floor((x - grid.info.origin.position.x) / grid.info.resolution));
+  const int j =
+      static_cast<int>(std::floor((y - grid.info.origin.position.y) / grid.info.resolution));
+  if (i < 0 || j < 0 || i >= static_cast<int>(grid.info.width) ||
+      j >= static_cast<int>(grid.info.height))
+    return -2;
   return data[static_cast<size_t>(j) * grid.info.width + i];
 }
 
@@ -110,43 +116,51 @@ class PlanningTopics : public testing::Test {
     disparity_pub_ = nh.advertise<stereo_msgs::DisparityImage>("/stereo/disparity", 10);
     image_pub_ = nh.advertise<sensor_msgs::Image>("/stereo/left/image_rect_color", 10);
     info_pub_ = nh.advertise<sensor_msgs::CameraInfo>("/stereo/left/camera_info", 10);
-    grid_sub_ = nh.subscribe<nav_msgs::OccupancyGrid>("/stereo_fusion/occupancy_grid", 10,
-                                                      [this](const nav_msgs::OccupancyGrid::ConstPtr& g) {
-                                                        std::lock_guard<std::mutex> lock(mutex_);
-                                                        held_.onFull(*g);
-                                                      });
+    grid_sub_ = nh.subscribe<nav_msgs::OccupancyGrid>(
+        "/stereo_fusion/occupancy_grid", 10, [this](const nav_msgs::OccupancyGrid::ConstPtr& g) {
+          std::lock_guard<std::mutex> lock(mutex_);
+          held_.onFull(*g);
+        });
     updates_sub_ = nh.subscribe<map_msgs::OccupancyGridUpdate>(
-        "/stereo_fusion/occupancy_grid_updates", 100, [this](const map_msgs::OccupancyGridUpdate::ConstPtr& u) {
+        "/stereo_fusion/occupancy_grid_updates", 100,
+        [this](const map_msgs::OccupancyGridUpdate::ConstPtr& u) {
           std::lock_guard<std::mutex> lock(mutex_);
           held_.onUpdate(*u);
         });
-    slice_sub_ = nh.subscribe<sensor_msgs::PointCloud2>("/stereo_fusion/esdf_slice", 10,
-                                                        [this](const sensor_msgs::PointCloud2::ConstPtr& c) {
-                                                          std::lock_guard<std::mutex> lock(mutex_);
-                                                          slice_ = *c;
-                                                          tick_stamps_.push_back(c->header.stamp);
-                                                        });
-    occupied_sub_ = nh.subscribe<sensor_msgs::PointCloud2>("/stereo_fusion/occupied_voxels", 10,
-                                                           [this](const sensor_msgs::PointCloud2::ConstPtr& c) {
-                                                             std::lock_guard<std::mutex> lock(mutex_);
-                                                             occupied_ = *c;
-                                                           });
-    ASSERT_TRUE(test::waitFor([&] {
-      return disparity_pub_.getNumSubscribers() > 0 && image_pub_.getNumSubscribers() > 0 &&
-             info_pub_.getNumSubscribers() > 0 && grid_sub_.getNumPublishers() > 0 &&
-             updates_sub_.getNumPublishers() > 0 && slice_sub_.getNumPublishers() > 0 &&
-             occupied_sub_.getNumPublishers() > 0;
-    }, 30.0)) << "the nodelet did not connect";
+    slice_sub_ = nh.subscribe<sensor_msgs::PointCloud2>(
+        "/stereo_fusion/esdf_slice", 10, [this](const sensor_msgs::PointCloud2::ConstPtr& c) {
+          std::lock_guard<std::mutex> lock(mutex_);
+          slice_ = *c;
+          tick_stamps_.push_back(c->header.stamp);
+        });
+    occupied_sub_ = nh.subscribe<sensor_msgs::PointCloud2>(
+        "/stereo_fusion/occupied_voxels", 10, [this](const sensor_msgs::PointCloud2::ConstPtr& c) {
+          std::lock_guard<std::mutex> lock(mutex_);
+          occupied_ = *c;
+        });
+    ASSERT_TRUE(test::waitFor(
+        [&] {
+          return disparity_pub_.getNumSubscribers() > 0 && image_pub_.getNumSubscribers() > 0 &&
+                 info_pub_.getNumSubscribers() > 0 && grid_sub_.getNumPublishers() > 0 &&
+                 updates_sub_.getNumPublishers() > 0 && slice_sub_.getNumPublishers() > 0 &&
+                 occupied_sub_.getNumPublishers() > 0;
+        },
+        30.0))
+        << "the nodelet did not connect";
     ASSERT_TRUE(test::waitForTfSubscriber(30.0)) << "the nodelet's tf listener did not connect";
     ASSERT_TRUE(diagnostics_.waitForNextReport(30.0)) << "no diagnostics from the nodelet";
     // Each test starts from an empty map: the grid is sent whole (0 × 0) within one update.
     const ros::Time before_reset = ros::Time::now();
     std_srvs::Empty reset;
     ASSERT_TRUE(ros::service::call("/stereo_fusion/reset", reset));
-    ASSERT_TRUE(test::waitFor([&] {
-      std::lock_guard<std::mutex> lock(mutex_);
-      return held_.have && held_.grid.header.stamp >= before_reset && held_.grid.info.width == 0;
-    }, 10.0)) << "no empty full grid after ~reset";
+    ASSERT_TRUE(test::waitFor(
+        [&] {
+          std::lock_guard<std::mutex> lock(mutex_);
+          return held_.have && held_.grid.header.stamp >= before_reset &&
+                 held_.grid.info.width == 0;
+        },
+        10.0))
+        << "no empty full grid after ~reset";
   }
 
   void TearDown() override {
@@ -170,8 +184,9 @@ class PlanningTopics : public testing::Test {
     const long fused_before = std::max(0L, diagnostics_.value("frames fused"));
     const std::vector<Eigen::Isometry3d> all = poses();
     for (const Eigen::Isometry3d& pose : all) publish(test::renderFrame(s, qvga(), pose));
-    ASSERT_TRUE(test::waitFor([&] { return diagnostics_.value("frames fused") >= fused_before + long(all.size()); },
-                              60.0))
+    ASSERT_TRUE(test::waitFor(
+        [&] { return diagnostics_.value("frames fused") >= fused_before + long(all.size()); },
+        60.0))
         << "fused " << diagnostics_.value("frames fused") << " of " << fused_before + all.size();
     // Two ticks: the grid messages of the first may arrive after its slice (another topic).
     const ros::Time first = waitForTickAfter(ros::Time::now());
@@ -181,15 +196,18 @@ class PlanningTopics : public testing::Test {
   /// The stamp of the first planning update (tick) that took the map after `t`.
   ros::Time waitForTickAfter(const ros::Time& t) {
     ros::Time tick;
-    EXPECT_TRUE(test::waitFor([&] {
-      std::lock_guard<std::mutex> lock(mutex_);
-      for (const ros::Time& s : tick_stamps_)
-        if (s >= t) {
-          tick = s;
-          return true;
-        }
-      return false;
-    }, 10.0)) << "no planning update after " << t;
+    EXPECT_TRUE(test::waitFor(
+        [&] {
+          std::lock_guard<std::mutex> lock(mutex_);
+          for (const ros::Time& s : tick_stamps_)
+            if (s >= t) {
+              tick = s;
+              return true;
+            }
+          return false;
+        },
+        10.0))
+        << "no planning update after " << t;
     return tick;
   }
 
@@ -246,15 +264,18 @@ TEST_F(PlanningTopics, GridPatchedWithItsUpdatesIsTheCurrentGridAndAClearReaches
   // The grid of that very update (an update message carries its tick's stamp) reads unknown in
   // the box: the columns whose cells lie inside it with a cell to spare.
   nav_msgs::OccupancyGrid after_clear;
-  ASSERT_TRUE(test::waitFor([&] {
-    std::lock_guard<std::mutex> lock(mutex_);
-    for (const nav_msgs::OccupancyGrid& g : held_.history)
-      if (g.header.stamp == tick) {
-        after_clear = g;
-        return true;
-      }
-    return false;
-  }, 5.0)) << "the planning update after the clear sent no grid change";
+  ASSERT_TRUE(test::waitFor(
+      [&] {
+        std::lock_guard<std::mutex> lock(mutex_);
+        for (const nav_msgs::OccupancyGrid& g : held_.history)
+          if (g.header.stamp == tick) {
+            after_clear = g;
+            return true;
+          }
+        return false;
+      },
+      5.0))
+      << "the planning update after the clear sent no grid change";
   int inside = 0;
   for (double x = 0.64 + 1.5 * kCell; x < 1.28 - kCell; x += kCell)
     for (double y = -0.32 + 1.5 * kCell; y < 0.32 - kCell; y += kCell) {
@@ -277,22 +298,31 @@ TEST_F(PlanningTopics, GridPatchedWithItsUpdatesIsTheCurrentGridAndAClearReaches
         std::lock_guard<std::mutex> lock(late_mutex);
         if (!late) late = *g;
       });
-  ASSERT_TRUE(test::waitFor([&] {
-    std::lock_guard<std::mutex> lock(late_mutex);
-    return late.has_value();
-  }, 10.0)) << "a new subscriber got no grid";
+  ASSERT_TRUE(test::waitFor(
+      [&] {
+        std::lock_guard<std::mutex> lock(late_mutex);
+        return late.has_value();
+      },
+      10.0))
+      << "a new subscriber got no grid";
   late_sub.shutdown();
   // An update sent just before the new subscriber's grid may still be on its way to ours.
-  EXPECT_TRUE(test::waitFor([&] {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return held_.grid.info.width == late->info.width && held_.grid.info.height == late->info.height &&
-           held_.grid.info.origin.position.x == late->info.origin.position.x &&
-           held_.grid.info.origin.position.y == late->info.origin.position.y && held_.grid.data == late->data;
-  }, 5.0)) << "the grid patched with its updates differs from the current grid";
+  EXPECT_TRUE(test::waitFor(
+      [&] {
+        std::lock_guard<std::mutex> lock(mutex_);
+        return held_.grid.info.width == late->info.width &&
+               held_.grid.info.height == late->info.height &&
+               held_.grid.info.origin.position.x == late->info.origin.position.x &&
+               held_.grid.info.origin.position.y == late->info.origin.position.y &&
+               held_.grid.data == late->data;
+      },
+      5.0))
+      << "the grid patched with its updates differs from the current grid";
   std::lock_guard<std::mutex> lock(mutex_);
   EXPECT_EQ(held_.bad_updates, 0);
   EXPECT_EQ(held_.updates_before_grid, 0);
-  EXPECT_GE(held_.updates_since_full, 2) << "the clear and the refill came as updates, not as full grids";
+  EXPECT_GE(held_.updates_since_full, 2)
+      << "the clear and the refill came as updates, not as full grids";
   EXPECT_EQ(cellAt(held_.grid, held_.grid.data, 1.0, 0.0), 0) << "the box is seen free again";
   EXPECT_GT(diagnostics_.value("planning updates"), 0);
   EXPECT_GT(diagnostics_.value("occupancy grid width (cells)"), 0);
@@ -319,11 +349,13 @@ TEST_F(PlanningTopics, EsdfSliceMatchesTheSceneAndOccupiedVoxelsLieOnItsSurfaces
     const double clearance = s.clearance(c.p);
     // Never nearer an obstacle than the scene puts it (unseen surfaces can only make it farther).
     EXPECT_GE(c.value, std::min(clearance, 2.0) - tolerance) << c.p.transpose();
-    if (c.value < 0) EXPECT_LE(clearance, tolerance) << "a cell inside an obstacle lies at a surface";
+    if (c.value < 0)
+      EXPECT_LE(clearance, tolerance) << "a cell inside an obstacle lies at a surface";
     // Before the ball, on its axis, the nearest surface is the ball's seen front.
     // (The floor is 0.6 m below, the wall farther than 1 m.)
     const double to_ball = (c.p - kBall).norm() - kBallRadius;
-    if (c.p.x() < kBall.x() - kBallRadius - 2 * kCell && std::abs(c.p.y()) < 0.15 && to_ball < 0.3) {
+    if (c.p.x() < kBall.x() - kBallRadius - 2 * kCell && std::abs(c.p.y()) < 0.15 &&
+        to_ball < 0.3) {
       EXPECT_NEAR(c.value, to_ball, tolerance) << c.p.transpose();
       ++near_ball;
     }
@@ -332,10 +364,13 @@ TEST_F(PlanningTopics, EsdfSliceMatchesTheSceneAndOccupiedVoxelsLieOnItsSurfaces
   ASSERT_GT(occupied.size(), 50u);
   int on_ball = 0;
   for (const CloudPoint& c : occupied) {
-    EXPECT_LE(s.clearance(c.p), 1.5 * kCell) << "an occupied cell in free space at " << c.p.transpose();
+    EXPECT_LE(s.clearance(c.p), 1.5 * kCell)
+        << "an occupied cell in free space at " << c.p.transpose();
     on_ball += std::abs((c.p - kBall).norm() - kBallRadius) < 1.5 * kCell;
   }
   EXPECT_GT(on_ball, 10);
 }
 
-int main(int argc, char** argv) { return test::runRosTests(argc, argv, "stereo_fusion_planning_test"); }
+int main(int argc, char** argv) {
+  return test::runRosTests(argc, argv, "stereo_fusion_planning_test");
+}

@@ -108,10 +108,12 @@ TEST(ReplayFast, EveryFrameOfTheBagIsFusedOrCountedAsLost) {
   long frames = 0;
   {
     rosbag::Bag bag(bag_path, rosbag::bagmode::Read);
-    for (const rosbag::MessageInstance& m : rosbag::View(bag, rosbag::TopicQuery(std::string("/stereo/disparity")))) {
+    for (const rosbag::MessageInstance& m :
+         rosbag::View(bag, rosbag::TopicQuery(std::string("/stereo/disparity")))) {
       const auto disparity = m.instantiate<stereo_msgs::DisparityImage>();
       ASSERT_TRUE(disparity);
-      ASSERT_EQ(disparity->header.seq, static_cast<uint32_t>(++frames)) << "the simulator numbers its frames";
+      ASSERT_EQ(disparity->header.seq, static_cast<uint32_t>(++frames))
+          << "the simulator numbers its frames";
     }
   }
   ASSERT_GT(frames, 100);
@@ -133,36 +135,47 @@ TEST(ReplayFast, EveryFrameOfTheBagIsFusedOrCountedAsLost) {
   // Like rosbag play, a publisher without the header flag: roscpp keeps the seq set below
   // instead of numbering this publisher's messages from 0.
   ros::AdvertiseOptions options = ros::AdvertiseOptions::create<stereo_msgs::DisparityImage>(
-      "/stereo/disparity", 1, ros::SubscriberStatusCallback(), ros::SubscriberStatusCallback(), ros::VoidConstPtr(),
-      nullptr);
+      "/stereo/disparity", 1, ros::SubscriberStatusCallback(), ros::SubscriberStatusCallback(),
+      ros::VoidConstPtr(), nullptr);
   options.has_header = false;
   ros::Publisher bracket_pub = nh.advertise(options);
   ASSERT_TRUE(test::waitFor([&] { return bracket_pub.getNumSubscribers() > 0; }, 30.0));
   stereo_msgs::DisparityImage first;
   first.header.seq = 0;
-  first.header.stamp = ros::Time(0, 1000000);  // 1 ms: before the bag's first stamp, on none of them
+  first.header.stamp =
+      ros::Time(0, 1000000);  // 1 ms: before the bag's first stamp, on none of them
   bracket_pub.publish(first);
   ASSERT_TRUE(test::waitFor([&] { return diag("disparities received") >= 1; }, 30.0));
   ASSERT_TRUE(test::startPausedPlayer(diagnostics));
   long settled = -1;
-  ASSERT_TRUE(test::waitFor([&] {
-    read();
-    const long now = received + missed;
-    const bool still = now > 1 && now == settled;  // more than the first bracket: the bag has begun
-    settled = now;
-    if (!still) ros::WallDuration(2.0).sleep();
-    return still;
-  }, 120.0));
+  ASSERT_TRUE(test::waitFor(
+      [&] {
+        read();
+        const long now = received + missed;
+        const bool still =
+            now > 1 && now == settled;  // more than the first bracket: the bag has begun
+        settled = now;
+        if (!still) ros::WallDuration(2.0).sleep();
+        return still;
+      },
+      120.0));
   stereo_msgs::DisparityImage last;
   last.header.seq = static_cast<uint32_t>(frames + 1);
   last.header.stamp = ros::Time::now() + ros::Duration(1.0);
   bracket_pub.publish(last);
-  test::waitFor([&] { read(); return received + missed >= frames + 2 && fused + dropped >= received; }, 60.0);
+  test::waitFor(
+      [&] {
+        read();
+        return received + missed >= frames + 2 && fused + dropped >= received;
+      },
+      60.0);
   ros::WallDuration(2.0).sleep();
   ASSERT_TRUE(diagnostics.waitForNextReport(10.0));
   read();
-  std::printf("[replay 50x] %ld frames in the bag + 2: %ld received, %ld missed upstream, %ld fused, %ld dropped\n",
-              frames, received, missed, fused, dropped);
+  std::printf(
+      "[replay 50x] %ld frames in the bag + 2: %ld received, %ld missed upstream, %ld fused, %ld "
+      "dropped\n",
+      frames, received, missed, fused, dropped);
   EXPECT_EQ(received + missed, frames + 2);
   EXPECT_EQ(fused + dropped, received);
   EXPECT_GT(fused, 0);
@@ -177,7 +190,8 @@ std::vector<Eigen::AlignedBox3d> ghostRegions(const std::string& sequence) {
   while (std::getline(in, line)) {
     std::istringstream fields(line);
     Eigen::Vector3d lo, hi;
-    if (fields >> kind >> lo.x() >> lo.y() >> lo.z() >> hi.x() >> hi.y() >> hi.z() && kind == "ghost_region")
+    if (fields >> kind >> lo.x() >> lo.y() >> lo.z() >> hi.x() >> hi.y() >> hi.z() &&
+        kind == "ghost_region")
       regions.emplace_back(lo, hi);
   }
   return regions;
@@ -194,7 +208,8 @@ bool seenThrough(const std::vector<StereoFrame>& frames, const Eigen::Vector3d& 
     const long v = std::lround(f.camera.fy() * p.y() / p.z() + f.camera.cy());
     if (u < 0 || v < 0 || u >= f.camera.width() || v >= f.camera.height()) continue;
     const float disparity = f.disparity_px.at<float>(v, u);
-    if (disparity > 0.0f && f.camera.fx() * f.camera.baseline() / disparity > p.z() + 0.1) return true;
+    if (disparity > 0.0f && f.camera.fx() * f.camera.baseline() / disparity > p.z() + 0.1)
+      return true;
   }
   return false;
 }
@@ -203,8 +218,8 @@ bool seenThrough(const std::vector<StereoFrame>& frames, const Eigen::Vector3d& 
 /// scene `truth`, that one of `later` sees through: what is left of the objects that went where
 /// later frames looked.
 template <typename Mesh>
-size_t ghostVertices(const Mesh& mesh, const std::vector<Eigen::AlignedBox3d>& regions, const sim::AnalyticScene& truth,
-                     const std::vector<StereoFrame>& later) {
+size_t ghostVertices(const Mesh& mesh, const std::vector<Eigen::AlignedBox3d>& regions,
+                     const sim::AnalyticScene& truth, const std::vector<StereoFrame>& later) {
   size_t n = 0;
   for (const auto& [key, sub] : mesh)
     for (const Eigen::Vector3f& p : sub.positions) {
@@ -235,21 +250,23 @@ TEST(DynamicReplay, APersonWhoLeftIsClearedFromTheLiveMesh) {
   uint64_t first_sequence = 0, last_sequence = 0, sequence_gaps = 0, removals = 0;
   bool applied_ok = true;
   ros::NodeHandle nh;
-  ros::Subscriber stream = nh.subscribe<MeshUpdate>("/stereo_fusion/mesh_update", 1000, [&](const MeshUpdate::ConstPtr& u) {
-    std::lock_guard<std::mutex> lock(stream_mutex);
-    if (first_sequence == 0) first_sequence = u->sequence;
-    if (last_sequence != 0 && u->sequence != last_sequence + 1) ++sequence_gaps;
-    last_sequence = u->sequence;
-    removals += u->removed_keys.size() / 3;
-    applied_ok &= applyMeshUpdate(*u, &streamed);
-  });
+  ros::Subscriber stream = nh.subscribe<MeshUpdate>(
+      "/stereo_fusion/mesh_update", 1000, [&](const MeshUpdate::ConstPtr& u) {
+        std::lock_guard<std::mutex> lock(stream_mutex);
+        if (first_sequence == 0) first_sequence = u->sequence;
+        if (last_sequence != 0 && u->sequence != last_sequence + 1) ++sequence_gaps;
+        last_sequence = u->sequence;
+        removals += u->removed_keys.size() / 3;
+        applied_ok &= applyMeshUpdate(*u, &streamed);
+      });
   std::string error;
   auto bag = BagSequence::open(sim.bag, BagTopics{}, &error);
   ASSERT_TRUE(bag) << error;
   const long frames = static_cast<long>(bag->size());
 
   test::DiagnosticsWatcher diagnostics;
-  ASSERT_TRUE(test::waitFor([&] { return stream.getNumPublishers() > 0; }, 60.0)) << "no ~mesh_update publisher";
+  ASSERT_TRUE(test::waitFor([&] { return stream.getNumPublishers() > 0; }, 60.0))
+      << "no ~mesh_update publisher";
   ASSERT_TRUE(test::startPausedPlayer(diagnostics));
   ASSERT_NO_FATAL_FAILURE(expectEveryFrameFused(diagnostics, frames, 150.0));
 
@@ -281,20 +298,23 @@ TEST(DynamicReplay, APersonWhoLeftIsClearedFromTheLiveMesh) {
   ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", full));
   std::unordered_map<BlockKey, SubMesh, BlockKeyHash> live;
   ASSERT_TRUE(applyMeshUpdate(full.response.mesh, &live));
-  const size_t ghost_off = ghostVertices(without_carving->mesh().submeshes(), regions, sim.room->scene, second_lap);
+  const size_t ghost_off =
+      ghostVertices(without_carving->mesh().submeshes(), regions, sim.room->scene, second_lap);
   const size_t ghost_live = ghostVertices(live, regions, sim.room->scene, second_lap);
-  std::printf("[dynamic replay] %ld frames: ghost vertices %zu without carving, %zu live with it\n", frames,
-              ghost_off, ghost_live);
+  std::printf("[dynamic replay] %ld frames: ghost vertices %zu without carving, %zu live with it\n",
+              frames, ghost_off, ghost_live);
   ASSERT_GT(ghost_off, 300u) << "the person must leave a ghost when nothing clears it";
   EXPECT_LE(ghost_live, ghost_off / 20) << "more than 5 % of the ghost is left";
   test::expectSameSubmeshes(live, with_carving->mesh().submeshes());
 
   // The full mesh answers with the last published sequence: once the stream reached it, the
   // streamed copy must equal it.
-  ASSERT_TRUE(test::waitFor([&] {
-    std::lock_guard<std::mutex> lock(stream_mutex);
-    return last_sequence >= full.response.mesh.sequence;
-  }, 10.0));
+  ASSERT_TRUE(test::waitFor(
+      [&] {
+        std::lock_guard<std::mutex> lock(stream_mutex);
+        return last_sequence >= full.response.mesh.sequence;
+      },
+      10.0));
   stream.shutdown();
   std::lock_guard<std::mutex> lock(stream_mutex);
   EXPECT_EQ(first_sequence, 1u) << "the test subscribed after the first update";
@@ -310,7 +330,8 @@ template <typename Mesh>
 std::pair<double, double> vertexErrors(const Mesh& mesh, const sim::AnalyticScene& truth) {
   std::vector<double> d;
   for (const auto& [key, sub] : mesh)
-    for (const Eigen::Vector3f& p : sub.positions) d.push_back(truth.distanceToSurface(p.cast<double>()));
+    for (const Eigen::Vector3f& p : sub.positions)
+      d.push_back(truth.distanceToSurface(p.cast<double>()));
   if (d.empty()) return {1e9, 1e9};
   std::sort(d.begin(), d.end());
   return {d[d.size() / 2], d[d.size() * 9 / 10]};
@@ -346,18 +367,24 @@ TEST(LoopClosureReplay, TheLiveMapFollowsTheCorrectedTrajectory) {
   ASSERT_NO_FATAL_FAILURE(expectEveryFrameFused(diagnostics, frames, 150.0));
   // Two trajectories: the first may be superseded by the second while it is re-fused; the
   // second, after the last frame, is applied.
-  ASSERT_TRUE(test::waitFor([&] {
-    return diag("corrections applied") >= 1 &&
-           diag("corrections applied") + diag("corrections superseded by a newer trajectory") >= 2;
-  }, 120.0)) << diag("corrections applied") << " applied, " << diag("trajectories rejected") << " rejected, "
-      << diag("trajectories received") << " received, " << diag("corrections superseded by a newer trajectory")
-      << " superseded, " << diag("trajectories taken without re-fusion") << " taken without re-fusion, "
+  ASSERT_TRUE(test::waitFor(
+      [&] {
+        return diag("corrections applied") >= 1 &&
+               diag("corrections applied") + diag("corrections superseded by a newer trajectory") >=
+                   2;
+      },
+      120.0))
+      << diag("corrections applied") << " applied, " << diag("trajectories rejected")
+      << " rejected, " << diag("trajectories received") << " received, "
+      << diag("corrections superseded by a newer trajectory") << " superseded, "
+      << diag("trajectories taken without re-fusion") << " taken without re-fusion, "
       << diag("corrections dropped by reset/load") << " dropped by reset/load, "
       << diag("loop closure: frames kept") << " frames kept";
   EXPECT_EQ(diag("trajectories received"), 2);
   EXPECT_EQ(diag("trajectories rejected"), 0);
-  std::printf("[loop closure] %ld frames; last correction: %ld frames fused again in %ld ms\n", frames,
-              diag("loop closure: last correction, frames fused again"), diag("loop closure: last correction (ms)"));
+  std::printf("[loop closure] %ld frames; last correction: %ld frames fused again in %ld ms\n",
+              frames, diag("loop closure: last correction, frames fused again"),
+              diag("loop closure: last correction (ms)"));
 
   MapperConfig config;
   NodeConfig node;
@@ -372,7 +399,8 @@ TEST(LoopClosureReplay, TheLiveMapFollowsTheCorrectedTrajectory) {
   std::vector<StampedPose> trajectory;
   {
     rosbag::Bag raw(sim.bag, rosbag::bagmode::Read);
-    for (const rosbag::MessageInstance& m : rosbag::View(raw, rosbag::TopicQuery(std::string("/trajectory")))) {
+    for (const rosbag::MessageInstance& m :
+         rosbag::View(raw, rosbag::TopicQuery(std::string("/trajectory")))) {
       const auto path = m.instantiate<nav_msgs::Path>();
       ASSERT_TRUE(path);
       trajectory.clear();
@@ -398,7 +426,9 @@ TEST(LoopClosureReplay, TheLiveMapFollowsTheCorrectedTrajectory) {
     mapper->updateMesh();
     return mapper;
   };
-  const auto corrected = fuse([&](size_t i) { return correction.corrected(originals[i].stamp_s, originals[i].T_world_camera); });
+  const auto corrected = fuse([&](size_t i) {
+    return correction.corrected(originals[i].stamp_s, originals[i].T_world_camera);
+  });
   const auto drifting = fuse([&](size_t i) { return originals[i].T_world_camera; });
   const auto at_truth = fuse([&](size_t i) { return truth_lines[i].T_world_camera; });
 
@@ -409,11 +439,15 @@ TEST(LoopClosureReplay, TheLiveMapFollowsTheCorrectedTrajectory) {
   test::expectSameSubmeshes(live, corrected->mesh().submeshes());
 
   const auto [live_median, live_p90] = vertexErrors(live, sim.room->scene);
-  const auto [drift_median, drift_p90] = vertexErrors(drifting->mesh().submeshes(), sim.room->scene);
+  const auto [drift_median, drift_p90] =
+      vertexErrors(drifting->mesh().submeshes(), sim.room->scene);
   const auto [true_median, true_p90] = vertexErrors(at_truth->mesh().submeshes(), sim.room->scene);
-  std::printf("[loop closure] vertex error median / p90 (mm): drifting %.1f / %.1f, live corrected %.1f / %.1f, "
-              "true poses %.1f / %.1f\n", 1e3 * drift_median, 1e3 * drift_p90, 1e3 * live_median, 1e3 * live_p90,
-              1e3 * true_median, 1e3 * true_p90);
+  std::printf(
+      "[loop closure] vertex error median / p90 (mm): drifting %.1f / %.1f, live corrected %.1f / "
+      "%.1f, "
+      "true poses %.1f / %.1f\n",
+      1e3 * drift_median, 1e3 * drift_p90, 1e3 * live_median, 1e3 * live_p90, 1e3 * true_median,
+      1e3 * true_p90);
   EXPECT_GT(drift_p90, 2.0 * true_p90) << "the drift must double the walls";
   EXPECT_LE(live_median, 1.25 * true_median);
   EXPECT_LE(live_p90, 1.25 * true_p90);
@@ -443,7 +477,8 @@ TEST(PlanningReplay, DistancesMatchTheAnalyticRoomAndBadRequestsChangeNothing) {
   ASSERT_TRUE(bag) << error;
   test::DiagnosticsWatcher diagnostics;
   ASSERT_TRUE(test::startPausedPlayer(diagnostics));
-  ASSERT_NO_FATAL_FAILURE(expectEveryFrameFused(diagnostics, static_cast<long>(bag->size()), 150.0));
+  ASSERT_NO_FATAL_FAILURE(
+      expectEveryFrameFused(diagnostics, static_cast<long>(bag->size()), 150.0));
   // Frames fused are in the planning layer after the next meshing pass: a full mesh forces one.
   GetFullMesh full;
   ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", full));
@@ -458,7 +493,8 @@ TEST(PlanningReplay, DistancesMatchTheAnalyticRoomAndBadRequestsChangeNothing) {
   std::vector<Eigen::Vector3d> points;
   for (int k = 0; k < 100000; ++k) {
     Eigen::Vector3d p;
-    for (int a = 0; a < 3; ++a) p[a] = std::uniform_real_distribution<double>(box.min()[a], box.max()[a])(rng);
+    for (int a = 0; a < 3; ++a)
+      p[a] = std::uniform_real_distribution<double>(box.min()[a], box.max()[a])(rng);
     points.push_back(p);
     geometry_msgs::Point q;
     q.x = p.x();
@@ -480,7 +516,8 @@ TEST(PlanningReplay, DistancesMatchTheAnalyticRoomAndBadRequestsChangeNothing) {
   const double cell_m = PlanningConfig::from(config).cell_m;
   const double max_m = config.esdf_max_distance_m;
   std::vector<double> errors_m;
-  size_t free = 0, occupied = 0, unknown = 0, free_inside_solid = 0, gradients_checked = 0, gradients_agree = 0;
+  size_t free = 0, occupied = 0, unknown = 0, free_inside_solid = 0, gradients_checked = 0,
+         gradients_agree = 0;
   for (size_t k = 0; k < points.size(); ++k) {
     const double truth_m = scene.clearance(points[k]);
     const uint8_t state = query.response.states[k];
@@ -493,7 +530,8 @@ TEST(PlanningReplay, DistancesMatchTheAnalyticRoomAndBadRequestsChangeNothing) {
     (state == GetDistance::Response::FREE ? free : occupied) += 1;
     // Seen empty deep inside a wall or a piece of furniture is an error.
     if (state == GetDistance::Response::FREE && truth_m < -2.0 * cell_m) ++free_inside_solid;
-    if (state == GetDistance::Response::FREE && truth_m > 2.0 * cell_m && truth_m < max_m - 2.0 * cell_m) {
+    if (state == GetDistance::Response::FREE && truth_m > 2.0 * cell_m &&
+        truth_m < max_m - 2.0 * cell_m) {
       errors_m.push_back(std::abs(d - truth_m));
       const geometry_msgs::Vector3& g = query.response.gradients[k];
       const Eigen::Vector3d gradient(g.x, g.y, g.z);
@@ -502,7 +540,8 @@ TEST(PlanningReplay, DistancesMatchTheAnalyticRoomAndBadRequestsChangeNothing) {
         for (int a = 0; a < 3; ++a) {
           Eigen::Vector3d step = Eigen::Vector3d::Zero();
           step[a] = 0.01;
-          numeric[a] = (scene.clearance(points[k] + step) - scene.clearance(points[k] - step)) / 0.02;
+          numeric[a] =
+              (scene.clearance(points[k] + step) - scene.clearance(points[k] - step)) / 0.02;
         }
         ++gradients_checked;
         if (gradient.normalized().dot(numeric.normalized()) > 0.7) ++gradients_agree;
@@ -510,11 +549,14 @@ TEST(PlanningReplay, DistancesMatchTheAnalyticRoomAndBadRequestsChangeNothing) {
     }
   }
   const double median_m = percentileOf(errors_m, 0.5), p95_m = percentileOf(errors_m, 0.95);
-  std::printf("[planning] 100000 points in %.0f ms: %zu free, %zu occupied, %zu unknown; |ESDF - clearance| of "
-              "free points median %.1f mm, p95 %.1f mm (cell %.0f mm); gradients agreeing %zu / %zu; free more than "
-              "2 cells inside a solid: %zu\n",
-              call_ms, free, occupied, unknown, 1e3 * median_m, 1e3 * p95_m, 1e3 * cell_m, gradients_agree,
-              gradients_checked, free_inside_solid);
+  std::printf(
+      "[planning] 100000 points in %.0f ms: %zu free, %zu occupied, %zu unknown; |ESDF - "
+      "clearance| of "
+      "free points median %.1f mm, p95 %.1f mm (cell %.0f mm); gradients agreeing %zu / %zu; free "
+      "more than "
+      "2 cells inside a solid: %zu\n",
+      call_ms, free, occupied, unknown, 1e3 * median_m, 1e3 * p95_m, 1e3 * cell_m, gradients_agree,
+      gradients_checked, free_inside_solid);
   // The samples reach 0.3 m beyond the walls (unknown there): a fifth of the box is the room's
   // free interior the orbit saw.
   EXPECT_GT(free, points.size() / 7) << "the orbit sees most of the room empty";
@@ -540,7 +582,8 @@ TEST(PlanningReplay, DistancesMatchTheAnalyticRoomAndBadRequestsChangeNothing) {
   ASSERT_TRUE(ros::service::call("/stereo_fusion/get_esdf_box", grid));
   ASSERT_TRUE(grid.response.success) << grid.response.message;
   EXPECT_DOUBLE_EQ(grid.response.resolution_m, cell_m);
-  const size_t n = static_cast<size_t>(grid.response.size_x) * grid.response.size_y * grid.response.size_z;
+  const size_t n =
+      static_cast<size_t>(grid.response.size_x) * grid.response.size_y * grid.response.size_z;
   ASSERT_EQ(grid.response.distances.size(), n);
   EXPECT_EQ(grid.response.size_x, static_cast<uint32_t>(std::floor(1.0 / cell_m + 1e-9)) + 1);
   GetDistance same;
@@ -556,7 +599,8 @@ TEST(PlanningReplay, DistancesMatchTheAnalyticRoomAndBadRequestsChangeNothing) {
   ASSERT_TRUE(ros::service::call("/stereo_fusion/get_distance", same));
   for (size_t k = 0; k < n; ++k) {
     EXPECT_EQ(grid.response.states[k], same.response.states[k]);
-    if (!std::isnan(same.response.distances[k])) EXPECT_EQ(grid.response.distances[k], same.response.distances[k]);
+    if (!std::isnan(same.response.distances[k]))
+      EXPECT_EQ(grid.response.distances[k], same.response.distances[k]);
   }
 
   // Invalid requests: success false, a message, and the map as it was.
@@ -565,7 +609,8 @@ TEST(PlanningReplay, DistancesMatchTheAnalyticRoomAndBadRequestsChangeNothing) {
   nan_point.request.points[1].y = NAN;
   ASSERT_TRUE(ros::service::call("/stereo_fusion/get_distance", nan_point));
   EXPECT_FALSE(nan_point.response.success);
-  EXPECT_NE(nan_point.response.message.find("point 1 is not finite"), std::string::npos) << nan_point.response.message;
+  EXPECT_NE(nan_point.response.message.find("point 1 is not finite"), std::string::npos)
+      << nan_point.response.message;
   GetEsdfBox inverted = grid;
   inverted.request.max.x = -1.0;
   ASSERT_TRUE(ros::service::call("/stereo_fusion/get_esdf_box", inverted));
@@ -574,7 +619,8 @@ TEST(PlanningReplay, DistancesMatchTheAnalyticRoomAndBadRequestsChangeNothing) {
   huge.request.resolution_m = 1e-4;  // 10 000 × 10 000 × 5 000 samples
   ASSERT_TRUE(ros::service::call("/stereo_fusion/get_esdf_box", huge));
   EXPECT_FALSE(huge.response.success);
-  EXPECT_NE(huge.response.message.find("planning_max_box_cells"), std::string::npos) << huge.response.message;
+  EXPECT_NE(huge.response.message.find("planning_max_box_cells"), std::string::npos)
+      << huge.response.message;
   GetEsdfBox negative = grid;
   negative.request.resolution_m = -0.1;
   ASSERT_TRUE(ros::service::call("/stereo_fusion/get_esdf_box", negative));
@@ -596,15 +642,17 @@ TEST(PlanningReplay, DistancesMatchTheAnalyticRoomAndBadRequestsChangeNothing) {
     c.y = (std::floor(q.y / cell_m) + 0.5) * cell_m;
     c.z = (std::floor(q.z / cell_m) + 0.5) * cell_m;
     const double h = 0.5 * cell_m;
-    if (c.x - h >= grid.request.min.x && c.x + h <= grid.request.max.x && c.y - h >= grid.request.min.y &&
-        c.y + h <= grid.request.max.y && c.z - h >= grid.request.min.z && c.z + h <= grid.request.max.z)
+    if (c.x - h >= grid.request.min.x && c.x + h <= grid.request.max.x &&
+        c.y - h >= grid.request.min.y && c.y + h <= grid.request.max.y &&
+        c.z - h >= grid.request.min.z && c.z + h <= grid.request.max.z)
       cleared.request.points.push_back(c);
   }
   ASSERT_GT(cleared.request.points.size(), 10u);
   GetDistance before_clear = cleared;
   ASSERT_TRUE(ros::service::call("/stereo_fusion/get_distance", before_clear));
   size_t known_before = 0;
-  for (uint8_t state : before_clear.response.states) known_before += state != GetDistance::Response::UNKNOWN;
+  for (uint8_t state : before_clear.response.states)
+    known_before += state != GetDistance::Response::UNKNOWN;
   EXPECT_GT(known_before, cleared.request.points.size() / 2);
   ClearBox clear;
   clear.request.min = grid.request.min;
@@ -613,8 +661,12 @@ TEST(PlanningReplay, DistancesMatchTheAnalyticRoomAndBadRequestsChangeNothing) {
   ASSERT_TRUE(clear.response.success) << clear.response.message;
   ASSERT_TRUE(ros::service::call("/stereo_fusion/get_distance", cleared));
   size_t still_known = 0;
-  for (uint8_t state : cleared.response.states) still_known += state != GetDistance::Response::UNKNOWN;
-  EXPECT_EQ(still_known, 0u) << "of " << cleared.request.points.size() << " cells inside the cleared box";
+  for (uint8_t state : cleared.response.states)
+    still_known += state != GetDistance::Response::UNKNOWN;
+  EXPECT_EQ(still_known, 0u) << "of " << cleared.request.points.size()
+                             << " cells inside the cleared box";
 }
 
-int main(int argc, char** argv) { return test::runRosTests(argc, argv, "stereo_fusion_replay_test"); }
+int main(int argc, char** argv) {
+  return test::runRosTests(argc, argv, "stereo_fusion_replay_test");
+}

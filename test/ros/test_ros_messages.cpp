@@ -27,12 +27,17 @@ SubMesh randomSubmesh(const BlockKey& key, size_t n, uint32_t seed) {
   s.key = key;
   s.level = 2;
   for (size_t v = 0; v < n; ++v) {
-    s.positions.emplace_back(Eigen::Vector3d(key.x * kBlockM + offset(rng), key.y * kBlockM + offset(rng),
-                                             key.z * kBlockM + offset(rng)).cast<float>());
-    s.normals.push_back(Eigen::Vector3d(unit(rng), unit(rng), unit(rng)).normalized().cast<float>());
-    s.colors.push_back({static_cast<uint8_t>(v), static_cast<uint8_t>(2 * v), static_cast<uint8_t>(3 * v)});
+    s.positions.emplace_back(Eigen::Vector3d(key.x * kBlockM + offset(rng),
+                                             key.y * kBlockM + offset(rng),
+                                             key.z * kBlockM + offset(rng))
+                                 .cast<float>());
+    s.normals.push_back(
+        Eigen::Vector3d(unit(rng), unit(rng), unit(rng)).normalized().cast<float>());
+    s.colors.push_back(
+        {static_cast<uint8_t>(v), static_cast<uint8_t>(2 * v), static_cast<uint8_t>(3 * v)});
   }
-  for (size_t v = 0; v + 2 < n; v += 3) s.triangles.push_back({uint32_t(v), uint32_t(v + 1), uint32_t(v + 2)});
+  for (size_t v = 0; v + 2 < n; v += 3)
+    s.triangles.push_back({uint32_t(v), uint32_t(v + 1), uint32_t(v + 2)});
   return s;
 }
 
@@ -62,13 +67,15 @@ TEST(CompactEncoding, RoundTripWithinHalfAStep) {
   EXPECT_EQ(d.level, 2);
   double worst_m = 0, worst_normal_rad = 0;
   for (size_t v = 0; v < s.positions.size(); ++v) {
-    worst_m = std::max(worst_m, static_cast<double>((d.positions[v] - s.positions[v]).cwiseAbs().maxCoeff()));
-    worst_normal_rad = std::max(worst_normal_rad, std::acos(std::min(1.0f, d.normals[v].dot(s.normals[v]))) + 0.0);
+    worst_m = std::max(
+        worst_m, static_cast<double>((d.positions[v] - s.positions[v]).cwiseAbs().maxCoeff()));
+    worst_normal_rad =
+        std::max(worst_normal_rad, std::acos(std::min(1.0f, d.normals[v].dot(s.normals[v]))) + 0.0);
     EXPECT_NEAR(d.normals[v].norm(), 1.0f, 1e-5f);
   }
   // Half a step (2.44 µm) plus float32 rounding of coordinates near 19 m (key z = 120).
   EXPECT_LE(worst_m, kBlockM / 32768.0 / 2.0 + 2e-6);
-  EXPECT_GT(worst_m, 1e-7);  // really quantised
+  EXPECT_GT(worst_m, 1e-7);            // really quantised
   EXPECT_LT(worst_normal_rad, 0.012);  // int8: ≤ 0.5/127 per component
 }
 
@@ -111,7 +118,8 @@ TexturePatch patchFor(const SubMesh& s, int w = 12, int h = 9) {
   TexturePatch patch;
   patch.image_rgb.create(h, w, CV_8UC3);
   for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) patch.image_rgb.at<cv::Vec3b>(y, x) = cv::Vec3b(20 * x, 25 * y, 7 * (x + y));
+    for (int x = 0; x < w; ++x)
+      patch.image_rgb.at<cv::Vec3b>(y, x) = cv::Vec3b(20 * x, 25 * y, 7 * (x + y));
   for (size_t v = 0; v < s.positions.size(); ++v)
     patch.uvs.emplace_back(static_cast<float>(v % 7) / 6.0f, static_cast<float>(v % 5) / 4.0f);
   return patch;
@@ -156,7 +164,8 @@ TEST(Textures, UpdateFromAPatchMapCarriesThePatches) {
   const SubmeshMap store{{s.key, s}};
   const PatchMap patches{{s.key, patchFor(s)}};
   for (MeshEncoding encoding : {MeshEncoding::kFloat32, MeshEncoding::kCompact}) {
-    const MeshUpdate u = toMeshUpdate(store, {s.key}, {}, std_msgs::Header(), kBlockM / 8.0, 3, true, encoding, &patches);
+    const MeshUpdate u = toMeshUpdate(store, {s.key}, {}, std_msgs::Header(), kBlockM / 8.0, 3,
+                                      true, encoding, &patches);
     ASSERT_EQ(u.blocks.size(), 1u);
     const MeshBlock expected = toMeshBlock(s, encoding, kBlockM, &patches.at(s.key));
     EXPECT_EQ(u.blocks[0].uvs, expected.uvs);
@@ -170,10 +179,13 @@ namespace {
 /// A PNG signature and IHDR chunk declaring `width`×`height` 8-bit RGB, zero-padded to 64 bytes
 /// (no image data: a decoder that trusts the header allocates width·height·3 bytes first).
 std::vector<uint8_t> pngHeader(uint32_t width, uint32_t height) {
-  std::vector<uint8_t> png = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n', 0, 0, 0, 13, 'I', 'H', 'D', 'R'};
+  std::vector<uint8_t> png = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n',
+                              0,    0,   0,   13,  'I',  'H',  'D',  'R'};
   for (uint32_t value : {width, height})
-    for (int shift = 24; shift >= 0; shift -= 8) png.push_back(static_cast<uint8_t>(value >> shift));
-  png.insert(png.end(), {8, 2, 0, 0, 0});  // bit depth 8, colour type 2 (RGB), deflate, no filter, no interlace
+    for (int shift = 24; shift >= 0; shift -= 8)
+      png.push_back(static_cast<uint8_t>(value >> shift));
+  png.insert(png.end(), {8, 2, 0, 0,
+                         0});  // bit depth 8, colour type 2 (RGB), deflate, no filter, no interlace
   png.resize(64, 0);
   return png;
 }
@@ -230,7 +242,8 @@ TEST(Validation, NonFiniteBlockSizeAndUnknownLevelsAreRefused) {
   const SubMesh held = randomSubmesh({9, 9, 9}, 30, 10);
   SubmeshMap mesh{{held.key, held}};
   for (MeshEncoding encoding : {MeshEncoding::kCompact, MeshEncoding::kFloat32}) {
-    for (float block_size : {std::numeric_limits<float>::infinity(), std::numeric_limits<float>::quiet_NaN()}) {
+    for (float block_size :
+         {std::numeric_limits<float>::infinity(), std::numeric_limits<float>::quiet_NaN()}) {
       MeshUpdate u = updateOf(s, encoding);
       u.block_size = block_size;
       EXPECT_FALSE(applyMeshUpdate(u, &mesh)) << static_cast<int>(encoding) << " " << block_size;
@@ -274,7 +287,8 @@ TEST(DebugMarkers, FrustumCornersAtTheGivenDepth) {
   const StereoCamera camera = *StereoCamera::create(320, 240, 262.5, 262.5, 159.5, 119.5, 0.1);
   Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();
   T_world_camera.translation() = Eigen::Vector3d(1.0, 2.0, 3.0);
-  const visualization_msgs::Marker m = frustumMarker(camera, T_world_camera, 2.0, std_msgs::Header());
+  const visualization_msgs::Marker m =
+      frustumMarker(camera, T_world_camera, 2.0, std_msgs::Header());
   EXPECT_EQ(m.type, visualization_msgs::Marker::LINE_LIST);
   ASSERT_EQ(m.points.size(), 16u);  // 4 rays + 4 far edges
   // Ray 0: optical centre → top-left image corner (pixel edge u = v = -0.5) at z = 2 m:
@@ -297,7 +311,8 @@ TEST(DebugMarkers, BlockBoundsAreTheTwelveEdgesOfEachBlock) {
   ASSERT_EQ(m.colors.size(), 24u);
   EXPECT_FLOAT_EQ(m.colors[0].r, 0.9f);  // level 1: yellow
   for (size_t i = 0; i < 24; i += 2) {
-    const Eigen::Vector3d a(m.points[i].x, m.points[i].y, m.points[i].z), b(m.points[i + 1].x, m.points[i + 1].y, m.points[i + 1].z);
+    const Eigen::Vector3d a(m.points[i].x, m.points[i].y, m.points[i].z),
+        b(m.points[i + 1].x, m.points[i + 1].y, m.points[i + 1].z);
     EXPECT_NEAR((b - a).norm(), kBlockM, 1e-12);  // one edge of the block, axis-aligned
     for (const Eigen::Vector3d& p : {a, b}) {
       EXPECT_TRUE(std::abs(p.x() - 0.16) < 1e-12 || std::abs(p.x() - 0.32) < 1e-12) << p.x();
@@ -305,5 +320,6 @@ TEST(DebugMarkers, BlockBoundsAreTheTwelveEdgesOfEachBlock) {
       EXPECT_TRUE(std::abs(p.z() + 0.48) < 1e-12 || std::abs(p.z() + 0.32) < 1e-12) << p.z();
     }
   }
-  EXPECT_EQ(blockBoundsMarker({}, kBlockM, std_msgs::Header()).action, visualization_msgs::Marker::DELETE);
+  EXPECT_EQ(blockBoundsMarker({}, kBlockM, std_msgs::Header()).action,
+            visualization_msgs::Marker::DELETE);
 }

@@ -1,6 +1,7 @@
 // A stereo camera's image pair stream through image_proc + stereo_image_proc + stereo_fusion
-// (launch/stereo_pipeline.launch; raw or, with rectified:=true, already rectified) gives a mesh of the simulated scene: every frame fused, many
-// triangles, and the vertices on the scene's true surface.
+// (launch/stereo_pipeline.launch; raw or, with rectified:=true, already rectified) gives a mesh of
+// the simulated scene: every frame fused, many triangles, and the vertices on the scene's true
+// surface.
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 #include <stereo_fusion/GetFullMesh.h>
@@ -34,8 +35,9 @@ TEST(StereoPipeline, ImagePairsGiveAMeshOfTheScene) {
   test::DiagnosticsWatcher diagnostics;
   auto diag = [&](const char* key) { return diagnostics.value(key); };
   test::waitFor([&] { return diag("frames fused") >= frames; }, 120.0);
-  EXPECT_EQ(diag("frames fused"), frames) << "dropped tf " << diag("dropped: tf timeout") << ", queue "
-                                          << diag("dropped: queue full") << ", bad " << diag("dropped: bad input");
+  EXPECT_EQ(diag("frames fused"), frames)
+      << "dropped tf " << diag("dropped: tf timeout") << ", queue " << diag("dropped: queue full")
+      << ", bad " << diag("dropped: bad input");
   ASSERT_GT(diag("frames fused"), 0);
 
   GetFullMesh full;
@@ -58,11 +60,14 @@ TEST(StereoPipeline, ImagePairsGiveAMeshOfTheScene) {
   ASSERT_FALSE(distances_m.empty());
   const double median_m = distances_m[distances_m.size() / 2];
   const double p90_m = distances_m[distances_m.size() * 9 / 10];
-  for (int q = 1; q < 10; ++q) std::printf("p%d %.4f ", q * 10, distances_m[distances_m.size() * q / 10]);
+  for (int q = 1; q < 10; ++q)
+    std::printf("p%d %.4f ", q * 10, distances_m[distances_m.size() * q / 10]);
   std::printf(" (%zu vertices near the table)\n", distances_m.size());
   RecordProperty("triangles", static_cast<int>(triangles));
-  std::printf("[pipeline] %ld frames fused, %zu blocks, %zu triangles; |distance to scene| median %.4f m, p90 %.4f m\n",
-              diag("frames fused"), mesh.size(), triangles, median_m, p90_m);
+  std::printf(
+      "[pipeline] %ld frames fused, %zu blocks, %zu triangles; |distance to scene| median %.4f m, "
+      "p90 %.4f m\n",
+      diag("frames fused"), mesh.size(), triangles, median_m, p90_m);
   EXPECT_GT(triangles, 3000u);
   EXPECT_GT(distances_m.size(), 5000u);
   // 2 cm voxels; stereo_image_proc's SGBM disparity at 1/16 px.
@@ -70,4 +75,6 @@ TEST(StereoPipeline, ImagePairsGiveAMeshOfTheScene) {
   EXPECT_LT(p90_m, 0.03);
 }
 
-int main(int argc, char** argv) { return test::runRosTests(argc, argv, "stereo_fusion_pipeline_test"); }
+int main(int argc, char** argv) {
+  return test::runRosTests(argc, argv, "stereo_fusion_pipeline_test");
+}

@@ -74,7 +74,8 @@ inline sim::AnalyticScene wallScene() {
 /// The whole file at `path` (empty if unreadable).
 inline std::vector<uint8_t> readBytes(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
-  return std::vector<uint8_t>((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  return std::vector<uint8_t>((std::istreambuf_iterator<char>(f)),
+                              std::istreambuf_iterator<char>());
 }
 
 /// Replaces the file at `path` by `bytes`.
@@ -83,15 +84,16 @@ inline void writeBytes(const std::string& path, const std::vector<uint8_t>& byte
   f.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
 }
 
-
-inline std::vector<Eigen::Isometry3d> viewsAround(const Eigen::Vector3d& centre, double radius, int n) {
+inline std::vector<Eigen::Isometry3d> viewsAround(const Eigen::Vector3d& centre, double radius,
+                                                  int n) {
   std::vector<Eigen::Isometry3d> poses;
   const double golden = M_PI * (3.0 - std::sqrt(5.0));
   for (int i = 0; i < n; ++i) {
     const double y = 1.0 - 2.0 * (i + 0.5) / n;
     const double r = std::sqrt(1.0 - y * y);
     const Eigen::Vector3d dir(r * std::cos(golden * i), y, r * std::sin(golden * i));
-    poses.push_back(sim::lookAt(centre + radius * dir, centre, Eigen::Vector3d(0.3, 1.0, 0.2).normalized()));
+    poses.push_back(
+        sim::lookAt(centre + radius * dir, centre, Eigen::Vector3d(0.3, 1.0, 0.2).normalized()));
   }
   return poses;
 }
@@ -113,8 +115,9 @@ inline std::unique_ptr<Mapper> fuseViews(const sim::AnalyticScene& scene,
 /// A map holding the exact SDF of `scene` (our sign: negative outside the solids, in free
 /// space) at `level_of(key)` only, in every block within `margin_m` of the scene's surface
 /// inside `bounds`: fully observed data, so any hole in its mesh is the mesher's fault.
-inline void fillAnalytic(BlockOctree* map, const sim::AnalyticScene& scene, const Eigen::AlignedBox3d& bounds,
-                         double margin_m, const std::function<int(const BlockKey&)>& level_of) {
+inline void fillAnalytic(BlockOctree* map, const sim::AnalyticScene& scene,
+                         const Eigen::AlignedBox3d& bounds, double margin_m,
+                         const std::function<int(const BlockKey&)>& level_of) {
   const BlockKey lo = map->keyForPoint(bounds.min()), hi = map->keyForPoint(bounds.max());
   const double bs = map->blockSize();
   for (int z = lo.z; z <= hi.z; ++z)
@@ -130,9 +133,11 @@ inline void fillAnalytic(BlockOctree* map, const sim::AnalyticScene& scene, cons
         for (int k = 0; k < side; ++k)
           for (int j = 0; j < side; ++j)
             for (int i = 0; i < side; ++i) {
-              const Eigen::Vector3d p = map->blockOrigin(key) + Eigen::Vector3d(i + 0.5, j + 0.5, k + 0.5) * h;
+              const Eigen::Vector3d p =
+                  map->blockOrigin(key) + Eigen::Vector3d(i + 0.5, j + 0.5, k + 0.5) * h;
               double inside = INFINITY;  // most negative primitive SDF = deepest inside
-              for (size_t s = 0; s < scene.size(); ++s) inside = std::min(inside, scene.primitive(static_cast<int>(s)).signedDistance(p));
+              for (size_t s = 0; s < scene.size(); ++s)
+                inside = std::min(inside, scene.primitive(static_cast<int>(s)).signedDistance(p));
               Voxel& v = b->writableAt(level, i, j, k);
               v.sdf_m = static_cast<float>(-inside);
               v.weight = 1.0f;
@@ -144,10 +149,12 @@ inline void fillAnalytic(BlockOctree* map, const sim::AnalyticScene& scene, cons
 struct Topology {
   size_t triangles = 0;
   size_t vertices = 0;
-  size_t boundary_edges = 0;     ///< directed edges without a reverse
-  size_t overused_edges = 0;     ///< directed edges used more than once (overlaps, bad winding)
+  size_t boundary_edges = 0;  ///< directed edges without a reverse
+  size_t overused_edges = 0;  ///< directed edges used more than once (overlaps, bad winding)
   size_t degenerate_triangles = 0;
-  bool watertight() const { return triangles > 0 && boundary_edges == 0 && overused_edges == 0 && degenerate_triangles == 0; }
+  bool watertight() const {
+    return triangles > 0 && boundary_edges == 0 && overused_edges == 0 && degenerate_triangles == 0;
+  }
 };
 
 inline Topology topology(const TriangleMesh& mesh) {
@@ -174,13 +181,15 @@ inline std::string describe(const Topology& t) {
 
 /// Every triangle of every submesh as three position triples, rotated to start at the
 /// smallest vertex (winding kept): equal sets ⇔ same triangles up to vertex order.
-inline std::map<BlockKey, std::multiset<std::array<float, 9>>> triangleSets(const MeshStore& store) {
+inline std::map<BlockKey, std::multiset<std::array<float, 9>>> triangleSets(
+    const MeshStore& store) {
   std::map<BlockKey, std::multiset<std::array<float, 9>>> out;
   for (const auto& [key, mesh] : store.submeshes()) {
     auto& set = out[key];
     for (const auto& tri : mesh.triangles) {
       std::array<std::array<float, 3>, 3> v;
-      for (int k = 0; k < 3; ++k) v[k] = {mesh.positions[tri[k]].x(), mesh.positions[tri[k]].y(), mesh.positions[tri[k]].z()};
+      for (int k = 0; k < 3; ++k)
+        v[k] = {mesh.positions[tri[k]].x(), mesh.positions[tri[k]].y(), mesh.positions[tri[k]].z()};
       int first = 0;
       for (int k = 1; k < 3; ++k)
         if (v[k] < v[first]) first = k;
@@ -196,10 +205,12 @@ inline std::map<BlockKey, std::multiset<std::array<float, 9>>> triangleSets(cons
 /// The mesh `mapper` keeps equals a from-scratch extraction of its map.
 inline void expectMeshEqualsRebuild(const Mapper& mapper) {
   const MapperConfig& config = mapper.config();
-  MeshStore batch(MeshingParams{config.voxel_size_m, config.truncation_vox, config.mesh_level_min_coverage});
+  MeshStore batch(
+      MeshingParams{config.voxel_size_m, config.truncation_vox, config.mesh_level_min_coverage});
   ThreadPool pool(2);
   batch.rebuild(mapper.map(), &pool);
-  EXPECT_TRUE(triangleSets(mapper.mesh()) == triangleSets(batch)) << "incremental mesh differs from a rebuild";
+  EXPECT_TRUE(triangleSets(mapper.mesh()) == triangleSets(batch))
+      << "incremental mesh differs from a rebuild";
 }
 
 }  // namespace stereo_fusion::test

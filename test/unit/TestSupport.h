@@ -56,7 +56,8 @@ inline MapSnapshot snapshot(const BlockOctree& map) {
   for (const VoxelBlock* b : map.blocksSortedByKey()) {
     s.keys.push_back(b->key);
     uint8_t mask = 0;
-    for (int level = 0; level < kNumLevels; ++level) mask |= static_cast<uint8_t>(b->hasLevel(level) << level);
+    for (int level = 0; level < kNumLevels; ++level)
+      mask |= static_cast<uint8_t>(b->hasLevel(level) << level);
     s.level_masks.push_back(mask);
     for (int n = 0; n < VoxelBlock::kVoxelCount; ++n) s.voxels.push_back(b->voxel(n));
   }

@@ -24,7 +24,8 @@ bool readText(const fs::path& path, std::string* text) {
 
 bool isFence(const std::string& line) {
   const size_t first = line.find_first_not_of(' ');
-  return first != std::string::npos && first <= 3 && (line.compare(first, 3, "```") == 0 || line.compare(first, 3, "~~~") == 0);
+  return first != std::string::npos && first <= 3 &&
+         (line.compare(first, 3, "```") == 0 || line.compare(first, 3, "~~~") == 0);
 }
 
 /// Calls f(line, number) for every line outside code fences.
@@ -44,7 +45,8 @@ void forEachProseLine(const std::string& text, F&& f) {
 
 /// UTF-8 sequences GitHub drops from anchors (punctuation and symbols seen in headings).
 bool droppedSymbol(const std::string& utf8) {
-  static const char* const kDropped[] = {"×", "—", "–", "→", "←", "·", "≤", "≥", "±", "…", "“", "”", "‘", "’", "°"};
+  static const char* const kDropped[] = {"×", "—", "–", "→", "←", "·", "≤", "≥",
+                                         "±", "…", "“", "”", "‘", "’", "°"};
   for (const char* s : kDropped)
     if (utf8 == s) return true;
   return false;
@@ -108,7 +110,8 @@ std::vector<std::string> brokenRelativeLinks(const std::string& path) {
   static const std::regex kScheme(R"(^[a-zA-Z][a-zA-Z0-9+.-]*:)");
   forEachProseLine(text, [&](const std::string& raw_line, int number) {
     const std::string line = withoutInlineCode(raw_line);
-    for (auto it = std::sregex_iterator(line.begin(), line.end(), kLink); it != std::sregex_iterator(); ++it) {
+    for (auto it = std::sregex_iterator(line.begin(), line.end(), kLink);
+         it != std::sregex_iterator(); ++it) {
       const std::string target = (*it)[1].str();
       if (std::regex_search(target, kScheme)) continue;  // http://, https://, mailto:
       const size_t hash = target.find('#');
@@ -129,7 +132,8 @@ std::vector<std::string> brokenRelativeLinks(const std::string& path) {
         continue;
       }
       const std::vector<std::string> anchors = markdownHeadingAnchors(target_text);
-      if (std::find(anchors.begin(), anchors.end(), anchor) == anchors.end()) report("no heading with this anchor");
+      if (std::find(anchors.begin(), anchors.end(), anchor) == anchors.end())
+        report("no heading with this anchor");
     }
   });
   return broken;

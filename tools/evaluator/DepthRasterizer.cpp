@@ -61,9 +61,8 @@ cv::Mat rasterizeDepth(const TriangleMesh& mesh, const StereoCamera& camera,
   const size_t vertex_count = vertices_camera.size();
   for (const auto& tri : mesh.triangles) {
     if (tri[0] >= vertex_count || tri[1] >= vertex_count || tri[2] >= vertex_count) continue;
-    const std::array<Eigen::Vector3d, 3> corners = {vertices_camera[tri[0]],
-                                                    vertices_camera[tri[1]],
-                                                    vertices_camera[tri[2]]};
+    const std::array<Eigen::Vector3d, 3> corners = {
+        vertices_camera[tri[0]], vertices_camera[tri[1]], vertices_camera[tri[2]]};
     // Clip against the plane z = near (Sutherland–Hodgman on one plane): a triangle crossing
     // it becomes a triangle or a quad; projecting unclipped corners behind the camera would
     // flip them across the image.

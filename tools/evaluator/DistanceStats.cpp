@@ -30,16 +30,16 @@ DistanceSummary summarizeDistances(std::vector<double> distances_m) {
   summary.p99_m = quantileOfSorted(distances_m, 0.99);
   summary.max_m = distances_m.back();
   const auto first_over = std::upper_bound(distances_m.begin(), distances_m.end(), kGrossErrorM);
-  summary.share_over_10cm = static_cast<double>(distances_m.end() - first_over) /
-                            static_cast<double>(distances_m.size());
+  summary.share_over_10cm =
+      static_cast<double>(distances_m.end() - first_over) / static_cast<double>(distances_m.size());
   return summary;
 }
 
 double shareWithin(const std::vector<double>& distances_m, double tolerance_m) {
   if (distances_m.empty()) return NAN;
-  const size_t within = static_cast<size_t>(
-      std::count_if(distances_m.begin(), distances_m.end(),
-                    [tolerance_m](double d) { return d <= tolerance_m; }));
+  const size_t within =
+      static_cast<size_t>(std::count_if(distances_m.begin(), distances_m.end(),
+                                        [tolerance_m](double d) { return d <= tolerance_m; }));
   return static_cast<double>(within) / static_cast<double>(distances_m.size());
 }
 

@@ -20,7 +20,7 @@ std::array<uint8_t, 3> errorColour(double distance_m, double tolerance_m) {
   if (!(t < 2.0)) return {255, 0, 0};         // also +inf and NaN: no surface near
   if (t <= 0.0) return {0, 0, 255};
   if (t < 0.5) return {0, channel(2.0 * t), channel(1.0 - 2.0 * t)};  // blue → green
-  if (t < 1.0) return {channel(2.0 * t - 1.0), 255, 0};              // green → yellow
+  if (t < 1.0) return {channel(2.0 * t - 1.0), 255, 0};               // green → yellow
   return {255, channel(2.0 - t), 0};                                  // yellow → red
 }
 
@@ -51,9 +51,11 @@ bool writeErrorColouredPly(const std::string& path, const TriangleMesh& reconstr
   return writeThroughTemporary(path, "cannot write the error-coloured mesh", write, error);
 }
 
-bool errorColouredPoints(const std::vector<Eigen::Vector3d>& points_m, const std::vector<uint8_t>& mask,
-                         const std::vector<double>& distances_m, double tolerance_m, TriangleMesh* cloud) {
-  if (distances_m.size() != points_m.size() || (!mask.empty() && mask.size() != points_m.size())) return false;
+bool errorColouredPoints(const std::vector<Eigen::Vector3d>& points_m,
+                         const std::vector<uint8_t>& mask, const std::vector<double>& distances_m,
+                         double tolerance_m, TriangleMesh* cloud) {
+  if (distances_m.size() != points_m.size() || (!mask.empty() && mask.size() != points_m.size()))
+    return false;
   *cloud = TriangleMesh{};
   for (size_t i = 0; i < points_m.size(); ++i) {
     if (!mask.empty() && mask[i] == 0) continue;
@@ -71,11 +73,13 @@ bool writeMissingPly(const std::string& path, const std::vector<Eigen::Vector3d>
   if (!errorColouredPoints(gt_samples_m, gt_visible, distances_m, tolerance_m, &cloud)) {
     if (error)
       *error = path + ": " + std::to_string(gt_samples_m.size()) + " ground-truth samples, " +
-               std::to_string(distances_m.size()) + " distances, " + std::to_string(gt_visible.size()) +
-               " visibility flags: they must match";
+               std::to_string(distances_m.size()) + " distances, " +
+               std::to_string(gt_visible.size()) + " visibility flags: they must match";
     return false;
   }
-  const auto write = [&](const std::string& temporary, std::string* why) { return writePly(temporary, cloud, why); };
+  const auto write = [&](const std::string& temporary, std::string* why) {
+    return writePly(temporary, cloud, why);
+  };
   return writeThroughTemporary(path, "cannot write the ground-truth samples", write, error);
 }
 

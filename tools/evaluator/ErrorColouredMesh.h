@@ -37,8 +37,9 @@ bool writeErrorColouredPly(const std::string& path, const TriangleMesh& reconstr
 /// cloud (no faces, zero normals), each coloured by errorColour() of its distance to the
 /// reconstruction, `distances_m[i]` (GroundTruthResult::gt_sample_distances_m): blue where the
 /// surface covers it, red where it is 2 × tolerance or more away. False when the sizes differ.
-bool errorColouredPoints(const std::vector<Eigen::Vector3d>& points_m, const std::vector<uint8_t>& mask,
-                         const std::vector<double>& distances_m, double tolerance_m, TriangleMesh* cloud);
+bool errorColouredPoints(const std::vector<Eigen::Vector3d>& points_m,
+                         const std::vector<uint8_t>& mask, const std::vector<double>& distances_m,
+                         double tolerance_m, TriangleMesh* cloud);
 
 /// Writes errorColouredPoints() of the ground-truth samples to `path` as binary PLY, whole or
 /// not at all. False with a message naming the file (or the size mismatch) on failure.

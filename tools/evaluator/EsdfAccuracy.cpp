@@ -8,14 +8,18 @@
 
 namespace stereo_fusion {
 
-EsdfAccuracy compareEsdf(const EsdfCells& cells, double max_distance_m, const std::vector<double>& band_edges_m,
-                         const std::function<double(const Eigen::Vector3d&)>& reference, double tolerance_m) {
-  std::vector<std::vector<double>> errors(band_edges_m.size() + 1), signed_errors(band_edges_m.size() + 1);
+EsdfAccuracy compareEsdf(const EsdfCells& cells, double max_distance_m,
+                         const std::vector<double>& band_edges_m,
+                         const std::function<double(const Eigen::Vector3d&)>& reference,
+                         double tolerance_m) {
+  std::vector<std::vector<double>> errors(band_edges_m.size() + 1),
+      signed_errors(band_edges_m.size() + 1);
   for (size_t i = 0; i < cells.free_centres.size(); ++i) {
     const double truth = reference(cells.free_centres[i]);
     if (!(truth <= max_distance_m)) continue;
     const double error = std::min(cells.free_distances_m[i], max_distance_m) - truth;
-    const size_t band = std::upper_bound(band_edges_m.begin(), band_edges_m.end(), truth) - band_edges_m.begin();
+    const size_t band =
+        std::upper_bound(band_edges_m.begin(), band_edges_m.end(), truth) - band_edges_m.begin();
     if (band >= band_edges_m.size()) continue;  // at or beyond the last edge
     for (size_t b : {band, band_edges_m.size()}) {
       errors[b].push_back(std::abs(error));
@@ -35,7 +39,8 @@ EsdfAccuracy compareEsdf(const EsdfCells& cells, double max_distance_m, const st
       band.median_m = percentileOfSorted(e, 0.5);
       band.p99_m = percentileOfSorted(e, 0.99);
       band.max_m = e.back();
-      band.over_tolerance = static_cast<size_t>(e.end() - std::upper_bound(e.begin(), e.end(), tolerance_m));
+      band.over_tolerance =
+          static_cast<size_t>(e.end() - std::upper_bound(e.begin(), e.end(), tolerance_m));
       double sum = 0;
       for (double s : signed_errors[b]) sum += s;
       band.mean_signed_m = sum / signed_errors[b].size();
@@ -47,7 +52,9 @@ EsdfAccuracy compareEsdf(const EsdfCells& cells, double max_distance_m, const st
 
 std::string EsdfAccuracy::describe(const std::string& title) const {
   char head[160];
-  std::snprintf(head, sizeof(head), "\n  band (m)      cells   median    p99     max    mean signed (m)  > %.3f m\n", tolerance_m);
+  std::snprintf(head, sizeof(head),
+                "\n  band (m)      cells   median    p99     max    mean signed (m)  > %.3f m\n",
+                tolerance_m);
   std::string out = title + head;
   char line[160];
   for (size_t b = 0; b < bands.size(); ++b) {
@@ -57,8 +64,8 @@ std::string EsdfAccuracy::describe(const std::string& title) const {
       std::snprintf(band, sizeof(band), "all        ");
     else
       std::snprintf(band, sizeof(band), "%4.2f–%4.2f  ", x.lo_m, x.hi_m);
-    std::snprintf(line, sizeof(line), "  %s %8zu  %.4f  %.4f  %.4f  %+.4f           %zu\n", band, x.cells, x.median_m,
-                  x.p99_m, x.max_m, x.mean_signed_m, x.over_tolerance);
+    std::snprintf(line, sizeof(line), "  %s %8zu  %.4f  %.4f  %.4f  %+.4f           %zu\n", band,
+                  x.cells, x.median_m, x.p99_m, x.max_m, x.mean_signed_m, x.over_tolerance);
     out += line;
   }
   return out;

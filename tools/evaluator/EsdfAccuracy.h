@@ -12,8 +12,8 @@ struct EsdfBand {
   double lo_m = 0, hi_m = 0;
   size_t cells = 0;
   double median_m = 0, p99_m = 0, max_m = 0;  ///< of |ESDF − reference|
-  double mean_signed_m = 0;                   ///< ESDF − reference: > 0 reads farther than the truth
-  size_t over_tolerance = 0;                  ///< cells whose |error| exceeds the tolerance
+  double mean_signed_m = 0;   ///< ESDF − reference: > 0 reads farther than the truth
+  size_t over_tolerance = 0;  ///< cells whose |error| exceeds the tolerance
 };
 
 struct EsdfAccuracy {
@@ -32,7 +32,9 @@ struct EsdfCells {
 /// `reference(centre)`; cells whose reference is beyond the max are left out. Bands end at
 /// `band_edges_m` (e.g. 0.25, 0.5, 1, 2).
 /// `tolerance_m`: the error counted in EsdfBand::over_tolerance (half a cell for the brute force).
-EsdfAccuracy compareEsdf(const EsdfCells& cells, double max_distance_m, const std::vector<double>& band_edges_m,
-                         const std::function<double(const Eigen::Vector3d&)>& reference, double tolerance_m);
+EsdfAccuracy compareEsdf(const EsdfCells& cells, double max_distance_m,
+                         const std::vector<double>& band_edges_m,
+                         const std::function<double(const Eigen::Vector3d&)>& reference,
+                         double tolerance_m);
 
 }  // namespace stereo_fusion

@@ -12,9 +12,10 @@ struct EvaluateArguments {
   std::string mesh_path;       ///< reconstruction (.ply)
   std::string reference_path;  ///< ground-truth .ply or sequence folder
   double tolerance_m = 0.04;
-  std::string json_path;  ///< empty: no JSON file
+  std::string json_path;       ///< empty: no JSON file
   std::string error_ply_path;  ///< empty: no error-coloured mesh (ground-truth mode only)
-  std::string missing_ply_path;  ///< empty: no coloured ground-truth samples (ground-truth mode only)
+  std::string
+      missing_ply_path;  ///< empty: no coloured ground-truth samples (ground-truth mode only)
   std::string held_out_depth_folder;  ///< empty: rendered depths not written (held-out mode only)
   std::string held_out_spec = "odd";
   bool held_out_given = false;  ///< --held-out forces held-out mode on a folder with gt_mesh.ply

@@ -16,7 +16,8 @@ bool hasPlyExtension(const fs::path& path) {
 
 }  // namespace
 
-ModeError chooseEvaluationMode(const EvaluateArguments& args, EvaluationMode* mode, std::string* error) {
+ModeError chooseEvaluationMode(const EvaluateArguments& args, EvaluationMode* mode,
+                               std::string* error) {
   const fs::path reference(args.reference_path);
   std::error_code ec;
   const fs::file_status status = fs::status(reference, ec);
@@ -41,14 +42,17 @@ ModeError chooseEvaluationMode(const EvaluateArguments& args, EvaluationMode* mo
     mode->ground_truth_path = args.reference_path;
   }
   if (!mode->ground_truth && (!args.error_ply_path.empty() || !args.missing_ply_path.empty())) {
-    *error = std::string(args.error_ply_path.empty() ? "--missing-ply" : "--error-ply") + " needs a ground truth (a .ply, or a sequence folder holding gt_mesh.ply "
+    *error = std::string(args.error_ply_path.empty() ? "--missing-ply" : "--error-ply") +
+             " needs a ground truth (a .ply, or a sequence folder holding gt_mesh.ply "
              "without --held-out); " +
              args.reference_path + " is evaluated in held-out mode";
     return ModeError::kBadArguments;
   }
   if (mode->ground_truth && !args.held_out_depth_folder.empty()) {
-    *error = "--held-out-depth needs held-out mode (a sequence folder without gt_mesh.ply, or --held-out); " +
-             args.reference_path + " is evaluated against its ground truth";
+    *error =
+        "--held-out-depth needs held-out mode (a sequence folder without gt_mesh.ply, or "
+        "--held-out); " +
+        args.reference_path + " is evaluated against its ground truth";
     return ModeError::kBadArguments;
   }
   return ModeError::kNone;

@@ -21,6 +21,7 @@ enum class ModeError { kNone, kUnreadable, kBadArguments };
 /// folder with gt_mesh.ply → ground truth with visibility, unless --held-out is given; any other
 /// folder → held-out. Refuses options the chosen mode cannot honour (--held-out with a .ply,
 /// --error-ply in held-out mode) before any work is done.
-ModeError chooseEvaluationMode(const EvaluateArguments& args, EvaluationMode* mode, std::string* error);
+ModeError chooseEvaluationMode(const EvaluateArguments& args, EvaluationMode* mode,
+                               std::string* error);
 
 }  // namespace stereo_fusion::eval

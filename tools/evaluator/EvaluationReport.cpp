@@ -71,9 +71,8 @@ std::string formatTable(const GroundTruthReport& report) {
   out += row("tolerance", millimetres(report.options.tolerance_m));
   out += row("samples per mesh", std::to_string(report.options.samples) + " (seed " +
                                      std::to_string(report.options.seed) + ")");
-  out += row("area reconstruction / truth",
-             format("%.3f m²", r.reconstruction_area_m2) + " / " +
-                 format("%.3f m²", r.ground_truth_area_m2));
+  out += row("area reconstruction / truth", format("%.3f m²", r.reconstruction_area_m2) + " / " +
+                                                format("%.3f m²", r.ground_truth_area_m2));
   out += "accuracy (reconstruction -> truth)\n";
   out += summaryRows(r.accuracy);
   out += "completion (truth -> reconstruction)\n";
@@ -95,9 +94,10 @@ std::string formatTable(const GroundTruthReport& report) {
   }
   out += row("F-score", percent(r.f_score));
   if (!report.options.ghost_regions_m.empty())
-    out += row("ghost surface (objects gone)", format("%.4f m²", r.ghost_area_m2) + " in " +
-                                                   std::to_string(report.options.ghost_regions_m.size()) +
-                                                   " region(s) of dynamic.txt");
+    out += row("ghost surface (objects gone)",
+               format("%.4f m²", r.ghost_area_m2) + " in " +
+                   std::to_string(report.options.ghost_regions_m.size()) +
+                   " region(s) of dynamic.txt");
   out += row("time", format("%.2f s", report.elapsed_s));
   return out;
 }
@@ -122,9 +122,9 @@ std::string formatTable(const HeldOutReport& report) {
   out += "scores\n";
   out += row("completeness (measured covered)", percent(r.completeness));
   out += row("floating (mesh in front)", percent(r.floating_share));
-  out += row("pixels measured / mesh / both",
-             std::to_string(r.total.measured_pixels) + " / " + std::to_string(r.total.mesh_pixels) +
-                 " / " + std::to_string(r.total.overlap_pixels));
+  out += row("pixels measured / mesh / both", std::to_string(r.total.measured_pixels) + " / " +
+                                                  std::to_string(r.total.mesh_pixels) + " / " +
+                                                  std::to_string(r.total.overlap_pixels));
   out += row("time", format("%.2f s", report.elapsed_s));
   return out;
 }
@@ -164,7 +164,8 @@ std::string toJson(const GroundTruthReport& report) {
 std::string toJson(const HeldOutReport& report) {
   const HeldOutResult& r = report.result;
   const auto share = [](uint64_t numerator, uint64_t denominator) {
-    return denominator == 0 ? NAN : static_cast<double>(numerator) / static_cast<double>(denominator);
+    return denominator == 0 ? NAN
+                            : static_cast<double>(numerator) / static_cast<double>(denominator);
   };
   Json json;
   json["mode"] = "held_out";
@@ -194,8 +195,8 @@ std::string toJson(const HeldOutReport& report) {
     const HeldOutCounts& c = r.per_frame[i];
     Json frame;
     frame["frame"] = r.frames_evaluated[i];
-    frame["mean_abs_residual_m"] =
-        number(c.overlap_pixels == 0 ? NAN : c.abs_residual_sum_m / static_cast<double>(c.overlap_pixels));
+    frame["mean_abs_residual_m"] = number(
+        c.overlap_pixels == 0 ? NAN : c.abs_residual_sum_m / static_cast<double>(c.overlap_pixels));
     frame["floating_share"] = number(share(c.floating_pixels, c.overlap_pixels));
     frame["completeness"] = number(share(c.agreeing_pixels, c.measured_pixels));
     frame["measured_pixels"] = c.measured_pixels;

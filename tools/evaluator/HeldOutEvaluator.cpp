@@ -25,7 +25,8 @@ HeldOutCounts compareFrame(const cv::Mat& mesh_depth, const StereoFrame& frame,
     const float* disparity = frame.disparity_px.ptr<float>(v);
     for (int u = 0; u < mesh_depth.cols; ++u) {
       const double measured = frame.camera.depthFromDisparity(disparity[u]);  // +inf if invalid
-      const bool has_measurement = measured >= options.min_depth_m && measured <= options.max_depth_m;
+      const bool has_measurement =
+          measured >= options.min_depth_m && measured <= options.max_depth_m;
       const bool has_mesh = rendered[u] > 0.0f;
       counts.measured_pixels += has_measurement;
       counts.mesh_pixels += has_mesh;
@@ -92,7 +93,8 @@ HeldOutResult evaluateHeldOut(const TriangleMesh& mesh, const FrameSource& frame
       if (!frame.camera.valid() || frame.disparity_px.type() != CV_32FC1 ||
           frame.disparity_px.cols != frame.camera.width() ||
           frame.disparity_px.rows != frame.camera.height()) {
-        outcome.error = "frame " + std::to_string(held_out[i]) + ": disparity does not match camera";
+        outcome.error =
+            "frame " + std::to_string(held_out[i]) + ": disparity does not match camera";
         continue;
       }
       const cv::Mat rendered = rasterizeDepth(mesh, frame.camera, frame.T_world_camera);

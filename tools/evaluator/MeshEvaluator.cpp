@@ -20,12 +20,10 @@ GroundTruthResult evaluateAgainstGroundTruth(const TriangleMesh& reconstruction,
                                            {}, options);
 }
 
-GroundTruthResult evaluateAgainstGroundTruthSamples(const TriangleMesh& reconstruction,
-                                                    const TriangleMesh& ground_truth,
-                                                    const std::vector<Eigen::Vector3d>& gt_samples_m,
-                                                    double gt_area_m2,
-                                                    const std::vector<uint8_t>& gt_visible,
-                                                    const GroundTruthOptions& options) {
+GroundTruthResult evaluateAgainstGroundTruthSamples(
+    const TriangleMesh& reconstruction, const TriangleMesh& ground_truth,
+    const std::vector<Eigen::Vector3d>& gt_samples_m, double gt_area_m2,
+    const std::vector<uint8_t>& gt_visible, const GroundTruthOptions& options) {
   GroundTruthResult result;
   ThreadPool pool(options.num_threads);
   const SurfaceSamples recon =
@@ -51,7 +49,8 @@ GroundTruthResult evaluateAgainstGroundTruthSamples(const TriangleMesh& reconstr
             break;
           }
       }
-      result.ghost_area_m2 = recon.area_m2 * static_cast<double>(ghost) / static_cast<double>(recon.points_m.size());
+      result.ghost_area_m2 =
+          recon.area_m2 * static_cast<double>(ghost) / static_cast<double>(recon.points_m.size());
     } else if (!options.ghost_regions_m.empty()) {
       result.ghost_area_m2 = 0.0;
     }

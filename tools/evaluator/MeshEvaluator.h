@@ -67,12 +67,10 @@ GroundTruthResult evaluateAgainstGroundTruth(const TriangleMesh& reconstruction,
 /// The same with given ground-truth samples and an optional mask (`gt_visible`, one entry per
 /// sample, or empty for "all"): completeness and the completion distances count only the
 /// samples marked visible, so a surface the sequence never saw does not count as missing.
-GroundTruthResult evaluateAgainstGroundTruthSamples(const TriangleMesh& reconstruction,
-                                                    const TriangleMesh& ground_truth,
-                                                    const std::vector<Eigen::Vector3d>& gt_samples_m,
-                                                    double gt_area_m2,
-                                                    const std::vector<uint8_t>& gt_visible,
-                                                    const GroundTruthOptions& options);
+GroundTruthResult evaluateAgainstGroundTruthSamples(
+    const TriangleMesh& reconstruction, const TriangleMesh& ground_truth,
+    const std::vector<Eigen::Vector3d>& gt_samples_m, double gt_area_m2,
+    const std::vector<uint8_t>& gt_visible, const GroundTruthOptions& options);
 
 /// Seed of the reconstruction's sample stream derived from `options.seed`; the ground truth
 /// uses `options.seed` itself. Exposed so callers drawing samples themselves stay consistent.

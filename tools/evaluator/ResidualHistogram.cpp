@@ -11,9 +11,8 @@ void ResidualHistogram::add(double abs_residual_m) {
   const double bin = std::floor(abs_residual_m / kBinWidthM);
   const size_t overflow = bins_.size() - 1;
   // NaN and anything past the range land in the overflow bin.
-  const size_t index = bin >= 0.0 && bin < static_cast<double>(overflow)
-                           ? static_cast<size_t>(bin)
-                           : overflow;
+  const size_t index =
+      bin >= 0.0 && bin < static_cast<double>(overflow) ? static_cast<size_t>(bin) : overflow;
   ++bins_[index];
   ++count_;
 }
@@ -32,7 +31,8 @@ double ResidualHistogram::quantile(double q) const {
     if (rank < static_cast<double>(before + bins_[i])) {
       if (i + 1 == bins_.size()) return kRangeM;
       // Spread the bin's samples evenly over its width (centres of equal sub-intervals).
-      const double within = (rank - static_cast<double>(before) + 0.5) / static_cast<double>(bins_[i]);
+      const double within =
+          (rank - static_cast<double>(before) + 0.5) / static_cast<double>(bins_[i]);
       return (static_cast<double>(i) + within) * kBinWidthM;
     }
     before += bins_[i];

@@ -11,8 +11,7 @@ constexpr size_t kPointsPerChunk = 4096;
 }  // namespace
 
 VisibilityResult computeVisibility(const std::vector<Eigen::Vector3d>& points_world_m,
-                                   const FrameSource& frames, double tolerance_m,
-                                   int num_threads) {
+                                   const FrameSource& frames, double tolerance_m, int num_threads) {
   VisibilityResult result;
   result.visible.assign(points_world_m.size(), 0);
   ThreadPool pool(num_threads);

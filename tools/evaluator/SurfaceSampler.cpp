@@ -22,10 +22,9 @@ SurfaceSamples sampleSurface(const TriangleMesh& mesh, size_t count, uint64_t se
     const auto& tri = mesh.triangles[t];
     if (tri[0] >= vertex_count || tri[1] >= vertex_count || tri[2] >= vertex_count) continue;
     const Eigen::Vector3d a = mesh.positions[tri[0]].cast<double>();
-    const double area =
-        0.5 * (mesh.positions[tri[1]].cast<double>() - a)
-                  .cross(mesh.positions[tri[2]].cast<double>() - a)
-                  .norm();
+    const double area = 0.5 * (mesh.positions[tri[1]].cast<double>() - a)
+                                  .cross(mesh.positions[tri[2]].cast<double>() - a)
+                                  .norm();
     if (!(area > 0.0) || !std::isfinite(area)) continue;
     samples.area_m2 += area;
     triangle_of.push_back(static_cast<uint32_t>(t));
@@ -37,10 +36,10 @@ SurfaceSamples sampleSurface(const TriangleMesh& mesh, size_t count, uint64_t se
   samples.points_m.resize(count);
   for (size_t i = 0; i < count; ++i) {
     const double target = uniform01(rng) * samples.area_m2;
-    const size_t k = std::min<size_t>(
-        std::upper_bound(cumulative_area.begin(), cumulative_area.end(), target) -
-            cumulative_area.begin(),
-        cumulative_area.size() - 1);
+    const size_t k =
+        std::min<size_t>(std::upper_bound(cumulative_area.begin(), cumulative_area.end(), target) -
+                             cumulative_area.begin(),
+                         cumulative_area.size() - 1);
     const auto& tri = mesh.triangles[triangle_of[k]];
     // Uniform point in a triangle: fold the unit square's upper half onto the lower one.
     double s = uniform01(rng), t = uniform01(rng);

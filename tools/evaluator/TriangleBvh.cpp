@@ -59,8 +59,9 @@ uint32_t TriangleBvh::build(uint32_t begin, uint32_t end, std::vector<Eigen::Vec
   const uint32_t middle = begin + (end - begin) / 2;
   std::vector<uint32_t> order(end - begin);
   std::iota(order.begin(), order.end(), begin);
-  std::nth_element(order.begin(), order.begin() + (middle - begin), order.end(),
-                   [&](uint32_t l, uint32_t r) { return (*centroids)[l][axis] < (*centroids)[r][axis]; });
+  std::nth_element(
+      order.begin(), order.begin() + (middle - begin), order.end(),
+      [&](uint32_t l, uint32_t r) { return (*centroids)[l][axis] < (*centroids)[r][axis]; });
   // Apply the permutation to the triangles, their centroids and their mesh indices.
   std::vector<Triangle> triangles(order.size());
   std::vector<Eigen::Vector3f> centres(order.size());
@@ -116,8 +117,8 @@ bool TriangleBvh::nearest(const Eigen::Vector3d& p, NearestSurfacePoint* nearest
     if (node.count > 0) {
       for (uint32_t t = node.offset; t < node.offset + node.count; ++t) {
         const Triangle& tri = triangles_[t];
-        const Eigen::Vector3d q = closestPointOnTriangle(p, tri.a.cast<double>(),
-                                                         tri.b.cast<double>(), tri.c.cast<double>());
+        const Eigen::Vector3d q = closestPointOnTriangle(
+            p, tri.a.cast<double>(), tri.b.cast<double>(), tri.c.cast<double>());
         const double d2 = (q - p).squaredNorm();
         if (d2 < best2) {
           best2 = d2;

@@ -21,16 +21,16 @@ Eigen::Vector3d closestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::Ve
   const double normal2 = normal.squaredNorm();
   // Relative threshold: a sliver whose normal is lost in rounding has no usable plane, but its
   // edges still describe its points exactly.
-  const bool degenerate = !(normal2 > 1e-24 * ab.squaredNorm() * ac.squaredNorm()) ||
-                          !(normal2 > 0.0);
+  const bool degenerate =
+      !(normal2 > 1e-24 * ab.squaredNorm() * ac.squaredNorm()) || !(normal2 > 0.0);
 
   if (!degenerate) {
     // Barycentric coordinates of p's projection onto the plane, from the signed areas of the
     // sub-triangles it forms with each edge.
     const Eigen::Vector3d ap = p - a, bp = p - b, cp = p - c;
-    const double wa = (c - b).cross(bp).dot(normal);  // opposite corner a
+    const double wa = (c - b).cross(bp).dot(normal);    // opposite corner a
     const double wb = ac.cross(cp).dot(normal) * -1.0;  // opposite corner b: edge c->a
-    const double wc = ab.cross(ap).dot(normal);  // opposite corner c
+    const double wc = ab.cross(ap).dot(normal);         // opposite corner c
     if (wa >= 0.0 && wb >= 0.0 && wc >= 0.0) {
       // Inside: the projection is the closest point.
       return p - normal * (ap.dot(normal) / normal2);

@@ -37,7 +37,8 @@ int usage(const char* why) {
 }
 
 /// The cells of an esdf.ply (x y z distance, as io/PlanningExport writes it), via PCL's reader.
-bool readEsdf(const std::string& path, EsdfCells* cells, double* max_distance_m, std::string* error) {
+bool readEsdf(const std::string& path, EsdfCells* cells, double* max_distance_m,
+              std::string* error) {
   pcl::PCLPointCloud2 cloud;
   if (pcl::io::loadPLYFile(path, cloud) < 0) {
     *error = path + ": not a readable PLY point cloud";
@@ -47,7 +48,8 @@ bool readEsdf(const std::string& path, EsdfCells* cells, double* max_distance_m,
   const char* names[4] = {"x", "y", "z", "distance"};
   for (const pcl::PCLPointField& f : cloud.fields)
     for (int i = 0; i < 4; ++i)
-      if (f.name == names[i] && f.datatype == pcl::PCLPointField::FLOAT32) offsets[i] = static_cast<int>(f.offset);
+      if (f.name == names[i] && f.datatype == pcl::PCLPointField::FLOAT32)
+        offsets[i] = static_cast<int>(f.offset);
   for (int i = 0; i < 4; ++i)
     if (offsets[i] < 0) {
       *error = path + ": no float property '" + names[i] + "' (not an esdf.ply?)";
@@ -75,9 +77,15 @@ bool readEsdf(const std::string& path, EsdfCells* cells, double* max_distance_m,
 nlohmann::ordered_json toJson(const EsdfAccuracy& a) {
   nlohmann::ordered_json bands = nlohmann::ordered_json::array();
   for (const EsdfBand& b : a.bands)
-    bands.push_back({{"lo_m", b.lo_m}, {"hi_m", b.hi_m}, {"cells", b.cells}, {"median_m", b.median_m},
-                     {"p99_m", b.p99_m}, {"max_m", b.max_m}, {"mean_signed_m", b.mean_signed_m},
-                     {"over_tolerance", b.over_tolerance}, {"tolerance_m", a.tolerance_m}});
+    bands.push_back({{"lo_m", b.lo_m},
+                     {"hi_m", b.hi_m},
+                     {"cells", b.cells},
+                     {"median_m", b.median_m},
+                     {"p99_m", b.p99_m},
+                     {"max_m", b.max_m},
+                     {"mean_signed_m", b.mean_signed_m},
+                     {"over_tolerance", b.over_tolerance},
+                     {"tolerance_m", a.tolerance_m}});
   return bands;
 }
 
@@ -116,27 +124,36 @@ int main(int argc, char** argv) {
 
   // (1) Brute force over the file's own occupied cells.
   pcl::PointCloud<pcl::PointXYZ>::Ptr occupied(new pcl::PointCloud<pcl::PointXYZ>);
-  for (const Eigen::Vector3d& p : cells.occupied_centres) occupied->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
-  double cell_m = INFINITY;  // the grid's spacing: the nearest other occupied centre
+  for (const Eigen::Vector3d& p : cells.occupied_centres)
+    occupied->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
+  double cell_m = INFINITY;              // the grid's spacing: the nearest other occupied centre
   pcl::KdTreeFLANN<pcl::PointXYZ> tree;  // a single k-d tree searched exactly
   if (!occupied->empty()) {
     tree.setInputCloud(occupied);
     std::vector<int> index(2);
     std::vector<float> squared(2);
     for (size_t i = 0; i < occupied->size(); i += std::max<size_t>(1, occupied->size() / 200))
-      if (tree.nearestKSearch((*occupied)[i], 2, index, squared) == 2) cell_m = std::min(cell_m, std::sqrt(double(squared[1])));
+      if (tree.nearestKSearch((*occupied)[i], 2, index, squared) == 2)
+        cell_m = std::min(cell_m, std::sqrt(double(squared[1])));
     std::printf("cell edge %.4f m (the nearest two occupied centres)\n", cell_m);
-    const EsdfAccuracy brute = compareEsdf(cells, max_distance_m, edges, [&](const Eigen::Vector3d& p) {
-      // Float centres: the cells' own distances are exact in double; search in float, then measure in double.
-      if (tree.nearestKSearch(pcl::PointXYZ(p.x(), p.y(), p.z()), 1, index, squared) < 1) return double(INFINITY);
-      return std::min((cells.occupied_centres[index[0]] - p).norm(), max_distance_m);
-    }, 0.5 * cell_m);
-    std::printf("%s", brute.describe("against the brute force (nearest occupied cell centre):").c_str());
+    const EsdfAccuracy brute = compareEsdf(
+        cells, max_distance_m, edges,
+        [&](const Eigen::Vector3d& p) {
+          // Float centres: the cells' own distances are exact in double; search in float, then
+          // measure in double.
+          if (tree.nearestKSearch(pcl::PointXYZ(p.x(), p.y(), p.z()), 1, index, squared) < 1)
+            return double(INFINITY);
+          return std::min((cells.occupied_centres[index[0]] - p).norm(), max_distance_m);
+        },
+        0.5 * cell_m);
+    std::printf("%s",
+                brute.describe("against the brute force (nearest occupied cell centre):").c_str());
     json["brute_force"] = toJson(brute);
   }
   // (2) Ground truth.
   if (!reference.empty()) {
-    const std::string mesh_path = fs::is_directory(reference) ? (fs::path(reference) / "gt_mesh.ply").string() : reference;
+    const std::string mesh_path =
+        fs::is_directory(reference) ? (fs::path(reference) / "gt_mesh.ply").string() : reference;
     TriangleMesh mesh;
     if (!readPly(mesh_path, &mesh, &error)) {
       std::fprintf(stderr, "%s\n", error.c_str());
@@ -145,8 +162,10 @@ int main(int argc, char** argv) {
     const eval::TriangleBvh bvh(mesh);
     const double diagonal = std::isfinite(cell_m) ? 0.5 * std::sqrt(3.0) * cell_m : 0.0;
     const EsdfAccuracy truth = compareEsdf(
-        cells, max_distance_m, edges, [&](const Eigen::Vector3d& p) { return bvh.distance(p); }, diagonal);
-    std::printf("%s", truth.describe("against the true surface (" + mesh_path + "), seen or not:").c_str());
+        cells, max_distance_m, edges, [&](const Eigen::Vector3d& p) { return bvh.distance(p); },
+        diagonal);
+    std::printf(
+        "%s", truth.describe("against the true surface (" + mesh_path + "), seen or not:").c_str());
     json["ground_truth"] = toJson(truth);
     // The same where the nearest true surface point lies in an occupied cell (within half a
     // cell diagonal of its centre): what the ESDF's grid costs where the map saw the surface.
@@ -154,15 +173,22 @@ int main(int argc, char** argv) {
       std::vector<int> index(1);
       std::vector<float> squared(1);
       const double reach = diagonal + 1e-6;
-      const EsdfAccuracy seen = compareEsdf(cells, max_distance_m, edges, [&](const Eigen::Vector3d& p) {
-        eval::NearestSurfacePoint nearest;
-        if (!bvh.nearest(p, &nearest)) return double(INFINITY);
-        const Eigen::Vector3d& q = nearest.point_m;
-        if (tree.nearestKSearch(pcl::PointXYZ(q.x(), q.y(), q.z()), 1, index, squared) < 1) return double(INFINITY);
-        if ((cells.occupied_centres[index[0]] - q).norm() > reach) return double(INFINITY);
-        return nearest.distance_m;
-      }, diagonal);
-      std::printf("%s", seen.describe("against the true surface where its nearest point was seen (occupied):").c_str());
+      const EsdfAccuracy seen = compareEsdf(
+          cells, max_distance_m, edges,
+          [&](const Eigen::Vector3d& p) {
+            eval::NearestSurfacePoint nearest;
+            if (!bvh.nearest(p, &nearest)) return double(INFINITY);
+            const Eigen::Vector3d& q = nearest.point_m;
+            if (tree.nearestKSearch(pcl::PointXYZ(q.x(), q.y(), q.z()), 1, index, squared) < 1)
+              return double(INFINITY);
+            if ((cells.occupied_centres[index[0]] - q).norm() > reach) return double(INFINITY);
+            return nearest.distance_m;
+          },
+          diagonal);
+      std::printf(
+          "%s",
+          seen.describe("against the true surface where its nearest point was seen (occupied):")
+              .c_str());
       json["ground_truth_seen"] = toJson(seen);
     }
   }

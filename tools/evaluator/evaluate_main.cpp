@@ -77,7 +77,8 @@ void writeErrorPlyOrFail(const EvaluateArguments& args, const TriangleMesh& reco
 
 /// The regions of `sequence`/dynamic.txt ("ghost_region x0 y0 z0 x1 y1 z1" lines, world metres,
 /// written by the simulator's --dynamic): where objects stood that later left. No file: none.
-bool readGhostRegions(const std::string& sequence, std::vector<Eigen::AlignedBox3d>* regions, std::string* error) {
+bool readGhostRegions(const std::string& sequence, std::vector<Eigen::AlignedBox3d>* regions,
+                      std::string* error) {
   const std::string path = sequence + "/dynamic.txt";
   std::ifstream in(path);
   if (!in) return true;
@@ -87,9 +88,11 @@ bool readGhostRegions(const std::string& sequence, std::vector<Eigen::AlignedBox
     std::string kind;
     if (!(fields >> kind) || kind[0] == '#') continue;
     Eigen::Vector3d lo, hi;
-    if (kind != "ghost_region" || !(fields >> lo.x() >> lo.y() >> lo.z() >> hi.x() >> hi.y() >> hi.z()) ||
+    if (kind != "ghost_region" ||
+        !(fields >> lo.x() >> lo.y() >> lo.z() >> hi.x() >> hi.y() >> hi.z()) ||
         !(lo.array() <= hi.array()).all()) {
-      *error = path + ":" + std::to_string(number) + ": expected 'ghost_region x0 y0 z0 x1 y1 z1' with x0 <= x1 ...";
+      *error = path + ":" + std::to_string(number) +
+               ": expected 'ghost_region x0 y0 z0 x1 y1 z1' with x0 <= x1 ...";
       return false;
     }
     regions->emplace_back(lo, hi);
@@ -112,10 +115,12 @@ void runGroundTruth(const EvaluateArguments& args, const std::string& gt_path,
   const TriangleMesh reconstruction = readMeshOrFail(args.mesh_path, "mesh");
   const TriangleMesh ground_truth = readMeshOrFail(gt_path, "ground truth");
   const SurfaceSamples gt_samples = sampleSurface(ground_truth, args.samples, args.seed);
-  if (gt_samples.points_m.empty()) throw Failure{kExitUnreadable, gt_path + ": has no surface area"};
+  if (gt_samples.points_m.empty())
+    throw Failure{kExitUnreadable, gt_path + ": has no surface area"};
   if (!sequence.empty()) {
     std::string error;
-    if (!readGhostRegions(sequence, &report.options.ghost_regions_m, &error)) throw Failure{kExitUnreadable, error};
+    if (!readGhostRegions(sequence, &report.options.ghost_regions_m, &error))
+      throw Failure{kExitUnreadable, error};
     const DatasetReader frames = openSequenceOrFail(sequence);
     report.visibility =
         computeVisibility(gt_samples.points_m, frames, args.tolerance_m, args.threads);
@@ -198,7 +203,8 @@ void run(const EvaluateArguments& args) {
   checkOutputFolderOrFail(args.json_path);
   checkOutputFolderOrFail(args.error_ply_path);
   checkOutputFolderOrFail(args.missing_ply_path);
-  checkOutputFolderOrFail(args.held_out_depth_folder.empty() ? "" : args.held_out_depth_folder + "/");
+  checkOutputFolderOrFail(args.held_out_depth_folder.empty() ? ""
+                                                             : args.held_out_depth_folder + "/");
   if (mode.ground_truth) {
     runGroundTruth(args, mode.ground_truth_path, mode.sequence_path);
   } else {
@@ -223,7 +229,8 @@ int main(int argc, char** argv) {
     run(args);
   } catch (const Failure& failure) {
     std::fprintf(stderr, "error: %s\n", failure.message.c_str());
-    if (failure.exit_code == kExitBadArguments) std::fprintf(stderr, "\n%s", evaluateUsage().c_str());
+    if (failure.exit_code == kExitBadArguments)
+      std::fprintf(stderr, "\n%s", evaluateUsage().c_str());
     return failure.exit_code;
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr, "error: out of memory (try fewer --samples)\n");

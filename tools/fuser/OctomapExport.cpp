@@ -6,7 +6,8 @@
 
 namespace stereo_fusion {
 
-bool writeOctomap(const std::string& path, const PlanningMap& planning, size_t* skipped, std::string* error) {
+bool writeOctomap(const std::string& path, const PlanningMap& planning, size_t* skipped,
+                  std::string* error) {
   octomap::OcTree tree(planning.grid().cell_m);
   size_t outside = 0;
   planning.forEachKnownCell([&](const CellIndex& cell, CellState state, double) {
@@ -16,8 +17,10 @@ bool writeOctomap(const std::string& path, const PlanningMap& planning, size_t* 
       ++outside;
       return;
     }
-    octomap::OcTreeNode* node = tree.updateNode(key, state == CellState::kOccupied, /*lazy_eval=*/true);
-    node->setLogOdds(state == CellState::kOccupied ? tree.getClampingThresMaxLog() : tree.getClampingThresMinLog());
+    octomap::OcTreeNode* node =
+        tree.updateNode(key, state == CellState::kOccupied, /*lazy_eval=*/true);
+    node->setLogOdds(state == CellState::kOccupied ? tree.getClampingThresMaxLog()
+                                                   : tree.getClampingThresMinLog());
   });
   tree.updateInnerOccupancy();
   tree.prune();

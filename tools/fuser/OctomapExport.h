@@ -10,6 +10,7 @@ namespace stereo_fusion {
 /// at the occupancy clamping maximum, free ones at its minimum, unknown ones absent; pruned and
 /// written with OcTree::writeBinary() (what octomap_server, MoveIt and octovis read). Cells
 /// beyond OctoMap's ±2¹⁵-cell range are left out and counted in `*skipped`.
-bool writeOctomap(const std::string& path, const PlanningMap& planning, size_t* skipped, std::string* error);
+bool writeOctomap(const std::string& path, const PlanningMap& planning, size_t* skipped,
+                  std::string* error);
 
 }  // namespace stereo_fusion

@@ -28,7 +28,8 @@ namespace stereo_fusion {
 
 namespace fs = std::filesystem;
 
-bool parseFuseArguments(const std::vector<std::string>& args, FuseOptions* options, std::string* error) {
+bool parseFuseArguments(const std::vector<std::string>& args, FuseOptions* options,
+                        std::string* error) {
   std::vector<std::string> positional, sets;
   std::string config_file;
   for (size_t i = 0; i < args.size(); ++i) {
@@ -56,8 +57,9 @@ bool parseFuseArguments(const std::vector<std::string>& args, FuseOptions* optio
         size_t used = 0;
         const long n = std::stol(*v, &used);
         if (used != v->size() || n < (mesh_every ? 1 : 0)) throw std::invalid_argument("");
-        (a == "--mesh-every" ? options->mesh_every : a == "--esdf-every" ? options->esdf_every : options->max_frames) =
-            static_cast<size_t>(n);
+        (a == "--mesh-every"   ? options->mesh_every
+         : a == "--esdf-every" ? options->esdf_every
+                               : options->max_frames) = static_cast<size_t>(n);
       } catch (...) {
         *error = a + ": '" + *v + "' is not a " + (mesh_every ? "frame count ≥ 1" : "frame count");
         return false;
@@ -66,14 +68,16 @@ bool parseFuseArguments(const std::vector<std::string>& args, FuseOptions* optio
                a == "--world-frame") {
       const std::string* v = value(a.c_str());
       if (!v) return false;
-      (a == "--disparity-topic"   ? options->bag_topics.disparity
-       : a == "--image-topic"     ? options->bag_topics.image
+      (a == "--disparity-topic"     ? options->bag_topics.disparity
+       : a == "--image-topic"       ? options->bag_topics.image
        : a == "--camera-info-topic" ? options->bag_topics.camera_info
                                     : options->bag_topics.world_frame) = *v;
     } else if (a == "--load-map" || a == "--save-map" || a == "--trajectory") {
       const std::string* v = value(a.c_str());
       if (!v) return false;
-      (a == "--load-map" ? options->load_map : a == "--save-map" ? options->save_map : options->trajectory) = *v;
+      (a == "--load-map"   ? options->load_map
+       : a == "--save-map" ? options->save_map
+                           : options->trajectory) = *v;
     } else if (a == "--quiet") {
       options->progress = false;
     } else if (a == "--time-planning") {
@@ -99,14 +103,16 @@ bool parseFuseArguments(const std::vector<std::string>& args, FuseOptions* optio
     *error = "--trajectory needs the frames it corrects (an input folder or bag)";
     return false;
   }
-  if (!config_file.empty() && !loadMapperConfigFile(config_file, &options->config, error)) return false;
+  if (!config_file.empty() && !loadMapperConfigFile(config_file, &options->config, error))
+    return false;
   for (const std::string& s : sets) {
     const size_t eq = s.find('=');
     if (eq == std::string::npos) {
       *error = "--set expects key=value, got '" + s + "'";
       return false;
     }
-    if (!setMapperParameter(&options->config, s.substr(0, eq), s.substr(eq + 1), error)) return false;
+    if (!setMapperParameter(&options->config, s.substr(0, eq), s.substr(eq + 1), error))
+      return false;
   }
   const auto problems = validateMapperConfig(options->config);
   if (!problems.empty()) {
@@ -124,8 +130,9 @@ void showProgress(size_t done, size_t total, double elapsed_s, bool terminal, si
   if (terminal) {
     const int width = 30;
     const int filled = total ? static_cast<int>(width * done / total) : width;
-    std::fprintf(stderr, "\r[%s%s] %zu/%zu frames  %.1f fps  ETA %.0f s ", std::string(filled, '=').c_str(),
-                 std::string(width - filled, ' ').c_str(), done, total, fps, eta);
+    std::fprintf(stderr, "\r[%s%s] %zu/%zu frames  %.1f fps  ETA %.0f s ",
+                 std::string(filled, '=').c_str(), std::string(width - filled, ' ').c_str(), done,
+                 total, fps, eta);
     if (done == total) std::fprintf(stderr, "\n");
   } else {
     const size_t decile = total ? 10 * done / total : 10;
@@ -151,7 +158,6 @@ Summary summarize(std::vector<double> v) {
   s.p99 = percentileOfSorted(v, 0.99);
   return s;
 }
-
 
 /// The usable poses of a TUM trajectory file, by stamp.
 bool readTrajectory(const std::string& path, std::vector<StampedPose>* poses, std::string* error) {
@@ -200,11 +206,16 @@ bool writePlanningOutputs(const std::string& out_dir, Mapper* mapper, bool time_
   const fs::path dir(out_dir);
   if (!writeEsdfPly((dir / "esdf.ply").string(), *planning, error)) return false;
   const MapperConfig& config = mapper->config();
-  const OccupancyGrid2D grid = projectOccupancy(*planning, config.grid_min_z_m, config.grid_max_z_m);
-  if (!writeOccupancyMap((dir / "occupancy.pgm").string(), (dir / "occupancy.yaml").string(), grid, error))
+  const OccupancyGrid2D grid =
+      projectOccupancy(*planning, config.grid_min_z_m, config.grid_max_z_m);
+  if (!writeOccupancyMap((dir / "occupancy.pgm").string(), (dir / "occupancy.yaml").string(), grid,
+                         error))
     return false;
-  if (!writeOctomap((dir / "octomap.bt").string(), *planning, &report->octomap_cells_skipped, error)) return false;
-  if (time_queries) {  // what a batch rebuild costs (it recomputes the same layer: incremental == batch)
+  if (!writeOctomap((dir / "octomap.bt").string(), *planning, &report->octomap_cells_skipped,
+                    error))
+    return false;
+  if (time_queries) {  // what a batch rebuild costs (it recomputes the same layer: incremental ==
+                       // batch)
     Timer rebuild;
     mapper->rebuildPlanning();
     report->rebuild_ms = rebuild.elapsedMs();
@@ -227,11 +238,13 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
     return false;
   }
   std::vector<StampedPose> trajectory;
-  if (!options.trajectory.empty() && !readTrajectory(options.trajectory, &trajectory, error)) return false;
+  if (!options.trajectory.empty() && !readTrajectory(options.trajectory, &trajectory, error))
+    return false;
   // The session keeps every frame's stamp and pose for --trajectory (the images are read again
   // from the input), and its one re-fusion routine applies the trajectory after the last frame.
   SessionConfig session_config;
-  session_config.loop_closure_max_frames = trajectory.empty() ? 0 : std::numeric_limits<size_t>::max();
+  session_config.loop_closure_max_frames =
+      trajectory.empty() ? 0 : std::numeric_limits<size_t>::max();
   session_config.background_corrections = false;
   MappingSession session(options.config, session_config);
   // Offline, one thread: the mapper is used directly between session calls (a correction
@@ -261,7 +274,8 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
   auto skip = [&](RejectReason reason, const std::string& message) {
     ++report->skipped[rejectReasonName(reason)];
     if (report->skipped_examples.size() < 5) report->skipped_examples.push_back(message);
-    std::fprintf(stderr, "%sskipping frame: %s\n", terminal && options.progress ? "\n" : "", message.c_str());
+    std::fprintf(stderr, "%sskipping frame: %s\n", terminal && options.progress ? "\n" : "",
+                 message.c_str());
   };
   for (size_t i = 0; i < total; ++i) {
     StereoFrame frame;
@@ -281,10 +295,12 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
       FrameLoader reload;
       if (!trajectory.empty()) {
         FrameSource* source = reader.get();
-        reload = [source, i](StereoFrame* again, std::string* why) { return source->load(i, again, why); };
+        reload = [source, i](StereoFrame* again, std::string* why) {
+          return source->load(i, again, why);
+        };
       }
-      const MappingSession::FrameOutcome out =
-          session.fuse(frame, session.arrive(), mesh_now ? MeshTiming::kNow : MeshTiming::kDeferred, reload);
+      const MappingSession::FrameOutcome out = session.fuse(
+          frame, session.arrive(), mesh_now ? MeshTiming::kNow : MeshTiming::kDeferred, reload);
       const IntegrationResult& r = out.result;
       if (out.reason == RejectReason::kError) {
         // Out of memory mid-frame: stop cleanly with what we have rather than crash. Set
@@ -301,10 +317,11 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
         report->pixels_rejected.edge_pixels += r.rejected.edge_pixels;
         if (r.reanchored) {
           ++report->frames_reanchored;
-          std::fprintf(stderr, "%sframe %zu: %s\n", terminal && options.progress ? "\n" : "", i, r.note.c_str());
+          std::fprintf(stderr, "%sframe %zu: %s\n", terminal && options.progress ? "\n" : "", i,
+                       r.note.c_str());
         }
-        StageTimings timings{r.lookup_ms, r.fusion_ms, r.carve_ms, r.mesh.meshing_ms, r.texture.texture_ms, 0.0,
-                             mesh_now};
+        StageTimings timings{r.lookup_ms,          r.fusion_ms, r.carve_ms, r.mesh.meshing_ms,
+                             r.texture.texture_ms, 0.0,         mesh_now};
         timings.free_space_ms = r.free_space_ms;
         timings.free_space_nodes = static_cast<double>(r.free_space.nodes_visited);
         if (mapper->planning() && report->frames_used % options.esdf_every == 0) {
@@ -320,15 +337,21 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
         }
         timings.total_ms = frame_timer.elapsedMs();
         report->timings.push_back(timings);
-        report->work.push_back({static_cast<double>(r.lookup.valid_points), static_cast<double>(r.lookup.octree_searches),
-                                static_cast<double>(r.lookup.blocks_queued), static_cast<double>(r.fusion.blocks_updated),
-                                static_cast<double>(r.fusion.voxels_updated), static_cast<double>(r.mesh.blocks_meshed),
-                                static_cast<double>(r.mesh.changed.size()), static_cast<double>(r.fusion.blocks_created),
-                                static_cast<double>(r.fusion.blocks_not_created), static_cast<double>(r.carve.blocks_carved),
+        report->work.push_back({static_cast<double>(r.lookup.valid_points),
+                                static_cast<double>(r.lookup.octree_searches),
+                                static_cast<double>(r.lookup.blocks_queued),
+                                static_cast<double>(r.fusion.blocks_updated),
+                                static_cast<double>(r.fusion.voxels_updated),
+                                static_cast<double>(r.mesh.blocks_meshed),
+                                static_cast<double>(r.mesh.changed.size()),
+                                static_cast<double>(r.fusion.blocks_created),
+                                static_cast<double>(r.fusion.blocks_not_created),
+                                static_cast<double>(r.carve.blocks_carved),
                                 static_cast<double>(r.carve.voxels_carved)});
       }
     }
-    if (options.progress) showProgress(i + 1, total, wall.elapsedMs() / 1000.0, terminal, &last_decile);
+    if (options.progress)
+      showProgress(i + 1, total, wall.elapsedMs() / 1000.0, terminal, &last_decile);
   }
   if (mapper->blocksAwaitingMesh() > 0) {  // the frames since the last meshing pass
     Timer mesh_timer;
@@ -363,11 +386,14 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
       t.frames_refused = c->frames_refused;
       t.frames_rejected = c->frames_rejected;
       t.ms = c->ms;
-      t.applied = c->outcome == TrajectoryOutcome::kApplied || c->outcome == TrajectoryOutcome::kAppliedWithoutRefusion;
+      t.applied = c->outcome == TrajectoryOutcome::kApplied ||
+                  c->outcome == TrajectoryOutcome::kAppliedWithoutRefusion;
     }
     if (!t.applied) {
-      *error = options.trajectory + ": " + (c ? c->message : std::string("not applied")) +
-               (c && c->outcome == TrajectoryOutcome::kRejectedNoMatch ? " (poses.txt's / the bag's)" : "");
+      *error =
+          options.trajectory + ": " + (c ? c->message : std::string("not applied")) +
+          (c && c->outcome == TrajectoryOutcome::kRejectedNoMatch ? " (poses.txt's / the bag's)"
+                                                                  : "");
       return false;
     }
     mapper = session.withMapper([](Mapper& m) { return &m; });
@@ -385,7 +411,8 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
   report->bytes_per_block = mapper->map().bytesPerBlock();
   report->memory = mapper->map().memoryUse();
   struct rusage usage {};
-  if (getrusage(RUSAGE_SELF, &usage) == 0) report->peak_rss_bytes = usage.ru_maxrss * 1024.0;  // KiB on Linux
+  if (getrusage(RUSAGE_SELF, &usage) == 0)
+    report->peak_rss_bytes = usage.ru_maxrss * 1024.0;  // KiB on Linux
   if (!mapper->map().blocks().empty()) {
     BlockKey lo = mapper->map().blocks().front()->key, hi = lo;
     for (const VoxelBlock* b : mapper->map().blocks()) {
@@ -396,7 +423,8 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
     report->dense_grid_bytes = (hi.x - lo.x + 1.0) * (hi.y - lo.y + 1.0) * (hi.z - lo.z + 1.0) *
                                voxels_per_block * sizeof(Voxel);
   }
-  const MeshStates& mesh_states = mapper->mesh().states();  // current: the mesh was brought up to date above
+  const MeshStates& mesh_states =
+      mapper->mesh().states();  // current: the mesh was brought up to date above
   for (const VoxelBlock* b : mapper->map().blocks()) {
     if (b->row >= mesh_states.size()) continue;
     const MeshBlockState& state = mesh_states[*b];
@@ -409,12 +437,15 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
   report->texture_bytes = mapper->textures().memoryBytes();
   if (options.config.texture == TextureMode::kPatches) {
     ObjExportInfo info;
-    if (!writeTexturedObj((fs::path(options.out_dir) / "mesh.obj").string(), mapper->mesh().submeshes(),
-                          mapper->textures().patches(), ObjExportOptions{}, &info, error))
+    if (!writeTexturedObj((fs::path(options.out_dir) / "mesh.obj").string(),
+                          mapper->mesh().submeshes(), mapper->textures().patches(),
+                          ObjExportOptions{}, &info, error))
       return false;
     report->atlas_count = info.files.size() - 2;  // besides the .obj and the .mtl
   }
-  if (!writePlanningOutputs(options.out_dir, mapper, options.time_planning, &report->planning, error)) return false;
+  if (!writePlanningOutputs(options.out_dir, mapper, options.time_planning, &report->planning,
+                            error))
+    return false;
   std::ofstream stats(fs::path(options.out_dir) / "stats.json");
   stats << statsJson(*report, options.config) << "\n";
   if (!stats) {
@@ -423,7 +454,6 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
   }
   return true;
 }
-
 
 std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   nlohmann::ordered_json j;
@@ -460,7 +490,8 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   }
   j["memory"]["peak_rss_megabytes"] = report.peak_rss_bytes / 1048576.0;
   j["memory"]["dense_grid_megabytes"] = report.dense_grid_bytes / 1048576.0;
-  j["memory"]["dense_grid_ratio"] = report.memory_bytes > 0 ? report.dense_grid_bytes / report.memory_bytes : 0.0;
+  j["memory"]["dense_grid_ratio"] =
+      report.memory_bytes > 0 ? report.dense_grid_bytes / report.memory_bytes : 0.0;
   j["mesh"]["vertices"] = report.mesh_vertices;
   j["mesh"]["triangles"] = report.mesh_triangles;
   j["texture"]["textured_blocks"] = report.textured_blocks;
@@ -474,8 +505,10 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
     for (const StageTimings& t : report.timings)
       if (t.meshed || !mesh_calls_only) v.push_back(t.*field);
     const Summary s = summarize(v);
-    return nlohmann::ordered_json{
-        {"mean", s.mean}, {"p50", s.p50}, {"p99", s.p99}, {"per", mesh_calls_only ? "mesh call" : "frame"}};
+    return nlohmann::ordered_json{{"mean", s.mean},
+                                  {"p50", s.p50},
+                                  {"p99", s.p99},
+                                  {"per", mesh_calls_only ? "mesh call" : "frame"}};
   };
   j["timings_ms"]["lookup"] = stage(&StageTimings::lookup_ms, false);
   j["timings_ms"]["fusion"] = stage(&StageTimings::fusion_ms, false);
@@ -492,14 +525,16 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
       return summarize(v);
     };
     const Summary s = overUpdates(&StageTimings::esdf_ms);
-    j["timings_ms"]["esdf"] = {{"mean", s.mean}, {"p50", s.p50}, {"p99", s.p99}, {"per", "planning update"}};
+    j["timings_ms"]["esdf"] = {
+        {"mean", s.mean}, {"p50", s.p50}, {"p99", s.p99}, {"per", "planning update"}};
     j["planning_work_p50"]["read_ms"] = overUpdates(&StageTimings::esdf_read_ms).p50;
     j["planning_work_p50"]["propagate_ms"] = overUpdates(&StageTimings::esdf_propagate_ms).p50;
     j["planning_work_p50"]["tsdf_blocks"] = overUpdates(&StageTimings::esdf_tsdf_blocks).p50;
     j["planning_work_p50"]["cells_flipped"] = overUpdates(&StageTimings::esdf_flipped).p50;
     j["planning_work_p50"]["cells_raised"] = overUpdates(&StageTimings::esdf_raised).p50;
     j["planning_work_p50"]["cells_lowered"] = overUpdates(&StageTimings::esdf_lowered).p50;
-    j["planning_work_p50"]["free_space_nodes"] = stage(&StageTimings::free_space_nodes, false)["p50"];
+    j["planning_work_p50"]["free_space_nodes"] =
+        stage(&StageTimings::free_space_nodes, false)["p50"];
   }
   j["timings_ms"]["total"] = stage(&StageTimings::total_ms, false);
   size_t mesh_calls = 0;
@@ -550,7 +585,8 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
     j["memory"]["esdf_megabytes"] = p.esdf_bytes / 1048576.0;
   }
   j["wall_time_s"] = report.wall_time_s;
-  for (const ParameterSpec& p : mapperParameterSpecs()) j["config"][p.name] = getMapperParameter(config, p.name);
+  for (const ParameterSpec& p : mapperParameterSpecs())
+    j["config"][p.name] = getMapperParameter(config, p.name);
   return j.dump(2);
 }
 

@@ -15,9 +15,10 @@ namespace stereo_fusion {
 
 /// What to fuse and where to write it.
 struct FuseOptions {
-  std::string input;    ///< dataset folder, or a rosbag (*.bag)
+  std::string input;     ///< dataset folder, or a rosbag (*.bag)
   BagTopics bag_topics;  ///< topics and world frame read from a bag (the nodelet's defaults)
-  std::string out_dir;  ///< receives mesh.ply and stats.json (and mesh.obj + .mtl + atlas PNGs with texture = patches)
+  std::string out_dir;  ///< receives mesh.ply and stats.json (and mesh.obj + .mtl + atlas PNGs with
+                        ///< texture = patches)
   MapperConfig config;
   size_t max_frames = 0;  ///< 0 = all
   /// Bring the mesh up to date after every N-th fused frame (and after the last): 1 = every
@@ -27,9 +28,10 @@ struct FuseOptions {
   /// frame and after the last (--esdf-every). 10: the distance field's wavefronts from ten
   /// frames overlap, so an update every tenth frame costs ~4× one update, not 10× (hall, 2 cm).
   size_t esdf_every = 10;
-  std::string load_map;  ///< map file to start from (empty = an empty map); `input` may then be empty
+  std::string
+      load_map;  ///< map file to start from (empty = an empty map); `input` may then be empty
   std::string save_map;  ///< where to save the map after the last frame (empty = not saved)
-  bool progress = true;   ///< progress bar on stderr (a line per 10 % when not a terminal)
+  bool progress = true;  ///< progress bar on stderr (a line per 10 % when not a terminal)
   /// --time-planning: after the outputs, time a 100 000-point batch query and a batch rebuild of
   /// the planning layer (stats.json planning.query_100k_ms, rebuild_ms; scripts/bench_planning.sh).
   bool time_planning = false;
@@ -42,12 +44,13 @@ struct FuseOptions {
 struct TrajectoryReport {
   bool applied = false;
   size_t trajectory_poses = 0;  ///< usable lines of the file
-  size_t matched_poses = 0;     ///< of those, within 0.5 s of a fused frame (they define the correction)
-  size_t frames_refused = 0;    ///< frames fused again at their corrected poses
-  size_t frames_rejected = 0;   ///< of those, rejected at the corrected pose (by the FrameGate)
-  double max_shift_m = 0.0;     ///< the largest move of a camera centre
+  size_t matched_poses =
+      0;  ///< of those, within 0.5 s of a fused frame (they define the correction)
+  size_t frames_refused = 0;   ///< frames fused again at their corrected poses
+  size_t frames_rejected = 0;  ///< of those, rejected at the corrected pose (by the FrameGate)
+  double max_shift_m = 0.0;    ///< the largest move of a camera centre
   double max_rotation_deg = 0.0;
-  double ms = 0.0;              ///< re-fusing and re-meshing
+  double ms = 0.0;  ///< re-fusing and re-meshing
 };
 
 /// Per-frame stage timings in milliseconds: lookup and fusion of the frame, and the meshing
@@ -59,32 +62,35 @@ struct StageTimings {
   double esdf_ms = 0;        ///< the planning update after this frame (with `esdf_updated`)
   bool esdf_updated = false;
   /// That update's work: TSDF blocks re-read, cells flipped (occupied ↔ not), raised, lowered.
-  double esdf_read_ms = 0, esdf_propagate_ms = 0, esdf_tsdf_blocks = 0, esdf_flipped = 0, esdf_raised = 0, esdf_lowered = 0;
+  double esdf_read_ms = 0, esdf_propagate_ms = 0, esdf_tsdf_blocks = 0, esdf_flipped = 0,
+         esdf_raised = 0, esdf_lowered = 0;
   double free_space_nodes = 0;  ///< octree nodes the free-space recording tested
 };
 
 /// How much work one frame made each stage do (what the timings above are spent on).
 struct StageWork {
-  double valid_points = 0, octree_searches = 0, blocks_queued = 0, blocks_updated = 0, voxels_updated = 0,
-         blocks_meshed = 0, submeshes_changed = 0, blocks_created = 0, blocks_not_created = 0, blocks_carved = 0,
-         voxels_carved = 0;
+  double valid_points = 0, octree_searches = 0, blocks_queued = 0, blocks_updated = 0,
+         voxels_updated = 0, blocks_meshed = 0, submeshes_changed = 0, blocks_created = 0,
+         blocks_not_created = 0, blocks_carved = 0, voxels_carved = 0;
 };
 
 /// What a run did; stats.json is this, plus the configuration.
 struct FuseReport {
   size_t frames_total = 0;
   size_t frames_used = 0;
-  size_t frames_reanchored = 0;  ///< of those, accepted as a relocalisation / clock reset (FrameGate)
-  OutlierRejectionStats pixels_rejected;  ///< summed over the used frames (OutlierRejection)
-  std::map<std::string, size_t> skipped;        ///< reason → count
-  std::vector<std::string> skipped_examples;    ///< the first few messages, verbatim
-  std::vector<StageTimings> timings;            ///< one per used frame
-  std::vector<StageWork> work;                  ///< one per used frame
+  size_t frames_reanchored =
+      0;  ///< of those, accepted as a relocalisation / clock reset (FrameGate)
+  OutlierRejectionStats pixels_rejected;      ///< summed over the used frames (OutlierRejection)
+  std::map<std::string, size_t> skipped;      ///< reason → count
+  std::vector<std::string> skipped_examples;  ///< the first few messages, verbatim
+  std::vector<StageTimings> timings;          ///< one per used frame
+  std::vector<StageWork> work;                ///< one per used frame
   size_t blocks = 0;
-  size_t blocks_loaded = 0;                     ///< blocks of the --load-map file
-  uint64_t blocks_evicted = 0;                  ///< by the memory bound (max_blocks, max_distance_from_camera_m)
-  size_t blocks_per_level[3] = {0, 0, 0};       ///< by the level each block is meshed at
-  size_t seam_filled_blocks = 0;                ///< blocks meshed with faces filled from coarser levels (mesh_fill_seams)
+  size_t blocks_loaded = 0;     ///< blocks of the --load-map file
+  uint64_t blocks_evicted = 0;  ///< by the memory bound (max_blocks, max_distance_from_camera_m)
+  size_t blocks_per_level[3] = {0, 0, 0};  ///< by the level each block is meshed at
+  size_t seam_filled_blocks =
+      0;  ///< blocks meshed with faces filled from coarser levels (mesh_fill_seams)
   size_t memory_bytes = 0;
   double bytes_per_block = 0;
   BlockOctree::MemoryUse memory;  ///< memory_bytes by part: blocks, voxel levels, nodes
@@ -93,9 +99,9 @@ struct FuseReport {
   /// what the sparse block octree saves.
   double dense_grid_bytes = 0;
   size_t mesh_vertices = 0, mesh_triangles = 0;
-  size_t textured_blocks = 0;        ///< blocks with a texture patch (texture = patches)
-  size_t texture_bytes = 0;          ///< memory held by the texture patches
-  size_t atlas_count = 0;            ///< atlas PNGs written with mesh.obj
+  size_t textured_blocks = 0;  ///< blocks with a texture patch (texture = patches)
+  size_t texture_bytes = 0;    ///< memory held by the texture patches
+  size_t atlas_count = 0;      ///< atlas PNGs written with mesh.obj
   double wall_time_s = 0;
   TrajectoryReport correction;
   /// The planning layer at the end (planning_enabled).
@@ -104,20 +110,24 @@ struct FuseReport {
     double cell_m = 0, max_distance_m = 0;
     size_t blocks = 0, cells_free = 0, cells_occupied = 0;
     size_t free_space_bytes = 0, esdf_bytes = 0;
-    double rebuild_ms = 0;   ///< with --time-planning: a batch rebuild of the whole layer
-    double query_100k_ms = 0;  ///< with --time-planning: sampleBatch() of 100 000 points in the known cells' box
+    double rebuild_ms = 0;  ///< with --time-planning: a batch rebuild of the whole layer
+    double query_100k_ms =
+        0;  ///< with --time-planning: sampleBatch() of 100 000 points in the known cells' box
     size_t octomap_cells_skipped = 0;
   } planning;
 };
 
-/// Parses `fuse <input> <out-dir> [--config FILE] [--set key=value ...] [--frames N] [--mesh-every N]
+/// Parses `fuse <input> <out-dir> [--config FILE] [--set key=value ...] [--frames N] [--mesh-every
+/// N]
 /// [--esdf-every N] [--time-planning] [--quiet]
 /// [--disparity-topic T] [--image-topic T] [--camera-info-topic T] [--world-frame F]
-/// [--load-map FILE] [--save-map FILE] [--trajectory FILE]`; with --load-map the input may be left out
+/// [--load-map FILE] [--save-map FILE] [--trajectory FILE]`; with --load-map the input may be left
+/// out
 /// (`fuse <out-dir> --load-map FILE` meshes a saved map).
 /// --config is applied before every --set, whatever their order. False with a message (which
 /// names the parameter or flag) on any error: unknown flags, unknown keys, out-of-range values.
-bool parseFuseArguments(const std::vector<std::string>& args, FuseOptions* options, std::string* error);
+bool parseFuseArguments(const std::vector<std::string>& args, FuseOptions* options,
+                        std::string* error);
 
 /// Runs the reconstruction. Frames that cannot be read or are rejected are skipped and
 /// counted by reason. Returns false (with a message) only when nothing can be done: a bad

@@ -22,19 +22,22 @@ namespace {
 
 bool hasExtension(const fs::path& p, std::initializer_list<const char*> extensions) {
   std::string ext = p.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
   for (const char* e : extensions)
     if (ext == e) return true;
   return false;
 }
 
 /// Regular files of `dir` with one of `extensions`, sorted by name; empty if `dir` is absent.
-std::vector<std::string> listImages(const fs::path& dir, std::initializer_list<const char*> extensions) {
+std::vector<std::string> listImages(const fs::path& dir,
+                                    std::initializer_list<const char*> extensions) {
   std::vector<std::string> files;
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) return files;
   for (const auto& entry : fs::directory_iterator(dir, ec))
-    if (entry.is_regular_file() && hasExtension(entry.path(), extensions)) files.push_back(entry.path().string());
+    if (entry.is_regular_file() && hasExtension(entry.path(), extensions))
+      files.push_back(entry.path().string());
   std::sort(files.begin(), files.end());
   return files;
 }
@@ -74,14 +77,14 @@ bool readCalibration(const fs::path& path, StereoCamera* camera, std::string* er
       return false;
     }
   }
-  if (values[0] != std::floor(values[0]) || values[1] != std::floor(values[1]) || !(values[0] > 0) ||
-      !(values[1] > 0) || values[0] > 1e5 || values[1] > 1e5) {
+  if (values[0] != std::floor(values[0]) || values[1] != std::floor(values[1]) ||
+      !(values[0] > 0) || !(values[1] > 0) || values[0] > 1e5 || values[1] > 1e5) {
     *error = path.string() + ": width and height must be whole pixel counts in [1, 100000]";
     return false;
   }
   std::string why;
-  auto created = StereoCamera::create(static_cast<int>(values[0]), static_cast<int>(values[1]), values[2],
-                                      values[3], values[4], values[5], values[6], &why);
+  auto created = StereoCamera::create(static_cast<int>(values[0]), static_cast<int>(values[1]),
+                                      values[2], values[3], values[4], values[5], values[6], &why);
   if (!created) {
     *error = path.string() + ": " + why;
     return false;
@@ -144,14 +147,9 @@ cv::Mat readColor(const std::string& path, std::string* error) {
   }
   cv::Mat rgb;
   switch (raw.channels()) {
-    case 1:
-      return raw;
-    case 3:
-      cv::cvtColor(raw, rgb, cv::COLOR_BGR2RGB);
-      return rgb;
-    case 4:
-      cv::cvtColor(raw, rgb, cv::COLOR_BGRA2RGB);
-      return rgb;
+    case 1: return raw;
+    case 3: cv::cvtColor(raw, rgb, cv::COLOR_BGR2RGB); return rgb;
+    case 4: cv::cvtColor(raw, rgb, cv::COLOR_BGRA2RGB); return rgb;
     default:
       *error = path + ": unsupported channel count " + std::to_string(raw.channels());
       return {};
@@ -160,7 +158,8 @@ cv::Mat readColor(const std::string& path, std::string* error) {
 
 }  // namespace
 
-bool readTumPoses(const std::string& file, std::vector<DatasetFrameInfo>* frames, std::string* error) {
+bool readTumPoses(const std::string& file, std::vector<DatasetFrameInfo>* frames,
+                  std::string* error) {
   const fs::path path(file);
   std::ifstream in(path);
   if (!in) {
@@ -209,7 +208,8 @@ bool readTumPoses(const std::string& file, std::vector<DatasetFrameInfo>* frames
     if (!finite)
       info.pose_error = where + ": pose is not finite";
     else if (std::abs(q.norm() - 1.0) > 1e-3)
-      info.pose_error = where + ": quaternion is not unit length (|q| = " + std::to_string(q.norm()) + ")";
+      info.pose_error =
+          where + ": quaternion is not unit length (|q| = " + std::to_string(q.norm()) + ")";
     else {
       info.T_world_camera.linear() = q.normalized().toRotationMatrix();
       info.T_world_camera.translation() = Eigen::Vector3d(v[1], v[2], v[3]);
@@ -243,14 +243,16 @@ std::optional<DatasetReader> DatasetReader::open(const std::string& folder, std:
       return std::nullopt;
     }
     if (colors.size() != rights.size()) {
-      *error = folder + ": computing disparity needs one color/ (left) image per right/ image, found " +
+      *error = folder +
+               ": computing disparity needs one color/ (left) image per right/ image, found " +
                std::to_string(colors.size()) + " and " + std::to_string(rights.size());
       return std::nullopt;
     }
     // OpenCV's SGBM needs more columns than disparities: on a narrower image it asks for a
     // negative-sized buffer or throws from a destructor (std::terminate), found by fuzzing.
     if (reader.camera_.width() <= sgbm.num_disparities) {
-      *error = (root / "calibration.yaml").string() + ": images " + std::to_string(reader.camera_.width()) +
+      *error = (root / "calibration.yaml").string() + ": images " +
+               std::to_string(reader.camera_.width()) +
                " px wide are too narrow to compute disparity with SGBM (" +
                std::to_string(sgbm.num_disparities) + " disparities need a wider image)";
       return std::nullopt;
@@ -275,7 +277,8 @@ std::optional<DatasetReader> DatasetReader::open(const std::string& folder, std:
     if (!colors.empty()) f.color_path = colors[i];
     if (!rights.empty() && i < rights.size()) f.right_path = rights[i];
   }
-  if (fs::is_regular_file(root / "gt_mesh.ply", ec)) reader.gt_mesh_path_ = (root / "gt_mesh.ply").string();
+  if (fs::is_regular_file(root / "gt_mesh.ply", ec))
+    reader.gt_mesh_path_ = (root / "gt_mesh.ply").string();
   return reader;
 }
 
@@ -329,8 +332,8 @@ bool DatasetReader::load(size_t i, StereoFrame* frame, std::string* error) const
     out.disparity_px = readDisparity(info.disparity_path, error);
     if (out.disparity_px.empty()) return false;
     if (out.disparity_px.size() != expected) {
-      *error = info.disparity_path + ": disparity is " + std::to_string(out.disparity_px.cols) + "x" +
-               std::to_string(out.disparity_px.rows) + " but calibration.yaml says " +
+      *error = info.disparity_path + ": disparity is " + std::to_string(out.disparity_px.cols) +
+               "x" + std::to_string(out.disparity_px.rows) + " but calibration.yaml says " +
                std::to_string(expected.width) + "x" + std::to_string(expected.height);
       return false;
     }
@@ -367,13 +370,16 @@ cv::Mat readPfm(const std::string& path, std::string* error) {
   const std::streamoff available = in.tellg() - data_start;
   in.seekg(data_start);
   if (available < 0 || static_cast<size_t>(available) < count * sizeof(float)) {
-    *error = path + ": truncated PFM (expected " + std::to_string(count * sizeof(float)) + " data bytes)";
+    *error = path + ": truncated PFM (expected " + std::to_string(count * sizeof(float)) +
+             " data bytes)";
     return {};
   }
   std::vector<float> data(count);
-  in.read(reinterpret_cast<char*>(data.data()), static_cast<std::streamsize>(count * sizeof(float)));
+  in.read(reinterpret_cast<char*>(data.data()),
+          static_cast<std::streamsize>(count * sizeof(float)));
   if (static_cast<size_t>(in.gcount()) != count * sizeof(float)) {
-    *error = path + ": truncated PFM (expected " + std::to_string(count * sizeof(float)) + " data bytes)";
+    *error = path + ": truncated PFM (expected " + std::to_string(count * sizeof(float)) +
+             " data bytes)";
     return {};
   }
   const bool file_little_endian = scale < 0.0;

@@ -1,9 +1,9 @@
 #pragma once
 // Reader for the dataset folder format of doc/dataset_format.md:
 //   <seq>/calibration.yaml        width, height, fx, fy, cx, cy, baseline   (left rectified camera)
-//   <seq>/poses.txt               per frame "timestamp tx ty tz qx qy qz qw" (T_world_camera, TUM order)
-//   <seq>/disparity/NNNNNN.png    uint16, disparity = value / 256, 0 = invalid (KITTI); or .pfm float32
-//   <seq>/color/NNNNNN.png|.jpg   8-bit colour or grey rectified left image
+//   <seq>/poses.txt               per frame "timestamp tx ty tz qx qy qz qw" (T_world_camera, TUM
+//   order) <seq>/disparity/NNNNNN.png    uint16, disparity = value / 256, 0 = invalid (KITTI); or
+//   .pfm float32 <seq>/color/NNNNNN.png|.jpg   8-bit colour or grey rectified left image
 //   <seq>/right/NNNNNN.png        optional rectified right image (disparity computed with SGBM
 //                                 when disparity/ is absent)
 //   <seq>/gt_mesh.ply             optional ground-truth surface (evaluation only)
@@ -45,7 +45,8 @@ struct DatasetFrameInfo {
 /// Reads a file of TUM pose lines "timestamp tx ty tz qx qy qz qw" (T_world_camera; blank lines
 /// and '#' comments skipped) into `frames` (index, timestamp, pose; pose_error for a line whose
 /// pose is unusable). False with "file:line: ..." on a malformed line or an unreadable file.
-bool readTumPoses(const std::string& path, std::vector<DatasetFrameInfo>* frames, std::string* error);
+bool readTumPoses(const std::string& path, std::vector<DatasetFrameInfo>* frames,
+                  std::string* error);
 
 /// A validated dataset folder. open() checks calibration, poses and file lists up front and
 /// fails with one message naming the file and line; load() reads one frame and fails (without

@@ -40,11 +40,13 @@ bool readObj(const std::string& path, ObjMesh* mesh, std::string* error) {
   const size_t vertex_count = attrib.vertices.size() / 3;
   mesh->positions.reserve(vertex_count);
   for (size_t i = 0; i < vertex_count; ++i)
-    mesh->positions.emplace_back(attrib.vertices[3 * i], attrib.vertices[3 * i + 1], attrib.vertices[3 * i + 2]);
+    mesh->positions.emplace_back(attrib.vertices[3 * i], attrib.vertices[3 * i + 1],
+                                 attrib.vertices[3 * i + 2]);
   if (attrib.colors.size() == attrib.vertices.size()) {
     mesh->colors.reserve(vertex_count);
     for (size_t i = 0; i < vertex_count; ++i)
-      mesh->colors.emplace_back(attrib.colors[3 * i], attrib.colors[3 * i + 1], attrib.colors[3 * i + 2]);
+      mesh->colors.emplace_back(attrib.colors[3 * i], attrib.colors[3 * i + 1],
+                                attrib.colors[3 * i + 2]);
   }
   for (size_t i = 0; i + 1 < attrib.texcoords.size(); i += 2)
     mesh->uvs.emplace_back(attrib.texcoords[i], attrib.texcoords[i + 1]);
@@ -55,7 +57,8 @@ bool readObj(const std::string& path, ObjMesh* mesh, std::string* error) {
   for (const tinyobj::material_t& material : reader.GetMaterials()) {
     ObjMaterial m;
     m.name = material.name;
-    if (!material.diffuse_texname.empty()) m.diffuse_map = (folder / material.diffuse_texname).string();
+    if (!material.diffuse_texname.empty())
+      m.diffuse_map = (folder / material.diffuse_texname).string();
     mesh->materials.push_back(std::move(m));
   }
 
@@ -63,7 +66,8 @@ bool readObj(const std::string& path, ObjMesh* mesh, std::string* error) {
     int object = -1;
     // tinyobjloader starts a new shape at each `usemtl` too: one object, several shapes.
     if (!shape.name.empty()) {
-      if (mesh->objects.empty() || mesh->objects.back() != shape.name) mesh->objects.push_back(shape.name);
+      if (mesh->objects.empty() || mesh->objects.back() != shape.name)
+        mesh->objects.push_back(shape.name);
       object = static_cast<int>(mesh->objects.size()) - 1;
     }
     const tinyobj::mesh_t& m = shape.mesh;
@@ -71,7 +75,8 @@ bool readObj(const std::string& path, ObjMesh* mesh, std::string* error) {
     for (size_t f = 0; f < m.num_face_vertices.size(); ++f) {
       const size_t corners = m.num_face_vertices[f];
       if (corners != 3 || corner + 3 > m.indices.size()) {
-        *error = path + ": face " + std::to_string(f) + " of object '" + shape.name + "' was not triangulated";
+        *error = path + ": face " + std::to_string(f) + " of object '" + shape.name +
+                 "' was not triangulated";
         return false;
       }
       ObjFace face;
@@ -81,8 +86,8 @@ bool readObj(const std::string& path, ObjMesh* mesh, std::string* error) {
             !checkIndex(index.texcoord_index, mesh->uvs.size(), false) ||
             !checkIndex(index.normal_index, mesh->normals.size(), false)) {
           *error = path + ": face " + std::to_string(f) + " of object '" + shape.name +
-                   "' has an index out of bounds (v " + std::to_string(index.vertex_index + 1) + " of " +
-                   std::to_string(mesh->positions.size()) + ")";
+                   "' has an index out of bounds (v " + std::to_string(index.vertex_index + 1) +
+                   " of " + std::to_string(mesh->positions.size()) + ")";
           return false;
         }
         face.v[k] = index.vertex_index;
@@ -91,7 +96,8 @@ bool readObj(const std::string& path, ObjMesh* mesh, std::string* error) {
       }
       corner += 3;
       const int material = f < m.material_ids.size() ? m.material_ids[f] : -1;
-      face.material = material >= 0 && static_cast<size_t>(material) < mesh->materials.size() ? material : -1;
+      face.material =
+          material >= 0 && static_cast<size_t>(material) < mesh->materials.size() ? material : -1;
       face.object = object;
       mesh->faces.push_back(face);
     }

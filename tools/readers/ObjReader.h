@@ -21,15 +21,17 @@ struct ObjFace {
 /// A material of the MTL file.
 struct ObjMaterial {
   std::string name;
-  std::string diffuse_map;  ///< map_Kd resolved against the OBJ's folder (where its MTL is); empty = none
+  std::string
+      diffuse_map;  ///< map_Kd resolved against the OBJ's folder (where its MTL is); empty = none
 };
 
 /// The content of an OBJ file. Polygons are split into triangles (tinyobjloader: a quad along its
 /// shorter diagonal).
 struct ObjMesh {
   std::vector<Eigen::Vector3f> positions;
-  std::vector<Eigen::Vector3f> colors;  ///< per position, from `v x y z r g b`; empty unless all have one
-  std::vector<Eigen::Vector2f> uvs;     ///< `vt` as written (OBJ convention: v up)
+  std::vector<Eigen::Vector3f>
+      colors;  ///< per position, from `v x y z r g b`; empty unless all have one
+  std::vector<Eigen::Vector2f> uvs;  ///< `vt` as written (OBJ convention: v up)
   std::vector<Eigen::Vector3f> normals;
   std::vector<ObjFace> faces;
   std::vector<ObjMaterial> materials;

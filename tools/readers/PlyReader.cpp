@@ -250,9 +250,9 @@ size_t minRowBytes(const Element& element, Format format) {
   size_t bytes = 0;
   for (const Property& property : element.properties) {
     // ASCII: at least one character and one separator per value.
-    bytes += format == Format::kAscii ? 2
-                                      : byteSize(property.is_list ? property.count_type
-                                                                  : property.type);
+    bytes += format == Format::kAscii
+                 ? 2
+                 : byteSize(property.is_list ? property.count_type : property.type);
   }
   return bytes;
 }
@@ -286,7 +286,8 @@ uint8_t toColorByte(double value, ScalarType type) {
 
 bool readVertices(const Element& element, ValueReader* reader, TriangleMesh* mesh,
                   std::string* error) {
-  const int x = findScalar(element, "x"), y = findScalar(element, "y"), z = findScalar(element, "z");
+  const int x = findScalar(element, "x"), y = findScalar(element, "y"),
+            z = findScalar(element, "z");
   if (x < 0 || y < 0 || z < 0) {
     *error = "vertex element lacks one of the properties x, y, z";
     return false;
@@ -306,11 +307,11 @@ bool readVertices(const Element& element, ValueReader* reader, TriangleMesh* mes
   for (size_t v = 0; v < count; ++v) {
     for (size_t p = 0; p < element.properties.size(); ++p) {
       const Property& property = element.properties[p];
-      const bool ok = property.is_list ? skipProperty(property, reader)
-                                       : reader->read(property.type, &row[p]);
+      const bool ok =
+          property.is_list ? skipProperty(property, reader) : reader->read(property.type, &row[p]);
       if (!ok) {
-        *error = "truncated or malformed vertex " + std::to_string(v) + " of " +
-                 std::to_string(count);
+        *error =
+            "truncated or malformed vertex " + std::to_string(v) + " of " + std::to_string(count);
         return false;
       }
     }

@@ -123,12 +123,14 @@ class Sphere : public Primitive {
         out.vertex(c_ + r_ * n, n);
       }
     }
-    const uint32_t south = out.vertex(c_ - r_ * Eigen::Vector3d::UnitZ(), -Eigen::Vector3d::UnitZ());
+    const uint32_t south =
+        out.vertex(c_ - r_ * Eigen::Vector3d::UnitZ(), -Eigen::Vector3d::UnitZ());
     auto ring = [&](int i, int j) { return first_ring + (i - 1) * n_lon + (j % n_lon); };
     for (int j = 0; j < n_lon; ++j) {
       out.triangle(north, ring(1, j), ring(1, j + 1));
       out.triangle(south, ring(n_lat - 1, j + 1), ring(n_lat - 1, j));
-      for (int i = 1; i + 1 < n_lat; ++i) out.quad(ring(i, j), ring(i + 1, j), ring(i + 1, j + 1), ring(i, j + 1));
+      for (int i = 1; i + 1 < n_lat; ++i)
+        out.quad(ring(i, j), ring(i + 1, j), ring(i + 1, j + 1), ring(i, j + 1));
     }
   }
 
@@ -142,7 +144,9 @@ class Box : public Primitive {
   /// `inside_out`: the solid is the complement of the box (a room); only the sign of the
   /// distance and the tessellated normals change, the surface is the same.
   Box(const Eigen::Isometry3d& T_world_box, const Eigen::Vector3d& half, bool inside_out = false)
-      : T_world_box_(T_world_box), T_box_world_(T_world_box.inverse()), h_(half),
+      : T_world_box_(T_world_box),
+        T_box_world_(T_world_box.inverse()),
+        h_(half),
         inside_out_(inside_out) {}
   double raycast(const Eigen::Vector3d& o_w, const Eigen::Vector3d& d_w,
                  double t_min) const override {
@@ -180,7 +184,8 @@ class Box : public Primitive {
           }
         auto at = [&](int i, int j) { return first + j * (nb + 1) + i; };
         for (int j = 0; j < nc; ++j)
-          for (int i = 0; i < nb; ++i) out.quad(at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+          for (int i = 0; i < nb; ++i)
+            out.quad(at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
       }
     }
   }
@@ -195,7 +200,9 @@ class Box : public Primitive {
 class Cylinder : public Primitive {
  public:
   Cylinder(const Eigen::Isometry3d& T_world_cylinder, double radius, double half_height)
-      : T_world_cyl_(T_world_cylinder), T_cyl_world_(T_world_cylinder.inverse()), r_(radius),
+      : T_world_cyl_(T_world_cylinder),
+        T_cyl_world_(T_world_cylinder.inverse()),
+        r_(radius),
         h_(half_height) {}
   double raycast(const Eigen::Vector3d& o_w, const Eigen::Vector3d& d_w,
                  double t_min) const override {
@@ -250,17 +257,22 @@ class Cylinder : public Primitive {
       }
     auto side = [&](int k, int j) { return side0 + k * n_around + (j % n_around); };
     for (int k = 0; k < n_z; ++k)
-      for (int j = 0; j < n_around; ++j) out.quad(side(k, j), side(k, j + 1), side(k + 1, j + 1), side(k + 1, j));
+      for (int j = 0; j < n_around; ++j)
+        out.quad(side(k, j), side(k, j + 1), side(k + 1, j + 1), side(k + 1, j));
     for (const double sign : {-1.0, 1.0}) {
       const Eigen::Vector3d n = R * Eigen::Vector3d(0, 0, sign);
       const uint32_t centre = out.vertex(T_world_cyl_ * Eigen::Vector3d(0, 0, sign * h_), n);
       for (int ring = 1; ring <= n_rings; ++ring)
         for (int j = 0; j < n_around; ++j)
-          out.vertex(T_world_cyl_ * rim(j, ring == n_rings ? r_ : r_ * ring / n_rings, sign * h_), n);
-      auto at = [&](int ring, int j) { return centre + 1 + (ring - 1) * n_around + (j % n_around); };
+          out.vertex(T_world_cyl_ * rim(j, ring == n_rings ? r_ : r_ * ring / n_rings, sign * h_),
+                     n);
+      auto at = [&](int ring, int j) {
+        return centre + 1 + (ring - 1) * n_around + (j % n_around);
+      };
       for (int j = 0; j < n_around; ++j) {
         out.triangle(centre, at(1, j), at(1, j + 1));
-        for (int ring = 1; ring < n_rings; ++ring) out.quad(at(ring, j), at(ring + 1, j), at(ring + 1, j + 1), at(ring, j + 1));
+        for (int ring = 1; ring < n_rings; ++ring)
+          out.quad(at(ring, j), at(ring + 1, j), at(ring + 1, j + 1), at(ring, j + 1));
       }
     }
   }
@@ -331,7 +343,8 @@ class Torus : public Primitive {
     }
     auto at = [&](int i, int j) { return first + (i % n_major) * n_minor + (j % n_minor); };
     for (int i = 0; i < n_major; ++i)
-      for (int j = 0; j < n_minor; ++j) out.quad(at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+      for (int j = 0; j < n_minor; ++j)
+        out.quad(at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
   }
 
  private:
@@ -355,8 +368,8 @@ double valueNoise(const Eigen::Vector3d& p) {
   double acc = 0;
   for (int c = 0; c < 8; ++c) {
     const int dx = c & 1, dy = (c >> 1) & 1, dz = (c >> 2) & 1;
-    acc += hash(x + dx, y + dy, z + dz) * (dx ? sx : 1 - sx) * (dy ? sy : 1 - sy) *
-           (dz ? sz : 1 - sz);
+    acc +=
+        hash(x + dx, y + dy, z + dz) * (dx ? sx : 1 - sx) * (dy ? sy : 1 - sy) * (dz ? sz : 1 - sz);
   }
   return acc;
 }
@@ -377,8 +390,8 @@ std::unique_ptr<Primitive> makeRoom(const Eigen::Isometry3d& T_world_room,
                                     const Eigen::Vector3d& half_size) {
   return std::make_unique<Box>(T_world_room, half_size, /*inside_out=*/true);
 }
-std::unique_ptr<Primitive> makeCylinder(const Eigen::Isometry3d& T_world_cylinder,
-                                        double radius_m, double half_height_m) {
+std::unique_ptr<Primitive> makeCylinder(const Eigen::Isometry3d& T_world_cylinder, double radius_m,
+                                        double half_height_m) {
   return std::make_unique<Cylinder>(T_world_cylinder, radius_m, half_height_m);
 }
 std::unique_ptr<Primitive> makeTorus(const Eigen::Isometry3d& T_world_torus, double major_m,
@@ -428,7 +441,8 @@ void AnalyticScene::tessellate(TriangleMesh* mesh, double max_edge_m) const {
 
 Eigen::Vector3d AnalyticScene::colorAt(const Eigen::Vector3d& p, int index) const {
   // Two octaves of value noise: texture at ~2 cm and ~10 cm scales, rich enough for SGBM.
-  const double n = 0.6 * valueNoise(p * 50.0) + 0.4 * valueNoise(p * 10.0 + Eigen::Vector3d(7, 3, 1));
+  const double n =
+      0.6 * valueNoise(p * 50.0) + 0.4 * valueNoise(p * 10.0 + Eigen::Vector3d(7, 3, 1));
   return (primitives_[index]->base_rgb * (0.35 + 0.9 * n)).cwiseMin(255.0).cwiseMax(0.0);
 }
 
@@ -442,7 +456,8 @@ void renderDepthAndColor(const AnalyticScene& scene, const StereoCamera& camera,
   cv::parallel_for_(cv::Range(0, camera.height()), [&](const cv::Range& rows) {
     for (int v = rows.start; v < rows.end; ++v) {
       for (int u = 0; u < camera.width(); ++u) {
-        const Eigen::Vector3d dir_c((u - camera.cx()) / camera.fx(), (v - camera.cy()) / camera.fy(), 1.0);
+        const Eigen::Vector3d dir_c((u - camera.cx()) / camera.fx(),
+                                    (v - camera.cy()) / camera.fy(), 1.0);
         const Eigen::Vector3d dir_c_n = dir_c.normalized();
         const Hit hit = scene.raycast(origin, R * dir_c_n);
         const bool ok = std::isfinite(hit.t);

@@ -50,8 +50,8 @@ std::unique_ptr<Primitive> makeRoom(const Eigen::Isometry3d& T_world_room,
                                     const Eigen::Vector3d& half_size);
 /// Capped solid cylinder around the z axis of its own frame, centred at its origin:
 /// radius `radius_m`, extending ±`half_height_m` along z.
-std::unique_ptr<Primitive> makeCylinder(const Eigen::Isometry3d& T_world_cylinder,
-                                        double radius_m, double half_height_m);
+std::unique_ptr<Primitive> makeCylinder(const Eigen::Isometry3d& T_world_cylinder, double radius_m,
+                                        double half_height_m);
 /// Torus around the z axis of its own frame: ring radius `major_m`, tube radius `minor_m`.
 std::unique_ptr<Primitive> makeTorus(const Eigen::Isometry3d& T_world_torus, double major_m,
                                      double minor_m);

@@ -38,7 +38,8 @@ bool writePng(const std::string& path, const cv::Mat& image, std::string* error)
 bool clearOldDataset(const fs::path& folder, std::string* error) {
   static const std::regex kFrameName(R"(\d{6}\.(png|pfm|jpg|jpeg))");
   std::error_code ec;
-  for (const char* name : {"poses.txt", "calibration.yaml", "gt_mesh.ply", "poses_true.txt", "trajectory.txt", "dynamic.txt"})
+  for (const char* name : {"poses.txt", "calibration.yaml", "gt_mesh.ply", "poses_true.txt",
+                           "trajectory.txt", "dynamic.txt"})
     fs::remove(folder / name, ec);
   for (const char* sub : kImageFolders) {
     if (!fs::is_directory(folder / sub)) continue;
@@ -98,7 +99,9 @@ std::unique_ptr<DatasetWriter> DatasetWriter::create(const std::string& folder,
     }
     if (!fs::is_empty(root, ec)) {
       if (!fs::exists(root / "calibration.yaml")) {
-        *error = folder + ": not empty and not a dataset folder (no calibration.yaml); refusing to write into it";
+        *error =
+            folder +
+            ": not empty and not a dataset folder (no calibration.yaml); refusing to write into it";
         return nullptr;
       }
       if (!clearOldDataset(root, error)) return nullptr;
@@ -140,9 +143,9 @@ std::unique_ptr<DatasetWriter> DatasetWriter::create(const std::string& folder,
 }
 
 bool DatasetWriter::writeFrame(size_t index, double timestamp_s,
-                               const Eigen::Isometry3d& T_world_camera,
-                               const cv::Mat& disparity_px, const cv::Mat& left_rgb,
-                               const cv::Mat& right_rgb, std::string* error) {
+                               const Eigen::Isometry3d& T_world_camera, const cv::Mat& disparity_px,
+                               const cv::Mat& left_rgb, const cv::Mat& right_rgb,
+                               std::string* error) {
   if (index != frames_written_) {
     *error = "frame " + std::to_string(index) + " written out of order (expected " +
              std::to_string(frames_written_) + ")";

@@ -43,7 +43,8 @@ Eigen::AlignedBox3d addRoom(AnalyticScene* scene, double hx, double hy, double h
   return Eigen::AlignedBox3d(Eigen::Vector3d(-hx, -hy, 0), Eigen::Vector3d(hx, hy, height));
 }
 
-/// A table: box top whose upper surface is at `top_z`, on four cylinder legs inset from the corners.
+/// A table: box top whose upper surface is at `top_z`, on four cylinder legs inset from the
+/// corners.
 void addTable(AnalyticScene* scene, const Eigen::Vector2d& centre_xy, double yaw_rad,
               const Eigen::Vector2d& half_top_m, double top_z, double leg_radius_m,
               const Eigen::Vector3d& top_rgb, const Eigen::Vector3d& leg_rgb) {
@@ -117,10 +118,10 @@ ScenePreset makeRoomPreset(uint32_t seed) {
             draw.color({140, 100, 70}));
 
   // Floor-to-ceiling column near the (-x, -y) corner.
-  scene.add(makeCylinder(at({-kHx + draw.uniform(0.45, 0.7), -kHy + draw.uniform(0.4, 0.6),
-                             kHeight / 2}),
-                         0.15, kHeight / 2),
-            draw.color({200, 200, 205}));
+  scene.add(
+      makeCylinder(at({-kHx + draw.uniform(0.45, 0.7), -kHy + draw.uniform(0.4, 0.6), kHeight / 2}),
+                   0.15, kHeight / 2),
+      draw.color({200, 200, 205}));
 
   // Ball on the floor near the -y wall, and a stool (cylinder) beside it.
   const double ball_r = draw.uniform(0.15, 0.22);
@@ -162,13 +163,26 @@ ScenePreset makeTabletopPreset(uint32_t seed) {
     const Kind kind = kinds[i];
     double footprint = 0, a = 0, b = 0, c = 0;
     switch (kind) {
-      case kTorus: a = draw.uniform(0.08, 0.11); b = draw.uniform(0.02, 0.035); footprint = a + b; break;
-      case kSphere: a = draw.uniform(0.05, 0.1); footprint = a; break;
+      case kTorus:
+        a = draw.uniform(0.08, 0.11);
+        b = draw.uniform(0.02, 0.035);
+        footprint = a + b;
+        break;
+      case kSphere:
+        a = draw.uniform(0.05, 0.1);
+        footprint = a;
+        break;
       case kBox:
-        a = draw.uniform(0.04, 0.09); b = draw.uniform(0.04, 0.09); c = draw.uniform(0.04, 0.1);
+        a = draw.uniform(0.04, 0.09);
+        b = draw.uniform(0.04, 0.09);
+        c = draw.uniform(0.04, 0.1);
         footprint = std::hypot(a, b);
         break;
-      case kCylinder: a = draw.uniform(0.03, 0.07); b = draw.uniform(0.05, 0.12); footprint = a; break;
+      case kCylinder:
+        a = draw.uniform(0.03, 0.07);
+        b = draw.uniform(0.05, 0.12);
+        footprint = a;
+        break;
     }
     const double yaw = draw.uniform(-M_PI, M_PI);
     bool ok = false;
@@ -187,7 +201,9 @@ ScenePreset makeTabletopPreset(uint32_t seed) {
       case kTorus: scene.add(makeTorus(at({xy.x(), xy.y(), kTopZ + b}, yaw), a, b), rgb); break;
       case kSphere: scene.add(makeSphere({xy.x(), xy.y(), kTopZ + a}, a), rgb); break;
       case kBox: scene.add(makeBox(at({xy.x(), xy.y(), kTopZ + c}, yaw), {a, b, c}), rgb); break;
-      case kCylinder: scene.add(makeCylinder(at({xy.x(), xy.y(), kTopZ + b}, yaw), a, b), rgb); break;
+      case kCylinder:
+        scene.add(makeCylinder(at({xy.x(), xy.y(), kTopZ + b}, yaw), a, b), rgb);
+        break;
     }
   }
 
@@ -215,20 +231,24 @@ ScenePreset makeHallPreset(uint32_t seed) {
     const int pieces = draw.integer(1, 2);
     for (int p = 0; p < pieces; ++p) {
       const double centre = draw.uniform(-half_len + 0.8, half_len - 0.8);
-      const double depth = draw.uniform(0.2, 0.45), width = draw.uniform(0.3, 0.7), tall = draw.uniform(0.4, 1.0);
+      const double depth = draw.uniform(0.2, 0.45), width = draw.uniform(0.3, 0.7),
+                   tall = draw.uniform(0.4, 1.0);
       const Eigen::Vector3d at_wall = along_x ? Eigen::Vector3d(centre, sign * (hy - depth), tall)
                                               : Eigen::Vector3d(sign * (hx - depth), centre, tall);
-      const Eigen::Vector3d half = along_x ? Eigen::Vector3d(width, depth, tall) : Eigen::Vector3d(depth, width, tall);
+      const Eigen::Vector3d half =
+          along_x ? Eigen::Vector3d(width, depth, tall) : Eigen::Vector3d(depth, width, tall);
       scene.add(makeBox(at(at_wall), half), draw.color({130, 110, 90}, 40));
     }
   }
   const double column_r = draw.uniform(0.15, 0.25);
-  scene.add(makeCylinder(at({-hx + 0.6, hy - 0.6, height / 2}), column_r, height / 2), draw.color({200, 200, 205}));
+  scene.add(makeCylinder(at({-hx + 0.6, hy - 0.6, height / 2}), column_r, height / 2),
+            draw.color({200, 200, 205}));
   const Eigen::Vector2d table_xy(draw.uniform(0.5, hx - 1.2), -hy + 1.0);
-  addTable(&scene, table_xy, draw.uniform(-0.3, 0.3), {0.6, 0.4}, 0.75, 0.03, draw.color({165, 115, 75}),
-           draw.color({80, 60, 45}));
+  addTable(&scene, table_xy, draw.uniform(-0.3, 0.3), {0.6, 0.4}, 0.75, 0.03,
+           draw.color({165, 115, 75}), draw.color({80, 60, 45}));
   const double ball_r = draw.uniform(0.1, 0.18);
-  scene.add(makeSphere({table_xy.x(), table_xy.y(), 0.75 + ball_r}, ball_r), draw.color({60, 90, 200}));
+  scene.add(makeSphere({table_xy.x(), table_xy.y(), 0.75 + ball_r}, ball_r),
+            draw.color({60, 90, 200}));
   scene.add(makeBox(at({-hx + 1.2, -hy + 1.0, 0.25}, draw.uniform(-0.5, 0.5)), {0.3, 0.3, 0.25}),
             draw.color({180, 150, 60}));
 

@@ -42,8 +42,8 @@ Eigen::Isometry3d rightCameraPose(const Eigen::Isometry3d& T_world_left, double 
 }
 
 void renderStereoPair(const AnalyticScene& scene, const StereoCamera& camera,
-                      const Eigen::Isometry3d& T_world_left, cv::Mat* left_rgb,
-                      cv::Mat* right_rgb, cv::Mat* depth_m) {
+                      const Eigen::Isometry3d& T_world_left, cv::Mat* left_rgb, cv::Mat* right_rgb,
+                      cv::Mat* depth_m) {
   renderDepthAndColor(scene, camera, T_world_left, depth_m, left_rgb);
   // The right depth is a by-product of the shared ray caster; it is not part of the output.
   cv::Mat right_depth_m;
@@ -65,7 +65,8 @@ cv::Mat addDisparityNoise(const cv::Mat& exact_disparity_px, const DisparityNois
       if (unit(&rng) < noise.outlier_fraction) {
         d = noise.outlier_min_px + (noise.outlier_max_px - noise.outlier_min_px) * unit(&rng);
       } else {
-        const double gauss = std::sqrt(-2.0 * std::log(unit(&rng))) * std::cos(2 * M_PI * unit(&rng));
+        const double gauss =
+            std::sqrt(-2.0 * std::log(unit(&rng))) * std::cos(2 * M_PI * unit(&rng));
         d = row[u] + noise.sigma_px * gauss;
       }
       row[u] = d > 0.0 ? static_cast<float>(d) : 0.0f;
@@ -112,9 +113,9 @@ StereoView StereoRenderer::render(const Eigen::Isometry3d& T_world_left, uint64_
       view.disparity_px = disparityFromDepth(view.depth_m, camera_);
       break;
     case DisparityMode::kNoisy:
-      view.disparity_px = addDisparityNoise(disparityFromDepth(view.depth_m, camera_),
-                                            config_.noise,
-                                            mix(config_.seed) ^ mix(frame_index + 0x51ed));
+      view.disparity_px =
+          addDisparityNoise(disparityFromDepth(view.depth_m, camera_), config_.noise,
+                            mix(config_.seed) ^ mix(frame_index + 0x51ed));
       break;
     case DisparityMode::kSgbm:
       view.disparity_px = sgbm_->compute(view.left_rgb, view.right_rgb);

@@ -56,8 +56,8 @@ Eigen::Isometry3d rightCameraPose(const Eigen::Isometry3d& T_world_left, double 
 
 /// Renders the left colour + exact depth and the right colour of the pair at T_world_left.
 void renderStereoPair(const AnalyticScene& scene, const StereoCamera& camera,
-                      const Eigen::Isometry3d& T_world_left, cv::Mat* left_rgb,
-                      cv::Mat* right_rgb, cv::Mat* depth_m);
+                      const Eigen::Isometry3d& T_world_left, cv::Mat* left_rgb, cv::Mat* right_rgb,
+                      cv::Mat* depth_m);
 
 /// Exact disparity with Gaussian noise and outliers (see DisparityNoiseParams). Deterministic
 /// in `seed` with any standard library (own Box–Muller on mt19937_64). Pixels whose noisy

@@ -51,7 +51,8 @@ Eigen::Vector3d positionAt(const DenseCurve& c, double s_m) {
   s_m = std::fmod(s_m, length);
   if (s_m < 0) s_m += length;
   const auto it = std::upper_bound(c.arc_m.begin(), c.arc_m.end(), s_m);
-  const size_t i = std::clamp<size_t>(static_cast<size_t>(it - c.arc_m.begin()), 1, c.arc_m.size() - 1);
+  const size_t i =
+      std::clamp<size_t>(static_cast<size_t>(it - c.arc_m.begin()), 1, c.arc_m.size() - 1);
   const double len = c.arc_m[i] - c.arc_m[i - 1];
   const double t = len > 0 ? (s_m - c.arc_m[i - 1]) / len : 0.0;
   return c.points[i - 1] + t * (c.points[i] - c.points[i - 1]);
@@ -73,8 +74,8 @@ std::vector<TimedPose> makeOrbit(const OrbitParams& params, int frames, double r
     const double angle = start_rad + direction * 2 * M_PI * params.revolutions * f;
     const double radius = params.radius_m * (1 + 0.1 * std::sin(2 * M_PI * f + radius_phase));
     const double height = params.height_m * (1 + 0.1 * std::sin(4 * M_PI * f + height_phase));
-    const Eigen::Vector3d eye =
-        params.centre_m + Eigen::Vector3d(radius * std::cos(angle), radius * std::sin(angle), height);
+    const Eigen::Vector3d eye = params.centre_m + Eigen::Vector3d(radius * std::cos(angle),
+                                                                  radius * std::sin(angle), height);
     poses.push_back({k / rate_hz, lookAt(eye, params.centre_m)});
   }
   return poses;
@@ -106,12 +107,14 @@ std::optional<std::vector<TimedPose>> makeWalkthrough(const AnalyticScene& scene
       const double angle = start_rad + 2 * M_PI * (i + uniform(&rng, -0.3, 0.3)) / n;
       const double scale = uniform(&rng, 0.35, 1.0);
       waypoints.emplace_back(centre.x() + scale * semi_x * std::cos(angle),
-                             centre.y() + scale * semi_y * std::sin(angle), uniform(&rng, z_lo, z_hi));
+                             centre.y() + scale * semi_y * std::sin(angle),
+                             uniform(&rng, z_lo, z_hi));
     }
     const DenseCurve curve = densify(waypoints, kSamplesPerSegment);
-    const bool clear = std::all_of(curve.points.begin(), curve.points.end(), [&](const Eigen::Vector3d& p) {
-      return params.free_space_m.contains(p) && scene.clearance(p) >= c;
-    });
+    const bool clear =
+        std::all_of(curve.points.begin(), curve.points.end(), [&](const Eigen::Vector3d& p) {
+          return params.free_space_m.contains(p) && scene.clearance(p) >= c;
+        });
     if (!clear) continue;
 
     const double sweep_phase = uniform(&rng, 0, 2 * M_PI);
@@ -164,15 +167,18 @@ std::optional<std::vector<TimedPose>> makeTrajectory(const std::string& name,
   return std::nullopt;
 }
 
-std::vector<TimedPose> addOdometryDrift(const std::vector<TimedPose>& truth, double yaw_deg, double metres) {
+std::vector<TimedPose> addOdometryDrift(const std::vector<TimedPose>& truth, double yaw_deg,
+                                        double metres) {
   std::vector<TimedPose> out = truth;
   if (truth.empty()) return out;
   const Eigen::Vector3d pivot = truth.front().T_world_camera.translation();
   for (size_t k = 0; k < truth.size(); ++k) {
     const double f = truth.size() > 1 ? static_cast<double>(k) / (truth.size() - 1) : 0.0;
     Eigen::Isometry3d D = Eigen::Isometry3d::Identity();
-    D.linear() = Eigen::AngleAxisd(f * yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    D.translation() = pivot - D.linear() * pivot + f * metres * Eigen::Vector3d(2, 1, 0).normalized();
+    D.linear() =
+        Eigen::AngleAxisd(f * yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    D.translation() =
+        pivot - D.linear() * pivot + f * metres * Eigen::Vector3d(2, 1, 0).normalized();
     out[k].T_world_camera = D * truth[k].T_world_camera;
   }
   return out;

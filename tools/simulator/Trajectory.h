@@ -39,11 +39,11 @@ struct WalkthroughParams {
   double min_height_m = 1.3;
   double max_height_m = 1.7;
   int waypoints = 7;
-  double speed_mps = 0.5;             ///< walking speed along the path
-  double inward_turn_rad = 0.6;       ///< look direction turned this much from ahead, inwards
-  double sweep_amplitude_rad = 0.5;   ///< side-to-side look amplitude
-  double sweep_period_s = 8.0;        ///< duration of one side-to-side look
-  double heading_window_m = 0.5;      ///< "ahead" is the path direction averaged over ±this
+  double speed_mps = 0.5;            ///< walking speed along the path
+  double inward_turn_rad = 0.6;      ///< look direction turned this much from ahead, inwards
+  double sweep_amplitude_rad = 0.5;  ///< side-to-side look amplitude
+  double sweep_period_s = 8.0;       ///< duration of one side-to-side look
+  double heading_window_m = 0.5;     ///< "ahead" is the path direction averaged over ±this
   double pitch_down_rad = 0.3;
   int max_attempts = 500;  ///< waypoint sets tried before giving up
 };
@@ -72,6 +72,7 @@ std::optional<std::vector<TimedPose>> makeTrajectory(const std::string& name,
 /// `truth` as drifting odometry reports it: pose k becomes D(k) · T_k, where D grows linearly from
 /// the identity at the first pose to, at the last, `yaw_deg` of rotation about the vertical (z)
 /// through the first camera and an offset of `metres` along (2, 1, 0)/√5.
-std::vector<TimedPose> addOdometryDrift(const std::vector<TimedPose>& truth, double yaw_deg, double metres);
+std::vector<TimedPose> addOdometryDrift(const std::vector<TimedPose>& truth, double yaw_deg,
+                                        double metres);
 
 }  // namespace stereo_fusion::sim

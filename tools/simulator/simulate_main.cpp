@@ -1,6 +1,6 @@
 // stereo_fusion_simulate: renders a stereo sequence of an analytic scene and writes it as a
-// dataset folder (doc/dataset_format.md), with exact, noisy or SGBM disparity and the ground-truth mesh.
-// Exit codes: 0 success, 1 failure while generating or writing, 2 bad command line.
+// dataset folder (doc/dataset_format.md), with exact, noisy or SGBM disparity and the ground-truth
+// mesh. Exit codes: 0 success, 1 failure while generating or writing, 2 bad command line.
 
 #include <unistd.h>
 
@@ -44,7 +44,8 @@ struct Options {
   uint32_t seed = 0;
   double rate_hz = 10.0;
   std::string bag;  ///< also write the frames as a rosbag here (empty: no bag)
-  /// disparity (matched) | pair (left/right raw images only) | rectified-pair (rectified images only)
+  /// disparity (matched) | pair (left/right raw images only) | rectified-pair (rectified images
+  /// only)
   std::string bag_content = "disparity";
   double gt_max_edge_m = 0.03;
   double revolutions = 1.0;
@@ -162,42 +163,70 @@ bool parseArguments(int argc, char** argv, Options* o) {
   using Setter = std::function<void(const std::string& flag, const std::string& value)>;
   const std::map<std::string, Setter> setters = {
       {"--preset", [&](auto& f, auto& v) { o->preset = parseChoice(f, v, presetNames()); }},
-      {"--trajectory", [&](auto& f, auto& v) { o->trajectory = parseChoice(f, v, trajectoryNames()); }},
-      {"--frames", [&](auto& f, auto& v) { o->frames = static_cast<int>(parseInteger(f, v, 1, 1000000)); }},
-      {"--width", [&](auto& f, auto& v) { o->width_px = static_cast<int>(parseInteger(f, v, 16, 8192)); }},
-      {"--height", [&](auto& f, auto& v) { o->height_px = static_cast<int>(parseInteger(f, v, 16, 8192)); }},
+      {"--trajectory",
+       [&](auto& f, auto& v) { o->trajectory = parseChoice(f, v, trajectoryNames()); }},
+      {"--frames",
+       [&](auto& f, auto& v) { o->frames = static_cast<int>(parseInteger(f, v, 1, 1000000)); }},
+      {"--width",
+       [&](auto& f, auto& v) { o->width_px = static_cast<int>(parseInteger(f, v, 16, 8192)); }},
+      {"--height",
+       [&](auto& f, auto& v) { o->height_px = static_cast<int>(parseInteger(f, v, 16, 8192)); }},
       {"--fx", [&](auto& f, auto& v) { o->fx_px = parseDouble(f, v, 0, 1e5, true); }},
       {"--fy", [&](auto& f, auto& v) { o->fy_px = parseDouble(f, v, 0, 1e5, true); }},
       {"--baseline", [&](auto& f, auto& v) { o->baseline_m = parseDouble(f, v, 0, 10, true); }},
-      {"--disparity", [&](auto& f, auto& v) { o->disparity = parseChoice(f, v, {"exact", "noisy", "sgbm"}); }},
+      {"--disparity",
+       [&](auto& f, auto& v) {
+         o->disparity = parseChoice(f, v, {"exact", "noisy", "sgbm"});
+       }},
       {"--noise-px", [&](auto& f, auto& v) { o->noise_px = parseDouble(f, v, 0, 100, false); }},
-      {"--outlier-fraction", [&](auto& f, auto& v) { o->outlier_fraction = parseDouble(f, v, 0, 1, false); }},
-      {"--sgbm-num-disparities", [&](auto& f, auto& v) {
+      {"--outlier-fraction",
+       [&](auto& f, auto& v) { o->outlier_fraction = parseDouble(f, v, 0, 1, false); }},
+      {"--sgbm-num-disparities",
+       [&](auto& f, auto& v) {
          o->sgbm.num_disparities = static_cast<int>(parseInteger(f, v, 16, 1024));
          if (o->sgbm.num_disparities % 16 != 0) throw UsageError{f + ": must be a multiple of 16"};
        }},
-      {"--sgbm-block-size", [&](auto& f, auto& v) {
+      {"--sgbm-block-size",
+       [&](auto& f, auto& v) {
          o->sgbm.block_size = static_cast<int>(parseInteger(f, v, 1, 31));
          if (o->sgbm.block_size % 2 == 0) throw UsageError{f + ": must be odd"};
        }},
-      {"--seed", [&](auto& f, auto& v) { o->seed = static_cast<uint32_t>(parseInteger(f, v, 0, 4294967295LL)); }},
-      {"--revolutions", [&](auto& f, auto& v) { o->revolutions = parseDouble(f, v, 0, 100, true); }},
-      {"--dynamic", [&](auto& f, auto& v) { o->dynamic = parseChoice(f, v, {"none", "person", "moved"}); }},
-      {"--drift", [&](auto& f, auto& v) {
+      {"--seed",
+       [&](auto& f, auto& v) {
+         o->seed = static_cast<uint32_t>(parseInteger(f, v, 0, 4294967295LL));
+       }},
+      {"--revolutions",
+       [&](auto& f, auto& v) { o->revolutions = parseDouble(f, v, 0, 100, true); }},
+      {"--dynamic",
+       [&](auto& f, auto& v) {
+         o->dynamic = parseChoice(f, v, {"none", "person", "moved"});
+       }},
+      {"--drift",
+       [&](auto& f, auto& v) {
          const size_t comma = v.find(',');
-         if (comma == std::string::npos) throw UsageError{f + ": expected YAW_DEG,METRES, got '" + v + "'"};
+         if (comma == std::string::npos)
+           throw UsageError{f + ": expected YAW_DEG,METRES, got '" + v + "'"};
          o->drift_yaw_deg = parseDouble(f, v.substr(0, comma), -180, 180, false);
          o->drift_m = parseDouble(f, v.substr(comma + 1), 0, 1000, false);
        }},
-      {"--keyframe-every", [&](auto& f, auto& v) { o->keyframe_every = static_cast<int>(parseInteger(f, v, 1, 1000000)); }},
+      {"--keyframe-every",
+       [&](auto& f, auto& v) {
+         o->keyframe_every = static_cast<int>(parseInteger(f, v, 1, 1000000));
+       }},
       {"--rate-hz", [&](auto& f, auto& v) { o->rate_hz = parseDouble(f, v, 0, 1e6, true); }},
-      {"--gt-max-edge", [&](auto& f, auto& v) { o->gt_max_edge_m = parseDouble(f, v, 0.001, 10, false); }},
-      {"--bag", [&](auto& f, auto& v) {
+      {"--gt-max-edge",
+       [&](auto& f, auto& v) { o->gt_max_edge_m = parseDouble(f, v, 0.001, 10, false); }},
+      {"--bag",
+       [&](auto& f, auto& v) {
          if (v.empty()) throw UsageError{f + ": expected a file name"};
          o->bag = v;
        }},
-      {"--bag-content", [&](auto& f, auto& v) { o->bag_content = parseChoice(f, v, {"disparity", "pair", "rectified-pair"}); }},
-      {"--out", [&](auto& f, auto& v) {
+      {"--bag-content",
+       [&](auto& f, auto& v) {
+         o->bag_content = parseChoice(f, v, {"disparity", "pair", "rectified-pair"});
+       }},
+      {"--out",
+       [&](auto& f, auto& v) {
          if (v.empty()) throw UsageError{f + ": expected a folder"};
          o->out = v;
        }},
@@ -232,8 +261,8 @@ struct DynamicScene {
 
 /// Builds --dynamic `kind` around the orbit focus of preset `preset_name` (seed `seed`); adds to
 /// `final_scene` what the scene holds at the end (the moved box at its second place).
-DynamicScene makeDynamicScene(const std::string& kind, const std::string& preset_name, uint32_t seed,
-                              AnalyticScene* final_scene) {
+DynamicScene makeDynamicScene(const std::string& kind, const std::string& preset_name,
+                              uint32_t seed, AnalyticScene* final_scene) {
   DynamicScene out;
   if (kind == "none") return out;
   auto first = makePreset(preset_name, seed);  // same seed, same scene
@@ -247,13 +276,16 @@ DynamicScene makeDynamicScene(const std::string& kind, const std::string& preset
     out.first_half->add(makeCylinder(T, radius_m, half_height_m), {180, 90, 70});
     out.ghost_regions.emplace_back(
         Eigen::Vector3d(focus.x() - radius_m - margin_m, focus.y() - radius_m - margin_m, 0.0),
-        Eigen::Vector3d(focus.x() + radius_m + margin_m, focus.y() + radius_m + margin_m, 2 * half_height_m + margin_m));
+        Eigen::Vector3d(focus.x() + radius_m + margin_m, focus.y() + radius_m + margin_m,
+                        2 * half_height_m + margin_m));
     return out;
   }
   // moved: a 0.4 × 0.4 × 0.6 m box beside the focus, then on its other side.
   const Eigen::Vector3d half(0.2, 0.2, 0.3);
-  const Eigen::Vector3d before(focus.x() + 0.45, focus.y(), half.z()), after(focus.x() - 0.45, focus.y() + 0.2, half.z());
-  Eigen::Isometry3d T_before = Eigen::Isometry3d::Identity(), T_after = Eigen::Isometry3d::Identity();
+  const Eigen::Vector3d before(focus.x() + 0.45, focus.y(), half.z()),
+      after(focus.x() - 0.45, focus.y() + 0.2, half.z());
+  Eigen::Isometry3d T_before = Eigen::Isometry3d::Identity(),
+                    T_after = Eigen::Isometry3d::Identity();
   T_before.translate(before);
   T_after.translate(after);
   out.first_half->add(makeBox(T_before, half), {70, 120, 180});
@@ -289,15 +321,16 @@ int main(int argc, char** argv) {
   }
 
   std::string error;
-  const auto camera = StereoCamera::create(o.width_px, o.height_px, o.fx_px,
-                                           o.fy_px > 0 ? o.fy_px : o.fx_px, (o.width_px - 1) / 2.0,
-                                           (o.height_px - 1) / 2.0, o.baseline_m, &error);
+  const auto camera =
+      StereoCamera::create(o.width_px, o.height_px, o.fx_px, o.fy_px > 0 ? o.fy_px : o.fx_px,
+                           (o.width_px - 1) / 2.0, (o.height_px - 1) / 2.0, o.baseline_m, &error);
   if (!camera) {
     std::cerr << "stereo_fusion_simulate: " << error << "\n";
     return 2;
   }
   auto preset = makePreset(o.preset, o.seed);
-  const auto poses = makeTrajectory(o.trajectory, *preset, o.frames, o.rate_hz, o.seed, &error, o.revolutions);
+  const auto poses =
+      makeTrajectory(o.trajectory, *preset, o.frames, o.rate_hz, o.seed, &error, o.revolutions);
   if (!poses) {
     std::cerr << "stereo_fusion_simulate: " << error << "\n";
     return 1;
@@ -329,7 +362,8 @@ int main(int argc, char** argv) {
   const DynamicScene dynamic = makeDynamicScene(o.dynamic, o.preset, o.seed, &preset->scene);
   StereoRenderer renderer(preset->scene, *camera, config);
   std::unique_ptr<StereoRenderer> first_half_renderer;
-  if (dynamic.first_half) first_half_renderer = std::make_unique<StereoRenderer>(*dynamic.first_half, *camera, config);
+  if (dynamic.first_half)
+    first_half_renderer = std::make_unique<StereoRenderer>(*dynamic.first_half, *camera, config);
 
   std::cerr << "[simulate] " << o.preset << ", " << o.trajectory << ", " << o.frames << " frames "
             << o.width_px << "x" << o.height_px << ", disparity " << o.disparity << ", seed "
@@ -359,25 +393,28 @@ int main(int argc, char** argv) {
       for (const StampedPose& p : list) {
         const Eigen::Quaterniond q(p.T_world_camera.rotation());
         const Eigen::Vector3d t = p.T_world_camera.translation();
-        out << p.stamp_s << " " << t.x() << " " << t.y() << " " << t.z() << " " << q.x() << " " << q.y() << " "
-            << q.z() << " " << q.w() << "\n";
+        out << p.stamp_s << " " << t.x() << " " << t.y() << " " << t.z() << " " << q.x() << " "
+            << q.y() << " " << q.z() << " " << q.w() << "\n";
       }
       return static_cast<bool>(out);
     };
     std::vector<StampedPose> truth;
     for (const TimedPose& p : *poses) truth.push_back({p.timestamp_s, p.T_world_camera});
     if (!writeTum("poses_true.txt", truth) || !writeTum("trajectory.txt", keyframes)) {
-      std::cerr << "stereo_fusion_simulate: cannot write " << o.out << "/poses_true.txt or trajectory.txt\n";
+      std::cerr << "stereo_fusion_simulate: cannot write " << o.out
+                << "/poses_true.txt or trajectory.txt\n";
       return 1;
     }
   }
   for (int k = 0; k < o.frames; ++k) {
     TimedPose pose = (*poses)[k];
     const Eigen::Isometry3d T_true = pose.T_world_camera;
-    StereoRenderer& frame_renderer = first_half_renderer && k < o.frames / 2 ? *first_half_renderer : renderer;
+    StereoRenderer& frame_renderer =
+        first_half_renderer && k < o.frames / 2 ? *first_half_renderer : renderer;
     StereoView view = frame_renderer.render(T_true, static_cast<uint64_t>(k));
     if (drifting) pose.T_world_camera = odometry[k].T_world_camera;
-    valid_share_sum += cv::countNonZero(view.disparity_px) / static_cast<double>(view.disparity_px.total());
+    valid_share_sum +=
+        cv::countNonZero(view.disparity_px) / static_cast<double>(view.disparity_px.total());
     if (!finishWrite()) return 1;
     pending_write = std::async(std::launch::async, [&, k, pose, view = std::move(view)] {
       if (!writer->writeFrame(k, pose.timestamp_s, pose.T_world_camera, view.disparity_px,
@@ -392,14 +429,16 @@ int main(int argc, char** argv) {
       frame.color = view.left_rgb;
       if (drifting && o.bag_content == "disparity") {
         // After the middle frame and after the last: the trajectory's keyframes up to this frame.
-        if (!bag->write(frame, static_cast<float>(o.sgbm.num_disparities), &write_error)) return false;
+        if (!bag->write(frame, static_cast<float>(o.sgbm.num_disparities), &write_error))
+          return false;
         if (k != o.frames / 2 - 1 && k != o.frames - 1) return true;
         std::vector<StampedPose> so_far;
         for (const StampedPose& key : keyframes)
           if (key.stamp_s <= pose.timestamp_s) so_far.push_back(key);
         return bag->writeTrajectory(so_far, pose.timestamp_s + 0.5 / o.rate_hz, &write_error);
       }
-      if (o.bag_content == "pair") return bag->writePair(frame, view.right_rgb, PairTopics{}, &write_error);
+      if (o.bag_content == "pair")
+        return bag->writePair(frame, view.right_rgb, PairTopics{}, &write_error);
       if (o.bag_content == "rectified-pair")
         return bag->writePair(frame, view.right_rgb, PairTopics::rectified(), &write_error);
       return bag->write(frame, static_cast<float>(o.sgbm.num_disparities), &write_error);
@@ -413,8 +452,8 @@ int main(int argc, char** argv) {
     std::ofstream regions(o.out + "/dynamic.txt");
     regions << "# where objects stood that left or moved (world, metres): x0 y0 z0 x1 y1 z1\n";
     for (const Eigen::AlignedBox3d& box : dynamic.ghost_regions)
-      regions << "ghost_region " << box.min().x() << " " << box.min().y() << " " << box.min().z() << " "
-              << box.max().x() << " " << box.max().y() << " " << box.max().z() << "\n";
+      regions << "ghost_region " << box.min().x() << " " << box.min().y() << " " << box.min().z()
+              << " " << box.max().x() << " " << box.max().y() << " " << box.max().z() << "\n";
     if (!regions) {
       std::cerr << "stereo_fusion_simulate: cannot write " << o.out << "/dynamic.txt\n";
       return 1;
@@ -426,10 +465,11 @@ int main(int argc, char** argv) {
     std::cerr << "stereo_fusion_simulate: " << error << "\n";
     return 1;
   }
-  std::fprintf(stderr,
-               "[simulate] wrote %d frames (%.1f %% valid disparity) and gt_mesh.ply (%zu triangles) "
-               "to %s in %.1f s\n",
-               o.frames, 100.0 * valid_share_sum / o.frames, gt_mesh.triangles.size(),
-               o.out.c_str(), elapsed());
+  std::fprintf(
+      stderr,
+      "[simulate] wrote %d frames (%.1f %% valid disparity) and gt_mesh.ply (%zu triangles) "
+      "to %s in %.1f s\n",
+      o.frames, 100.0 * valid_share_sum / o.frames, gt_mesh.triangles.size(), o.out.c_str(),
+      elapsed());
   return 0;
 }

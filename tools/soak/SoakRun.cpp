@@ -31,8 +31,9 @@ double residentMegabytes() {
 bool runSoak(const SoakOptions& options, std::vector<SoakSample>* samples, std::string* error) {
   std::string why;
   const double f_px = 0.82 * options.width_px;  // ~63° horizontal field of view
-  auto camera = StereoCamera::create(options.width_px, options.height_px, f_px, f_px, (options.width_px - 1) / 2.0,
-                                     (options.height_px - 1) / 2.0, 0.1, &why);
+  auto camera =
+      StereoCamera::create(options.width_px, options.height_px, f_px, f_px,
+                           (options.width_px - 1) / 2.0, (options.height_px - 1) / 2.0, 0.1, &why);
   if (!camera) {
     *error = why;
     return false;
@@ -46,7 +47,8 @@ bool runSoak(const SoakOptions& options, std::vector<SoakSample>* samples, std::
   for (int k = 0; k < 8; ++k) {
     const double yaw = 0.25 * std::sin(k * 0.8), pitch = 0.15 * std::cos(k * 1.3);
     Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-    T.linear() = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitX()))
+    T.linear() = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitY()) *
+                  Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitX()))
                      .toRotationMatrix();
     StereoFrame frame;
     frame.camera = *camera;
@@ -76,8 +78,8 @@ bool runSoak(const SoakOptions& options, std::vector<SoakSample>* samples, std::
     window_ms = 0;
     window_frames = 0;
     samples->push_back(s);
-    csv << s.frame << "," << s.rss_mb << "," << s.blocks << "," << s.evicted << "," << s.map_mb << ","
-        << s.mean_frame_ms << "\n"
+    csv << s.frame << "," << s.rss_mb << "," << s.blocks << "," << s.evicted << "," << s.map_mb
+        << "," << s.mean_frame_ms << "\n"
         << std::flush;
   };
   sample(0);
@@ -112,8 +114,8 @@ bool readSoakCsv(const std::string& path, std::vector<SoakSample>* samples, std:
     SoakSample s;
     char c1, c2, c3, c4, c5;
     std::istringstream row(line);
-    if (!(row >> s.frame >> c1 >> s.rss_mb >> c2 >> s.blocks >> c3 >> s.evicted >> c4 >> s.map_mb >> c5 >>
-          s.mean_frame_ms)) {
+    if (!(row >> s.frame >> c1 >> s.rss_mb >> c2 >> s.blocks >> c3 >> s.evicted >> c4 >> s.map_mb >>
+          c5 >> s.mean_frame_ms)) {
       *error = path + ":" + std::to_string(n) + ": malformed row";
       return false;
     }
@@ -122,8 +124,8 @@ bool readSoakCsv(const std::string& path, std::vector<SoakSample>* samples, std:
   return true;
 }
 
-bool plotSoak(const std::vector<std::pair<std::string, std::vector<SoakSample>>>& series, const std::string& png_path,
-              std::string* error) {
+bool plotSoak(const std::vector<std::pair<std::string, std::vector<SoakSample>>>& series,
+              const std::string& png_path, std::string* error) {
   const int width = 960, height = 540, left = 80, right = 30, top = 50, bottom = 60;
   cv::Mat img(height, width, CV_8UC3, cv::Scalar(255, 255, 255));
   double max_frame = 1, max_rss = 1;
@@ -144,22 +146,27 @@ bool plotSoak(const std::vector<std::pair<std::string, std::vector<SoakSample>>>
   const cv::Scalar grey(200, 200, 200), black(0, 0, 0);
   for (double r = 0; r <= top_rss + 1e-9; r += step) {
     cv::line(img, toPixel(0, r), toPixel(max_frame, r), grey, 1);
-    cv::putText(img, std::to_string(static_cast<long>(std::lround(r))), toPixel(0, r) + cv::Point(-60, 5),
-                cv::FONT_HERSHEY_SIMPLEX, 0.45, black, 1, cv::LINE_AA);
+    cv::putText(img, std::to_string(static_cast<long>(std::lround(r))),
+                toPixel(0, r) + cv::Point(-60, 5), cv::FONT_HERSHEY_SIMPLEX, 0.45, black, 1,
+                cv::LINE_AA);
   }
   for (int k = 0; k <= 5; ++k) {
     const double f = max_frame * k / 5;
     cv::line(img, toPixel(f, 0), toPixel(f, 0) + cv::Point(0, 5), black, 1);
-    cv::putText(img, std::to_string(static_cast<long>(std::lround(f))), toPixel(f, 0) + cv::Point(-20, 22),
-                cv::FONT_HERSHEY_SIMPLEX, 0.45, black, 1, cv::LINE_AA);
+    cv::putText(img, std::to_string(static_cast<long>(std::lround(f))),
+                toPixel(f, 0) + cv::Point(-20, 22), cv::FONT_HERSHEY_SIMPLEX, 0.45, black, 1,
+                cv::LINE_AA);
   }
   cv::line(img, toPixel(0, 0), toPixel(max_frame, 0), black, 1);
   cv::line(img, toPixel(0, 0), toPixel(0, top_rss), black, 1);
-  cv::putText(img, "frames", cv::Point(width / 2 - 30, height - 15), cv::FONT_HERSHEY_SIMPLEX, 0.55, black, 1, cv::LINE_AA);
-  cv::putText(img, "RSS (MiB)", cv::Point(10, top - 15), cv::FONT_HERSHEY_SIMPLEX, 0.55, black, 1, cv::LINE_AA);
-  cv::putText(img, "stereo_fusion soak: resident memory", cv::Point(width / 2 - 170, 25), cv::FONT_HERSHEY_SIMPLEX,
-              0.65, black, 1, cv::LINE_AA);
-  const cv::Scalar colours[] = {cv::Scalar(40, 40, 220), cv::Scalar(200, 120, 20), cv::Scalar(40, 160, 40)};
+  cv::putText(img, "frames", cv::Point(width / 2 - 30, height - 15), cv::FONT_HERSHEY_SIMPLEX, 0.55,
+              black, 1, cv::LINE_AA);
+  cv::putText(img, "RSS (MiB)", cv::Point(10, top - 15), cv::FONT_HERSHEY_SIMPLEX, 0.55, black, 1,
+              cv::LINE_AA);
+  cv::putText(img, "stereo_fusion soak: resident memory", cv::Point(width / 2 - 170, 25),
+              cv::FONT_HERSHEY_SIMPLEX, 0.65, black, 1, cv::LINE_AA);
+  const cv::Scalar colours[] = {cv::Scalar(40, 40, 220), cv::Scalar(200, 120, 20),
+                                cv::Scalar(40, 160, 40)};
   for (size_t k = 0; k < series.size(); ++k) {
     std::vector<cv::Point> line;
     for (const SoakSample& s : series[k].second) line.push_back(toPixel(s.frame, s.rss_mb));
@@ -167,7 +174,8 @@ bool plotSoak(const std::vector<std::pair<std::string, std::vector<SoakSample>>>
     if (line.size() >= 2) cv::polylines(img, line, false, colour, 2, cv::LINE_AA);
     const cv::Point key(left + 20, top + 20 + 22 * static_cast<int>(k));
     cv::line(img, key, key + cv::Point(30, 0), colour, 3);
-    cv::putText(img, series[k].first, key + cv::Point(40, 5), cv::FONT_HERSHEY_SIMPLEX, 0.5, black, 1, cv::LINE_AA);
+    cv::putText(img, series[k].first, key + cv::Point(40, 5), cv::FONT_HERSHEY_SIMPLEX, 0.5, black,
+                1, cv::LINE_AA);
   }
   if (!cv::imwrite(png_path, img)) {
     *error = png_path + ": cannot write the PNG";

@@ -7,11 +7,14 @@
 
 namespace {
 const char* kUsage =
-    "usage: stereo_fusion_soak --csv FILE [--frames N] [--sample-every K] [--width PX] [--height PX]\n"
+    "usage: stereo_fusion_soak --csv FILE [--frames N] [--sample-every K] [--width PX] [--height "
+    "PX]\n"
     "                          [--speed M] [--set key=value ...]\n"
     "       stereo_fusion_soak --plot OUT.png LABEL=FILE.csv [LABEL=FILE.csv ...]\n"
-    "Fuses N frames (default 10000) of an endless simulated corridor through the Mapper, the camera\n"
-    "moving --speed metres (default 0.05) along it every frame, and writes the resident memory every K\n"
+    "Fuses N frames (default 10000) of an endless simulated corridor through the Mapper, the "
+    "camera\n"
+    "moving --speed metres (default 0.05) along it every frame, and writes the resident memory "
+    "every K\n"
     "frames (default 100) to the CSV. --plot draws the RSS curves of several runs into a PNG.\n";
 
 bool toSize(const std::string& text, size_t* out) {
@@ -44,7 +47,8 @@ int main(int argc, char** argv) {
     for (size_t i = 2; i < args.size(); ++i) {
       const size_t eq = args[i].rfind('=');  // labels may hold "=", paths rarely do
       if (eq == std::string::npos) {
-        std::fprintf(stderr, "stereo_fusion_soak: expected LABEL=FILE.csv, got '%s'\n", args[i].c_str());
+        std::fprintf(stderr, "stereo_fusion_soak: expected LABEL=FILE.csv, got '%s'\n",
+                     args[i].c_str());
         return 2;
       }
       series.emplace_back(args[i].substr(0, eq), std::vector<soak::SoakSample>{});
@@ -86,7 +90,8 @@ int main(int argc, char** argv) {
       }
     } else if (a == "--set") {
       const size_t eq = v.find('=');
-      if (eq == std::string::npos || !setMapperParameter(&options.config, v.substr(0, eq), v.substr(eq + 1), &error)) {
+      if (eq == std::string::npos ||
+          !setMapperParameter(&options.config, v.substr(0, eq), v.substr(eq + 1), &error)) {
         std::fprintf(stderr, "stereo_fusion_soak: --set %s: %s\n", v.c_str(), error.c_str());
         return 2;
       }
@@ -115,8 +120,10 @@ int main(int argc, char** argv) {
   const soak::SoakSample& first = samples.front();
   const soak::SoakSample& mid = samples[samples.size() / 2];
   const soak::SoakSample& last = samples.back();
-  std::printf("RSS MiB at frame %zu / %zu / %zu: %.1f / %.1f / %.1f; blocks %zu / %zu / %zu; evicted %llu\n",
-              first.frame, mid.frame, last.frame, first.rss_mb, mid.rss_mb, last.rss_mb, first.blocks, mid.blocks,
-              last.blocks, last.evicted);
+  std::printf(
+      "RSS MiB at frame %zu / %zu / %zu: %.1f / %.1f / %.1f; blocks %zu / %zu / %zu; evicted "
+      "%llu\n",
+      first.frame, mid.frame, last.frame, first.rss_mb, mid.rss_mb, last.rss_mb, first.blocks,
+      mid.blocks, last.blocks, last.evicted);
   return 0;
 }

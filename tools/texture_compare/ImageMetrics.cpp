@@ -35,7 +35,8 @@ GradientEnergy gradientEnergy(const cv::Mat& image_rgb, const cv::Mat& mask) {
   // by 1/8 so a ramp of one grey level per pixel has gradient 1.
   cv::Sobel(grey, gx, CV_32F, 1, 0, 3, 1.0 / 8.0);
   cv::Sobel(grey, gy, CV_32F, 0, 1, 3, 1.0 / 8.0);
-  cv::erode(mask, inner, cv::Mat::ones(3, 3, CV_8U), cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(0));
+  cv::erode(mask, inner, cv::Mat::ones(3, 3, CV_8U), cv::Point(-1, -1), 1, cv::BORDER_CONSTANT,
+            cv::Scalar(0));
   GradientEnergy g;
   for (int y = 0; y < grey.rows; ++y)
     for (int x = 0; x < grey.cols; ++x) {

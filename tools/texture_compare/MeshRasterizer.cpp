@@ -31,20 +31,23 @@ RenderedView renderMesh(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash
     const TexturePatch* patch = nullptr;
     if (patches) {
       const auto it = patches->find(key);
-      if (it != patches->end() && it->second.uvs.size() == mesh.positions.size()) patch = &it->second;
+      if (it != patches->end() && it->second.uvs.size() == mesh.positions.size())
+        patch = &it->second;
     }
     p_camera.resize(mesh.positions.size());
     px.resize(mesh.positions.size());
     for (size_t v = 0; v < mesh.positions.size(); ++v) {
       p_camera[v] = T_camera_world * mesh.positions[v].cast<double>();
       const double z = std::max(p_camera[v].z(), kNearPlaneM);
-      px[v] = {camera.fx() * p_camera[v].x() / z + camera.cx(), camera.fy() * p_camera[v].y() / z + camera.cy()};
+      px[v] = {camera.fx() * p_camera[v].x() / z + camera.cx(),
+               camera.fy() * p_camera[v].y() / z + camera.cy()};
     }
     for (const auto& t : mesh.triangles) {
       const Eigen::Vector2d& a = px[t[0]];
       const Eigen::Vector2d& b = px[t[1]];
       const Eigen::Vector2d& c = px[t[2]];
-      if (p_camera[t[0]].z() < kNearPlaneM || p_camera[t[1]].z() < kNearPlaneM || p_camera[t[2]].z() < kNearPlaneM)
+      if (p_camera[t[0]].z() < kNearPlaneM || p_camera[t[1]].z() < kNearPlaneM ||
+          p_camera[t[2]].z() < kNearPlaneM)
         continue;
       const double area = edge(a, b, c);
       if (std::abs(area) < 1e-12) continue;
@@ -52,12 +55,14 @@ RenderedView renderMesh(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash
       const int x1 = std::min(W - 1, static_cast<int>(std::floor(std::max({a.x(), b.x(), c.x()}))));
       const int y0 = std::max(0, static_cast<int>(std::ceil(std::min({a.y(), b.y(), c.y()}))));
       const int y1 = std::min(H - 1, static_cast<int>(std::floor(std::max({a.y(), b.y(), c.y()}))));
-      const double inv_z[3] = {1.0 / p_camera[t[0]].z(), 1.0 / p_camera[t[1]].z(), 1.0 / p_camera[t[2]].z()};
+      const double inv_z[3] = {1.0 / p_camera[t[0]].z(), 1.0 / p_camera[t[1]].z(),
+                               1.0 / p_camera[t[2]].z()};
       for (int y = y0; y <= y1; ++y) {
         for (int x = x0; x <= x1; ++x) {
           const Eigen::Vector2d p(x, y);
           // Screen-space barycentrics, sign-normalised so either winding is drawn.
-          const double l0 = edge(b, c, p) / area, l1 = edge(c, a, p) / area, l2 = edge(a, b, p) / area;
+          const double l0 = edge(b, c, p) / area, l1 = edge(c, a, p) / area,
+                       l2 = edge(a, b, p) / area;
           if (l0 < 0 || l1 < 0 || l2 < 0) continue;
           // Perspective-correct weights: screen barycentrics / depth, renormalised.
           const double w0 = l0 * inv_z[0], w1 = l1 * inv_z[1], w2 = l2 * inv_z[2];
@@ -69,9 +74,10 @@ RenderedView renderMesh(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash
           const double b0 = w0 / sum, b1 = w1 / sum, b2 = w2 / sum;
           Eigen::Vector3f rgb;
           if (patch) {
-            const Eigen::Vector2f uv = (b0 * patch->uvs[t[0]].cast<double>() + b1 * patch->uvs[t[1]].cast<double>() +
-                                        b2 * patch->uvs[t[2]].cast<double>())
-                                           .cast<float>();
+            const Eigen::Vector2f uv =
+                (b0 * patch->uvs[t[0]].cast<double>() + b1 * patch->uvs[t[1]].cast<double>() +
+                 b2 * patch->uvs[t[2]].cast<double>())
+                    .cast<float>();
             rgb = sampleBilinear(patch->image_rgb, uv);
           } else {
             auto colour = [&](uint32_t v) {
@@ -81,7 +87,8 @@ RenderedView renderMesh(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash
                   static_cast<float>(b2) * colour(t[2]);
           }
           cv::Vec3b& out = view.rgb.at<cv::Vec3b>(y, x);
-          for (int k = 0; k < 3; ++k) out[k] = static_cast<uint8_t>(std::clamp(std::lround(rgb[k]), 0L, 255L));
+          for (int k = 0; k < 3; ++k)
+            out[k] = static_cast<uint8_t>(std::clamp(std::lround(rgb[k]), 0L, 255L));
           view.depth_m.at<float>(y, x) = static_cast<float>(z);
           view.textured.at<uint8_t>(y, x) = patch ? 255 : 0;
         }

@@ -14,9 +14,9 @@ namespace stereo_fusion::texcmp {
 
 /// One rendered view.
 struct RenderedView {
-  cv::Mat rgb;        ///< CV_8UC3, RGB; black where nothing was drawn
-  cv::Mat depth_m;    ///< CV_32FC1, camera z of the nearest surface; 0 where nothing was drawn
-  cv::Mat textured;   ///< CV_8UC1, 255 where the pixel came from a texture patch
+  cv::Mat rgb;       ///< CV_8UC3, RGB; black where nothing was drawn
+  cv::Mat depth_m;   ///< CV_32FC1, camera z of the nearest surface; 0 where nothing was drawn
+  cv::Mat textured;  ///< CV_8UC1, 255 where the pixel came from a texture patch
 };
 
 /// Renders `submeshes` seen from T_world_camera. Pixel centres sit at integer coordinates

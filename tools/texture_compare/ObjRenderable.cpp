@@ -8,8 +8,10 @@
 
 namespace stereo_fusion::texcmp {
 
-bool objToRenderable(const ObjMesh& obj, std::unordered_map<BlockKey, SubMesh, BlockKeyHash>* meshes,
-                     std::unordered_map<BlockKey, TexturePatch, BlockKeyHash>* patches, std::string* error) {
+bool objToRenderable(const ObjMesh& obj,
+                     std::unordered_map<BlockKey, SubMesh, BlockKeyHash>* meshes,
+                     std::unordered_map<BlockKey, TexturePatch, BlockKeyHash>* patches,
+                     std::string* error) {
   meshes->clear();
   patches->clear();
   std::vector<cv::Mat> atlases(obj.materials.size());
@@ -24,11 +26,13 @@ bool objToRenderable(const ObjMesh& obj, std::unordered_map<BlockKey, SubMesh, B
   }
   std::map<std::pair<int, int>, int> groups;  // (object, material) → group index
   for (const ObjFace& f : obj.faces) {
-    const auto [it, inserted] = groups.try_emplace({f.object, f.material}, static_cast<int>(groups.size()));
+    const auto [it, inserted] =
+        groups.try_emplace({f.object, f.material}, static_cast<int>(groups.size()));
     const BlockKey key{it->second, 0, 0};
     SubMesh& mesh = (*meshes)[key];
     mesh.key = key;
-    const bool textured = f.material >= 0 && !atlases[f.material].empty() && f.vt[0] >= 0 && f.vt[1] >= 0 && f.vt[2] >= 0;
+    const bool textured = f.material >= 0 && !atlases[f.material].empty() && f.vt[0] >= 0 &&
+                          f.vt[1] >= 0 && f.vt[2] >= 0;
     TexturePatch* patch = nullptr;
     if (textured) {
       patch = &(*patches)[key];
@@ -39,9 +43,10 @@ bool objToRenderable(const ObjMesh& obj, std::unordered_map<BlockKey, SubMesh, B
       mesh.positions.push_back(obj.positions[f.v[k]]);
       mesh.normals.push_back(f.vn[k] >= 0 ? obj.normals[f.vn[k]] : Eigen::Vector3f::Zero());
       const Eigen::Vector3f c = obj.colors.empty() ? Eigen::Vector3f::Ones() : obj.colors[f.v[k]];
-      mesh.colors.push_back({static_cast<uint8_t>(std::lround(std::clamp(c.x(), 0.0f, 1.0f) * 255)),
-                             static_cast<uint8_t>(std::lround(std::clamp(c.y(), 0.0f, 1.0f) * 255)),
-                             static_cast<uint8_t>(std::lround(std::clamp(c.z(), 0.0f, 1.0f) * 255))});
+      mesh.colors.push_back(
+          {static_cast<uint8_t>(std::lround(std::clamp(c.x(), 0.0f, 1.0f) * 255)),
+           static_cast<uint8_t>(std::lround(std::clamp(c.y(), 0.0f, 1.0f) * 255)),
+           static_cast<uint8_t>(std::lround(std::clamp(c.z(), 0.0f, 1.0f) * 255))});
       if (patch) patch->uvs.emplace_back(obj.uvs[f.vt[k]].x(), 1.0f - obj.uvs[f.vt[k]].y());
     }
     mesh.triangles.push_back({base, base + 1, base + 2});

@@ -16,7 +16,9 @@ namespace stereo_fusion::texcmp {
 /// material with a diffuse map get a patch that is the whole atlas image (loaded once and
 /// shared) with the OBJ's v flipped back to the image convention; others use the vertex
 /// colours (white without). False with a message when an atlas cannot be read.
-bool objToRenderable(const ObjMesh& obj, std::unordered_map<BlockKey, SubMesh, BlockKeyHash>* meshes,
-                     std::unordered_map<BlockKey, TexturePatch, BlockKeyHash>* patches, std::string* error);
+bool objToRenderable(const ObjMesh& obj,
+                     std::unordered_map<BlockKey, SubMesh, BlockKeyHash>* meshes,
+                     std::unordered_map<BlockKey, TexturePatch, BlockKeyHash>* patches,
+                     std::string* error);
 
 }  // namespace stereo_fusion::texcmp

@@ -25,14 +25,16 @@ namespace fs = std::filesystem;
 using namespace stereo_fusion;
 
 const char* kUsage =
-    "usage: stereo_fusion_texture_compare <seq-folder> <out-dir> [--config FILE] [--set key=value ...]\n"
+    "usage: stereo_fusion_texture_compare <seq-folder> <out-dir> [--config FILE] [--set key=value "
+    "...]\n"
     "                                     [--views N] [--figure-view K]\n"
     "Fuses the even frames of a dataset folder with texture=patches, renders the vertex-coloured\n"
     "and the textured mesh into the poses of the odd (held-out) frames and compares both with\n"
     "those frames' colour images (for simulated sequences: the exact ground truth). The textured\n"
     "mesh is also exported as OBJ + MTL + atlas, read back and rendered, to check the export.\n"
     "Prints and writes <out-dir>/texture_compare.json and the figures\n"
-    "<out-dir>/texture_compare_full.png and texture_compare_zoom.png (ground truth | vertex colour | texture).\n"
+    "<out-dir>/texture_compare_full.png and texture_compare_zoom.png (ground truth | vertex colour "
+    "| texture).\n"
     "  --views N        evaluate N held-out frames spread over the sequence (default: all)\n"
     "  --figure-view K  which evaluated view the figures show (default: the middle one)\n";
 
@@ -44,16 +46,21 @@ cv::Mat toRgb(const cv::Mat& colour) {
 }
 
 /// Panels side by side, each under a caption bar; `scale` > 1 magnifies with nearest neighbour.
-cv::Mat sideBySide(const std::vector<cv::Mat>& panels, const std::vector<std::string>& captions, double scale) {
+cv::Mat sideBySide(const std::vector<cv::Mat>& panels, const std::vector<std::string>& captions,
+                   double scale) {
   const int bar = 26;
   std::vector<cv::Mat> columns;
   for (size_t i = 0; i < panels.size(); ++i) {
     cv::Mat big;
-    cv::resize(panels[i], big, cv::Size(), scale, scale, scale >= 1 ? cv::INTER_NEAREST : cv::INTER_AREA);
+    cv::resize(panels[i], big, cv::Size(), scale, scale,
+               scale >= 1 ? cv::INTER_NEAREST : cv::INTER_AREA);
     cv::Mat column(big.rows + bar, big.cols, CV_8UC3, cv::Scalar(255, 255, 255));
     big.copyTo(column(cv::Rect(0, bar, big.cols, big.rows)));
-    cv::putText(column, captions[i], cv::Point(6, 18), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-    if (i + 1 < panels.size()) cv::copyMakeBorder(column, column, 0, 0, 0, 4, cv::BORDER_CONSTANT, cv::Scalar(255, 255, 255));
+    cv::putText(column, captions[i], cv::Point(6, 18), cv::FONT_HERSHEY_SIMPLEX, 0.5,
+                cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    if (i + 1 < panels.size())
+      cv::copyMakeBorder(column, column, 0, 0, 0, 4, cv::BORDER_CONSTANT,
+                         cv::Scalar(255, 255, 255));
     columns.push_back(column);
   }
   cv::Mat out;
@@ -94,7 +101,8 @@ int main(int argc, char** argv) {
         else
           figure_view = value;
       } catch (...) {
-        std::fprintf(stderr, "%s: '%s' is not a number\n%s", args[i].c_str(), args[i + 1].c_str(), kUsage);
+        std::fprintf(stderr, "%s: '%s' is not a number\n%s", args[i].c_str(), args[i + 1].c_str(),
+                     kUsage);
         return 2;
       }
       ++i;
@@ -129,22 +137,24 @@ int main(int argc, char** argv) {
   }
   const auto& submeshes = mapper.mesh().submeshes();
   const auto& patches = mapper.textures().patches();
-  std::printf("fused %zu even frames: %zu submeshes, %zu with a texture patch, texture memory %.2f MB "
-              "(cap %d px per patch edge)\n",
-              fused, submeshes.size(), patches.size(), mapper.textures().memoryBytes() / 1048576.0,
-              options.config.texture_max_patch_px);
+  std::printf(
+      "fused %zu even frames: %zu submeshes, %zu with a texture patch, texture memory %.2f MB "
+      "(cap %d px per patch edge)\n",
+      fused, submeshes.size(), patches.size(), mapper.textures().memoryBytes() / 1048576.0,
+      options.config.texture_max_patch_px);
 
   // The export, read back: what a viewer loading mesh.obj gets.
-  const fs::path obj_dir = fs::temp_directory_path() / ("stereo_fusion_texture_compare_" + std::to_string(getpid()));
+  const fs::path obj_dir =
+      fs::temp_directory_path() / ("stereo_fusion_texture_compare_" + std::to_string(getpid()));
   fs::create_directories(obj_dir);
   ObjExportInfo export_info;
   ObjMesh obj;
   std::unordered_map<BlockKey, SubMesh, BlockKeyHash> obj_meshes;
   std::unordered_map<BlockKey, TexturePatch, BlockKeyHash> obj_patches;
-  const bool obj_ok =
-      writeTexturedObj((obj_dir / "mesh.obj").string(), submeshes, patches, ObjExportOptions{}, &export_info, &error) &&
-      readObj((obj_dir / "mesh.obj").string(), &obj, &error) &&
-      texcmp::objToRenderable(obj, &obj_meshes, &obj_patches, &error);
+  const bool obj_ok = writeTexturedObj((obj_dir / "mesh.obj").string(), submeshes, patches,
+                                       ObjExportOptions{}, &export_info, &error) &&
+                      readObj((obj_dir / "mesh.obj").string(), &obj, &error) &&
+                      texcmp::objToRenderable(obj, &obj_meshes, &obj_patches, &error);
   fs::remove_all(obj_dir);
   if (!obj_ok) {
     std::fprintf(stderr, "error: OBJ export round trip: %s\n", error.c_str());
@@ -159,14 +169,15 @@ int main(int argc, char** argv) {
     for (size_t k = 0; k < views; ++k) chosen.push_back(held_out[k * held_out.size() / views]);
     held_out = chosen;
   }
-  if (figure_view < 0 || figure_view >= static_cast<long>(held_out.size())) figure_view = held_out.size() / 2;
+  if (figure_view < 0 || figure_view >= static_cast<long>(held_out.size()))
+    figure_view = held_out.size() / 2;
 
   texcmp::SquaredError err_vertex, err_texture, err_obj;
   texcmp::GradientEnergy ge_vertex, ge_texture, ge_truth;
   size_t covered = 0, textured_px = 0;
   nlohmann::ordered_json per_view = nlohmann::ordered_json::array();
-  std::printf("%6s %10s %12s %12s %12s %10s %10s %10s\n", "frame", "covered", "PSNR vertex", "PSNR texture",
-              "PSNR OBJ", "GE vertex", "GE texture", "GE truth");
+  std::printf("%6s %10s %12s %12s %12s %10s %10s %10s\n", "frame", "covered", "PSNR vertex",
+              "PSNR texture", "PSNR OBJ", "GE vertex", "GE texture", "GE truth");
   for (size_t k = 0; k < held_out.size(); ++k) {
     StereoFrame frame;
     if (!reader->load(held_out[k], &frame, &error) || frame.color.empty()) {
@@ -174,9 +185,12 @@ int main(int argc, char** argv) {
       continue;
     }
     const cv::Mat truth = toRgb(frame.color);
-    const texcmp::RenderedView vertex = texcmp::renderMesh(submeshes, nullptr, frame.camera, frame.T_world_camera);
-    const texcmp::RenderedView texture = texcmp::renderMesh(submeshes, &patches, frame.camera, frame.T_world_camera);
-    const texcmp::RenderedView exported = texcmp::renderMesh(obj_meshes, &obj_patches, frame.camera, frame.T_world_camera);
+    const texcmp::RenderedView vertex =
+        texcmp::renderMesh(submeshes, nullptr, frame.camera, frame.T_world_camera);
+    const texcmp::RenderedView texture =
+        texcmp::renderMesh(submeshes, &patches, frame.camera, frame.T_world_camera);
+    const texcmp::RenderedView exported =
+        texcmp::renderMesh(obj_meshes, &obj_patches, frame.camera, frame.T_world_camera);
     // The renders share the geometry, so they cover the same pixels (up to ties on edges the
     // unwelded OBJ may resolve differently).
     const cv::Mat mask = vertex.depth_m > 0;
@@ -196,8 +210,9 @@ int main(int argc, char** argv) {
     covered += n;
     textured_px += static_cast<size_t>(cv::countNonZero(texture.textured));
     const double share = n / static_cast<double>(mask.total());
-    std::printf("%6zu %9.1f%% %9.2f dB %9.2f dB %9.2f dB %10.1f %10.1f %10.1f\n", held_out[k], 100 * share,
-                ev.psnrDb(), et.psnrDb(), eo.psnrDb(), gv.mean(), gt.mean(), gg.mean());
+    std::printf("%6zu %9.1f%% %9.2f dB %9.2f dB %9.2f dB %10.1f %10.1f %10.1f\n", held_out[k],
+                100 * share, ev.psnrDb(), et.psnrDb(), eo.psnrDb(), gv.mean(), gt.mean(),
+                gg.mean());
     per_view.push_back({{"frame", held_out[k]},
                         {"covered_share", share},
                         {"psnr_vertex_db", ev.psnrDb()},
@@ -210,14 +225,17 @@ int main(int argc, char** argv) {
       const std::vector<cv::Mat> full = {truth, vertex.rgb, texture.rgb};
       const std::vector<std::string> captions = {
           "ground truth (frame " + std::to_string(held_out[k]) + ", held out)",
-          format("vertex colour  PSNR %.1f dB", ev.psnrDb()), format("texture patches  PSNR %.1f dB", et.psnrDb())};
-      bool ok = writeRgbPng(fs::path(options.out_dir) / "texture_compare_full.png", sideBySide(full, captions, 0.5));
+          format("vertex colour  PSNR %.1f dB", ev.psnrDb()),
+          format("texture patches  PSNR %.1f dB", et.psnrDb())};
+      bool ok = writeRgbPng(fs::path(options.out_dir) / "texture_compare_full.png",
+                            sideBySide(full, captions, 0.5));
       // A quarter of the width and height around the image centre, magnified 2× (nearest).
-      const cv::Rect centre(truth.cols / 4 + truth.cols / 8, truth.rows / 4 + truth.rows / 8, truth.cols / 4,
-                            truth.rows / 4);
-      ok &= writeRgbPng(fs::path(options.out_dir) / "texture_compare_zoom.png",
-                        sideBySide({truth(centre), vertex.rgb(centre), texture.rgb(centre)},
-                                   {"ground truth (centre, 2x)", "vertex colour", "texture patches"}, 2.0));
+      const cv::Rect centre(truth.cols / 4 + truth.cols / 8, truth.rows / 4 + truth.rows / 8,
+                            truth.cols / 4, truth.rows / 4);
+      ok &= writeRgbPng(
+          fs::path(options.out_dir) / "texture_compare_zoom.png",
+          sideBySide({truth(centre), vertex.rgb(centre), texture.rgb(centre)},
+                     {"ground truth (centre, 2x)", "vertex colour", "texture patches"}, 2.0));
       if (!ok) {
         std::fprintf(stderr, "error: cannot write the figures to %s\n", options.out_dir.c_str());
         return 1;
@@ -228,12 +246,15 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "error: no held-out frame was covered by the mesh\n");
     return 1;
   }
-  std::printf("all %zu views: PSNR vertex colour %.2f dB, texture patches %.2f dB; gradient energy vertex %.1f, "
-              "texture %.1f, ground truth %.1f; %.1f %% of covered pixels drawn from a patch\n"
-              "exported mesh.obj read back and rendered: PSNR %.2f dB (%zu textured + %zu baked vertex-colour blocks)\n",
-              held_out.size(), err_vertex.psnrDb(), err_texture.psnrDb(), ge_vertex.mean(), ge_texture.mean(),
-              ge_truth.mean(), 100.0 * textured_px / covered, err_obj.psnrDb(), export_info.textured_blocks,
-              export_info.vertex_colour_blocks);
+  std::printf(
+      "all %zu views: PSNR vertex colour %.2f dB, texture patches %.2f dB; gradient energy vertex "
+      "%.1f, "
+      "texture %.1f, ground truth %.1f; %.1f %% of covered pixels drawn from a patch\n"
+      "exported mesh.obj read back and rendered: PSNR %.2f dB (%zu textured + %zu baked "
+      "vertex-colour blocks)\n",
+      held_out.size(), err_vertex.psnrDb(), err_texture.psnrDb(), ge_vertex.mean(),
+      ge_texture.mean(), ge_truth.mean(), 100.0 * textured_px / covered, err_obj.psnrDb(),
+      export_info.textured_blocks, export_info.vertex_colour_blocks);
   nlohmann::ordered_json j;
   j["sequence"] = options.input;
   j["fused_frames"] = fused;

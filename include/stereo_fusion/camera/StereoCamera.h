@@ -53,7 +53,8 @@ class StereoCamera {
   /// Pixel (u, v) with known depth → point in the camera frame:
   /// X = (u − cx)·z/fx, Y = (v − cy)·z/fy, Z = z.
   Eigen::Vector3d backProject(double u_px, double v_px, double depth_m) const;
-  /// Same, from disparity (the form the thesis writes as x = −b(u_L+u_R)/(2d) about the rig centre).
+  /// Same, from disparity (the form the thesis writes as x = −b(u_L+u_R)/(2d) about the rig
+  /// centre).
   Eigen::Vector3d backProjectDisparity(double u_px, double v_px, double disparity_px) const;
 
   /// Camera point → continuous pixel coordinates (eq. 3.12–3.14). Returns false when the point

@@ -55,11 +55,13 @@ class BlockLookup {
 
   /// Fills `queue` with the distinct blocks to update, sorted by key (deterministic).
   /// The frame must have passed validateFrame(); `measurements` holds its depths
-  /// (MeasurementImage::build(frame, config, …) with this lookup's configuration). With `missing`, blocks not yet in the octree
-  /// are not allocated: their keys go to *missing (sorted), for fusion to create only those it
-  /// really updates (SurfaceFuser::fuse); without, they are allocated and queued.
-  LookupStats run(const StereoFrame& frame, const MeasurementImage& measurements, BlockOctree* octree,
-                  std::vector<VoxelBlock*>* queue, std::vector<BlockKey>* missing = nullptr);
+  /// (MeasurementImage::build(frame, config, …) with this lookup's configuration). With `missing`,
+  /// blocks not yet in the octree are not allocated: their keys go to *missing (sorted), for fusion
+  /// to create only those it really updates (SurfaceFuser::fuse); without, they are allocated and
+  /// queued.
+  LookupStats run(const StereoFrame& frame, const MeasurementImage& measurements,
+                  BlockOctree* octree, std::vector<VoxelBlock*>* queue,
+                  std::vector<BlockKey>* missing = nullptr);
 
  private:
   /// How far (in pixels) from a pixel's ray a voxel centre that fusion reads at that pixel can
@@ -90,7 +92,7 @@ class BlockLookup {
     /// Per world axis: R·((u − cx)/fx, 0, 0) per image column u and R·(0, (v − cy)/fy, 1) per
     /// image row v, in blocks per metre of depth.
     std::vector<float> column_dir[3], row_dir[3];
-    FloatLevelThresholds levels;  ///< eq. 3.2, the same float compares as fusion
+    FloatLevelThresholds levels;    ///< eq. 3.2, the same float compares as fusion
     float band_m[kNumLevels] = {};  ///< Φ of each measurement level
     /// Lateral margin around a pixel's ray, in blocks per metre of depth (kLateralMarginPx).
     float lateral_blocks_per_m = 0.0f;
@@ -106,14 +108,16 @@ class BlockLookup {
     BlockKey boxes_lo, boxes_hi;                       // the boxes' union, if there are boxes
     std::vector<std::pair<BlockKey, int>> key_counts;  // naive: histogram, points per block
     std::vector<std::pair<BlockKey, int>> sparse_counts;  // points per block off the dense grid
-    std::vector<int> dense_counts;                     // points per block over the boxes' union
-    std::vector<BlockKey> passing;  // accelerated: blocks that pass the histogram filter
+    std::vector<int> dense_counts;                        // points per block over the boxes' union
+    std::vector<BlockKey> passing;   // accelerated: blocks that pass the histogram filter
     std::vector<VoxelBlock*> found;  // naive: blocks found, in search order (with repeats)
-    std::vector<BlockKey> not_found;  // naive without allocation: keys of missing blocks (with repeats)
+    std::vector<BlockKey>
+        not_found;  // naive without allocation: keys of missing blocks (with repeats)
     LookupStats stats;
   };
 
-  void setPixelGeometry(const StereoFrame& frame, const MeasurementImage& measurements, const BlockOctree& octree);
+  void setPixelGeometry(const StereoFrame& frame, const MeasurementImage& measurements,
+                        const BlockOctree& octree);
   /// The band box of pixel (u, v), `depth_row` being row v of the depths; false if the pixel
   /// has no depth or its box leaves the key range.
   bool bandBoxOfPixel(const float* depth_row, int u, int v, BandBox* box) const;
@@ -122,8 +126,10 @@ class BlockLookup {
   size_t countInBoxes(const BandBox& box, RegionScratch* s) const;
   /// Fill s->boxes and s->stats.valid_points from the region's pixels (the AVX2 path gives
   /// exactly the scalar path's boxes and counts).
-  void countRegionBoxesScalar(const MeasurementImage& m, const cv::Rect& region, RegionScratch* s) const;
-  void countRegionBoxesAvx2(const MeasurementImage& m, const cv::Rect& region, RegionScratch* s) const;
+  void countRegionBoxesScalar(const MeasurementImage& m, const cv::Rect& region,
+                              RegionScratch* s) const;
+  void countRegionBoxesAvx2(const MeasurementImage& m, const cv::Rect& region,
+                            RegionScratch* s) const;
   /// s->boxes, their union and s->stats.valid_points of the region.
   void countRegionBoxes(const MeasurementImage& m, const cv::Rect& region, RegionScratch* s) const;
   /// Calls visit(key, count) for each block the region's boxes reach, with its number of
@@ -136,11 +142,12 @@ class BlockLookup {
   /// scaled by the share of its pixels with a measurement, rounded up, at least 1; 0 = off.
   int regionMinPoints(const cv::Rect& region, uint64_t valid_points) const;
   bool passesFilter(const RegionScratch& s, const BlockKey& key, int min_points) const;
-  void runRegionAccelerated(const MeasurementImage& m, const cv::Rect& region, RegionScratch* s) const;
+  void runRegionAccelerated(const MeasurementImage& m, const cv::Rect& region,
+                            RegionScratch* s) const;
   /// frame_keys_ ← the distinct `passing` keys of the first `num_regions` regions, sorted.
   void collectSortedDistinctKeys(size_t num_regions);
-  void runRegionNaive(const MeasurementImage& m, const cv::Rect& region, BlockOctree* octree, bool allocate,
-                      RegionScratch* s) const;
+  void runRegionNaive(const MeasurementImage& m, const cv::Rect& region, BlockOctree* octree,
+                      bool allocate, RegionScratch* s) const;
 
   LookupConfig config_;
   ThreadPool* pool_;

@@ -24,13 +24,16 @@ struct DisparityCoherence {
   size_t coherent_pixels = 0;  ///< usable, with a usable 8-neighbour within kCoherenceTolerancePx
   /// coherent / usable; 1 when nothing is usable.
   double share() const {
-    return usable_pixels == 0 ? 1.0 : static_cast<double>(coherent_pixels) / static_cast<double>(usable_pixels);
+    return usable_pixels == 0
+               ? 1.0
+               : static_cast<double>(coherent_pixels) / static_cast<double>(usable_pixels);
   }
 };
 
 /// Counts the usable and coherent pixels of `disparity_px` (CV_32FC1), usable as `measurements`
 /// (built from it) says; rows in parallel on `pool`. The counts do not depend on the threads.
-DisparityCoherence measureDisparityCoherence(const cv::Mat& disparity_px, const MeasurementImage& measurements,
+DisparityCoherence measureDisparityCoherence(const cv::Mat& disparity_px,
+                                             const MeasurementImage& measurements,
                                              ThreadPool* pool);
 
 }  // namespace stereo_fusion

@@ -11,9 +11,10 @@
 namespace stereo_fusion {
 
 struct CarveStats {
-  uint64_t blocks_visited = 0;  ///< blocks of the map in the frame's view that fusion had not queued
-  uint64_t blocks_carved = 0;   ///< of those, blocks in which some voxel was seen through
-  uint64_t voxels_carved = 0;   ///< voxel updates, all levels
+  uint64_t blocks_visited =
+      0;                       ///< blocks of the map in the frame's view that fusion had not queued
+  uint64_t blocks_carved = 0;  ///< of those, blocks in which some voxel was seen through
+  uint64_t voxels_carved = 0;  ///< voxel updates, all levels
 };
 
 /// Free-space evidence (stage 2b, after fusion). A measured surface says the space between the
@@ -44,12 +45,14 @@ class FreeSpaceCarver {
 
   /// Carves the frame into the blocks of `octree` in its view, except `queued` (fusion's blocks
   /// for this frame). `carved` receives the blocks that changed, sorted by key.
-  CarveStats carve(const StereoFrame& frame, const MeasurementImage& measurements, const BlockOctree& octree,
-                   const std::vector<VoxelBlock*>& queued, std::vector<VoxelBlock*>* carved);
+  CarveStats carve(const StereoFrame& frame, const MeasurementImage& measurements,
+                   const BlockOctree& octree, const std::vector<VoxelBlock*>& queued,
+                   std::vector<VoxelBlock*>* carved);
 
   /// The free depth F of pixel (u, v): the smallest depth within `window_px` of it (the window
   /// clipped to the image), 0 if a pixel of the window has no measurement (NaN).
-  static float freeDepth(const float* depth_m, int width_px, int height_px, int window_px, int u, int v);
+  static float freeDepth(const float* depth_m, int width_px, int height_px, int window_px, int u,
+                         int v);
 
  private:
   /// Largest depth per kTilePx² tile (0 where none): bounds the free depth under a footprint.
@@ -57,12 +60,12 @@ class FreeSpaceCarver {
 
   CarveConfig config_;
   ThreadPool* pool_;
-  std::vector<float> tile_max_depth_m_;   // largest depth per tile, reused across frames
+  std::vector<float> tile_max_depth_m_;  // largest depth per tile, reused across frames
   int tiles_x_ = 0, tiles_y_ = 0;
-  std::vector<uint32_t> queued_stamp_;    // by block row: the frame that queued it
+  std::vector<uint32_t> queued_stamp_;  // by block row: the frame that queued it
   uint32_t stamp_ = 0;
-  std::vector<VoxelBlock*> candidates_;   // reused across frames
-  std::vector<uint64_t> block_updates_;   // per candidate
+  std::vector<VoxelBlock*> candidates_;  // reused across frames
+  std::vector<uint64_t> block_updates_;  // per candidate
 };
 
 }  // namespace stereo_fusion

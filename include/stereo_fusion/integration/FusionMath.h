@@ -30,10 +30,8 @@ inline float steinbrueckerWeight(float sdf_m, float delta_m, float truncation_m)
 inline float measurementWeight(WeightMode mode, float sdf_m, float delta_m, float truncation_m,
                                float surface_depth_m, float reference_depth_m) {
   switch (mode) {
-    case WeightMode::kConstant:
-      return sdf_m > truncation_m ? 0.0f : 1.0f;
-    case WeightMode::kSteinbruecker:
-      return steinbrueckerWeight(sdf_m, delta_m, truncation_m);
+    case WeightMode::kConstant: return sdf_m > truncation_m ? 0.0f : 1.0f;
+    case WeightMode::kSteinbruecker: return steinbrueckerWeight(sdf_m, delta_m, truncation_m);
     case WeightMode::kDepthAware: {
       // Stereo depth error grows as z² (eq. 3.1): weight by the inverse, 1 at z_ref.
       const float ratio = reference_depth_m / surface_depth_m;
@@ -55,9 +53,10 @@ constexpr float kFinerLevelWeightScale = 0.25f;
 /// or arrived — or one of the two is an outlier. It keeps `keep` (1 − free_space_decay) of
 /// itself, so a change wins within a few frames rather than after as many frames as W counts;
 /// otherwise W. keep = 1 is the thesis' plain running average.
-inline float weightBeforeUpdate(float stored_sdf_m, float stored_weight, float truncated_sdf_m, float truncation_m,
-                                float keep) {
-  return std::abs(stored_sdf_m - truncated_sdf_m) > truncation_m ? stored_weight * keep : stored_weight;
+inline float weightBeforeUpdate(float stored_sdf_m, float stored_weight, float truncated_sdf_m,
+                                float truncation_m, float keep) {
+  return std::abs(stored_sdf_m - truncated_sdf_m) > truncation_m ? stored_weight * keep
+                                                                 : stored_weight;
 }
 
 /// Eq. 3.8–3.9: D ← (W·D + w·d)/(W + w), W ← min(W + w, W_max); colour averaged with the same

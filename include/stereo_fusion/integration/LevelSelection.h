@@ -9,7 +9,8 @@ namespace stereo_fusion {
 struct MapperConfig;
 
 enum class LevelMode {
-  kDepth,  ///< the configured switch depths scale2_min_depth_m / scale4_min_depth_m (thesis: 2 m, 4 m)
+  kDepth,  ///< the configured switch depths scale2_min_depth_m / scale4_min_depth_m (thesis: 2 m, 4
+           ///< m)
   kNoise,  ///< from the camera: where σ_z = z² · σ_d / (f · b) exceeds the voxel edge of a level
 };
 
@@ -31,6 +32,7 @@ double disparityNoisePx(const MapperConfig& config, double disparity_step_px);
 /// is at least its depth error, so level l starts at z_l = sqrt(2^(l−1) · voxel_size_m · f · b /
 /// σ_d) with σ_d = disparityNoisePx(config, disparity_step_px): a precise camera (long
 /// baseline, small σ_d) stays fine farther, a noisy one goes coarse sooner.
-LevelThresholds levelThresholdsFor(const MapperConfig& config, double fb_px_m, double disparity_step_px = 0.0);
+LevelThresholds levelThresholdsFor(const MapperConfig& config, double fb_px_m,
+                                   double disparity_step_px = 0.0);
 
 }  // namespace stereo_fusion

@@ -11,7 +11,8 @@ namespace stereo_fusion {
 /// Pixels a frame's outlier rejection made unusable, by rule.
 struct OutlierRejectionStats {
   uint64_t speckle_pixels = 0;  ///< in blobs of at most speckle_max_area_px disparities
-  uint64_t edge_pixels = 0;     ///< nearer than a neighbour within edge_reject_radius_px by > edge_reject_jump_px
+  uint64_t edge_pixels =
+      0;  ///< nearer than a neighbour within edge_reject_radius_px by > edge_reject_jump_px
 };
 
 /// Measurement-level outlier rejection, before the lookup (stage 0): pixels the stereo geometry
@@ -37,15 +38,16 @@ class OutlierRejection {
  public:
   /// Applies both rules (each off when its size parameter is 0) to the usable pixels of
   /// `measurements`, built from `disparity_px` (CV_32FC1, same size).
-  OutlierRejectionStats apply(const cv::Mat& disparity_px, const MapperConfig& config, MeasurementImage* measurements);
+  OutlierRejectionStats apply(const cv::Mat& disparity_px, const MapperConfig& config,
+                              MeasurementImage* measurements);
 
  private:
   cv::Mat usable_;       // CV_8U: 255 where the measurement image holds a depth (speckles)
   cv::Mat reject_;       // CV_8U: 255 where a rule rejects
   cv::Mat fixed_point_;  // CV_16S disparities in 1/16 px for filterSpeckles
   cv::Mat speckle_buffer_;
-  cv::Mat masked_;       // disparities, +inf where unusable
-  cv::Mat farthest_;     // smallest usable disparity in each pixel's window
+  cv::Mat masked_;    // disparities, +inf where unusable
+  cv::Mat farthest_;  // smallest usable disparity in each pixel's window
 };
 
 }  // namespace stereo_fusion

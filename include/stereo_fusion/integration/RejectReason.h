@@ -18,15 +18,16 @@ enum class RejectReason : uint8_t {
   kPoseJump,             ///< camera moved more than max_pose_jump_m since the last fused frame
   kTimestampJump,        ///< timestamp more than max_timestamp_gap_s after the last fused frame's
   kAllocationBudget,     ///< its bands reach more new blocks than max_new_blocks_per_frame
-  kIncoherentDisparity,  ///< fewer usable disparities agree with a neighbour than min_coherent_pixel_share
+  kIncoherentDisparity,  ///< fewer usable disparities agree with a neighbour than
+                         ///< min_coherent_pixel_share
   kUnreadable,           ///< the dataset frame could not be read (offline)
   kQueueFull,            ///< the frame queue was full (queue_size, drop_oldest)
   kTfTimeout,            ///< no camera pose from tf within tf_timeout_s
   kBadStamp,             ///< stamped 0, or ahead of the clock by more than max_stamp_ahead_s
-  kSuperseded,           ///< arrived before a reset or load_map: it belongs to the map they replaced
-  kSyncDuplicate,        ///< a second disparity of a stamp whose frame was not matched yet
-  kError,                ///< fusing it threw (e.g. out of memory); the mesh was rebuilt from the map
-  kCount,                ///< not a reason: the number of values
+  kSuperseded,     ///< arrived before a reset or load_map: it belongs to the map they replaced
+  kSyncDuplicate,  ///< a second disparity of a stamp whose frame was not matched yet
+  kError,          ///< fusing it threw (e.g. out of memory); the mesh was rebuilt from the map
+  kCount,          ///< not a reason: the number of values
 };
 
 constexpr size_t kRejectReasonCount = static_cast<size_t>(RejectReason::kCount);

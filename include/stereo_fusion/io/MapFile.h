@@ -15,11 +15,10 @@ namespace stereo_fusion {
 /// Map file format, version 3 (all numbers little-endian):
 ///
 ///   header, 80 bytes:
-///     0  char[8] magic "SFUSEMAP"       8  u32 version (kMapFileVersion)   12 u32 header bytes (80)
-///     16 f64 voxel_size_m               24 f64 truncation_vox
-///     32 f64 scale2_min_depth_m         40 f64 scale4_min_depth_m
-///     48 u64 frames integrated          56 u64 block count
-///     64 u64 payload bytes              72 u32 CRC-32 of the payload      76 u32 CRC-32 of header bytes 0..75
+///     0  char[8] magic "SFUSEMAP"       8  u32 version (kMapFileVersion)   12 u32 header bytes
+///     (80) 16 f64 voxel_size_m               24 f64 truncation_vox 32 f64 scale2_min_depth_m 40
+///     f64 scale4_min_depth_m 48 u64 frames integrated          56 u64 block count 64 u64 payload
+///     bytes              72 u32 CRC-32 of the payload      76 u32 CRC-32 of header bytes 0..75
 ///   payload: block count records, sorted by key, each a 24-byte head:
 ///     i32 x, y, z; u64 last_update_frame (for the eviction order); u8 levels (bit l: level l is
 ///     stored); u8 0, 0, 0;
@@ -62,7 +61,8 @@ struct MapFileInfo {
   double scale2_min_depth_m = 0;
   double scale4_min_depth_m = 0;
   uint64_t frames_integrated = 0;  ///< of the mapper that saved it
-  uint64_t block_count = 0;  ///< as the header announces (a version-1 file's blocks without observations are not loaded)
+  uint64_t block_count = 0;        ///< as the header announces (a version-1 file's blocks without
+                                   ///< observations are not loaded)
   /// Each block's last update frame as the file records it, in key order.
   std::vector<std::pair<BlockKey, uint64_t>> last_update_frames;
   /// Version 3: the seen-free space saved with the map (cell_m 0 for older versions).
@@ -73,13 +73,15 @@ struct MapFileInfo {
 using LastUpdateFrameOf = std::function<uint64_t(const VoxelBlock&)>;
 
 /// The file bytes for `map`, built with `config`, after `frames_integrated` frames.
-std::vector<uint8_t> encodeMapFile(const BlockOctree& map, const MapperConfig& config, uint64_t frames_integrated,
+std::vector<uint8_t> encodeMapFile(const BlockOctree& map, const MapperConfig& config,
+                                   uint64_t frames_integrated,
                                    const LastUpdateFrameOf& last_update_frame = {},
                                    const SeenFreeSpace& free_space = {});
 /// encodeMapFile() without its two checksums (left zero): the part that reads the map, so a
 /// caller that locks the map holds the lock only for it. sealMapFile() completes the bytes.
 std::vector<uint8_t> encodeMapFileUnsealed(const BlockOctree& map, const MapperConfig& config,
-                                           uint64_t frames_integrated, const LastUpdateFrameOf& last_update_frame = {},
+                                           uint64_t frames_integrated,
+                                           const LastUpdateFrameOf& last_update_frame = {},
                                            const SeenFreeSpace& free_space = {});
 /// Fills in both checksums of bytes from encodeMapFileUnsealed() (again, on sealed bytes: the
 /// same values).
@@ -98,7 +100,7 @@ bool decodeMapFile(const uint8_t* data, size_t size, const MapperConfig& config,
 /// they are checksummed and reach the disk.
 bool writeMapFileBytes(const std::string& path, std::vector<uint8_t>* bytes, std::string* error);
 /// Reads `path` and decodeMapFile()s it; errors are prefixed with the path.
-bool readMapFile(const std::string& path, const MapperConfig& config, BlockOctree* out, MapFileInfo* info,
-                 std::string* error);
+bool readMapFile(const std::string& path, const MapperConfig& config, BlockOctree* out,
+                 MapFileInfo* info, std::string* error);
 
 }  // namespace stereo_fusion

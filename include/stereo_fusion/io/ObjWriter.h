@@ -21,7 +21,8 @@ struct ObjExportOptions {
 struct ObjExportInfo {
   std::vector<std::string> files;  ///< the .obj, the .mtl and every atlas PNG, full paths
   size_t textured_blocks = 0;      ///< blocks drawn from their texture patch
-  size_t vertex_colour_blocks = 0; ///< blocks without a patch, drawn from their baked vertex colours
+  size_t vertex_colour_blocks =
+      0;  ///< blocks without a patch, drawn from their baked vertex colours
   /// Where each textured block's patch sits in the atlases.
   std::unordered_map<BlockKey, AtlasPlacement, BlockKeyHash> placements;
 };

@@ -13,7 +13,7 @@ bool writeEsdfPly(const std::string& path, const PlanningMap& planning, std::str
 
 /// The ROS map_server pair: `pgm_path` (P5, row 0 at the largest y; occupied 0, free 254,
 /// unknown 205) and `yaml_path` (image, resolution, origin, negate, thresholds, mode trinary).
-bool writeOccupancyMap(const std::string& pgm_path, const std::string& yaml_path, const OccupancyGrid2D& grid,
-                       std::string* error);
+bool writeOccupancyMap(const std::string& pgm_path, const std::string& yaml_path,
+                       const OccupancyGrid2D& grid, std::string* error);
 
 }  // namespace stereo_fusion

@@ -20,7 +20,7 @@ struct AtlasPlacement {
 /// included) are not allowed (the texture cap keeps them far smaller).
 struct AtlasLayout {
   std::vector<AtlasPlacement> placements;  ///< one per input size, in input order
-  std::vector<cv::Size> atlas_sizes;       ///< width = atlas_edge_px; height trimmed to the used rows
+  std::vector<cv::Size> atlas_sizes;  ///< width = atlas_edge_px; height trimmed to the used rows
 };
 
 /// Lays out `sizes` in atlases of at most atlas_edge_px × atlas_edge_px.
@@ -28,6 +28,7 @@ AtlasLayout packAtlas(const std::vector<cv::Size>& sizes, int atlas_edge_px, int
 
 /// Renders the atlas images (CV_8UC3, RGB) of `layout` from `patches` (RGB, in the order of
 /// the sizes given to packAtlas); gutters hold the patch's replicated border.
-std::vector<cv::Mat> renderAtlases(const AtlasLayout& layout, const std::vector<cv::Mat>& patches, int gutter_px);
+std::vector<cv::Mat> renderAtlases(const AtlasLayout& layout, const std::vector<cv::Mat>& patches,
+                                   int gutter_px);
 
 }  // namespace stereo_fusion

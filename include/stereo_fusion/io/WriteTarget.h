@@ -17,8 +17,9 @@ std::string temporaryPathBeside(const std::string& path);
 /// `write` fill a temporary beside it (false with `*error` set: the temporary is removed) and
 /// renames that into place, so a reader never sees half a file and a failure leaves the old one.
 /// A rename failure reads "<path>: <what> (rename failed: <reason>)".
-bool writeThroughTemporary(const std::string& path, const std::string& what,
-                           const std::function<bool(const std::string& temporary_path, std::string* error)>& write,
-                           std::string* error);
+bool writeThroughTemporary(
+    const std::string& path, const std::string& what,
+    const std::function<bool(const std::string& temporary_path, std::string* error)>& write,
+    std::string* error);
 
 }  // namespace stereo_fusion

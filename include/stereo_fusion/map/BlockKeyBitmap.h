@@ -19,7 +19,8 @@ class BlockKeyBitmap {
   /// Empties the set for keys within [lo, hi] (inclusive on every axis). False, leaving the set
   /// unusable until the next reset(), if the box is empty or needs more than kMaxBits bits.
   bool reset(const BlockKey& lo, const BlockKey& hi) {
-    const int64_t nx = int64_t{hi.x} - lo.x + 1, ny = int64_t{hi.y} - lo.y + 1, nz = int64_t{hi.z} - lo.z + 1;
+    const int64_t nx = int64_t{hi.x} - lo.x + 1, ny = int64_t{hi.y} - lo.y + 1,
+                  nz = int64_t{hi.z} - lo.z + 1;
     if (nx <= 0 || ny <= 0 || nz <= 0) return false;
     // Each (y, z) row starts on a word, so reading back needs no division.
     const int64_t words_per_row = (nx + 63) / 64;
@@ -35,7 +36,8 @@ class BlockKeyBitmap {
   /// Adds `key`, which must lie within the box given to reset().
   void insert(const BlockKey& key) {
     const uint32_t x = static_cast<uint32_t>(key.x - lo_.x);
-    const size_t row = static_cast<size_t>(key.z - lo_.z) * ny_ + static_cast<size_t>(key.y - lo_.y);
+    const size_t row =
+        static_cast<size_t>(key.z - lo_.z) * ny_ + static_cast<size_t>(key.y - lo_.y);
     words_[row * words_per_row_ + x / 64] |= uint64_t{1} << (x % 64);
   }
 

@@ -29,7 +29,7 @@ class BlockKeySet {
   /// Adds `key`; true if it was not in the set yet. At most `max_keys` (reset()) insertions.
   bool insert(const BlockKey& key) {
     const size_t mask = slots_.size() - 1;
-    for (size_t i = BlockKeyHash{}(key) & mask;; i = (i + 1) & mask) {
+    for (size_t i = BlockKeyHash{}(key)&mask;; i = (i + 1) & mask) {
       Slot& slot = slots_[i];
       if (slot.generation != generation_) {
         slot = {key, generation_};

@@ -68,9 +68,10 @@ class BlockOctree {
   /// is out of range. Thread-safe. `allocated` (optional) tells whether it was created now.
   VoxelBlock* findOrAllocate(const BlockKey& key, bool* allocated = nullptr);
   /// findOrAllocate() of each of keys[0, n): blocks[i] and allocated[i] (1 if created now) for
-  /// keys[i]. Counts one search per key in range, as findOrAllocate() does. Thread-safe as findOrAllocate(). Fastest on sorted keys: each
-  /// search starts from the deepest node of the previous key's path that holds the key, which
-  /// for neighbouring keys is a few levels up rather than the root.
+  /// keys[i]. Counts one search per key in range, as findOrAllocate() does. Thread-safe as
+  /// findOrAllocate(). Fastest on sorted keys: each search starts from the deepest node of the
+  /// previous key's path that holds the key, which for neighbouring keys is a few levels up rather
+  /// than the root.
   void findOrAllocateBatch(const BlockKey* keys, size_t n, VoxelBlock** blocks, uint8_t* allocated);
   /// find() of each of keys[0, n) into blocks[i] (nullptr where missing), as findOrAllocateBatch()
   /// searches but allocating nothing. Counts one search per key in range.

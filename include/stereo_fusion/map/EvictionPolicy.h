@@ -20,7 +20,8 @@ struct EvictionLimits {
 class EvictionPolicy {
  public:
   /// Blocks `updated` (keys; those not in `map` are skipped) were changed by frame `frame_index`.
-  void recordUpdates(const BlockOctree& map, const std::vector<BlockKey>& updated, uint64_t frame_index);
+  void recordUpdates(const BlockOctree& map, const std::vector<BlockKey>& updated,
+                     uint64_t frame_index);
   /// Sets one block's last update frame (a loaded map's, from its file).
   void setLastUpdateFrame(const BlockOctree& map, const VoxelBlock& block, uint64_t frame_index);
   /// The frame that last updated `block` (0: never, as far as this policy saw).

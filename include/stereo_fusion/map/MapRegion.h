@@ -26,9 +26,9 @@ struct MapRegion {
   std::string describe() const;
 
   Shape shape = Shape::kBox;
-  Eigen::AlignedBox3d box_m;          ///< kBox
+  Eigen::AlignedBox3d box_m;                           ///< kBox
   Eigen::Vector3d centre_m = Eigen::Vector3d::Zero();  ///< kSphere
-  double radius_m = 0.0;              ///< kSphere
+  double radius_m = 0.0;                               ///< kSphere
 };
 
 }  // namespace stereo_fusion

@@ -16,7 +16,7 @@ struct RegionClearing {
   std::vector<BlockKey> emptied;
   uint64_t blocks_visited = 0;  ///< blocks of the map the region reaches
   uint64_t voxels_cleared = 0;  ///< observed voxels made unobserved, all levels
-  size_t bytes_freed = 0;       ///< voxel storage of the levels freed (emptied blocks' levels included)
+  size_t bytes_freed = 0;  ///< voxel storage of the levels freed (emptied blocks' levels included)
 };
 
 /// Forgets the region: every observed voxel, at every level, whose centre lies in `region` is

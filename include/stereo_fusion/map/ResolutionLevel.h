@@ -16,7 +16,9 @@ constexpr int levelScale(int level) { return 1 << level; }
 /// Offset O of `level` in the block's flat voxel array (eq. 3.5): 0, 512, 576.
 constexpr int levelOffset(int level) { return level == 0 ? 0 : (level == 1 ? 512 : 576); }
 /// Voxel count of `level`: B³.
-constexpr int levelVoxelCount(int level) { return levelSide(level) * levelSide(level) * levelSide(level); }
+constexpr int levelVoxelCount(int level) {
+  return levelSide(level) * levelSide(level) * levelSide(level);
+}
 
 /// Depth thresholds of eq. 3.2. The thesis' s(z) = 2^⌊log2 z⌋ clamped to {1, 2, 4} switches to
 /// s = 2 at z = 2 m and to s = 4 at z = 4 m; both switch depths are parameters here.
@@ -39,8 +41,8 @@ inline int levelForDepth(double depth_m, const LevelThresholds& t) {
 /// measurement's depth error is below two voxels of that finer level (levelThresholdsFor());
 /// it keeps its own band there and a quarter of its weight (kFinerLevelWeightScale), so it
 /// fills in and refines what nearer views built without allocating anything.
-inline bool measurementUpdatesLevel(int measurement_level, int voxel_level, bool voxel_level_allocated,
-                                    bool update_allocated_finer) {
+inline bool measurementUpdatesLevel(int measurement_level, int voxel_level,
+                                    bool voxel_level_allocated, bool update_allocated_finer) {
   if (voxel_level >= measurement_level) return true;
   return update_allocated_finer && voxel_level_allocated && voxel_level == measurement_level - 1;
 }

@@ -36,7 +36,8 @@ class TruncationBand {
   template <typename T = double>
   T updateM(int measurement_level, int voxel_level) const {
     const T level_voxel_m = static_cast<T>(voxel_size_m_) * static_cast<T>(levelScale(voxel_level));
-    return std::max(measurementM<T>(measurement_level), static_cast<T>(kMinVoxelsOfUpdatedLevel) * level_voxel_m);
+    return std::max(measurementM<T>(measurement_level),
+                    static_cast<T>(kMinVoxelsOfUpdatedLevel) * level_voxel_m);
   }
 
   /// The widest band of any measurement on any level: how far from a surface any voxel can be

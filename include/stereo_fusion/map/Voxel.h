@@ -12,6 +12,7 @@ struct Voxel {
   uint8_t r = 0, g = 0, b = 0;
   uint8_t reserved = 0;  // keeps the voxel at 12 bytes and 4-byte aligned
 };
-static_assert(sizeof(Voxel) == 12, "Voxel must stay 12 bytes: the memory figures of doc/maps.md rely on it");
+static_assert(sizeof(Voxel) == 12,
+              "Voxel must stay 12 bytes: the memory figures of doc/maps.md rely on it");
 
 }  // namespace stereo_fusion

@@ -50,8 +50,10 @@ class NeighbourLinks {
 static_assert(NeighbourLinks::slot(-1, -1, -1) == 0 && NeighbourLinks::slot(1, 1, 1) == 25 &&
                   NeighbourLinks::slot(1, 0, 0) == 13 && NeighbourLinks::slot(-1, 0, 0) == 12,
               "slots number {-1,0,1}³ x fastest without the centre");
-static_assert(NeighbourLinks::opposite(NeighbourLinks::slot(1, -1, 0)) == NeighbourLinks::slot(-1, 1, 0) &&
-                  NeighbourLinks::opposite(NeighbourLinks::slot(0, 0, 1)) == NeighbourLinks::slot(0, 0, -1),
+static_assert(NeighbourLinks::opposite(NeighbourLinks::slot(1, -1, 0)) ==
+                      NeighbourLinks::slot(-1, 1, 0) &&
+                  NeighbourLinks::opposite(NeighbourLinks::slot(0, 0, 1)) ==
+                      NeighbourLinks::slot(0, 0, -1),
               "opposite() negates the offset");
 
 /// A leaf of the BlockOctree: one cube of the world holding the same volume at three
@@ -69,9 +71,9 @@ static_assert(NeighbourLinks::opposite(NeighbourLinks::slot(1, -1, 0)) == Neighb
 /// update_allocated_finer_level, into level L − 1 where the block already holds it (at a
 /// quarter weight, measurementUpdatesLevel()). So the coarsest level holds every
 /// measurement that reached the block, and a finer level holds the measurements close enough
-/// to deserve it plus, once it exists, those one level coarser. All levels therefore sample the same fused surface; the
-/// mesher picks the finest level with enough observation and can read any coarser level of
-/// a neighbour to close a seam.
+/// to deserve it plus, once it exists, those one level coarser. All levels therefore sample the
+/// same fused surface; the mesher picks the finest level with enough observation and can read any
+/// coarser level of a neighbour to close a seam.
 struct VoxelBlock {
   static constexpr int kVoxelCount = 584;
 
@@ -88,7 +90,9 @@ struct VoxelBlock {
   }
   /// Index of voxel (i, j, k) within the voxels of one level of `side`³ (index() without the
   /// level's offset).
-  static constexpr int indexInLevel(int side, int i, int j, int k) { return i + side * (j + side * k); }
+  static constexpr int indexInLevel(int side, int i, int j, int k) {
+    return i + side * (j + side * k);
+  }
   /// The level a flat index lies in.
   static constexpr int levelOfIndex(int flat_index) {
     return flat_index < levelOffset(1) ? 0 : (flat_index < levelOffset(2) ? 1 : 2);
@@ -96,7 +100,9 @@ struct VoxelBlock {
 
   /// The voxels of `level` (levelVoxelCount(level) of them, eq. 3.4 order): its storage, or a
   /// shared all-unobserved level when it is not allocated.
-  const Voxel* level(int level) const { return levels_[level] ? levels_[level].get() : unobservedLevel(); }
+  const Voxel* level(int level) const {
+    return levels_[level] ? levels_[level].get() : unobservedLevel();
+  }
   /// The level's storage, or nullptr when it is not allocated.
   Voxel* levelIfAllocated(int level) { return levels_[level].get(); }
   bool hasLevel(int level) const { return levels_[level] != nullptr; }

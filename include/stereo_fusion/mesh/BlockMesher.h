@@ -60,8 +60,8 @@ constexpr uint16_t meshSignBit(int region, bool non_negative) {
 /// voxel i0 with fractions `frac` (0..1 inside the cell; beyond it, linear extrapolation):
 /// signed distance and colour. False if a voxel with non-zero weight is unobserved. The one
 /// weighted sum of the mesher's samples (blockField()) and the seam fill.
-inline bool trilinearVoxels(const Voxel* voxels, int side, const int i0[3], const float frac[3], float* sdf,
-                            float rgb[3]) {
+inline bool trilinearVoxels(const Voxel* voxels, int side, const int i0[3], const float frac[3],
+                            float* sdf, float rgb[3]) {
   float acc = 0.0f, acc_rgb[3] = {0, 0, 0};
   for (int c = 0; c < 8; ++c) {
     const int dx = c & 1, dy = (c >> 1) & 1, dz = (c >> 2) & 1;
@@ -82,7 +82,8 @@ inline bool trilinearVoxels(const Voxel* voxels, int side, const int i0[3], cons
 
 /// What the mesher samples of `block`: its voxels at state.level, or (state.seam_filled) their
 /// face-filled copy, built in `scratch`.
-const Voxel* meshVoxels(const VoxelBlock& block, const MeshBlockState& state, std::vector<Voxel>* scratch);
+const Voxel* meshVoxels(const VoxelBlock& block, const MeshBlockState& state,
+                        std::vector<Voxel>* scratch);
 
 /// Fills `*out` with the voxels of `level` in which every unobserved voxel on the block's
 /// faces (i, j or k = 0 or side − 1) takes the trilinear field of the block's next coarser level
@@ -97,9 +98,9 @@ bool fillFacesFromCoarserLevels(const VoxelBlock& block, int level, std::vector<
 
 /// The level a block is meshed at: the finest level whose observed surface area (observed
 /// voxels × voxel volume ÷ band thickness, ∝ n·s²) is at least `level_min_coverage` × the
-/// largest of its levels'. A block seen only from far meshes at 2³, one seen from near at 8³, and one
-/// seen from near in only a corner of what was seen from far stays coarse rather than
-/// opening holes.
+/// largest of its levels'. A block seen only from far meshes at 2³, one seen from near at 8³, and
+/// one seen from near in only a corner of what was seen from far stays coarse rather than opening
+/// holes.
 int chooseMeshLevel(const VoxelBlock& block, double level_min_coverage);
 
 /// Sets state->sign_bits from the observed voxels of meshVoxels(block, *state, …).
@@ -112,11 +113,13 @@ void refreshMeshLevel(const VoxelBlock& block, const MeshingParams& params, Mesh
 
 /// refreshMeshLevel() as written: chooseMeshLevel(), the fill, then refreshMeshSigns(). The
 /// reference the AVX2 path is tested against.
-void refreshMeshLevelScalar(const VoxelBlock& block, const MeshingParams& params, MeshBlockState* state);
+void refreshMeshLevelScalar(const VoxelBlock& block, const MeshingParams& params,
+                            MeshBlockState* state);
 
 /// Same level, fill and sign bits as refreshMeshLevelScalar(), eight voxels per step, counting
 /// each level once and reading signs of the meshed voxels only. Only call it when avx2Supported().
-void refreshMeshLevelAvx2(const VoxelBlock& block, const MeshingParams& params, MeshBlockState* state);
+void refreshMeshLevelAvx2(const VoxelBlock& block, const MeshingParams& params,
+                          MeshBlockState* state);
 
 /// Which of BlockMesher's paths mesh a neighbourhood. Production meshes with kFast; kGeneralOnly
 /// exists for tests: every box of every neighbourhood through the general path (every point

@@ -48,7 +48,8 @@ class MeshStore {
   /// The owners a change of `updated` must re-mesh (existing blocks only), sorted by key.
   /// The searches for `updated` run on `pool` when given; their owners are then reached through
   /// the neighbour links (keys with no block, such as erased ones, through searches).
-  static std::vector<BlockKey> affectedOwners(const BlockOctree& map, const std::vector<BlockKey>& updated,
+  static std::vector<BlockKey> affectedOwners(const BlockOctree& map,
+                                              const std::vector<BlockKey>& updated,
                                               ThreadPool* pool = nullptr);
 
  private:
@@ -59,17 +60,20 @@ class MeshStore {
   };
   /// Owners of the seams of `present` blocks (through their links) and of `absent` keys (through
   /// searches), sorted by key without duplicates (`seen`: scratch for the de-duplication).
-  static std::vector<Owner> ownersOf(const BlockOctree& map, const std::vector<const VoxelBlock*>& present,
+  static std::vector<Owner> ownersOf(const BlockOctree& map,
+                                     const std::vector<const VoxelBlock*>& present,
                                      const std::vector<BlockKey>& absent, BlockKeySet* seen);
   MeshChanges remesh(const BlockOctree& map, const std::vector<Owner>& owners, ThreadPool* pool);
   /// The part of update() after the mesh levels are refreshed: `present` updated blocks and
   /// `absent` updated keys with no block, plus `erased`.
   MeshChanges remeshAround(const BlockOctree& map, std::vector<const VoxelBlock*> present,
-                           std::vector<BlockKey> absent, ThreadPool* pool, const std::vector<BlockKey>& erased);
+                           std::vector<BlockKey> absent, ThreadPool* pool,
+                           const std::vector<BlockKey>& erased);
 
   MeshingParams params_;
   BlockMesher mesher_;
-  MeshStates states_;  // the mesher's per-block cache, refreshed for every block before it is meshed
+  MeshStates
+      states_;  // the mesher's per-block cache, refreshed for every block before it is meshed
   SeamFills seam_fills_;  // during a pass: the face-filled copies its owners read, then freed
   std::unordered_map<BlockKey, SubMesh, BlockKeyHash> meshes_;
   std::vector<SubMesh> scratch_;

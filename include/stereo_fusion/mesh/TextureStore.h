@@ -28,10 +28,10 @@ struct TextureParams {
 
 /// What one texture pass did.
 struct TextureStats {
-  size_t retextured = 0;    ///< blocks given a new patch from the current frame
-  size_t reprojected = 0;   ///< blocks that kept their patch with UVs re-projected into it
-  size_t untextured = 0;    ///< re-meshed blocks left without a patch (vertex colour fallback)
-  size_t occluded = 0;      ///< blocks the current frame could not texture because a vertex was hidden
+  size_t retextured = 0;   ///< blocks given a new patch from the current frame
+  size_t reprojected = 0;  ///< blocks that kept their patch with UVs re-projected into it
+  size_t untextured = 0;   ///< re-meshed blocks left without a patch (vertex colour fallback)
+  size_t occluded = 0;  ///< blocks the current frame could not texture because a vertex was hidden
   double texture_ms = 0.0;
 };
 
@@ -65,7 +65,9 @@ class TextureStore {
   /// drops patches of blocks that no longer have a submesh or no longer fit their patch.
   void reprojectAll(const MeshStore& meshes);
 
-  const std::unordered_map<BlockKey, TexturePatch, BlockKeyHash>& patches() const { return patches_; }
+  const std::unordered_map<BlockKey, TexturePatch, BlockKeyHash>& patches() const {
+    return patches_;
+  }
   /// The patch of `key`, or nullptr (vertex colour).
   const TexturePatch* find(const BlockKey& key) const;
   /// Bytes held by all patches.
@@ -79,6 +81,7 @@ class TextureStore {
 
 /// Projects a world point through the patch's source camera into the patch's UV convention.
 /// False when the point is behind that camera.
-bool projectIntoPatch(const TexturePatch& patch, const Eigen::Vector3f& p_world, Eigen::Vector2f* uv);
+bool projectIntoPatch(const TexturePatch& patch, const Eigen::Vector3f& p_world,
+                      Eigen::Vector2f* uv);
 
 }  // namespace stereo_fusion

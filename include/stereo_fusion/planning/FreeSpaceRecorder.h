@@ -12,7 +12,7 @@
 namespace stereo_fusion {
 
 struct FreeSpaceStats {
-  uint64_t nodes_visited = 0;  ///< octree nodes of the frustum tested (all sizes)
+  uint64_t nodes_visited = 0;    ///< octree nodes of the frustum tested (all sizes)
   uint64_t cells_seen_free = 0;  ///< cells this frame saw empty (newly or again)
 };
 

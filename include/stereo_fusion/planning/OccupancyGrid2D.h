@@ -10,7 +10,8 @@ namespace stereo_fusion {
 /// that nav_msgs/OccupancyGrid, map_server and costmap_2d's static layer read. A column is
 /// occupied if any cell of it in the band is, else free if any is free, else unknown.
 struct OccupancyGrid2D {
-  static constexpr int8_t kOccupied = 100, kFree = 0, kUnknown = -1;  ///< nav_msgs/OccupancyGrid values
+  static constexpr int8_t kOccupied = 100, kFree = 0,
+                          kUnknown = -1;  ///< nav_msgs/OccupancyGrid values
   double resolution_m = 0.0;
   double origin_x_m = 0.0, origin_y_m = 0.0;  ///< world position of cell (0, 0)'s outer corner
   int width = 0, height = 0;

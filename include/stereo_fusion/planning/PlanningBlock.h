@@ -13,17 +13,20 @@ namespace stereo_fusion {
 /// in units of the cell edge (MapperConfig::planningCellSizeM()).
 struct CellIndex {
   int32_t x = 0, y = 0, z = 0;
-  friend bool operator==(const CellIndex& a, const CellIndex& b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
+  friend bool operator==(const CellIndex& a, const CellIndex& b) {
+    return a.x == b.x && a.y == b.y && a.z == b.z;
+  }
   friend bool operator!=(const CellIndex& a, const CellIndex& b) { return !(a == b); }
   CellIndex offset(int dx, int dy, int dz) const { return {x + dx, y + dy, z + dz}; }
 };
 
 /// What the map knows of a cell.
 enum class CellState : uint8_t {
-  kUnknown = 0,   ///< never seen: neither a surface nor space a frame saw empty
-  kFree = 1,      ///< seen empty (a ray passed through it short of its surface, or the TSDF's
-                  ///< observed voxels in it all lie in front of a surface)
-  kOccupied = 2,  ///< holds a surface or the space just behind one (an observed TSDF voxel with sdf ≥ 0)
+  kUnknown = 0,  ///< never seen: neither a surface nor space a frame saw empty
+  kFree = 1,     ///< seen empty (a ray passed through it short of its surface, or the TSDF's
+                 ///< observed voxels in it all lie in front of a surface)
+  kOccupied =
+      2,  ///< holds a surface or the space just behind one (an observed TSDF voxel with sdf ≥ 0)
 };
 
 /// 8³ planning cells: the unit of allocation of the planning layer (its own sparse grid, keyed
@@ -82,7 +85,9 @@ inline BlockKey planningBlockOf(const CellIndex& cell) {
           floorDiv(cell.z, PlanningBlock::kSide)};
 }
 inline int cellInBlock(const CellIndex& cell) {
-  auto local = [](int32_t v) { return v - PlanningBlock::kSide * floorDiv(v, PlanningBlock::kSide); };
+  auto local = [](int32_t v) {
+    return v - PlanningBlock::kSide * floorDiv(v, PlanningBlock::kSide);
+  };
   return PlanningBlock::index(local(cell.x), local(cell.y), local(cell.z));
 }
 inline CellIndex cellOf(const BlockKey& block, int cell) {

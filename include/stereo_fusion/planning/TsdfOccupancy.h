@@ -10,7 +10,8 @@ namespace stereo_fusion {
 struct TsdfCellState {
   CellIndex cell;
   bool observed = false;  ///< some voxel overlapping the cell is observed (weight > 0)
-  bool occupied = false;  ///< the finest level observed there has a voxel with sdf ≥ 0 over the cell
+  bool occupied =
+      false;  ///< the finest level observed there has a voxel with sdf ≥ 0 over the cell
 };
 
 /// The planning cells a TSDF block covers, and their state read from its voxels. A planning cell

@@ -31,7 +31,8 @@ struct BagTopics {
 /// load with the reason; the others load normally.
 class BagSequence : public FrameSource {
  public:
-  static std::unique_ptr<BagSequence> open(const std::string& path, const BagTopics& topics, std::string* error);
+  static std::unique_ptr<BagSequence> open(const std::string& path, const BagTopics& topics,
+                                           std::string* error);
 
   size_t size() const override { return disparities_.size(); }
   bool load(size_t i, StereoFrame* frame, std::string* error) const override;

@@ -34,8 +34,8 @@ namespace stereo_fusion {
 
 class FrameInput {
  public:
-  FrameInput(ros::NodeHandle& nh, const NodeConfig& node, MappingSession* session, const tf2_ros::Buffer* tf,
-             MeshPublisher* publisher, NodeStats* stats);
+  FrameInput(ros::NodeHandle& nh, const NodeConfig& node, MappingSession* session,
+             const tf2_ros::Buffer* tf, MeshPublisher* publisher, NodeStats* stats);
   /// Stops the worker (the frame in hand is finished or dropped first).
   ~FrameInput();
 
@@ -55,7 +55,8 @@ class FrameInput {
   using ImageMsg = sensor_msgs::Image;
   using InfoMsg = sensor_msgs::CameraInfo;
   using ExactPolicy = message_filters::sync_policies::ExactTime<DisparityMsg, ImageMsg, InfoMsg>;
-  using ApproxPolicy = message_filters::sync_policies::ApproximateTime<DisparityMsg, ImageMsg, InfoMsg>;
+  using ApproxPolicy =
+      message_filters::sync_policies::ApproximateTime<DisparityMsg, ImageMsg, InfoMsg>;
   struct QueuedFrame {
     DisparityMsg::ConstPtr disparity;
     ImageMsg::ConstPtr image;
@@ -74,13 +75,15 @@ class FrameInput {
     if (exact_sync_) exact_sync_->template add<I>(msg);
     if (approx_sync_) approx_sync_->template add<I>(msg);
   }
-  void onFrame(const DisparityMsg::ConstPtr& d, const ImageMsg::ConstPtr& i, const InfoMsg::ConstPtr& c);
+  void onFrame(const DisparityMsg::ConstPtr& d, const ImageMsg::ConstPtr& i,
+               const InfoMsg::ConstPtr& c);
   void workerLoop();
   void processFrame(const QueuedFrame& frame);
   /// Counts a frame dropped before the map under `reason` and says why (throttled).
   void drop(RejectReason reason, const std::string& why);
   /// Waits (wall time: a paused bag stops the ROS clock) up to tf_timeout_s for the camera pose.
-  bool waitForPose(const std_msgs::Header& header, Eigen::Isometry3d* T_world_camera, std::string* error);
+  bool waitForPose(const std_msgs::Header& header, Eigen::Isometry3d* T_world_camera,
+                   std::string* error);
 
   const NodeConfig& node_;
   MappingSession* session_;
@@ -99,12 +102,14 @@ class FrameInput {
   message_filters::Subscriber<InfoMsg> info_sub_;
   std::unique_ptr<message_filters::Synchronizer<ExactPolicy>> exact_sync_;
   std::unique_ptr<message_filters::Synchronizer<ApproxPolicy>> approx_sync_;
-  /// Stamps each topic passed to the synchroniser, not matched yet: the first message of a stamp wins.
+  /// Stamps each topic passed to the synchroniser, not matched yet: the first message of a stamp
+  /// wins.
   std::mutex stamps_mutex_;
   RecentStamps disparity_stamps_{1}, image_stamps_{1}, info_stamps_{1};
   SequenceGaps disparity_seq_;  // roscpp runs one subscription's callbacks one at a time: no lock
 
-  std::atomic<uint64_t> disparities_in_{0}, disparities_missed_{0}, matched_{0}, ignored_duplicate_parts_{0};
+  std::atomic<uint64_t> disparities_in_{0}, disparities_missed_{0}, matched_{0},
+      ignored_duplicate_parts_{0};
   std::atomic<uint64_t> disparities_refused_{0};
   /// True if `stamp` is the newest fused frame's, in the current map epoch.
   bool isNewestFusedStamp(const ros::Time& stamp) const;

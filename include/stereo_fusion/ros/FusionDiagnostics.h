@@ -16,8 +16,9 @@ namespace stereo_fusion {
 
 class FusionDiagnostics {
  public:
-  FusionDiagnostics(ros::NodeHandle& nh, ros::NodeHandle& pnh, const NodeConfig& node, MappingSession* session,
-                    const FrameInput* frames, const TrajectoryInput* trajectories, const NodeStats* stats);
+  FusionDiagnostics(ros::NodeHandle& nh, ros::NodeHandle& pnh, const NodeConfig& node,
+                    MappingSession* session, const FrameInput* frames,
+                    const TrajectoryInput* trajectories, const NodeStats* stats);
 
  private:
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);

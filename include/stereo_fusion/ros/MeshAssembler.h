@@ -55,9 +55,9 @@ class MeshAssembler : public nodelet::Nodelet {
   /// The robot's texture patches (image and UVs only), kept in step with mesh_ by applyMeshUpdate.
   std::unordered_map<BlockKey, TexturePatch, BlockKeyHash> textures_;
   MeshMarkers markers_;
-  bool synced_ = false;        ///< mesh_ equals the robot's mesh at last_sequence_
+  bool synced_ = false;  ///< mesh_ equals the robot's mesh at last_sequence_
   uint64_t last_sequence_ = 0;
-  uint64_t session_ = 0;       ///< MeshUpdate::session of the mesh held
+  uint64_t session_ = 0;                            ///< MeshUpdate::session of the mesh held
   MeshEncoding encoding_ = MeshEncoding::kFloat32;  ///< of ~get_full_mesh
   float voxel_size_m_ = 0.0f;
   std_msgs::Header last_header_;

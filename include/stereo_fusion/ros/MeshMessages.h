@@ -35,15 +35,16 @@ MeshBlock toMeshBlock(const SubMesh& submesh, MeshEncoding encoding = MeshEncodi
 /// publisher sets it.
 MeshUpdate toMeshUpdate(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes,
                         const std::vector<BlockKey>& changed, const std::vector<BlockKey>& removed,
-                        const std_msgs::Header& header, double voxel_size_m, uint64_t sequence, bool full,
-                        MeshEncoding encoding = MeshEncoding::kFloat32, const TextureStore* textures = nullptr);
+                        const std_msgs::Header& header, double voxel_size_m, uint64_t sequence,
+                        bool full, MeshEncoding encoding = MeshEncoding::kFloat32,
+                        const TextureStore* textures = nullptr);
 
 /// The same with the patches as a plain key → patch map (a subscriber such as MeshAssembler
 /// holds what applyMeshUpdate decoded, not a TextureStore); null = no textures.
 MeshUpdate toMeshUpdate(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes,
                         const std::vector<BlockKey>& changed, const std::vector<BlockKey>& removed,
-                        const std_msgs::Header& header, double voxel_size_m, uint64_t sequence, bool full,
-                        MeshEncoding encoding,
+                        const std_msgs::Header& header, double voxel_size_m, uint64_t sequence,
+                        bool full, MeshEncoding encoding,
                         const std::unordered_map<BlockKey, TexturePatch, BlockKeyHash>* patches);
 
 /// Applies `update` to `mesh` (key → submesh), as a subscriber would; decodes both encodings.
@@ -53,16 +54,18 @@ MeshUpdate toMeshUpdate(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash
 /// leaves `mesh` and `textures` untouched. With
 /// `textures`, the blocks' patches are decoded into it too (image and UVs only; a block
 /// without UVs loses its patch).
-bool applyMeshUpdate(const MeshUpdate& update, std::unordered_map<BlockKey, SubMesh, BlockKeyHash>* mesh,
+bool applyMeshUpdate(const MeshUpdate& update,
+                     std::unordered_map<BlockKey, SubMesh, BlockKeyHash>* mesh,
                      std::unordered_map<BlockKey, TexturePatch, BlockKeyHash>* textures = nullptr);
 
 /// rviz markers for the changed blocks (one vertex-coloured TRIANGLE_LIST per block, namespace
 /// "mesh", a stable id per block) and DELETE markers for the removed ones.
 class MeshMarkers {
  public:
-  visualization_msgs::MarkerArray build(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes,
-                                        const std::vector<BlockKey>& changed,
-                                        const std::vector<BlockKey>& removed, const std_msgs::Header& header);
+  visualization_msgs::MarkerArray build(
+      const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes,
+      const std::vector<BlockKey>& changed, const std::vector<BlockKey>& removed,
+      const std_msgs::Header& header);
   /// A DELETEALL marker, and forget every id (after ~reset).
   visualization_msgs::MarkerArray clear(const std_msgs::Header& header);
   /// Blocks that currently have a marker id (drawn and not deleted since).

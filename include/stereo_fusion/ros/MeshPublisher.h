@@ -20,7 +20,8 @@ namespace stereo_fusion {
 /// the map it reads.
 class MeshPublisher {
  public:
-  MeshPublisher(ros::NodeHandle& private_nh, const NodeConfig& node, MappingSession* session, NodeStats* stats);
+  MeshPublisher(ros::NodeHandle& private_nh, const NodeConfig& node, MappingSession* session,
+                NodeStats* stats);
 
   /// A frame was fused (path, frustum, latency): call with the map lock held.
   void frameFusedLocked(const StereoFrame& frame, const std_msgs::Header& header);
@@ -46,7 +47,8 @@ class MeshPublisher {
   ros::Publisher mesh_update_pub_, markers_pub_, path_pub_, frustum_pub_, block_bounds_pub_;
   /// Its place in the mapper's log of mesh changes: what it has not sent yet.
   BlockChangeLog::Consumer consumer_ = 0;
-  const Mapper* subscribed_to_ = nullptr;  // the mapper consumer_ belongs to (a correction swaps it)
+  const Mapper* subscribed_to_ =
+      nullptr;  // the mapper consumer_ belongs to (a correction swaps it)
   MeshMarkers markers_;
   bool markers_full_pending_ = false;
   uint64_t sequence_ = 0;

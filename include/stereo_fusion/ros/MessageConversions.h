@@ -32,7 +32,7 @@ void toMessages(const StereoFrame& frame, const std_msgs::Header& header, float 
 
 /// T_world_camera as the tf transform world_frame → camera_header.frame_id.
 geometry_msgs::TransformStamped toTransform(const Eigen::Isometry3d& T_world_camera,
-                                           const std::string& world_frame,
-                                           const std_msgs::Header& camera_header);
+                                            const std::string& world_frame,
+                                            const std_msgs::Header& camera_header);
 
 }  // namespace stereo_fusion

@@ -24,7 +24,8 @@ class NodeStats {
     push(&mesh_pass_ms_, {meshing_ms, texture_ms, 0.0});
     ++mesh_passes_;
   }
-  /// One planning update that had work (Mapper::updatePlanning(): changed TSDF blocks re-read, ESDF).
+  /// One planning update that had work (Mapper::updatePlanning(): changed TSDF blocks re-read,
+  /// ESDF).
   void recordPlanningUpdate(double ms) {
     std::lock_guard<std::mutex> lock(mutex_);
     planning_ms_.push_back(ms);
@@ -71,8 +72,10 @@ class NodeStats {
     return v;
   }
 
-  std::atomic<uint64_t> pixels_rejected_speckle{0}, pixels_rejected_edge{0};  // OutlierRejection, fused frames
-  std::atomic<uint64_t> reanchored{0};  // frames the gate accepted as a relocalisation / clock reset
+  std::atomic<uint64_t> pixels_rejected_speckle{0},
+      pixels_rejected_edge{0};  // OutlierRejection, fused frames
+  std::atomic<uint64_t> reanchored{
+      0};  // frames the gate accepted as a relocalisation / clock reset
   // The occupancy grid last built (PlanningPublisher; 0 × 0 until someone subscribed).
   std::atomic<uint32_t> grid_width{0}, grid_height{0};
 

@@ -55,9 +55,9 @@ class PlanningPublisher {
   NodeStats* stats_;
   ros::Publisher grid_pub_, grid_updates_pub_, slice_pub_, occupied_pub_;
   ros::WallTimer timer_;
-  std::mutex tick_mutex_;      // one tick at a time (the timer may run on a multi-threaded queue)
-  bool replaced_ = true;       // guarded by the session's map lock: send the next grid whole
-  std::mutex grid_mutex_;      // guards the two below (the tick and new subscribers' callbacks)
+  std::mutex tick_mutex_;  // one tick at a time (the timer may run on a multi-threaded queue)
+  bool replaced_ = true;   // guarded by the session's map lock: send the next grid whole
+  std::mutex grid_mutex_;  // guards the two below (the tick and new subscribers' callbacks)
   std::optional<OccupancyGrid2D> grid_;  // the grid subscribers hold now
   nav_msgs::OccupancyGrid grid_msg_;     // the same as a message, for a new subscriber
 };

@@ -28,8 +28,8 @@ class PlanningServices {
   bool getEsdfBox(GetEsdfBox::Request& req, GetEsdfBox::Response& res);
   /// Samples `points` under the map lock; false with `why` when there is no planning layer or
   /// the map stayed busy.
-  bool sample(const std::vector<Eigen::Vector3d>& points, std::vector<EsdfSample>* samples, double* cell_m,
-              std::string* why);
+  bool sample(const std::vector<Eigen::Vector3d>& points, std::vector<EsdfSample>* samples,
+              double* cell_m, std::string* why);
   template <typename Response>
   bool refuse(const char* service, const std::string& why, Response* res);
 

@@ -15,20 +15,20 @@ namespace stereo_fusion {
 /// src/ros/RosParameters.cpp); the defaults here are the single source of truth, printed into
 /// doc/parameters.md's node table.
 struct NodeConfig {
-  std::string world_frame = "world";       ///< fixed frame of the map and the mesh
-  int queue_size = 5;                      ///< frames waiting for the worker (≥ 1)
-  bool drop_oldest = true;                 ///< queue full: drop the oldest (true) or the newest frame
-  bool approximate_sync = false;           ///< ApproximateTime instead of ExactTime synchronisation
-  int sync_queue_size = 10;                ///< message_filters synchroniser queue
-  double tf_timeout_s = 0.2;               ///< how long the worker waits for T_world_camera
+  std::string world_frame = "world";  ///< fixed frame of the map and the mesh
+  int queue_size = 5;                 ///< frames waiting for the worker (≥ 1)
+  bool drop_oldest = true;            ///< queue full: drop the oldest (true) or the newest frame
+  bool approximate_sync = false;      ///< ApproximateTime instead of ExactTime synchronisation
+  int sync_queue_size = 10;           ///< message_filters synchroniser queue
+  double tf_timeout_s = 0.2;          ///< how long the worker waits for T_world_camera
   /// A frame stamped more than this ahead of the node's clock is dropped (0 = no check).
   double max_stamp_ahead_s = 10.0;
-  double mesh_publish_rate_hz = 2.0;       ///< 0 = publish after every frame
-  bool publish_markers = true;             ///< ~mesh_markers for rviz
-  bool publish_path = true;                ///< ~camera_path (nav_msgs/Path) of the fused frames
-  bool publish_frustum = true;             ///< ~frustum: the newest fused frame's view (Marker)
-  double frustum_depth_m = 1.0;            ///< depth at which ~frustum is drawn
-  bool publish_block_bounds = false;       ///< ~block_bounds: edges of every meshed block (debug)
+  double mesh_publish_rate_hz = 2.0;  ///< 0 = publish after every frame
+  bool publish_markers = true;        ///< ~mesh_markers for rviz
+  bool publish_path = true;           ///< ~camera_path (nav_msgs/Path) of the fused frames
+  bool publish_frustum = true;        ///< ~frustum: the newest fused frame's view (Marker)
+  double frustum_depth_m = 1.0;       ///< depth at which ~frustum is drawn
+  bool publish_block_bounds = false;  ///< ~block_bounds: edges of every meshed block (debug)
   MeshEncoding mesh_encoding = MeshEncoding::kFloat32;  ///< how ~mesh_update carries the mesh
   /// Frames kept for loop closures (their images: ~2.1 MB each at 640×480); 0 = none, and a
   /// trajectory can then correct nothing.
@@ -50,7 +50,8 @@ const std::vector<ParameterSpec>& nodeParameterSpecs();
 
 /// Sets node parameter `name` from its textual value. False with a message naming the parameter
 /// (and its range and unit) when the name is unknown, the value does not parse or is out of range.
-bool setNodeParameter(NodeConfig* config, const std::string& name, const std::string& value, std::string* error);
+bool setNodeParameter(NodeConfig* config, const std::string& name, const std::string& value,
+                      std::string* error);
 /// Textual value of node parameter `name` (as setNodeParameter accepts it); empty if unknown.
 std::string getNodeParameter(const NodeConfig& config, const std::string& name);
 
@@ -62,6 +63,7 @@ std::vector<std::string> validateNodeConfig(const NodeConfig& config);
 /// validates both. False with a message naming the parameter as ROS knows it (with its
 /// namespace) and its range and unit when a value has the wrong type or is out of range; then
 /// *mapper and *node are unchanged.
-bool loadParameters(const ros::NodeHandle& private_nh, MapperConfig* mapper, NodeConfig* node, std::string* error);
+bool loadParameters(const ros::NodeHandle& private_nh, MapperConfig* mapper, NodeConfig* node,
+                    std::string* error);
 
 }  // namespace stereo_fusion

@@ -38,21 +38,23 @@ struct PairTopics {
 class StereoBagWriter {
  public:
   static std::unique_ptr<StereoBagWriter> open(const std::string& path, const BagTopics& topics,
-                                               const std::string& camera_frame, double stamp_offset_s,
-                                               std::string* error);
+                                               const std::string& camera_frame,
+                                               double stamp_offset_s, std::string* error);
   ~StereoBagWriter();
   /// Writes one frame; false with a message on I/O failure.
   bool write(const StereoFrame& frame, float max_disparity_px, std::string* error);
   /// Writes one frame as a stereo camera driver publishes it (no disparity): the left colour
-  /// image, `right_rgb` (CV_8UC3 RGB, rectified right camera), as PairTopics describes, both CameraInfos (distortion
-  /// zero, R = I, the right P with Tx = -fx * baseline as stereo_image_proc needs it) on
-  /// `topics`, and the left pose on /tf. Both images carry the left camera's frame_id:
-  /// stereo_image_proc requires one frame for the pair (the baseline is in the right P). False with a message on I/O failure.
+  /// image, `right_rgb` (CV_8UC3 RGB, rectified right camera), as PairTopics describes, both
+  /// CameraInfos (distortion zero, R = I, the right P with Tx = -fx * baseline as stereo_image_proc
+  /// needs it) on `topics`, and the left pose on /tf. Both images carry the left camera's frame_id:
+  /// stereo_image_proc requires one frame for the pair (the baseline is in the right P). False with
+  /// a message on I/O failure.
   bool writePair(const StereoFrame& frame, const cv::Mat& right_rgb, const PairTopics& topics,
                  std::string* error);
   /// Writes a SLAM's corrected trajectory as it publishes one after a loop closure: a
   /// nav_msgs/Path of `poses` (camera poses in the world frame, stamps shifted like the frames')
-  /// on BagTopics::trajectory, stamped `stamp_s` (+ the offset). False with a message on I/O failure.
+  /// on BagTopics::trajectory, stamped `stamp_s` (+ the offset). False with a message on I/O
+  /// failure.
   bool writeTrajectory(const std::vector<StampedPose>& poses, double stamp_s, std::string* error);
   void close();
 
@@ -61,7 +63,8 @@ class StereoBagWriter {
   std::unique_ptr<rosbag::Bag> bag_;
   BagTopics topics_;
   std::string camera_frame_;
-  uint32_t frames_written_ = 0;  // header.seq of the last frame written (numbered from 1, as drivers do)
+  uint32_t frames_written_ =
+      0;  // header.seq of the last frame written (numbered from 1, as drivers do)
   double stamp_offset_s_ = 0.0;
 };
 

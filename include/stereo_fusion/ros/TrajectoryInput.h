@@ -17,8 +17,8 @@ namespace stereo_fusion {
 class TrajectoryInput {
  public:
   /// `camera_frame()` gives the fused frames' camera frame ("" before the first).
-  TrajectoryInput(ros::NodeHandle& nh, const NodeConfig& node, MappingSession* session, const tf2_ros::Buffer* tf,
-                  std::function<std::string()> camera_frame);
+  TrajectoryInput(ros::NodeHandle& nh, const NodeConfig& node, MappingSession* session,
+                  const tf2_ros::Buffer* tf, std::function<std::string()> camera_frame);
 
   uint64_t received() const { return received_.load(); }
 

@@ -88,15 +88,15 @@ struct RefusionProgress {
   size_t frames = 0;
   size_t rejected = 0;
 };
-RefusionStatus replayEdits(const std::vector<Edit>& edits, const PoseCorrection& correction, Mapper* map,
-                           EditReplay* replay, const std::function<bool()>& cancelled, RefusionProgress* progress,
-                           std::string* error);
+RefusionStatus replayEdits(const std::vector<Edit>& edits, const PoseCorrection& correction,
+                           Mapper* map, EditReplay* replay, const std::function<bool()>& cancelled,
+                           RefusionProgress* progress, std::string* error);
 
 /// A new mapper holding `base_bytes` (a sealed map file; empty: an empty map), nullptr with
 /// `error` if they do not decode. The base's frame count is kept: later frames count on from it
 /// (the eviction order).
-std::unique_ptr<Mapper> mapperFromBase(const MapperConfig& config, const std::vector<uint8_t>& base_bytes,
-                                       std::string* error);
+std::unique_ptr<Mapper> mapperFromBase(const MapperConfig& config,
+                                       const std::vector<uint8_t>& base_bytes, std::string* error);
 
 /// The single record of what the live map received, kept for loop closures: the newest
 /// `max_frames` frames and the clears among and after them, in the live order, over the *base*,

@@ -44,9 +44,9 @@ enum class MapChange { kReset, kLoaded, kCorrected, kRecovered };
 /// Told to the listener, with the map lock held, whenever the map is replaced wholesale.
 struct MapReplaced {
   MapChange change;
-  Mapper& map;                            ///< the map now (a correction swaps in a new Mapper)
-  const std::vector<BlockKey>& removed;   ///< submeshes of the old map that are gone
-  const PoseCorrection& correction;       ///< the latest correction applied (path display)
+  Mapper& map;                           ///< the map now (a correction swaps in a new Mapper)
+  const std::vector<BlockKey>& removed;  ///< submeshes of the old map that are gone
+  const PoseCorrection& correction;      ///< the latest correction applied (path display)
 };
 
 /// What became of one trajectory and its re-fusion.
@@ -54,10 +54,11 @@ struct CorrectionReport {
   TrajectoryOutcome outcome = TrajectoryOutcome::kApplied;
   std::string message;
   size_t trajectory_poses = 0;
-  size_t matched_poses = 0;   ///< trajectory poses within 0.5 s of a kept frame
+  size_t matched_poses = 0;  ///< trajectory poses within 0.5 s of a kept frame
   double max_shift_m = 0.0, max_rotation_deg = 0.0;
   size_t frames_refused = 0;  ///< frames fused again (catch-up included)
-  size_t frames_rejected = 0;  ///< of those, refused by the new map's FrameGate at the corrected pose
+  size_t frames_rejected =
+      0;  ///< of those, refused by the new map's FrameGate at the corrected pose
   double ms = 0.0;
 };
 
@@ -133,8 +134,8 @@ class MappingSession {
   /// background_corrections it is queued (a newer one supersedes it, counted) and nullopt is
   /// returned; otherwise it is applied now and its report returned. `fused_until_s`: the
   /// frames the SLAM had seen (default: the newest kept frame now; offline: +infinity).
-  std::optional<CorrectionReport> submitTrajectory(std::vector<StampedPose> poses,
-                                                   std::optional<double> fused_until_s = std::nullopt);
+  std::optional<CorrectionReport> submitTrajectory(
+      std::vector<StampedPose> poses, std::optional<double> fused_until_s = std::nullopt);
   /// Counts a trajectory an input refused before submitTrajectory().
   void countTrajectory(TrajectoryOutcome outcome) { trajectories_.count(outcome); }
   /// The latest applied correction's report.
@@ -200,14 +201,16 @@ class MappingSession {
   /// Re-fuses the kept edits at `trajectory`'s poses, catches up, swaps; its report.
   CorrectionReport runCorrection(const PendingTrajectory& trajectory);
   /// Replaces the live map by `rebuilt` (map lock held) and tells the listener.
-  void adoptCorrectedLocked(std::unique_ptr<Mapper> rebuilt, EditReplay replay, const PoseCorrection& correction);
+  void adoptCorrectedLocked(std::unique_ptr<Mapper> rebuilt, EditReplay replay,
+                            const PoseCorrection& correction);
   /// A new epoch (reset, load): drops the kept edits and any correction (map lock held).
   void startEpochLocked(const std::vector<uint8_t>& base_bytes);
   void notifyLocked(MapChange change, const std::vector<BlockKey>& removed);
   KeptStatus keptLocked() const;
   /// Takes `lock`'s mutex within `wait`, polling every millisecond (libstdc++'s timed mutex
   /// locks through pthread_mutex_clocklock, which ThreadSanitizer does not see).
-  static bool lockWithin(std::unique_lock<std::mutex>* lock, std::chrono::steady_clock::duration wait);
+  static bool lockWithin(std::unique_lock<std::mutex>* lock,
+                         std::chrono::steady_clock::duration wait);
   std::chrono::steady_clock::duration requestWait() const {
     return std::chrono::duration_cast<std::chrono::steady_clock::duration>(
         std::chrono::duration<double>(session_config_.max_request_wait_s));
@@ -216,8 +219,8 @@ class MappingSession {
   const MapperConfig config_;
   const SessionConfig session_config_;
 
-  mutable std::mutex mutex_;         // the map lock: guards everything up to the trajectory queue
-  StageMonitor monitor_;            // the live mapper's (a correction's rebuilt one gets it at the swap)
+  mutable std::mutex mutex_;  // the map lock: guards everything up to the trajectory queue
+  StageMonitor monitor_;      // the live mapper's (a correction's rebuilt one gets it at the swap)
   std::unique_ptr<Mapper> mapper_;
   EditReplay live_replay_;
   EditTimeline timeline_;
@@ -238,7 +241,8 @@ class MappingSession {
 
   RejectCounters drops_;
   TrajectoryCounters trajectories_;
-  std::atomic<uint64_t> frames_fused_{0}, frames_recleared_{0}, regions_cleared_{0}, clears_refused_{0};
+  std::atomic<uint64_t> frames_fused_{0}, frames_recleared_{0}, regions_cleared_{0},
+      clears_refused_{0};
   std::atomic<uint64_t> blocks_evicted_{0};
 };
 

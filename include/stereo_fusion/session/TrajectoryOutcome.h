@@ -9,9 +9,10 @@ namespace stereo_fusion {
 /// What became of a corrected trajectory (a SLAM's loop closure): the one list, counted on
 /// /diagnostics and named in logs. A new outcome is one value and one row in TrajectoryOutcome.cpp.
 enum class TrajectoryOutcome : uint8_t {
-  kApplied,              ///< the kept frames were fused again at the corrected poses, the maps swapped
-  kAppliedWithoutRefusion,  ///< it moves no kept frame visibly: taken for the frames still to leave the window
-  kSuperseded,           ///< a newer trajectory came before it was applied (waiting or being fused again)
+  kApplied,  ///< the kept frames were fused again at the corrected poses, the maps swapped
+  kAppliedWithoutRefusion,  ///< it moves no kept frame visibly: taken for the frames still to leave
+                            ///< the window
+  kSuperseded,  ///< a newer trajectory came before it was applied (waiting or being fused again)
   kDroppedByReset,       ///< a reset or load_map replaced the map it was for
   kRejectedWrongFrame,   ///< its header's frame is not world_frame
   kRejectedNothingKept,  ///< loop_closure_max_frames is 0
@@ -20,8 +21,8 @@ enum class TrajectoryOutcome : uint8_t {
   kRejectedBadPose,      ///< a pose is not finite or its quaternion is no rotation
   kRejectedEmpty,        ///< it holds no pose
   kRejectedNoMatch,      ///< none of its stamps lies near a kept frame's
-  kFailed,               ///< the re-fusion could not read the base or a kept frame: the map is unchanged
-  kCount,                ///< not an outcome: the number of values
+  kFailed,  ///< the re-fusion could not read the base or a kept frame: the map is unchanged
+  kCount,   ///< not an outcome: the number of values
 };
 
 constexpr size_t kTrajectoryOutcomeCount = static_cast<size_t>(TrajectoryOutcome::kCount);
@@ -42,7 +43,8 @@ class TrajectoryCounters : public EnumCounters<TrajectoryOutcome, kTrajectoryOut
   /// Calls f(info, count) for every outcome, in the table's order.
   template <typename F>
   void forEach(F&& f) const {
-    forEachValue([&](TrajectoryOutcome outcome, uint64_t n) { f(trajectoryOutcomeInfo(outcome), n); });
+    forEachValue(
+        [&](TrajectoryOutcome outcome, uint64_t n) { f(trajectoryOutcomeInfo(outcome), n); });
   }
 };
 

@@ -16,7 +16,8 @@ struct StampedPose {
 void sortByStamp(std::vector<StampedPose>* poses);
 
 /// The pose halfway between `a` and `b` at `alpha` ∈ [0, 1]: translation linear, rotation slerp.
-Eigen::Isometry3d interpolatePose(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, double alpha);
+Eigen::Isometry3d interpolatePose(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b,
+                                  double alpha);
 
 /// Where a SLAM's revised trajectory puts frames that were fused at their original poses.
 ///
@@ -45,7 +46,8 @@ class PoseCorrection {
   /// C(stamp_s) as above (the identity when empty()).
   Eigen::Isometry3d correctionAt(double stamp_s) const;
   /// C(stamp_s) · T_world_camera_original.
-  Eigen::Isometry3d corrected(double stamp_s, const Eigen::Isometry3d& T_world_camera_original) const {
+  Eigen::Isometry3d corrected(double stamp_s,
+                              const Eigen::Isometry3d& T_world_camera_original) const {
     return correctionAt(stamp_s) * T_world_camera_original;
   }
   /// `frame` (fused at its pose) at its corrected pose; the images are shared, not copied.
@@ -66,10 +68,11 @@ class PoseCorrection {
 /// two frames around it; false if no fused frame lies within `max_gap_s` of it on a side it
 /// needs (before the first or after the last frame by more than max_gap_s, or in a gap of the
 /// frames wider than 2·max_gap_s).
-bool originalPoseAt(const std::vector<StampedPose>& fused, double stamp_s, double max_gap_s, Eigen::Isometry3d* pose);
+bool originalPoseAt(const std::vector<StampedPose>& fused, double stamp_s, double max_gap_s,
+                    Eigen::Isometry3d* pose);
 
 /// The largest move of a camera centre (m) and rotation (deg) that `correction` gives `originals`.
-void correctionMagnitude(const std::vector<StampedPose>& originals, const PoseCorrection& correction, double* shift_m,
-                         double* rotation_deg);
+void correctionMagnitude(const std::vector<StampedPose>& originals,
+                         const PoseCorrection& correction, double* shift_m, double* rotation_deg);
 
 }  // namespace stereo_fusion

@@ -11,6 +11,7 @@ constexpr double kMaxQuaternionNormError = 0.01;
 /// The rotation quaternion (x, y, z, w) stands for, normalised; nullopt with `why` when a
 /// component is not finite or its norm is off 1 by more than kMaxQuaternionNormError (zero
 /// included): such a pose carries no rotation, and tf2 refuses it as well.
-std::optional<Eigen::Quaterniond> unitQuaternion(double x, double y, double z, double w, std::string* why);
+std::optional<Eigen::Quaterniond> unitQuaternion(double x, double y, double z, double w,
+                                                 std::string* why);
 
 }  // namespace stereo_fusion

@@ -90,22 +90,27 @@ TEST(StereoCamera, RejectsInvalidIntrinsics) {
 TEST(StereoCamera, RejectsImplausibleCalibrations) {
   std::string error;
   EXPECT_FALSE(StereoCamera::create(640, 480, 525, 1e-3, 320, 240, 0.1, &error));
-  EXPECT_NE(error.find("focal lengths fx=525 fy=0.001 px are implausible for a 640x480 image (at least 0.04 × 640 px"),
+  EXPECT_NE(error.find("focal lengths fx=525 fy=0.001 px are implausible for a 640x480 image (at "
+                       "least 0.04 × 640 px"),
             std::string::npos)
       << error;
-  EXPECT_FALSE(StereoCamera::create(640, 480, 25.5, 25.5, 320, 240, 0.1));  // below 0.04 × 640 = 25.6
-  EXPECT_TRUE(StereoCamera::create(640, 480, 25.7, 25.7, 320, 240, 0.1));   // a 170° lens
-  EXPECT_TRUE(StereoCamera::create(640, 480, 64000, 64000, 320, 240, 0.1)); // a telescope
+  EXPECT_FALSE(
+      StereoCamera::create(640, 480, 25.5, 25.5, 320, 240, 0.1));  // below 0.04 × 640 = 25.6
+  EXPECT_TRUE(StereoCamera::create(640, 480, 25.7, 25.7, 320, 240, 0.1));    // a 170° lens
+  EXPECT_TRUE(StereoCamera::create(640, 480, 64000, 64000, 320, 240, 0.1));  // a telescope
   EXPECT_FALSE(StereoCamera::create(640, 480, 5000, 450, 320, 240, 0.1, &error));
   EXPECT_NE(error.find("fx / fy = 11.1"), std::string::npos) << error;
   EXPECT_TRUE(StereoCamera::create(640, 480, 500, 51, 320, 240, 0.1));
   // The principal point may lie outside the image (a crop) while every pixel's ray stays within
   // 85.4° of the optical axis: |u − cx| ≤ 12.5 · f = 12.5 · 525 = 6562.5 px.
   EXPECT_FALSE(StereoCamera::create(640, 480, 525, 525, 1e9, 240, 0.1, &error));
-  EXPECT_NE(error.find("principal point cx=1e+09 cy=240 px is implausible for a 640x480 image with fx=525"),
-            std::string::npos)
+  EXPECT_NE(
+      error.find(
+          "principal point cx=1e+09 cy=240 px is implausible for a 640x480 image with fx=525"),
+      std::string::npos)
       << error;
-  EXPECT_TRUE(StereoCamera::create(640, 480, 525, 525, -5922, 240, 0.1));   // farthest pixel 6562 px away
+  EXPECT_TRUE(
+      StereoCamera::create(640, 480, 525, 525, -5922, 240, 0.1));  // farthest pixel 6562 px away
   EXPECT_FALSE(StereoCamera::create(640, 480, 525, 525, -5923, 240, 0.1));  // 6563 px
   EXPECT_TRUE(StereoCamera::create(640, 480, 525, 525, 320, 6562, 0.1));
   EXPECT_FALSE(StereoCamera::create(640, 480, 525, 525, 320, 6563, 0.1));

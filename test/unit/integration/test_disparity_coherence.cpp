@@ -35,24 +35,22 @@ TEST(DisparityCoherence, HandCountedRows) {
   // A neighbour that is not usable does not count, however close its value: 0.2 px is beyond
   // 4 m (z = 5 m), NaN and 0 are no measurement.
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  cv::Mat lonely = (cv::Mat_<float>(3, 3) << 0.2f, nan, 0.0f,
-                                             nan, 0.45f, 0.2f,
-                                             0.0f, 3.9f, nan);
+  cv::Mat lonely = (cv::Mat_<float>(3, 3) << 0.2f, nan, 0.0f, nan, 0.45f, 0.2f, 0.0f, 3.9f, nan);
   c = coherenceOf(lonely);
   EXPECT_EQ(c.usable_pixels, 2u) << "0.45 and 3.9";
   EXPECT_EQ(c.coherent_pixels, 0u);
   EXPECT_DOUBLE_EQ(c.share(), 0.0);
 
   // Diagonal neighbours count; a uniform block is all coherent.
-  cv::Mat diagonal = (cv::Mat_<float>(2, 2) << 2.0f, 3.0f,
-                                               0.0f, 2.2f);
+  cv::Mat diagonal = (cv::Mat_<float>(2, 2) << 2.0f, 3.0f, 0.0f, 2.2f);
   c = coherenceOf(diagonal);
   EXPECT_EQ(c.usable_pixels, 3u);
   EXPECT_EQ(c.coherent_pixels, 2u) << "2.0 and 2.2 (diagonal) agree; 3.0 is 0.8 from both";
   c = coherenceOf(cv::Mat(4, 5, CV_32F, cv::Scalar(1.0f)));
   EXPECT_EQ(c.usable_pixels, 20u);
   EXPECT_EQ(c.coherent_pixels, 20u);
-  EXPECT_DOUBLE_EQ(coherenceOf(cv::Mat(2, 2, CV_32F, cv::Scalar(0.0f))).share(), 1.0) << "nothing usable";
+  EXPECT_DOUBLE_EQ(coherenceOf(cv::Mat(2, 2, CV_32F, cv::Scalar(0.0f))).share(), 1.0)
+      << "nothing usable";
 }
 
 TEST(DisparityCoherence, CountsDoNotDependOnTheThreads) {
@@ -70,7 +68,8 @@ TEST(DisparityCoherence, CountsDoNotDependOnTheThreads) {
 TEST(DisparityCoherence, SeparatesANoisySurfaceFromRandomDisparities) {
   // A rendered floor and sphere with 0.3 px of Gaussian disparity noise (twice the default
   // disparity_noise_px) against disparities drawn uniformly over 1–64 px.
-  const StereoFrame surface = renderFrame(floorAndSphere(), qvgaCamera(), floorAndSphereView(0), 0.3, 1);
+  const StereoFrame surface =
+      renderFrame(floorAndSphere(), qvgaCamera(), floorAndSphereView(0), 0.3, 1);
   ThreadPool pool(2);
   MapperConfig config;
   MeasurementImage m;

@@ -35,8 +35,8 @@ StereoFrame flatFrame(double depth_m) {
 }
 
 /// Sets voxel (i, j, k) of `level` in `block` and returns the camera point of its centre.
-Eigen::Vector3d setVoxel(const BlockOctree& map, VoxelBlock* block, int level, int i, int j, int k, float sdf,
-                         float weight) {
+Eigen::Vector3d setVoxel(const BlockOctree& map, VoxelBlock* block, int level, int i, int j, int k,
+                         float sdf, float weight) {
   Voxel& v = block->writableAt(level, i, j, k);
   v.sdf_m = sdf;
   v.weight = weight;
@@ -47,7 +47,8 @@ Eigen::Vector3d setVoxel(const BlockOctree& map, VoxelBlock* block, int level, i
 size_t crossingsNear(const BlockOctree& map, const Eigen::Vector3d& centre, double radius_m) {
   size_t n = 0;
   for (int axis = 0; axis < 3; ++axis)
-    for (const Eigen::Vector3d& p : zeroCrossings(map, 0, axis)) n += (p - centre).norm() < radius_m;
+    for (const Eigen::Vector3d& p : zeroCrossings(map, 0, axis))
+      n += (p - centre).norm() < radius_m;
   return n;
 }
 
@@ -156,17 +157,20 @@ TEST(FreeSpaceCarver, AGhostThatLaterFramesSeeThroughDisappears) {
     const size_t before = crossingsNear(mapper.map(), sphere_centre, 0.3);
     ASSERT_GT(before, 300u);
     for (int i = 0; i < 30; ++i) {  // and then has gone
-      StereoFrame frame = renderFrame(wallWithSphere(false), qvgaCamera(), sweepView(29 - i), 0.1, 100 + i);
+      StereoFrame frame =
+          renderFrame(wallWithSphere(false), qvgaCamera(), sweepView(29 - i), 0.1, 100 + i);
       frame.timestamp_s = stamp++;
       ASSERT_TRUE(mapper.integrate(frame).accepted);
     }
     const size_t after = crossingsNear(mapper.map(), sphere_centre, 0.3);
-    std::printf("[ carving %s ] ghost surface crossings: %zu after the first sweep, %zu after the second\n",
-                carving ? "on " : "off", before, after);
+    std::printf(
+        "[ carving %s ] ghost surface crossings: %zu after the first sweep, %zu after the second\n",
+        carving ? "on " : "off", before, after);
     if (carving)
       EXPECT_LT(after, before / 20) << "at most 5 % of the ghost may remain";
     else
-      EXPECT_GT(after, before / 2) << "without carving the ghost stays (else this test shows nothing)";
+      EXPECT_GT(after, before / 2)
+          << "without carving the ghost stays (else this test shows nothing)";
   }
 }
 
@@ -201,8 +205,9 @@ TEST(FreeSpaceCarver, AThinPoleTheMatcherLosesInHalfTheFramesSurvives) {
     return n;
   };
   const size_t without = poleCrossings(false, 1), with = poleCrossings(true, 1);
-  std::printf("[ thin pole ] crossings on the pole: %zu without carving, %zu with (%zu with no window)\n", without,
-              with, poleCrossings(true, 0));
+  std::printf(
+      "[ thin pole ] crossings on the pole: %zu without carving, %zu with (%zu with no window)\n",
+      without, with, poleCrossings(true, 0));
   ASSERT_GT(without, 50u);
   EXPECT_GE(with, without * 95 / 100);
 }
@@ -214,15 +219,18 @@ TEST(FreeSpaceCarver, AFloorSeenAtGrazingAnglesIsNotEaten) {
     MapperConfig config = carveConfig(carving);
     Mapper mapper(config);
     for (int i = 0; i < 20; ++i) {
-      StereoFrame frame = renderFrame(floorAndSphere(), qvgaCamera(), floorAndSphereView(i), 0.3, i);
+      StereoFrame frame =
+          renderFrame(floorAndSphere(), qvgaCamera(), floorAndSphereView(i), 0.3, i);
       frame.timestamp_s = 1.0 + i;
       ASSERT_TRUE(mapper.integrate(frame).accepted);
     }
     size_t n = 0;
-    for (const Eigen::Vector3d& p : zeroCrossings(mapper.map(), 0, 1)) n += std::abs(p.y() - 0.3) < 0.05;
+    for (const Eigen::Vector3d& p : zeroCrossings(mapper.map(), 0, 1))
+      n += std::abs(p.y() - 0.3) < 0.05;
     crossings[carving] = n;
   }
-  std::printf("[ grazing floor ] floor crossings: %zu without carving, %zu with\n", crossings[0], crossings[1]);
+  std::printf("[ grazing floor ] floor crossings: %zu without carving, %zu with\n", crossings[0],
+              crossings[1]);
   ASSERT_GT(crossings[0], 1000u);
   EXPECT_GE(crossings[1], crossings[0] * 99 / 100);
 }
@@ -234,7 +242,8 @@ TEST(FreeSpaceCarver, ResultDoesNotDependOnTheThreadCount) {
     config.num_threads = threads;
     Mapper mapper(config);
     for (int i = 0; i < 10; ++i) {
-      StereoFrame frame = renderFrame(wallWithSphere(i < 5), qvgaCamera(), sweepView(3 * i), 0.2, i);
+      StereoFrame frame =
+          renderFrame(wallWithSphere(i < 5), qvgaCamera(), sweepView(3 * i), 0.2, i);
       frame.timestamp_s = 1.0 + i;
       ASSERT_TRUE(mapper.integrate(frame).accepted);
     }

@@ -45,8 +45,10 @@ TEST(FusionMath, ModesHandWorked) {
   EXPECT_FLOAT_EQ(measurementWeight(WeightMode::kConstant, 0.05f, 0.02f, 0.08f, 2.0f, 1.0f), 1.0f);
   EXPECT_FLOAT_EQ(measurementWeight(WeightMode::kConstant, 0.09f, 0.02f, 0.08f, 2.0f, 1.0f), 0.0f);
   // depth aware at z = 2, z_ref = 1: 0.5 · (1/2)² = 0.125
-  EXPECT_FLOAT_EQ(measurementWeight(WeightMode::kDepthAware, 0.05f, 0.02f, 0.08f, 2.0f, 1.0f), 0.125f);
-  EXPECT_FLOAT_EQ(measurementWeight(WeightMode::kDepthAware, -0.05f, 0.02f, 0.08f, 0.5f, 1.0f), 4.0f);
+  EXPECT_FLOAT_EQ(measurementWeight(WeightMode::kDepthAware, 0.05f, 0.02f, 0.08f, 2.0f, 1.0f),
+                  0.125f);
+  EXPECT_FLOAT_EQ(measurementWeight(WeightMode::kDepthAware, -0.05f, 0.02f, 0.08f, 0.5f, 1.0f),
+                  4.0f);
 }
 
 TEST(FusionMath, RunningAverageEq38Eq39HandWorked) {

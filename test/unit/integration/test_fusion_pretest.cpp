@@ -22,8 +22,8 @@ namespace {
 
 /// The largest depth among pixels [u0, u1) × [v0, v1) whose measurement level is at most
 /// `max_level` (levelForDepth() with float thresholds); −inf if none.
-float bruteForceMax(const std::vector<float>& depth_m, int width, int u0, int v0, int u1, int v1, float t1,
-                    float t2, int max_level = 0) {
+float bruteForceMax(const std::vector<float>& depth_m, int width, int u0, int v0, int u1, int v1,
+                    float t1, float t2, int max_level = 0) {
   float max_m = -std::numeric_limits<float>::infinity();
   for (int v = v0; v < v1; ++v)
     for (int u = u0; u < u1; ++u) {
@@ -46,10 +46,16 @@ TEST(DepthTiles, MaxDepthFollowsThePerPixelRule) {
     for (int variant = 0; variant < 2; ++variant) {
       const int width = size[0], height = size[1];
       const float t1 = 2.0f, t2 = variant == 0 ? 4.0f : 1.5f;
-      const float special[] = {t1, std::nextafter(t1, 0.0f), t2, std::nextafter(t2, 0.0f),
-                               std::numeric_limits<float>::quiet_NaN(), 0.1f, 7.9f};
+      const float special[] = {t1,
+                               std::nextafter(t1, 0.0f),
+                               t2,
+                               std::nextafter(t2, 0.0f),
+                               std::numeric_limits<float>::quiet_NaN(),
+                               0.1f,
+                               7.9f};
       std::vector<float> depth_m(static_cast<size_t>(width) * height);
-      for (float& z : depth_m) z = unit(rng) < 0.3f ? special[rng() % std::size(special)] : 0.1f + 6.0f * unit(rng);
+      for (float& z : depth_m)
+        z = unit(rng) < 0.3f ? special[rng() % std::size(special)] : 0.1f + 6.0f * unit(rng);
       // Whole tiles without a measurement, and tiles with only coarse ones.
       if (width >= 16 && height >= 16)
         for (int v = 0; v < 8; ++v)
@@ -62,13 +68,16 @@ TEST(DepthTiles, MaxDepthFollowsThePerPixelRule) {
       ASSERT_EQ(tiles.tilesX(), (width + 7) / 8);
       ASSERT_EQ(tiles.tilesY(), (height + 7) / 8);
       using Which = DepthTiles::Measurements;
-      for (const auto [which, max_level] : {std::pair{Which::kLevel0, 0}, std::pair{Which::kLevel0And1, 1}}) {
+      for (const auto [which, max_level] :
+           {std::pair{Which::kLevel0, 0}, std::pair{Which::kLevel0And1, 1}}) {
         for (int ty = 0; ty < tiles.tilesY(); ++ty)
           for (int tx = 0; tx < tiles.tilesX(); ++tx) {
-            const float want = bruteForceMax(depth_m, width, 8 * tx, 8 * ty, std::min(8 * tx + 8, width),
-                                             std::min(8 * ty + 8, height), t1, t2, max_level);
+            const float want =
+                bruteForceMax(depth_m, width, 8 * tx, 8 * ty, std::min(8 * tx + 8, width),
+                              std::min(8 * ty + 8, height), t1, t2, max_level);
             ASSERT_EQ(tiles.maxDepth(which, tx, ty, tx, ty), want)
-                << width << "x" << height << " tile " << tx << "," << ty << " levels <= " << max_level;
+                << width << "x" << height << " tile " << tx << "," << ty
+                << " levels <= " << max_level;
             EXPECT_EQ(tiles.allBelow(which, tx, ty, tx, ty, std::nextafter(want, INFINITY)), true);
             EXPECT_EQ(tiles.allBelow(which, tx, ty, tx, ty, want), false);
           }
@@ -91,7 +100,8 @@ TEST(DepthTiles, MaxDepthFollowsThePerPixelRule) {
 StereoCamera smallCamera() { return *StereoCamera::create(96, 72, 300.0, 310.0, 47.3, 35.6, 0.1); }
 
 /// A frame seeing one surface at `depth_m` everywhere (a fronto-parallel plane).
-StereoFrame planeFrame(const StereoCamera& cam, const Eigen::Isometry3d& T_world_camera, float disparity_px) {
+StereoFrame planeFrame(const StereoCamera& cam, const Eigen::Isometry3d& T_world_camera,
+                       float disparity_px) {
   StereoFrame frame;
   frame.camera = cam;
   frame.T_world_camera = T_world_camera;
@@ -108,7 +118,10 @@ float disparityForDepth(const StereoCamera& cam, double depth_m) {
 class KernelPair {
  public:
   explicit KernelPair(const MapperConfig& config)
-      : config_(config), octree_(config.blockSizeM()), scalar_(fusionConfig(config), &pool_), avx2_(fusionConfig(config), &pool_) {
+      : config_(config),
+        octree_(config.blockSizeM()),
+        scalar_(fusionConfig(config), &pool_),
+        avx2_(fusionConfig(config), &pool_) {
     scalar_.setKernel(SurfaceFuser::Kernel::kScalar);
     if (avx2Supported()) avx2_.setKernel(SurfaceFuser::Kernel::kAvx2);
   }
@@ -129,19 +142,23 @@ class KernelPair {
     std::vector<VoxelBlock*> updated;
     MeasurementImage measurements;
     measurements.build(frame, config_, &pool_);
-    const uint64_t want_updates = scalar_.fuse(frame, measurements, octree_, {&want}, &updated).voxels_updated;
-    const uint64_t got_updates = avx2_.fuse(frame, measurements, octree_, {&got}, &updated).voxels_updated;
+    const uint64_t want_updates =
+        scalar_.fuse(frame, measurements, octree_, {&want}, &updated).voxels_updated;
+    const uint64_t got_updates =
+        avx2_.fuse(frame, measurements, octree_, {&got}, &updated).voxels_updated;
     EXPECT_EQ(got_updates, want_updates);
     for (int level = 0; level < kNumLevels; ++level)
       EXPECT_EQ(got.hasLevel(level), want.hasLevel(level)) << "level " << level << " allocated";
     for (int v = 0; v < VoxelBlock::kVoxelCount; ++v)
       if (std::memcmp(&got.voxel(v), &want.voxel(v), sizeof(Voxel)) != 0) {
-        ADD_FAILURE() << "voxel " << v << ": weight " << got.voxel(v).weight << " vs " << want.voxel(v).weight;
+        ADD_FAILURE() << "voxel " << v << ": weight " << got.voxel(v).weight << " vs "
+                      << want.voxel(v).weight;
         break;
       }
     level0_observed_ = 0;
     if (want.hasLevel(0))
-      for (int v = 0; v < levelVoxelCount(0); ++v) level0_observed_ += want.level(0)[v].weight > 0.0f;
+      for (int v = 0; v < levelVoxelCount(0); ++v)
+        level0_observed_ += want.level(0)[v].weight > 0.0f;
     return want_updates;
   }
 
@@ -160,7 +177,8 @@ class KernelPair {
 /// with the camera's.
 std::vector<Eigen::Isometry3d> testPoses() {
   Eigen::Isometry3d turned = Eigen::Isometry3d::Identity();
-  turned.linear() = (Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(-0.2, Eigen::Vector3d::UnitX()) *
+  turned.linear() = (Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY()) *
+                     Eigen::AngleAxisd(-0.2, Eigen::Vector3d::UnitX()) *
                      Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitZ()))
                         .toRotationMatrix();
   turned.translation() = Eigen::Vector3d(0.013, -0.007, 0.004);
@@ -178,7 +196,8 @@ TEST(FusionPreTest, NeverSkipsVoxelsAtTheBackOfTheBand) {
   uint64_t total_updates = 0;
   int sweeps_with_partial_updates = 0;
   for (const Eigen::Isometry3d& T_world_camera : testPoses()) {
-    const BlockKey key = kernels.octree().keyForPoint(T_world_camera * Eigen::Vector3d(0.12, -0.05, 1.5));
+    const BlockKey key =
+        kernels.octree().keyForPoint(T_world_camera * Eigen::Vector3d(0.12, -0.05, 1.5));
     const Eigen::Isometry3d T_camera_world = T_world_camera.inverse();
     const double voxel_m = config.voxel_size_m;
     for (int level = 0; level < kNumLevels; ++level) {
@@ -188,17 +207,19 @@ TEST(FusionPreTest, NeverSkipsVoxelsAtTheBackOfTheBand) {
         // Depth of the slice's nearest voxel centre (the pre-test bounds by the nearest).
         double z_near_m = INFINITY;
         for (int c = 0; c < 4; ++c) {
-          const Eigen::Vector3d centre = kernels.octree().blockOrigin(key) +
-                                         level_voxel_m * Eigen::Vector3d((c & 1) * (levelSide(level) - 1) + 0.5,
-                                                                         (c >> 1) * (levelSide(level) - 1) + 0.5, k + 0.5);
+          const Eigen::Vector3d centre =
+              kernels.octree().blockOrigin(key) +
+              level_voxel_m * Eigen::Vector3d((c & 1) * (levelSide(level) - 1) + 0.5,
+                                              (c >> 1) * (levelSide(level) - 1) + 0.5, k + 0.5);
           z_near_m = std::min(z_near_m, (T_camera_world * centre).z());
         }
         uint64_t previous = 0;
         bool partial = false;
-        for (double offset_m : {-2e-3, -3e-4, -1e-4, -3e-5, -1e-5, -1e-6, 0.0, 1e-6, 1e-5, 3e-5, 1e-4, 3e-4, 2e-3}) {
+        for (double offset_m :
+             {-2e-3, -3e-4, -1e-4, -3e-5, -1e-5, -1e-6, 0.0, 1e-6, 1e-5, 3e-5, 1e-4, 3e-4, 2e-3}) {
           const double surface_m = z_near_m - truncation_m + offset_m;
-          const uint64_t updates =
-              kernels.expectAgree(planeFrame(cam, T_world_camera, disparityForDepth(cam, surface_m)), key);
+          const uint64_t updates = kernels.expectAgree(
+              planeFrame(cam, T_world_camera, disparityForDepth(cam, surface_m)), key);
           partial |= updates != previous && previous != 0;
           previous = updates;
           total_updates += updates;
@@ -223,17 +244,21 @@ TEST(FusionPreTest, NeverSkipsVoxelsAtTheImageBorders) {
   uint64_t total_updates = 0;
   for (const Eigen::Isometry3d& T_world_camera : testPoses()) {
     // Corners of the image as rays at 1.5 m; the block starts fully inside and ends outside.
-    const Eigen::Vector2d borders_px[] = {{-0.5, cam.cy()}, {cam.width() - 0.5, cam.cy()}, {cam.cx(), -0.5},
+    const Eigen::Vector2d borders_px[] = {{-0.5, cam.cy()},
+                                          {cam.width() - 0.5, cam.cy()},
+                                          {cam.cx(), -0.5},
                                           {cam.cx(), cam.height() - 0.5}};
     for (const Eigen::Vector2d& border : borders_px) {
       const Eigen::Vector3d on_border((border.x() - cam.cx()) / cam.fx() * depth_m,
                                       (border.y() - cam.cy()) / cam.fy() * depth_m, depth_m);
-      const Eigen::Vector3d outward = Eigen::Vector3d(border.x() - cam.cx(), border.y() - cam.cy(), 0).normalized();
+      const Eigen::Vector3d outward =
+          Eigen::Vector3d(border.x() - cam.cx(), border.y() - cam.cy(), 0).normalized();
       const double step_m = 0.2 * depth_m / cam.fx();
       for (double shift_m = -1.5 * block_m; shift_m <= 1.5 * block_m; shift_m += step_m) {
         const Eigen::Vector3d centre_c = on_border + shift_m * outward;
         const BlockKey key = kernels.octree().keyForPoint(T_world_camera * centre_c);
-        total_updates += kernels.expectAgree(planeFrame(cam, T_world_camera, disparityForDepth(cam, depth_m)), key);
+        total_updates += kernels.expectAgree(
+            planeFrame(cam, T_world_camera, disparityForDepth(cam, depth_m)), key);
         if (HasFailure()) return;
       }
     }
@@ -251,10 +276,11 @@ TEST(FusionPreTest, NeverSkipsAtTheLevelThresholds) {
   const StereoCamera cam = smallCamera();
   uint64_t total_updates = 0;
   for (const Eigen::Isometry3d& T_world_camera : testPoses()) {
-    for (double threshold_m : {config.levels.scale2_min_depth_m, config.levels.scale4_min_depth_m}) {
+    for (double threshold_m :
+         {config.levels.scale2_min_depth_m, config.levels.scale4_min_depth_m}) {
       for (double block_offset_m : {-0.1, -0.03, 0.0, 0.03, 0.1}) {
-        const BlockKey key =
-            kernels.octree().keyForPoint(T_world_camera * Eigen::Vector3d(0.05, 0.02, threshold_m + block_offset_m));
+        const BlockKey key = kernels.octree().keyForPoint(
+            T_world_camera * Eigen::Vector3d(0.05, 0.02, threshold_m + block_offset_m));
         float disparity = disparityForDepth(cam, threshold_m);
         for (int n = 0; n < 6; ++n) disparity = std::nextafter(disparity, INFINITY);
         for (int n = 0; n < 12; ++n, disparity = std::nextafter(disparity, 0.0f))
@@ -282,27 +308,31 @@ TEST(FusionPreTest, NeverSkipsAHeldFinerLevelUpdatedByCoarserMeasurements) {
   const double truncation_m = config.truncationBand().updateM(1, 0);
   int sweeps_with_partial_updates = 0, level0_observed = 0;
   for (const Eigen::Isometry3d& T_world_camera : testPoses()) {
-    const BlockKey key = kernels.octree().keyForPoint(T_world_camera * Eigen::Vector3d(0.12, -0.05, 1.5));
+    const BlockKey key =
+        kernels.octree().keyForPoint(T_world_camera * Eigen::Vector3d(0.12, -0.05, 1.5));
     const Eigen::Isometry3d T_camera_world = T_world_camera.inverse();
     for (int k = 0; k < levelSide(0); ++k) {
       double z_near_m = INFINITY;
       for (int c = 0; c < 4; ++c) {
         const Eigen::Vector3d centre =
             kernels.octree().blockOrigin(key) +
-            config.voxel_size_m * Eigen::Vector3d((c & 1) * (levelSide(0) - 1) + 0.5, (c >> 1) * (levelSide(0) - 1) + 0.5, k + 0.5);
+            config.voxel_size_m * Eigen::Vector3d((c & 1) * (levelSide(0) - 1) + 0.5,
+                                                  (c >> 1) * (levelSide(0) - 1) + 0.5, k + 0.5);
         z_near_m = std::min(z_near_m, (T_camera_world * centre).z());
       }
       int previous = 0;
       bool partial = false;
       for (double offset_m : {-2e-3, -1e-4, -1e-5, -1e-6, 0.0, 1e-6, 1e-5, 1e-4, 2e-3}) {
-        const StereoFrame frame = planeFrame(cam, T_world_camera, disparityForDepth(cam, z_near_m - truncation_m + offset_m));
+        const StereoFrame frame = planeFrame(
+            cam, T_world_camera, disparityForDepth(cam, z_near_m - truncation_m + offset_m));
         kernels.expectAgree(frame, key, /*held_levels=*/0b001);
         const int observed = kernels.level0Observed();
         partial |= observed != previous && previous != 0;
         previous = observed;
         level0_observed += observed;
         kernels.expectAgree(frame, key, /*held_levels=*/0);
-        EXPECT_EQ(kernels.level0Observed(), 0) << "level 0 is not held: no level-1 measurement allocates it";
+        EXPECT_EQ(kernels.level0Observed(), 0)
+            << "level 0 is not held: no level-1 measurement allocates it";
       }
       sweeps_with_partial_updates += partial;
       if (HasFailure()) return;
@@ -322,14 +352,16 @@ TEST(FusionPreTest, NeverSkipsAtTheLevelThresholdsWithHeldFinerLevels) {
   const StereoCamera cam = smallCamera();
   uint64_t total_updates = 0;
   for (const Eigen::Isometry3d& T_world_camera : testPoses()) {
-    for (double threshold_m : {config.levels.scale2_min_depth_m, config.levels.scale4_min_depth_m}) {
+    for (double threshold_m :
+         {config.levels.scale2_min_depth_m, config.levels.scale4_min_depth_m}) {
       for (double block_offset_m : {-0.1, 0.0, 0.1}) {
-        const BlockKey key =
-            kernels.octree().keyForPoint(T_world_camera * Eigen::Vector3d(0.05, 0.02, threshold_m + block_offset_m));
+        const BlockKey key = kernels.octree().keyForPoint(
+            T_world_camera * Eigen::Vector3d(0.05, 0.02, threshold_m + block_offset_m));
         float disparity = disparityForDepth(cam, threshold_m);
         for (int n = 0; n < 4; ++n) disparity = std::nextafter(disparity, INFINITY);
         for (int n = 0; n < 8; ++n, disparity = std::nextafter(disparity, 0.0f))
-          total_updates += kernels.expectAgree(planeFrame(cam, T_world_camera, disparity), key, 0b011);
+          total_updates +=
+              kernels.expectAgree(planeFrame(cam, T_world_camera, disparity), key, 0b011);
         if (HasFailure()) return;
       }
     }

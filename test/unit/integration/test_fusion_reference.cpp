@@ -1,8 +1,8 @@
 // SurfaceFuser against a reference transcription of the thesis equations that visits every
 // voxel of every level of every queued block, with none of the fuser's shortcuts (block-level
 // depth test, level skipping, depth-tile pre-test); it states the level rule
-// (measurementUpdatesLevel()) in its own words. Voxel values must agree bit for bit, so any shortcut that
-// drops a real update, or updates what it should not, fails here.
+// (measurementUpdatesLevel()) in its own words. Voxel values must agree bit for bit, so any
+// shortcut that drops a real update, or updates what it should not, fails here.
 
 #include <gtest/gtest.h>
 
@@ -26,15 +26,16 @@ using test::vgaCamera;
 /// Eq. 3.8–3.15 for one block, every voxel of every level; the float operations are those of
 /// SurfaceFuser so that results are comparable bit for bit. Colour as the fuser: RGB, grey
 /// (one channel for all three) or none (empty image or use_color off).
-void referenceFuseBlock(const StereoFrame& frame, const BlockOctree& octree, const MapperConfig& config,
-                        VoxelBlock* block) {
+void referenceFuseBlock(const StereoFrame& frame, const BlockOctree& octree,
+                        const MapperConfig& config, VoxelBlock* block) {
   const StereoCamera& cam = frame.camera;
   const Eigen::Isometry3d T_camera_world = frame.T_world_camera.inverse();
   const Eigen::Vector3f origin_c = (T_camera_world * octree.blockOrigin(block->key)).cast<float>();
   const Eigen::Matrix3f R_cw = T_camera_world.linear().cast<float>();
   const float fx = static_cast<float>(cam.fx()), fy = static_cast<float>(cam.fy());
   const float cx = static_cast<float>(cam.cx()), cy = static_cast<float>(cam.cy());
-  const LevelThresholds thresholds = levelThresholdsFor(config, cam.fx() * cam.baseline());  // the frame's
+  const LevelThresholds thresholds =
+      levelThresholdsFor(config, cam.fx() * cam.baseline());  // the frame's
   const float fb = static_cast<float>(cam.fx() * cam.baseline());
   const float voxel = static_cast<float>(config.voxel_size_m);
   bool allocated_before[kNumLevels];
@@ -48,24 +49,30 @@ void referenceFuseBlock(const StereoFrame& frame, const BlockOctree& octree, con
     for (int k = 0; k < side; ++k)
       for (int j = 0; j < side; ++j)
         for (int i = 0; i < side; ++i) {
-          const Eigen::Vector3f p = first + static_cast<float>(i) * ex + static_cast<float>(j) * ey +
-                                    static_cast<float>(k) * ez;
+          const Eigen::Vector3f p = first + static_cast<float>(i) * ex +
+                                    static_cast<float>(j) * ey + static_cast<float>(k) * ez;
           if (!(p.z() > 0.0f)) continue;
           const float u = fx * p.x() / p.z() + cx, v = fy * p.y() / p.z() + cy;
-          if (!(u >= -0.5f && v >= -0.5f && u < cam.width() - 0.5f && v < cam.height() - 0.5f)) continue;
-          const int iu = static_cast<int>(std::floor(u + 0.5f)), iv = static_cast<int>(std::floor(v + 0.5f));
+          if (!(u >= -0.5f && v >= -0.5f && u < cam.width() - 0.5f && v < cam.height() - 0.5f))
+            continue;
+          const int iu = static_cast<int>(std::floor(u + 0.5f)),
+                    iv = static_cast<int>(std::floor(v + 0.5f));
           if (iu < 0 || iv < 0 || iu >= cam.width() || iv >= cam.height()) continue;
           const float d = frame.disparity_px.at<float>(iv, iu);
           if (!(d > 0.0f) || !std::isfinite(d)) continue;
           const float z = fb / d;
-          if (!(z >= static_cast<float>(config.min_depth_m) && z <= static_cast<float>(config.max_depth_m))) continue;
+          if (!(z >= static_cast<float>(config.min_depth_m) &&
+                z <= static_cast<float>(config.max_depth_m)))
+            continue;
           const int m = levelForDepth(z, thresholds);
           // Its own level and coarser ones; the next finer one too where the block held it.
-          const bool finer_held = config.update_allocated_finer_level && allocated_before[level] && level == m - 1;
+          const bool finer_held =
+              config.update_allocated_finer_level && allocated_before[level] && level == m - 1;
           if (level < m && !finer_held) continue;
           const float scale = static_cast<float>(levelScale(m));
-          const float truncation = std::max(static_cast<float>(config.truncation_vox) * scale * voxel,
-                                            TruncationBand::kMinVoxelsOfUpdatedLevel * level_voxel);
+          const float truncation =
+              std::max(static_cast<float>(config.truncation_vox) * scale * voxel,
+                       TruncationBand::kMinVoxelsOfUpdatedLevel * level_voxel);
           const float delta = static_cast<float>(config.weight_falloff_start_vox) * scale * voxel;
           const float sdf = signedDistanceAlongRay(p.x(), p.y(), p.z(), z);
           if (sdf > truncation) continue;
@@ -82,9 +89,12 @@ void referenceFuseBlock(const StereoFrame& frame, const BlockOctree& octree, con
             rgb = grey;
           }
           Voxel& voxel = block->writableAt(level, i, j, k);
-          const float keep = config.free_space_carving ? static_cast<float>(1.0 - config.free_space_decay) : 1.0f;
-          voxel.weight = weightBeforeUpdate(voxel.sdf_m, voxel.weight, std::max(sdf, -truncation), truncation, keep);
-          fuseMeasurement(&voxel, std::max(sdf, -truncation), w, static_cast<float>(config.max_weight), rgb);
+          const float keep =
+              config.free_space_carving ? static_cast<float>(1.0 - config.free_space_decay) : 1.0f;
+          voxel.weight = weightBeforeUpdate(voxel.sdf_m, voxel.weight, std::max(sdf, -truncation),
+                                            truncation, keep);
+          fuseMeasurement(&voxel, std::max(sdf, -truncation), w,
+                          static_cast<float>(config.max_weight), rgb);
         }
   }
 }
@@ -130,18 +140,21 @@ void expectFuserEqualsReferenceAcrossAllLevels(SurfaceFuser::Kernel kernel) {
     for (size_t n = 0; n < queue.size(); ++n) {
       ++compared_blocks;
       for (int level = 0; level < kNumLevels; ++level)
-        ASSERT_EQ(queue[n]->hasLevel(level), expected[n].hasLevel(level)) << "level " << level << " allocated";
+        ASSERT_EQ(queue[n]->hasLevel(level), expected[n].hasLevel(level))
+            << "level " << level << " allocated";
       for (int v = 0; v < VoxelBlock::kVoxelCount; ++v) {
         const Voxel& got = queue[n]->voxel(v);
         const Voxel& want = expected[n].voxel(v);
         ASSERT_EQ(std::memcmp(&got, &want, sizeof(Voxel)), 0)
-            << "block " << queue[n]->key.x << "," << queue[n]->key.y << "," << queue[n]->key.z << " voxel " << v
-            << ": sdf " << got.sdf_m << " vs " << want.sdf_m << ", weight " << got.weight << " vs " << want.weight;
+            << "block " << queue[n]->key.x << "," << queue[n]->key.y << "," << queue[n]->key.z
+            << " voxel " << v << ": sdf " << got.sdf_m << " vs " << want.sdf_m << ", weight "
+            << got.weight << " vs " << want.weight;
         updated_voxels += want.weight > 0.0f;
       }
     }
   }
-  std::printf("[ reference ] %zu block fusions and %zu observed voxels identical\n", compared_blocks, updated_voxels);
+  std::printf("[ reference ] %zu block fusions and %zu observed voxels identical\n",
+              compared_blocks, updated_voxels);
 }
 
 TEST(FusionReference, FuserEqualsPerVoxelReferenceAcrossAllLevels) {
@@ -158,11 +171,18 @@ TEST(FusionReference, FuserEqualsPerVoxelReferenceAcrossAllLevels) {
 cv::Mat randomDisparity(const StereoCamera& cam, uint32_t plane_seed, std::mt19937* rng) {
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   std::mt19937 plane_rng(plane_seed);
-  const Eigen::Vector3d normal = Eigen::Vector3d(unit(plane_rng) - 0.5, unit(plane_rng) - 0.5, -1.0).normalized();
+  const Eigen::Vector3d normal =
+      Eigen::Vector3d(unit(plane_rng) - 0.5, unit(plane_rng) - 0.5, -1.0).normalized();
   const double plane_depth_m = 0.3 + 6.0 * unit(plane_rng);  // along the optical axis
-  const float special[] = {0.0f, -1.0f, std::numeric_limits<float>::quiet_NaN(),
-                           std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity(),
-                           std::numeric_limits<float>::denorm_min(), 1e-30f, 1e30f, 1e-3f};
+  const float special[] = {0.0f,
+                           -1.0f,
+                           std::numeric_limits<float>::quiet_NaN(),
+                           std::numeric_limits<float>::infinity(),
+                           -std::numeric_limits<float>::infinity(),
+                           std::numeric_limits<float>::denorm_min(),
+                           1e-30f,
+                           1e30f,
+                           1e-3f};
   cv::Mat disparity(cam.height(), cam.width(), CV_32FC1);
   for (int v = 0; v < cam.height(); ++v)
     for (int u = 0; u < cam.width(); ++u) {
@@ -181,13 +201,15 @@ cv::Mat randomDisparity(const StereoCamera& cam, uint32_t plane_seed, std::mt199
 
 /// Keys of blocks around the surface seen by random pixels (and a few anywhere, including
 /// behind the camera and outside the image), without repeats.
-std::vector<BlockKey> randomBlockKeys(const StereoFrame& frame, const BlockOctree& octree, std::mt19937* rng) {
+std::vector<BlockKey> randomBlockKeys(const StereoFrame& frame, const BlockOctree& octree,
+                                      std::mt19937* rng) {
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   const StereoCamera& cam = frame.camera;
   std::vector<BlockKey> keys;
   for (int n = 0; n < 160; ++n) {
     // Pixels slightly beyond the borders too, so blocks straddle them.
-    const double u = -3.0 + (cam.width() + 6.0) * unit(*rng), v = -3.0 + (cam.height() + 6.0) * unit(*rng);
+    const double u = -3.0 + (cam.width() + 6.0) * unit(*rng),
+                 v = -3.0 + (cam.height() + 6.0) * unit(*rng);
     const int iu = std::clamp(static_cast<int>(u), 0, cam.width() - 1);
     const int iv = std::clamp(static_cast<int>(v), 0, cam.height() - 1);
     const float d = frame.disparity_px.at<float>(iv, iu);
@@ -226,7 +248,8 @@ TEST(FusionReference, KernelsEqualReferenceOnRandomFramesAndBlocks) {
   const int widths[] = {640, 641, 37, 9, 1, 203};
   const int heights[] = {480, 13, 1, 77};
   const double voxel_sizes[] = {0.01, 0.02, 0.035, 0.05};
-  const WeightMode modes[] = {WeightMode::kConstant, WeightMode::kSteinbruecker, WeightMode::kDepthAware};
+  const WeightMode modes[] = {WeightMode::kConstant, WeightMode::kSteinbruecker,
+                              WeightMode::kDepthAware};
   ThreadPool pool(2);
   size_t compared_voxels = 0, updates = 0;
   for (int trial = 0; trial < 48; ++trial) {
@@ -242,14 +265,16 @@ TEST(FusionReference, KernelsEqualReferenceOnRandomFramesAndBlocks) {
     config.max_depth_m = rng() % 2 ? 8.0 : 1e30;
     config.level_mode = LevelMode::kDepth;  // the thresholds below, drawn at random
     config.levels.scale2_min_depth_m = rng() % 2 ? 2.0 : 2.0000001;
-    config.levels.scale4_min_depth_m = rng() % 2 ? 4.0 : 1.0 + 5.0 * unit(rng);  // may be below level 1's
+    config.levels.scale4_min_depth_m =
+        rng() % 2 ? 4.0 : 1.0 + 5.0 * unit(rng);  // may be below level 1's
     config.use_color = rng() % 4 != 0;
     config.update_allocated_finer_level = trial % 4 != 0;
-    const int width = widths[rng() % std::size(widths)], height = heights[rng() % std::size(heights)];
+    const int width = widths[rng() % std::size(widths)],
+              height = heights[rng() % std::size(heights)];
     const double f_px = 30.0 + 800.0 * unit(rng);
-    const StereoCamera cam = *StereoCamera::create(width, height, f_px, f_px * (0.9 + 0.2 * unit(rng)),
-                                                   (width - 1) / 2.0 + unit(rng), (height - 1) / 2.0 - unit(rng),
-                                                   0.05 + 0.2 * unit(rng));
+    const StereoCamera cam = *StereoCamera::create(
+        width, height, f_px, f_px * (0.9 + 0.2 * unit(rng)), (width - 1) / 2.0 + unit(rng),
+        (height - 1) / 2.0 - unit(rng), 0.05 + 0.2 * unit(rng));
     BlockOctree octree(config.blockSizeM());
     std::vector<SurfaceFuser> fusers;
     for (SurfaceFuser::Kernel kernel : kernelsToTest()) {
@@ -268,17 +293,21 @@ TEST(FusionReference, KernelsEqualReferenceOnRandomFramesAndBlocks) {
       if (color_kind != 2) {
         frame.color.create(height, width, color_kind == 0 ? CV_8UC3 : CV_8UC1);
         for (int v = 0; v < height; ++v)
-          for (size_t byte = 0; byte < frame.color.step[0]; ++byte) frame.color.ptr<uint8_t>(v)[byte] = static_cast<uint8_t>(rng());
+          for (size_t byte = 0; byte < frame.color.step[0]; ++byte)
+            frame.color.ptr<uint8_t>(v)[byte] = static_cast<uint8_t>(rng());
       }
       // The first pose anywhere; the second a few centimetres and degrees from it, so that it
       // sees the same blocks again and averages into observed voxels.
       std::normal_distribution<double> gauss;
       const double spread = frame_index == 1 ? 1.0 : 0.03;
-      const Eigen::Quaterniond q = Eigen::Quaterniond(frame_index == 1 ? gauss(rng) : 1.0, spread * gauss(rng),
-                                                      spread * gauss(rng), spread * gauss(rng)).normalized();
+      const Eigen::Quaterniond q =
+          Eigen::Quaterniond(frame_index == 1 ? gauss(rng) : 1.0, spread * gauss(rng),
+                             spread * gauss(rng), spread * gauss(rng))
+              .normalized();
       Eigen::Isometry3d T_first_camera = Eigen::Isometry3d::Identity();
       T_first_camera.linear() = q.toRotationMatrix();
-      T_first_camera.translation() = Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng)) * (frame_index == 1 ? 10.0 : spread);
+      T_first_camera.translation() =
+          Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng)) * (frame_index == 1 ? 10.0 : spread);
       frame.T_world_camera = T_world_first * T_first_camera;
       if (frame_index == 1) {
         T_world_first = frame.T_world_camera;
@@ -297,7 +326,8 @@ TEST(FusionReference, KernelsEqualReferenceOnRandomFramesAndBlocks) {
       for (size_t n = 0; n < fusers.size(); ++n) {
         std::vector<VoxelBlock*> queue, updated;
         for (VoxelBlock& b : blocks[n]) queue.push_back(&b);
-        voxels_updated.push_back(fusers[n].fuse(frame, measurements, octree, queue, &updated).voxels_updated);
+        voxels_updated.push_back(
+            fusers[n].fuse(frame, measurements, octree, queue, &updated).voxels_updated);
       }
       for (size_t n = 1; n < fusers.size(); ++n) EXPECT_EQ(voxels_updated[n], voxels_updated[0]);
       updates += voxels_updated[0];
@@ -306,13 +336,14 @@ TEST(FusionReference, KernelsEqualReferenceOnRandomFramesAndBlocks) {
           for (int v = 0; v < VoxelBlock::kVoxelCount; ++v) {
             if (v == 0) {
               for (int level = 0; level < kNumLevels; ++level)
-                ASSERT_EQ(blocks[n][b].hasLevel(level), expected[b].hasLevel(level)) << "kernel " << n << " level " << level;
+                ASSERT_EQ(blocks[n][b].hasLevel(level), expected[b].hasLevel(level))
+                    << "kernel " << n << " level " << level;
             }
             const Voxel& got = blocks[n][b].voxel(v);
             const Voxel& want = expected[b].voxel(v);
             ASSERT_EQ(std::memcmp(&got, &want, sizeof(Voxel)), 0)
-                << "kernel " << n << " block " << b << " voxel " << v << ": sdf " << got.sdf_m << " vs "
-                << want.sdf_m << ", weight " << got.weight << " vs " << want.weight;
+                << "kernel " << n << " block " << b << " voxel " << v << ": sdf " << got.sdf_m
+                << " vs " << want.sdf_m << ", weight " << got.weight << " vs " << want.weight;
             ++compared_voxels;
           }
     }

@@ -76,9 +76,11 @@ TEST(FusionSurface, SphereZeroCrossingWithinTenthOfAVoxel) {
   const SphereScene sphere;
   Mapper mapper(testConfig());
   const Eigen::Vector3d eye(0, 0, 0);
-  ASSERT_TRUE(mapper.integrate(renderFrame(sphere.scene, vgaCamera(),
-                                           sim::lookAt(eye, sphere.centre, -Eigen::Vector3d::UnitY())))
-                  .accepted);
+  ASSERT_TRUE(
+      mapper
+          .integrate(renderFrame(sphere.scene, vgaCamera(),
+                                 sim::lookAt(eye, sphere.centre, -Eigen::Vector3d::UnitY())))
+          .accepted);
   // Crossings along all three axes over the cap facing the camera (< 60° from the view ray).
   for (int axis = 0; axis < 3; ++axis) {
     std::vector<double> errors;
@@ -101,7 +103,11 @@ TEST(FusionSurface, SphereFromThreeViews) {
   Mapper mapper(testConfig());
   std::vector<Eigen::Vector3d> eyes = {{0, 0, 0}, {0.5, 0.2, 0.3}, {-0.4, -0.3, 0.2}};
   for (const auto& eye : eyes)
-    ASSERT_TRUE(mapper.integrate(renderFrame(sphere.scene, vgaCamera(), sim::lookAt(eye, sphere.centre, -Eigen::Vector3d::UnitY()))).accepted);
+    ASSERT_TRUE(
+        mapper
+            .integrate(renderFrame(sphere.scene, vgaCamera(),
+                                   sim::lookAt(eye, sphere.centre, -Eigen::Vector3d::UnitY())))
+            .accepted);
   const std::vector<double> errors = crossingErrorsVox(mapper.map(), sphere, 0, eyes[0], true);
   ASSERT_GT(errors.size(), 300u);
   const double worst = *std::max_element(errors.begin(), errors.end());
@@ -119,7 +125,8 @@ TEST(FusionSurface, NoisyPlaneFusesToQuarterVoxelAfter30Frames) {
   for (int f = 0; f < 30; ++f) {
     const Eigen::Vector3d eye(jitter(rng), jitter(rng), jitter(rng));
     const Eigen::Isometry3d pose = sim::lookAt(eye, plane.point, -Eigen::Vector3d::UnitY());
-    ASSERT_TRUE(mapper.integrate(renderFrame(plane.scene, vgaCamera(), pose, 0.3, 100 + f)).accepted);
+    ASSERT_TRUE(
+        mapper.integrate(renderFrame(plane.scene, vgaCamera(), pose, 0.3, 100 + f)).accepted);
   }
   const std::vector<double> errors =
       crossingErrorsVox(mapper.map(), plane, 0, Eigen::Vector3d::Zero(), false);
@@ -137,8 +144,11 @@ TEST(FusionSurface, NoisySphereFusesToQuarterVoxelAfter30Frames) {
   std::uniform_real_distribution<double> jitter(-0.05, 0.05);
   for (int f = 0; f < 30; ++f) {
     const Eigen::Vector3d eye(jitter(rng), jitter(rng), jitter(rng));
-    ASSERT_TRUE(mapper.integrate(renderFrame(sphere.scene, vgaCamera(),
-                                             sim::lookAt(eye, sphere.centre, -Eigen::Vector3d::UnitY()), 0.3, 200 + f)).accepted);
+    ASSERT_TRUE(mapper
+                    .integrate(renderFrame(
+                        sphere.scene, vgaCamera(),
+                        sim::lookAt(eye, sphere.centre, -Eigen::Vector3d::UnitY()), 0.3, 200 + f))
+                    .accepted);
   }
   const std::vector<double> errors =
       crossingErrorsVox(mapper.map(), sphere, 0, Eigen::Vector3d::Zero(), true);
@@ -155,7 +165,8 @@ TEST(FusionSurface, SignConventionNegativeInFront) {
   sim::AnalyticScene scene;
   scene.add(sim::makePlane({0, 0, 1.5}, {0, 0, -1}));
   Mapper mapper(testConfig());
-  ASSERT_TRUE(mapper.integrate(renderFrame(scene, vgaCamera(), Eigen::Isometry3d::Identity())).accepted);
+  ASSERT_TRUE(
+      mapper.integrate(renderFrame(scene, vgaCamera(), Eigen::Isometry3d::Identity())).accepted);
   int front = 0, behind = 0;
   for (const VoxelBlock* b : mapper.map().blocks()) {
     for (int k = 0; k < 8; ++k)
@@ -188,12 +199,15 @@ TEST(FusionSurface, CoarseLevelsGetABandOfTheirOwnVoxels) {
   config.truncation_vox = 1.0;
   config.weight_falloff_start_vox = 0.5;
   Mapper mapper(config);
-  ASSERT_TRUE(mapper.integrate(renderFrame(plane.scene, vgaCamera(), Eigen::Isometry3d::Identity())).accepted);
+  ASSERT_TRUE(mapper.integrate(renderFrame(plane.scene, vgaCamera(), Eigen::Isometry3d::Identity()))
+                  .accepted);
   const double fine = static_cast<double>(zeroCrossings(mapper.map(), 0, 2).size());
   ASSERT_GT(fine, 3000);
   for (int level = 1; level < kNumLevels; ++level) {
-    const double scaled = static_cast<double>(zeroCrossings(mapper.map(), level, 2).size()) * (1 << (2 * level));
-    std::printf("[ coarse band ] level %d: %.0f crossings per level-0 area vs %.0f at level 0\n", level, scaled, fine);
+    const double scaled =
+        static_cast<double>(zeroCrossings(mapper.map(), level, 2).size()) * (1 << (2 * level));
+    std::printf("[ coarse band ] level %d: %.0f crossings per level-0 area vs %.0f at level 0\n",
+                level, scaled, fine);
     EXPECT_GT(scaled, 0.8 * fine) << "level " << level;
   }
 }
@@ -203,7 +217,8 @@ TEST(FusionSurface, FarMeasurementsOnlyReachCoarseLevels) {
   sim::AnalyticScene scene;
   scene.add(sim::makePlane({0, 0, 5.0}, {0, 0, -1}));
   Mapper mapper(testConfig());
-  ASSERT_TRUE(mapper.integrate(renderFrame(scene, vgaCamera(), Eigen::Isometry3d::Identity())).accepted);
+  ASSERT_TRUE(
+      mapper.integrate(renderFrame(scene, vgaCamera(), Eigen::Isometry3d::Identity())).accepted);
   size_t observed[kNumLevels] = {0, 0, 0};
   for (const VoxelBlock* b : mapper.map().blocks())
     for (int level = 0; level < kNumLevels; ++level)
@@ -233,8 +248,8 @@ TEST(FusionSurface, AFartherViewRefinesTheFineLevelANearViewAllocated) {
   // and a quarter of its weight (kFinerLevelWeightScale): those it observes get weight
   // 1 + 1/4 and keep the wall's exact distance (frontal view, voxels
   // within δ in front: the along-ray distance is the distance to the wall up to the ray's
-  // slant, ≤ 1.6e-3 of it within 0.1 m of the axis). Without the option they keep weight 1. Neither run
-  // allocates level 0 in a block the first view did not reach.
+  // slant, ≤ 1.6e-3 of it within 0.1 m of the axis). Without the option they keep weight 1. Neither
+  // run allocates level 0 in a block the first view did not reach.
   sim::AnalyticScene scene;
   scene.add(sim::makePlane({0, 0, 1.8}, {0, 0, -1}));
   for (const bool refine : {true, false}) {
@@ -243,7 +258,8 @@ TEST(FusionSurface, AFartherViewRefinesTheFineLevelANearViewAllocated) {
     config.level_mode = LevelMode::kDepth;
     config.update_allocated_finer_level = refine;
     Mapper mapper(config);
-    Eigen::Isometry3d near_pose = Eigen::Isometry3d::Identity(), far_pose = Eigen::Isometry3d::Identity();
+    Eigen::Isometry3d near_pose = Eigen::Isometry3d::Identity(),
+                      far_pose = Eigen::Isometry3d::Identity();
     far_pose.translation() = Eigen::Vector3d(0, 0, -0.5);
     ASSERT_TRUE(mapper.integrate(renderFrame(scene, vgaCamera(), near_pose)).accepted);
     std::vector<BlockKey> level0_blocks;
@@ -255,16 +271,20 @@ TEST(FusionSurface, AFartherViewRefinesTheFineLevelANearViewAllocated) {
     for (const VoxelBlock* b : mapper.map().blocks()) {
       if (!b->hasLevel(0)) continue;
       ++level0_after;
-      EXPECT_NE(std::find(level0_blocks.begin(), level0_blocks.end(), b->key), level0_blocks.end()) << b->key;
+      EXPECT_NE(std::find(level0_blocks.begin(), level0_blocks.end(), b->key), level0_blocks.end())
+          << b->key;
       const Eigen::Vector3d origin = mapper.map().blockOrigin(b->key);
       for (int k = 0; k < 8; ++k)
         for (int j = 0; j < 8; ++j)
           for (int i = 0; i < 8; ++i) {
             const Voxel& v = b->level(0)[VoxelBlock::indexInLevel(8, i, j, k)];
-            const Eigen::Vector3d centre = origin + kVoxel * Eigen::Vector3d(i + 0.5, j + 0.5, k + 0.5);
+            const Eigen::Vector3d centre =
+                origin + kVoxel * Eigen::Vector3d(i + 0.5, j + 0.5, k + 0.5);
             const double wall_distance_m = centre.z() - 1.8;  // negative in front
             // Within δ = 1 voxel in front of the wall and near the optical axis: weight 1 per view.
-            if (!(wall_distance_m < 0 && wall_distance_m > -kVoxel) || centre.head<2>().norm() > 0.1) continue;
+            if (!(wall_distance_m < 0 && wall_distance_m > -kVoxel) ||
+                centre.head<2>().norm() > 0.1)
+              continue;
             if (v.weight == 1.25f) ++refined;
             if (v.weight == 1.0f) ++near_only;
             EXPECT_NEAR(v.sdf_m, wall_distance_m, 2e-3 * std::abs(wall_distance_m) + 1e-6);

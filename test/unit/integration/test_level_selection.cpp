@@ -24,9 +24,11 @@ TEST(LevelSelection, NoiseModeSwitchesWhereTheDepthErrorReachesTheVoxelEdge) {
   // A long-baseline camera (KITTI: f·b ≈ 386) at 10 cm stays fine to 16 m; a noisier source
   // (σ_d four times larger) goes coarse at half the depth.
   config.voxel_size_m = 0.10;
-  EXPECT_NEAR(levelThresholdsFor(config, 386.14).scale2_min_depth_m, std::sqrt(0.10 * 386.14 / 0.15), 1e-9);
+  EXPECT_NEAR(levelThresholdsFor(config, 386.14).scale2_min_depth_m,
+              std::sqrt(0.10 * 386.14 / 0.15), 1e-9);
   config.disparity_noise_px = 0.60;
-  EXPECT_NEAR(levelThresholdsFor(config, 386.14).scale2_min_depth_m, 0.5 * std::sqrt(0.10 * 386.14 / 0.15), 1e-9);
+  EXPECT_NEAR(levelThresholdsFor(config, 386.14).scale2_min_depth_m,
+              0.5 * std::sqrt(0.10 * 386.14 / 0.15), 1e-9);
 }
 
 TEST(LevelSelection, CoarseDisparityStepsRaiseTheNoiseToTheirRoundingError) {
@@ -45,7 +47,8 @@ TEST(LevelSelection, CoarseDisparityStepsRaiseTheNoiseToTheirRoundingError) {
   EXPECT_NEAR(whole.scale4_min_depth_m, 3.094761, 1e-6);
   // The configured depths ignore it.
   config.level_mode = LevelMode::kDepth;
-  EXPECT_EQ(levelThresholdsFor(config, 69.12, 1.0).scale2_min_depth_m, config.levels.scale2_min_depth_m);
+  EXPECT_EQ(levelThresholdsFor(config, 69.12, 1.0).scale2_min_depth_m,
+            config.levels.scale2_min_depth_m);
 }
 
 TEST(LevelSelection, DepthModeKeepsTheConfiguredDepths) {
@@ -65,7 +68,8 @@ TEST(LevelSelection, DepthModeKeepsTheConfiguredDepths) {
 TEST(LevelSelection, TheMapperFusesAtTheLevelTheFramesCameraSelects) {
   sim::AnalyticScene scene;
   scene.add(sim::makePlane({0, 0, 2.5}, {0, 0, -1}));
-  const StereoCamera camera = *StereoCamera::create(320, 240, 288.0, 288.0, 159.5, 119.5, 0.24);  // f·b = 69.12
+  const StereoCamera camera =
+      *StereoCamera::create(320, 240, 288.0, 288.0, 159.5, 119.5, 0.24);  // f·b = 69.12
   StereoFrame frame = renderFrame(scene, camera, Eigen::Isometry3d::Identity());
   frame.timestamp_s = 1.0;
   auto levelsAllocated = [&](const MapperConfig& config) {
@@ -81,7 +85,8 @@ TEST(LevelSelection, TheMapperFusesAtTheLevelTheFramesCameraSelects) {
   depth_mode.level_mode = LevelMode::kDepth;
   EXPECT_EQ(levelsAllocated(depth_mode), 0b110) << "2.5 m is past the thesis' 2 m: 4³ and coarser";
   MapperConfig noise_mode;  // σ_d = 0.15 px: level 1 from 3.04 m
-  EXPECT_EQ(levelsAllocated(noise_mode), 0b111) << "good data at 2.5 m stays at 8³ (and updates the coarser levels)";
+  EXPECT_EQ(levelsAllocated(noise_mode), 0b111)
+      << "good data at 2.5 m stays at 8³ (and updates the coarser levels)";
   // Whole-pixel disparities (delta_d = 1): σ_d ≥ 0.289 px, level 1 from 2.19 m.
   frame.disparity_step_px = 1.0;
   EXPECT_EQ(levelsAllocated(noise_mode), 0b110) << "rounded disparities at 2.5 m go to 4³";
@@ -95,7 +100,8 @@ TEST(LevelSelection, TheMapperFusesAtTheLevelTheFramesCameraSelects) {
     const IntegrationResult r = mapper.integrate(frame);
     EXPECT_FALSE(r.accepted) << step;
     EXPECT_EQ(r.reason, RejectReason::kInvalidFrame) << step;
-    EXPECT_NE(r.error.find("disparity step (DisparityImage.delta_d)"), std::string::npos) << r.error;
+    EXPECT_NE(r.error.find("disparity step (DisparityImage.delta_d)"), std::string::npos)
+        << r.error;
     EXPECT_EQ(mapper.map().blockCount(), 0u);
   }
 }

@@ -46,8 +46,8 @@ LookupRun runLookup(const MapperConfig& config, const StereoFrame& frame, BlockO
 struct NaiveAndAccelerated {
   LookupRun naive, accel;
 };
-NaiveAndAccelerated runNaiveAndAccelerated(MapperConfig config, const StereoFrame& frame, BlockOctree* naive_tree,
-                                           BlockOctree* accel_tree) {
+NaiveAndAccelerated runNaiveAndAccelerated(MapperConfig config, const StereoFrame& frame,
+                                           BlockOctree* naive_tree, BlockOctree* accel_tree) {
   NaiveAndAccelerated runs;
   config.lookup_mode = LookupMode::kNaive;
   runs.naive = runLookup(config, frame, naive_tree);
@@ -77,9 +77,11 @@ struct ScalarAndVector {
   std::vector<std::tuple<int, int, int>> scalar_keys, vector_keys;
 };
 
-ScalarAndVector runScalarAndVector(const MapperConfig& config, const StereoFrame& frame, ThreadPool* pool) {
+ScalarAndVector runScalarAndVector(const MapperConfig& config, const StereoFrame& frame,
+                                   ThreadPool* pool) {
   BlockOctree scalar_tree(config.blockSizeM()), vector_tree(config.blockSizeM());
-  BlockLookup scalar(lookupConfig(config), pool, /*allow_simd=*/false), vector(lookupConfig(config), pool);
+  BlockLookup scalar(lookupConfig(config), pool, /*allow_simd=*/false),
+      vector(lookupConfig(config), pool);
   EXPECT_FALSE(scalar.usesSimd());
   std::vector<VoxelBlock*> scalar_queue, vector_queue;
   ScalarAndVector r;
@@ -96,7 +98,8 @@ ScalarAndVector runScalarAndVector(const MapperConfig& config, const StereoFrame
 TEST(BlockLookup, NaiveAndAcceleratedQueueTheSameBlocks) {
   const StereoCamera camera = vgaCamera();
   const sim::AnalyticScene scene = planeAndSphere();
-  const StereoFrame frame = renderFrame(scene, camera, sim::lookAt({0.2, -0.3, -0.5}, {0, 0, 2.0}, -Eigen::Vector3d::UnitY()));
+  const StereoFrame frame = renderFrame(
+      scene, camera, sim::lookAt({0.2, -0.3, -0.5}, {0, 0, 2.0}, -Eigen::Vector3d::UnitY()));
   // Φ of 16 voxels makes the boxes of levels 1 and 2 (2 m on) 9 or more blocks wide, past
   // the histogram's 8-cell box rows; one pixel in 16 keeps the naive search short there.
   StereoFrame sparse_frame = frame;
@@ -104,16 +107,19 @@ TEST(BlockLookup, NaiveAndAcceleratedQueueTheSameBlocks) {
   for (int v = 0; v < sparse_frame.disparity_px.rows; ++v)
     for (int u = 0; u < sparse_frame.disparity_px.cols; ++u)
       if (u % 4 != 0 || v % 4 != 0) sparse_frame.disparity_px.at<float>(v, u) = 0.0f;
-  for (const auto& [histogram, truncation_vox] : {std::pair{0, 4.0}, std::pair{4, 4.0}, std::pair{0, 16.0}}) {
+  for (const auto& [histogram, truncation_vox] :
+       {std::pair{0, 4.0}, std::pair{4, 4.0}, std::pair{0, 16.0}}) {
     const StereoFrame& frame_used = truncation_vox > 4.0 ? sparse_frame : frame;
     MapperConfig config;
     config.histogram_min_points = histogram;
     config.truncation_vox = truncation_vox;
     BlockOctree naive_tree(config.blockSizeM()), accel_tree(config.blockSizeM());
-    const auto [naive, accel] = runNaiveAndAccelerated(config, frame_used, &naive_tree, &accel_tree);
+    const auto [naive, accel] =
+        runNaiveAndAccelerated(config, frame_used, &naive_tree, &accel_tree);
 
     EXPECT_GT(naive.queue.size(), 100u);
-    EXPECT_EQ(keysOf(naive.queue), keysOf(accel.queue)) << "histogram " << histogram << ", Φ " << truncation_vox;
+    EXPECT_EQ(keysOf(naive.queue), keysOf(accel.queue))
+        << "histogram " << histogram << ", Φ " << truncation_vox;
     EXPECT_EQ(naive.stats.valid_points, accel.stats.valid_points);
     EXPECT_EQ(naive_tree.blockCount(), accel_tree.blockCount());
     EXPECT_EQ(accel.stats.blocks_allocated, accel_tree.blockCount());
@@ -124,12 +130,13 @@ TEST(BlockLookup, NaiveAndAcceleratedQueueTheSameBlocks) {
     // The counts are the octree's own: the lookup made exactly the searches it reports.
     EXPECT_EQ(accel_tree.searchCount(), accel.stats.octree_searches);
     EXPECT_EQ(naive_tree.searchCount(), naive.stats.octree_searches);
-    std::printf("[ lookup ] 640x480, histogram %d: %llu valid points, %zu blocks, searches naive %llu,"
-                " accelerated %llu (%.0fx fewer)\n",
-                histogram, static_cast<unsigned long long>(naive.stats.valid_points),
-                naive.queue.size(), static_cast<unsigned long long>(naive.stats.octree_searches),
-                static_cast<unsigned long long>(accel.stats.octree_searches),
-                double(naive.stats.octree_searches) / accel.stats.octree_searches);
+    std::printf(
+        "[ lookup ] 640x480, histogram %d: %llu valid points, %zu blocks, searches naive %llu,"
+        " accelerated %llu (%.0fx fewer)\n",
+        histogram, static_cast<unsigned long long>(naive.stats.valid_points), naive.queue.size(),
+        static_cast<unsigned long long>(naive.stats.octree_searches),
+        static_cast<unsigned long long>(accel.stats.octree_searches),
+        double(naive.stats.octree_searches) / accel.stats.octree_searches);
   }
 }
 
@@ -220,7 +227,8 @@ void expectEveryBlockFusionCanUpdateIsQueued(const Eigen::Vector3d& world_offset
   MapperConfig config;
   config.histogram_min_points = 0;  // the filter drops sparse blocks on purpose
   config.voxel_size_m = 0.01;
-  config.level_mode = LevelMode::kDepth;  // the scene's depths (1.2, 3, 6 m) put points at all three levels
+  config.level_mode =
+      LevelMode::kDepth;  // the scene's depths (1.2, 3, 6 m) put points at all three levels
   const StereoCamera camera = *StereoCamera::create(160, 120, 131.25, 131.25, 79.5, 59.5, 0.1);
   const Eigen::Vector3d& o = world_offset_m;
   sim::AnalyticScene scene;
@@ -228,7 +236,8 @@ void expectEveryBlockFusionCanUpdateIsQueued(const Eigen::Vector3d& world_offset
   scene.add(sim::makeSphere(o + Eigen::Vector3d(0.4, 0.1, 1.2), 0.3));
   scene.add(sim::makeSphere(o + Eigen::Vector3d(-1.0, -0.3, 3.0), 0.5));
   const Eigen::Isometry3d pose =
-      sim::lookAt(o + Eigen::Vector3d(0.2, -0.1, -0.3), o + Eigen::Vector3d(0.1, 0.0, 3.0), -Eigen::Vector3d::UnitY());
+      sim::lookAt(o + Eigen::Vector3d(0.2, -0.1, -0.3), o + Eigen::Vector3d(0.1, 0.0, 3.0),
+                  -Eigen::Vector3d::UnitY());
   const StereoFrame frame = renderFrame(scene, camera, pose, 0.3, 7);
   ThreadPool pool(2);
   BlockOctree tree(config.blockSizeM());
@@ -242,7 +251,8 @@ void expectEveryBlockFusionCanUpdateIsQueued(const Eigen::Vector3d& world_offset
     hi = componentMax(hi, b->key);
   }
   BlockOctree all(config.blockSizeM());
-  const LevelThresholds thresholds = levelThresholdsFor(config, frame.camera.fx() * frame.camera.baseline());
+  const LevelThresholds thresholds =
+      levelThresholdsFor(config, frame.camera.fx() * frame.camera.baseline());
   std::vector<VoxelBlock*> every;
   for (int32_t z = lo.z - 2; z <= hi.z + 2; ++z)
     for (int32_t y = lo.y - 2; y <= hi.y + 2; ++y)
@@ -265,23 +275,27 @@ void expectEveryBlockFusionCanUpdateIsQueued(const Eigen::Vector3d& world_offset
             const Voxel& v = b->at(level, i, j, k);
             if (!(v.weight > 0.0f)) continue;
             const Eigen::Vector3d x_c = T_camera_world * voxelCentre(all, b->key, level, i, j, k);
-            const double surface_depth_m = x_c.z() * (1.0 - v.sdf_m / x_c.norm());  // eq. 3.15 solved for z
-            const double phi_m = band.measurementM(
-                levelForDepth(surface_depth_m, thresholds));
+            const double surface_depth_m =
+                x_c.z() * (1.0 - v.sdf_m / x_c.norm());  // eq. 3.15 solved for z
+            const double phi_m = band.measurementM(levelForDepth(surface_depth_m, thresholds));
             if (std::abs(v.sdf_m) > 0.999 * phi_m) continue;
             ++in_band[level];
             if (!queued.count(b->key)) {
               ++missed;
-              ADD_FAILURE() << "block " << b->key << " level " << level << " sdf " << v.sdf_m << " not queued";
+              ADD_FAILURE() << "block " << b->key << " level " << level << " sdf " << v.sdf_m
+                            << " not queued";
             }
           }
     }
   EXPECT_EQ(missed, 0u);
-  for (int level = 0; level < kNumLevels; ++level) EXPECT_GT(in_band[level], 100u) << "level " << level;
+  for (int level = 0; level < kNumLevels; ++level)
+    EXPECT_GT(in_band[level], 100u) << "level " << level;
 }
 }  // namespace
 
-TEST(BlockLookup, EveryBlockFusionCanUpdateIsQueued) { expectEveryBlockFusionCanUpdateIsQueued(Eigen::Vector3d::Zero()); }
+TEST(BlockLookup, EveryBlockFusionCanUpdateIsQueued) {
+  expectEveryBlockFusionCanUpdateIsQueued(Eigen::Vector3d::Zero());
+}
 
 // The same 12 km from the world origin, where a float world coordinate is off by a millimetre:
 // the lookup's boxes are relative to the camera's block, so the margin still holds.
@@ -295,20 +309,23 @@ TEST(BlockLookup, CameraMovedByWholeBlocksShiftsTheQueueExactly) {
   MapperConfig config;
   config.histogram_min_points = 0;
   config.voxel_size_m = 0.02;
-  const StereoFrame near_frame = renderFrame(planeAndSphere(), vgaCamera(),
-                                             sim::lookAt({0.21, -0.13, -0.4}, {0, 0, 2.0}, -Eigen::Vector3d::UnitY()));
+  const StereoFrame near_frame =
+      renderFrame(planeAndSphere(), vgaCamera(),
+                  sim::lookAt({0.21, -0.13, -0.4}, {0, 0, 2.0}, -Eigen::Vector3d::UnitY()));
   BlockOctree near_tree(config.blockSizeM());
   const LookupRun near_run = runLookup(config, near_frame, &near_tree);
   ASSERT_GT(near_run.queue.size(), 500u);
   const BlockKey shift{1000003, -2000017, 300007};  // ≈ 160 km at 8 cm blocks
   StereoFrame far_frame = near_frame;
-  far_frame.T_world_camera.translation() += config.blockSizeM() * Eigen::Vector3d(shift.x, shift.y, shift.z);
+  far_frame.T_world_camera.translation() +=
+      config.blockSizeM() * Eigen::Vector3d(shift.x, shift.y, shift.z);
   BlockOctree far_tree(config.blockSizeM());
   const LookupRun far_run = runLookup(config, far_frame, &far_tree);
   ASSERT_EQ(far_run.queue.size(), near_run.queue.size());
   for (size_t i = 0; i < near_run.queue.size(); ++i) {
     const BlockKey& k = near_run.queue[i]->key;
-    ASSERT_EQ(far_run.queue[i]->key, (BlockKey{k.x + shift.x, k.y + shift.y, k.z + shift.z})) << "block " << i;
+    ASSERT_EQ(far_run.queue[i]->key, (BlockKey{k.x + shift.x, k.y + shift.y, k.z + shift.z}))
+        << "block " << i;
   }
 }
 
@@ -339,7 +356,7 @@ TEST(BlockLookup, HistogramFilterDropsSparseBlocks) {
   // Region of 16×16: 253 pixels on a plane at 1 m, 3 isolated pixels far away at 5 m.
   const StereoCamera camera = *StereoCamera::create(16, 16, 500, 500, 8, 8, 0.1);
   StereoFrame frame = constantDepthFrame(camera, 50.0f);  // z = 1 m
-  frame.disparity_px.at<float>(0, 0) = 10.0f;               // z = 5 m
+  frame.disparity_px.at<float>(0, 0) = 10.0f;             // z = 5 m
   frame.disparity_px.at<float>(0, 1) = 10.0f;
   frame.disparity_px.at<float>(1, 0) = 10.0f;
   MapperConfig config;
@@ -366,7 +383,8 @@ TEST(BlockLookup, HistogramFilterDropsSparseBlocks) {
 TEST(BlockLookup, ResultDoesNotDependOnThreadsOrRegionSize) {
   const StereoCamera camera = vgaCamera();
   const StereoFrame frame =
-      renderFrame(planeAndSphere(), camera, sim::lookAt({-0.4, 0.2, -0.2}, {0.1, 0, 2.0}, -Eigen::Vector3d::UnitY()));
+      renderFrame(planeAndSphere(), camera,
+                  sim::lookAt({-0.4, 0.2, -0.2}, {0.1, 0, 2.0}, -Eigen::Vector3d::UnitY()));
   MapperConfig config;
   config.histogram_min_points = 0;
   std::vector<std::tuple<int, int, int>> reference;
@@ -393,7 +411,8 @@ TEST(BlockLookup, VectorPathEqualsScalarPathOnHostileFrames) {
   const float specials[] = {0.0f, -3.0f, std::nanf(""), HUGE_VALF, -HUGE_VALF, 1e-30f, 1e30f};
   for (int trial = 0; trial < 12; ++trial) {
     const int width = 61 + trial, height = 37 + 2 * trial;
-    const StereoCamera camera = *StereoCamera::create(width, height, 60.0, 62.0, width * 0.45, height * 0.55, 0.12);
+    const StereoCamera camera =
+        *StereoCamera::create(width, height, 60.0, 62.0, width * 0.45, height * 0.55, 0.12);
     StereoFrame frame = constantDepthFrame(camera, 0.0f);
     for (int v = 0; v < height; ++v)
       for (int u = 0; u < width; ++u) {
@@ -436,7 +455,8 @@ TEST(BlockLookup, VectorPathEqualsScalarPathOnSmoothFrames) {
   const float specials[] = {0.0f, -3.0f, std::nanf(""), HUGE_VALF, 1e-30f, 1e30f};
   for (int trial = 0; trial < 8; ++trial) {
     const int width = 90 + 3 * trial, height = 50 + trial;
-    const StereoCamera camera = *StereoCamera::create(width, height, 70.0, 70.0, width * 0.5, height * 0.5, 0.12);
+    const StereoCamera camera =
+        *StereoCamera::create(width, height, 70.0, 70.0, width * 0.5, height * 0.5, 0.12);
     StereoFrame frame = constantDepthFrame(camera, 0.0f);
     // A tilted plane (disparity linear in u and v) spanning all three levels; odd trials add
     // noise so that pixels near a box edge alternate between two boxes.
@@ -449,7 +469,8 @@ TEST(BlockLookup, VectorPathEqualsScalarPathOnSmoothFrames) {
         if (pick < special_per_100) d = specials[pick % 6];
         frame.disparity_px.at<float>(v, u) = d;
       }
-    frame.T_world_camera = Eigen::AngleAxisd(0.2 * trial, Eigen::Vector3d(0.3, -1.0, 0.5).normalized());
+    frame.T_world_camera =
+        Eigen::AngleAxisd(0.2 * trial, Eigen::Vector3d(0.3, -1.0, 0.5).normalized());
     frame.T_world_camera.translation() = Eigen::Vector3d(0.1 * trial, -0.7, 0.4);
     for (int histogram : {0, 2, 3, 5, 9, 16, 33, 64}) {
       MapperConfig config;
@@ -466,7 +487,8 @@ TEST(BlockLookup, VectorPathEqualsScalarPathOnSmoothFrames) {
       EXPECT_GT(s.valid_points, 0u);
       EXPECT_EQ(r.scalar_keys, r.vector_keys) << "trial " << trial << ", histogram " << histogram;
       EXPECT_EQ(s.valid_points, v.valid_points);
-      EXPECT_EQ(s.blocks_filtered, v.blocks_filtered) << "trial " << trial << ", histogram " << histogram;
+      EXPECT_EQ(s.blocks_filtered, v.blocks_filtered)
+          << "trial " << trial << ", histogram " << histogram;
     }
   }
 }
@@ -508,13 +530,15 @@ TEST(BlockLookup, VectorPathEqualsScalarPathWhereTheSumOrderDecidesTheBlock) {
   const int u = 2, v = 1;
   const float disparity = 20.0f;  // z = 0.5 m: level 0
   const double z = camera.fx() * camera.baseline() / disparity;
-  const double p[3] = {(u - camera.cx()) * z * (1.0 / camera.fx()), (v - camera.cy()) * z * (1.0 / camera.fy()), z};
+  const double p[3] = {(u - camera.cx()) * z * (1.0 / camera.fx()),
+                       (v - camera.cy()) * z * (1.0 / camera.fy()), z};
   const double band = 0.5;
   std::mt19937 rng(3);
   bool found = false;
   for (int attempt = 0; attempt < 10000 && !found; ++attempt) {
     const Eigen::Matrix3d R =
-        Eigen::AngleAxisd(std::uniform_real_distribution<double>(0.0, 6.0)(rng), Eigen::Vector3d::Random().normalized())
+        Eigen::AngleAxisd(std::uniform_real_distribution<double>(0.0, 6.0)(rng),
+                          Eigen::Vector3d::Random().normalized())
             .toRotationMatrix();
     const double a0 = R(2, 0) * p[0], a1 = R(2, 1) * p[1], a2 = R(2, 2) * p[2];
     const double left = (a0 + a1) + a2, right = a0 + (a1 + a2);
@@ -593,5 +617,6 @@ TEST(BlockLookup, HistogramFilterKeepsAFarSparseTrueSurface) {
   config.histogram_min_points = 0;
   BlockOctree all_tree(config.blockSizeM());
   const LookupRun all = runLookup(config, frame, &all_tree);
-  EXPECT_EQ(keysOf(filtered.queue), keysOf(all.queue)) << filtered.stats.blocks_filtered << " (region, block) pairs dropped";
+  EXPECT_EQ(keysOf(filtered.queue), keysOf(all.queue))
+      << filtered.stats.blocks_filtered << " (region, block) pairs dropped";
 }

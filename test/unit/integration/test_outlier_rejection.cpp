@@ -47,7 +47,8 @@ Rejected reject(const cv::Mat& disparity, const MapperConfig& config) {
       const float z = image.depths()[v * disparity.cols + u];
       if (!std::isnan(z)) {
         r.usable.at<uint8_t>(v, u) = 1;
-        EXPECT_EQ(z, kFb / disparity.at<float>(v, u)) << "a kept depth changed at (" << u << ", " << v << ")";
+        EXPECT_EQ(z, kFb / disparity.at<float>(v, u))
+            << "a kept depth changed at (" << u << ", " << v << ")";
       }
     }
   return r;
@@ -79,7 +80,8 @@ TEST(OutlierRejection, AStepOfAtMostTheJumpIsNoEdge) {
   EXPECT_EQ(reject(disparity, rejectionConfig(0, 2)).stats.edge_pixels, 0u);
   disparity(cv::Rect(0, 0, kWidth / 2, kHeight)).setTo(11.01f);
   // The two columns left of the step, every row.
-  EXPECT_EQ(reject(disparity, rejectionConfig(0, 2)).stats.edge_pixels, static_cast<uint64_t>(2 * kHeight));
+  EXPECT_EQ(reject(disparity, rejectionConfig(0, 2)).stats.edge_pixels,
+            static_cast<uint64_t>(2 * kHeight));
 }
 
 TEST(OutlierRejection, KeepsSlantedPlanesUpToTheJumpOverTheRadius) {
@@ -89,13 +91,16 @@ TEST(OutlierRejection, KeepsSlantedPlanesUpToTheJumpOverTheRadius) {
   for (const float gradient : {0.327f, 0.5f}) {
     cv::Mat disparity(kHeight, kWidth, CV_32FC1);
     for (int v = 0; v < kHeight; ++v) disparity.row(v).setTo(5.0f + gradient * v);
-    EXPECT_EQ(reject(disparity, rejectionConfig(50, 2)).stats.edge_pixels, 0u) << "gradient " << gradient;
-    EXPECT_EQ(reject(disparity, rejectionConfig(50, 2)).stats.speckle_pixels, 0u) << "gradient " << gradient;
+    EXPECT_EQ(reject(disparity, rejectionConfig(50, 2)).stats.edge_pixels, 0u)
+        << "gradient " << gradient;
+    EXPECT_EQ(reject(disparity, rejectionConfig(50, 2)).stats.speckle_pixels, 0u)
+        << "gradient " << gradient;
   }
   cv::Mat steep(kHeight, kWidth, CV_32FC1);
   for (int v = 0; v < kHeight; ++v) steep.row(v).setTo(5.0f + 0.55f * v);
   // Row v is cut by row v − 2 (1.1 px farther): every row but the first two.
-  EXPECT_EQ(reject(steep, rejectionConfig(0, 2)).stats.edge_pixels, static_cast<uint64_t>((kHeight - 2) * kWidth));
+  EXPECT_EQ(reject(steep, rejectionConfig(0, 2)).stats.edge_pixels,
+            static_cast<uint64_t>((kHeight - 2) * kWidth));
 }
 
 TEST(OutlierRejection, DropsSpecklesUpToTheirAreaAndNoLargerBlob) {

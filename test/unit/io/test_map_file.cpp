@@ -18,12 +18,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-
 std::string tempPath(const std::string& name) {
   return testing::TempDir() + "stereo_fusion_mapfile_" + std::to_string(::getpid()) + "_" + name;
 }
-
-
 
 /// A tiny hand-made map of three blocks (fast to decode thousands of times).
 std::vector<uint8_t> tinyMapFile(const MapperConfig& config) {
@@ -39,7 +36,9 @@ std::vector<uint8_t> tinyMapFile(const MapperConfig& config) {
     }
     ++n;
   }
-  return encodeMapFile(map, config, 12, [](const VoxelBlock& b) { return uint64_t{10} + static_cast<uint64_t>(b.key.x + 3); });
+  return encodeMapFile(map, config, 12, [](const VoxelBlock& b) {
+    return uint64_t{10} + static_cast<uint64_t>(b.key.x + 3);
+  });
 }
 
 /// Re-seals a patched file with correct checksums, so the content checks are what fails.
@@ -83,9 +82,10 @@ TEST(MapFile, OneBlockEncodesToTheDocumentedBytesHandWorked) {
   VoxelBlock* block = map.findOrAllocate({1, -2, 3});
   ASSERT_NE(block, nullptr);
   // Levels 0 and 2 allocated, level 1 not: the record holds 512 + 8 voxels.
-  block->writableVoxel(0) = Voxel{0.5f, 2.0f, 10, 20, 30, 0};     // 0x3f000000, 0x40000000
-  block->writableVoxel(583) = Voxel{-0.25f, 1.0f, 1, 2, 3, 0};    // 0xbe800000, 0x3f800000
-  const std::vector<uint8_t> file = encodeMapFile(map, config, 12, [](const VoxelBlock&) { return 0x0102030405060708ull; });
+  block->writableVoxel(0) = Voxel{0.5f, 2.0f, 10, 20, 30, 0};   // 0x3f000000, 0x40000000
+  block->writableVoxel(583) = Voxel{-0.25f, 1.0f, 1, 2, 3, 0};  // 0xbe800000, 0x3f800000
+  const std::vector<uint8_t> file =
+      encodeMapFile(map, config, 12, [](const VoxelBlock&) { return 0x0102030405060708ull; });
   const size_t record_bytes = 24 + (512 + 8) * 12;
   ASSERT_EQ(file.size(), kMapFileHeaderBytes + record_bytes + 16);  // + an empty seen-free section
   auto bytes = [&](size_t offset, std::initializer_list<int> want) {
@@ -97,25 +97,33 @@ TEST(MapFile, OneBlockEncodesToTheDocumentedBytesHandWorked) {
   bytes(kMapFileHeaderBytes + record_bytes, {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0});
   bytes(48, {12, 0, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0});  // frames, block count
   const size_t payload_bytes = record_bytes + 16;
-  bytes(64, {int(payload_bytes & 0xff), int(payload_bytes >> 8), 0, 0, 0, 0, 0, 0});  // payload bytes
+  bytes(64,
+        {int(payload_bytes & 0xff), int(payload_bytes >> 8), 0, 0, 0, 0, 0, 0});  // payload bytes
   const size_t record = kMapFileHeaderBytes;
-  bytes(record, {1, 0, 0, 0, 0xfe, 0xff, 0xff, 0xff, 3, 0, 0, 0});    // key
-  bytes(record + 12, {8, 7, 6, 5, 4, 3, 2, 1, 5, 0, 0, 0});           // last update frame, levels 0 and 2, 0, 0, 0
+  bytes(record, {1, 0, 0, 0, 0xfe, 0xff, 0xff, 0xff, 3, 0, 0, 0});  // key
+  bytes(record + 12,
+        {8, 7, 6, 5, 4, 3, 2, 1, 5, 0, 0, 0});  // last update frame, levels 0 and 2, 0, 0, 0
   bytes(record + 24, {0, 0, 0, 0x3f, 0, 0, 0, 0x40, 10, 20, 30, 0});  // first voxel of level 0
-  bytes(record + 24 + 512 * 12 + 7 * 12, {0, 0, 0x80, 0xbe, 0, 0, 0x80, 0x3f, 1, 2, 3, 0});  // last of level 2
+  bytes(record + 24 + 512 * 12 + 7 * 12,
+        {0, 0, 0x80, 0xbe, 0, 0, 0x80, 0x3f, 1, 2, 3, 0});   // last of level 2
   bytes(record + 36, {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0});  // an untouched voxel
   // Both checksums as documented: payload at 72, header bytes 0..75 at 76.
   const uint32_t payload_crc = crc32(file.data() + record, payload_bytes);
   const uint32_t header_crc = crc32(file.data(), 76);
-  bytes(72, {int(payload_crc & 0xff), int(payload_crc >> 8 & 0xff), int(payload_crc >> 16 & 0xff), int(payload_crc >> 24)});
-  bytes(76, {int(header_crc & 0xff), int(header_crc >> 8 & 0xff), int(header_crc >> 16 & 0xff), int(header_crc >> 24)});
+  bytes(72, {int(payload_crc & 0xff), int(payload_crc >> 8 & 0xff), int(payload_crc >> 16 & 0xff),
+             int(payload_crc >> 24)});
+  bytes(76, {int(header_crc & 0xff), int(header_crc >> 8 & 0xff), int(header_crc >> 16 & 0xff),
+             int(header_crc >> 24)});
 }
 
 // A version-1 file (72-byte header, all 584 voxels per block) as the previous release wrote it.
-std::vector<uint8_t> versionOneFile(const BlockOctree& map, const MapperConfig& config, uint64_t frames) {
+std::vector<uint8_t> versionOneFile(const BlockOctree& map, const MapperConfig& config,
+                                    uint64_t frames) {
   const std::vector<VoxelBlock*> blocks = map.blocksSortedByKey();
   std::vector<uint8_t> file(kMapFileV1HeaderBytes + blocks.size() * kMapFileV1RecordBytes, 0);
-  auto put = [&](size_t at, const void* value, size_t n) { std::memcpy(file.data() + at, value, n); };
+  auto put = [&](size_t at, const void* value, size_t n) {
+    std::memcpy(file.data() + at, value, n);
+  };
   const uint32_t version = 1, header_bytes = 72;
   const uint64_t count = blocks.size();
   put(0, "SFUSEMAP", 8);
@@ -130,7 +138,8 @@ std::vector<uint8_t> versionOneFile(const BlockOctree& map, const MapperConfig& 
   size_t at = kMapFileV1HeaderBytes;
   for (const VoxelBlock* b : blocks) {
     put(at, &b->key, 12);
-    const uint64_t last_update = 40 + static_cast<uint64_t>(b->key.z & 7);  // any: v1 stored the frame here
+    const uint64_t last_update =
+        40 + static_cast<uint64_t>(b->key.z & 7);  // any: v1 stored the frame here
     put(at + 12, &last_update, 8);
     file[at + 20] = 2;  // v1's mesh level: derived data the reader checks (< 3) and ignores
     for (int v = 0; v < VoxelBlock::kVoxelCount; ++v) put(at + 24 + 12 * v, &b->voxel(v), 12);
@@ -153,11 +162,13 @@ TEST(MapFile, VersionOneFilesStillLoadWithOnlyTheirObservedLevels) {
   }
   with_empty.findOrAllocate({500, 0, 0});
   with_empty.findOrAllocate({501, 0, 0})->writableLevel(1);  // stored, never observed
-  const std::vector<uint8_t> old_file = versionOneFile(with_empty, config, original->framesIntegrated());
+  const std::vector<uint8_t> old_file =
+      versionOneFile(with_empty, config, original->framesIntegrated());
   BlockOctree loaded(config.blockSizeM());
   MapFileInfo info;
   std::string error;
-  ASSERT_TRUE(decodeMapFile(old_file.data(), old_file.size(), config, &loaded, &info, &error)) << error;
+  ASSERT_TRUE(decodeMapFile(old_file.data(), old_file.size(), config, &loaded, &info, &error))
+      << error;
   EXPECT_EQ(info.version, 1u);
   EXPECT_EQ(info.block_count, original->map().blockCount() + 2);
   // The fused blocks and voxels, without the empty ones, and a level is allocated exactly
@@ -170,7 +181,8 @@ TEST(MapFile, VersionOneFilesStillLoadWithOnlyTheirObservedLevels) {
   // Saved again, it is a current file of the same map.
   BlockOctree again(config.blockSizeM());
   const std::vector<uint8_t> new_file = encodeMapFile(loaded, config, info.frames_integrated);
-  ASSERT_TRUE(decodeMapFile(new_file.data(), new_file.size(), config, &again, &info, &error)) << error;
+  ASSERT_TRUE(decodeMapFile(new_file.data(), new_file.size(), config, &again, &info, &error))
+      << error;
   EXPECT_EQ(info.version, kMapFileVersion);
   EXPECT_TRUE(snapshot(again) == snapshot(original->map()));
   EXPECT_LT(new_file.size(), old_file.size());
@@ -185,8 +197,10 @@ TEST(MapFile, SaveLoadGivesTheIdenticalMapAndByteIdenticalMesh) {
   ASSERT_TRUE(original->saveMap(map_path, &error)) << error;
   size_t voxel_bytes = 0;
   for (const VoxelBlock* b : original->map().blocks()) voxel_bytes += b->voxelBytes();
-  const size_t free_space_bytes = 16 + original->planning()->seenFree().size() * kMapFileFreeSpaceRecordBytes;
-  EXPECT_EQ(fs::file_size(map_path), kMapFileHeaderBytes + original->map().blockCount() * kMapFileRecordHeadBytes +
+  const size_t free_space_bytes =
+      16 + original->planning()->seenFree().size() * kMapFileFreeSpaceRecordBytes;
+  EXPECT_EQ(fs::file_size(map_path), kMapFileHeaderBytes +
+                                         original->map().blockCount() * kMapFileRecordHeadBytes +
                                          voxel_bytes + free_space_bytes);
 
   Mapper loaded(config);
@@ -196,12 +210,14 @@ TEST(MapFile, SaveLoadGivesTheIdenticalMapAndByteIdenticalMesh) {
   EXPECT_EQ(loaded.framesIntegrated(), original->framesIntegrated());
   // The eviction order goes with the map.
   for (const VoxelBlock* b : original->map().blocks())
-    EXPECT_EQ(loaded.lastUpdateFrame(*loaded.map().find(b->key)), original->lastUpdateFrame(*b)) << b->key;
+    EXPECT_EQ(loaded.lastUpdateFrame(*loaded.map().find(b->key)), original->lastUpdateFrame(*b))
+        << b->key;
   EXPECT_EQ(changes.changed.size(), loaded.mesh().submeshes().size());
   EXPECT_TRUE(changes.removed.empty());
   // Loading allocates block by block and swaps the octree in: the neighbour links the mesher
   // reads must come out equal to searches, and as many as the original map has.
-  const LinkCheck links = checkNeighbourLinks(loaded.map()), original_links = checkNeighbourLinks(original->map());
+  const LinkCheck links = checkNeighbourLinks(loaded.map()),
+                  original_links = checkNeighbourLinks(original->map());
   EXPECT_EQ(links.mismatched, 0u);
   EXPECT_EQ(links.checked, 27 * loaded.map().blockCount());
   EXPECT_EQ(links.linked, original_links.linked);
@@ -230,14 +246,18 @@ TEST(MapFile, EncodeThenWriteAndReadThenAdoptEqualSaveAndLoad) {
   ASSERT_TRUE(original->saveMap(saved, &error)) << error;
   // encodeMap() leaves the checksums to writeMapFileBytes(), which fills them in place.
   std::vector<uint8_t> bytes = original->encodeMap();
-  const SeenFreeSpace free_space{original->planning()->grid().cell_m, original->planning()->seenFree()};
-  const std::vector<uint8_t> sealed =
-      encodeMapFile(original->map(), config, original->framesIntegrated(),
-                    [&](const VoxelBlock& block) { return original->lastUpdateFrame(block); }, free_space);
+  const SeenFreeSpace free_space{original->planning()->grid().cell_m,
+                                 original->planning()->seenFree()};
+  const std::vector<uint8_t> sealed = encodeMapFile(
+      original->map(), config, original->framesIntegrated(),
+      [&](const VoxelBlock& block) { return original->lastUpdateFrame(block); }, free_space);
   ASSERT_EQ(bytes.size(), sealed.size());
-  EXPECT_TRUE(std::equal(bytes.begin(), bytes.begin() + 72, sealed.begin()));  // header before the checksums
-  EXPECT_TRUE(std::equal(bytes.begin() + kMapFileHeaderBytes, bytes.end(), sealed.begin() + kMapFileHeaderBytes));
-  EXPECT_TRUE(std::all_of(bytes.begin() + 72, bytes.begin() + 80, [](uint8_t b) { return b == 0; }));
+  EXPECT_TRUE(std::equal(bytes.begin(), bytes.begin() + 72,
+                         sealed.begin()));  // header before the checksums
+  EXPECT_TRUE(std::equal(bytes.begin() + kMapFileHeaderBytes, bytes.end(),
+                         sealed.begin() + kMapFileHeaderBytes));
+  EXPECT_TRUE(
+      std::all_of(bytes.begin() + 72, bytes.begin() + 80, [](uint8_t b) { return b == 0; }));
   ASSERT_TRUE(writeMapFileBytes(written, &bytes, &error)) << error;
   EXPECT_TRUE(bytes == sealed);
   EXPECT_TRUE(readBytes(written) == readBytes(saved));
@@ -250,7 +270,8 @@ TEST(MapFile, EncodeThenWriteAndReadThenAdoptEqualSaveAndLoad) {
   MapFileInfo info;
   ASSERT_TRUE(readMapFile(written, by_adopt.config(), &read, &info, &error)) << error;
   const MeshChanges adopt_changes = by_adopt.adoptMap(&read, info);
-  EXPECT_EQ(read.blockCount(), 0u) << "adoptMap leaves the mapper's old (empty) map in its argument";
+  EXPECT_EQ(read.blockCount(), 0u)
+      << "adoptMap leaves the mapper's old (empty) map in its argument";
   EXPECT_TRUE(snapshot(by_adopt.map()) == snapshot(by_load.map()));
   EXPECT_EQ(by_adopt.framesIntegrated(), by_load.framesIntegrated());
   EXPECT_EQ(adopt_changes.changed.size(), load_changes.changed.size());
@@ -335,7 +356,8 @@ TEST(MapFile, VersionParametersAndContentAreChecked) {
   const std::vector<uint8_t> good = tinyMapFile(config);
   std::vector<uint8_t> bad = good;
   bad[8] = 4;  // version 4
-  EXPECT_EQ(decodeError(bad, config), "map file version 4 is not supported (this build reads versions 1 to 3)");
+  EXPECT_EQ(decodeError(bad, config),
+            "map file version 4 is not supported (this build reads versions 1 to 3)");
   bad = good;
   bad[0] = 'X';
   EXPECT_EQ(decodeError(bad, config), "not a stereo_fusion map file (bad magic)");
@@ -343,22 +365,28 @@ TEST(MapFile, VersionParametersAndContentAreChecked) {
 
   MapperConfig other = config;
   other.voxel_size_m = 0.04;
-  EXPECT_NE(decodeError(good, other).find("built with voxel_size_m = 0.02"), std::string::npos) << decodeError(good, other);
+  EXPECT_NE(decodeError(good, other).find("built with voxel_size_m = 0.02"), std::string::npos)
+      << decodeError(good, other);
   other = config;
   other.truncation_vox = 3;
-  EXPECT_NE(decodeError(good, other).find("this mapper uses voxel_size_m = 0.02, truncation_vox = 3"), std::string::npos);
+  EXPECT_NE(
+      decodeError(good, other).find("this mapper uses voxel_size_m = 0.02, truncation_vox = 3"),
+      std::string::npos);
 
   // Well-sealed files with impossible content.
   bad = good;
   const size_t second = kMapFileHeaderBytes + kAllLevelsRecordBytes;
-  std::copy(good.begin() + kMapFileHeaderBytes, good.begin() + kMapFileHeaderBytes + 12, bad.begin() + second);
+  std::copy(good.begin() + kMapFileHeaderBytes, good.begin() + kMapFileHeaderBytes + 12,
+            bad.begin() + second);
   reseal(&bad);
-  EXPECT_NE(decodeError(bad, config).find("appears twice"), std::string::npos) << decodeError(bad, config);
+  EXPECT_NE(decodeError(bad, config).find("appears twice"), std::string::npos)
+      << decodeError(bad, config);
   bad = good;
   const float nan = NAN;
   std::memcpy(bad.data() + kMapFileHeaderBytes + 24 + 12 * 5, &nan, 4);
   reseal(&bad);
-  EXPECT_NE(decodeError(bad, config).find("non-finite distance or a negative weight"), std::string::npos);
+  EXPECT_NE(decodeError(bad, config).find("non-finite distance or a negative weight"),
+            std::string::npos);
   bad = good;
   const float negative = -1.0f;
   std::memcpy(bad.data() + kMapFileHeaderBytes + 24 + 12 * 5 + 4, &negative, 4);
@@ -367,12 +395,14 @@ TEST(MapFile, VersionParametersAndContentAreChecked) {
   bad = good;
   bad[kMapFileHeaderBytes + 20] = 8;  // a level that does not exist
   reseal(&bad);
-  EXPECT_NE(decodeError(bad, config).find("has head bytes 8, 0, 0, 0 (levels, 0, 0, 0)"), std::string::npos)
+  EXPECT_NE(decodeError(bad, config).find("has head bytes 8, 0, 0, 0 (levels, 0, 0, 0)"),
+            std::string::npos)
       << decodeError(bad, config);
   bad = good;
   bad[kMapFileHeaderBytes + 23] = 1;  // the head's padding must be zero
   reseal(&bad);
-  EXPECT_NE(decodeError(bad, config).find("has head bytes 7, 0, 0, 1"), std::string::npos) << decodeError(bad, config);
+  EXPECT_NE(decodeError(bad, config).find("has head bytes 7, 0, 0, 1"), std::string::npos)
+      << decodeError(bad, config);
   bad = good;
   const uint32_t far = (1u << 28) + 5;  // beyond kMaxKey
   std::memcpy(bad.data() + kMapFileHeaderBytes, &far, 4);
@@ -381,21 +411,26 @@ TEST(MapFile, VersionParametersAndContentAreChecked) {
   bad = good;
   bad[56] = 0xFF;  // block count 255 + ...: more blocks than the payload holds
   reseal(&bad);
-  EXPECT_NE(decodeError(bad, config).find("block 3 of 255 runs past the end"), std::string::npos) << decodeError(bad, config);
+  EXPECT_NE(decodeError(bad, config).find("block 3 of 255 runs past the end"), std::string::npos)
+      << decodeError(bad, config);
   bad = good;
   for (size_t v = 0; v < 8; ++v)  // the first block's level 2 (its last 8 voxels) unobserved
     std::memset(bad.data() + kMapFileHeaderBytes + kAllLevelsRecordBytes - 12 * (8 - v) + 4, 0, 4);
   reseal(&bad);
-  EXPECT_NE(decodeError(bad, config).find("stores level 2 without an observed voxel"), std::string::npos)
+  EXPECT_NE(decodeError(bad, config).find("stores level 2 without an observed voxel"),
+            std::string::npos)
       << decodeError(bad, config);
   bad = good;
   bad[64] = 0;  // a payload size other than the file's
   reseal(&bad);
-  EXPECT_NE(decodeError(bad, config).find("corrupted map file"), std::string::npos) << decodeError(bad, config);
+  EXPECT_NE(decodeError(bad, config).find("corrupted map file"), std::string::npos)
+      << decodeError(bad, config);
   bad = good;
-  bad[kMapFileHeaderBytes + 20] = 3;  // the first block without its level 2: the records no longer add up
+  bad[kMapFileHeaderBytes + 20] =
+      3;  // the first block without its level 2: the records no longer add up
   reseal(&bad);
-  EXPECT_NE(decodeError(bad, config).find("invalid map file"), std::string::npos) << decodeError(bad, config);
+  EXPECT_NE(decodeError(bad, config).find("invalid map file"), std::string::npos)
+      << decodeError(bad, config);
 }
 
 TEST(MapFile, AFailedLoadLeavesTheMapAndMeshUntouched) {
@@ -432,7 +467,8 @@ TEST(MapFile, AFailedLoadLeavesTheMapAndMeshUntouched) {
   EXPECT_NE(error.find("cannot open the map file"), std::string::npos) << error;
   EXPECT_FALSE(mapper->saveMap("/nonexistent_dir/x.sfmap", &error));
   EXPECT_NE(error.find("cannot write"), std::string::npos) << error;
-  EXPECT_NE(error.find("No such file or directory"), std::string::npos) << "the message says why: " << error;
+  EXPECT_NE(error.find("No such file or directory"), std::string::npos)
+      << "the message says why: " << error;
   // A device is refused before reading (/dev/zero would never end), a directory likewise.
   for (const std::string& not_a_file : {std::string("/dev/zero"), testing::TempDir()}) {
     EXPECT_FALSE(mapper->loadMap(not_a_file, nullptr, &error));

@@ -21,7 +21,8 @@ namespace fs = std::filesystem;
 namespace {
 
 fs::path freshDir(const std::string& name) {
-  const fs::path dir = fs::path(testing::TempDir()) / ("stereo_fusion_" + name + "_" + std::to_string(::getpid()));
+  const fs::path dir =
+      fs::path(testing::TempDir()) / ("stereo_fusion_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
@@ -43,14 +44,17 @@ TEST(WriteTarget, OnlyAbsentPathsAndRegularFilesAreWritable) {
   EXPECT_TRUE(isWritableTarget((dir / "old.ply").string(), &error));
   ASSERT_EQ(::mkfifo((dir / "fifo.ply").c_str(), 0644), 0);
   EXPECT_FALSE(isWritableTarget((dir / "fifo.ply").string(), &error));
-  EXPECT_NE(error.find("fifo.ply is a FIFO: only regular files are written"), std::string::npos) << error;
+  EXPECT_NE(error.find("fifo.ply is a FIFO: only regular files are written"), std::string::npos)
+      << error;
   EXPECT_FALSE(isWritableTarget("/dev/null", &error));
   EXPECT_NE(error.find("/dev/null is a device"), std::string::npos) << error;
   EXPECT_FALSE(isWritableTarget(dir.string(), &error));
   EXPECT_NE(error.find("is a directory"), std::string::npos) << error;
   fs::create_symlink(dir / "fifo.ply", dir / "link.ply");
-  EXPECT_FALSE(isWritableTarget((dir / "link.ply").string(), &error)) << "a link is judged by what it points to";
-  EXPECT_NE(temporaryPathBeside((dir / "a.map").string()), temporaryPathBeside((dir / "a.map").string()));
+  EXPECT_FALSE(isWritableTarget((dir / "link.ply").string(), &error))
+      << "a link is judged by what it points to";
+  EXPECT_NE(temporaryPathBeside((dir / "a.map").string()),
+            temporaryPathBeside((dir / "a.map").string()));
   fs::remove_all(dir);
 }
 
@@ -74,11 +78,13 @@ TEST(WriteTarget, MapAndMeshExportsRefuseAFifoWithoutBlocking) {
   EXPECT_NE(error.find("mesh.mtl is a FIFO"), std::string::npos) << error;
   EXPECT_TRUE(fs::is_fifo(dir / "map.sfmap"));
   EXPECT_TRUE(fs::is_fifo(dir / "mesh.ply"));
-  EXPECT_EQ(fs::file_size(dir / "mesh.obj"), 3u) << "nothing was written when one target was refused";
+  EXPECT_EQ(fs::file_size(dir / "mesh.obj"), 3u)
+      << "nothing was written when one target was refused";
   for (const auto& entry : fs::directory_iterator(dir))
     EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
   // A regular target is written, through a temporary renamed into place.
-  EXPECT_TRUE(exportMesh((dir / "good.ply").string(), mapper->mesh().submeshes(), {}, &error)) << error;
+  EXPECT_TRUE(exportMesh((dir / "good.ply").string(), mapper->mesh().submeshes(), {}, &error))
+      << error;
   EXPECT_GT(fs::file_size(dir / "good.ply"), 1000u);
   fs::remove_all(dir);
 }
@@ -102,7 +108,9 @@ TEST(MapFile, HugeFilesAreRefusedFromTheirHeaderWithoutBeingRead) {
   EXPECT_FALSE(readMapFile(zeros.string(), config, &out, &info, &error));
   EXPECT_NE(error.find("bad magic"), std::string::npos) << error;
   EXPECT_FALSE(readMapFile(grown.string(), config, &out, &info, &error));
-  EXPECT_NE(error.find("corrupted map file: 1073741824 bytes, but the header announces"), std::string::npos) << error;
+  EXPECT_NE(error.find("corrupted map file: 1073741824 bytes, but the header announces"),
+            std::string::npos)
+      << error;
   EXPECT_LT(maxRssKb() - rss_before_kb, 64 * 1024) << "the payload must not have been read";
   EXPECT_EQ(out.blockCount(), 0u);
   fs::resize_file(grown, real_size);

@@ -24,7 +24,8 @@ TEST(BlockKeyBitmap, ReadsBackDistinctKeysInSortedOrder) {
   insert(lo);
   insert(hi);
   for (int i = 0; i < 3000; ++i) insert({x(rng), y(rng), z(rng)});
-  for (int i = 0; i < 500; ++i) insert(*std::next(reference.begin(), static_cast<long>(rng() % reference.size())));
+  for (int i = 0; i < 500; ++i)
+    insert(*std::next(reference.begin(), static_cast<long>(rng() % reference.size())));
   std::vector<BlockKey> keys = {{1, 2, 3}};  // appended to, not replaced
   bitmap.appendSorted(&keys);
   const std::vector<BlockKey> expected = [&] {

@@ -30,7 +30,8 @@ TEST(BlockKeySet, ResetForgetsAndGrowsWithTheNextPass) {
   for (int round = 0; round < 2; ++round)
     for (int z = -8; z < 8; ++z)
       for (int y = -8; y < 8; ++y)
-        for (int x = -8; x < 8; ++x) EXPECT_EQ(set.insert({x, y, z}), reference.insert({x, y, z}).second);
+        for (int x = -8; x < 8; ++x)
+          EXPECT_EQ(set.insert({x, y, z}), reference.insert({x, y, z}).second);
   EXPECT_EQ(reference.size(), 4096u);
 }
 

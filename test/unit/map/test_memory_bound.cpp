@@ -24,7 +24,8 @@ sim::AnalyticScene corridor() {
 }
 
 StereoFrame corridorFrame(const sim::AnalyticScene& scene, double x_m) {
-  Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();  // optical frame: looking along +z
+  Eigen::Isometry3d T_world_camera =
+      Eigen::Isometry3d::Identity();  // optical frame: looking along +z
   T_world_camera.translation() = Eigen::Vector3d(x_m, 0, 0);
   return renderFrame(scene, qvgaCamera(), T_world_camera);
 }
@@ -100,20 +101,23 @@ TEST(EvictionPolicy, HandWorkedBudgetAndDistance) {
   policy.recordUpdates(map, {{4, 0, 0}, {7, 7, 7}}, 9);  // (7, 7, 7): no block, skipped
   EXPECT_EQ(policy.lastUpdateFrame(*map.find({3, 0, 0})), 0u);
   EXPECT_EQ(policy.lastUpdateFrame(*map.find({2, 0, 0})), 3u);
-  auto selectBlocksToEvict = [&](const BlockOctree& m, const Eigen::Vector3d& c, const EvictionLimits& l) {
-    return policy.select(m, c, l);
-  };
+  auto selectBlocksToEvict = [&](const BlockOctree& m, const Eigen::Vector3d& c,
+                                 const EvictionLimits& l) { return policy.select(m, c, l); };
   const Eigen::Vector3d camera(0.5, 0.5, 0.5);  // at the centre of block 0
   // No limit, or a budget not exceeded: nothing.
   EXPECT_TRUE(selectBlocksToEvict(map, camera, {}).empty());
   EXPECT_TRUE(selectBlocksToEvict(map, camera, {5, 0.0}).empty());
   // Budget 3: evict 2. Oldest is x = 3 (never updated); then x = 1 and x = 2 tie at frame 3 and
   // the farther, x = 2 (2 m away against 1 m), goes.
-  EXPECT_EQ(selectBlocksToEvict(map, camera, {3, 0.0}), (std::vector<BlockKey>{{2, 0, 0}, {3, 0, 0}}));
+  EXPECT_EQ(selectBlocksToEvict(map, camera, {3, 0.0}),
+            (std::vector<BlockKey>{{2, 0, 0}, {3, 0, 0}}));
   // Distance 2.5 m: centres at 3 m and 4 m are beyond, whatever their age.
-  EXPECT_EQ(selectBlocksToEvict(map, camera, {0, 2.5}), (std::vector<BlockKey>{{3, 0, 0}, {4, 0, 0}}));
-  // Both: 3 and 4 by distance, then among 0, 1, 2 one more for a budget of 2: x = 2 (frame 3, farther).
-  EXPECT_EQ(selectBlocksToEvict(map, camera, {2, 2.5}), (std::vector<BlockKey>{{2, 0, 0}, {3, 0, 0}, {4, 0, 0}}));
+  EXPECT_EQ(selectBlocksToEvict(map, camera, {0, 2.5}),
+            (std::vector<BlockKey>{{3, 0, 0}, {4, 0, 0}}));
+  // Both: 3 and 4 by distance, then among 0, 1, 2 one more for a budget of 2: x = 2 (frame 3,
+  // farther).
+  EXPECT_EQ(selectBlocksToEvict(map, camera, {2, 2.5}),
+            (std::vector<BlockKey>{{2, 0, 0}, {3, 0, 0}, {4, 0, 0}}));
 }
 
 TEST(MemoryBound, BudgetHoldsAfterEveryFrameAndEvictsTheLeastRecent) {
@@ -130,12 +134,14 @@ TEST(MemoryBound, BudgetHoldsAfterEveryFrameAndEvictsTheLeastRecent) {
     EXPECT_LE(mapper.map().blockCount(), 250u) << "frame " << f;
     evicted_total += r.evicted_blocks.size();
     uint64_t oldest_kept = UINT64_MAX;
-    for (const VoxelBlock* b : mapper.map().blocks()) oldest_kept = std::min(oldest_kept, mapper.lastUpdateFrame(*b));
+    for (const VoxelBlock* b : mapper.map().blocks())
+      oldest_kept = std::min(oldest_kept, mapper.lastUpdateFrame(*b));
     for (const BlockKey& k : r.evicted_blocks) {
       EXPECT_EQ(mapper.map().find(k), nullptr) << k;
       EXPECT_FALSE(std::binary_search(r.updated_blocks.begin(), r.updated_blocks.end(), k)) << k;
       auto it = before.find(k);
-      // A block that existed before the frame is only evicted if every kept block is at least as recent.
+      // A block that existed before the frame is only evicted if every kept block is at least as
+      // recent.
       if (it != before.end()) {
         EXPECT_LE(it->second, oldest_kept) << "evicted " << k << " at frame " << f;
       }
@@ -145,7 +151,8 @@ TEST(MemoryBound, BudgetHoldsAfterEveryFrameAndEvictsTheLeastRecent) {
   EXPECT_EQ(mapper.blocksEvicted(), evicted_total);
   // The kept map is the recent end of the corridor: every block last updated in the first
   // quarter of the run is gone.
-  for (const VoxelBlock* b : mapper.map().blocks()) EXPECT_GT(mapper.lastUpdateFrame(*b), 10u) << b->key;
+  for (const VoxelBlock* b : mapper.map().blocks())
+    EXPECT_GT(mapper.lastUpdateFrame(*b), 10u) << b->key;
 }
 
 TEST(MemoryBound, DistanceLimitKeepsOnlyNearbyBlocks) {
@@ -165,7 +172,8 @@ TEST(MemoryBound, DistanceLimitKeepsOnlyNearbyBlocks) {
     for (const VoxelBlock* b : unbounded.map().blocks())
       near_in_unbounded += (unbounded.map().blockOrigin(b->key) + half - camera).norm() <= 3.0;
     for (const VoxelBlock* b : mapper.map().blocks())
-      ASSERT_LE((mapper.map().blockOrigin(b->key) + half - camera).norm(), 3.0) << b->key << " frame " << f;
+      ASSERT_LE((mapper.map().blockOrigin(b->key) + half - camera).norm(), 3.0)
+          << b->key << " frame " << f;
     // Nothing near was evicted: the near part of the unbounded map is all there.
     EXPECT_EQ(mapper.map().blockCount(), near_in_unbounded) << "frame " << f;
   }
@@ -190,17 +198,19 @@ TEST(MemoryBound, MeshAfterEvictionEqualsARebuildAndTheStreamedCopy) {
       streamed.erase(k);
     }
     for (const BlockKey& k : r.evicted_blocks) {
-      EXPECT_EQ(mapper.mesh().submeshes().count(k), 0u) << "evicted block " << k << " kept its submesh";
+      EXPECT_EQ(mapper.mesh().submeshes().count(k), 0u)
+          << "evicted block " << k << " kept its submesh";
       removed_by_eviction += std::binary_search(r.mesh.removed.begin(), r.mesh.removed.end(), k);
     }
   }
   EXPECT_GT(removed_by_eviction, 20u);
   ThreadPool pool(2);
-  MeshStore batch(MeshingParams{config.voxel_size_m, config.truncation_vox, config.mesh_level_min_coverage,
-                                config.mesh_fill_seams});
+  MeshStore batch(MeshingParams{config.voxel_size_m, config.truncation_vox,
+                                config.mesh_level_min_coverage, config.mesh_fill_seams});
   batch.rebuild(mapper.map(), &pool);
   ASSERT_GT(batch.triangleCount(), 1000u);
-  EXPECT_TRUE(triangleSets(mapper.mesh()) == triangleSets(batch)) << "incremental mesh differs from a rebuild";
+  EXPECT_TRUE(triangleSets(mapper.mesh()) == triangleSets(batch))
+      << "incremental mesh differs from a rebuild";
   ASSERT_EQ(streamed.size(), mapper.mesh().submeshes().size());
   for (const auto& [key, sub] : mapper.mesh().submeshes()) {
     auto it = streamed.find(key);
@@ -213,7 +223,8 @@ TEST(MemoryBound, MeshAfterEvictionEqualsARebuildAndTheStreamedCopy) {
 TEST(MemoryBound, UnlimitedByDefaultEvictsNothing) {
   const sim::AnalyticScene scene = corridor();
   Mapper mapper(boundedConfig());
-  for (int f = 0; f < 10; ++f) EXPECT_TRUE(mapper.integrate(corridorFrame(scene, 0.3 * f)).evicted_blocks.empty());
+  for (int f = 0; f < 10; ++f)
+    EXPECT_TRUE(mapper.integrate(corridorFrame(scene, 0.3 * f)).evicted_blocks.empty());
   EXPECT_EQ(mapper.blocksEvicted(), 0u);
 }
 

@@ -71,8 +71,8 @@ TEST(BlockOctree, RandomInsertAndFindAgainstStdMap) {
 
 TEST(BlockOctree, GrowsToPointsOneKilometreAwayInEveryDirection) {
   BlockOctree tree(0.16);
-  const Eigen::Vector3d points[] = {{0.1, 0.1, 0.1},     {1000.0, 0, 0},   {-1000.0, 0, 0},
-                                    {0, -1000.0, 500.0}, {0, 0, -1000.0},  {-700, -700, -700},
+  const Eigen::Vector3d points[] = {{0.1, 0.1, 0.1},      {1000.0, 0, 0},  {-1000.0, 0, 0},
+                                    {0, -1000.0, 500.0},  {0, 0, -1000.0}, {-700, -700, -700},
                                     {999.9, -999.9, 0.05}};
   std::vector<VoxelBlock*> blocks;
   for (const auto& p : points) {
@@ -151,8 +151,9 @@ TEST(BlockOctree, MemoryAccounting) {
   EXPECT_EQ(tree.memoryUse(false).total(), empty_bytes);
   // Even all three levels everywhere stay inside the old 10 KiB budget.
   EXPECT_LT(static_cast<double>(sizeof(VoxelBlock) + 584 * 12), 10 * 1024.0);
-  std::printf("[ memory ] %zu blocks, %zu nodes: %.0f bytes per block incl. octree (block alone %zu)\n",
-              tree.blockCount(), tree.nodeCount(), tree.bytesPerBlock(), sizeof(VoxelBlock));
+  std::printf(
+      "[ memory ] %zu blocks, %zu nodes: %.0f bytes per block incl. octree (block alone %zu)\n",
+      tree.blockCount(), tree.nodeCount(), tree.bytesPerBlock(), sizeof(VoxelBlock));
   EXPECT_GT(tree.nodeCount(), 0u);
   EXPECT_LT(tree.nodeCount(), tree.blockCount());
   tree.clear();
@@ -215,8 +216,8 @@ TEST(BlockOctree, ExtremeKeysOnEveryAxisStayBalancedAndExact) {
   // Keys at ±kMaxKey on all axes, in an order that once pushed the root past int32.
   BlockOctree tree(0.16);
   const int32_t K = BlockOctree::kMaxKey;
-  const std::vector<BlockKey> keys = {{0, 0, 0},  {0, 0, K},   {0, 0, -K}, {0, -K, 0}, {-K, 0, 0},
-                                      {K, K, K},  {-K, -K, -K}, {K, -K, K}, {-K, K, -K}, {1, -1, 1}};
+  const std::vector<BlockKey> keys = {{0, 0, 0}, {0, 0, K},    {0, 0, -K}, {0, -K, 0},  {-K, 0, 0},
+                                      {K, K, K}, {-K, -K, -K}, {K, -K, K}, {-K, K, -K}, {1, -1, 1}};
   std::vector<VoxelBlock*> blocks;
   for (const BlockKey& k : keys) {
     blocks.push_back(tree.findOrAllocate(k));

@@ -21,7 +21,8 @@ namespace {
 /// Links a block holds to other blocks (the block itself not counted).
 int linkCount(const VoxelBlock& block) {
   int n = 0;
-  for (int slot = 0; slot < NeighbourLinks::kCount; ++slot) n += block.neighbours.at(slot) != nullptr;
+  for (int slot = 0; slot < NeighbourLinks::kCount; ++slot)
+    n += block.neighbours.at(slot) != nullptr;
   return n;
 }
 
@@ -35,7 +36,8 @@ int totalLinks(const BlockOctree& map) {
 void allocateCube(BlockOctree* map, const BlockKey& centre) {
   for (int dz = -1; dz <= 1; ++dz)
     for (int dy = -1; dy <= 1; ++dy)
-      for (int dx = -1; dx <= 1; ++dx) ASSERT_NE(map->findOrAllocate(centre.offset(dx, dy, dz)), nullptr);
+      for (int dx = -1; dx <= 1; ++dx)
+        ASSERT_NE(map->findOrAllocate(centre.offset(dx, dy, dz)), nullptr);
 }
 
 }  // namespace
@@ -84,7 +86,8 @@ TEST(BlockOctreeLinks, EraseLeavesNoDanglingLink) {
     for (int slot = 0; slot < NeighbourLinks::kCount; ++slot) {
       const VoxelBlock* n = b->neighbours.at(slot);
       if (n == nullptr) continue;
-      EXPECT_EQ(doomed_addresses.count(reinterpret_cast<uintptr_t>(n)), 0u) << b->key << " slot " << slot;
+      EXPECT_EQ(doomed_addresses.count(reinterpret_cast<uintptr_t>(n)), 0u)
+          << b->key << " slot " << slot;
       // Reading through every link: AddressSanitizer reports a link to a freed block here.
       EXPECT_NE(map.find(n->key), nullptr);
     }
@@ -154,10 +157,11 @@ TEST(BlockOctreeLinks, EqualSearchesAfterRandomAllocateEraseClearSwap) {
       ++allocations;
     } else if (op < 17) {
       std::vector<BlockKey> doomed;
-      for (const VoxelBlock* b : tree.blocksSortedByKey())  // not allocation order: threads set that
+      for (const VoxelBlock* b :
+           tree.blocksSortedByKey())  // not allocation order: threads set that
         if (rng() % 3 == 0) doomed.push_back(b->key);
       if (!doomed.empty()) doomed.push_back(doomed.front());  // duplicates are ignored
-      doomed.push_back(centre.offset(40, 0, 0));               // and so are absent keys
+      doomed.push_back(centre.offset(40, 0, 0));              // and so are absent keys
       erased += tree.erase(doomed);
       ++erases;
     } else if (op < 18) {
@@ -175,9 +179,11 @@ TEST(BlockOctreeLinks, EqualSearchesAfterRandomAllocateEraseClearSwap) {
       linked += c.linked;
     }
   }
-  std::printf("[ links ] %d allocation batches (%d grew the root), %d erases (%zu blocks), %d clears, %d swaps: "
-              "%zu links checked, %zu non-null\n",
-              allocations, root_growths, erases, erased, clears, swaps, checked, linked);
+  std::printf(
+      "[ links ] %d allocation batches (%d grew the root), %d erases (%zu blocks), %d clears, %d "
+      "swaps: "
+      "%zu links checked, %zu non-null\n",
+      allocations, root_growths, erases, erased, clears, swaps, checked, linked);
   EXPECT_GT(allocations, steps / 3);
   EXPECT_GT(root_growths, 0);
   EXPECT_GT(erased, 100u);

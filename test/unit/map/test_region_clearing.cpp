@@ -25,10 +25,14 @@ TEST(MapRegion, BoxAndSphereTestsHandWorked) {
   const MapRegion box = MapRegion::box({0, 0, 0}, {1, 2, 3});
   EXPECT_TRUE(box.contains({1, 2, 3}));  // the boundary belongs to the region
   EXPECT_FALSE(box.contains({1.001, 1, 1}));
-  EXPECT_TRUE(box.intersects(Eigen::AlignedBox3d(Eigen::Vector3d(1, 1, 1), Eigen::Vector3d(5, 5, 5))));
-  EXPECT_FALSE(box.intersects(Eigen::AlignedBox3d(Eigen::Vector3d(1.1, 0, 0), Eigen::Vector3d(5, 5, 5))));
-  EXPECT_TRUE(box.containsBox(Eigen::AlignedBox3d(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 1, 1))));
-  EXPECT_FALSE(box.containsBox(Eigen::AlignedBox3d(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 1, 3.5))));
+  EXPECT_TRUE(
+      box.intersects(Eigen::AlignedBox3d(Eigen::Vector3d(1, 1, 1), Eigen::Vector3d(5, 5, 5))));
+  EXPECT_FALSE(
+      box.intersects(Eigen::AlignedBox3d(Eigen::Vector3d(1.1, 0, 0), Eigen::Vector3d(5, 5, 5))));
+  EXPECT_TRUE(
+      box.containsBox(Eigen::AlignedBox3d(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 1, 1))));
+  EXPECT_FALSE(
+      box.containsBox(Eigen::AlignedBox3d(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 1, 3.5))));
 
   // The box [1, 2]³ is √3 = 1.7321 m from the origin at its corner (1, 1, 1), and its far
   // corner (2, 2, 2) is √12 = 3.4641 m away.
@@ -39,17 +43,20 @@ TEST(MapRegion, BoxAndSphereTestsHandWorked) {
   EXPECT_FALSE(MapRegion::sphere({0, 0, 0}, 3.4640).containsBox(cube));
   // A box that straddles the centre: its nearest point is the centre itself.
   EXPECT_TRUE(MapRegion::sphere({1.5, 1.5, 1.5}, 0.01).intersects(cube));
-  EXPECT_TRUE(MapRegion::sphere({0, 0, 1}, 0.5).contains({0.3, 0.4, 1.0}));   // 0.5 m away: on it
+  EXPECT_TRUE(MapRegion::sphere({0, 0, 1}, 0.5).contains({0.3, 0.4, 1.0}));  // 0.5 m away: on it
   EXPECT_FALSE(MapRegion::sphere({0, 0, 1}, 0.5).contains({0.3, 0.41, 1.0}));
 }
 
 TEST(MapRegion, InvalidRegionsSayWhatIsWrong) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   EXPECT_EQ(MapRegion::box({0, 0, 0}, {0, 0, 0}).validate(), "");  // a point is a valid box
-  EXPECT_NE(MapRegion::box({0, 1, 0}, {1, 0, 1}).validate().find("min must not exceed its max"), std::string::npos);
+  EXPECT_NE(MapRegion::box({0, 1, 0}, {1, 0, 1}).validate().find("min must not exceed its max"),
+            std::string::npos);
   EXPECT_NE(MapRegion::box({nan, 0, 0}, {1, 1, 1}).validate().find("finite"), std::string::npos);
-  EXPECT_NE(MapRegion::sphere({0, 0, 0}, 0.0).validate().find("radius must be positive"), std::string::npos);
-  EXPECT_NE(MapRegion::sphere({0, 0, 0}, -1.0).validate().find("radius must be positive"), std::string::npos);
+  EXPECT_NE(MapRegion::sphere({0, 0, 0}, 0.0).validate().find("radius must be positive"),
+            std::string::npos);
+  EXPECT_NE(MapRegion::sphere({0, 0, 0}, -1.0).validate().find("radius must be positive"),
+            std::string::npos);
   EXPECT_NE(MapRegion::sphere({0, 0, 0}, INFINITY).validate().find("finite"), std::string::npos);
 }
 
@@ -105,9 +112,9 @@ TEST(RegionClearing, ALevelLeftWithoutObservedVoxelsIsFreedAndUnobservedVoxelsAr
   BlockOctree map(0.16);
   VoxelBlock* block = map.findOrAllocate({0, 0, 0});
   // Level 0: one observed voxel, inside the sphere; level 2: one inside, one outside.
-  block->writableAt(0, 0, 0, 0) = Voxel{0.0f, 1.0f, 0, 0, 0, 0};   // centre (0.01, 0.01, 0.01)
-  block->writableAt(2, 0, 0, 0) = Voxel{0.0f, 1.0f, 0, 0, 0, 0};   // centre (0.04, 0.04, 0.04)
-  block->writableAt(2, 1, 1, 1) = Voxel{0.0f, 1.0f, 0, 0, 0, 0};   // centre (0.12, 0.12, 0.12)
+  block->writableAt(0, 0, 0, 0) = Voxel{0.0f, 1.0f, 0, 0, 0, 0};  // centre (0.01, 0.01, 0.01)
+  block->writableAt(2, 0, 0, 0) = Voxel{0.0f, 1.0f, 0, 0, 0, 0};  // centre (0.04, 0.04, 0.04)
+  block->writableAt(2, 1, 1, 1) = Voxel{0.0f, 1.0f, 0, 0, 0, 0};  // centre (0.12, 0.12, 0.12)
   // Radius 0.08 around the origin: (0.04, 0.04, 0.04) is 0.0693 m away, (0.12, ...) 0.208 m.
   const RegionClearing result = clearRegionVoxels(MapRegion::sphere({0, 0, 0}, 0.08), &map);
   EXPECT_EQ(result.voxels_cleared, 2u);  // the 511 unobserved voxels of level 0 are not counted

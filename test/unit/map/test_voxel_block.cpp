@@ -27,12 +27,12 @@ TEST(VoxelBlock, SizesMatchTheMemoryTable) {
 TEST(VoxelBlock, FlatIndexEq34Eq35HandWorked) {
   // I_B(i,j,k) = i + j·B + k·B² + O
   EXPECT_EQ(VoxelBlock::index(0, 0, 0, 0), 0);
-  EXPECT_EQ(VoxelBlock::index(0, 1, 2, 3), 1 + 2 * 8 + 3 * 64);         // 209
+  EXPECT_EQ(VoxelBlock::index(0, 1, 2, 3), 1 + 2 * 8 + 3 * 64);  // 209
   EXPECT_EQ(VoxelBlock::index(0, 7, 7, 7), 511);
   EXPECT_EQ(VoxelBlock::index(1, 0, 0, 0), 512);
-  EXPECT_EQ(VoxelBlock::index(1, 1, 2, 3), 1 + 2 * 4 + 3 * 16 + 512);    // 569
+  EXPECT_EQ(VoxelBlock::index(1, 1, 2, 3), 1 + 2 * 4 + 3 * 16 + 512);  // 569
   EXPECT_EQ(VoxelBlock::index(2, 0, 0, 0), 576);
-  EXPECT_EQ(VoxelBlock::index(2, 1, 1, 0), 1 + 2 + 576);                 // 579
+  EXPECT_EQ(VoxelBlock::index(2, 1, 1, 0), 1 + 2 + 576);  // 579
   EXPECT_EQ(VoxelBlock::index(2, 1, 1, 1), 583);
 }
 
@@ -69,7 +69,8 @@ TEST(VoxelBlock, DefaultThresholdsReproduceTheThesisFormula) {
   const LevelThresholds t;
   for (double z = 0.05; z < 20.0; z += 0.0137) {
     // s(z) = 1 if z ≤ 1, else 2^⌊log2 z⌋ clamped to {1, 2, 4}
-    const int s = z <= 1.0 ? 1 : std::min(4, std::max(1, 1 << static_cast<int>(std::floor(std::log2(z)))));
+    const int s =
+        z <= 1.0 ? 1 : std::min(4, std::max(1, 1 << static_cast<int>(std::floor(std::log2(z)))));
     EXPECT_EQ(levelScale(levelForDepth(z, t)), s) << "z = " << z;
   }
 }

@@ -1,7 +1,7 @@
-// The bad-input catalogue (doc/reliability.md, "Bad input") cases of the Mapper not covered elsewhere: time
-// order, duplicates and pose jumps, degenerate disparity values. Each checks the message, the
-// counter or reason, and that the map and mesh did not change. The cases of ROS messages and
-// bags are in test/unit/ros/test_bad_input_ros.cpp.
+// The bad-input catalogue (doc/reliability.md, "Bad input") cases of the Mapper not covered
+// elsewhere: time order, duplicates and pose jumps, degenerate disparity values. Each checks the
+// message, the counter or reason, and that the map and mesh did not change. The cases of ROS
+// messages and bags are in test/unit/ros/test_bad_input_ros.cpp.
 #include <gtest/gtest.h>
 
 #include <cfloat>
@@ -13,7 +13,6 @@ using namespace stereo_fusion;
 using namespace stereo_fusion::test;
 
 namespace {
-
 
 /// The map and the mesh, for before/after comparisons.
 struct MapState {
@@ -34,8 +33,8 @@ StereoFrame randomDisparityFrame() {
 
 /// Integrates `frame`, which must be rejected for `reason` with the map (state and memory) as it
 /// was; returns the result for its message.
-IntegrationResult expectRejectedMapUnchanged(Mapper* mapper, const StereoFrame& frame, RejectReason reason,
-                                             const char* reason_name) {
+IntegrationResult expectRejectedMapUnchanged(Mapper* mapper, const StereoFrame& frame,
+                                             RejectReason reason, const char* reason_name) {
   const MapState before = state(*mapper);
   const size_t bytes_before = mapper->memoryBytes();
   const IntegrationResult rejected = mapper->integrate(frame);
@@ -93,7 +92,8 @@ TEST(BadInput, PoseJumpsAreJudgedAgainstTheLastFusedFrameAndARelocalisationCosts
   EXPECT_FALSE(r.accepted);
   EXPECT_EQ(r.reason, RejectReason::kPoseJump);
   EXPECT_NE(r.error.find("camera jumped 3000"), std::string::npos) << r.error;
-  EXPECT_NE(r.error.find("since the last fused frame (max_pose_jump_m = 100)"), std::string::npos) << r.error;
+  EXPECT_NE(r.error.find("since the last fused frame (max_pose_jump_m = 100)"), std::string::npos)
+      << r.error;
   EXPECT_TRUE(state(mapper) == before);
   // The glitch did not become the reference: the next good frame is fused.
   r = mapper.integrate(floorAndSphereFrame(1, 3.0));
@@ -140,10 +140,13 @@ TEST(BadInput, AStampFarInTheFutureCostsOneFrameAndAClockResetThree) {
   EXPECT_FALSE(r.accepted);
   EXPECT_EQ(r.reason, RejectReason::kTimestampJump);
   EXPECT_STREQ(rejectReasonName(r.reason), "timestamp_jump");
-  EXPECT_NE(r.error.find("after the last fused frame (max_timestamp_gap_s = 3600)"), std::string::npos) << r.error;
+  EXPECT_NE(r.error.find("after the last fused frame (max_timestamp_gap_s = 3600)"),
+            std::string::npos)
+      << r.error;
   EXPECT_TRUE(state(mapper) == before);
   // Later good frames are not "backwards" from the bad stamp: they are fused.
-  for (int k = 0; k < 5; ++k) EXPECT_TRUE(mapper.integrate(floorAndSphereFrame(1 + k % 3, 101.0 + k)).accepted) << k;
+  for (int k = 0; k < 5; ++k)
+    EXPECT_TRUE(mapper.integrate(floorAndSphereFrame(1 + k % 3, 101.0 + k)).accepted) << k;
   // A clock that really went back (a new recording, a restarted driver): after three frames
   // that follow each other, the gate follows the new clock.
   for (int k = 0; k < FrameGate::kFramesToReanchor; ++k) {
@@ -153,7 +156,8 @@ TEST(BadInput, AStampFarInTheFutureCostsOneFrameAndAClockResetThree) {
   EXPECT_TRUE(r.reanchored);
   EXPECT_TRUE(mapper.integrate(floorAndSphereFrame(1, 5.5)).accepted);
   // Frames stamped after one bad past stamp do not agree with it: a lone stamp never takes over.
-  EXPECT_EQ(mapper.integrate(floorAndSphereFrame(2, 1.0)).reason, RejectReason::kTimestampBackwards);
+  EXPECT_EQ(mapper.integrate(floorAndSphereFrame(2, 1.0)).reason,
+            RejectReason::kTimestampBackwards);
   EXPECT_TRUE(mapper.integrate(floorAndSphereFrame(2, 5.6)).accepted);
 }
 
@@ -166,8 +170,13 @@ TEST(BadInput, DegenerateDisparityValuesLeaveTheMapUnchanged) {
     float value;
   };
   // Huge disparities mean a depth below min_depth_m (f·b/d → 0); the rest are invalid.
-  const Case cases[] = {{"NaN", NAN}, {"+inf", INFINITY}, {"-inf", -INFINITY}, {"negative", -5.0f},
-                        {"huge", 1e30f}, {"FLT_MAX", FLT_MAX}, {"all zero (all invalid)", 0.0f}};
+  const Case cases[] = {{"NaN", NAN},
+                        {"+inf", INFINITY},
+                        {"-inf", -INFINITY},
+                        {"negative", -5.0f},
+                        {"huge", 1e30f},
+                        {"FLT_MAX", FLT_MAX},
+                        {"all zero (all invalid)", 0.0f}};
   double t = 2.0;
   for (const Case& c : cases) {
     StereoFrame f = floorAndSphereFrame(1, t += 1.0);
@@ -185,7 +194,7 @@ TEST(BadInput, DegenerateDisparityValuesLeaveTheMapUnchanged) {
 // rejected before fusion; at exactly the budget it is fused.
 TEST(BadInput, AFrameOverItsAllocationBudgetIsRejectedAndTheMapUnchanged) {
   MapperConfig config;
-  config.histogram_min_points = 0;  // every pixel reaches the map: the bound alone must hold
+  config.histogram_min_points = 0;        // every pixel reaches the map: the bound alone must hold
   config.min_coherent_pixel_share = 0.0;  // the coherence check would reject the noise first
   const StereoFrame noise = randomDisparityFrame();
 
@@ -198,17 +207,20 @@ TEST(BadInput, AFrameOverItsAllocationBudgetIsRejectedAndTheMapUnchanged) {
     const IntegrationResult r = unlimited.integrate(noise);
     ASSERT_TRUE(r.accepted);
     reached = r.lookup.blocks_missing;
-    EXPECT_GT(r.fusion.blocks_created, 1000u) << "noise must allocate much more than the budget below";
+    EXPECT_GT(r.fusion.blocks_created, 1000u)
+        << "noise must allocate much more than the budget below";
   }
   ASSERT_GT(reached, 0u);
 
   config.max_new_blocks_per_frame = static_cast<int>(reached) - 1;
   Mapper mapper(config);
   ASSERT_TRUE(mapper.integrate(floorAndSphereFrame(0, 1.0)).accepted);
-  const IntegrationResult rejected =
-      expectRejectedMapUnchanged(&mapper, noise, RejectReason::kAllocationBudget, "allocation_budget");
-  EXPECT_NE(rejected.error.find("reach " + std::to_string(reached) + " blocks not yet in the map, more than "
-                                "max_new_blocks_per_frame (" + std::to_string(reached - 1) + ")"),
+  const IntegrationResult rejected = expectRejectedMapUnchanged(
+      &mapper, noise, RejectReason::kAllocationBudget, "allocation_budget");
+  EXPECT_NE(rejected.error.find("reach " + std::to_string(reached) +
+                                " blocks not yet in the map, more than "
+                                "max_new_blocks_per_frame (" +
+                                std::to_string(reached - 1) + ")"),
             std::string::npos)
       << rejected.error;
 
@@ -232,11 +244,12 @@ TEST(BadInput, RandomDisparitiesAreRejectedAsIncoherentAndTheMapUnchanged) {
   const StereoFrame noise = randomDisparityFrame();
   Mapper mapper(config);
   ASSERT_TRUE(mapper.integrate(floorAndSphereFrame(0, 1.0)).accepted);
-  const IntegrationResult rejected =
-      expectRejectedMapUnchanged(&mapper, noise, RejectReason::kIncoherentDisparity, "incoherent_disparity");
-  EXPECT_NE(rejected.error.find("usable disparities agree within 0.5 px with a neighbour, less than "
-                                "min_coherent_pixel_share (50.0 %)"),
-            std::string::npos)
+  const IntegrationResult rejected = expectRejectedMapUnchanged(
+      &mapper, noise, RejectReason::kIncoherentDisparity, "incoherent_disparity");
+  EXPECT_NE(
+      rejected.error.find("usable disparities agree within 0.5 px with a neighbour, less than "
+                          "min_coherent_pixel_share (50.0 %)"),
+      std::string::npos)
       << rejected.error;
   // Not the time reference: a good frame stamped before it is fused.
   EXPECT_TRUE(mapper.integrate(floorAndSphereFrame(2, 1.5)).accepted);

@@ -16,7 +16,8 @@ const Eigen::Vector3d kBallCentre(0.05, 0.1, 1.2);  // floorAndSphere()'s ball, 
 size_t verticesNear(const Mapper& mapper, const Eigen::Vector3d& centre, double radius_m) {
   size_t n = 0;
   for (const auto& [key, sub] : mapper.mesh().submeshes())
-    for (const Eigen::Vector3f& p : sub.positions) n += (p.cast<double>() - centre).norm() < radius_m;
+    for (const Eigen::Vector3f& p : sub.positions)
+      n += (p.cast<double>() - centre).norm() < radius_m;
   return n;
 }
 
@@ -47,7 +48,8 @@ TEST(ClearRegion, TheBallGoesFromMapAndMeshAndEverythingOutsideStaysBitIdentical
       for (int k = 0; k < side; ++k)
         for (int j = 0; j < side; ++j)
           for (int i = 0; i < side; ++i) {
-            const Voxel& old = before.voxels[b * VoxelBlock::kVoxelCount + VoxelBlock::index(level, i, j, k)];
+            const Voxel& old =
+                before.voxels[b * VoxelBlock::kVoxelCount + VoxelBlock::index(level, i, j, k)];
             if (region.contains(voxelCentre(mapper->map(), key, level, i, j, k))) {
               if (block) {
                 EXPECT_EQ(block->at(level, i, j, k).weight, 0.0f);
@@ -55,9 +57,11 @@ TEST(ClearRegion, TheBallGoesFromMapAndMeshAndEverythingOutsideStaysBitIdentical
               continue;
             }
             if (old.weight == 0.0f) continue;
-            ASSERT_NE(block, nullptr) << "block " << key << " with observed voxels outside the region was erased";
+            ASSERT_NE(block, nullptr)
+                << "block " << key << " with observed voxels outside the region was erased";
             const Voxel& now = block->at(level, i, j, k);
-            EXPECT_TRUE(now.sdf_m == old.sdf_m && now.weight == old.weight && now.r == old.r) << key;
+            EXPECT_TRUE(now.sdf_m == old.sdf_m && now.weight == old.weight && now.r == old.r)
+                << key;
             ++compared;
           }
     }
@@ -82,8 +86,9 @@ TEST(ClearRegion, TheBallGoesFromMapAndMeshAndEverythingOutsideStaysBitIdentical
 TEST(ClearRegion, AClearedRegionIsUnknownAndLaterFramesFillItAgain) {
   std::unique_ptr<Mapper> mapper = fusedMapper(6);
   const size_t near_before = verticesNear(*mapper, kBallCentre, 0.25);
-  ASSERT_TRUE(mapper->clearRegion(MapRegion::box(kBallCentre - Eigen::Vector3d::Constant(0.3),
-                                                 kBallCentre + Eigen::Vector3d::Constant(0.3)))
+  ASSERT_TRUE(mapper
+                  ->clearRegion(MapRegion::box(kBallCentre - Eigen::Vector3d::Constant(0.3),
+                                               kBallCentre + Eigen::Vector3d::Constant(0.3)))
                   .accepted);
   EXPECT_EQ(verticesNear(*mapper, kBallCentre, 0.25), 0u);
   const sim::AnalyticScene scene = floorAndSphere();
@@ -98,7 +103,8 @@ TEST(ClearRegion, AClearedRegionIsUnknownAndLaterFramesFillItAgain) {
 
 TEST(ClearRegion, DeferredMeshingWaitsForUpdateMeshLikeAFrame) {
   std::unique_ptr<Mapper> mapper = fusedMapper(4);
-  const ClearResult result = mapper->clearRegion(MapRegion::sphere(kBallCentre, 0.3), MeshTiming::kDeferred);
+  const ClearResult result =
+      mapper->clearRegion(MapRegion::sphere(kBallCentre, 0.3), MeshTiming::kDeferred);
   ASSERT_TRUE(result.accepted);
   EXPECT_TRUE(result.mesh.changed.empty() && result.mesh.removed.empty());
   EXPECT_EQ(mapper->blocksAwaitingMesh(), result.blocks_changed + result.blocks_erased);

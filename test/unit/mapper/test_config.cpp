@@ -58,7 +58,9 @@ TEST(Config, RejectsUnknownMalformedAndOutOfRange) {
   EXPECT_FALSE(setMapperParameter(&c, "voxel_size_m", "0.01m", &error));
   EXPECT_FALSE(setMapperParameter(&c, "voxel_size_m", "nan", &error));
   EXPECT_FALSE(setMapperParameter(&c, "voxel_size_m", "0", &error));
-  EXPECT_NE(error.find("parameter 'voxel_size_m' = 0 is out of range [0.002, 1] m"), std::string::npos) << error;
+  EXPECT_NE(error.find("parameter 'voxel_size_m' = 0 is out of range [0.002, 1] m"),
+            std::string::npos)
+      << error;
   EXPECT_FALSE(setMapperParameter(&c, "max_depth_m", "0", &error));  // exclusive lower bound
   EXPECT_FALSE(setMapperParameter(&c, "lookup_region_px", "0", &error));
   EXPECT_FALSE(setMapperParameter(&c, "lookup_region_px", "1.5", &error));
@@ -71,7 +73,8 @@ TEST(Config, RejectsUnknownMalformedAndOutOfRange) {
 TEST(Config, SubnormalAndSpacedValues) {
   MapperConfig c;
   std::string error;
-  EXPECT_TRUE(setMapperParameter(&c, "min_depth_m", "1e-310", &error)) << error;  // subnormal, in range
+  EXPECT_TRUE(setMapperParameter(&c, "min_depth_m", "1e-310", &error))
+      << error;  // subnormal, in range
   EXPECT_NO_THROW(validateMapperConfig(c));
   EXPECT_TRUE(validateMapperConfig(c).empty());
   EXPECT_EQ(getMapperParameter(c, "min_depth_m"), "1e-310");
@@ -95,7 +98,8 @@ TEST(Config, CrossParameterRules) {
 TEST(Config, YamlFileErrorsNameFileLineAndParameter) {
   MapperConfig c;
   std::string error;
-  EXPECT_FALSE(loadMapperConfigText("voxel_size_m: 0.01\ntruncation_vox: 100\n", "my.yaml", &c, &error));
+  EXPECT_FALSE(
+      loadMapperConfigText("voxel_size_m: 0.01\ntruncation_vox: 100\n", "my.yaml", &c, &error));
   EXPECT_NE(error.find("my.yaml:2"), std::string::npos) << error;
   EXPECT_NE(error.find("truncation_vox"), std::string::npos) << error;
   EXPECT_EQ(c.voxel_size_m, MapperConfig{}.voxel_size_m);  // nothing applied on error
@@ -108,7 +112,9 @@ TEST(Config, YamlFileErrorsNameFileLineAndParameter) {
   EXPECT_NE(error.find("min_depth_m must be < max_depth_m"), std::string::npos) << error;
   EXPECT_FALSE(loadMapperConfigFile("/nonexistent/file.yaml", &c, &error));
   EXPECT_NE(error.find("cannot open"), std::string::npos);
-  EXPECT_TRUE(loadMapperConfigText("voxel_size_m: 0.01\nweight_mode: constant\n", "ok.yaml", &c, &error)) << error;
+  EXPECT_TRUE(
+      loadMapperConfigText("voxel_size_m: 0.01\nweight_mode: constant\n", "ok.yaml", &c, &error))
+      << error;
   EXPECT_DOUBLE_EQ(c.voxel_size_m, 0.01);
   EXPECT_EQ(c.weight_mode, WeightMode::kConstant);
 }
@@ -179,10 +185,13 @@ TEST(ParameterTable, ParsesChecksAndNamesEveryType) {
     bool keep_oldest = true;
   };
   ParameterTable<Settings> table;
-  table.addDouble("rate_hz", "Hz", 0.0, true, 1000.0, "a rate", ParameterTable<Settings>::member(&Settings::rate_hz));
-  table.addInt("queue", "frames", 1, 1000, "a queue", ParameterTable<Settings>::member(&Settings::queue));
+  table.addDouble("rate_hz", "Hz", 0.0, true, 1000.0, "a rate",
+                  ParameterTable<Settings>::member(&Settings::rate_hz));
+  table.addInt("queue", "frames", 1, 1000, "a queue",
+               ParameterTable<Settings>::member(&Settings::queue));
   table.addBool("markers", "markers on", ParameterTable<Settings>::member(&Settings::markers));
-  table.addString("frame", false, "a tf frame", "a frame", ParameterTable<Settings>::member(&Settings::frame));
+  table.addString("frame", false, "a tf frame", "a frame",
+                  ParameterTable<Settings>::member(&Settings::frame));
   table.addString("optional_frame", true, "a tf frame, or empty", "another",
                   ParameterTable<Settings>::member(&Settings::optional_frame));
   table.addEnum<bool>("policy", {{"drop_oldest", true}, {"drop_newest", false}}, "which to drop",
@@ -237,6 +246,7 @@ TEST(ParameterTable, ParsesChecksAndNamesEveryType) {
   EXPECT_EQ(errors[0], "parameter 'queue' = 0 is out of range [1, 1000] frames");
   EXPECT_EQ(errors[1], "parameter 'frame' must not be empty (a tf frame)");
 
-  EXPECT_THROW(table.addInt("queue", "", 0, 1, "again", ParameterTable<Settings>::member(&Settings::queue)),
-               std::logic_error);
+  EXPECT_THROW(
+      table.addInt("queue", "", 0, 1, "again", ParameterTable<Settings>::member(&Settings::queue)),
+      std::logic_error);
 }

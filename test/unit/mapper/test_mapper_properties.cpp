@@ -23,7 +23,8 @@ sim::AnalyticScene tableTop() {
   return scene;
 }
 
-std::vector<StereoFrame> orbitFrames(int n, double noise_px = 0.0, const StereoCamera& camera = vgaCamera()) {
+std::vector<StereoFrame> orbitFrames(int n, double noise_px = 0.0,
+                                     const StereoCamera& camera = vgaCamera()) {
   const sim::AnalyticScene scene = tableTop();
   std::vector<StereoFrame> frames;
   for (int f = 0; f < n; ++f) {
@@ -71,7 +72,8 @@ TEST(MapperProperties, FusingTheSameFrameTwiceWithRefinementKeepsEveryCrossing) 
   double worst = 0;
   for (const Eigen::Vector3d& p : fused.crossings_once) {
     double nearest = INFINITY;
-    for (const Eigen::Vector3d& q : fused.crossings_twice) nearest = std::min(nearest, (p - q).norm());
+    for (const Eigen::Vector3d& q : fused.crossings_twice)
+      nearest = std::min(nearest, (p - q).norm());
     worst = std::max(worst, nearest);
   }
   EXPECT_LT(worst, 1e-6);
@@ -111,8 +113,9 @@ TEST(MapperProperties, FusingTheSameFrameTwiceKeepsTheSurface) {
 TEST(MapperProperties, ThreadCountDoesNotChangeTheMap) {
   // Quick mode: two quarter-resolution frames instead of four VGA ones.
   const std::vector<StereoFrame> frames =
-      quickMode() ? orbitFrames(2, 0.3, *StereoCamera::create(160, 120, 131.25, 131.25, 79.5, 59.5, 0.1))
-                  : orbitFrames(4, 0.3);
+      quickMode()
+          ? orbitFrames(2, 0.3, *StereoCamera::create(160, 120, 131.25, 131.25, 79.5, 59.5, 0.1))
+          : orbitFrames(4, 0.3);
   std::optional<MapSnapshot> reference;
   for (int threads : {1, 2, 4}) {
     for (LookupMode mode : {LookupMode::kAccelerated, LookupMode::kNaive}) {
@@ -163,14 +166,16 @@ TEST(MapperProperties, NonFiniteDisparityPixelsAreSkippedLikeInvalidOnes) {
   // Replacing invalid (0) pixels by NaN, ±inf or negative values must change nothing.
   StereoFrame clean = orbitFrames(1)[0];
   for (int v = 0; v < clean.disparity_px.rows; v += 3)
-    for (int u = v % 7; u < clean.disparity_px.cols; u += 5) clean.disparity_px.at<float>(v, u) = 0.0f;
+    for (int u = v % 7; u < clean.disparity_px.cols; u += 5)
+      clean.disparity_px.at<float>(v, u) = 0.0f;
   StereoFrame dirty = clean;
   dirty.disparity_px = clean.disparity_px.clone();
   const float bad[] = {NAN, INFINITY, -INFINITY, -3.0f};
   int n = 0;
   for (int v = 0; v < dirty.disparity_px.rows; ++v)
     for (int u = 0; u < dirty.disparity_px.cols; ++u)
-      if (dirty.disparity_px.at<float>(v, u) == 0.0f) dirty.disparity_px.at<float>(v, u) = bad[n++ % 4];
+      if (dirty.disparity_px.at<float>(v, u) == 0.0f)
+        dirty.disparity_px.at<float>(v, u) = bad[n++ % 4];
   ASSERT_GT(n, 10000);
   Mapper a(MapperConfig{}), b(MapperConfig{});
   const IntegrationResult ra = a.integrate(clean);
@@ -192,16 +197,26 @@ TEST(MapperProperties, RejectedFramesLeaveTheMapUnchanged) {
     const char* message;
   };
   const std::vector<Case> cases = {
-      {"colour size differs", [](StereoFrame* f) { f->color = cv::Mat(240, 320, CV_8UC3); }, "colour image is 320x240"},
-      {"disparity size differs from camera", [](StereoFrame* f) { f->disparity_px = cv::Mat(10, 10, CV_32FC1, cv::Scalar(5)); }, "disparity is 10x10"},
-      {"disparity wrong type", [](StereoFrame* f) { f->disparity_px.convertTo(f->disparity_px, CV_16UC1); }, "CV_32FC1"},
+      {"colour size differs", [](StereoFrame* f) { f->color = cv::Mat(240, 320, CV_8UC3); },
+       "colour image is 320x240"},
+      {"disparity size differs from camera",
+       [](StereoFrame* f) { f->disparity_px = cv::Mat(10, 10, CV_32FC1, cv::Scalar(5)); },
+       "disparity is 10x10"},
+      {"disparity wrong type",
+       [](StereoFrame* f) { f->disparity_px.convertTo(f->disparity_px, CV_16UC1); }, "CV_32FC1"},
       {"empty disparity", [](StereoFrame* f) { f->disparity_px = cv::Mat(); }, "empty"},
-      {"colour wrong type", [](StereoFrame* f) { f->color.convertTo(f->color, CV_32FC3); }, "8-bit"},
-      {"NaN in pose", [](StereoFrame* f) { f->T_world_camera.translation().x() = NAN; }, "not finite"},
-      {"inf in rotation", [](StereoFrame* f) { f->T_world_camera.linear()(0, 1) = INFINITY; }, "not finite"},
-      {"non-orthonormal rotation", [](StereoFrame* f) { f->T_world_camera.linear() *= 1.1; }, "not a rotation"},
-      {"reflection", [](StereoFrame* f) { f->T_world_camera.linear().col(0) *= -1; }, "not a rotation"},
-      {"pose beyond the map", [](StereoFrame* f) { f->T_world_camera.translation().x() = 1e9; }, "beyond the map"},
+      {"colour wrong type", [](StereoFrame* f) { f->color.convertTo(f->color, CV_32FC3); },
+       "8-bit"},
+      {"NaN in pose", [](StereoFrame* f) { f->T_world_camera.translation().x() = NAN; },
+       "not finite"},
+      {"inf in rotation", [](StereoFrame* f) { f->T_world_camera.linear()(0, 1) = INFINITY; },
+       "not finite"},
+      {"non-orthonormal rotation", [](StereoFrame* f) { f->T_world_camera.linear() *= 1.1; },
+       "not a rotation"},
+      {"reflection", [](StereoFrame* f) { f->T_world_camera.linear().col(0) *= -1; },
+       "not a rotation"},
+      {"pose beyond the map", [](StereoFrame* f) { f->T_world_camera.translation().x() = 1e9; },
+       "beyond the map"},
       {"no camera", [](StereoFrame* f) { f->camera = StereoCamera(); }, "camera"},
   };
   for (const Case& c : cases) {

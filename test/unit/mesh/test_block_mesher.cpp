@@ -39,7 +39,8 @@ sim::AnalyticScene torusScene() {
 
 /// Forgets the finer levels of the blocks selected by `coarse_level(key)` (> 0): as if
 /// those blocks had only been seen from far away.
-void forgetFineLevels(const Mapper& mapper, const std::function<int(const BlockKey&)>& coarse_level) {
+void forgetFineLevels(const Mapper& mapper,
+                      const std::function<int(const BlockKey&)>& coarse_level) {
   for (VoxelBlock* b : mapper.map().blocks()) {
     const int keep_from = coarse_level(b->key);
     for (int level = 0; level < keep_from; ++level) b->releaseLevel(level);
@@ -49,8 +50,9 @@ void forgetFineLevels(const Mapper& mapper, const std::function<int(const BlockK
 /// The welded mesh of fused `scene` whose blocks keep only the levels from `coarse_level(key)`
 /// up, meshed with or without the seam fill.
 Topology fusedTopology(const char* name, const sim::AnalyticScene& scene,
-                       const std::function<int(const BlockKey&)>& coarse_level, std::set<int> expected_levels,
-                       bool fill_seams, double truncation_vox = 4.0) {
+                       const std::function<int(const BlockKey&)>& coarse_level,
+                       std::set<int> expected_levels, bool fill_seams,
+                       double truncation_vox = 4.0) {
   // 1e-6: every block meshes at the finest level holding any data, i.e. at the level the
   // test leaves it (the default 0.8 may keep a barely touched block coarse).
   MapperConfig config;
@@ -67,15 +69,17 @@ Topology fusedTopology(const char* name, const sim::AnalyticScene& scene,
   for (const auto& [key, sub] : store.submeshes()) levels.insert(sub.level);
   EXPECT_EQ(levels, expected_levels) << name;
   const Topology t = topology(weldSubmeshes(store.submeshes()));
-  std::printf("[ watertight ] %-28s %-12s %zu submeshes: %s\n", name, fill_seams ? "seams filled" : "no seam fill",
-              store.submeshes().size(), describe(t).c_str());
+  std::printf("[ watertight ] %-28s %-12s %zu submeshes: %s\n", name,
+              fill_seams ? "seams filled" : "no seam fill", store.submeshes().size(),
+              describe(t).c_str());
   return t;
 }
 
 void expectWatertight(const char* name, const sim::AnalyticScene& scene,
                       const std::function<int(const BlockKey&)>& coarse_level,
                       std::set<int> expected_levels, double truncation_vox = 4.0) {
-  const Topology t = fusedTopology(name, scene, coarse_level, expected_levels, true, truncation_vox);
+  const Topology t =
+      fusedTopology(name, scene, coarse_level, expected_levels, true, truncation_vox);
   EXPECT_TRUE(t.watertight()) << name << ": " << describe(t);
 }
 
@@ -107,15 +111,18 @@ TEST(BlockMesher, FusedFineBlocksMeetTwoCubedBlocksWithoutHoles) {
   // voxels are unobserved: without the seam fill those cells are skipped (holes along the
   // seam); filled from the fine block's own 2³ level, the mesh closes.
   auto half = [](const BlockKey& k) { return k.x >= 0 ? 2 : 0; };
-  const std::pair<const char*, sim::AnalyticScene> shapes[] = {
-      {"sphere, 8^3 | 2^3", sphereScene()}, {"box, 8^3 | 2^3", boxScene()}, {"torus, 8^3 | 2^3", torusScene()}};
+  const std::pair<const char*, sim::AnalyticScene> shapes[] = {{"sphere, 8^3 | 2^3", sphereScene()},
+                                                               {"box, 8^3 | 2^3", boxScene()},
+                                                               {"torus, 8^3 | 2^3", torusScene()}};
   size_t open_without_fill = 0;
   for (const auto& [name, scene] : shapes) {
     const Topology filled = fusedTopology(name, scene, half, {0, 2}, /*fill_seams=*/true);
     EXPECT_TRUE(filled.watertight()) << name << ": " << describe(filled);
-    open_without_fill += fusedTopology(name, scene, half, {0, 2}, /*fill_seams=*/false).boundary_edges;
+    open_without_fill +=
+        fusedTopology(name, scene, half, {0, 2}, /*fill_seams=*/false).boundary_edges;
   }
-  EXPECT_GT(open_without_fill, 0u) << "the seams must have holes to close, or this test shows nothing";
+  EXPECT_GT(open_without_fill, 0u)
+      << "the seams must have holes to close, or this test shows nothing";
 }
 
 TEST(BlockMesher, WatertightAcrossAllThreeLevelsInACheckerboard) {
@@ -125,7 +132,8 @@ TEST(BlockMesher, WatertightAcrossAllThreeLevelsInACheckerboard) {
   // crack or overlap made by the mesher. (With fused data, see
   // FusedFineBlocksMeetTwoCubedBlocksWithoutHoles.)
   auto mixed = [](const BlockKey& k) { return ((k.x + 2 * k.y + 3 * k.z) % 3 + 3) % 3; };
-  const Eigen::AlignedBox3d bounds(kCentre - Eigen::Vector3d::Constant(0.5), kCentre + Eigen::Vector3d::Constant(0.5));
+  const Eigen::AlignedBox3d bounds(kCentre - Eigen::Vector3d::Constant(0.5),
+                                   kCentre + Eigen::Vector3d::Constant(0.5));
   const std::pair<const char*, sim::AnalyticScene> shapes[] = {
       {"sphere", sphereScene()}, {"box", boxScene()}, {"torus", torusScene()}};
   for (const auto& [name, scene] : shapes) {
@@ -139,11 +147,13 @@ TEST(BlockMesher, WatertightAcrossAllThreeLevelsInACheckerboard) {
     EXPECT_EQ(levels, (std::set<int>{0, 1, 2})) << name;
     const TriangleMesh mesh = weldSubmeshes(store.submeshes());
     const Topology t = topology(mesh);
-    std::printf("[ watertight ] %-6s exact SDF, 8^3/4^3/2^3 checkerboard: %s\n", name, describe(t).c_str());
+    std::printf("[ watertight ] %-6s exact SDF, 8^3/4^3/2^3 checkerboard: %s\n", name,
+                describe(t).c_str());
     EXPECT_TRUE(t.watertight()) << name << ": " << describe(t);
     // And the surface is where it should be, to within the coarsest level's resolution.
     double worst = 0;
-    for (const auto& p : mesh.positions) worst = std::max(worst, scene.distanceToSurface(p.cast<double>()));
+    for (const auto& p : mesh.positions)
+      worst = std::max(worst, scene.distanceToSurface(p.cast<double>()));
     EXPECT_LT(worst, 4 * kVoxel) << name;
   }
 }
@@ -160,11 +170,13 @@ TEST(BlockMesher, SphereVerticesAndNormalsAreAccurate) {
     const Eigen::Vector3d p = mesh.positions[v].cast<double>();
     distance_vox.push_back(std::abs((p - kCentre).norm() - 0.25) / kVoxel);
     const Eigen::Vector3d truth = (p - kCentre).normalized();  // outward: towards free space
-    angle_deg.push_back(std::acos(std::clamp(truth.dot(mesh.normals[v].cast<double>()), -1.0, 1.0)) * 180.0 / M_PI);
+    angle_deg.push_back(
+        std::acos(std::clamp(truth.dot(mesh.normals[v].cast<double>()), -1.0, 1.0)) * 180.0 / M_PI);
   }
   const double med_d = median(distance_vox), med_a = median(angle_deg);
-  std::printf("[ sphere mesh ] %zu vertices: median distance %.4f voxel, median normal error %.2f deg\n",
-              mesh.positions.size(), med_d, med_a);
+  std::printf(
+      "[ sphere mesh ] %zu vertices: median distance %.4f voxel, median normal error %.2f deg\n",
+      mesh.positions.size(), med_d, med_a);
   EXPECT_LE(med_d, 0.1);
   EXPECT_LE(med_a, 5.0);
 }
@@ -177,7 +189,8 @@ TEST(BlockMesher, SkipsUnobservedCellsAndEmptySpace) {
   MapperConfig config;
   config.histogram_min_points = 0;
   Mapper mapper(config);
-  ASSERT_TRUE(mapper.integrate(renderFrame(scene, qvgaCamera(), Eigen::Isometry3d::Identity())).accepted);
+  ASSERT_TRUE(
+      mapper.integrate(renderFrame(scene, qvgaCamera(), Eigen::Isometry3d::Identity())).accepted);
   const TriangleMesh mesh = mapper.extractMesh();
   ASSERT_GT(mesh.triangles.size(), 100u);
   for (const auto& p : mesh.positions) EXPECT_NEAR(p.z(), 1.2, 0.2 * kVoxel);
@@ -202,14 +215,14 @@ TEST(BlockMesher, IncrementalEqualsBatchAfterRandomPartialViews) {
   for (int f = 0; f < 8; ++f) {
     const Eigen::Vector3d eye(0.6 * u(rng), -0.3 + 0.2 * u(rng), 0.4 * u(rng));
     const Eigen::Vector3d target(0.3 * u(rng), 0.1, 1.4 + 0.2 * u(rng));
-    const IntegrationResult r = mapper.integrate(
-        renderFrame(scene, qvgaCamera(), sim::lookAt(eye, target, -Eigen::Vector3d::UnitY()), 0.2, f));
+    const IntegrationResult r = mapper.integrate(renderFrame(
+        scene, qvgaCamera(), sim::lookAt(eye, target, -Eigen::Vector3d::UnitY()), 0.2, f));
     ASSERT_TRUE(r.accepted);
     EXPECT_GT(r.mesh.blocks_meshed, 0u);
   }
   ThreadPool pool(2);
-  MeshStore batch(MeshingParams{config.voxel_size_m, config.truncation_vox, config.mesh_level_min_coverage,
-                                config.mesh_fill_seams});
+  MeshStore batch(MeshingParams{config.voxel_size_m, config.truncation_vox,
+                                config.mesh_level_min_coverage, config.mesh_fill_seams});
   batch.rebuild(mapper.map(), &pool);
   ASSERT_GT(batch.triangleCount(), 1000u);
   EXPECT_EQ(mapper.mesh().triangleCount(), batch.triangleCount());
@@ -224,9 +237,10 @@ TEST(BlockMesher, RemeshingTouchesExactlyTheOwnersOfTheUpdatedBlocks) {
   // blocks it does.
   scene.add(sim::makePlane({0.0, 0.0, 1.8}, {0.0, 0.0, -1.0}));
   Mapper mapper(MapperConfig{});
-  ASSERT_TRUE(mapper.integrate(renderFrame(scene, qvgaCamera(), Eigen::Isometry3d::Identity())).accepted);
-  const IntegrationResult r = mapper.integrate(
-      renderFrame(scene, qvgaCamera(), sim::lookAt({0.3, 0, 0}, {0, 0, 1.2}, -Eigen::Vector3d::UnitY())));
+  ASSERT_TRUE(
+      mapper.integrate(renderFrame(scene, qvgaCamera(), Eigen::Isometry3d::Identity())).accepted);
+  const IntegrationResult r = mapper.integrate(renderFrame(
+      scene, qvgaCamera(), sim::lookAt({0.3, 0, 0}, {0, 0, 1.2}, -Eigen::Vector3d::UnitY())));
   ASSERT_TRUE(r.accepted);
   // Independently: owners whose seams reach an updated block are K − (0|1, 0|1, 0|1).
   std::set<std::tuple<int, int, int>> expected;
@@ -234,7 +248,8 @@ TEST(BlockMesher, RemeshingTouchesExactlyTheOwnersOfTheUpdatedBlocks) {
     for (int dz = 0; dz <= 1; ++dz)
       for (int dy = 0; dy <= 1; ++dy)
         for (int dx = 0; dx <= 1; ++dx)
-          if (mapper.map().find(k.offset(-dx, -dy, -dz))) expected.insert({k.x - dx, k.y - dy, k.z - dz});
+          if (mapper.map().find(k.offset(-dx, -dy, -dz)))
+            expected.insert({k.x - dx, k.y - dy, k.z - dz});
   EXPECT_EQ(r.mesh.blocks_meshed, expected.size());
   EXPECT_GT(expected.size(), r.updated_blocks.size());
   EXPECT_LT(r.mesh.blocks_meshed, mapper.map().blockCount() + 1);
@@ -267,8 +282,10 @@ TEST(BlockMesher, ThreadCountDoesNotChangeTheMesh) {
     for (const auto& pose : viewsAround(kCentre, 1.0, quickMode() ? 3 : 5))
       ASSERT_TRUE(mapper.integrate(renderFrame(torusScene(), qvgaCamera(), pose)).accepted);
     const auto sets = triangleSets(mapper.mesh());
-    if (!reference) reference = sets;
-    else EXPECT_TRUE(sets == *reference) << threads << " threads";
+    if (!reference)
+      reference = sets;
+    else
+      EXPECT_TRUE(sets == *reference) << threads << " threads";
   }
   EXPECT_FALSE(reference->empty());
 }
@@ -307,14 +324,16 @@ TEST(BlockMesher, SignBitsPerRegionHandWorked) {
   set(7, 0, 7, 0.0f, 1.0f);
   set(1, 1, 1, 5.0f, 0.0f);
   refreshMeshSigns(block, &state);
-  auto has = [&](int region, bool non_negative) { return (state.sign_bits & meshSignBit(region, non_negative)) != 0; };
+  auto has = [&](int region, bool non_negative) {
+    return (state.sign_bits & meshSignBit(region, non_negative)) != 0;
+  };
   // region: bit 0 x, bit 1 y, bit 2 z        <0 from          ≥0 from
-  EXPECT_TRUE(has(0, false) && has(0, true));  // all              (3,7,0), (7,0,7)
-  EXPECT_TRUE(has(1, false) && has(1, true));  // (0,0,0)          (3,7,0)
-  EXPECT_TRUE(has(2, false) && has(2, true));  // (0,0,0)          (7,0,7)
+  EXPECT_TRUE(has(0, false) && has(0, true));   // all              (3,7,0), (7,0,7)
+  EXPECT_TRUE(has(1, false) && has(1, true));   // (0,0,0)          (3,7,0)
+  EXPECT_TRUE(has(2, false) && has(2, true));   // (0,0,0)          (7,0,7)
   EXPECT_TRUE(has(3, false) && !has(3, true));  // (0,0,0)         —
-  EXPECT_TRUE(has(4, false) && has(4, true));  // (0,0,0)          (3,7,0)
-  EXPECT_TRUE(has(5, false) && has(5, true));  // (0,0,0)          (3,7,0)
+  EXPECT_TRUE(has(4, false) && has(4, true));   // (0,0,0)          (3,7,0)
+  EXPECT_TRUE(has(5, false) && has(5, true));   // (0,0,0)          (3,7,0)
   EXPECT_TRUE(has(6, false) && !has(6, true));  // (0,0,0)         —
   EXPECT_TRUE(has(7, false) && !has(7, true));  // (0,0,0)         —
 
@@ -325,7 +344,7 @@ TEST(BlockMesher, SignBitsPerRegionHandWorked) {
   block.writableAt(2, 1, 0, 0).weight = 1.0f;
   refreshMeshSigns(block, &state);
   EXPECT_EQ(state.sign_bits, meshSignBit(0, false) | meshSignBit(2, false) | meshSignBit(4, false) |
-                                      meshSignBit(6, false));
+                                 meshSignBit(6, false));
   // A negative too near 0 to keep its sign through the mesher's weighted sums counts as both.
   block.writableAt(2, 1, 0, 0).sdf_m = -1e-31f;
   refreshMeshSigns(block, &state);

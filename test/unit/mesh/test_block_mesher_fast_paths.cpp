@@ -24,26 +24,25 @@ constexpr int kClusterSide = 4;  // blocks per axis
 /// Bitwise equality of two float vectors (−0 ≠ +0, NaN payloads compared).
 template <typename T>
 bool sameBytes(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+  return a.size() == b.size() &&
+         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
 }
 
 /// A value for one voxel: mostly a tilted plane's distance plus noise, sometimes one of the
 /// values the fast paths must treat exactly like the general path.
-float voxelValue(std::mt19937& rng, const Eigen::Vector3d& centre, const Eigen::Vector3d& normal, double offset,
-                 double noise_vox) {
+float voxelValue(std::mt19937& rng, const Eigen::Vector3d& centre, const Eigen::Vector3d& normal,
+                 double offset, double noise_vox) {
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   if (unit(rng) < 0.25) {
     const float phi = static_cast<float>(kTruncationVox * kVoxel);
     const float band = 0.99f * phi;
-    const float specials[] = {0.0f,       -0.0f,       1e-31f,      -1e-31f,     -1e-30f,
-                              -2e-30f,    1e-40f,      -1e-40f,     band,        -band,
-                              2 * band,   -2 * band,   4 * band,    -4 * band,   phi,
-                              -phi,       4 * phi,     -4 * phi,    std::nextafter(band, 0.0f),
-                              std::nextafter(-band, 0.0f), std::nextafter(2 * band, 1.0f),
-                              std::nextafter(-4 * band, -1.0f),
-                              // Negative, yet the 1/s-weighted sums of coarse levels round them to −0.
-                              -std::numeric_limits<float>::denorm_min(),
-                              -3 * std::numeric_limits<float>::denorm_min()};
+    const float specials[] = {
+        0.0f, -0.0f, 1e-31f, -1e-31f, -1e-30f, -2e-30f, 1e-40f, -1e-40f, band, -band, 2 * band,
+        -2 * band, 4 * band, -4 * band, phi, -phi, 4 * phi, -4 * phi, std::nextafter(band, 0.0f),
+        std::nextafter(-band, 0.0f), std::nextafter(2 * band, 1.0f),
+        std::nextafter(-4 * band, -1.0f),
+        // Negative, yet the 1/s-weighted sums of coarse levels round them to −0.
+        -std::numeric_limits<float>::denorm_min(), -3 * std::numeric_limits<float>::denorm_min()};
     return specials[std::uniform_int_distribution<size_t>(0, std::size(specials) - 1)(rng)];
   }
   std::normal_distribution<double> noise(0.0, noise_vox * kVoxel);
@@ -61,13 +60,15 @@ struct Trial {
 /// hold a plane's distance plus Gaussian noise of `noise_vox` voxels.
 /// `layered`: each block also holds every level coarser than its own (as fusion leaves them), so
 /// the mesher samples face-filled copies (fillFacesFromCoarserLevels()).
-void runTrial(uint32_t seed, bool uniform_levels, Trial* totals, double noise_vox = 0.3, bool layered = false) {
+void runTrial(uint32_t seed, bool uniform_levels, Trial* totals, double noise_vox = 0.3,
+              bool layered = false) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   const double block_size = kFinestSide * kVoxel;
   BlockOctree map(block_size);
   MeshStates states;  // the mesher's per-block state, as MeshStore keeps it
-  const Eigen::Vector3d normal = Eigen::Vector3d(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5).normalized();
+  const Eigen::Vector3d normal =
+      Eigen::Vector3d(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5).normalized();
   const double offset = normal.dot(Eigen::Vector3d::Constant(kClusterSide * block_size / 2)) +
                         (unit(rng) - 0.5) * block_size;
   const double presence = 0.7 + 0.3 * unit(rng);
@@ -78,7 +79,9 @@ void runTrial(uint32_t seed, bool uniform_levels, Trial* totals, double noise_vo
       for (int x = 0; x < kClusterSide; ++x) {
         if (unit(rng) > presence) continue;
         VoxelBlock* block = map.findOrAllocate({x, y, z});
-        const int level = uniform_levels ? shared_level : std::uniform_int_distribution<int>(0, kNumLevels - 1)(rng);
+        const int level = uniform_levels
+                              ? shared_level
+                              : std::uniform_int_distribution<int>(0, kNumLevels - 1)(rng);
         for (int written = level; written <= (layered ? kNumLevels - 1 : level); ++written) {
           const int side = levelSide(written);
           const double h = block_size / side;
@@ -115,8 +118,9 @@ void runTrial(uint32_t seed, bool uniform_levels, Trial* totals, double noise_vo
         uniform &= states[*nb].level == states[*owner].level;
     ++(uniform ? totals->owners_uniform : totals->owners_mixed);
     totals->triangles += b.triangles.size();
-    const std::string where = "seed " + std::to_string(seed) + ", owner (" + std::to_string(owner->key.x) + ", " +
-                              std::to_string(owner->key.y) + ", " + std::to_string(owner->key.z) + ")";
+    const std::string where = "seed " + std::to_string(seed) + ", owner (" +
+                              std::to_string(owner->key.x) + ", " + std::to_string(owner->key.y) +
+                              ", " + std::to_string(owner->key.z) + ")";
     ASSERT_EQ(a.triangles, b.triangles) << where;
     ASSERT_TRUE(sameBytes(a.positions, b.positions)) << where;
     ASSERT_TRUE(sameBytes(a.normals, b.normals)) << where;
@@ -149,12 +153,15 @@ TEST(BlockMesherFastPaths, SameBitsWithFacesFilledFromCoarserLevels) {
   Trial totals;
   const int trials = test::quickMode() ? 20 : 80;
   for (int t = 0; t < trials; ++t) {
-    runTrial(9000 + t, /*uniform_levels=*/t % 2 == 0, &totals, /*noise_vox=*/t % 4 < 2 ? 0.3 : 2.0, /*layered=*/true);
+    runTrial(9000 + t, /*uniform_levels=*/t % 2 == 0, &totals, /*noise_vox=*/t % 4 < 2 ? 0.3 : 2.0,
+             /*layered=*/true);
     if (HasFatalFailure()) return;
   }
-  std::printf("[ fast paths, face-filled ] %d uniform and %d mixed neighbourhoods, %d filled blocks, %zu triangles: "
-              "identical\n",
-              totals.owners_uniform, totals.owners_mixed, totals.face_filled_blocks, totals.triangles);
+  std::printf(
+      "[ fast paths, face-filled ] %d uniform and %d mixed neighbourhoods, %d filled blocks, %zu "
+      "triangles: "
+      "identical\n",
+      totals.owners_uniform, totals.owners_mixed, totals.face_filled_blocks, totals.triangles);
   EXPECT_GT(totals.face_filled_blocks, 10 * trials);  // ≈ 17 per trial
   EXPECT_GT(totals.owners_mixed, 10 * trials);
   EXPECT_GT(totals.triangles, 1000u * trials);
@@ -170,8 +177,8 @@ TEST(BlockMesherFastPaths, SameBitsWithSignsFlippingVoxelByVoxelBetweenLevels) {
     runTrial(5000 + t, /*uniform_levels=*/false, &totals, /*noise_vox=*/2.0);
     if (HasFatalFailure()) return;
   }
-  std::printf("[ fast paths, noisy ] %d mixed neighbourhoods, %zu triangles: identical\n", totals.owners_mixed,
-              totals.triangles);
+  std::printf("[ fast paths, noisy ] %d mixed neighbourhoods, %zu triangles: identical\n",
+              totals.owners_mixed, totals.triangles);
   EXPECT_GT(totals.owners_mixed, 15 * trials);
   EXPECT_GT(totals.triangles, 1000u * trials);
 }

@@ -83,7 +83,8 @@ TEST(MarchingCubesTable, EveryTraceLiesOnAFaceAndEverySignChangeIsUsed) {
     for (const auto& [a, b] : boundaryOf(k)) {
       bool shared_face = false;
       for (int axis = 0; axis < 3; ++axis)
-        for (int bit = 0; bit < 2; ++bit) shared_face |= onFace(a, axis, bit) && onFace(b, axis, bit);
+        for (int bit = 0; bit < 2; ++bit)
+          shared_face |= onFace(a, axis, bit) && onFace(b, axis, bit);
       EXPECT_TRUE(shared_face) << "case " << k << ": trace segment crosses the cube interior";
     }
     std::set<int> used;

@@ -1,7 +1,7 @@
 // The AVX2 mesh-level refresh against the plain one (chooseMeshLevel(), the face fill, then
-// refreshMeshSigns()): same level, fill and sign bits on random blocks with unobserved voxels, ±0, values in
-// [−1e-30, 0), NaN, in all three levels and at several coverage shares; and on blocks with a
-// single observed voxel anywhere, which pins each voxel to its region.
+// refreshMeshSigns()): same level, fill and sign bits on random blocks with unobserved voxels, ±0,
+// values in [−1e-30, 0), NaN, in all three levels and at several coverage shares; and on blocks
+// with a single observed voxel anywhere, which pins each voxel to its region.
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -18,19 +18,34 @@ namespace {
 
 /// A signed distance, often one whose sign the refresh must classify with care.
 float randomSdf(std::mt19937& rng) {
-  const float specials[] = {0.0f,    -0.0f,   1e-31f,  -1e-31f, -1e-30f, -1.0000001e-30f, -2e-30f,
-                            1e-40f,  -1e-40f, 1e-30f,  0.5f,    -0.5f,   std::numeric_limits<float>::quiet_NaN(),
-                            std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity()};
-  std::uniform_int_distribution<int> pick(0, static_cast<int>(sizeof(specials) / sizeof(specials[0])) - 1);
+  const float specials[] = {0.0f,
+                            -0.0f,
+                            1e-31f,
+                            -1e-31f,
+                            -1e-30f,
+                            -1.0000001e-30f,
+                            -2e-30f,
+                            1e-40f,
+                            -1e-40f,
+                            1e-30f,
+                            0.5f,
+                            -0.5f,
+                            std::numeric_limits<float>::quiet_NaN(),
+                            std::numeric_limits<float>::infinity(),
+                            -std::numeric_limits<float>::infinity()};
+  std::uniform_int_distribution<int> pick(
+      0, static_cast<int>(sizeof(specials) / sizeof(specials[0])) - 1);
   std::uniform_real_distribution<float> value(-0.1f, 0.1f);
-  return std::uniform_real_distribution<float>(0.0f, 1.0f)(rng) < 0.3f ? specials[pick(rng)] : value(rng);
+  return std::uniform_real_distribution<float>(0.0f, 1.0f)(rng) < 0.3f ? specials[pick(rng)]
+                                                                       : value(rng);
 }
 
 /// A weight: observed (> 0, denormals included) or not (0, −0, NaN, negative).
 float randomWeight(std::mt19937& rng, float observed_share) {
   std::uniform_real_distribution<float> unit(0.0f, 1.0f);
   if (unit(rng) < observed_share) return unit(rng) < 0.1f ? 1e-42f : 0.5f + 20.0f * unit(rng);
-  const float unobserved[] = {0.0f, -0.0f, 0.0f, 0.0f, std::numeric_limits<float>::quiet_NaN(), -1.0f};
+  const float unobserved[] = {0.0f, -0.0f, 0.0f, 0.0f, std::numeric_limits<float>::quiet_NaN(),
+                              -1.0f};
   return unobserved[std::uniform_int_distribution<int>(0, 5)(rng)];
 }
 
@@ -53,7 +68,8 @@ VoxelBlock randomBlock(std::mt19937& rng) {
 }
 
 bool sameVoxels(const std::vector<Voxel>& a, const std::vector<Voxel>& b) {
-  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(Voxel)) == 0);
+  return a.size() == b.size() &&
+         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(Voxel)) == 0);
 }
 
 void expectSameRefresh(const VoxelBlock& block, double coverage, bool fill = true) {
@@ -83,7 +99,8 @@ void expectSameRefresh(const VoxelBlock& block, double coverage, bool fill = tru
   if (filled) {  // what the mesher then reads
     std::vector<Voxel> scratch;
     const Voxel* meshed = meshVoxels(block, plain, &scratch);
-    ASSERT_TRUE(sameVoxels(std::vector<Voxel>(meshed, meshed + levelVoxelCount(plain.level)), expected_fill));
+    ASSERT_TRUE(sameVoxels(std::vector<Voxel>(meshed, meshed + levelVoxelCount(plain.level)),
+                           expected_fill));
   }
 }
 
@@ -94,7 +111,8 @@ TEST(MeshLevelRefresh, Avx2MatchesPlainOnRandomBlocks) {
   for (int trial = 0; trial < 4000; ++trial) {
     const VoxelBlock block = randomBlock(rng);
     for (double coverage : {0.0, 1e-6, 0.5, 0.8, 1.0}) {
-      ASSERT_NO_FATAL_FAILURE(expectSameRefresh(block, coverage, trial % 4 != 3)) << "trial " << trial;
+      ASSERT_NO_FATAL_FAILURE(expectSameRefresh(block, coverage, trial % 4 != 3))
+          << "trial " << trial;
       MeshBlockState state;
       refreshMeshLevel(block, MeshingParams{0.02, 4.0, coverage}, &state);
       filled += state.seam_filled;
@@ -102,7 +120,8 @@ TEST(MeshLevelRefresh, Avx2MatchesPlainOnRandomBlocks) {
     }
   }
   // The comparison means little unless every level's sign pass ran many times.
-  for (int level = 0; level < kNumLevels; ++level) EXPECT_GT(chosen[level], 1000) << "level " << level;
+  for (int level = 0; level < kNumLevels; ++level)
+    EXPECT_GT(chosen[level], 1000) << "level " << level;
   EXPECT_GT(filled, 1000);  // and the sign pass over a filled copy
 }
 

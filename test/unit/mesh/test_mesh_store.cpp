@@ -17,7 +17,8 @@ TEST(MeshStore, UpdateByKeysEqualsARebuildBeforeAndAfterErase) {
   BlockOctree map(8 * voxel_m);
   sim::AnalyticScene scene;
   scene.add(sim::makeSphere({0.013, -0.021, 0.037}, 0.25));
-  fillAnalytic(&map, scene, Eigen::AlignedBox3d(Eigen::Vector3d::Constant(-0.4), Eigen::Vector3d::Constant(0.4)),
+  fillAnalytic(&map, scene,
+               Eigen::AlignedBox3d(Eigen::Vector3d::Constant(-0.4), Eigen::Vector3d::Constant(0.4)),
                3 * voxel_m, [](const BlockKey&) { return 0; });
   ASSERT_GT(map.blockCount(), 100u);
   ThreadPool pool(2);
@@ -39,18 +40,21 @@ TEST(MeshStore, UpdateByKeysEqualsARebuildBeforeAndAfterErase) {
 
   // Erase every third block with a surface: their submeshes go, their owners are re-meshed.
   std::vector<BlockKey> erased;
-  for (size_t i = 0; i < first_by_key.changed.size(); i += 3) erased.push_back(first_by_key.changed[i]);
+  for (size_t i = 0; i < first_by_key.changed.size(); i += 3)
+    erased.push_back(first_by_key.changed[i]);
   ASSERT_EQ(map.erase(erased), erased.size());
   const MeshChanges second_by_key = by_key.update(map, {}, &pool, erased);
   for (const BlockKey& k : erased)
-    EXPECT_TRUE(std::binary_search(second_by_key.removed.begin(), second_by_key.removed.end(), k)) << k;
+    EXPECT_TRUE(std::binary_search(second_by_key.removed.begin(), second_by_key.removed.end(), k))
+        << k;
   // Up to 7 surviving owners per erased block, shared between neighbours.
   EXPECT_GT(second_by_key.blocks_meshed, erased.size());
   EXPECT_LE(second_by_key.blocks_meshed, 7 * erased.size());
 
-  std::printf("[ mesh store ] %zu blocks, %zu submeshes; %zu erased: %zu owners re-meshed, %zu removed\n",
-              blocks, first_by_key.changed.size(), erased.size(), second_by_key.blocks_meshed,
-              second_by_key.removed.size());
+  std::printf(
+      "[ mesh store ] %zu blocks, %zu submeshes; %zu erased: %zu owners re-meshed, %zu removed\n",
+      blocks, first_by_key.changed.size(), erased.size(), second_by_key.blocks_meshed,
+      second_by_key.removed.size());
 
   MeshStore rebuilt(params);
   rebuilt.rebuild(map, &pool);

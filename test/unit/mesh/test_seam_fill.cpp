@@ -29,7 +29,9 @@ VoxelBlock linearCoarseBlock() {
   return block;
 }
 
-const Voxel& at(const std::vector<Voxel>& level0, int i, int j, int k) { return level0[i + 8 * (j + 8 * k)]; }
+const Voxel& at(const std::vector<Voxel>& level0, int i, int j, int k) {
+  return level0[i + 8 * (j + 8 * k)];
+}
 
 }  // namespace
 
@@ -46,10 +48,12 @@ TEST(SeamFill, FaceVoxelsTakeTheLinearFieldOfTheNextCoarserLevel) {
   EXPECT_NEAR(at(filled, 1, 0, 0).sdf_m, -0.2725f, 1e-6f);
   EXPECT_EQ(at(filled, 1, 0, 0).weight, 1.0f);
   EXPECT_EQ(at(filled, 1, 0, 0).r, 3);
-  // (3, 7, 2), on the y = 7 face: (1.25, 3.25, 0.75) → 0.0125 + 0.325 + 0.75 = 1.0875, red 12.5 → 13.
+  // (3, 7, 2), on the y = 7 face: (1.25, 3.25, 0.75) → 0.0125 + 0.325 + 0.75 = 1.0875, red 12.5
+  // → 13.
   EXPECT_NEAR(at(filled, 3, 7, 2).sdf_m, 1.0875f, 1e-6f);
   EXPECT_EQ(at(filled, 3, 7, 2).r, 13);
-  // (7, 4, 4), on the x = 7 face: (3.25, 1.75, 1.75) → 0.0325 + 0.175 + 1.75 = 1.9575, red 32.5 → 33.
+  // (7, 4, 4), on the x = 7 face: (3.25, 1.75, 1.75) → 0.0325 + 0.175 + 1.75 = 1.9575, red 32.5
+  // → 33.
   EXPECT_NEAR(at(filled, 7, 4, 4).sdf_m, 1.9575f, 1e-6f);
   EXPECT_EQ(at(filled, 7, 4, 4).r, 33);
   // (0, 3, 0): red extrapolates to −2.5, clamped to 0.

@@ -15,7 +15,6 @@
 namespace stereo_fusion::test {
 namespace {
 
-
 TEST(TextureStore, PatchesCoverTheirSubmeshWithUvsInTheUnitSquareAndTrueColours) {
   const sim::AnalyticScene scene = wallScene();
   const StereoCamera camera = vgaCamera();
@@ -51,7 +50,8 @@ TEST(TextureStore, PatchesCoverTheirSubmeshWithUvsInTheUnitSquareAndTrueColours)
     EXPECT_LE(patch->image_rgb.rows, config.texture_max_patch_px);
     for (size_t v = 0; v < mesh.positions.size(); ++v) {
       const Eigen::Vector2f& uv = patch->uvs[v];
-      ASSERT_TRUE(uv.x() >= 0 && uv.x() <= 1 && uv.y() >= 0 && uv.y() <= 1) << key << " uv " << uv.transpose();
+      ASSERT_TRUE(uv.x() >= 0 && uv.x() <= 1 && uv.y() >= 0 && uv.y() <= 1)
+          << key << " uv " << uv.transpose();
       // The patch at the vertex's UV shows the scene at the vertex.
       const Eigen::Vector3f seen = sampleBilinear(patch->image_rgb, uv);
       const Eigen::Vector3d truth = scene.colorAt(mesh.positions[v].cast<double>(), 0);
@@ -89,7 +89,9 @@ TEST(TextureStore, PatchEdgeIsCappedAndUvsStillPointAtTheSameSurface) {
 TEST(TextureStore, OffByDefaultAndNothingIsStored) {
   Mapper mapper(MapperConfig{});
   EXPECT_EQ(MapperConfig{}.texture, TextureMode::kOff);
-  ASSERT_TRUE(mapper.integrate(renderFrame(wallScene(), vgaCamera(), lookFrom({0, 0, 0}, {0, 0, 1.5}))).accepted);
+  ASSERT_TRUE(
+      mapper.integrate(renderFrame(wallScene(), vgaCamera(), lookFrom({0, 0, 0}, {0, 0, 1.5})))
+          .accepted);
   EXPECT_GT(mapper.mesh().submeshes().size(), 0u);
   EXPECT_TRUE(mapper.textures().patches().empty());
 }
@@ -140,17 +142,21 @@ TEST(TextureStore, HiddenVerticesNeverTakeTheOccludersColour) {
       const sim::Hit hit = scene.raycast(eye_front, (p - eye_front).normalized());
       hidden_from_front += hit.primitive == 1;
       ASSERT_GT(c.z(), c.x()) << "wall vertex " << p.transpose() << " of block " << key
-                              << " textured from frame " << patch.frame_index << " shows the red box";
+                              << " textured from frame " << patch.frame_index
+                              << " shows the red box";
     }
   }
   EXPECT_GT(wall_vertices, 500u);
   EXPECT_GT(front_patches, 0u) << "the front view wins where it sees the whole block";
-  EXPECT_GT(hidden_from_front, 20u) << "wall behind the box must be textured from the oblique views";
+  EXPECT_GT(hidden_from_front, 20u)
+      << "wall behind the box must be textured from the oblique views";
 }
 
 TEST(TextureStore, RebuildReprojectsThePatchesOntoTheNewSubmeshes) {
   Mapper mapper(texturedConfig());
-  ASSERT_TRUE(mapper.integrate(renderFrame(wallScene(), vgaCamera(), lookFrom({0, 0, 0}, {0, 0, 1.5}))).accepted);
+  ASSERT_TRUE(
+      mapper.integrate(renderFrame(wallScene(), vgaCamera(), lookFrom({0, 0, 0}, {0, 0, 1.5})))
+          .accepted);
   const size_t before = mapper.textures().patches().size();
   ASSERT_GT(before, 0u);
   mapper.rebuildMesh();
@@ -178,13 +184,15 @@ TEST(TextureAtlas, ShelfPackingKeepsPatchesAndGuttersDisjointAndInside) {
     ASSERT_GE(p.atlas, 0);
     ASSERT_LT(p.atlas, static_cast<int>(layout.atlas_sizes.size()));
     EXPECT_EQ(p.rect.size(), sizes[i]);
-    const cv::Rect framed(p.rect.x - gutter, p.rect.y - gutter, p.rect.width + 2 * gutter, p.rect.height + 2 * gutter);
+    const cv::Rect framed(p.rect.x - gutter, p.rect.y - gutter, p.rect.width + 2 * gutter,
+                          p.rect.height + 2 * gutter);
     const cv::Size atlas = layout.atlas_sizes[p.atlas];
     EXPECT_TRUE((framed & cv::Rect(0, 0, atlas.width, atlas.height)) == framed) << i;
     for (size_t j = 0; j < i; ++j) {
       const AtlasPlacement& q = layout.placements[j];
       if (q.atlas != p.atlas) continue;
-      const cv::Rect other(q.rect.x - gutter, q.rect.y - gutter, q.rect.width + 2 * gutter, q.rect.height + 2 * gutter);
+      const cv::Rect other(q.rect.x - gutter, q.rect.y - gutter, q.rect.width + 2 * gutter,
+                           q.rect.height + 2 * gutter);
       ASSERT_EQ((framed & other).area(), 0) << "patches " << i << " and " << j << " overlap";
     }
   }
@@ -193,7 +201,8 @@ TEST(TextureAtlas, ShelfPackingKeepsPatchesAndGuttersDisjointAndInside) {
     const AtlasPlacement& p = layout.placements[i];
     EXPECT_EQ(cv::norm(atlases[p.atlas](p.rect), patches[i], cv::NORM_INF), 0.0) << i;
     // The gutter replicates the border: the texel left of the top-left corner repeats it.
-    EXPECT_EQ(atlases[p.atlas].at<cv::Vec3b>(p.rect.y, p.rect.x - 1), patches[i].at<cv::Vec3b>(0, 0));
+    EXPECT_EQ(atlases[p.atlas].at<cv::Vec3b>(p.rect.y, p.rect.x - 1),
+              patches[i].at<cv::Vec3b>(0, 0));
   }
   EXPECT_THROW(packAtlas({cv::Size(255, 10)}, atlas_edge, gutter), std::invalid_argument);
 }

@@ -18,7 +18,8 @@ struct BruteForceCell {
   uint32_t dist2;
 };
 
-inline std::vector<BruteForceCell> bruteForceDistances(const PlanningBlockMap& blocks, uint32_t max_dist2) {
+inline std::vector<BruteForceCell> bruteForceDistances(const PlanningBlockMap& blocks,
+                                                       uint32_t max_dist2) {
   std::vector<CellIndex> occupied;
   std::vector<BruteForceCell> out;
   for (const auto& [key, block] : blocks)
@@ -57,7 +58,9 @@ inline uint16_t storedDist2(const PlanningBlockMap& blocks, const CellIndex& cel
 /// Largest |distance − brute force| in cells over every cell (kNoSite reads as √max_dist2).
 inline double maxErrorCells(const PlanningBlockMap& blocks, uint32_t max_dist2) {
   double worst = 0.0;
-  auto cells = [&](uint32_t d2) { return d2 == PlanningBlock::kNoSite ? std::sqrt(double(max_dist2)) : std::sqrt(double(d2)); };
+  auto cells = [&](uint32_t d2) {
+    return d2 == PlanningBlock::kNoSite ? std::sqrt(double(max_dist2)) : std::sqrt(double(d2));
+  };
   for (const BruteForceCell& b : bruteForceDistances(blocks, max_dist2))
     worst = std::max(worst, std::abs(cells(storedDist2(blocks, b.cell)) - cells(b.dist2)));
   return worst;

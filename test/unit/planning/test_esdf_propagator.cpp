@@ -62,7 +62,8 @@ TEST(EsdfPropagator, RemovingAnObstacleRaisesItsCells) {
   setOccupied(&blocks, {4, 8, 8}, false);
   propagator.update(&blocks, {{4, 8, 8}}, {}, 64);
   for (const auto& [key, block] : blocks)
-    for (int c = 0; c < PlanningBlock::kCells; ++c) EXPECT_EQ(block->dist2[c], PlanningBlock::kNoSite);
+    for (int c = 0; c < PlanningBlock::kCells; ++c)
+      EXPECT_EQ(block->dist2[c], PlanningBlock::kNoSite);
 }
 
 // Inside an obstacle the distance is to the nearest cell that is not occupied: a 5-cell-thick
@@ -127,7 +128,8 @@ TEST(EsdfPropagator, IncrementalMatchesBruteForceAndRebuildAfterRandomFlips) {
     propagator.rebuild(&rebuilt, 49);
     size_t differing = 0;
     for (const auto& [key, block] : blocks)
-      for (int c = 0; c < PlanningBlock::kCells; ++c) differing += block->dist2[c] != rebuilt.at(key)->dist2[c];
+      for (int c = 0; c < PlanningBlock::kCells; ++c)
+        differing += block->dist2[c] != rebuilt.at(key)->dist2[c];
     EXPECT_EQ(differing, 0u) << "seed " << seed;
   }
 }

@@ -14,7 +14,8 @@ StereoFrame wallFrame(float disparity_px) {
   return frame;
 }
 
-bool seenFree(const std::vector<std::pair<BlockKey, PlanningBlock::Bits>>& blocks, const CellIndex& cell) {
+bool seenFree(const std::vector<std::pair<BlockKey, PlanningBlock::Bits>>& blocks,
+              const CellIndex& cell) {
   for (const auto& [key, bits] : blocks)
     if (key == planningBlockOf(cell)) return PlanningBlock::test(bits, cellInBlock(cell));
   return false;
@@ -76,7 +77,8 @@ TEST(FreeSpaceRecorder, ThreadCountIndependent) {
   sim::AnalyticScene scene;
   scene.add(sim::makeSphere(Eigen::Vector3d(0.3, 0.2, 2.0), 0.5));
   scene.add(sim::makePlane(Eigen::Vector3d(0, 0, 4.0), Eigen::Vector3d(0, 0, -1)));
-  const StereoFrame frame = test::renderFrame(scene, test::vgaCamera(), Eigen::Isometry3d::Identity(), 0.1, 3);
+  const StereoFrame frame =
+      test::renderFrame(scene, test::vgaCamera(), Eigen::Isometry3d::Identity(), 0.1, 3);
   MapperConfig config;
   std::vector<std::pair<BlockKey, PlanningBlock::Bits>> results[2];
   for (int threads : {1, 2}) {

@@ -52,7 +52,9 @@ using CellKey = std::tuple<int, int, int>;
 
 std::map<CellKey, CellRecord> cells(const PlanningMap& planning) {
   std::map<CellKey, CellRecord> out;
-  planning.forEachKnownCell([&](const CellIndex& c, CellState s, double d) { out[{c.x, c.y, c.z}] = {s, d}; });
+  planning.forEachKnownCell([&](const CellIndex& c, CellState s, double d) {
+    out[{c.x, c.y, c.z}] = {s, d};
+  });
   return out;
 }
 
@@ -145,7 +147,8 @@ TEST(PlanningMap, ClearMakesTheRegionUnknownUntilSeenAgain) {
   const sim::AnalyticScene scene = roomWithSphere();
   Mapper mapper(planningConfig());
   const auto poses = circlePoses(8);
-  for (const Eigen::Isometry3d& pose : poses) ASSERT_TRUE(mapper.integrate(renderFrame(scene, vgaCamera(), pose)).accepted);
+  for (const Eigen::Isometry3d& pose : poses)
+    ASSERT_TRUE(mapper.integrate(renderFrame(scene, vgaCamera(), pose)).accepted);
   mapper.updatePlanning();
   const PlanningMap& planning = *mapper.planning();
   const Eigen::Vector3d free_point(0.0, 0.0, 1.2), wall_point(-2.03, 0.0, 1.0);
@@ -177,7 +180,8 @@ TEST(PlanningMap, AnObjectThatLeftBecomesFree) {
   without_box.add(sim::makePlane(Eigen::Vector3d(3.0, 0, 0), Eigen::Vector3d(-1, 0, 0)));
   Mapper mapper(planningConfig());
   const Eigen::Isometry3d pose = sim::lookAt(Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(3, 0, 1));
-  for (int i = 0; i < 5; ++i) ASSERT_TRUE(mapper.integrate(renderFrame(with_box, vgaCamera(), pose, 0.0)).accepted);
+  for (int i = 0; i < 5; ++i)
+    ASSERT_TRUE(mapper.integrate(renderFrame(with_box, vgaCamera(), pose, 0.0)).accepted);
   mapper.updatePlanning();
   const PlanningMap& planning = *mapper.planning();
   ASSERT_EQ(planning.state({1.3, 0.0, 1.0}), CellState::kOccupied);
@@ -197,9 +201,12 @@ TEST(PlanningMap, AnObjectThatLeftBecomesFree) {
 namespace stereo_fusion {
 namespace {
 
-std::map<std::tuple<int, int, int>, std::pair<CellState, double>> cellMap(const PlanningMap& planning) {
+std::map<std::tuple<int, int, int>, std::pair<CellState, double>> cellMap(
+    const PlanningMap& planning) {
   std::map<std::tuple<int, int, int>, std::pair<CellState, double>> out;
-  planning.forEachKnownCell([&](const CellIndex& c, CellState s, double d) { out[{c.x, c.y, c.z}] = {s, d}; });
+  planning.forEachKnownCell([&](const CellIndex& c, CellState s, double d) {
+    out[{c.x, c.y, c.z}] = {s, d};
+  });
   return out;
 }
 
@@ -215,7 +222,8 @@ TEST(PlanningMapFile, SavedAndLoadedLayerIsTheSameAndOlderFilesLoadWithFreeSpace
   ASSERT_TRUE(original.integrate(test::renderFrame(scene, test::vgaCamera(), pose)).accepted);
   original.updatePlanning();
   const auto saved_cells = cellMap(*original.planning());
-  ASSERT_EQ(original.planning()->state({1.0, 0.0, 1.0}), CellState::kFree);  // seen free, far from the band
+  ASSERT_EQ(original.planning()->state({1.0, 0.0, 1.0}),
+            CellState::kFree);  // seen free, far from the band
 
   std::vector<uint8_t> bytes = original.encodeMap();
   sealMapFile(&bytes);
@@ -230,7 +238,8 @@ TEST(PlanningMapFile, SavedAndLoadedLayerIsTheSameAndOlderFilesLoadWithFreeSpace
   EXPECT_TRUE(cellMap(*loaded.planning()) == saved_cells);
 
   // The same file as version 2: drop the section, fix the version and the payload size.
-  std::vector<uint8_t> v2(bytes.begin(), bytes.end() - (16 + info.free_space.blocks.size() * kMapFileFreeSpaceRecordBytes));
+  std::vector<uint8_t> v2(bytes.begin(), bytes.end() - (16 + info.free_space.blocks.size() *
+                                                                 kMapFileFreeSpaceRecordBytes));
   v2[8] = 2;
   const uint64_t payload = v2.size() - kMapFileHeaderBytes;
   for (int b = 0; b < 8; ++b) v2[64 + b] = static_cast<uint8_t>(payload >> (8 * b));

@@ -33,7 +33,8 @@ TEST(PlanningScenes, ThinWallDistancesInFrontAndUnknownBehind) {
   Mapper mapper(sceneConfig());
   for (int i = 0; i < 3; ++i) {
     const Eigen::Vector3d eye(0.0, -0.2 + 0.2 * i, 1.0);
-    StereoFrame frame = renderFrame(scene, vgaCamera(), sim::lookAt(eye, eye + Eigen::Vector3d::UnitX()));
+    StereoFrame frame =
+        renderFrame(scene, vgaCamera(), sim::lookAt(eye, eye + Eigen::Vector3d::UnitX()));
     frame.timestamp_s = 1.0 + i;
     ASSERT_TRUE(mapper.integrate(frame).accepted);
   }
@@ -70,7 +71,8 @@ TEST(PlanningScenes, CorridorHalfWidthOnTheAxis) {
     const Eigen::Vector3d eye(0.3 * i, 0.0, 1.0);
     const double yaw = (i % 2 ? 1 : -1) * 0.5;
     StereoFrame frame =
-        renderFrame(scene, vgaCamera(), sim::lookAt(eye, eye + Eigen::Vector3d(std::cos(yaw), std::sin(yaw), -0.1)));
+        renderFrame(scene, vgaCamera(),
+                    sim::lookAt(eye, eye + Eigen::Vector3d(std::cos(yaw), std::sin(yaw), -0.1)));
     frame.timestamp_s = 1.0 + i;
     ASSERT_TRUE(mapper.integrate(frame).accepted);
   }
@@ -99,7 +101,8 @@ TEST(PlanningScenes, EvictionMakesForgottenSpaceUnknown) {
   Mapper mapper(config);
   for (int i = 0; i < 16; ++i) {
     const Eigen::Vector3d eye(1.0 * i, 0.0, 1.0);
-    StereoFrame frame = renderFrame(scene, vgaCamera(), sim::lookAt(eye, eye + Eigen::Vector3d(1.0, 0.6, -0.3)));
+    StereoFrame frame =
+        renderFrame(scene, vgaCamera(), sim::lookAt(eye, eye + Eigen::Vector3d(1.0, 0.6, -0.3)));
     frame.timestamp_s = 1.0 + i;
     ASSERT_TRUE(mapper.integrate(frame).accepted);
     mapper.updatePlanning();
@@ -113,7 +116,8 @@ TEST(PlanningScenes, EvictionMakesForgottenSpaceUnknown) {
   EXPECT_EQ(planning.state({17.0, 1.5, 1.0}), CellState::kOccupied);
   // No cell within the bound of the last camera is lost.
   planning.forEachKnownCell([&](const CellIndex& c, CellState, double) {
-    EXPECT_LE((planning.grid().centre(c) - Eigen::Vector3d(15.0, 0.0, 1.0)).norm(), 6.0 + planning.grid().blockM());
+    EXPECT_LE((planning.grid().centre(c) - Eigen::Vector3d(15.0, 0.0, 1.0)).norm(),
+              6.0 + planning.grid().blockM());
   });
 }
 
@@ -138,8 +142,9 @@ TEST(PlanningScenes, QueriesWhileFusingAreSafe) {
     while (!done.load()) {
       planning->sampleBatch(points, &samples);
       for (const EsdfSample& s : samples) {
-        const bool ok = s.state == CellState::kUnknown ? std::isnan(s.distance_m)
-                                                       : std::abs(s.distance_m) <= planning->config().max_distance_m;
+        const bool ok = s.state == CellState::kUnknown
+                            ? std::isnan(s.distance_m)
+                            : std::abs(s.distance_m) <= planning->config().max_distance_m;
         bad += !ok;
       }
       answered += samples.size();
@@ -149,7 +154,8 @@ TEST(PlanningScenes, QueriesWhileFusingAreSafe) {
   for (int i = 0; i < frames; ++i) {
     const double a = 2.0 * M_PI * i / frames;
     const Eigen::Vector3d eye(0.5 * std::cos(a), 0.5 * std::sin(a), 1.2);
-    StereoFrame frame = renderFrame(scene, vgaCamera(), sim::lookAt(eye, eye + Eigen::Vector3d(std::cos(a), std::sin(a), 0)));
+    StereoFrame frame = renderFrame(
+        scene, vgaCamera(), sim::lookAt(eye, eye + Eigen::Vector3d(std::cos(a), std::sin(a), 0)));
     frame.timestamp_s = 1.0 + i;
     ASSERT_TRUE(mapper.integrate(frame).accepted);
     mapper.updatePlanning();
@@ -158,7 +164,7 @@ TEST(PlanningScenes, QueriesWhileFusingAreSafe) {
   reader.join();
   EXPECT_GT(answered.load(), 0u);
   EXPECT_EQ(bad.load(), 0u);
-  EXPECT_EQ(planning->state({1.2, 0.1, 1.2}), CellState::kFree);   // in front of the first camera
+  EXPECT_EQ(planning->state({1.2, 0.1, 1.2}), CellState::kFree);     // in front of the first camera
   EXPECT_EQ(planning->state({0.0, 0.0, 1.2}), CellState::kUnknown);  // behind every camera
 }
 
@@ -182,7 +188,8 @@ TEST(PlanningScenes, ChangesDoNotPileUpWhenNobodyUpdatesTheLayer) {
   // changes allowed would wait.
   for (int i = 0; i < 100; ++i) {
     const Eigen::Vector3d eye(0.0, 0.02 * i, 1.0);
-    StereoFrame frame = test::renderFrame(scene, test::vgaCamera(), sim::lookAt(eye, eye + Eigen::Vector3d::UnitX()));
+    StereoFrame frame = test::renderFrame(scene, test::vgaCamera(),
+                                          sim::lookAt(eye, eye + Eigen::Vector3d::UnitX()));
     frame.timestamp_s = 1.0 + i;
     const IntegrationResult r = mapper.integrate(frame);
     ASSERT_TRUE(r.accepted);

@@ -20,7 +20,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-
 struct Messages {
   stereo_msgs::DisparityImage disparity;
   sensor_msgs::Image image;
@@ -42,45 +41,88 @@ TEST(BadInput, CameraInfoAndDisparityCalibrationAreChecked) {
   const Messages good = messagesOf(floorAndSphereFrame(0, 1.0));
   StereoFrame out;
   std::string error;
-  ASSERT_TRUE(toStereoFrame(good.disparity, good.image, good.info, Eigen::Isometry3d::Identity(), &out, &error)) << error;
+  ASSERT_TRUE(toStereoFrame(good.disparity, good.image, good.info, Eigen::Isometry3d::Identity(),
+                            &out, &error))
+      << error;
   struct Case {
     const char* name;
     std::function<void(Messages*)> corrupt;
     const char* message;
   };
   const std::vector<Case> cases = {
-      {"CameraInfo fx = 0 (P and K)", [](Messages* m) { m->info.P[0] = 0; m->info.K[0] = 0; }, "disagrees with DisparityImage f"},
-      {"CameraInfo fx < 0", [](Messages* m) { m->info.P[0] = -262.5; }, "disagrees with DisparityImage f"},
-      {"CameraInfo fx NaN", [](Messages* m) { m->info.P[0] = NAN; }, "focal lengths must be finite and > 0"},
-      {"CameraInfo fy = 0", [](Messages* m) { m->info.P[5] = 0; }, "focal lengths must be finite and > 0"},
-      {"CameraInfo fy NaN", [](Messages* m) { m->info.P[5] = NAN; }, "focal lengths must be finite and > 0"},
-      {"CameraInfo cx inf", [](Messages* m) { m->info.P[2] = INFINITY; }, "principal point must be finite"},
+      {"CameraInfo fx = 0 (P and K)",
+       [](Messages* m) {
+         m->info.P[0] = 0;
+         m->info.K[0] = 0;
+       },
+       "disagrees with DisparityImage f"},
+      {"CameraInfo fx < 0", [](Messages* m) { m->info.P[0] = -262.5; },
+       "disagrees with DisparityImage f"},
+      {"CameraInfo fx NaN", [](Messages* m) { m->info.P[0] = NAN; },
+       "focal lengths must be finite and > 0"},
+      {"CameraInfo fy = 0", [](Messages* m) { m->info.P[5] = 0; },
+       "focal lengths must be finite and > 0"},
+      {"CameraInfo fy NaN", [](Messages* m) { m->info.P[5] = NAN; },
+       "focal lengths must be finite and > 0"},
+      {"CameraInfo cx inf", [](Messages* m) { m->info.P[2] = INFINITY; },
+       "principal point must be finite"},
       {"DisparityImage T = 0", [](Messages* m) { m->disparity.T = 0; }, "needs f > 0 and T > 0"},
-      {"DisparityImage T < 0", [](Messages* m) { m->disparity.T = -0.1f; }, "needs f > 0 and T > 0"},
+      {"DisparityImage T < 0", [](Messages* m) { m->disparity.T = -0.1f; },
+       "needs f > 0 and T > 0"},
       {"DisparityImage f = 0", [](Messages* m) { m->disparity.f = 0; }, "needs f > 0 and T > 0"},
       {"DisparityImage f NaN", [](Messages* m) { m->disparity.f = NAN; }, "needs f > 0 and T > 0"},
-      {"empty disparity image", [](Messages* m) { m->disparity.image.width = 0; m->disparity.image.height = 0;
-                                                  m->disparity.image.data.clear(); }, "disparity image is empty"},
-      {"empty colour image", [](Messages* m) { m->image.width = 0; m->image.height = 0; m->image.data.clear(); },
+      {"empty disparity image",
+       [](Messages* m) {
+         m->disparity.image.width = 0;
+         m->disparity.image.height = 0;
+         m->disparity.image.data.clear();
+       },
+       "disparity image is empty"},
+      {"empty colour image",
+       [](Messages* m) {
+         m->image.width = 0;
+         m->image.height = 0;
+         m->image.data.clear();
+       },
        "image is 0x0 but the disparity is 320x240"},
-      {"colour data shorter than step × height", [](Messages* m) { m->image.data.resize(100); }, "image data is shorter than step × height"},
-      {"unsupported encoding bayer", [](Messages* m) { m->image.encoding = "bayer_rggb8"; }, "unsupported image encoding"},
-      {"disparity 16UC1", [](Messages* m) { m->disparity.image.encoding = "16UC1"; }, "must be 32FC1"},
-      {"CameraInfo size differs", [](Messages* m) { m->info.width = 640; }, "CameraInfo is 640x240"},
-      {"CameraInfo fy = 1e-3", [](Messages* m) { m->info.P[5] = 1e-3; m->info.K[4] = 1e-3; },
+      {"colour data shorter than step × height", [](Messages* m) { m->image.data.resize(100); },
+       "image data is shorter than step × height"},
+      {"unsupported encoding bayer", [](Messages* m) { m->image.encoding = "bayer_rggb8"; },
+       "unsupported image encoding"},
+      {"disparity 16UC1", [](Messages* m) { m->disparity.image.encoding = "16UC1"; },
+       "must be 32FC1"},
+      {"CameraInfo size differs", [](Messages* m) { m->info.width = 640; },
+       "CameraInfo is 640x240"},
+      {"CameraInfo fy = 1e-3",
+       [](Messages* m) {
+         m->info.P[5] = 1e-3;
+         m->info.K[4] = 1e-3;
+       },
        "px are implausible for a 320x240 image"},
-      {"CameraInfo principal point 1e9 (K and P)", [](Messages* m) { m->info.P[2] = 1e9; m->info.K[2] = 1e9; },
+      {"CameraInfo principal point 1e9 (K and P)",
+       [](Messages* m) {
+         m->info.P[2] = 1e9;
+         m->info.K[2] = 1e9;
+       },
        "is implausible for a 320x240 image"},
-      {"DisparityImage min_disparity NaN", [](Messages* m) { m->disparity.min_disparity = NAN; }, "is not a range"},
-      {"DisparityImage max_disparity inf", [](Messages* m) { m->disparity.max_disparity = INFINITY; }, "is not a range"},
-      {"DisparityImage max < min", [](Messages* m) { m->disparity.min_disparity = 50; m->disparity.max_disparity = 10; },
+      {"DisparityImage min_disparity NaN", [](Messages* m) { m->disparity.min_disparity = NAN; },
+       "is not a range"},
+      {"DisparityImage max_disparity inf",
+       [](Messages* m) { m->disparity.max_disparity = INFINITY; }, "is not a range"},
+      {"DisparityImage max < min",
+       [](Messages* m) {
+         m->disparity.min_disparity = 50;
+         m->disparity.max_disparity = 10;
+       },
        "is not a range"},
   };
   for (const Case& c : cases) {
     Messages m = good;
     c.corrupt(&m);
     error.clear();
-    EXPECT_FALSE(toStereoFrame(m.disparity, m.image, m.info, Eigen::Isometry3d::Identity(), &out, &error)) << c.name;
+    EXPECT_FALSE(
+        toStereoFrame(m.disparity, m.image, m.info, Eigen::Isometry3d::Identity(), &out, &error))
+        << c.name;
     EXPECT_NE(error.find(c.message), std::string::npos) << c.name << ": " << error;
   }
 }
@@ -92,7 +134,9 @@ TEST(BadInput, DisparitiesOutsideTheMessagesRangeAreNotMeasurements) {
   StereoFrame all, clipped;
   std::string error;
   m.disparity.max_disparity = 0;  // no upper bound given
-  ASSERT_TRUE(toStereoFrame(m.disparity, m.image, m.info, Eigen::Isometry3d::Identity(), &all, &error)) << error;
+  ASSERT_TRUE(
+      toStereoFrame(m.disparity, m.image, m.info, Eigen::Isometry3d::Identity(), &all, &error))
+      << error;
   std::vector<float> valid;
   for (int v = 0; v < all.disparity_px.rows; ++v)
     for (int u = 0; u < all.disparity_px.cols; ++u)
@@ -101,7 +145,9 @@ TEST(BadInput, DisparitiesOutsideTheMessagesRangeAreNotMeasurements) {
   std::nth_element(valid.begin(), valid.begin() + valid.size() / 2, valid.end());
   const float median = valid[valid.size() / 2];
   m.disparity.max_disparity = median;
-  ASSERT_TRUE(toStereoFrame(m.disparity, m.image, m.info, Eigen::Isometry3d::Identity(), &clipped, &error)) << error;
+  ASSERT_TRUE(
+      toStereoFrame(m.disparity, m.image, m.info, Eigen::Isometry3d::Identity(), &clipped, &error))
+      << error;
   size_t dropped = 0;
   for (int v = 0; v < all.disparity_px.rows; ++v)
     for (int u = 0; u < all.disparity_px.cols; ++u) {
@@ -117,12 +163,14 @@ TEST(BadInput, DisparitiesOutsideTheMessagesRangeAreNotMeasurements) {
 }
 
 TEST(BadInput, TruncatedBagsFailCleanlyInTheOfflinePath) {
-  const std::string path = testing::TempDir() + "stereo_fusion_truncated_" + std::to_string(::getpid()) + ".bag";
+  const std::string path =
+      testing::TempDir() + "stereo_fusion_truncated_" + std::to_string(::getpid()) + ".bag";
   std::string error;
   {
     auto writer = StereoBagWriter::open(path, BagTopics{}, "left_optical", 1.0, &error);
     ASSERT_TRUE(writer) << error;
-    for (int i = 0; i < 3; ++i) ASSERT_TRUE(writer->write(floorAndSphereFrame(i, 0.1 * i), 128.0f, &error)) << error;
+    for (int i = 0; i < 3; ++i)
+      ASSERT_TRUE(writer->write(floorAndSphereFrame(i, 0.1 * i), 128.0f, &error)) << error;
     writer->close();
   }
   const auto full_size = fs::file_size(path);
@@ -138,7 +186,8 @@ TEST(BadInput, TruncatedBagsFailCleanlyInTheOfflinePath) {
     FuseReport report;
     const bool ran = runOfflineFusion(options, &report, &error);
     if (!ran) {
-      EXPECT_NE(error.find(cut), std::string::npos) << share << ": the message names the bag: " << error;
+      EXPECT_NE(error.find(cut), std::string::npos)
+          << share << ": the message names the bag: " << error;
     } else {
       size_t skipped = 0;
       for (const auto& [reason, n] : report.skipped) skipped += n;
@@ -157,11 +206,16 @@ TEST(BadInput, BigEndianDisparitiesReadAsTheSameValues) {
   Messages m = messagesOf(floorAndSphereFrame(0, 1.0));
   StereoFrame little, big;
   std::string error;
-  ASSERT_TRUE(toStereoFrame(m.disparity, m.image, m.info, Eigen::Isometry3d::Identity(), &little, &error)) << error;
+  ASSERT_TRUE(
+      toStereoFrame(m.disparity, m.image, m.info, Eigen::Isometry3d::Identity(), &little, &error))
+      << error;
   sensor_msgs::Image& d = m.disparity.image;
-  for (size_t k = 0; k + 4 <= d.data.size(); k += 4) std::reverse(d.data.begin() + k, d.data.begin() + k + 4);
+  for (size_t k = 0; k + 4 <= d.data.size(); k += 4)
+    std::reverse(d.data.begin() + k, d.data.begin() + k + 4);
   d.is_bigendian = 1;
-  ASSERT_TRUE(toStereoFrame(m.disparity, m.image, m.info, Eigen::Isometry3d::Identity(), &big, &error)) << error;
+  ASSERT_TRUE(
+      toStereoFrame(m.disparity, m.image, m.info, Eigen::Isometry3d::Identity(), &big, &error))
+      << error;
   ASSERT_EQ(big.disparity_px.size(), little.disparity_px.size());
   EXPECT_EQ(cv::norm(big.disparity_px, little.disparity_px, cv::NORM_INF), 0.0);
 }
@@ -173,10 +227,14 @@ TEST(BadInput, TheDisparityStepTravelsWithTheFrame) {
   StereoFrame frame;
   std::string error;
   m.disparity.delta_d = 1.0f;
-  ASSERT_TRUE(toStereoFrame(m.disparity, m.image, m.info, Eigen::Isometry3d::Identity(), &frame, &error)) << error;
+  ASSERT_TRUE(
+      toStereoFrame(m.disparity, m.image, m.info, Eigen::Isometry3d::Identity(), &frame, &error))
+      << error;
   EXPECT_EQ(frame.disparity_step_px, 1.0);
   EXPECT_EQ(validateFrame(frame, 0.16), "");
   m.disparity.delta_d = NAN;
-  ASSERT_TRUE(toStereoFrame(m.disparity, m.image, m.info, Eigen::Isometry3d::Identity(), &frame, &error)) << error;
+  ASSERT_TRUE(
+      toStereoFrame(m.disparity, m.image, m.info, Eigen::Isometry3d::Identity(), &frame, &error))
+      << error;
   EXPECT_NE(validateFrame(frame, 0.16).find("is not a resolution in [0, 4] px"), std::string::npos);
 }

@@ -43,12 +43,14 @@ struct SmallBag {
   std::vector<StereoFrame> frames;
   SmallBag() {
     // One file per test: ctest runs the tests of this binary in parallel processes.
-    path = testing::TempDir() + "stereo_fusion_" + testing::UnitTest::GetInstance()->current_test_info()->name() + ".bag";
+    path = testing::TempDir() + "stereo_fusion_" +
+           testing::UnitTest::GetInstance()->current_test_info()->name() + ".bag";
     const sim::AnalyticScene scene = floorAndSphere();
     rosbag::Bag bag(path, rosbag::bagmode::Write);
     for (int i = 0; i < 3; ++i) {
       const ros::Time stamp(100.0 + 0.1 * i);
-      const Eigen::Isometry3d T = sim::lookAt({-0.1 + 0.1 * i, -0.2, 0.0}, {0.05, 0.1, 1.2}, -Eigen::Vector3d::UnitY());
+      const Eigen::Isometry3d T =
+          sim::lookAt({-0.1 + 0.1 * i, -0.2, 0.0}, {0.05, 0.1, 1.2}, -Eigen::Vector3d::UnitY());
       StereoFrame f = renderFrame(scene, qvgaCamera(), T);
       f.timestamp_s = stamp.toSec();
       frames.push_back(f);
@@ -82,7 +84,9 @@ TEST(BagSequence, ReadsFramesAndPosesAndReportsMissingTf) {
     StereoFrame f;
     ASSERT_TRUE(seq->load(i, &f, &error)) << error;
     EXPECT_NEAR(f.timestamp_s, bag.frames[i].timestamp_s, 1e-9);
-    EXPECT_LT((f.T_world_camera.matrix() - bag.frames[i].T_world_camera.matrix()).cwiseAbs().maxCoeff(), 1e-9);
+    EXPECT_LT(
+        (f.T_world_camera.matrix() - bag.frames[i].T_world_camera.matrix()).cwiseAbs().maxCoeff(),
+        1e-9);
     EXPECT_EQ(cv::norm(f.disparity_px, bag.frames[i].disparity_px, cv::NORM_INF), 0.0);
     EXPECT_EQ(cv::norm(f.color, bag.frames[i].color, cv::NORM_INF), 0.0);
     EXPECT_DOUBLE_EQ(f.camera.fx(), 262.5);
@@ -119,7 +123,9 @@ TEST(BagSequence, BadBagsAndTopicsAreClearErrors) {
   BagTopics topics;
   topics.disparity = "/elsewhere/disparity";
   EXPECT_FALSE(BagSequence::open(bag.path, topics, &error));
-  EXPECT_NE(error.find("no stereo_msgs/DisparityImage on topic /elsewhere/disparity"), std::string::npos) << error;
+  EXPECT_NE(error.find("no stereo_msgs/DisparityImage on topic /elsewhere/disparity"),
+            std::string::npos)
+      << error;
 }
 
 TEST(StereoBagWriter, WritesWhatBagSequenceReads) {
@@ -132,7 +138,9 @@ TEST(StereoBagWriter, WritesWhatBagSequenceReads) {
     auto writer = StereoBagWriter::open(path, BagTopics{}, "cam", 1.0, &error);
     ASSERT_TRUE(writer) << error;
     for (int i = 0; i < 2; ++i) {
-      StereoFrame f = renderFrame(scene, qvgaCamera(), sim::lookAt({0.05 * i, 0, 0}, {0, 0, 1.0}, -Eigen::Vector3d::UnitY()));
+      StereoFrame f =
+          renderFrame(scene, qvgaCamera(),
+                      sim::lookAt({0.05 * i, 0, 0}, {0, 0, 1.0}, -Eigen::Vector3d::UnitY()));
       f.timestamp_s = 0.1 * i;  // starts at 0: the writer's offset keeps it away from "latest"
       ASSERT_TRUE(writer->write(f, 128.0f, &error)) << error;
       frames.push_back(f);
@@ -145,20 +153,26 @@ TEST(StereoBagWriter, WritesWhatBagSequenceReads) {
     StereoFrame f;
     ASSERT_TRUE(seq->load(i, &f, &error)) << error;
     EXPECT_NEAR(f.timestamp_s, 1.0 + frames[i].timestamp_s, 1e-6);
-    EXPECT_LT((f.T_world_camera.matrix() - frames[i].T_world_camera.matrix()).cwiseAbs().maxCoeff(), 1e-9);
+    EXPECT_LT((f.T_world_camera.matrix() - frames[i].T_world_camera.matrix()).cwiseAbs().maxCoeff(),
+              1e-9);
     EXPECT_EQ(cv::norm(f.disparity_px, frames[i].disparity_px, cv::NORM_INF), 0.0);
   }
   fs::remove(path);
 }
 
 TEST(MessageConversions, RejectsInconsistentMessages) {
-  const StereoFrame f = renderFrame(sim::AnalyticScene(), qvgaCamera(), Eigen::Isometry3d::Identity());
+  const StereoFrame f =
+      renderFrame(sim::AnalyticScene(), qvgaCamera(), Eigen::Isometry3d::Identity());
   const BagMessages good = toMessages(f, ros::Time(1.0));
   StereoFrame out;
   std::string error;
-  ASSERT_TRUE(toStereoFrame(good.disparity, good.image, good.info, Eigen::Isometry3d::Identity(), &out, &error)) << error;
+  ASSERT_TRUE(toStereoFrame(good.disparity, good.image, good.info, Eigen::Isometry3d::Identity(),
+                            &out, &error))
+      << error;
   auto expectError = [&](BagMessages m, const char* fragment) {
-    EXPECT_FALSE(toStereoFrame(m.disparity, m.image, m.info, Eigen::Isometry3d::Identity(), &out, &error)) << fragment;
+    EXPECT_FALSE(
+        toStereoFrame(m.disparity, m.image, m.info, Eigen::Isometry3d::Identity(), &out, &error))
+        << fragment;
     EXPECT_NE(error.find(fragment), std::string::npos) << error;
   };
   BagMessages m = good;

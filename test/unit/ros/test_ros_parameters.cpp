@@ -41,34 +41,59 @@ TEST(NodeParameterRegistry, DefaultsAreNodeConfigsAndValid) {
   // Every field of NodeConfig has its one definition (drop_oldest is queue_policy).
   std::vector<std::string> names;
   for (const ParameterSpec& spec : nodeParameterSpecs()) names.push_back(spec.name);
-  EXPECT_EQ(names, (std::vector<std::string>{"world_frame", "queue_size", "queue_policy", "approximate_sync",
-                                             "sync_queue_size", "tf_timeout_s", "max_stamp_ahead_s",
-                                             "mesh_publish_rate_hz", "publish_markers", "publish_path",
-                                             "publish_frustum", "frustum_depth_m", "publish_block_bounds",
-                                             "mesh_encoding", "loop_closure_max_frames", "trajectory_frame",
-                                             "planning_publish_rate_hz", "esdf_slice_height_m",
-                                             "planning_max_box_cells", "planning_max_query_points"}));
+  EXPECT_EQ(names, (std::vector<std::string>{"world_frame",
+                                             "queue_size",
+                                             "queue_policy",
+                                             "approximate_sync",
+                                             "sync_queue_size",
+                                             "tf_timeout_s",
+                                             "max_stamp_ahead_s",
+                                             "mesh_publish_rate_hz",
+                                             "publish_markers",
+                                             "publish_path",
+                                             "publish_frustum",
+                                             "frustum_depth_m",
+                                             "publish_block_bounds",
+                                             "mesh_encoding",
+                                             "loop_closure_max_frames",
+                                             "trajectory_frame",
+                                             "planning_publish_rate_hz",
+                                             "esdf_slice_height_m",
+                                             "planning_max_box_cells",
+                                             "planning_max_query_points"}));
   for (const ParameterSpec& spec : nodeParameterSpecs()) {
     EXPECT_FALSE(spec.description.empty()) << spec.name;
     EXPECT_FALSE(spec.range.empty()) << spec.name;
     // The default reads back through the setter unchanged.
     NodeConfig parsed;
     std::string error;
-    ASSERT_TRUE(setNodeParameter(&parsed, spec.name, getNodeParameter(defaults, spec.name), &error)) << error;
-    EXPECT_EQ(getNodeParameter(parsed, spec.name), getNodeParameter(defaults, spec.name)) << spec.name;
+    ASSERT_TRUE(setNodeParameter(&parsed, spec.name, getNodeParameter(defaults, spec.name), &error))
+        << error;
+    EXPECT_EQ(getNodeParameter(parsed, spec.name), getNodeParameter(defaults, spec.name))
+        << spec.name;
   }
 }
 
 TEST(NodeParameterRegistry, SetsEveryTypeIntoTheFieldsTheNodeletReads) {
   NodeConfig c;
   std::string error;
-  for (const auto& [name, value] : std::vector<std::pair<std::string, std::string>>{
-           {"world_frame", "map"}, {"queue_size", "12"}, {"queue_policy", "drop_newest"},
-           {"approximate_sync", "true"}, {"sync_queue_size", "3"}, {"tf_timeout_s", "1.5"},
-           {"max_stamp_ahead_s", "0"}, {"mesh_publish_rate_hz", "0.5"}, {"publish_markers", "false"},
-           {"publish_path", "0"}, {"publish_frustum", "false"}, {"frustum_depth_m", "2.5"},
-           {"publish_block_bounds", "true"}, {"mesh_encoding", "compact"}, {"loop_closure_max_frames", "0"},
-           {"trajectory_frame", "base_link"}}) {
+  for (const auto& [name, value] :
+       std::vector<std::pair<std::string, std::string>>{{"world_frame", "map"},
+                                                        {"queue_size", "12"},
+                                                        {"queue_policy", "drop_newest"},
+                                                        {"approximate_sync", "true"},
+                                                        {"sync_queue_size", "3"},
+                                                        {"tf_timeout_s", "1.5"},
+                                                        {"max_stamp_ahead_s", "0"},
+                                                        {"mesh_publish_rate_hz", "0.5"},
+                                                        {"publish_markers", "false"},
+                                                        {"publish_path", "0"},
+                                                        {"publish_frustum", "false"},
+                                                        {"frustum_depth_m", "2.5"},
+                                                        {"publish_block_bounds", "true"},
+                                                        {"mesh_encoding", "compact"},
+                                                        {"loop_closure_max_frames", "0"},
+                                                        {"trajectory_frame", "base_link"}}) {
     ASSERT_TRUE(setNodeParameter(&c, name, value, &error)) << name << ": " << error;
   }
   EXPECT_EQ(c.world_frame, "map");
@@ -101,16 +126,23 @@ TEST(NodeParameterRegistry, InvalidValuesAreRefusedNamingParameterRangeAndUnit) 
       {"queue_size", "-3", "parameter 'queue_size' = -3 is out of range [1, 1000] frames"},
       {"queue_size", "0", "parameter 'queue_size' = 0 is out of range [1, 1000] frames"},
       {"queue_size", "2.5", "parameter 'queue_size': '2.5' is not an integer"},
-      {"queue_policy", "drop_all", "parameter 'queue_policy': 'drop_all' is not one of drop_oldest | drop_newest"},
-      {"approximate_sync", "sometimes", "parameter 'approximate_sync': 'sometimes' is not true or false"},
-      {"sync_queue_size", "1001", "parameter 'sync_queue_size' = 1001 is out of range [1, 1000] messages"},
+      {"queue_policy", "drop_all",
+       "parameter 'queue_policy': 'drop_all' is not one of drop_oldest | drop_newest"},
+      {"approximate_sync", "sometimes",
+       "parameter 'approximate_sync': 'sometimes' is not true or false"},
+      {"sync_queue_size", "1001",
+       "parameter 'sync_queue_size' = 1001 is out of range [1, 1000] messages"},
       {"tf_timeout_s", "-1", "parameter 'tf_timeout_s' = -1 is out of range [0, 10] s"},
       {"tf_timeout_s", "nan", "parameter 'tf_timeout_s': 'nan' is not a finite number"},
-      {"max_stamp_ahead_s", "2e6", "parameter 'max_stamp_ahead_s' = 2e6 is out of range [0, 1e+06] s"},
-      {"mesh_publish_rate_hz", "-2", "parameter 'mesh_publish_rate_hz' = -2 is out of range [0, 1000] Hz"},
+      {"max_stamp_ahead_s", "2e6",
+       "parameter 'max_stamp_ahead_s' = 2e6 is out of range [0, 1e+06] s"},
+      {"mesh_publish_rate_hz", "-2",
+       "parameter 'mesh_publish_rate_hz' = -2 is out of range [0, 1000] Hz"},
       {"frustum_depth_m", "0", "parameter 'frustum_depth_m' = 0 is out of range (0, 100] m"},
-      {"mesh_encoding", "float16", "parameter 'mesh_encoding': 'float16' is not one of float32 | compact"},
-      {"loop_closure_max_frames", "-1", "parameter 'loop_closure_max_frames' = -1 is out of range [0, 100000] frames"},
+      {"mesh_encoding", "float16",
+       "parameter 'mesh_encoding': 'float16' is not one of float32 | compact"},
+      {"loop_closure_max_frames", "-1",
+       "parameter 'loop_closure_max_frames' = -1 is out of range [0, 100000] frames"},
       {"world_frame", "", "parameter 'world_frame' must not be empty (a tf frame, not empty)"},
       {"publish_path", "yes", "parameter 'publish_path': 'yes' is not true or false"},
       {"queue_length", "5", "unknown parameter 'queue_length'"},
@@ -120,16 +152,18 @@ TEST(NodeParameterRegistry, InvalidValuesAreRefusedNamingParameterRangeAndUnit) 
     std::string error;
     EXPECT_FALSE(setNodeParameter(&config, c.name, c.value, &error)) << c.name << " = " << c.value;
     EXPECT_EQ(error, c.message);
-    EXPECT_EQ(getNodeParameter(config, c.name), getNodeParameter(NodeConfig{}, c.name)) << "a refused value changes nothing";
+    EXPECT_EQ(getNodeParameter(config, c.name), getNodeParameter(NodeConfig{}, c.name))
+        << "a refused value changes nothing";
   }
   NodeConfig bad;
   bad.queue_size = -1;
   bad.frustum_depth_m = 0.0;
   bad.world_frame.clear();
-  EXPECT_EQ(validateNodeConfig(bad), (std::vector<std::string>{
-                                         "parameter 'world_frame' must not be empty (a tf frame, not empty)",
-                                         "parameter 'queue_size' = -1 is out of range [1, 1000] frames",
-                                         "parameter 'frustum_depth_m' = 0 is out of range (0, 100] m"}));
+  EXPECT_EQ(
+      validateNodeConfig(bad),
+      (std::vector<std::string>{"parameter 'world_frame' must not be empty (a tf frame, not empty)",
+                                "parameter 'queue_size' = -1 is out of range [1, 1000] frames",
+                                "parameter 'frustum_depth_m' = 0 is out of range (0, 100] m"}));
 }
 
 // loadParameters() reads both registries from one private namespace: a name in both would be
@@ -137,7 +171,8 @@ TEST(NodeParameterRegistry, InvalidValuesAreRefusedNamingParameterRangeAndUnit) 
 TEST(NodeParameterRegistry, NamesAreDistinctFromTheMappingParameters) {
   std::set<std::string> mapping;
   for (const ParameterSpec& spec : mapperParameterSpecs()) mapping.insert(spec.name);
-  for (const ParameterSpec& spec : nodeParameterSpecs()) EXPECT_EQ(mapping.count(spec.name), 0u) << spec.name;
+  for (const ParameterSpec& spec : nodeParameterSpecs())
+    EXPECT_EQ(mapping.count(spec.name), 0u) << spec.name;
 }
 
 // A launch file's <arg> named after a node parameter (world_frame in fusion.launch and
@@ -154,7 +189,8 @@ TEST(NodeParameterRegistry, LaunchArgumentsDefaultToTheRegistryDefaults) {
       const std::string name = (*it)[1];
       for (const ParameterSpec& spec : nodeParameterSpecs()) {
         if (spec.name != name) continue;
-        EXPECT_EQ((*it)[2].str(), getNodeParameter(defaults, name)) << launch << ": <arg name=\"" << name << "\">";
+        EXPECT_EQ((*it)[2].str(), getNodeParameter(defaults, name))
+            << launch << ": <arg name=\"" << name << "\">";
         ++checked;
       }
     }
@@ -163,5 +199,6 @@ TEST(NodeParameterRegistry, LaunchArgumentsDefaultToTheRegistryDefaults) {
   const std::string yaml = readFile(kSourceDir + "/config/default.yaml");
   ASSERT_FALSE(yaml.empty());
   for (const ParameterSpec& spec : nodeParameterSpecs())
-    EXPECT_EQ(yaml.find("\n" + spec.name + ":"), std::string::npos) << spec.name << " in config/default.yaml";
+    EXPECT_EQ(yaml.find("\n" + spec.name + ":"), std::string::npos)
+        << spec.name << " in config/default.yaml";
 }

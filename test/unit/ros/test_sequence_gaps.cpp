@@ -10,7 +10,8 @@ TEST(SequenceGaps, CountsTheNumbersSkippedFromTheFirstMessageOn) {
   EXPECT_EQ(gaps.next(3), 2u) << "1 and 2 were lost right after the first";
   EXPECT_EQ(gaps.next(4), 0u);
   EXPECT_EQ(gaps.next(14), 9u);
-  EXPECT_EQ(gaps.next(15 + SequenceGaps::kMaxGap), SequenceGaps::kMaxGap) << "the largest gap still counted";
+  EXPECT_EQ(gaps.next(15 + SequenceGaps::kMaxGap), SequenceGaps::kMaxGap)
+      << "the largest gap still counted";
 }
 
 TEST(SequenceGaps, RepeatsRestartsForeignNumbersAndUnnumberedBagsCountNothing) {

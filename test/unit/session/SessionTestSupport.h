@@ -13,16 +13,19 @@ namespace stereo_fusion::test {
 
 constexpr int kFrames = 8;
 
-/// Odometry's view of pose `T_true` at frame i: 0.5° of yaw about the first camera and 1 cm per frame.
+/// Odometry's view of pose `T_true` at frame i: 0.5° of yaw about the first camera and 1 cm per
+/// frame.
 inline Eigen::Isometry3d drifted(int i, const Eigen::Isometry3d& T_true) {
   const Eigen::Vector3d pivot = floorAndSphereView(0).translation();
   Eigen::Isometry3d D = Eigen::Isometry3d::Identity();
-  D.linear() = Eigen::AngleAxisd(0.5 * i * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  D.linear() =
+      Eigen::AngleAxisd(0.5 * i * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
   D.translation() = pivot - D.linear() * pivot + Eigen::Vector3d(0.01 * i, 0.0, 0.0);
   return D * T_true;
 }
 
-/// Frame i of floorAndSphere() rendered from the true pose, carrying the drifted one, stamped 1 + i.
+/// Frame i of floorAndSphere() rendered from the true pose, carrying the drifted one, stamped 1 +
+/// i.
 inline StereoFrame driftingFrame(int i) {
   StereoFrame f = renderFrame(floorAndSphere(), qvgaCamera(), floorAndSphereView(i), 0.2, i);
   f.timestamp_s = 1.0 + i;
@@ -62,8 +65,10 @@ inline Edit clearEdit(const MapRegion& region, uint64_t ticket, double stamp_s) 
 }
 
 /// The map a correction re-fuses from `timeline`'s snapshot, meshed.
-inline std::unique_ptr<Mapper> refuseSnapshot(const MapperConfig& config, const EditTimeline& timeline,
-                                              const PoseCorrection& correction, RefusionProgress* progress = nullptr) {
+inline std::unique_ptr<Mapper> refuseSnapshot(const MapperConfig& config,
+                                              const EditTimeline& timeline,
+                                              const PoseCorrection& correction,
+                                              RefusionProgress* progress = nullptr) {
   EditTimeline::Snapshot snapshot = timeline.snapshot();
   std::string error;
   std::unique_ptr<Mapper> mapper = mapperFromBase(config, snapshot.base_bytes, &error);
@@ -71,7 +76,8 @@ inline std::unique_ptr<Mapper> refuseSnapshot(const MapperConfig& config, const 
   if (!mapper) return mapper;
   EditReplay replay(snapshot.base_pending);
   RefusionProgress local;
-  EXPECT_EQ(replayEdits(snapshot.edits, correction, mapper.get(), &replay, {}, progress ? progress : &local, &error),
+  EXPECT_EQ(replayEdits(snapshot.edits, correction, mapper.get(), &replay, {},
+                        progress ? progress : &local, &error),
             RefusionStatus::kDone)
       << error;
   mapper->updateMesh();

@@ -30,7 +30,8 @@ TEST(EditTimeline, RefusingTheKeptFramesEqualsFusingThemAtTheirCorrectedPoses) {
   const PoseCorrection correction(timeline.originalPoses(), keyframes(), frames.back().timestamp_s);
   ASSERT_EQ(correction.corrections().size(), 4u);
   for (int i : {0, 3, 6, 7})  // the keyframes land on their true poses
-    EXPECT_TRUE(correction.corrected(frames[i].timestamp_s, frames[i].T_world_camera).isApprox(floorAndSphereView(i), 1e-9));
+    EXPECT_TRUE(correction.corrected(frames[i].timestamp_s, frames[i].T_world_camera)
+                    .isApprox(floorAndSphereView(i), 1e-9));
   double shift_m = 0, rotation_deg = 0;
   correctionMagnitude(timeline.originalPoses(), correction, &shift_m, &rotation_deg);
   EXPECT_NEAR(rotation_deg, 3.5, 1e-6);  // frame 7: 0.5° per frame
@@ -47,7 +48,8 @@ TEST(EditTimeline, RefusingTheKeptFramesEqualsFusingThemAtTheirCorrectedPoses) {
     ASSERT_TRUE(reference.integrate(f).accepted);
   }
   EXPECT_TRUE(snapshot(refused->map()) == snapshot(reference.map()));
-  EXPECT_FALSE(snapshot(refused->map()) == snapshot(live.map())) << "the correction must move the map";
+  EXPECT_FALSE(snapshot(refused->map()) == snapshot(live.map()))
+      << "the correction must move the map";
   EXPECT_TRUE(triangleSets(refused->mesh()) == triangleSets(reference.mesh()));
   expectMeshEqualsRebuild(*refused);
   // The planning layer follows: the same cells, states and distances as the reference's.
@@ -100,8 +102,8 @@ TEST(EditTimeline, ACorrectionKnownWhenAFrameLeavesIsAppliedToIt) {
   for (int i = 0; i < 3; ++i) frames.push_back(driftingFrame(i));
   timeline.append(frameEdit(frames[0], 1));
   timeline.append(frameEdit(frames[1], 2));
-  const PoseCorrection correction(timeline.originalPoses(), {{1.0, floorAndSphereView(0)}, {2.0, floorAndSphereView(1)}},
-                                  2.0);
+  const PoseCorrection correction(
+      timeline.originalPoses(), {{1.0, floorAndSphereView(0)}, {2.0, floorAndSphereView(1)}}, 2.0);
   timeline.setCorrection(correction);
   timeline.append(frameEdit(frames[2], 3));  // frame 0 leaves, at its corrected (true) pose
   Mapper reference(config);
@@ -109,7 +111,8 @@ TEST(EditTimeline, ACorrectionKnownWhenAFrameLeavesIsAppliedToIt) {
   first.T_world_camera = correction.corrected(first.timestamp_s, first.T_world_camera);
   ASSERT_TRUE(reference.integrate(first).accepted);
   std::string error;
-  const std::unique_ptr<Mapper> base = mapperFromBase(config, timeline.snapshot().base_bytes, &error);
+  const std::unique_ptr<Mapper> base =
+      mapperFromBase(config, timeline.snapshot().base_bytes, &error);
   ASSERT_TRUE(base) << error;
   EXPECT_TRUE(snapshot(base->map()) == snapshot(reference.map()));
 }
@@ -127,8 +130,9 @@ TEST(EditTimeline, NothingIsKeptWithZeroFramesAndACancelledReplayStopsAtOnce) {
   EditReplay replay;
   RefusionProgress progress;
   std::string error;
-  EXPECT_EQ(replayEdits({frameEdit(driftingFrame(0), 1)}, PoseCorrection(), &map, &replay, [] { return true; },
-                        &progress, &error),
+  EXPECT_EQ(replayEdits(
+                {frameEdit(driftingFrame(0), 1)}, PoseCorrection(), &map, &replay,
+                [] { return true; }, &progress, &error),
             RefusionStatus::kCancelled);
   EXPECT_EQ(progress.frames, 0u);
   EXPECT_EQ(map.map().blockCount(), 0u);
@@ -139,7 +143,8 @@ TEST(EditReplay, AFrameFromBeforeAClearIsClearedAgainAndTheClearSettlesOnANewerF
   const MapRegion ball = MapRegion::sphere({0.05, 0.1, 1.2}, 0.3);
   Mapper map(config);
   EditReplay replay;
-  ASSERT_TRUE(replay.frame(&map, driftingFrame(0), frameEdit(driftingFrame(0), 1), MeshTiming::kNow).result.accepted);
+  ASSERT_TRUE(replay.frame(&map, driftingFrame(0), frameEdit(driftingFrame(0), 1), MeshTiming::kNow)
+                  .result.accepted);
   ASSERT_GT(replay.clear(&map, clearEdit(ball, 3, 10.0), MeshTiming::kNow).voxels_cleared, 0u);
   EXPECT_EQ(replay.pending().size(), 1u);
   const MapSnapshot cleared = snapshot(map.map());
@@ -147,19 +152,24 @@ TEST(EditReplay, AFrameFromBeforeAClearIsClearedAgainAndTheClearSettlesOnANewerF
   const StereoFrame late = driftingFrame(1);  // stamped 2 s, before the clear's 10 s
   EXPECT_TRUE(replay.frame(&map, late, frameEdit(late, 2), MeshTiming::kNow).recleared);
   EXPECT_EQ(replay.pending().size(), 1u);
-  // A frame that arrived after the clear but was taken before it (stamp 3 s < 10 s): cleared again too.
+  // A frame that arrived after the clear but was taken before it (stamp 3 s < 10 s): cleared again
+  // too.
   const StereoFrame taken_before = driftingFrame(2);
-  EXPECT_TRUE(replay.frame(&map, taken_before, frameEdit(taken_before, 4), MeshTiming::kNow).recleared);
+  EXPECT_TRUE(
+      replay.frame(&map, taken_before, frameEdit(taken_before, 4), MeshTiming::kNow).recleared);
   // A frame that arrived after it and was taken after it refills the ball, and settles the clear.
   StereoFrame newer = driftingFrame(3);
   newer.timestamp_s = 11.0;
-  const EditReplay::FrameApplied refill = replay.frame(&map, newer, frameEdit(newer, 5), MeshTiming::kNow);
+  const EditReplay::FrameApplied refill =
+      replay.frame(&map, newer, frameEdit(newer, 5), MeshTiming::kNow);
   EXPECT_TRUE(refill.result.accepted);
   EXPECT_FALSE(refill.recleared);
   EXPECT_TRUE(replay.pending().empty());
   EXPECT_FALSE(snapshot(map.map()) == cleared);
   // An invalid region is refused by the map and not kept.
-  EXPECT_FALSE(replay.clear(&map, clearEdit(MapRegion::sphere({0, 0, 0}, -1.0), 6, 12.0), MeshTiming::kNow).accepted);
+  EXPECT_FALSE(
+      replay.clear(&map, clearEdit(MapRegion::sphere({0, 0, 0}, -1.0), 6, 12.0), MeshTiming::kNow)
+          .accepted);
   EXPECT_TRUE(replay.pending().empty());
 }
 
@@ -184,7 +194,8 @@ TEST(EditTimeline, AClearComesBackInTheOrderTheLiveMapSawIt) {
   }
   ASSERT_EQ(timeline.clears(), 1u);
   // Re-fused at the original poses, the replay is the live map, bit for bit.
-  EXPECT_TRUE(snapshot(refuseSnapshot(config, timeline, PoseCorrection())->map()) == snapshot(live.map()));
+  EXPECT_TRUE(snapshot(refuseSnapshot(config, timeline, PoseCorrection())->map()) ==
+              snapshot(live.map()));
   const PoseCorrection correction(timeline.originalPoses(), keyframes(), frames.back().timestamp_s);
   const std::unique_ptr<Mapper> refused = refuseSnapshot(config, timeline, correction);
   Mapper reference(config);
@@ -197,7 +208,8 @@ TEST(EditTimeline, AClearComesBackInTheOrderTheLiveMapSawIt) {
     ASSERT_TRUE(reference.integrate(f).accepted);
   }
   EXPECT_TRUE(snapshot(refused->map()) == snapshot(reference.map()));
-  Mapper forgetful(config);  // without the clear the maps differ: the test sees a replay that drops it
+  Mapper forgetful(
+      config);  // without the clear the maps differ: the test sees a replay that drops it
   for (StereoFrame f : frames) {
     f.T_world_camera = correction.corrected(f.timestamp_s, f.T_world_camera);
     ASSERT_TRUE(forgetful.integrate(f).accepted);

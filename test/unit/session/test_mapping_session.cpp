@@ -40,22 +40,27 @@ MapSnapshot mapOf(MappingSession& session) {
 
 TEST(MappingSession, AFrameThatArrivedBeforeAClearDoesNotRefillIt) {
   MappingSession session(sessionTestConfig(), keepAll(false));
-  ASSERT_EQ(session.fuse(driftingFrame(0), session.arrive(), MeshTiming::kNow).reason, RejectReason::kNone);
+  ASSERT_EQ(session.fuse(driftingFrame(0), session.arrive(), MeshTiming::kNow).reason,
+            RejectReason::kNone);
   const FrameTicket waited = session.arrive();  // frame 1 arrives, waits for tf...
   const MappingSession::ClearOutcome cleared = session.clear(kBall, 0.5);  // stamped before frame 1
   ASSERT_TRUE(cleared.success) << cleared.message;
   EXPECT_GT(cleared.result.voxels_cleared, 0u);
-  const MappingSession::FrameOutcome late = session.fuse(driftingFrame(1), waited, MeshTiming::kNow);
+  const MappingSession::FrameOutcome late =
+      session.fuse(driftingFrame(1), waited, MeshTiming::kNow);
   EXPECT_EQ(late.reason, RejectReason::kNone);
-  EXPECT_TRUE(late.recleared) << "it arrived before the clear: the region is cleared again after it";
+  EXPECT_TRUE(late.recleared)
+      << "it arrived before the clear: the region is cleared again after it";
   EXPECT_EQ(session.framesRecleared(), 1u);
   // A frame that arrives after the clear, stamped after it, refills the region.
-  const MappingSession::FrameOutcome newer = session.fuse(driftingFrame(2), session.arrive(), MeshTiming::kNow);
+  const MappingSession::FrameOutcome newer =
+      session.fuse(driftingFrame(2), session.arrive(), MeshTiming::kNow);
   EXPECT_FALSE(newer.recleared);
   EXPECT_EQ(session.kept().pending_clears, 0u) << "the clear is settled";
   // An invalid region is refused and changes nothing.
   const MapSnapshot before = mapOf(session);
-  const MappingSession::ClearOutcome invalid = session.clear(MapRegion::sphere({0, 0, 0}, -1.0), 9.0);
+  const MappingSession::ClearOutcome invalid =
+      session.clear(MapRegion::sphere({0, 0, 0}, -1.0), 9.0);
   EXPECT_FALSE(invalid.success);
   EXPECT_NE(invalid.message.find("unchanged"), std::string::npos) << invalid.message;
   EXPECT_TRUE(mapOf(session) == before);
@@ -67,8 +72,10 @@ TEST(MappingSession, FramesFromBeforeAResetOrALoadAreSupersededAndCounted) {
   MappingSession session(config, keepAll(false));
   std::vector<MapChange> changes;
   session.setMapReplacedListener([&](const MapReplaced& r) { changes.push_back(r.change); });
-  ASSERT_EQ(session.fuse(driftingFrame(0), session.arrive(), MeshTiming::kNow).reason, RejectReason::kNone);
-  const std::string path = (std::filesystem::temp_directory_path() / "session_epoch_test.sfmap").string();
+  ASSERT_EQ(session.fuse(driftingFrame(0), session.arrive(), MeshTiming::kNow).reason,
+            RejectReason::kNone);
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "session_epoch_test.sfmap").string();
   std::string error;
   ASSERT_TRUE(session.withMapper([&](Mapper& m) { return m.saveMap(path, &error); })) << error;
   const MapSnapshot saved = mapOf(session);
@@ -77,7 +84,8 @@ TEST(MappingSession, FramesFromBeforeAResetOrALoadAreSupersededAndCounted) {
   EXPECT_TRUE(session.isCurrent(before_reset));
   session.reset();
   EXPECT_FALSE(session.isCurrent(before_reset));
-  EXPECT_EQ(session.fuse(driftingFrame(1), before_reset, MeshTiming::kNow).reason, RejectReason::kSuperseded);
+  EXPECT_EQ(session.fuse(driftingFrame(1), before_reset, MeshTiming::kNow).reason,
+            RejectReason::kSuperseded);
   EXPECT_EQ(session.drops()[RejectReason::kSuperseded], 1u);
   EXPECT_EQ(session.withMapper([](Mapper& m) { return m.map().blockCount(); }), 0u);
   EXPECT_EQ(session.kept().frames, 0u);
@@ -86,7 +94,8 @@ TEST(MappingSession, FramesFromBeforeAResetOrALoadAreSupersededAndCounted) {
   const MappingSession::LoadOutcome loaded = session.load(path);
   ASSERT_TRUE(loaded.success) << loaded.message;
   EXPECT_TRUE(mapOf(session) == saved);
-  EXPECT_EQ(session.fuse(driftingFrame(2), before_load, MeshTiming::kNow).reason, RejectReason::kSuperseded);
+  EXPECT_EQ(session.fuse(driftingFrame(2), before_load, MeshTiming::kNow).reason,
+            RejectReason::kSuperseded);
   EXPECT_EQ(session.drops()[RejectReason::kSuperseded], 2u);
   // A broken file leaves the map as it was.
   const MappingSession::LoadOutcome missing = session.load(path + ".missing");
@@ -111,7 +120,8 @@ TEST(MappingSession, ACorrectionSwapsInTheMapOfTheKeptFramesAtTheirCorrectedPose
   std::vector<StereoFrame> frames;
   for (int i = 0; i < kFrames; ++i) {
     frames.push_back(driftingFrame(i));
-    ASSERT_EQ(session.fuse(frames.back(), session.arrive(), MeshTiming::kNow).reason, RejectReason::kNone);
+    ASSERT_EQ(session.fuse(frames.back(), session.arrive(), MeshTiming::kNow).reason,
+              RejectReason::kNone);
   }
   const std::optional<CorrectionReport> report = session.submitTrajectory(keyframes());
   ASSERT_TRUE(report);
@@ -128,14 +138,17 @@ TEST(MappingSession, ACorrectionSwapsInTheMapOfTheKeptFramesAtTheirCorrectedPose
     ASSERT_TRUE(reference.integrate(f).accepted);
   }
   EXPECT_TRUE(mapOf(session) == snapshot(reference.map()));
-  session.withMapper([&](Mapper& m) { EXPECT_TRUE(triangleSets(m.mesh()) == triangleSets(reference.mesh())); });
+  session.withMapper(
+      [&](Mapper& m) { EXPECT_TRUE(triangleSets(m.mesh()) == triangleSets(reference.mesh())); });
   EXPECT_EQ(session.trajectories()[TrajectoryOutcome::kApplied], 1u);
   // The same trajectory again moves nothing: taken without re-fusion, counted as such.
   const std::optional<CorrectionReport> again = session.submitTrajectory(keyframes());
   ASSERT_TRUE(again);
-  EXPECT_EQ(again->outcome, TrajectoryOutcome::kApplied) << "poses are corrected from the originals";
+  EXPECT_EQ(again->outcome, TrajectoryOutcome::kApplied)
+      << "poses are corrected from the originals";
   // Stamps near no kept frame: rejected, counted.
-  const std::optional<CorrectionReport> far = session.submitTrajectory({{500.0, Eigen::Isometry3d::Identity()}});
+  const std::optional<CorrectionReport> far =
+      session.submitTrajectory({{500.0, Eigen::Isometry3d::Identity()}});
   ASSERT_TRUE(far);
   EXPECT_EQ(far->outcome, TrajectoryOutcome::kRejectedNoMatch);
   EXPECT_EQ(session.trajectories().rejected(), 1u);
@@ -144,14 +157,20 @@ TEST(MappingSession, ACorrectionSwapsInTheMapOfTheKeptFramesAtTheirCorrectedPose
 TEST(MappingSession, EveryTrajectoryIsAccountedForWhenTheyComeFasterThanTheyAreApplied) {
   MappingSession session(sessionTestConfig(), keepAll(true));
   for (int i = 0; i < kFrames; ++i)
-    ASSERT_EQ(session.fuse(driftingFrame(i), session.arrive(), MeshTiming::kDeferred).reason, RejectReason::kNone);
+    ASSERT_EQ(session.fuse(driftingFrame(i), session.arrive(), MeshTiming::kDeferred).reason,
+              RejectReason::kNone);
   // Three back to back: the newest wins; the others are superseded, waiting or while fused
   // again, and counted either way (a replaced waiting trajectory used to vanish uncounted).
   for (int k = 0; k < 3; ++k) EXPECT_FALSE(session.submitTrajectory(keyframes()).has_value());
   const TrajectoryCounters& t = session.trajectories();
-  ASSERT_TRUE(waitFor([&] {
-    return t[TrajectoryOutcome::kApplied] + t[TrajectoryOutcome::kSuperseded] == 3 && !session.correcting();
-  }, 120.0)) << t[TrajectoryOutcome::kApplied] << " applied, " << t[TrajectoryOutcome::kSuperseded] << " superseded";
+  ASSERT_TRUE(waitFor(
+      [&] {
+        return t[TrajectoryOutcome::kApplied] + t[TrajectoryOutcome::kSuperseded] == 3 &&
+               !session.correcting();
+      },
+      120.0))
+      << t[TrajectoryOutcome::kApplied] << " applied, " << t[TrajectoryOutcome::kSuperseded]
+      << " superseded";
   EXPECT_GE(t[TrajectoryOutcome::kApplied], 1u);
   // Nothing kept: refused at once.
   MappingSession none(sessionTestConfig(), SessionConfig{});
@@ -163,14 +182,19 @@ TEST(MappingSession, EveryTrajectoryIsAccountedForWhenTheyComeFasterThanTheyAreA
 TEST(MappingSession, AResetDropsAWaitingTrajectoryAndCountsIt) {
   MappingSession session(sessionTestConfig(), keepAll(true));
   for (int i = 0; i < kFrames; ++i)
-    ASSERT_EQ(session.fuse(driftingFrame(i), session.arrive(), MeshTiming::kDeferred).reason, RejectReason::kNone);
+    ASSERT_EQ(session.fuse(driftingFrame(i), session.arrive(), MeshTiming::kDeferred).reason,
+              RejectReason::kNone);
   session.submitTrajectory(keyframes());
   session.reset();
   const TrajectoryCounters& t = session.trajectories();
-  ASSERT_TRUE(waitFor([&] {
-    return !session.correcting() && t[TrajectoryOutcome::kApplied] + t[TrajectoryOutcome::kDroppedByReset] +
-                                            t[TrajectoryOutcome::kSuperseded] == 1;
-  }, 60.0));
+  ASSERT_TRUE(waitFor(
+      [&] {
+        return !session.correcting() && t[TrajectoryOutcome::kApplied] +
+                                                t[TrajectoryOutcome::kDroppedByReset] +
+                                                t[TrajectoryOutcome::kSuperseded] ==
+                                            1;
+      },
+      60.0));
   // Whatever it reached, the map after the reset holds nothing from before it.
   ASSERT_TRUE(waitFor([&] { return !session.correcting(); }, 60.0));
   if (t[TrajectoryOutcome::kApplied] == 0)
@@ -195,9 +219,11 @@ TEST(MappingSession, ACatchUpReplaysAClearAndTheFramesAfterItInTheirOrder) {
   std::unique_ptr<Mapper> rebuilt = mapperFromBase(config, snap.base_bytes, &error);
   EditReplay replay(snap.base_pending);
   RefusionProgress progress;
-  ASSERT_EQ(replayEdits(snap.edits, PoseCorrection(), rebuilt.get(), &replay, {}, &progress, &error), RefusionStatus::kDone);
-  ASSERT_EQ(replayEdits(timeline.editsFrom(snap.end_position), PoseCorrection(), rebuilt.get(), &replay, {}, &progress,
-                        &error),
+  ASSERT_EQ(
+      replayEdits(snap.edits, PoseCorrection(), rebuilt.get(), &replay, {}, &progress, &error),
+      RefusionStatus::kDone);
+  ASSERT_EQ(replayEdits(timeline.editsFrom(snap.end_position), PoseCorrection(), rebuilt.get(),
+                        &replay, {}, &progress, &error),
             RefusionStatus::kDone);
   EXPECT_EQ(progress.frames, static_cast<size_t>(kFrames));
   Mapper live(config);
@@ -207,7 +233,8 @@ TEST(MappingSession, ACatchUpReplaysAClearAndTheFramesAfterItInTheirOrder) {
   }
   EXPECT_TRUE(snapshot(rebuilt->map()) == snapshot(live.map()));
   Mapper clears_last(config);  // what the catch-up did before: the frames, then the clears
-  for (int i = 0; i < kFrames; ++i) ASSERT_TRUE(clears_last.integrate(frames[i], MeshTiming::kDeferred).accepted);
+  for (int i = 0; i < kFrames; ++i)
+    ASSERT_TRUE(clears_last.integrate(frames[i], MeshTiming::kDeferred).accepted);
   ASSERT_TRUE(clears_last.clearRegion(kBall, MeshTiming::kDeferred).accepted);
   EXPECT_FALSE(snapshot(clears_last.map()) == snapshot(live.map()));
 }
@@ -218,15 +245,18 @@ TEST(MappingSession, NoClearIsLostToABoundAndTooManyPendingClearsAreRefusedNotDr
   std::vector<StereoFrame> frames;
   for (int i = 0; i < 4; ++i) {
     frames.push_back(driftingFrame(i));
-    ASSERT_EQ(session.fuse(frames.back(), session.arrive(), MeshTiming::kDeferred).reason, RejectReason::kNone);
+    ASSERT_EQ(session.fuse(frames.back(), session.arrive(), MeshTiming::kDeferred).reason,
+              RejectReason::kNone);
   }
   // 300 clears (more than the old log's 256) of small balls along the floor, then four frames.
   std::vector<MapRegion> balls;
-  for (int k = 0; k < 300; ++k) balls.push_back(MapRegion::sphere({-0.6 + 0.004 * k, 0.3, 1.0 + 0.002 * k}, 0.05));
+  for (int k = 0; k < 300; ++k)
+    balls.push_back(MapRegion::sphere({-0.6 + 0.004 * k, 0.3, 1.0 + 0.002 * k}, 0.05));
   for (const MapRegion& ball : balls) ASSERT_TRUE(session.clear(ball, 4.5).success);
   for (int i = 4; i < kFrames; ++i) {
     frames.push_back(driftingFrame(i));
-    ASSERT_EQ(session.fuse(frames.back(), session.arrive(), MeshTiming::kDeferred).reason, RejectReason::kNone);
+    ASSERT_EQ(session.fuse(frames.back(), session.arrive(), MeshTiming::kDeferred).reason,
+              RejectReason::kNone);
   }
   EXPECT_EQ(session.kept().clears, 300u);
   const std::optional<CorrectionReport> report = session.submitTrajectory(keyframes());
@@ -237,7 +267,8 @@ TEST(MappingSession, NoClearIsLostToABoundAndTooManyPendingClearsAreRefusedNotDr
   Mapper reference(config);
   for (int i = 0; i < kFrames; ++i) {
     if (i == 4)
-      for (const MapRegion& ball : balls) ASSERT_TRUE(reference.clearRegion(ball, MeshTiming::kDeferred).accepted);
+      for (const MapRegion& ball : balls)
+        ASSERT_TRUE(reference.clearRegion(ball, MeshTiming::kDeferred).accepted);
     StereoFrame f = frames[i];
     f.T_world_camera = correction.corrected(f.timestamp_s, f.T_world_camera);
     ASSERT_TRUE(reference.integrate(f, MeshTiming::kDeferred).accepted);
@@ -247,7 +278,8 @@ TEST(MappingSession, NoClearIsLostToABoundAndTooManyPendingClearsAreRefusedNotDr
   // Clears a later frame may predate wait in the session: past kMaxPendingClears the next one
   // is refused (counted), never silently forgotten.
   MappingSession crowded(config, SessionConfig{});
-  ASSERT_EQ(crowded.fuse(driftingFrame(0), crowded.arrive(), MeshTiming::kDeferred).reason, RejectReason::kNone);
+  ASSERT_EQ(crowded.fuse(driftingFrame(0), crowded.arrive(), MeshTiming::kDeferred).reason,
+            RejectReason::kNone);
   crowded.arrive();  // a frame that arrived and never came: every clear stays pending
   for (size_t k = 0; k < MappingSession::kMaxPendingClears; ++k)
     ASSERT_TRUE(crowded.clear(MapRegion::sphere({0, 0, 5.0 + k}, 0.01), 1e9).success);
@@ -272,8 +304,9 @@ TEST(MappingSession, OfflineFramesAreReadAgainForACorrectionAndAnUnreadableOneLe
       *f = driftingFrame(i);
       return true;
     };
-    ASSERT_EQ(session.fuse(driftingFrame(i), session.arrive(), MeshTiming::kDeferred, reload).reason,
-              RejectReason::kNone);
+    ASSERT_EQ(
+        session.fuse(driftingFrame(i), session.arrive(), MeshTiming::kDeferred, reload).reason,
+        RejectReason::kNone);
   }
   EXPECT_EQ(session.kept().frames, static_cast<size_t>(kFrames));
   EXPECT_EQ(session.kept().bytes, 0u) << "offline, only stamps and poses are kept";
@@ -295,7 +328,8 @@ TEST(MappingSession, ARequestFindingTheMapBusyAnswersBusyInBoundedTimeAndChanges
   SessionConfig config = keepAll(false);
   config.max_request_wait_s = 0.2;
   MappingSession session(sessionTestConfig(), config);
-  ASSERT_EQ(session.fuse(driftingFrame(0), session.arrive(), MeshTiming::kNow).reason, RejectReason::kNone);
+  ASSERT_EQ(session.fuse(driftingFrame(0), session.arrive(), MeshTiming::kNow).reason,
+            RejectReason::kNone);
   const MapSnapshot before = mapOf(session);
   std::atomic<bool> holding{false}, release{false};
   std::thread holder([&] {
@@ -313,9 +347,11 @@ TEST(MappingSession, ARequestFindingTheMapBusyAnswersBusyInBoundedTimeAndChanges
   EXPECT_FALSE(session.load("/nonexistent.sfmap").success);
   EXPECT_FALSE(session.tryWithMapper([](Mapper&) {}));
   EXPECT_FALSE(session.tryStatus(0.05).has_value());
-  const double waited_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  EXPECT_LT(waited_s, 30.0) << "four requests of 0.2 s each";  // bounded, however loaded the machine
-  EXPECT_GE(waited_s, 0.6);  // each waited its bound, none gave up at once
+  const double waited_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_LT(waited_s, 30.0)
+      << "four requests of 0.2 s each";  // bounded, however loaded the machine
+  EXPECT_GE(waited_s, 0.6);              // each waited its bound, none gave up at once
   release = true;
   holder.join();
   EXPECT_TRUE(mapOf(session) == before);

@@ -29,7 +29,8 @@ TEST(AnalyticScene, RaycastsHitTheSurface) {
       ++hits;
       EXPECT_NEAR(p->signedDistance(o + t * dir), 0.0, 1e-7);
       // Nothing nearer along the ray is inside the solid.
-      for (double s = 0.01; s < t - 1e-3; s += 0.01) EXPECT_GT(p->signedDistance(o + s * dir), -1e-9);
+      for (double s = 0.01; s < t - 1e-3; s += 0.01)
+        EXPECT_GT(p->signedDistance(o + s * dir), -1e-9);
     }
     EXPECT_GT(hits, 50);
   }

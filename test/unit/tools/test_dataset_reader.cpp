@@ -34,24 +34,29 @@ void writeText(const fs::path& path, const std::string& text) {
 struct SmallSequence {
   fs::path dir;
   std::vector<StereoFrame> frames;
-  explicit SmallSequence(const std::string& name, int n = 3, bool with_right = false, bool with_disparity = true) {
+  explicit SmallSequence(const std::string& name, int n = 3, bool with_right = false,
+                         bool with_disparity = true) {
     dir = fs::path(testing::TempDir()) / ("stereo_fusion_" + name);
     fs::remove_all(dir);
     fs::create_directories(dir / "color");
     if (with_disparity) fs::create_directories(dir / "disparity");
     if (with_right) fs::create_directories(dir / "right");
     const StereoCamera cam = qvgaCamera();
-    writeText(dir / "calibration.yaml", "width: 320\nheight: 240\nfx: 262.5\nfy: 262.5\ncx: 159.5\ncy: 119.5\nbaseline: 0.1\n");
+    writeText(
+        dir / "calibration.yaml",
+        "width: 320\nheight: 240\nfx: 262.5\nfy: 262.5\ncx: 159.5\ncy: 119.5\nbaseline: 0.1\n");
     const sim::AnalyticScene scene = floorAndSphere();
     std::ofstream poses(dir / "poses.txt");
     poses.precision(17);
     poses << "# timestamp tx ty tz qx qy qz qw\n";
     for (int i = 0; i < n; ++i) {
-      const Eigen::Isometry3d T = sim::lookAt({-0.1 + 0.1 * i, -0.2, 0.0}, {0.05, 0.1, 1.2}, -Eigen::Vector3d::UnitY());
+      const Eigen::Isometry3d T =
+          sim::lookAt({-0.1 + 0.1 * i, -0.2, 0.0}, {0.05, 0.1, 1.2}, -Eigen::Vector3d::UnitY());
       StereoFrame f = renderFrame(scene, cam, T);
       const Eigen::Quaterniond q(T.linear());
-      poses << 0.1 * i << " " << T.translation().x() << " " << T.translation().y() << " " << T.translation().z()
-            << " " << q.x() << " " << q.y() << " " << q.z() << " " << q.w() << "\n";
+      poses << 0.1 * i << " " << T.translation().x() << " " << T.translation().y() << " "
+            << T.translation().z() << " " << q.x() << " " << q.y() << " " << q.z() << " " << q.w()
+            << "\n";
       cv::Mat bgr;
       cv::cvtColor(f.color, bgr, cv::COLOR_RGB2BGR);
       cv::imwrite((dir / "color" / frameName(i, ".png")).string(), bgr);
@@ -97,7 +102,9 @@ TEST(DatasetReader, RoundTripOfWrittenFolder) {
     StereoFrame f;
     ASSERT_TRUE(reader->load(i, &f, &error)) << error;
     EXPECT_DOUBLE_EQ(f.timestamp_s, 0.1 * i);
-    EXPECT_LT((f.T_world_camera.matrix() - seq.frames[i].T_world_camera.matrix()).cwiseAbs().maxCoeff(), 1e-9);
+    EXPECT_LT(
+        (f.T_world_camera.matrix() - seq.frames[i].T_world_camera.matrix()).cwiseAbs().maxCoeff(),
+        1e-9);
     EXPECT_EQ(cv::norm(f.disparity_px, seq.frames[i].disparity_px, cv::NORM_INF), 0.0);
     EXPECT_EQ(cv::norm(f.color, seq.frames[i].color, cv::NORM_INF), 0.0);  // RGB order kept
   }
@@ -140,12 +147,18 @@ TEST(DatasetReader, BadFoldersNameTheFileAndLine) {
   EXPECT_NE(openError(seq.dir).find("calibration.yaml: missing"), std::string::npos);
   writeText(calib, "width: 320\nheight: 240\nfx: 262.5\nfy: 262.5\ncx: 159.5\ncy: 119.5\n");
   EXPECT_NE(openError(seq.dir).find("missing key 'baseline'"), std::string::npos);
-  writeText(calib, "width: 320\nheight: 240\nfx: 262.5\nfy: 262.5\ncx: 159.5\ncy: 119.5\nbaseline: 0\n");
+  writeText(calib,
+            "width: 320\nheight: 240\nfx: 262.5\nfy: 262.5\ncx: 159.5\ncy: 119.5\nbaseline: 0\n");
   EXPECT_NE(openError(seq.dir).find("baseline"), std::string::npos);
-  writeText(calib, "width: 320\nheight: 240\nfx: abc\nfy: 262.5\ncx: 159.5\ncy: 119.5\nbaseline: 0.1\n");
-  EXPECT_NE(openError(seq.dir).find("calibration.yaml:3: 'fx' is not a number"), std::string::npos) << openError(seq.dir);
-  writeText(calib, "width: -1e10\nheight: 240\nfx: 262.5\nfy: 262.5\ncx: 159.5\ncy: 119.5\nbaseline: 0.1\n");
-  EXPECT_NE(openError(seq.dir).find("width and height must be whole pixel counts"), std::string::npos);
+  writeText(calib,
+            "width: 320\nheight: 240\nfx: abc\nfy: 262.5\ncx: 159.5\ncy: 119.5\nbaseline: 0.1\n");
+  EXPECT_NE(openError(seq.dir).find("calibration.yaml:3: 'fx' is not a number"), std::string::npos)
+      << openError(seq.dir);
+  writeText(
+      calib,
+      "width: -1e10\nheight: 240\nfx: 262.5\nfy: 262.5\ncx: 159.5\ncy: 119.5\nbaseline: 0.1\n");
+  EXPECT_NE(openError(seq.dir).find("width and height must be whole pixel counts"),
+            std::string::npos);
   writeText(calib, "width: [320\n");
   EXPECT_NE(openError(seq.dir).find("not valid YAML"), std::string::npos);
   writeText(calib, "%YAML:1.0\n" + good_calib);  // OpenCV FileStorage style is accepted
@@ -153,15 +166,19 @@ TEST(DatasetReader, BadFoldersNameTheFileAndLine) {
   EXPECT_TRUE(DatasetReader::open(seq.dir.string(), &error)) << error;
   writeText(calib, good_calib);
 
-  const std::string first_pose = good_poses.substr(0, good_poses.find('\n', good_poses.find('\n') + 1) + 1);
+  const std::string first_pose =
+      good_poses.substr(0, good_poses.find('\n', good_poses.find('\n') + 1) + 1);
   writeText(poses, first_pose);  // comment + 1 pose for 2 frames
-  EXPECT_NE(openError(seq.dir).find("1 poses for 2 frames"), std::string::npos) << openError(seq.dir);
+  EXPECT_NE(openError(seq.dir).find("1 poses for 2 frames"), std::string::npos)
+      << openError(seq.dir);
   writeText(poses, good_poses + "0.3 1 2 x 0 0 0 1\n");
-  EXPECT_NE(openError(seq.dir).find("poses.txt:4: expected 8 numbers"), std::string::npos) << openError(seq.dir);
+  EXPECT_NE(openError(seq.dir).find("poses.txt:4: expected 8 numbers"), std::string::npos)
+      << openError(seq.dir);
   // An unusable pose on a well-formed line costs its frame only: the sequence opens, that frame
   // does not load and says why, the others load.
-  for (const std::string& bad : {std::string("0.1 1 2 nan 0 0 0 1"), std::string("0.1 1 2 3 0 0 0 0"),
-                                 std::string("0.1 1 2 3 0 0 0.5 1")}) {
+  for (const std::string& bad :
+       {std::string("0.1 1 2 nan 0 0 0 1"), std::string("0.1 1 2 3 0 0 0 0"),
+        std::string("0.1 1 2 3 0 0 0.5 1")}) {
     writeText(poses, "0 1 2 3 0 0 0 1\n" + bad + "\n");
     std::string open_error;
     const std::optional<DatasetReader> reader = DatasetReader::open(seq.dir.string(), &open_error);
@@ -170,8 +187,10 @@ TEST(DatasetReader, BadFoldersNameTheFileAndLine) {
     std::string why;
     EXPECT_TRUE(reader->load(0, &frame, &why)) << why;
     EXPECT_FALSE(reader->load(1, &frame, &why)) << bad;
-    EXPECT_NE(why.find("frame 1: " + (seq.dir / "poses.txt").string() + ":2: "), std::string::npos) << why;
-    EXPECT_NE(why.find(bad.find("nan") != std::string::npos ? "pose is not finite" : "quaternion is not unit length"),
+    EXPECT_NE(why.find("frame 1: " + (seq.dir / "poses.txt").string() + ":2: "), std::string::npos)
+        << why;
+    EXPECT_NE(why.find(bad.find("nan") != std::string::npos ? "pose is not finite"
+                                                            : "quaternion is not unit length"),
               std::string::npos)
         << why;
   }
@@ -180,7 +199,8 @@ TEST(DatasetReader, BadFoldersNameTheFileAndLine) {
   writeText(poses, good_poses);
 
   fs::remove(seq.dir / "color" / "000001.png");
-  EXPECT_NE(openError(seq.dir).find("color/ has 1 images but there are 2 frames"), std::string::npos);
+  EXPECT_NE(openError(seq.dir).find("color/ has 1 images but there are 2 frames"),
+            std::string::npos);
   fs::remove_all(seq.dir / "color");
   fs::remove_all(seq.dir / "disparity");
   EXPECT_NE(openError(seq.dir).find("no disparity/ images"), std::string::npos);
@@ -191,7 +211,8 @@ TEST(DatasetReader, BadSingleFramesFailToLoadWithTheFileName) {
   // Frame 1: truncated PNG. Frame 2: disparity of the wrong size.
   const fs::path truncated = seq.dir / "disparity" / "000001.png";
   fs::resize_file(truncated, fs::file_size(truncated) / 3);
-  cv::imwrite((seq.dir / "disparity" / "000002.png").string(), cv::Mat(10, 10, CV_16UC1, cv::Scalar(500)));
+  cv::imwrite((seq.dir / "disparity" / "000002.png").string(),
+              cv::Mat(10, 10, CV_16UC1, cv::Scalar(500)));
   std::string error;
   auto reader = DatasetReader::open(seq.dir.string(), &error);
   ASSERT_TRUE(reader) << error;
@@ -200,10 +221,13 @@ TEST(DatasetReader, BadSingleFramesFailToLoadWithTheFileName) {
   EXPECT_FALSE(reader->load(1, &f, &error));
   EXPECT_NE(error.find("000001.png"), std::string::npos) << error;
   EXPECT_FALSE(reader->load(2, &f, &error));
-  EXPECT_NE(error.find("000002.png: disparity is 10x10 but calibration.yaml says 320x240"), std::string::npos) << error;
+  EXPECT_NE(error.find("000002.png: disparity is 10x10 but calibration.yaml says 320x240"),
+            std::string::npos)
+      << error;
   EXPECT_FALSE(reader->load(7, &f, &error));
   // An 8-bit disparity PNG is not KITTI.
-  cv::imwrite((seq.dir / "disparity" / "000002.png").string(), cv::Mat(240, 320, CV_8UC1, cv::Scalar(5)));
+  cv::imwrite((seq.dir / "disparity" / "000002.png").string(),
+              cv::Mat(240, 320, CV_8UC1, cv::Scalar(5)));
   EXPECT_FALSE(reader->load(2, &f, &error));
   EXPECT_NE(error.find("16-bit"), std::string::npos) << error;
 }
@@ -228,7 +252,8 @@ TEST(DatasetReader, ComputesDisparityWithSgbmFromRightImages) {
       ++valid;
       errors.push_back(std::abs(d - truth.at<float>(v, u)));
     }
-  std::printf("[ sgbm ] %d of %d pixels valid, median |error| %.3f px\n", valid, considered, median(errors));
+  std::printf("[ sgbm ] %d of %d pixels valid, median |error| %.3f px\n", valid, considered,
+              median(errors));
   EXPECT_GT(valid, considered / 2);
   EXPECT_LT(median(errors), 0.5);
 }
@@ -242,8 +267,10 @@ TEST(DatasetReader, SgbmRefusesImagesNoWiderThanItsDisparityRange) {
   sgbm.num_disparities = (width + 15) / 16 * 16;  // >= width, a multiple of 16 as SGBM wants
   std::string error;
   EXPECT_FALSE(DatasetReader::open(seq.dir.string(), &error, sgbm));
-  EXPECT_NE(error.find("calibration.yaml: images " + std::to_string(width) + " px wide are too narrow"),
-            std::string::npos) << error;
+  EXPECT_NE(
+      error.find("calibration.yaml: images " + std::to_string(width) + " px wide are too narrow"),
+      std::string::npos)
+      << error;
   sgbm.num_disparities = (width - 1) / 16 * 16;  // the widest range that fits still works
   ASSERT_TRUE(DatasetReader::open(seq.dir.string(), &error, sgbm)) << error;
 }
@@ -253,13 +280,15 @@ TEST(DatasetReader, SgbmRefusesImagesNoWiderThanItsDisparityRange) {
 TEST(DatasetReader, ImagesWhoseDecoderThrowsAreUnreadable) {
   for (const char* folder : {"color", "disparity"}) {
     SmallSequence seq(std::string("throwing_decoder_") + folder, 1);
-    writeText(seq.dir / folder / "000000.png", std::string("Pf\n0 3\n-1\n") + std::string(48, '\0'));
+    writeText(seq.dir / folder / "000000.png",
+              std::string("Pf\n0 3\n-1\n") + std::string(48, '\0'));
     std::string error;
     auto reader = DatasetReader::open(seq.dir.string(), &error);
     ASSERT_TRUE(reader) << error;
     StereoFrame f;
     EXPECT_FALSE(reader->load(0, &f, &error));
-    EXPECT_NE(error.find(std::string(folder) + "/000000.png: unreadable or truncated image"), std::string::npos)
+    EXPECT_NE(error.find(std::string(folder) + "/000000.png: unreadable or truncated image"),
+              std::string::npos)
         << error;
   }
 }
@@ -273,7 +302,8 @@ TEST(OfflineFuser, WritesMeshAndStatsAndCountsSkippedFrames) {
     std::string text, line;
     int pose_lines = 0;
     while (std::getline(in, line)) {
-      if (!line.empty() && line[0] != '#' && pose_lines++ == 4) line = line.substr(0, line.find(' ')) + " nan 0 0 0 0 0 1";
+      if (!line.empty() && line[0] != '#' && pose_lines++ == 4)
+        line = line.substr(0, line.find(' ')) + " nan 0 0 0 0 0 1";
       text += line + "\n";
     }
     in.close();
@@ -283,8 +313,9 @@ TEST(OfflineFuser, WritesMeshAndStatsAndCountsSkippedFrames) {
   std::string error;
   const fs::path out = fs::path(testing::TempDir()) / "stereo_fusion_fuse_out";
   fs::remove_all(out);
-  ASSERT_TRUE(parseFuseArguments({seq.dir.string(), out.string(), "--set", "voxel_size_m=0.03", "--quiet"},
-                                 &options, &error)) << error;
+  ASSERT_TRUE(parseFuseArguments(
+      {seq.dir.string(), out.string(), "--set", "voxel_size_m=0.03", "--quiet"}, &options, &error))
+      << error;
   EXPECT_DOUBLE_EQ(options.config.voxel_size_m, 0.03);
   FuseReport report;
   ASSERT_TRUE(runOfflineFusion(options, &report, &error)) << error;
@@ -297,22 +328,29 @@ TEST(OfflineFuser, WritesMeshAndStatsAndCountsSkippedFrames) {
   const nlohmann::json stats = nlohmann::json::parse(stats_file);
   EXPECT_EQ(stats["frames"]["used"], 3);
   EXPECT_EQ(stats["frames"]["skipped_by_reason"]["unreadable"], 2);
-  EXPECT_NE(stats["frames"]["skipped_examples"][0].get<std::string>().find("000002.png"), std::string::npos);
-  EXPECT_NE(stats["frames"]["skipped_examples"][1].get<std::string>().find("frame 4: "), std::string::npos);
-  EXPECT_NE(stats["frames"]["skipped_examples"][1].get<std::string>().find("poses.txt:"), std::string::npos);
-  EXPECT_NE(stats["frames"]["skipped_examples"][1].get<std::string>().find("pose is not finite"), std::string::npos);
+  EXPECT_NE(stats["frames"]["skipped_examples"][0].get<std::string>().find("000002.png"),
+            std::string::npos);
+  EXPECT_NE(stats["frames"]["skipped_examples"][1].get<std::string>().find("frame 4: "),
+            std::string::npos);
+  EXPECT_NE(stats["frames"]["skipped_examples"][1].get<std::string>().find("poses.txt:"),
+            std::string::npos);
+  EXPECT_NE(stats["frames"]["skipped_examples"][1].get<std::string>().find("pose is not finite"),
+            std::string::npos);
   EXPECT_EQ(stats["config"]["voxel_size_m"], "0.03");
   for (const char* stage : {"lookup", "fusion", "meshing", "total"})
-    for (const char* stat : {"mean", "p50", "p99"}) EXPECT_GE(stats["timings_ms"][stage][stat].get<double>(), 0.0);
+    for (const char* stat : {"mean", "p50", "p99"})
+      EXPECT_GE(stats["timings_ms"][stage][stat].get<double>(), 0.0);
   EXPECT_EQ(stats["blocks"]["total"].get<size_t>(), report.blocks);
-  EXPECT_EQ(stats["blocks"]["meshed_at_8"].get<size_t>() + stats["blocks"]["meshed_at_4"].get<size_t>() +
+  EXPECT_EQ(stats["blocks"]["meshed_at_8"].get<size_t>() +
+                stats["blocks"]["meshed_at_4"].get<size_t>() +
                 stats["blocks"]["meshed_at_2"].get<size_t>(),
             report.blocks);
   // The dense comparison grid covers at least the blocks' own voxels (512 finest voxels of 12 B
   // each per block), and a bounding box of them: at most its volume in blocks.
   const double dense_bytes = stats["memory"]["dense_grid_megabytes"].get<double>() * 1048576.0;
   EXPECT_GE(dense_bytes, report.blocks * 512.0 * 12.0 * (1 - 1e-9));
-  EXPECT_NEAR(stats["memory"]["dense_grid_ratio"].get<double>(), dense_bytes / report.memory_bytes, 1e-9);
+  EXPECT_NEAR(stats["memory"]["dense_grid_ratio"].get<double>(), dense_bytes / report.memory_bytes,
+              1e-9);
   fs::remove_all(out);
 }
 
@@ -320,7 +358,8 @@ TEST(OfflineFuser, WritesMeshAndStatsAndCountsSkippedFrames) {
 // stats.json counts the meshing passes (frames 3 and 5 of 5: every 3rd, then the last).
 TEST(OfflineFuser, MeshEveryNthFrameWritesTheSameMeshAndCountsMeshCalls) {
   SmallSequence seq("fuse_mesh_every", 5);
-  auto run = [&](const std::string& name, const std::vector<std::string>& extra, nlohmann::json* stats) {
+  auto run = [&](const std::string& name, const std::vector<std::string>& extra,
+                 nlohmann::json* stats) {
     const fs::path out = fs::path(testing::TempDir()) / ("stereo_fusion_fuse_" + name);
     fs::remove_all(out);
     std::vector<std::string> args = {seq.dir.string(), out.string(), "--quiet"};
@@ -356,8 +395,9 @@ TEST(OfflineFuser, TexturePatchesAddObjMtlAndAtlasAndTheirMemoryToStats) {
   std::string error;
   const fs::path out = fs::path(testing::TempDir()) / "stereo_fusion_fuse_textured_out";
   fs::remove_all(out);
-  ASSERT_TRUE(parseFuseArguments({seq.dir.string(), out.string(), "--set", "texture=patches", "--quiet"}, &options,
-                                 &error)) << error;
+  ASSERT_TRUE(parseFuseArguments(
+      {seq.dir.string(), out.string(), "--set", "texture=patches", "--quiet"}, &options, &error))
+      << error;
   FuseReport report;
   ASSERT_TRUE(runOfflineFusion(options, &report, &error)) << error;
   ASSERT_TRUE(fs::exists(out / "mesh.ply"));
@@ -391,7 +431,8 @@ TEST(OfflineFuser, ArgumentErrorsNameTheProblem) {
   EXPECT_NE(error.find("unknown option '--bogus'"), std::string::npos) << error;
   EXPECT_FALSE(parseFuseArguments({"seq"}, &options, &error));
   EXPECT_FALSE(parseFuseArguments({"seq", "out", "--frames", "-3"}, &options, &error));
-  EXPECT_FALSE(parseFuseArguments({"seq", "out", "--config", "/nonexistent.yaml"}, &options, &error));
+  EXPECT_FALSE(
+      parseFuseArguments({"seq", "out", "--config", "/nonexistent.yaml"}, &options, &error));
   EXPECT_NE(error.find("cannot open"), std::string::npos) << error;
   EXPECT_FALSE(parseFuseArguments({"seq", "out", "--set", "min_depth_m=9"}, &options, &error));
   EXPECT_NE(error.find("min_depth_m must be < max_depth_m"), std::string::npos) << error;

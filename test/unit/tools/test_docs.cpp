@@ -51,8 +51,8 @@ TEST(Docs, ParameterPageIsGeneratedFromTheRegistry) {
   const NodeConfig node_defaults;
   for (const ParameterSpec& spec : nodeParameterSpecs()) {
     const std::string value = getNodeParameter(node_defaults, spec.name);
-    const std::string row = "| `" + spec.name + "` | " + (spec.unit.empty() ? "–" : spec.unit) + " | " +
-                            (value.empty() ? "(empty)" : "`" + value + "`") + " | ";
+    const std::string row = "| `" + spec.name + "` | " + (spec.unit.empty() ? "–" : spec.unit) +
+                            " | " + (value.empty() ? "(empty)" : "`" + value + "`") + " | ";
     const size_t at = page.find(row);
     EXPECT_NE(at, std::string::npos) << row;
     EXPECT_GT(at, node_section) << spec.name;
@@ -71,18 +71,22 @@ TEST(Docs, EveryRelativeLinkResolves) {
 // The README is the landing page; the reference lives in doc/.
 TEST(Docs, ReadmeStaysALandingPage) {
   const std::string readme = readFile(fs::path(kSourceDir) / "README.md");
-  EXPECT_LE(std::count(readme.begin(), readme.end(), '\n'), 200) << "README.md: move reference material into doc/";
+  EXPECT_LE(std::count(readme.begin(), readme.end(), '\n'), 200)
+      << "README.md: move reference material into doc/";
 }
 
 // The checker itself: it must see a missing file, a missing anchor and a link into a page's
 // own headings, and ignore code and absolute URLs.
 TEST(Docs, LinkCheckerReportsWhatDoesNotResolve) {
-  const fs::path folder = fs::temp_directory_path() / ("stereo_fusion_docs_" + std::to_string(::getpid()));
+  const fs::path folder =
+      fs::temp_directory_path() / ("stereo_fusion_docs_" + std::to_string(::getpid()));
   fs::create_directories(folder / "sub");
-  std::ofstream(folder / "sub" / "target.md") << "# Target page\n\n## Speed & memory — 2 cm\n\n## Speed & memory — 2 cm\n";
+  std::ofstream(folder / "sub" / "target.md")
+      << "# Target page\n\n## Speed & memory — 2 cm\n\n## Speed & memory — 2 cm\n";
   std::ofstream(folder / "page.md")
       << "# Page\n\n## A heading\n\n"
-         "[ok](sub/target.md) [ok](sub/target.md#target-page) [ok](sub/target.md#speed--memory--2-cm-1)\n"
+         "[ok](sub/target.md) [ok](sub/target.md#target-page) "
+         "[ok](sub/target.md#speed--memory--2-cm-1)\n"
          "[ok](#a-heading) [ok](sub/) [web](https://example.org/missing.md) `[code](missing.md)`\n"
          "[bad file](sub/missing.md)\n"
          "[bad anchor](sub/target.md#no-such-heading)\n"
@@ -92,13 +96,16 @@ TEST(Docs, LinkCheckerReportsWhatDoesNotResolve) {
   fs::remove_all(folder);
   ASSERT_EQ(broken.size(), 3u);
   EXPECT_NE(broken[0].find(":7: sub/missing.md (no such file)"), std::string::npos) << broken[0];
-  EXPECT_NE(broken[1].find(":8: sub/target.md#no-such-heading (no heading with this anchor)"), std::string::npos)
+  EXPECT_NE(broken[1].find(":8: sub/target.md#no-such-heading (no heading with this anchor)"),
+            std::string::npos)
       << broken[1];
   EXPECT_NE(broken[2].find(":12: #nowhere"), std::string::npos) << broken[2];
 }
 
 TEST(Docs, HeadingAnchorsFollowTheForges) {
-  EXPECT_EQ(markdownHeadingAnchors("# Quick start\n## The method, as implemented\n### `fuse.sh` — offline\n"
-                                   "## Quick start\n"),
-            (std::vector<std::string>{"quick-start", "the-method-as-implemented", "fusesh--offline", "quick-start-1"}));
+  EXPECT_EQ(markdownHeadingAnchors(
+                "# Quick start\n## The method, as implemented\n### `fuse.sh` — offline\n"
+                "## Quick start\n"),
+            (std::vector<std::string>{"quick-start", "the-method-as-implemented", "fusesh--offline",
+                                      "quick-start-1"}));
 }

@@ -69,8 +69,8 @@ double distanceToUnitTriangle(const Vector3d& p) {
 TEST(EvaluatorTriangleDistance, FaceRegionIsTheDistanceToThePlane) {
   EXPECT_NEAR(distanceToUnitTriangle({0.25, 0.25, 2.0}), 2.0, 1e-12);
   EXPECT_NEAR(distanceToUnitTriangle({0.1, 0.2, -0.5}), 0.5, 1e-12);
-  EXPECT_TRUE(closestPointOnTriangle({0.25, 0.25, 2.0}, kA, kB, kC)
-                  .isApprox(Vector3d(0.25, 0.25, 0.0)));
+  EXPECT_TRUE(
+      closestPointOnTriangle({0.25, 0.25, 2.0}, kA, kB, kC).isApprox(Vector3d(0.25, 0.25, 0.0)));
   EXPECT_NEAR(distanceToUnitTriangle({0.3, 0.3, 0.0}), 0.0, 1e-12);  // on the face
 }
 
@@ -117,11 +117,11 @@ TEST(EvaluatorBvh, HandWorkedDistancesToASquare) {
     Vector3d query, closest;
     double distance;
   } cases[] = {
-      {{0.5, 0.5, 0.3}, {0.5, 0.5, 0}, 0.3},   // above the face
-      {{0.3, 0.6, -2}, {0.3, 0.6, 0}, 2.0},    // below it
-      {{2, 0.5, 0}, {1, 0.5, 0}, 1.0},         // beyond an edge, in the plane
-      {{-3, -4, 0}, {0, 0, 0}, 5.0},           // beyond a corner: 3-4-5
-      {{1.5, 2, 1}, {1, 1, 0}, 1.5},           // beyond the opposite corner: √(0.25 + 1 + 1)
+      {{0.5, 0.5, 0.3}, {0.5, 0.5, 0}, 0.3},  // above the face
+      {{0.3, 0.6, -2}, {0.3, 0.6, 0}, 2.0},   // below it
+      {{2, 0.5, 0}, {1, 0.5, 0}, 1.0},        // beyond an edge, in the plane
+      {{-3, -4, 0}, {0, 0, 0}, 5.0},          // beyond a corner: 3-4-5
+      {{1.5, 2, 1}, {1, 1, 0}, 1.5},          // beyond the opposite corner: √(0.25 + 1 + 1)
       {{0.25, -1, 1}, {0.25, 0, 0}, std::sqrt(2.0)},  // beyond an edge, above the plane
   };
   for (const auto& c : cases) {
@@ -172,12 +172,15 @@ TEST(EvaluatorBvh, MatchesBruteForceOnATriangleSoup) {
     const auto& t = soup.triangles[hit.triangle];
     EXPECT_NEAR((closestPointOnTriangle(p, soup.positions[t[0]].cast<double>(),
                                         soup.positions[t[1]].cast<double>(),
-                                        soup.positions[t[2]].cast<double>()) - p).norm(),
+                                        soup.positions[t[2]].cast<double>()) -
+                 p)
+                    .norm(),
                 hit.distance_m, 1e-12);
   }
   // Batched queries (Morton order, parallel) give the same distances in the caller's order.
   std::vector<Vector3d> queries;
-  for (int q = 0; q < 5000; ++q) queries.push_back(2.0 * Vector3d(coordinate(rng), coordinate(rng), coordinate(rng)));
+  for (int q = 0; q < 5000; ++q)
+    queries.push_back(2.0 * Vector3d(coordinate(rng), coordinate(rng), coordinate(rng)));
   ThreadPool pool(2);
   const std::vector<double> batch = distancesToSurface(bvh, queries, &pool);
   ASSERT_EQ(batch.size(), queries.size());
@@ -299,10 +302,13 @@ TEST(EvaluatorGroundTruth, GhostSurfaceIsWhatLiesOffTheTruthInsideTheRegions) {
   // wrong, but no dynamic object's).
   const TriangleMesh truth = planeMesh(0, 1, 0, 1, 0.0);
   TriangleMesh reconstruction = truth;
-  for (const TriangleMesh& square : {planeMesh(0.2, 0.4, 0.2, 0.4, 0.5), planeMesh(0.7, 0.9, 0.7, 0.9, 0.5)}) {
+  for (const TriangleMesh& square :
+       {planeMesh(0.2, 0.4, 0.2, 0.4, 0.5), planeMesh(0.7, 0.9, 0.7, 0.9, 0.5)}) {
     const auto offset = static_cast<uint32_t>(reconstruction.positions.size());
-    reconstruction.positions.insert(reconstruction.positions.end(), square.positions.begin(), square.positions.end());
-    for (auto t : square.triangles) reconstruction.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+    reconstruction.positions.insert(reconstruction.positions.end(), square.positions.begin(),
+                                    square.positions.end());
+    for (auto t : square.triangles)
+      reconstruction.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
   }
   GroundTruthOptions options = smallOptions(0.02);
   EXPECT_TRUE(std::isnan(evaluateAgainstGroundTruth(reconstruction, truth, options).ghost_area_m2));
@@ -311,7 +317,8 @@ TEST(EvaluatorGroundTruth, GhostSurfaceIsWhatLiesOffTheTruthInsideTheRegions) {
   const GroundTruthResult r = evaluateAgainstGroundTruth(reconstruction, truth, options);
   // 20 000 samples over 1.08 m²: the ghost's 0.04 m² gets ~740 of them, ±4 % (1σ).
   EXPECT_NEAR(r.ghost_area_m2, 0.04, 0.005);
-  EXPECT_NE(toJson(GroundTruthReport{"m", "g", "", options, r, {}, 0.0}).find("\"ghost_area_m2\""), std::string::npos);
+  EXPECT_NE(toJson(GroundTruthReport{"m", "g", "", options, r, {}, 0.0}).find("\"ghost_area_m2\""),
+            std::string::npos);
 }
 
 TEST(EvaluatorGroundTruth, EmptyReconstructionScoresZero) {
@@ -348,10 +355,12 @@ TEST(EvaluatorReport, GroundTruthShowsP99AndShareOverTenCentimetres) {
   EXPECT_TRUE(hasRow(table, "p90", "255.00 mm")) << table;
   const std::string json = toJson(report);
   // The existing keys stay (scripts/bench.sh reads accuracy_m.median); the new ones follow.
-  EXPECT_NE(json.find("\"accuracy_m\": {\n    \"count\": 4,\n    \"mean\": 0.15,\n    \"median\": 0.125,\n"
-                      "    \"p90\": 0.255,\n    \"max\": 0.3,\n    \"p99\": 0.2955,\n"
-                      "    \"share_over_10cm\": 0.5\n  }"),
-            std::string::npos)
+  EXPECT_NE(
+      json.find(
+          "\"accuracy_m\": {\n    \"count\": 4,\n    \"mean\": 0.15,\n    \"median\": 0.125,\n"
+          "    \"p90\": 0.255,\n    \"max\": 0.3,\n    \"p99\": 0.2955,\n"
+          "    \"share_over_10cm\": 0.5\n  }"),
+      std::string::npos)
       << json;
   EXPECT_NE(json.find("\"p99\": 0.198"), std::string::npos) << json;
   // An empty summary: null, not NaN (JSON has none).
@@ -392,11 +401,11 @@ TEST(EvaluatorErrorColour, KeyPointsOfTheScale) {
 
 TEST(EvaluatorErrorColour, LinearBetweenTheKeyPoints) {
   // Tolerance 1 m keeps the arithmetic exact; channels round to nearest (half away from 0).
-  EXPECT_EQ(errorColour(0.1, 1.0), (Rgb{0, 51, 204}));     // blue → green, 1/5 of the way
-  EXPECT_EQ(errorColour(0.25, 1.0), (Rgb{0, 128, 128}));   // halfway: 127.5 each
-  EXPECT_EQ(errorColour(0.75, 1.0), (Rgb{128, 255, 0}));   // green → yellow, halfway
-  EXPECT_EQ(errorColour(1.75, 1.0), (Rgb{255, 64, 0}));    // yellow → red, 3/4: 63.75
-  EXPECT_EQ(errorColour(1.999, 1.0), (Rgb{255, 0, 0}));    // 0.255 rounds to 0
+  EXPECT_EQ(errorColour(0.1, 1.0), (Rgb{0, 51, 204}));         // blue → green, 1/5 of the way
+  EXPECT_EQ(errorColour(0.25, 1.0), (Rgb{0, 128, 128}));       // halfway: 127.5 each
+  EXPECT_EQ(errorColour(0.75, 1.0), (Rgb{128, 255, 0}));       // green → yellow, halfway
+  EXPECT_EQ(errorColour(1.75, 1.0), (Rgb{255, 64, 0}));        // yellow → red, 3/4: 63.75
+  EXPECT_EQ(errorColour(1.999, 1.0), (Rgb{255, 0, 0}));        // 0.255 rounds to 0
   EXPECT_EQ(errorColour(0.02, 0.08), errorColour(0.25, 1.0));  // only distance / tolerance counts
 }
 
@@ -407,7 +416,8 @@ TEST(EvaluatorErrorColour, WrittenMeshReadsBackWithColoursByDistance) {
   // no normals.
   const TriangleMesh truth = planeMesh(-1, 2, -1, 2, 0.0, 3);
   TriangleMesh reconstruction;
-  reconstruction.positions = {{0, 0, 0}, {1, 0, 0.02f}, {1, 1, 0.04f}, {0, 1, 0.10f}, {0.5f, 0.5f, 0.07f}};
+  reconstruction.positions = {
+      {0, 0, 0}, {1, 0, 0.02f}, {1, 1, 0.04f}, {0, 1, 0.10f}, {0.5f, 0.5f, 0.07f}};
   reconstruction.triangles = {{{0, 1, 4}}, {{1, 2, 4}}, {{2, 3, 4}}, {{3, 0, 4}}};
   const std::string path = testing::TempDir() + "stereo_fusion_evaluator_error.ply";
   std::string error;
@@ -424,7 +434,7 @@ TEST(EvaluatorErrorColour, WrittenMeshReadsBackWithColoursByDistance) {
   EXPECT_EQ(read.colors[2], (Rgb{255, 255, 0}));
   EXPECT_EQ(read.colors[3], (Rgb{255, 0, 0}));
   EXPECT_EQ(read.colors[4], (Rgb{255, 64, 0}));  // 7 cm = 1.75 tolerances
-  ASSERT_EQ(read.normals.size(), 5u);  // computed, since the input had none
+  ASSERT_EQ(read.normals.size(), 5u);            // computed, since the input had none
   for (const Eigen::Vector3f& n : read.normals) {
     EXPECT_NEAR(n.norm(), 1.0f, 1e-5f);
     EXPECT_GT(n.z(), 0.9f);  // the square is nearly flat, wound counter-clockwise from above
@@ -441,14 +451,14 @@ TEST(EvaluatorErrorColour, MissingPlyColoursTheMaskedTruthSamplesByTheirDistance
   // (tolerance 4 cm: blue, green, yellow), one 3 cm beside its edge (x = 1.03: green-yellow),
   // one far off (red), and one masked out.
   TriangleMesh reconstruction = planeMesh(0, 1, 0, 1, 0.0, 1);
-  const std::vector<Vector3d> samples = {
-      {0.5, 0.5, 0.0}, {0.5, 0.5, 0.02}, {0.5, 0.5, 0.04}, {1.03, 0.5, 0.0}, {0.5, 0.5, 1.0}, {0.5, 0.5, 0.01}};
+  const std::vector<Vector3d> samples = {{0.5, 0.5, 0.0},  {0.5, 0.5, 0.02}, {0.5, 0.5, 0.04},
+                                         {1.03, 0.5, 0.0}, {0.5, 0.5, 1.0},  {0.5, 0.5, 0.01}};
   const std::vector<uint8_t> visible = {1, 1, 1, 1, 1, 0};
   // The distances as the evaluator keeps them for its completeness.
   GroundTruthOptions options;
   options.samples = 1000;
-  const GroundTruthResult result =
-      evaluateAgainstGroundTruthSamples(reconstruction, reconstruction, samples, 1.0, visible, options);
+  const GroundTruthResult result = evaluateAgainstGroundTruthSamples(
+      reconstruction, reconstruction, samples, 1.0, visible, options);
   const std::vector<double>& distances = result.gt_sample_distances_m;
   ASSERT_EQ(distances.size(), samples.size());
   EXPECT_NEAR(distances[3], 0.03, 1e-12);
@@ -482,7 +492,9 @@ TEST(EvaluatorErrorColour, MissingPlyColoursTheMaskedTruthSamplesByTheirDistance
 // ---------------------------------------------------------------------------------------------
 // Frames built with the camera model: a plane n·x = c seen from T_world_camera.
 // ---------------------------------------------------------------------------------------------
-StereoCamera smallCamera() { return *StereoCamera::create(160, 120, 100.0, 100.0, 79.5, 59.5, 0.1); }
+StereoCamera smallCamera() {
+  return *StereoCamera::create(160, 120, 100.0, 100.0, 79.5, 59.5, 0.1);
+}
 
 /// Exact disparity of the plane {x : n·x = c} at every pixel centre (0 where the ray misses it
 /// or the hit is behind the camera).
@@ -496,10 +508,12 @@ StereoFrame planeFrame(const Vector3d& n, double c, const Eigen::Isometry3d& T_w
   for (int v = 0; v < camera.height(); ++v) {
     for (int u = 0; u < camera.width(); ++u) {
       // Ray with camera-frame z component 1, so the ray parameter is the depth z.
-      const Vector3d direction = T_world_camera.linear() *
-                                 Vector3d((u - camera.cx()) / camera.fx(), (v - camera.cy()) / camera.fy(), 1.0);
+      const Vector3d direction =
+          T_world_camera.linear() *
+          Vector3d((u - camera.cx()) / camera.fx(), (v - camera.cy()) / camera.fy(), 1.0);
       const double z = (c - n.dot(origin)) / n.dot(direction);
-      if (z > 0) frame.disparity_px.at<float>(v, u) = static_cast<float>(camera.disparityFromDepth(z));
+      if (z > 0)
+        frame.disparity_px.at<float>(v, u) = static_cast<float>(camera.disparityFromDepth(z));
     }
   }
   return frame;
@@ -579,7 +593,8 @@ TEST(EvaluatorHeldOut, MeshFiveCentimetresInFrontIsFloating) {
   EXPECT_EQ(r.total.over_10cm_pixels, 0u);
   EXPECT_DOUBLE_EQ(r.share_over_10cm, 0.0);
   // 15 cm in front: every overlapping pixel is a gross error.
-  const HeldOutResult far = evaluateHeldOut(planeMesh(-4, 4, -3, 3, 2.0 - 0.15), source, {0}, HeldOutOptions{});
+  const HeldOutResult far =
+      evaluateHeldOut(planeMesh(-4, 4, -3, 3, 2.0 - 0.15), source, {0}, HeldOutOptions{});
   EXPECT_GT(far.total.overlap_pixels, 0u);
   EXPECT_EQ(far.total.over_10cm_pixels, far.total.overlap_pixels);
   EXPECT_DOUBLE_EQ(far.share_over_10cm, 1.0);
@@ -644,7 +659,8 @@ TEST(EvaluatorGroundTruth, VisibilityRestrictsCompletenessToWhatWasSeen) {
   const VisibilityResult visibility = computeVisibility(samples.points_m, source, 0.02);
   EXPECT_EQ(visibility.frames_used, 1u);
   // Visible: |x| ≤ 80/100·2 = 1.6 and |y| ≤ 60/100·2 = 1.2 (all of y): 3.2 / 12 of the area.
-  EXPECT_NEAR(static_cast<double>(visibility.visible_count) / samples.points_m.size(), 3.2 / 12, 0.01);
+  EXPECT_NEAR(static_cast<double>(visibility.visible_count) / samples.points_m.size(), 3.2 / 12,
+              0.01);
   const GroundTruthResult r = evaluateAgainstGroundTruthSamples(
       seen, truth, samples.points_m, samples.area_m2, visibility.visible, options);
   EXPECT_TRUE(r.visibility_used);
@@ -663,8 +679,8 @@ TEST(EvaluatorGroundTruth, VisibilityRestrictsCompletenessToWhatWasSeen) {
 TEST(EvaluatorArguments, ParsesOptionsAndRejectsBadOnes) {
   EvaluateArguments args;
   std::string error;
-  ASSERT_TRUE(parseEvaluateArguments({"m.ply", "seq", "--tolerance-m", "0.03", "--held-out",
-                                      "1,2", "--samples", "500", "--seed", "9", "--json", "o.json"},
+  ASSERT_TRUE(parseEvaluateArguments({"m.ply", "seq", "--tolerance-m", "0.03", "--held-out", "1,2",
+                                      "--samples", "500", "--seed", "9", "--json", "o.json"},
                                      &args, &error))
       << error;
   EXPECT_EQ(args.mesh_path, "m.ply");
@@ -698,10 +714,12 @@ TEST(EvaluatorArguments, ErrorPlyOnlyInGroundTruthMode) {
   namespace fs = std::filesystem;
   EvaluateArguments args;
   std::string error;
-  ASSERT_TRUE(parseEvaluateArguments({"m.ply", "seq", "--error-ply", "e.ply"}, &args, &error)) << error;
+  ASSERT_TRUE(parseEvaluateArguments({"m.ply", "seq", "--error-ply", "e.ply"}, &args, &error))
+      << error;
   EXPECT_EQ(args.error_ply_path, "e.ply");
   EXPECT_FALSE(parseEvaluateArguments({"m.ply", "seq", "--error-ply"}, &args, &error));
-  ASSERT_TRUE(parseEvaluateArguments({"m.ply", "seq", "--missing-ply", "t.ply"}, &args, &error)) << error;
+  ASSERT_TRUE(parseEvaluateArguments({"m.ply", "seq", "--missing-ply", "t.ply"}, &args, &error))
+      << error;
   EXPECT_EQ(args.missing_ply_path, "t.ply");
 
   const fs::path folder = fs::path(testing::TempDir()) / "stereo_fusion_evaluator_mode";
@@ -717,9 +735,11 @@ TEST(EvaluatorArguments, ErrorPlyOnlyInGroundTruthMode) {
   // A folder without gt_mesh.ply is held-out mode: --error-ply is an argument error.
   EXPECT_EQ(choose({"m.ply", folder.string()}, &mode), ModeError::kNone);
   EXPECT_FALSE(mode.ground_truth);
-  EXPECT_EQ(choose({"m.ply", folder.string(), "--error-ply", "e.ply"}, &mode), ModeError::kBadArguments);
+  EXPECT_EQ(choose({"m.ply", folder.string(), "--error-ply", "e.ply"}, &mode),
+            ModeError::kBadArguments);
   EXPECT_NE(error.find("--error-ply needs a ground truth"), std::string::npos) << error;
-  EXPECT_EQ(choose({"m.ply", folder.string(), "--missing-ply", "t.ply"}, &mode), ModeError::kBadArguments);
+  EXPECT_EQ(choose({"m.ply", folder.string(), "--missing-ply", "t.ply"}, &mode),
+            ModeError::kBadArguments);
   EXPECT_NE(error.find("--missing-ply needs a ground truth"), std::string::npos) << error;
 
   // With gt_mesh.ply it is ground-truth mode, unless --held-out forces held-out mode.
@@ -732,7 +752,8 @@ TEST(EvaluatorArguments, ErrorPlyOnlyInGroundTruthMode) {
             ModeError::kBadArguments);
   EXPECT_NE(error.find("--error-ply"), std::string::npos) << error;
   // The rendered depths of held-out frames: held-out mode only.
-  EXPECT_EQ(choose({"m.ply", folder.string(), "--held-out-depth", "d"}, &mode), ModeError::kBadArguments);
+  EXPECT_EQ(choose({"m.ply", folder.string(), "--held-out-depth", "d"}, &mode),
+            ModeError::kBadArguments);
   EXPECT_NE(error.find("--held-out-depth needs held-out mode"), std::string::npos) << error;
   EXPECT_EQ(choose({"m.ply", folder.string(), "--held-out", "odd", "--held-out-depth", "d"}, &mode),
             ModeError::kNone);

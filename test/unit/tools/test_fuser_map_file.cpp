@@ -1,4 +1,5 @@
-// The offline fuser's --save-map / --load-map (the map file itself: test/unit/io/test_map_file.cpp).
+// The offline fuser's --save-map / --load-map (the map file itself:
+// test/unit/io/test_map_file.cpp).
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -15,15 +16,11 @@ using namespace stereo_fusion;
 using namespace stereo_fusion::test;
 namespace fs = std::filesystem;
 
-namespace {
-
-
-
-
-}  // namespace
+namespace {}  // namespace
 
 TEST(OfflineFuser, SaveMapThenLoadMapAloneWritesTheSameMesh) {
-  const fs::path seq = fs::path(testing::TempDir()) / ("stereo_fusion_mapfile_seq_" + std::to_string(::getpid()));
+  const fs::path seq =
+      fs::path(testing::TempDir()) / ("stereo_fusion_mapfile_seq_" + std::to_string(::getpid()));
   fs::remove_all(seq);
   std::string error;
   auto writer = sim::DatasetWriter::create(seq.string(), qvgaCamera(), &error);
@@ -31,12 +28,16 @@ TEST(OfflineFuser, SaveMapThenLoadMapAloneWritesTheSameMesh) {
   const sim::AnalyticScene scene = floorAndSphere();
   for (int i = 0; i < 3; ++i) {
     const StereoFrame f = renderFrame(scene, qvgaCamera(), floorAndSphereView(i));
-    ASSERT_TRUE(writer->writeFrame(i, 0.1 * (i + 1), floorAndSphereView(i), f.disparity_px, f.color, cv::Mat(), &error)) << error;
+    ASSERT_TRUE(writer->writeFrame(i, 0.1 * (i + 1), floorAndSphereView(i), f.disparity_px, f.color,
+                                   cv::Mat(), &error))
+        << error;
   }
   const std::string out_a = (seq / "out_a").string(), out_b = (seq / "out_b").string();
   const std::string map_path = (seq / "map.sfmap").string();
   FuseOptions a;
-  ASSERT_TRUE(parseFuseArguments({seq.string(), out_a, "--quiet", "--save-map", map_path}, &a, &error)) << error;
+  ASSERT_TRUE(
+      parseFuseArguments({seq.string(), out_a, "--quiet", "--save-map", map_path}, &a, &error))
+      << error;
   FuseReport report;
   ASSERT_TRUE(runOfflineFusion(a, &report, &error)) << error;
   ASSERT_EQ(report.frames_used, 3u);
@@ -56,7 +57,8 @@ TEST(OfflineFuser, SaveMapThenLoadMapAloneWritesTheSameMesh) {
   bytes.resize(bytes.size() - 1);
   writeBytes(map_path, bytes);
   FuseOptions c;
-  ASSERT_TRUE(parseFuseArguments({(seq / "out_c").string(), "--quiet", "--load-map", map_path}, &c, &error));
+  ASSERT_TRUE(parseFuseArguments({(seq / "out_c").string(), "--quiet", "--load-map", map_path}, &c,
+                                 &error));
   EXPECT_FALSE(runOfflineFusion(c, &report, &error));
   EXPECT_NE(error.find("truncated map file"), std::string::npos) << error;
   EXPECT_FALSE(fs::exists(seq / "out_c" / "mesh.ply"));

@@ -27,21 +27,24 @@ constexpr int kFrames = 6;
 Eigen::Isometry3d drifted(int i) {
   const Eigen::Vector3d pivot = floorAndSphereView(0).translation();
   Eigen::Isometry3d D = Eigen::Isometry3d::Identity();
-  D.linear() = Eigen::AngleAxisd(0.5 * i * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  D.linear() =
+      Eigen::AngleAxisd(0.5 * i * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
   D.translation() = pivot - D.linear() * pivot + Eigen::Vector3d(0.015 * i, 0.0, 0.0);
   return D * floorAndSphereView(i);
 }
 
 double stamp(int i) { return 0.1 * (i + 1); }
 
-void writeTum(const std::string& path, const std::vector<int>& frames, double stamp_offset_s = 0.0) {
+void writeTum(const std::string& path, const std::vector<int>& frames,
+              double stamp_offset_s = 0.0) {
   std::ofstream out(path);
   for (int i : frames) {
     const Eigen::Isometry3d T = floorAndSphereView(i);
     const Eigen::Quaterniond q(T.rotation());
     char line[256];
-    std::snprintf(line, sizeof(line), "%.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", stamp(i) + stamp_offset_s,
-                  T.translation().x(), T.translation().y(), T.translation().z(), q.x(), q.y(), q.z(), q.w());
+    std::snprintf(line, sizeof(line), "%.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n",
+                  stamp(i) + stamp_offset_s, T.translation().x(), T.translation().y(),
+                  T.translation().z(), q.x(), q.y(), q.z(), q.w());
     out << line;
   }
 }
@@ -60,7 +63,8 @@ double meanError(const std::string& ply) {
 class FuserTrajectory : public testing::Test {
  protected:
   void SetUp() override {
-    seq_ = fs::path(testing::TempDir()) / ("stereo_fusion_trajectory_seq_" + std::to_string(::getpid()));
+    seq_ = fs::path(testing::TempDir()) /
+           ("stereo_fusion_trajectory_seq_" + std::to_string(::getpid()));
     fs::remove_all(seq_);
     std::string error;
     auto writer = sim::DatasetWriter::create(seq_.string(), qvgaCamera(), &error);
@@ -68,7 +72,9 @@ class FuserTrajectory : public testing::Test {
     const sim::AnalyticScene scene = floorAndSphere();
     for (int i = 0; i < kFrames; ++i) {
       const StereoFrame f = renderFrame(scene, qvgaCamera(), floorAndSphereView(i));
-      ASSERT_TRUE(writer->writeFrame(i, stamp(i), drifted(i), f.disparity_px, f.color, cv::Mat(), &error)) << error;
+      ASSERT_TRUE(
+          writer->writeFrame(i, stamp(i), drifted(i), f.disparity_px, f.color, cv::Mat(), &error))
+          << error;
     }
   }
   void TearDown() override { fs::remove_all(seq_); }
@@ -82,9 +88,12 @@ TEST_F(FuserTrajectory, TheFramesAreFusedAgainAtTheCorrectedPosesAndLandOnTheTru
   writeTum(trajectory, {0, 2, 4, 5});
   std::string error;
   FuseOptions drifting, corrected;
-  ASSERT_TRUE(parseFuseArguments({seq_.string(), (seq_ / "drift").string(), "--quiet"}, &drifting, &error)) << error;
-  ASSERT_TRUE(parseFuseArguments({seq_.string(), (seq_ / "corr").string(), "--quiet", "--trajectory", trajectory},
-                                 &corrected, &error))
+  ASSERT_TRUE(
+      parseFuseArguments({seq_.string(), (seq_ / "drift").string(), "--quiet"}, &drifting, &error))
+      << error;
+  ASSERT_TRUE(parseFuseArguments(
+      {seq_.string(), (seq_ / "corr").string(), "--quiet", "--trajectory", trajectory}, &corrected,
+      &error))
       << error;
   FuseReport drift_report, report;
   ASSERT_TRUE(runOfflineFusion(drifting, &drift_report, &error)) << error;
@@ -97,7 +106,8 @@ TEST_F(FuserTrajectory, TheFramesAreFusedAgainAtTheCorrectedPosesAndLandOnTheTru
   EXPECT_EQ(report.correction.frames_rejected, 0u);
   EXPECT_NEAR(report.correction.max_rotation_deg, 2.5, 1e-6);  // frame 5
   std::ifstream stats_file((seq_ / "corr" / "stats.json").string());
-  const std::string stats((std::istreambuf_iterator<char>(stats_file)), std::istreambuf_iterator<char>());
+  const std::string stats((std::istreambuf_iterator<char>(stats_file)),
+                          std::istreambuf_iterator<char>());
   EXPECT_NE(stats.find("\"frames_refused\": 6"), std::string::npos);
 
   // Exactly the map of the frames fused at PoseCorrection's poses.
@@ -107,7 +117,8 @@ TEST_F(FuserTrajectory, TheFramesAreFusedAgainAtTheCorrectedPosesAndLandOnTheTru
   ASSERT_TRUE(readTumPoses(trajectory, &lines, &error)) << error;
   std::vector<StampedPose> keyframes, originals;
   for (const DatasetFrameInfo& l : lines) keyframes.push_back({l.timestamp_s, l.T_world_camera});
-  for (size_t i = 0; i < reader->size(); ++i) originals.push_back({reader->info(i).timestamp_s, reader->info(i).T_world_camera});
+  for (size_t i = 0; i < reader->size(); ++i)
+    originals.push_back({reader->info(i).timestamp_s, reader->info(i).T_world_camera});
   const PoseCorrection correction(originals, keyframes, 1e9);
   Mapper reference(corrected.config);
   for (size_t i = 0; i < reader->size(); ++i) {
@@ -124,7 +135,8 @@ TEST_F(FuserTrajectory, TheFramesAreFusedAgainAtTheCorrectedPosesAndLandOnTheTru
   // The corrected mesh lies on the truth; the drifted one does not.
   const double drift_error = meanError((seq_ / "drift" / "mesh.ply").string());
   const double corrected_error = meanError((seq_ / "corr" / "mesh.ply").string());
-  std::printf("[trajectory] mean vertex error: drifting %.4f m, corrected %.4f m\n", drift_error, corrected_error);
+  std::printf("[trajectory] mean vertex error: drifting %.4f m, corrected %.4f m\n", drift_error,
+              corrected_error);
   EXPECT_LT(corrected_error, 0.5 * drift_error);
   EXPECT_LT(corrected_error, 0.01);
 }
@@ -134,18 +146,23 @@ TEST_F(FuserTrajectory, ATrajectoryThatMatchesNoFrameOrIsMalformedIsOneClearErro
   const std::string far = (seq_ / "far.txt").string();
   writeTum(far, {0, 5}, 100.0);
   FuseOptions options;
-  ASSERT_TRUE(parseFuseArguments({seq_.string(), (seq_ / "out").string(), "--quiet", "--trajectory", far}, &options, &error));
+  ASSERT_TRUE(parseFuseArguments(
+      {seq_.string(), (seq_ / "out").string(), "--quiet", "--trajectory", far}, &options, &error));
   FuseReport report;
   EXPECT_FALSE(runOfflineFusion(options, &report, &error));
-  EXPECT_NE(error.find("none of its 2 stamps lies within 0.5 s of a fused frame"), std::string::npos) << error;
+  EXPECT_NE(error.find("none of its 2 stamps lies within 0.5 s of a fused frame"),
+            std::string::npos)
+      << error;
 
   const std::string bad = (seq_ / "bad.txt").string();
   std::ofstream(bad) << "0.1 1 2 3\n";
-  ASSERT_TRUE(parseFuseArguments({seq_.string(), (seq_ / "out").string(), "--quiet", "--trajectory", bad}, &options, &error));
+  ASSERT_TRUE(parseFuseArguments(
+      {seq_.string(), (seq_ / "out").string(), "--quiet", "--trajectory", bad}, &options, &error));
   EXPECT_FALSE(runOfflineFusion(options, &report, &error));
   EXPECT_NE(error.find("bad.txt:1: expected 8 numbers"), std::string::npos) << error;
 
   FuseOptions no_input;
-  EXPECT_FALSE(parseFuseArguments({(seq_ / "out").string(), "--load-map", "x.sfmap", "--trajectory", bad}, &no_input, &error));
+  EXPECT_FALSE(parseFuseArguments(
+      {(seq_ / "out").string(), "--load-map", "x.sfmap", "--trajectory", bad}, &no_input, &error));
   EXPECT_NE(error.find("--trajectory needs the frames it corrects"), std::string::npos) << error;
 }

@@ -22,10 +22,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-
 /// A folder unique to this process and test (ctest runs tests in parallel).
 fs::path tempFolder(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("stereo_fusion_" + name + "_" + std::to_string(getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("stereo_fusion_" + name + "_" + std::to_string(getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
@@ -34,16 +34,18 @@ fs::path tempFolder(const std::string& name) {
 TEST(ObjExport, TexturedMeshRoundTripsThroughObjMtlAndPng) {
   const sim::AnalyticScene scene = wallScene();
   MapperConfig config = texturedConfig();
-  config.texture_border_px = 60;  // leave some blocks untextured: patches and baked colours are exercised
+  config.texture_border_px =
+      60;  // leave some blocks untextured: patches and baked colours are exercised
   Mapper mapper(config);
-  ASSERT_TRUE(mapper.integrate(renderFrame(scene, vgaCamera(), lookFrom({0, 0, 0}, {0.1, 0, 1.5}))).accepted);
+  ASSERT_TRUE(mapper.integrate(renderFrame(scene, vgaCamera(), lookFrom({0, 0, 0}, {0.1, 0, 1.5})))
+                  .accepted);
   const fs::path dir = tempFolder("obj_round_trip");
   ObjExportInfo info;
   std::string error;
   ObjExportOptions options;
   options.atlas_edge_px = 512;
-  ASSERT_TRUE(writeTexturedObj((dir / "mesh.obj").string(), mapper.mesh().submeshes(), mapper.textures().patches(),
-                               options, &info, &error))
+  ASSERT_TRUE(writeTexturedObj((dir / "mesh.obj").string(), mapper.mesh().submeshes(),
+                               mapper.textures().patches(), options, &info, &error))
       << error;
   EXPECT_EQ(info.textured_blocks, mapper.textures().patches().size());
   ASSERT_GT(info.textured_blocks, 0u);
@@ -106,10 +108,12 @@ TEST(ObjExport, TexturedMeshRoundTripsThroughObjMtlAndPng) {
         const Eigen::Vector3f colour(c[0], c[1], c[2]);
         mean += colour / 3;
         centroid += obj.uvs[f.vt[k]] / 3;
-        max_baked_error = std::max<double>(max_baked_error,
-                                           (atlas_colour(atlas, obj.uvs[f.vt[k]]) - colour).cwiseAbs().maxCoeff());
+        max_baked_error = std::max<double>(
+            max_baked_error,
+            (atlas_colour(atlas, obj.uvs[f.vt[k]]) - colour).cwiseAbs().maxCoeff());
       }
-      max_baked_error = std::max<double>(max_baked_error, (atlas_colour(atlas, centroid) - mean).cwiseAbs().maxCoeff());
+      max_baked_error = std::max<double>(
+          max_baked_error, (atlas_colour(atlas, centroid) - mean).cwiseAbs().maxCoeff());
       continue;
     }
     ++textured_faces;
@@ -125,7 +129,8 @@ TEST(ObjExport, TexturedMeshRoundTripsThroughObjMtlAndPng) {
       EXPECT_LE(y, placement.rect.y + placement.rect.height + 1e-3);
       // The atlas shows what the patch showed at that vertex.
       const Eigen::Vector3f expected = sampleBilinear(patch->image_rgb, patch->uvs[local[k]]);
-      max_colour_error = std::max<double>(max_colour_error, (atlas_colour(atlas, vt) - expected).cwiseAbs().maxCoeff());
+      max_colour_error = std::max<double>(
+          max_colour_error, (atlas_colour(atlas, vt) - expected).cwiseAbs().maxCoeff());
     }
   }
   EXPECT_GT(baked_faces, 0u);
@@ -143,11 +148,12 @@ TEST(ObjReader, ReadsAHandWrittenFileWithEveryElement) {
   // (relative) index, a quad and a comment; the numbers below are read off the file.
   const fs::path dir = tempFolder("obj_reader_hand");
   std::ofstream(dir / "scene.mtl") << "newmtl plain\nKd 1 1 1\nnewmtl wood\nmap_Kd wood.png\n";
-  std::ofstream(dir / "scene.obj") << "# hand written\nmtllib scene.mtl\n"
-                                      "v 0 0 0 1 0 0\nv 2 0 0 0 1 0\nv 2 1 0.5 0 0 1\nv 0 1 0.5 0.25 0.5 0.75\n"
-                                      "vt 0 0\nvt 1 0\nvt 1 1\nvn 0 0 1\n"
-                                      "o first\nusemtl wood\nf 1/1/1 2/2/1 3/3/1\n"
-                                      "o second\nusemtl plain\nf 1//1 3//1 -1//1\nf 1 2 3 4\n";
+  std::ofstream(dir / "scene.obj")
+      << "# hand written\nmtllib scene.mtl\n"
+         "v 0 0 0 1 0 0\nv 2 0 0 0 1 0\nv 2 1 0.5 0 0 1\nv 0 1 0.5 0.25 0.5 0.75\n"
+         "vt 0 0\nvt 1 0\nvt 1 1\nvn 0 0 1\n"
+         "o first\nusemtl wood\nf 1/1/1 2/2/1 3/3/1\n"
+         "o second\nusemtl plain\nf 1//1 3//1 -1//1\nf 1 2 3 4\n";
   ObjMesh obj;
   std::string error;
   ASSERT_TRUE(readObj((dir / "scene.obj").string(), &obj, &error)) << error;

@@ -77,7 +77,8 @@ double meshArea(const TriangleMesh& m) {
 
 StereoCamera smallCamera(int width = 160, int height = 120, double fx = 131.25,
                          double baseline = 0.1) {
-  return *StereoCamera::create(width, height, fx, fx, (width - 1) / 2.0, (height - 1) / 2.0, baseline);
+  return *StereoCamera::create(width, height, fx, fx, (width - 1) / 2.0, (height - 1) / 2.0,
+                               baseline);
 }
 
 bool sameImage(const cv::Mat& a, const cv::Mat& b) {
@@ -103,10 +104,10 @@ struct TempFolder {
 
 TEST(SimulatorPrimitives, CylinderDistanceByHand) {
   const auto cyl = makeCylinder(Eigen::Isometry3d::Identity(), 0.5, 1.0);
-  EXPECT_NEAR(cyl->signedDistance({1.0, 0, 0}), 0.5, 1e-12);          // beside the side
-  EXPECT_NEAR(cyl->signedDistance({0, 0, 2.0}), 1.0, 1e-12);          // above the cap
-  EXPECT_NEAR(cyl->signedDistance({0, 0, 0}), -0.5, 1e-12);           // centre: nearest is the side
-  EXPECT_NEAR(cyl->signedDistance({0.3, 0, 0.95}), -0.05, 1e-12);     // inside, nearest is the cap
+  EXPECT_NEAR(cyl->signedDistance({1.0, 0, 0}), 0.5, 1e-12);       // beside the side
+  EXPECT_NEAR(cyl->signedDistance({0, 0, 2.0}), 1.0, 1e-12);       // above the cap
+  EXPECT_NEAR(cyl->signedDistance({0, 0, 0}), -0.5, 1e-12);        // centre: nearest is the side
+  EXPECT_NEAR(cyl->signedDistance({0.3, 0, 0.95}), -0.05, 1e-12);  // inside, nearest is the cap
   EXPECT_NEAR(cyl->signedDistance({0, 1.5, 3.0}), std::hypot(1.0, 2.0), 1e-12);  // beyond the rim
   // Posed: rotated 90° about x, so its axis is the world's −y axis.
   const auto lying = makeCylinder(posed({1, 2, 3}, M_PI / 2, Eigen::Vector3d::UnitX()), 0.5, 1.0);
@@ -135,20 +136,22 @@ TEST(SimulatorPrimitives, CylinderRandomRaysHitTheSurfaceFirst) {
   int hits = 0;
   for (int n = 0; n < 500; ++n) {
     const Eigen::Vector3d o(0.0, 0.0, 0.0);
-    const Eigen::Vector3d dir = Eigen::Vector3d(0.1 + jitter(rng), -0.2 + jitter(rng), 1.5).normalized();
+    const Eigen::Vector3d dir =
+        Eigen::Vector3d(0.1 + jitter(rng), -0.2 + jitter(rng), 1.5).normalized();
     const double t = cyl->raycast(o, dir, 1e-9);
     if (!std::isfinite(t)) continue;
     ++hits;
     EXPECT_NEAR(cyl->signedDistance(o + t * dir), 0.0, 1e-9);
-    for (double s = 0.01; s < t - 1e-3; s += 0.01) EXPECT_GT(cyl->signedDistance(o + s * dir), -1e-9);
+    for (double s = 0.01; s < t - 1e-3; s += 0.01)
+      EXPECT_GT(cyl->signedDistance(o + s * dir), -1e-9);
   }
   EXPECT_GT(hits, 100);
 }
 
 TEST(SimulatorPrimitives, RoomIsFreeInsideAndItsWallsAreHitFromWithin) {
   const auto room = makeRoom(posed({0, 0, 1.3}, 0.0, Eigen::Vector3d::UnitZ()), {2.5, 1.5, 1.3});
-  EXPECT_NEAR(room->signedDistance({0, 0, 1.3}), 1.3, 1e-12);   // free space: positive
-  EXPECT_NEAR(room->signedDistance({0, 0, -0.2}), -0.2, 1e-12);  // under the floor: solid
+  EXPECT_NEAR(room->signedDistance({0, 0, 1.3}), 1.3, 1e-12);             // free space: positive
+  EXPECT_NEAR(room->signedDistance({0, 0, -0.2}), -0.2, 1e-12);           // under the floor: solid
   EXPECT_NEAR(room->raycast({0, 0, 1.0}, {0, 0, -1}, 1e-9), 1.0, 1e-12);  // the floor
   EXPECT_NEAR(room->raycast({0, 0, 1.0}, {1, 0, 0}, 1e-9), 2.5, 1e-12);   // the +x wall
   AnalyticScene scene;
@@ -173,9 +176,12 @@ TEST(SimulatorTessellation, VerticesLieOnThePrimitivesAndTheMeshCoversThem) {
   const Eigen::Isometry3d T = posed({0.3, -0.1, 1.2}, 0.5, {1, -2, 0.5});
   std::vector<Case> cases;
   cases.push_back({"sphere", makeSphere({0.3, -0.1, 1.2}, 0.3), 4 * M_PI * 0.09, 0.3});
-  cases.push_back({"box", makeBox(T, {0.2, 0.13, 0.31}), 8 * (0.2 * 0.13 + 0.13 * 0.31 + 0.2 * 0.31), INFINITY});
-  cases.push_back({"room", makeRoom(T, {0.6, 0.5, 0.4}), 8 * (0.6 * 0.5 + 0.5 * 0.4 + 0.6 * 0.4), INFINITY});
-  cases.push_back({"cylinder", makeCylinder(T, 0.12, 0.25), 2 * M_PI * 0.12 * 0.12 + 4 * M_PI * 0.12 * 0.25, 0.12});
+  cases.push_back({"box", makeBox(T, {0.2, 0.13, 0.31}),
+                   8 * (0.2 * 0.13 + 0.13 * 0.31 + 0.2 * 0.31), INFINITY});
+  cases.push_back(
+      {"room", makeRoom(T, {0.6, 0.5, 0.4}), 8 * (0.6 * 0.5 + 0.5 * 0.4 + 0.6 * 0.4), INFINITY});
+  cases.push_back({"cylinder", makeCylinder(T, 0.12, 0.25),
+                   2 * M_PI * 0.12 * 0.12 + 4 * M_PI * 0.12 * 0.25, 0.12});
   cases.push_back({"torus", makeTorus(T, 0.3, 0.08), 4 * M_PI * M_PI * 0.3 * 0.08, 0.08});
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
@@ -192,7 +198,8 @@ TEST(SimulatorTessellation, VerticesLieOnThePrimitivesAndTheMeshCoversThem) {
       // one side stays on the neighbouring face).
       const Eigen::Vector3d n = mesh.normals[v].cast<double>();
       const double delta = 1e-4;
-      EXPECT_GT(c.prim->signedDistance(p + delta * n) - c.prim->signedDistance(p - delta * n), 0.9 * delta);
+      EXPECT_GT(c.prim->signedDistance(p + delta * n) - c.prim->signedDistance(p - delta * n),
+                0.9 * delta);
     }
     // Triangles wound counter-clockwise seen from outside; no edge much longer than asked.
     for (const auto& t : mesh.triangles) {
@@ -200,10 +207,14 @@ TEST(SimulatorTessellation, VerticesLieOnThePrimitivesAndTheMeshCoversThem) {
                                        .cross(mesh.positions[t[2]] - mesh.positions[t[0]]);
       EXPECT_GT(face.dot(mesh.normals[t[0]] + mesh.normals[t[1]] + mesh.normals[t[2]]), 0.0f);
       for (int k = 0; k < 3; ++k)
-        EXPECT_LE((mesh.positions[t[k]] - mesh.positions[t[(k + 1) % 3]]).norm(), e * std::sqrt(2.0) + 1e-6);
+        EXPECT_LE((mesh.positions[t[k]] - mesh.positions[t[(k + 1) % 3]]).norm(),
+                  e * std::sqrt(2.0) + 1e-6);
     }
     // Covers the surface: the area matches and every surface point is near the mesh.
-    const double chord_tol = std::isinf(c.min_radius_m) ? 1e-6 : c.min_radius_m * (1 - std::cos(M_PI / 24)) + e * e / (8 * c.min_radius_m);
+    const double chord_tol =
+        std::isinf(c.min_radius_m)
+            ? 1e-6
+            : c.min_radius_m * (1 - std::cos(M_PI / 24)) + e * e / (8 * c.min_radius_m);
     EXPECT_NEAR(meshArea(mesh), c.area_m2, 0.03 * c.area_m2);
     std::mt19937 rng(7);
     std::normal_distribution<double> g;
@@ -215,7 +226,9 @@ TEST(SimulatorTessellation, VerticesLieOnThePrimitivesAndTheMeshCoversThem) {
       const Eigen::Vector3d centre(0.3, -0.1, 1.2);
       const bool room = std::string(c.name) == "room";
       const Eigen::Vector3d o = room ? centre : Eigen::Vector3d(centre + 3.0 * dir);
-      const Eigen::Vector3d ray = room ? dir : Eigen::Vector3d(-dir + 0.1 * Eigen::Vector3d(g(rng), g(rng), g(rng))).normalized();
+      const Eigen::Vector3d ray =
+          room ? dir
+               : Eigen::Vector3d(-dir + 0.1 * Eigen::Vector3d(g(rng), g(rng), g(rng))).normalized();
       const double t = c.prim->raycast(o, ray, 1e-9);
       if (!std::isfinite(t)) continue;
       ++samples;
@@ -232,7 +245,8 @@ TEST(SimulatorTessellation, PresetMeshesLieOnTheScenesSurfaces) {
     preset.scene.tessellate(&mesh, 0.1);
     ASSERT_GT(mesh.triangles.size(), 1000u) << name;
     double worst = 0;
-    for (const auto& p : mesh.positions) worst = std::max(worst, preset.scene.distanceToSurface(p.cast<double>()));
+    for (const auto& p : mesh.positions)
+      worst = std::max(worst, preset.scene.distanceToSurface(p.cast<double>()));
     EXPECT_LT(worst, 1e-6) << name;
     // Vertex colours come from the texture, not one flat colour per primitive.
     std::set<std::array<uint8_t, 3>> colours(mesh.colors.begin(), mesh.colors.end());
@@ -248,8 +262,10 @@ TEST(SimulatorScenes, SameSeedSameSceneOtherSeedOtherScene) {
   const StereoCamera camera = smallCamera();
   for (const char* name : {"room", "tabletop", "hall"}) {
     SCOPED_TRACE(name);
-    const ScenePreset a = *makePreset(name, 11), b = *makePreset(name, 11), c = *makePreset(name, 12);
-    const Eigen::Isometry3d pose = lookAt(a.focus_m + Eigen::Vector3d(a.orbit_radius_m, 0, a.orbit_height_m), a.focus_m);
+    const ScenePreset a = *makePreset(name, 11), b = *makePreset(name, 11),
+                      c = *makePreset(name, 12);
+    const Eigen::Isometry3d pose =
+        lookAt(a.focus_m + Eigen::Vector3d(a.orbit_radius_m, 0, a.orbit_height_m), a.focus_m);
     cv::Mat da, ca, db, cb, dc, cc;
     renderDepthAndColor(a.scene, camera, pose, &da, &ca);
     renderDepthAndColor(b.scene, camera, pose, &db, &cb);
@@ -298,7 +314,8 @@ TEST(SimulatorTrajectory, OrbitCirclesTheCentreLookingAtIt) {
   for (size_t k = 0; k < poses.size(); ++k) {
     const Eigen::Isometry3d& T = poses[k].T_world_camera;
     EXPECT_DOUBLE_EQ(poses[k].timestamp_s, k / 20.0);
-    EXPECT_NEAR((T.linear().transpose() * T.linear() - Eigen::Matrix3d::Identity()).norm(), 0, 1e-12);
+    EXPECT_NEAR((T.linear().transpose() * T.linear() - Eigen::Matrix3d::Identity()).norm(), 0,
+                1e-12);
     EXPECT_NEAR(T.linear().determinant(), 1.0, 1e-12);
     const Eigen::Vector3d rel = T.translation() - orbit.centre_m;
     EXPECT_NEAR(rel.head<2>().norm(), 1.2, 0.12 + 1e-9);
@@ -311,7 +328,8 @@ TEST(SimulatorTrajectory, OrbitCirclesTheCentreLookingAtIt) {
     EXPECT_LT(T.linear().col(1).z(), 0);
     if (k > 0) {
       const Eigen::Vector3d a = poses[k - 1].T_world_camera.translation() - orbit.centre_m;
-      swept += std::abs(std::atan2(a.x() * rel.y() - a.y() * rel.x(), a.head<2>().dot(rel.head<2>())));
+      swept +=
+          std::abs(std::atan2(a.x() * rel.y() - a.y() * rel.x(), a.head<2>().dot(rel.head<2>())));
     }
   }
   EXPECT_NEAR(swept, 2 * M_PI * 49 / 50, 1e-6);  // one revolution over the sequence
@@ -326,20 +344,24 @@ TEST(SimulatorTrajectory, OdometryDriftGrowsLinearlyToTheRequestedYawAndOffset) 
   truth[0].T_world_camera.translation() = Eigen::Vector3d(1, 0, 1.5);
   truth[1].T_world_camera.translation() = Eigen::Vector3d(0, 1, 1.5);
   truth[2].T_world_camera.translation() = Eigen::Vector3d(-1, 0, 1.0);
-  truth[2].T_world_camera.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  truth[2].T_world_camera.linear() =
+      Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()).toRotationMatrix();
   const std::vector<TimedPose> odometry = addOdometryDrift(truth, 4.0, 0.15);
   ASSERT_EQ(odometry.size(), 3u);
   EXPECT_TRUE(odometry[0].T_world_camera.isApprox(truth[0].T_world_camera, 1e-15));
   // Last frame: rotated by 4° about the vertical through (1, 0): the point (−1, 0) is 2 m from
   // it, so it moves to (1 − 2 cos 4°, −2 sin 4°), then by 0.15·(2, 1)/√5.
   const double a = 4.0 * M_PI / 180.0;
-  const Eigen::Vector3d expected(1 - 2 * std::cos(a) + 0.3 / std::sqrt(5.0), -2 * std::sin(a) + 0.15 / std::sqrt(5.0), 1.0);
+  const Eigen::Vector3d expected(1 - 2 * std::cos(a) + 0.3 / std::sqrt(5.0),
+                                 -2 * std::sin(a) + 0.15 / std::sqrt(5.0), 1.0);
   EXPECT_TRUE(odometry[2].T_world_camera.translation().isApprox(expected, 1e-12));
-  const Eigen::Matrix3d turn = odometry[2].T_world_camera.linear() * truth[2].T_world_camera.linear().transpose();
+  const Eigen::Matrix3d turn =
+      odometry[2].T_world_camera.linear() * truth[2].T_world_camera.linear().transpose();
   EXPECT_NEAR(std::atan2(turn(1, 0), turn(0, 0)), a, 1e-12);
   EXPECT_NEAR(turn(2, 2), 1.0, 1e-12);  // about the vertical only
   // Halfway: half of it.
-  const Eigen::Matrix3d half = odometry[1].T_world_camera.linear() * truth[1].T_world_camera.linear().transpose();
+  const Eigen::Matrix3d half =
+      odometry[1].T_world_camera.linear() * truth[1].T_world_camera.linear().transpose();
   EXPECT_NEAR(std::atan2(half(1, 0), half(0, 0)), a / 2, 1e-12);
 }
 
@@ -367,7 +389,8 @@ TEST(SimulatorTrajectory, PresetPathsStayInsideTheRoomAndSeeTheScene) {
           const double step = (eye - P.translation()).norm();
           max_step = std::max(max_step, step);
           min_step = std::min(min_step, step);
-          EXPECT_LT(Eigen::AngleAxisd(P.linear().transpose() * T.linear()).angle(), 0.25);  // smooth
+          EXPECT_LT(Eigen::AngleAxisd(P.linear().transpose() * T.linear()).angle(),
+                    0.25);  // smooth
         }
         // Every pixel sees a surface, none too near for the stereo range.
         if (k % 6 == 0) {
@@ -379,8 +402,8 @@ TEST(SimulatorTrajectory, PresetPathsStayInsideTheRoomAndSeeTheScene) {
           EXPECT_LT(hi, 8.0);
         }
       }
-      EXPECT_LT(max_step, 0.3);               // at most 3 m/s at 10 Hz
-      EXPECT_LT(max_step, 1.6 * min_step);    // steady speed, no jumps
+      EXPECT_LT(max_step, 0.3);             // at most 3 m/s at 10 Hz
+      EXPECT_LT(max_step, 1.6 * min_step);  // steady speed, no jumps
       const auto again = makeTrajectory(traj, preset, 60, 10.0, 2, &error);
       const auto other = makeTrajectory(traj, preset, 60, 10.0, 3, &error);
       EXPECT_TRUE((*again)[30].T_world_camera.isApprox((*poses)[30].T_world_camera, 0));
@@ -445,8 +468,11 @@ TEST(SimulatorStereo, ExactDisparityIsFocalTimesBaselineOverDepth) {
     }
   EXPECT_EQ(valid, 160 * 120);
   // Depth is z along the optical axis to the ray-cast surface.
-  for (const auto& uv : {Eigen::Vector2i(80, 60), Eigen::Vector2i(3, 7), Eigen::Vector2i(150, 110)}) {
-    const Eigen::Vector3d dir = Eigen::Vector3d((uv.x() - camera.cx()) / camera.fx(), (uv.y() - camera.cy()) / camera.fy(), 1).normalized();
+  for (const auto& uv :
+       {Eigen::Vector2i(80, 60), Eigen::Vector2i(3, 7), Eigen::Vector2i(150, 110)}) {
+    const Eigen::Vector3d dir = Eigen::Vector3d((uv.x() - camera.cx()) / camera.fx(),
+                                                (uv.y() - camera.cy()) / camera.fy(), 1)
+                                    .normalized();
     const Hit hit = preset.scene.raycast(pose.translation(), pose.linear() * dir);
     EXPECT_NEAR(view.depth_m.at<float>(uv.y(), uv.x()), hit.t * dir.z(), 1e-5);
   }
@@ -455,7 +481,7 @@ TEST(SimulatorStereo, ExactDisparityIsFocalTimesBaselineOverDepth) {
 TEST(SimulatorStereo, NoisyDisparityHasTheRequestedStatistics) {
   cv::Mat exact(300, 400, CV_32FC1, cv::Scalar(40.0f));
   exact(cv::Rect(0, 0, 400, 10)).setTo(0.0f);  // invalid pixels stay invalid
-  DisparityNoiseParams noise;  // σ 0.3 px, 1 % outliers uniform in [1, 128)
+  DisparityNoiseParams noise;                  // σ 0.3 px, 1 % outliers uniform in [1, 128)
   const cv::Mat noisy = addDisparityNoise(exact, noise, 42);
   EXPECT_EQ(cv::countNonZero(noisy(cv::Rect(0, 0, 400, 10))), 0);
   double sum = 0, sum2 = 0;
@@ -518,7 +544,8 @@ TEST(SimulatorStereo, RightImageIsTheLeftShiftedByTheDisparity) {
   for (int v = 0; v < 120; ++v)
     for (int u = 10; u < 160; ++u)
       for (int ch = 0; ch < 3; ++ch) {
-        const int diff = std::abs(left.at<cv::Vec3b>(v, u)[ch] - right.at<cv::Vec3b>(v, u - 10)[ch]);
+        const int diff =
+            std::abs(left.at<cv::Vec3b>(v, u)[ch] - right.at<cv::Vec3b>(v, u - 10)[ch]);
         worst = std::max(worst, diff);
         sum += diff;
         ++n;
@@ -526,13 +553,17 @@ TEST(SimulatorStereo, RightImageIsTheLeftShiftedByTheDisparity) {
   EXPECT_LE(worst, 1);  // only float rounding of the hit point
   EXPECT_LT(sum / n, 0.05);
   // And the shift is really there: unshifted, the images differ.
-  EXPECT_GT(cv::norm(left(cv::Rect(10, 0, 150, 120)), right(cv::Rect(10, 0, 150, 120)), cv::NORM_L1) / (150 * 120 * 3), 5.0);
+  EXPECT_GT(
+      cv::norm(left(cv::Rect(10, 0, 150, 120)), right(cv::Rect(10, 0, 150, 120)), cv::NORM_L1) /
+          (150 * 120 * 3),
+      5.0);
 }
 
 TEST(SimulatorStereo, SgbmOnASlantedPlaneIsSubpixelAccurate) {
   // A textured plane slanted 35° about the vertical axis: true disparities 11–23 px.
   AnalyticScene scene;
-  scene.add(makeBox(posed({0, 0, 1.9}, 35 * M_PI / 180, Eigen::Vector3d::UnitY()), {4, 4, 0.2}), {200, 190, 170});
+  scene.add(makeBox(posed({0, 0, 1.9}, 35 * M_PI / 180, Eigen::Vector3d::UnitY()), {4, 4, 0.2}),
+            {200, 190, 170});
   const StereoCamera camera = smallCamera(320, 240, 262.5, 0.1);
   StereoRenderConfig config;
   config.mode = DisparityMode::kSgbm;
@@ -566,7 +597,8 @@ TEST(SimulatorDataset, DisparityEncodingFollowsKitti) {
   std::copy(values, values + 8, d.ptr<float>());
   const cv::Mat png = encodeDisparityPng(d);
   ASSERT_EQ(png.type(), CV_16UC1);
-  const uint16_t expected[8] = {0, 0, 0, 0, 1, static_cast<uint16_t>(std::lround(17.3f * 256.0)), 65533, 0};
+  const uint16_t expected[8] = {
+      0, 0, 0, 0, 1, static_cast<uint16_t>(std::lround(17.3f * 256.0)), 65533, 0};
   for (int i = 0; i < 8; ++i) EXPECT_EQ(png.at<uint16_t>(0, i), expected[i]) << values[i];
   EXPECT_EQ(frameStem(0), "000000");
   EXPECT_EQ(frameStem(123456), "123456");
@@ -591,11 +623,13 @@ TEST(SimulatorDataset, WritesTheFolderTheReaderReads) {
     for (size_t k = 0; k < 3; ++k) {
       views.push_back(renderer.render((*poses)[k].T_world_camera, k));
       ASSERT_TRUE(writer->writeFrame(k, (*poses)[k].timestamp_s, (*poses)[k].T_world_camera,
-                                     views[k].disparity_px, views[k].left_rgb, views[k].right_rgb, &error))
+                                     views[k].disparity_px, views[k].left_rgb, views[k].right_rgb,
+                                     &error))
           << error;
     }
     EXPECT_FALSE(writer->writeFrame(7, 0.7, Eigen::Isometry3d::Identity(), views[0].disparity_px,
-                                    views[0].left_rgb, views[0].right_rgb, &error));  // out of order
+                                    views[0].left_rgb, views[0].right_rgb,
+                                    &error));  // out of order
     TriangleMesh mesh;
     preset.scene.tessellate(&mesh, 0.1);
     ASSERT_TRUE(writer->writeGroundTruthMesh(mesh, &error)) << error;
@@ -621,9 +655,11 @@ TEST(SimulatorDataset, WritesTheFolderTheReaderReads) {
     const cv::Mat d16 = cv::imread((tmp.path / "disparity" / stem).string(), cv::IMREAD_UNCHANGED);
     EXPECT_TRUE(sameImage(d16, encodeDisparityPng(views[k].disparity_px)));
     cv::Mat rgb;
-    cv::cvtColor(cv::imread((tmp.path / "color" / stem).string(), cv::IMREAD_COLOR), rgb, cv::COLOR_BGR2RGB);
+    cv::cvtColor(cv::imread((tmp.path / "color" / stem).string(), cv::IMREAD_COLOR), rgb,
+                 cv::COLOR_BGR2RGB);
     EXPECT_TRUE(sameImage(rgb, views[k].left_rgb));
-    cv::cvtColor(cv::imread((tmp.path / "right" / stem).string(), cv::IMREAD_COLOR), rgb, cv::COLOR_BGR2RGB);
+    cv::cvtColor(cv::imread((tmp.path / "right" / stem).string(), cv::IMREAD_COLOR), rgb,
+                 cv::COLOR_BGR2RGB);
     EXPECT_TRUE(sameImage(rgb, views[k].right_rgb));
   }
 
@@ -646,7 +682,8 @@ TEST(SimulatorDataset, WritesTheFolderTheReaderReads) {
     double worst = 0;
     for (int v = 0; v < 120; ++v)
       for (int u = 0; u < 160; ++u)
-        worst = std::max(worst, double(std::abs(frame.disparity_px.at<float>(v, u) - views[k].disparity_px.at<float>(v, u))));
+        worst = std::max(worst, double(std::abs(frame.disparity_px.at<float>(v, u) -
+                                                views[k].disparity_px.at<float>(v, u))));
     EXPECT_LE(worst, 0.5 / 256 + 1e-6);
   }
 

@@ -21,8 +21,8 @@ using SubmeshMap = std::unordered_map<BlockKey, SubMesh, BlockKeyHash>;
 using PatchMap = std::unordered_map<BlockKey, TexturePatch, BlockKeyHash>;
 
 /// A quad with corners a, b, c, d (counter-clockwise seen from the camera side) as one submesh.
-SubMesh quad(const BlockKey& key, const Eigen::Vector3f& a, const Eigen::Vector3f& b, const Eigen::Vector3f& c,
-             const Eigen::Vector3f& d, uint8_t grey) {
+SubMesh quad(const BlockKey& key, const Eigen::Vector3f& a, const Eigen::Vector3f& b,
+             const Eigen::Vector3f& c, const Eigen::Vector3f& d, uint8_t grey) {
   SubMesh m;
   m.key = key;
   m.positions = {a, b, c, d};
@@ -50,7 +50,8 @@ TEST(MeshRasterizer, TexturesAreInterpolatedPerspectiveCorrectly) {
   const Eigen::Vector3f a(-1, -1, 1.5), b(1, -1, 3), c(1, 1, 3), d(-1, 1, 1.5);
   SubmeshMap meshes{{BlockKey{0, 0, 0}, quad({0, 0, 0}, a, b, c, d, 100)}};
   PatchMap patches{{BlockKey{0, 0, 0}, rampPatch()}};
-  const texcmp::RenderedView view = texcmp::renderMesh(meshes, &patches, camera, Eigen::Isometry3d::Identity());
+  const texcmp::RenderedView view =
+      texcmp::renderMesh(meshes, &patches, camera, Eigen::Isometry3d::Identity());
   int checked = 0;
   for (int y = 20; y < camera.height(); y += 37)
     for (int x = 5; x < camera.width(); x += 23) {
@@ -73,12 +74,16 @@ TEST(MeshRasterizer, TexturesAreInterpolatedPerspectiveCorrectly) {
 TEST(MeshRasterizer, NearerSurfaceWinsAndVertexColoursBlend) {
   const StereoCamera camera = qvgaCamera();
   SubmeshMap meshes;
-  meshes[{0, 0, 0}] = quad({0, 0, 0}, {-2, -2, 3}, {2, -2, 3}, {2, 2, 3}, {-2, 2, 3}, 50);    // far wall
-  meshes[{1, 0, 0}] = quad({1, 0, 0}, {-0.2f, -0.2f, 1}, {0.2f, -0.2f, 1}, {0.2f, 0.2f, 1}, {-0.2f, 0.2f, 1}, 200);
+  meshes[{0, 0, 0}] =
+      quad({0, 0, 0}, {-2, -2, 3}, {2, -2, 3}, {2, 2, 3}, {-2, 2, 3}, 50);  // far wall
+  meshes[{1, 0, 0}] =
+      quad({1, 0, 0}, {-0.2f, -0.2f, 1}, {0.2f, -0.2f, 1}, {0.2f, 0.2f, 1}, {-0.2f, 0.2f, 1}, 200);
   // Vertex colours varying along x on the near quad: 0 at x = −0.2, 240 at x = +0.2.
   meshes[{1, 0, 0}].colors = {{0, 0, 0}, {240, 240, 240}, {240, 240, 240}, {0, 0, 0}};
-  const texcmp::RenderedView view = texcmp::renderMesh(meshes, nullptr, camera, Eigen::Isometry3d::Identity());
-  // Image centre (159.5, 119.5) lies between pixels; pixel (160, 120) is at X = 0.5/262.5 m on the near quad.
+  const texcmp::RenderedView view =
+      texcmp::renderMesh(meshes, nullptr, camera, Eigen::Isometry3d::Identity());
+  // Image centre (159.5, 119.5) lies between pixels; pixel (160, 120) is at X = 0.5/262.5 m on the
+  // near quad.
   const double X = (160 - camera.cx()) / camera.fx();
   EXPECT_NEAR(view.depth_m.at<float>(120, 160), 1.0, 1e-5);
   EXPECT_NEAR(view.rgb.at<cv::Vec3b>(120, 160)[1], 240 * (X + 0.2) / 0.4, 1.0);
@@ -100,30 +105,37 @@ TEST(ObjRenderable, TheExportedObjRendersLikeTheTexturedMeshItCameFrom) {
   Mapper mapper(config);
   const StereoCamera camera = vgaCamera();
   for (double x : {-0.1, 0.0, 0.1})
-    ASSERT_TRUE(mapper.integrate(renderFrame(scene, camera, sim::lookAt({x, 0, 0}, {0, 0, 1.5}, -Eigen::Vector3d::UnitY())))
-                    .accepted);
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("stereo_fusion_obj_renderable_" + std::to_string(getpid()));
+    ASSERT_TRUE(
+        mapper
+            .integrate(renderFrame(scene, camera,
+                                   sim::lookAt({x, 0, 0}, {0, 0, 1.5}, -Eigen::Vector3d::UnitY())))
+            .accepted);
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("stereo_fusion_obj_renderable_" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
   ObjExportInfo info;
   ObjMesh obj;
   SubmeshMap obj_meshes;
   PatchMap obj_patches;
   std::string error;
-  ASSERT_TRUE(writeTexturedObj((dir / "mesh.obj").string(), mapper.mesh().submeshes(), mapper.textures().patches(),
-                               {}, &info, &error)) << error;
+  ASSERT_TRUE(writeTexturedObj((dir / "mesh.obj").string(), mapper.mesh().submeshes(),
+                               mapper.textures().patches(), {}, &info, &error))
+      << error;
   ASSERT_TRUE(readObj((dir / "mesh.obj").string(), &obj, &error)) << error;
   ASSERT_TRUE(texcmp::objToRenderable(obj, &obj_meshes, &obj_patches, &error)) << error;
   std::filesystem::remove_all(dir);
   ASSERT_GT(info.textured_blocks, 10u);
   ASSERT_GT(info.vertex_colour_blocks, 0u);
 
-  const Eigen::Isometry3d view = sim::lookAt({0.05, 0.05, 0.1}, {0, 0, 1.5}, -Eigen::Vector3d::UnitY());
-  const auto original = texcmp::renderMesh(mapper.mesh().submeshes(), &mapper.textures().patches(), camera, view);
+  const Eigen::Isometry3d view =
+      sim::lookAt({0.05, 0.05, 0.1}, {0, 0, 1.5}, -Eigen::Vector3d::UnitY());
+  const auto original =
+      texcmp::renderMesh(mapper.mesh().submeshes(), &mapper.textures().patches(), camera, view);
   const auto exported = texcmp::renderMesh(obj_meshes, &obj_patches, camera, view);
   const cv::Mat mask = (original.depth_m > 0) & (exported.depth_m > 0);
   ASSERT_GT(cv::countNonZero(mask), 100000);
-  EXPECT_GT(cv::countNonZero(exported.textured & mask), cv::countNonZero(mask) * 99 / 100) << "every face textured";
+  EXPECT_GT(cv::countNonZero(exported.textured & mask), cv::countNonZero(mask) * 99 / 100)
+      << "every face textured";
   // Same texels through the atlas: equal up to UV rounding; a swapped or unflipped v, a wrong
   // atlas offset or a bad baked tile would drop this far below 40 dB.
   EXPECT_GT(texcmp::squaredError(exported.rgb, original.rgb, mask).psnrDb(), 40.0);

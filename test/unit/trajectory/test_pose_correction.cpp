@@ -12,7 +12,8 @@ namespace {
 
 Eigen::Isometry3d pose(double x, double y, double z, double yaw_deg = 0.0) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  T.linear() =
+      Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   T.translation() = Eigen::Vector3d(x, y, z);
   return T;
 }
@@ -53,13 +54,15 @@ TEST(PoseCorrection, ATrajectoryThatAgreesCorrectsNothing) {
   const PoseCorrection correction(fused, {fused[0], fused[2], fused[4]}, 4.0);
   ASSERT_EQ(correction.corrections().size(), 3u);
   for (const StampedPose& f : fused)
-    EXPECT_TRUE(correction.corrected(f.stamp_s, f.T_world_camera).isApprox(f.T_world_camera, 1e-12));
+    EXPECT_TRUE(
+        correction.corrected(f.stamp_s, f.T_world_camera).isApprox(f.T_world_camera, 1e-12));
 }
 
 TEST(PoseCorrection, FramesBetweenTrajectoryPosesTakeTheInterpolatedCorrectionHandWorked) {
   const std::vector<StampedPose> fused = straightLine();
   // At t = 0 the SLAM moves the frame by +1 m in y; at t = 4 by +3 m in y and 90° of yaw.
-  const std::vector<StampedPose> trajectory{{0.0, pose(0, 1, 0)}, {4.0, pose(4, 3, 0) * pose(0, 0, 0, 90)}};
+  const std::vector<StampedPose> trajectory{{0.0, pose(0, 1, 0)},
+                                            {4.0, pose(4, 3, 0) * pose(0, 0, 0, 90)}};
   const PoseCorrection correction(fused, trajectory, 4.0);
   ASSERT_EQ(correction.corrections().size(), 2u);
   // C_0 = T_0 · O(0)⁻¹ = translation (0, 1, 0). C_4 = T_4 · O(4)⁻¹: rotate by 90° about the
@@ -75,8 +78,10 @@ TEST(PoseCorrection, FramesBetweenTrajectoryPosesTakeTheInterpolatedCorrectionHa
   EXPECT_NEAR(at2.translation().x(), 2.0 + std::sqrt(2.0), 1e-9);
   EXPECT_NEAR(at2.translation().y(), std::sqrt(2.0), 1e-9);
   // The trajectory poses themselves are met exactly.
-  EXPECT_TRUE(correction.corrected(4.0, fused[4].T_world_camera).isApprox(trajectory[1].T_world_camera, 1e-12));
-  EXPECT_TRUE(correction.corrected(0.0, fused[0].T_world_camera).isApprox(trajectory[0].T_world_camera, 1e-12));
+  EXPECT_TRUE(correction.corrected(4.0, fused[4].T_world_camera)
+                  .isApprox(trajectory[1].T_world_camera, 1e-12));
+  EXPECT_TRUE(correction.corrected(0.0, fused[0].T_world_camera)
+                  .isApprox(trajectory[0].T_world_camera, 1e-12));
 }
 
 TEST(PoseCorrection, BeforeTheFirstPoseTheFirstCorrectionAfterTheLastOnlyForFramesFusedBeforeIt) {
