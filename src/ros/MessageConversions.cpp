@@ -8,6 +8,8 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
+#include "stereo_fusion/trajectory/UnitQuaternion.h"
+
 namespace stereo_fusion {
 
 namespace enc = sensor_msgs::image_encodings;
@@ -127,6 +129,31 @@ bool toStereoFrame(const stereo_msgs::DisparityImage& disparity, const sensor_ms
   frame->disparity_px = disparity_px;
   frame->color = color;
   frame->T_world_camera = T_world_camera;
+  return true;
+}
+
+bool toCameraPoses(const nav_msgs::Path& path, const Eigen::Isometry3d& T_trajectory_camera,
+                   std::vector<StampedPose>* poses, std::string* why) {
+  std::vector<StampedPose> out;
+  out.reserve(path.poses.size());
+  for (size_t k = 0; k < path.poses.size(); ++k) {
+    const geometry_msgs::Pose& p = path.poses[k].pose;
+    std::string bad_rotation;
+    const std::optional<Eigen::Quaterniond> q = unitQuaternion(
+        p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w, &bad_rotation);
+    const Eigen::Vector3d t(p.position.x, p.position.y, p.position.z);
+    const double stamp_s = path.poses[k].header.stamp.toSec();
+    if (!q || !t.allFinite() || !std::isfinite(stamp_s)) {
+      *why = "pose " + std::to_string(k) + " of " + std::to_string(path.poses.size()) + ": " +
+             (q ? "its position is not finite" : bad_rotation) + " (the whole path is refused)";
+      return false;
+    }
+    Eigen::Isometry3d T_world_trajectory = Eigen::Isometry3d::Identity();
+    T_world_trajectory.linear() = q->toRotationMatrix();
+    T_world_trajectory.translation() = t;
+    out.push_back({stamp_s, T_world_trajectory * T_trajectory_camera});
+  }
+  *poses = std::move(out);
   return true;
 }
 

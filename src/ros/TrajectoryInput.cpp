@@ -2,7 +2,7 @@
 
 #include <tf2_eigen/tf2_eigen.h>
 
-#include "stereo_fusion/trajectory/UnitQuaternion.h"
+#include "stereo_fusion/ros/MessageConversions.h"
 
 namespace stereo_fusion {
 
@@ -53,23 +53,9 @@ void TrajectoryInput::onTrajectory(const nav_msgs::Path::ConstPtr& path) {
     }
   }
   std::vector<StampedPose> poses;
-  for (size_t k = 0; k < path->poses.size(); ++k) {
-    const geometry_msgs::Pose& p = path->poses[k].pose;
-    std::string why;
-    const std::optional<Eigen::Quaterniond> q =
-        unitQuaternion(p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w, &why);
-    const Eigen::Vector3d t(p.position.x, p.position.y, p.position.z);
-    if (!q || !t.allFinite() || !std::isfinite(path->poses[k].header.stamp.toSec()))
-      return refuse(TrajectoryOutcome::kRejectedBadPose,
-                    "pose " + std::to_string(k) + " of " + std::to_string(path->poses.size()) +
-                        ": " + (q ? "its position is not finite" : why) +
-                        " (the whole path is refused)");
-    Eigen::Isometry3d T_world_trajectory = Eigen::Isometry3d::Identity();
-    T_world_trajectory.linear() = q->toRotationMatrix();
-    T_world_trajectory.translation() = t;
-    poses.push_back(
-        {path->poses[k].header.stamp.toSec(), T_world_trajectory * T_trajectory_camera});
-  }
+  std::string why;
+  if (!toCameraPoses(*path, T_trajectory_camera, &poses, &why))
+    return refuse(TrajectoryOutcome::kRejectedBadPose, why);
   const std::optional<CorrectionReport> refused = session_->submitTrajectory(std::move(poses));
   if (refused)
     ROS_ERROR_THROTTLE(5.0, "stereo_fusion: trajectory ignored (%llu so far): %s",

@@ -2,14 +2,17 @@
 // ROS messages ↔ core types. The ros/ folder is the only place that includes ROS headers.
 
 #include <geometry_msgs/TransformStamped.h>
+#include <nav_msgs/Path.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <stereo_msgs/DisparityImage.h>
 
 #include <Eigen/Geometry>
 #include <string>
+#include <vector>
 
 #include "stereo_fusion/integration/StereoFrame.h"
+#include "stereo_fusion/trajectory/PoseCorrection.h"
 
 namespace stereo_fusion {
 
@@ -22,6 +25,13 @@ namespace stereo_fusion {
 bool toStereoFrame(const stereo_msgs::DisparityImage& disparity, const sensor_msgs::Image& image,
                    const sensor_msgs::CameraInfo& info, const Eigen::Isometry3d& T_world_camera,
                    StereoFrame* frame, std::string* error);
+
+/// The camera poses a SLAM's Path stands for: T_world_camera = pose_k · T_trajectory_camera,
+/// stamped by each pose's header. A pose whose position or stamp is not finite, or whose
+/// quaternion is no rotation (unitQuaternion(): one slightly off unit length is normalised),
+/// refuses the whole Path: false, `poses` untouched, `why` names the pose.
+bool toCameraPoses(const nav_msgs::Path& path, const Eigen::Isometry3d& T_trajectory_camera,
+                   std::vector<StampedPose>* poses, std::string* why);
 
 /// The messages a stereo pipeline publishes for `frame`, stamped with `header`: disparity as
 /// 32FC1 with f, T and the disparity range [0, max_disparity_px]; the image as rgb8 (or mono8);
