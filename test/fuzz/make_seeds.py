@@ -81,3 +81,46 @@ write("fuzz_integrate", "special_disparities", bytes(special))
 raw = struct.pack("<5f", 300.0, 300.0, 16.0, 12.0, 0.1) + struct.pack("<12f", 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0)
 raw += struct.pack("<768f", *([20.0] * 768))
 write("fuzz_integrate", "raw_floats", bytes([0x43, 0]) + raw)
+
+# toStereoFrame() + integrate(): flags, the broken field's index, the colour encoding, then the
+# fields fuzz_ros_frame.cpp reads (plausible K: 4 bytes; disparity header: 5 bytes; 192
+# disparity bytes; the colour byte; a raw u32 when bit 4; the pose: 2 bytes).
+def ros_frame_seed(flags, broken=0, encoding=0, k=(128, 128, 128, 128), disparity_byte=20, raw32=b""):
+    body = bytes([flags, broken, encoding]) + bytes(k)
+    if flags & 64:
+        body += bytes([16, 12])
+    body += bytes([128, 128, 64, 255, 16]) + bytes([disparity_byte]) * (16 * 12) + b"\x50"
+    return body + raw32 + bytes([128, 128])
+
+write("fuzz_ros_frame", "plausible_rgb8", ros_frame_seed(0x00))
+write("fuzz_ros_frame", "k_only_mono8", ros_frame_seed(0x22, encoding=4))
+write("fuzz_ros_frame", "big_endian_disparity", ros_frame_seed(0x08))
+write("fuzz_ros_frame", "unknown_encoding", ros_frame_seed(0x20, encoding=6))
+write("fuzz_ros_frame", "info_size_from_bytes", ros_frame_seed(0x40))
+# a disparity width whose 4-byte row overflows 32 bits: the step check must not wrap
+write("fuzz_ros_frame", "huge_disparity_width", ros_frame_seed(0x10, broken=0, raw32=struct.pack("<I", 0x40000001)))
+write("fuzz_ros_frame", "huge_image_step", ros_frame_seed(0x10, broken=5, raw32=struct.pack("<I", 0xFFFFFFFF)))
+# the principal point far outside the image (a 1e9 px cx stalled the lookup once)
+raw_k = struct.pack("<4f", 30.0, 30.0, 1e9, 6.0)
+write("fuzz_ros_frame", "absurd_principal_point", bytes([0x01, 0, 0]) + raw_k + bytes([128, 128, 64, 255, 16])
+      + bytes([20]) * (16 * 12) + b"\x50" + bytes([128, 128]))
+
+# toCameraPoses() + submitTrajectory(): flags, poses, per pose: stamp byte, 3 position bytes,
+# 3 axis-angle bytes and a norm byte (or raw floats with bits 0-1).
+def trajectory_seed(flags, poses):
+    body = bytes([flags, len(poses)])
+    for pose in poses:
+        body += bytes(pose)
+    return body
+
+identity = [128, 128, 128, 128, 128, 128, 128, 128]
+shifted = [128, 140, 128, 128, 128, 133, 128, 128]
+write("fuzz_ros_trajectory", "identity_at_the_frames", trajectory_seed(0x00, [identity, identity, identity]))
+write("fuzz_ros_trajectory", "a_small_correction", trajectory_seed(0x00, [identity, shifted, shifted]))
+write("fuzz_ros_trajectory", "with_a_clear", trajectory_seed(0x08, [identity, shifted, shifted]))
+write("fuzz_ros_trajectory", "stamps_anywhere", trajectory_seed(0x04, [[30] + identity[1:], [250] + shifted[1:]]))
+write("fuzz_ros_trajectory", "empty_path", trajectory_seed(0x00, []))
+zero_q = bytes([0x01, 1, 128, 128, 128, 128]) + struct.pack("<4f", 0.0, 0.0, 0.0, 0.0)
+write("fuzz_ros_trajectory", "zero_quaternion", zero_q)
+long_q = bytes([0x01, 1, 128, 128, 128, 128]) + struct.pack("<4f", 0.0, 0.0, 0.0, 2.0)
+write("fuzz_ros_trajectory", "quaternion_of_norm_two", long_q)
