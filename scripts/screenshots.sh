@@ -6,6 +6,7 @@
 #   doc/images/rviz_mapping.png   mid-run: mesh, camera path, current frustum
 #   doc/images/rviz_final.png     after the last frame
 #   doc/images/rviz_blocks.png    the same with the block bounds (debug) shown
+#   doc/images/rviz_planning.png  the planning layer alone: occupancy grid, ESDF slice, occupied cells
 #   scripts/screenshots.sh [--frames N]
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -88,3 +89,17 @@ PIDS+=($!)
 sleep 15  # ~block_bounds is latched: the new rviz gets the last one
 import -window root "$OUT/rviz_blocks.png"
 echo "[screenshots] $OUT/rviz_blocks.png"
+
+# The planning layer: the mesh hidden, the occupied cells shown beside the grid and the slice (a
+# new subscriber gets the grid when it connects; the clouds come at planning_publish_rate_hz).
+rosnode kill /rviz >/dev/null 2>&1 || true
+pkill -f "rviz -d $DEMO/screenshots_blocks.rviz" 2>/dev/null || true
+sleep 2
+sed -e '/Name: Mesh$/{n;s/Enabled: true/Enabled: false/}' \
+  -e '/Name: Occupied cells$/{n;s/Enabled: false/Enabled: true/}' \
+  "$ROOT/rviz/stereo_fusion.rviz" >"$DEMO/screenshots_planning.rviz"
+rviz -d "$DEMO/screenshots_planning.rviz" >"$DEMO/screenshots_rviz3.log" 2>&1 &
+PIDS+=($!)
+sleep 15
+import -window root "$OUT/rviz_planning.png"
+echo "[screenshots] $OUT/rviz_planning.png"
