@@ -120,6 +120,13 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
   result.rejected = outlier_rejection_.apply(frame.disparity_px, config_, &measurements_);
   result.lookup = lookup_.run(frame, measurements_, &octree_, &queue_, &missing_);
   result.lookup_ms = lookup_timer.elapsedMs();
+  if (result.lookup.over_work_bound)
+    return reject_after_gate(
+        RejectReason::kWorkBound,
+        "its truncation bands span " + std::to_string(result.lookup.box_blocks) +
+            " blocks for the lookup to visit, more than max_lookup_blocks_per_frame (" +
+            std::to_string(config_.max_lookup_blocks_per_frame) +
+            "): an absurd calibration or depth range?");
   // The lookup only reads the map: a frame over its allocation budget leaves it untouched.
   if (config_.max_new_blocks_per_frame > 0 &&
       missing_.size() > static_cast<size_t>(config_.max_new_blocks_per_frame))

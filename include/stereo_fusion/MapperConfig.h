@@ -84,6 +84,7 @@ struct MapperConfig {
   double min_coherent_pixel_share =
       0.5;  ///< A frame whose usable disparities agree with a neighbour less often is rejected
             ///< (DisparityCoherence). 0 = no check.
+  int max_lookup_blocks_per_frame = 20000000;  ///< Work bound of the lookup (see the registry)
   int max_new_blocks_per_frame = 50000;  ///< A frame whose bands reach more blocks not yet in the
                                          ///< map is rejected before fusion. 0 = no limit.
   double max_distance_from_camera_m =
@@ -126,6 +127,7 @@ struct LookupConfig {
   LookupMode lookup_mode = MapperConfig{}.lookup_mode;
   int lookup_region_px = MapperConfig{}.lookup_region_px;
   int histogram_min_points = MapperConfig{}.histogram_min_points;
+  int max_lookup_blocks_per_frame = MapperConfig{}.max_lookup_blocks_per_frame;
 
   /// Φ by level, as MapperConfig::truncationBand() gives it.
   TruncationBand truncationBand() const { return TruncationBand(voxel_size_m, truncation_vox); }

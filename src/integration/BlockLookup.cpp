@@ -367,10 +367,17 @@ void BlockLookup::forEachBlockCount(RegionScratch* s, Visit&& visit) const {
   for (const auto& [key, count] : s->sparse_counts) visit(key, count);
 }
 
-void BlockLookup::gatherHistogram(const MeasurementImage& m, const cv::Rect& region,
-                                  RegionScratch* s) const {
-  // Count points per distinct band box first and expand boxes to blocks after.
-  countRegionBoxes(m, region, s);
+uint64_t BlockLookup::boxBlocks(const RegionScratch& s, bool per_point) const {
+  // In doubles: a box of an absurd frame may span up to 2^30 blocks per axis.
+  double blocks = 0.0;
+  for (const BoxCount& b : s.boxes)
+    blocks += (double(b.box.hi.x) - b.box.lo.x + 1) * (double(b.box.hi.y) - b.box.lo.y + 1) *
+              (double(b.box.hi.z) - b.box.lo.z + 1) * (per_point ? b.count : 1);
+  return blocks >= 1.8e19 ? UINT64_MAX : static_cast<uint64_t>(blocks);
+}
+
+void BlockLookup::gatherHistogram(RegionScratch* s) const {
+  // Points were counted per distinct band box (countRegionBoxes); boxes expand to blocks here.
   s->key_counts.clear();
   forEachBlockCount(
       s, [s](const BlockKey& key, int count) { s->key_counts.emplace_back(key, count); });
@@ -393,10 +400,8 @@ bool BlockLookup::passesFilter(const RegionScratch& s, const BlockKey& key, int 
   return false;
 }
 
-void BlockLookup::runRegionAccelerated(const MeasurementImage& m, const cv::Rect& region,
-                                       RegionScratch* s) const {
+void BlockLookup::runRegionAccelerated(const cv::Rect& region, RegionScratch* s) const {
   // The histogram straight into the filter: no per-block list in between.
-  countRegionBoxes(m, region, s);
   s->passing.clear();
   const int min_points = regionMinPoints(region, s->stats.valid_points);
   forEachBlockCount(s, [s, min_points](const BlockKey& key, int count) {
@@ -444,11 +449,11 @@ void BlockLookup::runRegionNaive(const MeasurementImage& m, const cv::Rect& regi
   const bool filter = config_.histogram_min_points > 0;
   int min_points = 0;
   if (filter) {
-    gatherHistogram(m, region, s);
+    gatherHistogram(s);
     min_points = regionMinPoints(region, s->stats.valid_points);
     for (const auto& [key, count] : s->key_counts) s->stats.blocks_filtered += count < min_points;
-    s->stats.valid_points = 0;  // counted again below
   }
+  s->stats.valid_points = 0;  // counted with the boxes; counted again below
   for (int v = region.y; v < region.y + region.height; ++v) {
     const float* depth_row = m.depths() + static_cast<size_t>(v) * m.width();
     for (int u = region.x; u < region.x + region.width; ++u) {
@@ -484,24 +489,50 @@ LookupStats BlockLookup::run(const StereoFrame& frame, const MeasurementImage& m
   setPixelGeometry(frame, measurements, *octree);
 
   const bool accelerated = config_.lookup_mode == LookupMode::kAccelerated;
+  auto region_of = [&](size_t r) {
+    const int x = static_cast<int>(r % cols) * region_px;
+    const int y = static_cast<int>(r / cols) * region_px;
+    return cv::Rect(x, y, std::min(region_px, frame.disparity_px.cols - x),
+                    std::min(region_px, frame.disparity_px.rows - y));
+  };
+  // Pass 1: each region's distinct band boxes and the blocks they span, before any block is
+  // visited, so that a frame over the work bound costs one pass over its pixels.
   pool_->parallelFor(num_regions, 4, [&](size_t begin, size_t end) {
     for (size_t r = begin; r < end; ++r) {
       RegionScratch& s = scratch_[r];
       s.found.clear();
       s.not_found.clear();
+      s.passing.clear();
       s.stats = LookupStats{};
-      const int x = static_cast<int>(r % cols) * region_px;
-      const int y = static_cast<int>(r / cols) * region_px;
-      const cv::Rect region(x, y, std::min(region_px, frame.disparity_px.cols - x),
-                            std::min(region_px, frame.disparity_px.rows - y));
+      countRegionBoxes(measurements, region_of(r), &s);
+      s.stats.box_blocks = boxBlocks(s, /*per_point=*/!accelerated);
+    }
+  });
+  uint64_t box_blocks = 0;
+  for (size_t r = 0; r < num_regions; ++r)
+    box_blocks = std::min(UINT64_MAX - scratch_[r].stats.box_blocks, box_blocks) +
+                 scratch_[r].stats.box_blocks;
+  const uint64_t bound = static_cast<uint64_t>(std::max(0, config_.max_lookup_blocks_per_frame));
+  if (bound > 0 && box_blocks > bound) {
+    queue->clear();
+    LookupStats over;
+    for (size_t r = 0; r < num_regions; ++r) over.valid_points += scratch_[r].stats.valid_points;
+    over.box_blocks = box_blocks;
+    over.over_work_bound = true;
+    return over;
+  }
+  // Pass 2: expand the boxes to blocks.
+  pool_->parallelFor(num_regions, 4, [&](size_t begin, size_t end) {
+    for (size_t r = begin; r < end; ++r) {
       if (accelerated)
-        runRegionAccelerated(measurements, region, &s);
+        runRegionAccelerated(region_of(r), &scratch_[r]);
       else
-        runRegionNaive(measurements, region, octree, allocate, &s);
+        runRegionNaive(measurements, region_of(r), octree, allocate, &scratch_[r]);
     }
   });
 
   LookupStats total;
+  total.box_blocks = box_blocks;
   for (size_t r = 0; r < num_regions; ++r) {
     const LookupStats& stats = scratch_[r].stats;
     total.valid_points += stats.valid_points;

@@ -21,6 +21,7 @@ constexpr RejectReasonInfo kTable[] = {
     {RejectReason::kSyncDuplicate, "sync_duplicate",
      "dropped: duplicate stamp before synchronisation"},
     {RejectReason::kError, "error", "dropped: error while fusing"},
+    {RejectReason::kWorkBound, "work_bound", "dropped: lookup work bound"},
 };
 static_assert(sizeof(kTable) / sizeof(kTable[0]) == kRejectReasonCount, "one row per RejectReason");
 

@@ -337,17 +337,17 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
         }
         timings.total_ms = frame_timer.elapsedMs();
         report->timings.push_back(timings);
-        report->work.push_back({static_cast<double>(r.lookup.valid_points),
-                                static_cast<double>(r.lookup.octree_searches),
-                                static_cast<double>(r.lookup.blocks_queued),
-                                static_cast<double>(r.fusion.blocks_updated),
-                                static_cast<double>(r.fusion.voxels_updated),
-                                static_cast<double>(r.mesh.blocks_meshed),
-                                static_cast<double>(r.mesh.changed.size()),
-                                static_cast<double>(r.fusion.blocks_created),
-                                static_cast<double>(r.fusion.blocks_not_created),
-                                static_cast<double>(r.carve.blocks_carved),
-                                static_cast<double>(r.carve.voxels_carved)});
+        report->work.push_back(
+            {static_cast<double>(r.lookup.valid_points),
+             static_cast<double>(r.lookup.octree_searches),
+             static_cast<double>(r.lookup.blocks_queued),
+             static_cast<double>(r.fusion.blocks_updated),
+             static_cast<double>(r.fusion.voxels_updated),
+             static_cast<double>(r.mesh.blocks_meshed), static_cast<double>(r.mesh.changed.size()),
+             static_cast<double>(r.fusion.blocks_created),
+             static_cast<double>(r.fusion.blocks_not_created),
+             static_cast<double>(r.carve.blocks_carved), static_cast<double>(r.carve.voxels_carved),
+             static_cast<double>(r.lookup.box_blocks)});
       }
     }
     if (options.progress)
@@ -547,6 +547,13 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   };
   j["work_per_frame_p50"]["valid_points"] = work(&StageWork::valid_points);
   j["work_per_frame_p50"]["octree_searches"] = work(&StageWork::octree_searches);
+  // The lookup's work, which max_lookup_blocks_per_frame bounds.
+  j["work_per_frame_p50"]["lookup_box_blocks"] = work(&StageWork::lookup_box_blocks);
+  {
+    double most = 0.0;
+    for (const StageWork& w : report.work) most = std::max(most, w.lookup_box_blocks);
+    j["work_per_frame_max"]["lookup_box_blocks"] = most;
+  }
   j["work_per_frame_p50"]["blocks_queued"] = work(&StageWork::blocks_queued);
   j["work_per_frame_p50"]["blocks_updated"] = work(&StageWork::blocks_updated);
   j["work_per_frame_p50"]["voxels_updated"] = work(&StageWork::voxels_updated);

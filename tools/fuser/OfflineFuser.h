@@ -71,7 +71,7 @@ struct StageTimings {
 struct StageWork {
   double valid_points = 0, octree_searches = 0, blocks_queued = 0, blocks_updated = 0,
          voxels_updated = 0, blocks_meshed = 0, submeshes_changed = 0, blocks_created = 0,
-         blocks_not_created = 0, blocks_carved = 0, voxels_carved = 0;
+         blocks_not_created = 0, blocks_carved = 0, voxels_carved = 0, lookup_box_blocks = 0;
 };
 
 /// What a run did; stats.json is this, plus the configuration.

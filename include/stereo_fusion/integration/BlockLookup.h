@@ -20,6 +20,11 @@ struct LookupStats {
   uint64_t blocks_allocated = 0;  ///< of those, allocated by the lookup (only when run() allocates)
   uint64_t blocks_missing = 0;    ///< of those, not in the map and left to fusion to create
   uint64_t blocks_filtered = 0;   ///< (region, block) pairs dropped by the histogram filter
+  /// The lookup's work: blocks spanned by the distinct band boxes of each region (naive: by
+  /// every pixel's box), counted before any block is visited.
+  uint64_t box_blocks = 0;
+  /// box_blocks exceeded max_lookup_blocks_per_frame: nothing was visited or queued.
+  bool over_work_bound = false;
 };
 
 /// Stage 1 of the pipeline (thesis §3.4): turns a frame's depths into the queue of voxel blocks
@@ -136,14 +141,18 @@ class BlockLookup {
   /// points, in z, y, x order (or the boxes' order when the union is too large for the grid).
   template <typename Visit>
   void forEachBlockCount(RegionScratch* s, Visit&& visit) const;
-  /// s->boxes, then s->key_counts: the region's histogram.
-  void gatherHistogram(const MeasurementImage& m, const cv::Rect& region, RegionScratch* s) const;
+  /// The blocks the region's counted boxes span: each distinct box once (accelerated, which
+  /// expands each box once) or once per point in it (naive, which expands every pixel's box);
+  /// saturates at UINT64_MAX.
+  uint64_t boxBlocks(const RegionScratch& s, bool per_point) const;
+  /// s->key_counts: the region's histogram, from its counted boxes.
+  void gatherHistogram(RegionScratch* s) const;
   /// The histogram filter's threshold in `region` (both lookup modes): histogram_min_points
   /// scaled by the share of its pixels with a measurement, rounded up, at least 1; 0 = off.
   int regionMinPoints(const cv::Rect& region, uint64_t valid_points) const;
   bool passesFilter(const RegionScratch& s, const BlockKey& key, int min_points) const;
-  void runRegionAccelerated(const MeasurementImage& m, const cv::Rect& region,
-                            RegionScratch* s) const;
+  /// The second pass of both modes, after countRegionBoxes() and the work bound.
+  void runRegionAccelerated(const cv::Rect& region, RegionScratch* s) const;
   /// frame_keys_ ← the distinct `passing` keys of the first `num_regions` regions, sorted.
   void collectSortedDistinctKeys(size_t num_regions);
   void runRegionNaive(const MeasurementImage& m, const cv::Rect& region, BlockOctree* octree,

@@ -27,6 +27,8 @@ enum class RejectReason : uint8_t {
   kSuperseded,     ///< arrived before a reset or load_map: it belongs to the map they replaced
   kSyncDuplicate,  ///< a second disparity of a stamp whose frame was not matched yet
   kError,          ///< fusing it threw (e.g. out of memory); the mesh was rebuilt from the map
+  kWorkBound,      ///< its band boxes would make the lookup visit more than
+                   ///< max_lookup_blocks_per_frame blocks (an absurd calibration or range)
   kCount,          ///< not a reason: the number of values
 };
 

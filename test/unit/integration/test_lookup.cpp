@@ -158,6 +158,7 @@ TEST(BlockLookup, SearchCountsHandWorked) {
   const LookupRun naive = runLookup(config, frame, &naive_tree);
   EXPECT_EQ(naive.stats.valid_points, 1024u);
   EXPECT_EQ(naive.stats.octree_searches, 1024u);  // one per pixel
+  EXPECT_EQ(naive.stats.box_blocks, 1024u);       // one 1-block box per pixel
   ASSERT_EQ(naive.queue.size(), 1u);
   EXPECT_EQ(naive.queue[0]->key, (BlockKey{1, 1, 2}));
 
@@ -169,6 +170,39 @@ TEST(BlockLookup, SearchCountsHandWorked) {
   ASSERT_EQ(accel.queue.size(), 1u);
   EXPECT_EQ(accel.stats.blocks_queued, 1u);
   EXPECT_EQ(accel.stats.blocks_allocated, 1u);
+  EXPECT_EQ(accel.stats.box_blocks, 4u);  // one distinct 1-block box per region
+}
+
+TEST(BlockLookup, WorkBoundStopsTheFrameBeforeAnyBlockIsVisited) {
+  // SearchCountsHandWorked's frame: its boxes span 4 blocks (accelerated) or 1 024 (naive).
+  const StereoCamera camera = *StereoCamera::create(32, 32, 500, 500, -300, -300, 0.1);
+  const StereoFrame frame = constantDepthFrame(camera, 50.0f);
+  MapperConfig config;
+  config.voxel_size_m = 0.05;
+  config.truncation_vox = 1.0;
+  config.weight_falloff_start_vox = 0.5;
+  config.histogram_min_points = 0;
+  config.lookup_region_px = 16;
+  for (const auto& [mode, work] :
+       {std::pair{LookupMode::kAccelerated, 4}, {LookupMode::kNaive, 1024}}) {
+    config.lookup_mode = mode;
+    config.max_lookup_blocks_per_frame = work - 1;
+    BlockOctree over_tree(config.blockSizeM());
+    const LookupRun over = runLookup(config, frame, &over_tree);
+    EXPECT_TRUE(over.stats.over_work_bound);
+    EXPECT_EQ(over.stats.box_blocks, static_cast<uint64_t>(work));
+    EXPECT_EQ(over.stats.valid_points, 1024u);
+    EXPECT_EQ(over.stats.octree_searches, 0u);
+    EXPECT_TRUE(over.queue.empty());
+    EXPECT_EQ(over_tree.blockCount(), 0u);  // the allocating lookup allocated nothing
+
+    config.max_lookup_blocks_per_frame = work;  // at the bound: looked up
+    BlockOctree at_tree(config.blockSizeM());
+    const LookupRun at = runLookup(config, frame, &at_tree);
+    EXPECT_FALSE(at.stats.over_work_bound);
+    ASSERT_EQ(at.queue.size(), 1u);
+    EXPECT_EQ(at.queue[0]->key, (BlockKey{1, 1, 2}));
+  }
 }
 
 TEST(BlockLookup, QueuesTheWholeTruncationBand) {
@@ -183,6 +217,7 @@ TEST(BlockLookup, QueuesTheWholeTruncationBand) {
   BlockOctree tree(config.blockSizeM());
   const LookupRun run = runLookup(config, frame, &tree);
   EXPECT_EQ(run.stats.valid_points, 1u);
+  EXPECT_EQ(run.stats.box_blocks, 8u);  // 2 × 2 × 2 blocks
   std::set<std::tuple<int, int, int>> expected;
   for (int z : {5, 6})
     for (int y : {-1, 0})

@@ -236,6 +236,39 @@ TEST(BadInput, AFrameOverItsAllocationBudgetIsRejectedAndTheMapUnchanged) {
   EXPECT_TRUE(at_budget.integrate(noise).accepted);
 }
 
+// The absurd-calibration class: a frame whose bands would make the lookup visit more blocks than
+// max_lookup_blocks_per_frame is dropped after one pass over its pixels, before any block is
+// visited, and counted under its own reason.
+TEST(BadInput, AFrameOverTheLookupWorkBoundIsRejectedAndTheMapUnchanged) {
+  MapperConfig config;
+  const StereoFrame frame = floorAndSphereFrame(1, 2.0);
+  uint64_t work = 0;
+  {
+    Mapper unlimited(config);
+    const IntegrationResult r = unlimited.integrate(frame);
+    ASSERT_TRUE(r.accepted) << r.error;
+    work = r.lookup.box_blocks;
+  }
+  ASSERT_GT(work, 100u);
+  config.max_lookup_blocks_per_frame = static_cast<int>(work) - 1;
+  Mapper mapper(config);
+  const IntegrationResult rejected =
+      expectRejectedMapUnchanged(&mapper, frame, RejectReason::kWorkBound, "work_bound");
+  EXPECT_TRUE(rejected.lookup.over_work_bound);
+  EXPECT_EQ(rejected.lookup.octree_searches, 0u);
+  EXPECT_NE(rejected.error.find("span " + std::to_string(work) +
+                                " blocks for the lookup to visit, more than "
+                                "max_lookup_blocks_per_frame (" +
+                                std::to_string(work - 1) + ")"),
+            std::string::npos)
+      << rejected.error;
+  EXPECT_STREQ(rejectReasonInfo(RejectReason::kWorkBound).label, "dropped: lookup work bound");
+  // The rejected frame did not become the time reference, and at the bound it is fused.
+  config.max_lookup_blocks_per_frame = static_cast<int>(work);
+  Mapper at_bound(config);
+  EXPECT_TRUE(at_bound.integrate(frame).accepted);
+}
+
 // Random disparities agree with their neighbours only by chance (about 12 % over 1–64 px);
 // a matcher's output almost always. Below min_coherent_pixel_share the frame is rejected before
 // the lookup, whatever its allocation, and the map stays as it was.

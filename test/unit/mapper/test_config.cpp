@@ -129,6 +129,7 @@ TEST(Config, StageConfigsCarryTheirParameters) {
   c.lookup_mode = LookupMode::kNaive;
   c.lookup_region_px = 23;
   c.histogram_min_points = 7;
+  c.max_lookup_blocks_per_frame = 1234;
   c.weight_mode = WeightMode::kDepthAware;
   c.weight_falloff_start_vox = 1.75;
   c.depth_weight_reference_m = 2.25;
@@ -144,6 +145,7 @@ TEST(Config, StageConfigsCarryTheirParameters) {
   EXPECT_EQ(lookup.lookup_mode, LookupMode::kNaive);
   EXPECT_EQ(lookup.lookup_region_px, 23);
   EXPECT_EQ(lookup.histogram_min_points, 7);
+  EXPECT_EQ(lookup.max_lookup_blocks_per_frame, 1234);
   EXPECT_EQ(lookup.truncationBand().maxM(), c.truncationBand().maxM());
   const FusionConfig fusion = fusionConfig(c);
   EXPECT_EQ(fusion.voxel_size_m, 0.013);
