@@ -1,5 +1,6 @@
 #include "stereo_fusion/ros/PlanningServices.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -33,24 +34,39 @@ bool PlanningServices::refuse(const char* service, const std::string& why, Respo
 
 bool PlanningServices::sample(const std::vector<Eigen::Vector3d>& points,
                               std::vector<EsdfSample>* samples, double* cell_m, std::string* why) {
-  bool enabled = true;
-  const bool got = session_->tryWithMapper([&](Mapper& map) {
-    const PlanningMap* planning = map.planning();
-    if (!planning) {
-      enabled = false;
-      return;
+  samples->resize(points.size());
+  std::vector<Eigen::Vector3d> chunk;
+  std::vector<EsdfSample> chunk_samples;
+  // The map lock is taken per chunk of kPointsPerLock points (≈ 3 ms of sampling), so a large
+  // request lets the frames that wait for the map in between instead of holding them back for
+  // its whole length; every point is answered from the map as it was at some moment of the call.
+  for (size_t begin = 0; begin == 0 || begin < points.size(); begin += kPointsPerLock) {
+    const size_t end = std::min(points.size(), begin + kPointsPerLock);
+    chunk.assign(points.begin() + begin, points.begin() + end);
+    bool enabled = true;
+    const bool got = session_->tryWithMapper([&](Mapper& map) {
+      const PlanningMap* planning = map.planning();
+      if (!planning) {
+        enabled = false;
+        return;
+      }
+      *cell_m = planning->grid().cell_m;
+      // The answer is the map as it is now: the TSDF changes since the last planning update
+      // (at most 1 / planning_publish_rate_hz old, or one chunk) reach the distances first.
+      map.updatePlanning();
+      planning->sampleBatch(chunk, &chunk_samples);
+    });
+    if (!got) {
+      *why = session_->busyMessage();
+      return false;
     }
-    *cell_m = planning->grid().cell_m;
-    // The answer is the map as it is now: the TSDF changes since the last planning update
-    // (at most 1 / planning_publish_rate_hz old) reach the distances first.
-    map.updatePlanning();
-    planning->sampleBatch(points, samples);
-  });
-  if (!got)
-    *why = session_->busyMessage();
-  else if (!enabled)
-    *why = "the planning layer is off (planning_enabled: false)";
-  return got && enabled;
+    if (!enabled) {
+      *why = "the planning layer is off (planning_enabled: false)";
+      return false;
+    }
+    std::copy(chunk_samples.begin(), chunk_samples.end(), samples->begin() + begin);
+  }
+  return true;
 }
 
 bool PlanningServices::getDistance(GetDistance::Request& req, GetDistance::Response& res) {
