@@ -96,8 +96,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (flags & 8) {
     session.clear(MapRegion::box({-0.3, -0.3, 1.8}, {0.3, 0.3, 2.2}), 2.5);
   }
-  const auto [blocks_before, triangles_before] = session.withMapper(
-      [](Mapper& m) { return std::make_pair(m.map().blockCount(), m.mesh().triangleCount()); });
+  // Not a structured binding: lambdas may capture those only from C++20 (clang refuses).
+  size_t blocks_before = 0, triangles_before = 0;
+  session.withMapper([&](Mapper& m) {
+    blocks_before = m.map().blockCount();
+    triangles_before = m.mesh().triangleCount();
+  });
 
   const std::optional<CorrectionReport> report = session.submitTrajectory(std::move(poses));
   fuzz::require(report.has_value());

@@ -138,7 +138,7 @@ class BlockLookup {
   /// s->boxes, their union and s->stats.valid_points of the region.
   void countRegionBoxes(const MeasurementImage& m, const cv::Rect& region, RegionScratch* s) const;
   /// Calls visit(key, count) for each block the region's boxes reach, with its number of
-  /// points, in z, y, x order (or the boxes' order when the union is too large for the grid).
+  /// points, in z, y, x order (or key order when the union is too large for the grid).
   template <typename Visit>
   void forEachBlockCount(RegionScratch* s, Visit&& visit) const;
   /// The blocks the region's counted boxes span: each distinct box once (accelerated, which

@@ -173,6 +173,30 @@ TEST(BlockLookup, SearchCountsHandWorked) {
   EXPECT_EQ(accel.stats.box_blocks, 4u);  // one distinct 1-block box per region
 }
 
+TEST(BlockLookup, WidelySpreadBoxesOffTheDenseGridCountLikeTheNaiveLookup) {
+  // A 16×12 frame at f = 5 px seeing a plane 7.9 m away, measured in columns 0–7 of rows 0 and
+  // 11 (one 16-px region): each pixel's box is ±0.75/5·7.9 m ≈ ±7.5 blocks wide and neighbouring
+  // pixels' rays lie 1.6 m (10 blocks) apart, so neighbours' boxes overlap and the region's span
+  // ~95 × 125 blocks × their depth, past the dense grid's 16 384 cells: they are counted
+  // sparsely, sorted and summed (a search per block made that quadratic: the fuzzer's slow
+  // unit). With the filter at ⌈24·16/192⌉ = 2 points only the overlaps pass: the sums decide.
+  const StereoCamera camera = *StereoCamera::create(16, 12, 5, 5, 7.5, 5.5, 0.25);
+  StereoFrame frame = constantDepthFrame(camera, 0.0f);
+  for (int v : {0, 11})
+    for (int u = 0; u < 8; ++u) frame.disparity_px.at<float>(v, u) = 5.0f * 0.25f / 7.9f;
+  for (int histogram : {0, 24}) {
+    MapperConfig config;
+    config.histogram_min_points = histogram;
+    BlockOctree naive_tree(config.blockSizeM()), accel_tree(config.blockSizeM());
+    const auto [naive, accel] = runNaiveAndAccelerated(config, frame, &naive_tree, &accel_tree);
+    EXPECT_EQ(accel.stats.valid_points, 16u);
+    EXPECT_GT(accel.queue.size(), 100u);
+    EXPECT_EQ(keysOf(naive.queue), keysOf(accel.queue)) << "histogram " << histogram;
+    EXPECT_EQ(naive.stats.blocks_filtered, accel.stats.blocks_filtered)
+        << "histogram " << histogram;
+  }
+}
+
 TEST(BlockLookup, WorkBoundStopsTheFrameBeforeAnyBlockIsVisited) {
   // SearchCountsHandWorked's frame: its boxes span 4 blocks (accelerated) or 1 024 (naive).
   const StereoCamera camera = *StereoCamera::create(32, 32, 500, 500, -300, -300, 0.1);
