@@ -11,6 +11,8 @@
 #include <fstream>
 #include <string>
 
+#include "stereo_fusion/mesh/SubMesh.h"
+
 namespace stereo_fusion::fuzz {
 
 /// Consumes the input front to back. Past the end every value reads as zero, so a short input
@@ -84,6 +86,16 @@ inline void writeFile(const std::filesystem::path& path, const std::string& byte
 /// Aborts (a finding) when an invariant of the code under test does not hold.
 inline void require(bool condition) {
   if (!condition) std::abort();
+}
+
+/// The mesh invariants every target that fuses checks: finite vertices and normals, one normal
+/// per vertex, every triangle indexing a vertex.
+inline void checkMesh(const TriangleMesh& mesh) {
+  require(mesh.normals.size() == mesh.positions.size());
+  for (const auto& p : mesh.positions) require(p.allFinite());
+  for (const auto& n : mesh.normals) require(n.allFinite());
+  for (const auto& t : mesh.triangles)
+    for (uint32_t i : t) require(i < mesh.positions.size());
 }
 
 }  // namespace stereo_fusion::fuzz

@@ -103,14 +103,6 @@ Eigen::Isometry3d readPose(fuzz::ByteReader& in, bool raw) {
   return T;
 }
 
-void checkMesh(const TriangleMesh& mesh) {
-  fuzz::require(mesh.normals.size() == mesh.positions.size());
-  for (const auto& p : mesh.positions) fuzz::require(p.allFinite());
-  for (const auto& n : mesh.normals) fuzz::require(n.allFinite());
-  for (const auto& t : mesh.triangles)
-    for (uint32_t i : t) fuzz::require(i < mesh.positions.size());
-}
-
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
@@ -156,9 +148,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     for (const BlockKey& key : result.mesh.changed) {
       const auto it = mapper.mesh().submeshes().find(key);
       fuzz::require(it != mapper.mesh().submeshes().end());
-      checkMesh(it->second);
+      fuzz::checkMesh(it->second);
     }
   }
-  checkMesh(mapper.extractMesh());
+  fuzz::checkMesh(mapper.extractMesh());
   return 0;
 }

@@ -55,13 +55,6 @@ std::string encodingFor(uint8_t b) {
   return kEncodings[b % 8];
 }
 
-void checkMesh(const TriangleMesh& mesh) {
-  fuzz::require(mesh.normals.size() == mesh.positions.size());
-  for (const auto& p : mesh.positions) fuzz::require(p.allFinite());
-  for (const auto& t : mesh.triangles)
-    for (uint32_t i : t) fuzz::require(i < mesh.positions.size());
-}
-
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
@@ -145,6 +138,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     fuzz::require(!result.error.empty());
     fuzz::require(map.map().blockCount() == 0);
   }
-  checkMesh(map.extractMesh());
+  fuzz::checkMesh(map.extractMesh());
   return 0;
 }

@@ -36,13 +36,6 @@ StereoFrame frame(int i) {
   return f;
 }
 
-void checkMesh(const TriangleMesh& mesh) {
-  fuzz::require(mesh.normals.size() == mesh.positions.size());
-  for (const auto& p : mesh.positions) fuzz::require(p.allFinite());
-  for (const auto& t : mesh.triangles)
-    for (uint32_t i : t) fuzz::require(i < mesh.positions.size());
-}
-
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
@@ -114,7 +107,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       fuzz::require(m.mesh().triangleCount() == triangles_before);
     }
     m.updateMesh();
-    checkMesh(m.extractMesh());
+    fuzz::checkMesh(m.extractMesh());
   });
   return 0;
 }

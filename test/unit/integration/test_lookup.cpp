@@ -140,18 +140,31 @@ TEST(BlockLookup, NaiveAndAcceleratedQueueTheSameBlocks) {
   }
 }
 
+namespace {
+
+/// 32×32 image, principal point far left/up so every point lies in one block:
+/// voxel 5 cm → block 0.4 m; Φ = 1 voxel = 0.05 m; disparity 50 → z = 500·0.1/50 = 1.0 m.
+/// X = (u + 300)·1/500 ∈ [0.600, 0.662] ± 0.05 → block 1; Z ∈ [0.95, 1.05] → block 2.
+struct OneBlockCase {
+  StereoFrame frame =
+      constantDepthFrame(*StereoCamera::create(32, 32, 500, 500, -300, -300, 0.1), 50.0f);
+  MapperConfig config = [] {
+    MapperConfig c;
+    c.voxel_size_m = 0.05;
+    c.truncation_vox = 1.0;
+    c.weight_falloff_start_vox = 0.5;
+    c.histogram_min_points = 0;
+    c.lookup_region_px = 16;
+    return c;
+  }();
+};
+
+}  // namespace
+
 TEST(BlockLookup, SearchCountsHandWorked) {
-  // 32×32 image, principal point far left/up so every point lies in one block:
-  // voxel 5 cm → block 0.4 m; Φ = 1 voxel = 0.05 m; disparity 50 → z = 500·0.1/50 = 1.0 m.
-  // X = (u + 300)·1/500 ∈ [0.600, 0.662] ± 0.05 → block 1; Z ∈ [0.95, 1.05] → block 2.
-  const StereoCamera camera = *StereoCamera::create(32, 32, 500, 500, -300, -300, 0.1);
-  const StereoFrame frame = constantDepthFrame(camera, 50.0f);
-  MapperConfig config;
-  config.voxel_size_m = 0.05;
-  config.truncation_vox = 1.0;
-  config.weight_falloff_start_vox = 0.5;
-  config.histogram_min_points = 0;
-  config.lookup_region_px = 16;
+  OneBlockCase one_block;
+  const StereoFrame& frame = one_block.frame;
+  MapperConfig& config = one_block.config;
 
   config.lookup_mode = LookupMode::kNaive;
   BlockOctree naive_tree(config.blockSizeM());
@@ -198,15 +211,10 @@ TEST(BlockLookup, WidelySpreadBoxesOffTheDenseGridCountLikeTheNaiveLookup) {
 }
 
 TEST(BlockLookup, WorkBoundStopsTheFrameBeforeAnyBlockIsVisited) {
-  // SearchCountsHandWorked's frame: its boxes span 4 blocks (accelerated) or 1 024 (naive).
-  const StereoCamera camera = *StereoCamera::create(32, 32, 500, 500, -300, -300, 0.1);
-  const StereoFrame frame = constantDepthFrame(camera, 50.0f);
-  MapperConfig config;
-  config.voxel_size_m = 0.05;
-  config.truncation_vox = 1.0;
-  config.weight_falloff_start_vox = 0.5;
-  config.histogram_min_points = 0;
-  config.lookup_region_px = 16;
+  // OneBlockCase: its boxes span 4 blocks (one per region, accelerated) or 1 024 (naive).
+  OneBlockCase one_block;
+  const StereoFrame& frame = one_block.frame;
+  MapperConfig& config = one_block.config;
   for (const auto& [mode, work] :
        {std::pair{LookupMode::kAccelerated, 4}, {LookupMode::kNaive, 1024}}) {
     config.lookup_mode = mode;
