@@ -46,8 +46,10 @@ struct MapSnapshot {
   std::vector<uint8_t> level_masks;  ///< per block, bit l: level l allocated
   std::vector<Voxel> voxels;         ///< VoxelBlock::kVoxelCount per block
   bool operator==(const MapSnapshot& o) const {
+    // memcmp takes no null pointer, not even for 0 bytes (an empty map's vectors have none).
     return keys == o.keys && level_masks == o.level_masks && voxels.size() == o.voxels.size() &&
-           std::memcmp(voxels.data(), o.voxels.data(), voxels.size() * sizeof(Voxel)) == 0;
+           (voxels.empty() ||
+            std::memcmp(voxels.data(), o.voxels.data(), voxels.size() * sizeof(Voxel)) == 0);
   }
 };
 
