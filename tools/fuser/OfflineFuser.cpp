@@ -540,20 +540,19 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   size_t mesh_calls = 0;
   for (const StageTimings& t : report.timings) mesh_calls += t.meshed;
   j["timings_ms"]["mesh_calls"] = mesh_calls;
-  auto work = [&](double StageWork::*field) {
+  auto work_column = [&](double StageWork::*field) {
     std::vector<double> v;
     for (const StageWork& w : report.work) v.push_back(w.*field);
-    return summarize(v).p50;
+    return v;
   };
+  auto work = [&](double StageWork::*field) { return summarize(work_column(field)).p50; };
   j["work_per_frame_p50"]["valid_points"] = work(&StageWork::valid_points);
   j["work_per_frame_p50"]["octree_searches"] = work(&StageWork::octree_searches);
   // The lookup's work, which max_lookup_blocks_per_frame bounds.
   j["work_per_frame_p50"]["lookup_box_blocks"] = work(&StageWork::lookup_box_blocks);
-  {
-    double most = 0.0;
-    for (const StageWork& w : report.work) most = std::max(most, w.lookup_box_blocks);
-    j["work_per_frame_max"]["lookup_box_blocks"] = most;
-  }
+  const std::vector<double> box_blocks = work_column(&StageWork::lookup_box_blocks);
+  j["work_per_frame_max"]["lookup_box_blocks"] =
+      box_blocks.empty() ? 0.0 : *std::max_element(box_blocks.begin(), box_blocks.end());
   j["work_per_frame_p50"]["blocks_queued"] = work(&StageWork::blocks_queued);
   j["work_per_frame_p50"]["blocks_updated"] = work(&StageWork::blocks_updated);
   j["work_per_frame_p50"]["voxels_updated"] = work(&StageWork::voxels_updated);
