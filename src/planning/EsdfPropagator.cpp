@@ -197,6 +197,38 @@ class Propagation {
   uint64_t lowered_ = 0;
 };
 
+/// Gives the cells of freshly allocated blocks (no site yet) what their neighbours offer.
+/// Only a cell next to an older block can read a site there, and only an occupied one can read
+/// the space outside every block (its inside distance); the others start with nothing to read:
+/// the lower wavefront reaches them from those, and from the flipped cells' offers.
+void reseedFresh(Propagation* p, const PlanningBlockMap& blocks, std::vector<BlockKey> fresh) {
+  std::sort(fresh.begin(), fresh.end());
+  const int last = PlanningBlock::kSide - 1;
+  for (const BlockKey& key : fresh) {
+    const PlanningBlock& block = *blocks.at(key);
+    bool older[3][3][3];  // neighbour block (dx + 1, dy + 1, dz + 1) exists and is not fresh
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const BlockKey n = key.offset(dx, dy, dz);
+          older[dz + 1][dy + 1][dx + 1] = (dx | dy | dz) && blocks.count(n) &&
+                                          !std::binary_search(fresh.begin(), fresh.end(), n);
+        }
+    for (int k = 0; k <= last; ++k)
+      for (int j = 0; j <= last; ++j)
+        for (int i = 0; i <= last; ++i) {
+          const int cell = PlanningBlock::index(i, j, k);
+          bool reads = PlanningBlock::test(block.occupied, cell);
+          // The neighbour blocks this cell touches: offsets 0 and, on a face, ±1.
+          for (int dz = (k == 0 ? -1 : 0); !reads && dz <= (k == last ? 1 : 0); ++dz)
+            for (int dy = (j == 0 ? -1 : 0); !reads && dy <= (j == last ? 1 : 0); ++dy)
+              for (int dx = (i == 0 ? -1 : 0); !reads && dx <= (i == last ? 1 : 0); ++dx)
+                reads = older[dz + 1][dy + 1][dx + 1];
+          if (reads) p->reseed(cellOf(key, cell));
+        }
+  }
+}
+
 }  // namespace
 
 bool cellOccupied(const PlanningBlockMap& blocks, const CellIndex& cell) {
@@ -219,8 +251,7 @@ EsdfStats EsdfPropagator::update(PlanningBlockMap* blocks, const std::vector<Cel
   const std::vector<CellIndex> cleared = p.raise(seeds);
   stats.cells_raised = cleared.size();
   for (const CellIndex& c : cleared) p.reseed(c);
-  for (const BlockKey& key : fresh)
-    for (int cell = 0; cell < PlanningBlock::kCells; ++cell) p.reseed(cellOf(key, cell));
+  reseedFresh(&p, *blocks, fresh);
   // A flipped cell is a new site for its neighbours of the other kind, whatever its own site.
   for (const CellIndex& c : flipped) p.offerToNeighbours(c);
   p.lower();
