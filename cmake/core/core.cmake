@@ -60,6 +60,7 @@ add_library(stereo_fusion_core STATIC
   ${STEREO_FUSION_ROOT}/src/planning/TsdfOccupancy.cpp
   ${STEREO_FUSION_ROOT}/src/planning/FreeSpaceRecorder.cpp
   ${STEREO_FUSION_ROOT}/src/planning/EsdfPropagator.cpp
+  ${STEREO_FUSION_ROOT}/src/planning/EsdfTransit.cpp
   ${STEREO_FUSION_ROOT}/src/planning/PlanningMap.cpp
   ${STEREO_FUSION_ROOT}/src/planning/OccupancyGrid2D.cpp
   ${STEREO_FUSION_ROOT}/src/io/PlanningExport.cpp

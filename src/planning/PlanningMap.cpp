@@ -20,15 +20,22 @@ PlanningConfig PlanningConfig::from(const MapperConfig& config) {
   return p;
 }
 
+namespace {
+/// The max distance in cells², rounded down: the ESDF's integer bound.
+uint32_t maxDist2(const PlanningConfig& config) {
+  const double cells = config.max_distance_m / config.cell_m;
+  return static_cast<uint32_t>(std::floor(cells * cells + 1e-9));
+}
+}  // namespace
+
 PlanningMap::PlanningMap(const PlanningConfig& config, ThreadPool* pool)
     : config_(config),
       grid_{config.cell_m},
       pool_(pool),
       recorder_(FreeSpaceRecorder::Params{config.cell_m, config.unmeasured_range_m, config.band},
-                pool) {
-  const double cells = config.max_distance_m / config.cell_m;
-  max_dist2_ = static_cast<uint32_t>(std::floor(cells * cells + 1e-9));
-}
+                pool),
+      max_dist2_(maxDist2(config)),
+      transit_(max_dist2_) {}
 
 PlanningBlock* PlanningMap::allocate(const BlockKey& key) {
   auto& slot = blocks_[key];
@@ -37,6 +44,56 @@ PlanningBlock* PlanningMap::allocate(const BlockKey& key) {
     fresh_.push_back(key);
   }
   return slot.get();
+}
+
+uint64_t PlanningMap::applyTransitRule(std::vector<BlockKey> keys) {
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  transit_.beginPass();
+  uint64_t allocated = 0;
+  for (const BlockKey& key : keys) {
+    const auto it = blocks_.find(key);
+    if (it == blocks_.end()) continue;
+    PlanningBlock& block = *it->second;
+    const uint8_t kinds = blockKinds(block);
+    const uint8_t gained = kinds & ~block.kinds_seen;
+    block.kinds_seen = kinds;
+    block.kinds_queued = false;
+    if (!gained) continue;
+    for (const BlockKey& transit : transit_.needed(blocks_, key, gained)) {
+      allocate(transit);
+      ++allocated;
+    }
+  }
+  return allocated;
+}
+
+uint64_t PlanningMap::eraseUnknownBlocks(std::vector<BlockKey> keys) {
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  std::vector<BlockKey> erased;
+  for (const BlockKey& key : keys) {
+    const auto it = blocks_.find(key);
+    if (it != blocks_.end() && !it->second->anyKnown()) {
+      blocks_.erase(it);
+      erased.push_back(key);
+    }
+  }
+  // An erased block may have been one a pair of its neighbours needed: they look again.
+  std::vector<BlockKey> neighbours;
+  const int r = transit_.reachBlocks() + 1;
+  for (const BlockKey& key : erased)
+    for (int dz = -r; dz <= r; ++dz)
+      for (int dy = -r; dy <= r; ++dy)
+        for (int dx = -r; dx <= r; ++dx) {
+          const auto it = blocks_.find(key.offset(dx, dy, dz));
+          if (it != blocks_.end() && it->second->kinds_seen) {
+            it->second->kinds_seen = 0;  // acts on all its kinds again
+            neighbours.push_back(it->first);
+          }
+        }
+  applyTransitRule(std::move(neighbours));
+  return erased.size();
 }
 
 FreeSpaceStats PlanningMap::recordFreeSpace(const StereoFrame& frame,
@@ -76,7 +133,7 @@ PlanningUpdateStats PlanningMap::update(const BlockOctree& octree,
   std::unique_lock lock(mutex_);
   const size_t fresh_before = fresh_.size();
   std::vector<CellIndex> flipped;
-  std::vector<BlockKey> maybe_empty;
+  std::vector<BlockKey> maybe_empty, touched;
   flipped.swap(pending_flips_);
   maybe_empty.swap(maybe_empty_);
   for (const auto& block_states : states)
@@ -90,28 +147,28 @@ PlanningUpdateStats PlanningMap::update(const BlockOctree& octree,
         const auto it = blocks_.find(key);
         if (it == blocks_.end()) continue;
         block = it->second.get();
-        maybe_empty.push_back(key);
+        if (PlanningBlock::test(block->tsdf_observed, cell)) maybe_empty.push_back(key);
       }
+      if (touched.empty() || touched.back() != key) touched.push_back(key);
       PlanningBlock::set(&block->tsdf_observed, cell, s.observed);
       if (PlanningBlock::test(block->occupied, cell) != s.occupied) {
         PlanningBlock::set(&block->occupied, cell, s.occupied);
         flipped.push_back(s.cell);
       }
     }
+  touched.insert(touched.end(), fresh_.begin(), fresh_.end());
+  touched.insert(touched.end(), kinds_gained_.begin(), kinds_gained_.end());
+  touched.insert(touched.end(), maybe_empty.begin(), maybe_empty.end());
+  kinds_gained_.clear();
+  Timer transit_timer;
+  stats.transit_allocated = applyTransitRule(std::move(touched));
+  stats.transit_ms = transit_timer.elapsedMs();
   stats.blocks_allocated = fresh_.size() - fresh_before;
   Timer propagate_timer;
   stats.esdf = propagator_.update(&blocks_, flipped, fresh_, max_dist2_);
   stats.propagate_ms = propagate_timer.elapsedMs();
   fresh_.clear();
-  std::sort(maybe_empty.begin(), maybe_empty.end());
-  maybe_empty.erase(std::unique(maybe_empty.begin(), maybe_empty.end()), maybe_empty.end());
-  for (const BlockKey& key : maybe_empty) {
-    const auto it = blocks_.find(key);
-    if (it != blocks_.end() && !it->second->anyKnown()) {
-      blocks_.erase(it);
-      ++stats.blocks_erased;
-    }
-  }
+  stats.blocks_erased = eraseUnknownBlocks(std::move(maybe_empty));
   return stats;
 }
 
@@ -136,18 +193,23 @@ PlanningUpdateStats PlanningMap::rebuild(const BlockOctree& octree) {
       PlanningBlock::set(&block->tsdf_observed, cell, true);
       PlanningBlock::set(&block->occupied, cell, s.occupied);
     }
+  std::vector<BlockKey> all;
   for (auto it = blocks_.begin(); it != blocks_.end();) {
     if (it->second->anyKnown()) {
+      it->second->kinds_seen = 0;
+      all.push_back(it->first);
       ++it;
     } else {
       it = blocks_.erase(it);
       ++stats.blocks_erased;
     }
   }
+  stats.transit_allocated = applyTransitRule(std::move(all));
   stats.blocks_allocated = fresh_.size();
   fresh_.clear();
   pending_flips_.clear();
   maybe_empty_.clear();
+  kinds_gained_.clear();
   stats.esdf = propagator_.rebuild(&blocks_, max_dist2_);
   return stats;
 }
@@ -190,6 +252,7 @@ void PlanningMap::clear() {
   fresh_.clear();
   pending_flips_.clear();
   maybe_empty_.clear();
+  kinds_gained_.clear();
 }
 
 double PlanningMap::signedDistance(const PlanningBlock& block, int cell) const {
@@ -303,6 +366,10 @@ void PlanningMap::addSeenFree(
   for (const auto& [key, bits] : seen_free) {
     PlanningBlock* block = allocate(key);
     for (size_t w = 0; w < bits.size(); ++w) block->seen_free[w] |= bits[w];
+    if (!block->kinds_queued && (blockKinds(*block) & ~block->kinds_seen)) {
+      block->kinds_queued = true;
+      kinds_gained_.push_back(key);
+    }
   }
 }
 

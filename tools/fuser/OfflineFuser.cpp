@@ -330,6 +330,8 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
           timings.esdf_updated = true;
           timings.esdf_read_ms = pass.stats.read_ms;
           timings.esdf_propagate_ms = pass.stats.propagate_ms;
+          timings.esdf_transit_ms = pass.stats.transit_ms;
+          timings.esdf_transit_blocks = static_cast<double>(pass.stats.transit_allocated);
           timings.esdf_tsdf_blocks = static_cast<double>(pass.stats.tsdf_blocks);
           timings.esdf_flipped = static_cast<double>(pass.stats.esdf.cells_flipped);
           timings.esdf_raised = static_cast<double>(pass.stats.esdf.cells_raised);
@@ -529,6 +531,8 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
         {"mean", s.mean}, {"p50", s.p50}, {"p99", s.p99}, {"per", "planning update"}};
     j["planning_work_p50"]["read_ms"] = overUpdates(&StageTimings::esdf_read_ms).p50;
     j["planning_work_p50"]["propagate_ms"] = overUpdates(&StageTimings::esdf_propagate_ms).p50;
+    j["planning_work_p50"]["transit_ms"] = overUpdates(&StageTimings::esdf_transit_ms).p50;
+    j["planning_work_p50"]["transit_blocks"] = overUpdates(&StageTimings::esdf_transit_blocks).p50;
     j["planning_work_p50"]["tsdf_blocks"] = overUpdates(&StageTimings::esdf_tsdf_blocks).p50;
     j["planning_work_p50"]["cells_flipped"] = overUpdates(&StageTimings::esdf_flipped).p50;
     j["planning_work_p50"]["cells_raised"] = overUpdates(&StageTimings::esdf_raised).p50;

@@ -62,8 +62,8 @@ struct StageTimings {
   double esdf_ms = 0;        ///< the planning update after this frame (with `esdf_updated`)
   bool esdf_updated = false;
   /// That update's work: TSDF blocks re-read, cells flipped (occupied ↔ not), raised, lowered.
-  double esdf_read_ms = 0, esdf_propagate_ms = 0, esdf_tsdf_blocks = 0, esdf_flipped = 0,
-         esdf_raised = 0, esdf_lowered = 0;
+  double esdf_read_ms = 0, esdf_propagate_ms = 0, esdf_transit_ms = 0, esdf_tsdf_blocks = 0,
+         esdf_flipped = 0, esdf_raised = 0, esdf_lowered = 0, esdf_transit_blocks = 0;
   double free_space_nodes = 0;  ///< octree nodes the free-space recording tested
 };
 

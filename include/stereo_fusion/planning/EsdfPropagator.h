@@ -28,8 +28,9 @@ struct EsdfStats {
 /// longer of the opposite kind, then a lower wavefront (a priority queue by distance) offers
 /// each cell's site, and the cell itself to its neighbours of the opposite kind, until no cell
 /// improves. Sites are offered through allocated planning blocks only (unknown cells inside
-/// them included: distances are geometric); a cell beyond `max_dist2` cells² from any site
-/// keeps kNoSite (reads as the max distance). Cells outside every block count as not occupied.
+/// them included: distances are geometric; EsdfTransit allocates the blocks a hole in the map
+/// would otherwise cut); a cell beyond `max_dist2` cells² from any site keeps kNoSite (reads as
+/// the max distance). Cells outside every block count as not occupied.
 class EsdfPropagator {
  public:
   /// Brings `blocks` up to date after `flipped` cells changed occupancy and `fresh` blocks were

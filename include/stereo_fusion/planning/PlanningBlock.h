@@ -20,6 +20,12 @@ struct CellIndex {
   CellIndex offset(int dx, int dy, int dz) const { return {x + dx, y + dy, z + dz}; }
 };
 
+/// A box of cells in cell coordinates: cells min .. max − 1 on each axis (their extent).
+struct CellBox {
+  Eigen::Vector3i min = Eigen::Vector3i::Zero(), max = Eigen::Vector3i::Zero();
+  bool empty() const { return (max.array() <= min.array()).any(); }
+};
+
 /// What the map knows of a cell.
 enum class CellState : uint8_t {
   kUnknown = 0,  ///< never seen: neither a surface nor space a frame saw empty
@@ -62,6 +68,15 @@ struct PlanningBlock {
   /// occupied one — and the site as an offset from the cell; kNoSite beyond the max distance.
   std::array<uint16_t, kCells> dist2;
   std::array<std::array<int8_t, 3>, kCells> site;
+  /// The kinds (EsdfTransit's BlockKind bits) the transit rule last acted on, and whether the
+  /// block waits for it to act again.
+  uint8_t kinds_seen = 0;
+  bool kinds_queued = false;
+  /// The transit rule's summary of the block — its kinds and the boxes around its occupied and
+  /// its free cells — valid while `summary_pass` is the rule's current pass (EsdfTransit).
+  mutable uint32_t summary_pass = 0;
+  mutable uint8_t summary_kinds = 0;
+  mutable CellBox summary_occupied, summary_free;
 
   PlanningBlock() { dist2.fill(kNoSite); }
 

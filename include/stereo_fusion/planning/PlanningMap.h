@@ -10,6 +10,7 @@
 #include "stereo_fusion/map/BlockOctree.h"
 #include "stereo_fusion/map/MapRegion.h"
 #include "stereo_fusion/planning/EsdfPropagator.h"
+#include "stereo_fusion/planning/EsdfTransit.h"
 #include "stereo_fusion/planning/FreeSpaceRecorder.h"
 #include "stereo_fusion/planning/PlanningBlock.h"
 
@@ -43,9 +44,12 @@ struct EsdfSample {
 struct PlanningUpdateStats {
   uint64_t tsdf_blocks = 0;  ///< TSDF blocks whose cells were re-read
   uint64_t blocks_allocated = 0, blocks_erased = 0;
+  uint64_t transit_allocated =
+      0;  ///< of those allocated, blocks without a known cell (EsdfTransit)
   EsdfStats esdf;
   double read_ms = 0.0;       ///< re-reading the TSDF blocks' cells
   double propagate_ms = 0.0;  ///< the ESDF's wavefronts
+  double transit_ms = 0.0;    ///< finding the transit blocks (EsdfTransit)
 };
 
 /// The planning layer: for every planning cell of space the frames have seen, what it is
@@ -101,6 +105,12 @@ class PlanningMap {
 
  private:
   PlanningBlock* allocate(const BlockKey& key);
+  /// Allocates the transit blocks that the kinds `keys` gained since the rule last saw them
+  /// call for; returns how many.
+  uint64_t applyTransitRule(std::vector<BlockKey> keys);
+  /// Erases `keys` that hold no known cell, then allocates the transit blocks their neighbours
+  /// still need (seeded at the next update); returns how many were erased.
+  uint64_t eraseUnknownBlocks(std::vector<BlockKey> keys);
   double signedDistance(const PlanningBlock& block, int cell) const;
   EsdfSample sampleLocked(const Eigen::Vector3d& p_world) const;
 
@@ -110,6 +120,7 @@ class PlanningMap {
   FreeSpaceRecorder recorder_;
   EsdfPropagator propagator_;
   uint32_t max_dist2_ = 0;
+  EsdfTransit transit_;
   mutable std::shared_mutex mutex_;
   PlanningBlockMap blocks_;
   /// Since the previous update(): blocks allocated (their cells have no site yet).
@@ -118,6 +129,8 @@ class PlanningMap {
   /// blocks that may have lost their last known cell (erased at the update if so).
   std::vector<CellIndex> pending_flips_;
   std::vector<BlockKey> maybe_empty_;
+  /// Since the previous update(): blocks whose seen-free bits gave them a kind (kinds_queued).
+  std::vector<BlockKey> kinds_gained_;
   std::vector<std::pair<BlockKey, PlanningBlock::Bits>> seen_scratch_;
 };
 

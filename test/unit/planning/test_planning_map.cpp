@@ -169,6 +169,57 @@ TEST(PlanningMap, ClearMakesTheRegionUnknownUntilSeenAgain) {
   EXPECT_LE(planning.sample({-1.4, 0.0, 1.0}).distance_m, 0.65);
 }
 
+// A clear leaves a hole of whole planning blocks between a wall and the free space in front of
+// it (x −1.92..−1.28 m, the wall at −2 m). The cells across it still read their distance to
+// the wall through the transit blocks, after the update and after a rebuild from scratch, and
+// the two agree; without them the cells in the hole's shadow would read the wall around it.
+TEST(PlanningMap, DistancesCrossAHoleTheClearLeft) {
+  const sim::AnalyticScene scene = roomWithSphere();
+  Mapper mapper(planningConfig());
+  for (const Eigen::Isometry3d& pose : circlePoses(8))
+    ASSERT_TRUE(mapper.integrate(renderFrame(scene, vgaCamera(), pose)).accepted);
+  mapper.updatePlanning();
+  const PlanningMap& planning = *mapper.planning();
+  ASSERT_DOUBLE_EQ(planning.grid().blockM(), 0.64);
+  const Eigen::Vector3d hole_min(-1.92, -0.64, 1.28), hole_max(-1.28, 0.64, 1.92);
+  ASSERT_EQ(planning.state(0.5 * (hole_min + hole_max)), CellState::kFree);
+  ASSERT_TRUE(mapper.clearRegion(MapRegion::box(hole_min, hole_max)).accepted);
+  mapper.updatePlanning();
+  ASSERT_EQ(planning.state(0.5 * (hole_min + hole_max)), CellState::kUnknown);
+
+  auto check = [&](const char* when) {
+    std::vector<Eigen::Vector3d> occupied;
+    std::vector<std::pair<Eigen::Vector3d, double>> shadow;  // free cells behind the hole
+    planning.forEachKnownCell([&](const CellIndex& c, CellState s, double d) {
+      const Eigen::Vector3d p = planning.grid().centre(c);
+      if (s == CellState::kOccupied) occupied.push_back(p);
+      if (s == CellState::kFree && p.x() > -1.28 && p.x() < -0.4 && std::abs(p.y()) < 0.64 &&
+          p.z() > 1.28 && p.z() < 1.92)
+        shadow.emplace_back(p, d);
+    });
+    ASSERT_GT(shadow.size(), 500u) << when;
+    double worst = 0.0;
+    for (const auto& [p, d] : shadow) {
+      double brute = planning.config().max_distance_m;
+      for (const Eigen::Vector3d& o : occupied) brute = std::min(brute, (o - p).norm());
+      worst = std::max(worst, std::abs(d - brute));
+    }
+    EXPECT_LE(worst, 0.5 * planning.grid().cell_m) << when;
+  };
+  check("after the update");
+  const auto incremental = cells(planning);
+  mapper.rebuildPlanning();
+  check("after a rebuild");
+  const auto rebuilt = cells(planning);
+  ASSERT_EQ(incremental.size(), rebuilt.size());
+  size_t differing = 0;
+  for (const auto& [key, record] : incremental) {
+    const CellRecord& other = rebuilt.at(key);
+    differing += record.state != other.state || record.distance_m != other.distance_m;
+  }
+  EXPECT_EQ(differing, 0u);
+}
+
 // A box that was there and has gone: carving turns its cells free, and the distance field follows.
 TEST(PlanningMap, AnObjectThatLeftBecomesFree) {
   sim::AnalyticScene with_box;
