@@ -75,6 +75,42 @@ cv::Mat addDisparityNoise(const cv::Mat& exact_disparity_px, const DisparityNois
   return out;
 }
 
+double surfaceMismatchPx(const Eigen::Vector3d& p_world, const MatcherErrorParams& params,
+                         uint64_t scene_seed) {
+  if (!(params.mismatch_fraction > 0.0)) return 0.0;
+  uint64_t h = mix(scene_seed ^ 0x6d69736d61746368ull);
+  for (int a = 0; a < 3; ++a)
+    h = mix(h ^ static_cast<uint64_t>(
+                    static_cast<int64_t>(std::floor(p_world[a] / params.mismatch_patch_m))));
+  std::mt19937_64 rng(h);
+  if (!(unit(&rng) < params.mismatch_fraction)) return 0.0;
+  const double size =
+      params.mismatch_min_px + (params.mismatch_max_px - params.mismatch_min_px) * unit(&rng);
+  return unit(&rng) < 0.5 ? -size : size;
+}
+
+void addMatcherErrors(cv::Mat* disparity_px, const cv::Mat& depth_m, const StereoCamera& camera,
+                      const Eigen::Isometry3d& T_world_left, const MatcherErrorParams& params,
+                      uint64_t scene_seed, uint64_t frame_seed) {
+  CV_Assert(disparity_px->type() == CV_32FC1 && depth_m.type() == CV_32FC1 &&
+            disparity_px->size() == depth_m.size());
+  std::mt19937_64 rng(mix(frame_seed ^ 0x6e6f697365ull));
+  for (int v = 0; v < disparity_px->rows; ++v) {
+    float* row = disparity_px->ptr<float>(v);
+    const float* z = depth_m.ptr<float>(v);
+    for (int u = 0; u < disparity_px->cols; ++u) {
+      if (!(row[u] > 0.0f)) continue;
+      double d = row[u];
+      if (params.sigma_px > 0.0)
+        d += params.sigma_px * std::sqrt(-2.0 * std::log(unit(&rng))) *
+             std::cos(2 * M_PI * unit(&rng));
+      if (z[u] > 0.0f)
+        d += surfaceMismatchPx(T_world_left * camera.backProject(u, v, z[u]), params, scene_seed);
+      row[u] = d > 0.0 ? static_cast<float>(d) : 0.0f;
+    }
+  }
+}
+
 SgbmMatcher::SgbmMatcher(const SgbmParams& p) {
   const int area = p.block_size * p.block_size;
   // P1/P2 as OpenCV's sample recommends for one channel; disp12MaxDiff = 1 enables the
@@ -121,6 +157,9 @@ StereoView StereoRenderer::render(const Eigen::Isometry3d& T_world_left, uint64_
       view.disparity_px = sgbm_->compute(view.left_rgb, view.right_rgb);
       break;
   }
+  if (config_.matcher.any())
+    addMatcherErrors(&view.disparity_px, view.depth_m, camera_, T_world_left, config_.matcher,
+                     config_.seed, mix(config_.seed) ^ mix(frame_index + 0x3a7c));
   return view;
 }
 

@@ -41,6 +41,8 @@ struct Options {
   std::string disparity = "sgbm";
   double noise_px = 0.3;
   double outlier_fraction = 0.01;
+  double matcher_noise_px = 0.0;
+  double mismatch_fraction = 0.0;
   uint32_t seed = 0;
   double rate_hz = 10.0;
   std::string bag;  ///< also write the frames as a rosbag here (empty: no bag)
@@ -72,6 +74,11 @@ calibration.yaml, poses.txt, disparity/ color/ right/ NNNNNN.png, gt_mesh.ply.
   --disparity exact|noisy|sgbm    disparity source (default sgbm)
   --noise-px S                    noisy: Gaussian sigma in pixels (default 0.3)
   --outlier-fraction P            noisy: share of outliers in [0, 1] (default 0.01)
+  --matcher-noise-px S            any mode: Gaussian sigma added per pixel and frame (default 0)
+  --mismatch-fraction P           any mode: share in [0, 1] of 5 cm surface patches where the
+                                  matcher errs by the same 1-3 px in every view (default 0);
+                                  real SGBM on far walls: --matcher-noise-px 0.2
+                                  --mismatch-fraction 0.03
   --sgbm-num-disparities N        sgbm: search range, a multiple of 16 (default 128)
   --sgbm-block-size N             sgbm: odd matching window size (default 5)
   --seed K                        scene, path and noise seed, 0..4294967295 (default 0)
@@ -181,6 +188,10 @@ bool parseArguments(int argc, char** argv, Options* o) {
       {"--noise-px", [&](auto& f, auto& v) { o->noise_px = parseDouble(f, v, 0, 100, false); }},
       {"--outlier-fraction",
        [&](auto& f, auto& v) { o->outlier_fraction = parseDouble(f, v, 0, 1, false); }},
+      {"--matcher-noise-px",
+       [&](auto& f, auto& v) { o->matcher_noise_px = parseDouble(f, v, 0, 100, false); }},
+      {"--mismatch-fraction",
+       [&](auto& f, auto& v) { o->mismatch_fraction = parseDouble(f, v, 0, 1, false); }},
       {"--sgbm-num-disparities",
        [&](auto& f, auto& v) {
          o->sgbm.num_disparities = static_cast<int>(parseInteger(f, v, 16, 1024));
@@ -355,6 +366,8 @@ int main(int argc, char** argv) {
   config.noise.sigma_px = o.noise_px;
   config.noise.outlier_fraction = o.outlier_fraction;
   config.noise.outlier_max_px = o.sgbm.num_disparities;
+  config.matcher.sigma_px = o.matcher_noise_px;
+  config.matcher.mismatch_fraction = o.mismatch_fraction;
   config.sgbm = o.sgbm;
   config.seed = o.seed;
   // With --dynamic the first half of the frames sees `first_half` (the preset + what later

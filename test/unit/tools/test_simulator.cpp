@@ -527,6 +527,57 @@ TEST(SimulatorStereo, NoisyFramesAreReproducibleAndDifferPerFrame) {
   EXPECT_FALSE(sameImage(a3.disparity_px, c.render(pose, 3).disparity_px));
 }
 
+// Matcher errors on a wall 3 m away seen from two poses 0.2 m apart: about the requested share
+// of pixels is off by 1–3 px, and where both views see the same surface patch they are off by
+// the same amount (the matcher errs on the texture, not per view); the Gaussian part has the
+// requested σ and differs per frame.
+TEST(SimulatorStereo, MatcherMismatchesAreTiedToTheSurfaceAndAgreeAcrossViews) {
+  AnalyticScene scene;
+  scene.add(makeBox(posed({0, 0, 3.5}, 0, Eigen::Vector3d::UnitZ()), {6, 6, 0.5}), {180, 160, 140});
+  const StereoCamera camera = smallCamera(320, 240, 260.0, 0.1);
+  StereoRenderConfig config;
+  config.mode = DisparityMode::kExact;
+  config.matcher.mismatch_fraction = 0.03;
+  config.seed = 5;
+  StereoRenderer renderer(scene, camera, config);
+  const Eigen::Isometry3d first = Eigen::Isometry3d::Identity();
+  const Eigen::Isometry3d second = posed({0.2, 0.0, 0}, 0, Eigen::Vector3d::UnitZ());
+  const StereoView a = renderer.render(first, 0), b = renderer.render(second, 1);
+  const double exact = 260.0 * 0.1 / 3.0;
+  int off = 0, valid = 0, shared = 0;
+  for (int v = 0; v < 240; ++v)
+    for (int u = 0; u < 320; ++u) {
+      const double error = a.disparity_px.at<float>(v, u) - exact;
+      ++valid;
+      if (std::abs(error) < 1e-3) continue;
+      ++off;
+      EXPECT_GE(std::abs(error), 1.0 - 1e-4);
+      EXPECT_LE(std::abs(error), 3.0 + 1e-4);
+      // The same surface point in the second view (0.2 m to the right: 17.3 px to the left).
+      const Eigen::Vector3d p = first * camera.backProject(u, v, 3.0);
+      const Eigen::Vector3d q = second.inverse() * p;
+      const int u2 = static_cast<int>(std::lround(camera.fx() * q.x() / q.z() + camera.cx()));
+      if (u2 < 0 || u2 >= 320 || u2 == u) continue;
+      const Eigen::Vector3d p2 = second * camera.backProject(u2, v, 3.0);
+      if ((p2 / 0.05).array().floor().matrix() != (p / 0.05).array().floor().matrix()) continue;
+      ++shared;
+      EXPECT_NEAR(b.disparity_px.at<float>(v, u2) - exact, error, 1e-4);
+    }
+  EXPECT_NEAR(off / double(valid), 0.03, 0.012);
+  EXPECT_GT(shared, 200);
+
+  config.matcher.mismatch_fraction = 0.0;
+  config.matcher.sigma_px = 0.25;
+  StereoRenderer noisy(scene, camera, config);
+  const StereoView c = noisy.render(first, 0), d = noisy.render(first, 1);
+  cv::Mat errors = c.disparity_px - exact;
+  cv::Scalar mean, stddev;
+  cv::meanStdDev(errors, mean, stddev);
+  EXPECT_NEAR(mean[0], 0.0, 0.01);
+  EXPECT_NEAR(stddev[0], 0.25, 0.01);
+  EXPECT_FALSE(sameImage(c.disparity_px, d.disparity_px));
+}
+
 TEST(SimulatorStereo, RightImageIsTheLeftShiftedByTheDisparity) {
   // Fronto-parallel textured wall at z = 1 m; f·b/z = 100 · 0.1 / 1 = 10 px exactly.
   AnalyticScene scene;
