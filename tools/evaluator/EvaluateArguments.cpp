@@ -47,6 +47,11 @@ std::string evaluateUsage() {
          "  --seed K          sampling seed (default 1)\n"
          "  --min-depth-m X   held-out: ignore measurements nearer than X (default 0.1)\n"
          "  --max-depth-m X   held-out: ignore measurements farther than X (default 8)\n"
+         "  --accuracy-against all|seen  ground-truth mode with a sequence: measure the mesh's\n"
+         "                    accuracy against every ground-truth triangle (default) or only\n"
+         "                    those the frames' cameras saw; with seen, walls count as solid:\n"
+         "                    a surface behind a wall is an error measured to the wall, not a\n"
+         "                    near miss of its hidden back or of what stands behind it\n"
          "  --threads N       worker threads, 0 = all cores (default 0)\n"
          "  -h, --help        this text\n"
          "\n"
@@ -112,6 +117,12 @@ bool parseEvaluateArguments(const std::vector<std::string>& args, EvaluateArgume
         *error = bad + " (a depth in metres > 0)";
         return false;
       }
+    } else if (arg == "--accuracy-against") {
+      if (value != "all" && value != "seen") {
+        *error = bad + " (all or seen)";
+        return false;
+      }
+      parsed->accuracy_against_seen = value == "seen";
     } else if (arg == "--threads") {
       if (!parseNumber(value, &parsed->threads) || parsed->threads < 0 || parsed->threads > 256) {
         *error = bad + " (an integer in [0, 256])";

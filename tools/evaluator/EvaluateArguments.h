@@ -24,6 +24,8 @@ struct EvaluateArguments {
   double min_depth_m = 0.1;
   double max_depth_m = 8.0;
   int threads = 0;
+  /// Ground-truth mode: score accuracy against only the triangles the frames saw (walls solid).
+  bool accuracy_against_seen = false;
   bool help = false;
 };
 

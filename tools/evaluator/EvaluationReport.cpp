@@ -69,6 +69,9 @@ std::string formatTable(const GroundTruthReport& report) {
   out += row("ground truth", report.ground_truth_path);
   if (!report.sequence_path.empty()) out += row("visibility from", report.sequence_path);
   out += row("tolerance", millimetres(report.options.tolerance_m));
+  out += row("accuracy against", report.options.accuracy_triangles.empty()
+                                     ? "all ground truth"
+                                     : "the ground truth the frames saw (walls solid)");
   out += row("samples per mesh", std::to_string(report.options.samples) + " (seed " +
                                      std::to_string(report.options.seed) + ")");
   out += row("area reconstruction / truth", format("%.3f m²", r.reconstruction_area_m2) + " / " +
@@ -139,6 +142,7 @@ std::string toJson(const GroundTruthReport& report) {
   json["tolerance_m"] = number(report.options.tolerance_m);
   json["samples"] = report.options.samples;
   json["seed"] = report.options.seed;
+  json["accuracy_against"] = report.options.accuracy_triangles.empty() ? "all" : "seen";
   json["precision"] = number(r.precision);
   json["completeness"] = number(r.completeness);
   json["completeness_all"] = number(r.completeness_all);

@@ -1,6 +1,7 @@
 #include "evaluator/MeshEvaluator.h"
 
 #include "evaluator/BatchDistance.h"
+#include "evaluator/SeenTriangles.h"
 #include "evaluator/SurfaceSampler.h"
 #include "evaluator/TriangleBvh.h"
 #include "stereo_fusion/util/ThreadPool.h"
@@ -36,7 +37,9 @@ GroundTruthResult evaluateAgainstGroundTruthSamples(
 
   // Precision / accuracy: reconstruction → ground truth.
   {
-    const TriangleBvh gt_surface(ground_truth);
+    const TriangleBvh gt_surface(options.accuracy_triangles.empty()
+                                     ? ground_truth
+                                     : keepTriangles(ground_truth, options.accuracy_triangles));
     const std::vector<double> to_gt = distancesToSurface(gt_surface, recon.points_m, &pool);
     result.precision = shareWithin(to_gt, options.tolerance_m);
     if (!options.ghost_regions_m.empty() && !recon.points_m.empty()) {

@@ -25,6 +25,9 @@ struct GroundTruthOptions {
   /// Where objects stood that have gone since (the sequence's dynamic.txt): reconstruction
   /// surface inside them that is farther than the tolerance from the truth is ghost surface.
   std::vector<Eigen::AlignedBox3d> ghost_regions_m;
+  /// One entry per ground-truth triangle, or empty for all: the triangles that accuracy and
+  /// precision are measured against (seenTriangles(): walls count as solid).
+  std::vector<uint8_t> accuracy_triangles;
 };
 
 /// Scores of a reconstruction against a ground-truth surface. Shares are fractions in [0, 1].

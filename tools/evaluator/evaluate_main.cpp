@@ -14,6 +14,7 @@
 #include "evaluator/EvaluationMode.h"
 #include "evaluator/EvaluationReport.h"
 #include "evaluator/HeldOutSelection.h"
+#include "evaluator/SeenTriangles.h"
 #include "evaluator/SurfaceSampler.h"
 #include "readers/DatasetReader.h"
 #include "readers/PlyReader.h"
@@ -27,6 +28,8 @@ namespace {
 constexpr int kExitOk = 0;
 constexpr int kExitUnreadable = 1;
 constexpr int kExitBadArguments = 2;
+/// A triangle counts as seen when its centroid lies within this of the truth's own depth image.
+constexpr double kSeenToleranceM = 0.02;
 
 /// Thrown on a failure that ends the program with `exit_code`.
 struct Failure {
@@ -131,6 +134,16 @@ void runGroundTruth(const EvaluateArguments& args, const std::string& gt_path,
       std::fprintf(stderr, "[evaluate] warning: no ground-truth sample is visible in %s\n",
                    sequence.c_str());
     }
+    if (args.accuracy_against_seen) {
+      report.options.accuracy_triangles =
+          seenTriangles(ground_truth, frames, kSeenToleranceM, args.threads);
+      size_t seen = 0;
+      for (uint8_t s : report.options.accuracy_triangles) seen += s;
+      std::fprintf(stderr, "[evaluate] accuracy against the %zu of %zu triangles the frames saw\n",
+                   seen, ground_truth.triangles.size());
+    }
+  } else if (args.accuracy_against_seen) {
+    throw Failure{kExitBadArguments, "--accuracy-against seen needs the sequence folder"};
   }
   report.result = evaluateAgainstGroundTruthSamples(reconstruction, ground_truth,
                                                     gt_samples.points_m, gt_samples.area_m2,

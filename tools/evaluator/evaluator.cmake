@@ -15,6 +15,7 @@ set(EVALUATOR_SOURCES
   ${EVALUATOR_DIR}/DistanceStats.cpp
   ${EVALUATOR_DIR}/MeshEvaluator.cpp
   ${EVALUATOR_DIR}/SampleVisibility.cpp
+  ${EVALUATOR_DIR}/SeenTriangles.cpp
   ${EVALUATOR_DIR}/DepthRasterizer.cpp
   ${EVALUATOR_DIR}/ResidualHistogram.cpp
   ${EVALUATOR_DIR}/HeldOutEvaluator.cpp

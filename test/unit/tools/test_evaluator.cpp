@@ -24,6 +24,7 @@
 #include "evaluator/HeldOutEvaluator.h"
 #include "evaluator/HeldOutSelection.h"
 #include "evaluator/InMemoryFrameSource.h"
+#include "evaluator/SeenTriangles.h"
 #include "evaluator/MeshEvaluator.h"
 #include "evaluator/SampleVisibility.h"
 #include "evaluator/SurfaceSampler.h"
@@ -673,9 +674,73 @@ TEST(EvaluatorGroundTruth, VisibilityRestrictsCompletenessToWhatWasSeen) {
   EXPECT_EQ(computeVisibility(samples.points_m, occluded, 0.02).visible_count, 0u);
 }
 
+/// `b`'s triangles appended to `a`.
+TriangleMesh merged(TriangleMesh a, const TriangleMesh& b) {
+  const auto offset = static_cast<uint32_t>(a.positions.size());
+  a.positions.insert(a.positions.end(), b.positions.begin(), b.positions.end());
+  for (const auto& t : b.triangles)
+    a.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  return a;
+}
+
+// A cabinet (front face z = 2, back face z = 2.4, 1 m wide) before a wall at z = 3, one camera
+// at the origin: the front is seen, the back is not, nor the wall in the cabinet's shadow
+// (|x|, |y| < 0.5 · 3 / 2 = 0.75). A skin inside the cabinet at z = 2.3 is 0.1 m from the
+// hidden back but 0.3 m from what the camera saw: with walls solid, its error is 0.3 m.
+TEST(EvaluatorGroundTruth, AccuracyAgainstTheSeenTruthCountsWallsAsSolid) {
+  const TriangleMesh front = planeMesh(-0.5, 0.5, -0.5, 0.5, 2.0, 8);
+  const TriangleMesh back = planeMesh(-0.5, 0.5, -0.5, 0.5, 2.4, 8);
+  const TriangleMesh wall = planeMesh(-2, 2, -1.6, 1.6, 3.0, 16);
+  const TriangleMesh truth = merged(merged(front, back), wall);
+  const InMemoryFrameSource source({planeFrame({0, 0, 1}, 3.0, Eigen::Isometry3d::Identity())});
+  const std::vector<uint8_t> seen = seenTriangles(truth, source, 0.02);
+  ASSERT_EQ(seen.size(), truth.triangles.size());
+  size_t t = 0;
+  for (; t < front.triangles.size(); ++t) EXPECT_EQ(seen[t], 1) << t;
+  for (; t < front.triangles.size() + back.triangles.size(); ++t) EXPECT_EQ(seen[t], 0) << t;
+  size_t wall_seen = 0, wall_expected = 0;
+  for (; t < truth.triangles.size(); ++t) {
+    const auto& tri = truth.triangles[t];
+    const Eigen::Vector3f c =
+        (truth.positions[tri[0]] + truth.positions[tri[1]] + truth.positions[tri[2]]) / 3.0f;
+    const bool in_shadow = std::abs(c.x()) < 0.75f && std::abs(c.y()) < 0.75f;
+    EXPECT_EQ(seen[t], in_shadow ? 0 : 1) << c.transpose();
+    wall_seen += seen[t];
+    wall_expected += !in_shadow;
+  }
+  EXPECT_EQ(wall_seen, wall_expected);
+  EXPECT_LT(wall_expected, wall.triangles.size());
+
+  const TriangleMesh skin = planeMesh(-0.4, 0.4, -0.4, 0.4, 2.3, 4);
+  GroundTruthOptions options = smallOptions(0.04);
+  const SurfaceSamples samples = sampleSurface(truth, options.samples, options.seed);
+  const GroundTruthResult thin = evaluateAgainstGroundTruthSamples(skin, truth, samples.points_m,
+                                                                   samples.area_m2, {}, options);
+  EXPECT_NEAR(thin.accuracy.median_m, 0.1, 1e-3);
+  options.accuracy_triangles = seen;
+  const GroundTruthResult solid = evaluateAgainstGroundTruthSamples(skin, truth, samples.points_m,
+                                                                    samples.area_m2, {}, options);
+  EXPECT_NEAR(solid.accuracy.median_m, 0.3, 1e-3);
+  EXPECT_DOUBLE_EQ(solid.precision, 0.0);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Command line
 // ---------------------------------------------------------------------------------------------
+TEST(EvaluatorArguments, AccuracyAgainstAllOrSeen) {
+  EvaluateArguments args;
+  std::string error;
+  EXPECT_FALSE(args.accuracy_against_seen);
+  ASSERT_TRUE(parseEvaluateArguments({"m.ply", "seq", "--accuracy-against", "seen"}, &args, &error))
+      << error;
+  EXPECT_TRUE(args.accuracy_against_seen);
+  ASSERT_TRUE(parseEvaluateArguments({"m.ply", "seq", "--accuracy-against", "all"}, &args, &error));
+  EXPECT_FALSE(args.accuracy_against_seen);
+  EXPECT_FALSE(
+      parseEvaluateArguments({"m.ply", "seq", "--accuracy-against", "solid"}, &args, &error));
+  EXPECT_NE(error.find("all or seen"), std::string::npos);
+}
+
 TEST(EvaluatorArguments, ParsesOptionsAndRejectsBadOnes) {
   EvaluateArguments args;
   std::string error;
