@@ -75,13 +75,17 @@ cv::Mat addDisparityNoise(const cv::Mat& exact_disparity_px, const DisparityNois
   return out;
 }
 
-double surfaceMismatchPx(const Eigen::Vector3d& p_world, const MatcherErrorParams& params,
-                         uint64_t scene_seed) {
+double surfaceMismatchPx(const Eigen::Vector3d& p_world, uint64_t frame_index,
+                         const MatcherErrorParams& params, uint64_t scene_seed) {
   if (!(params.mismatch_fraction > 0.0)) return 0.0;
   uint64_t h = mix(scene_seed ^ 0x6d69736d61746368ull);
   for (int a = 0; a < 3; ++a)
     h = mix(h ^ static_cast<uint64_t>(
                     static_cast<int64_t>(std::floor(p_world[a] / params.mismatch_patch_m))));
+  if (params.mismatch_views > 0) {
+    const uint64_t views = static_cast<uint64_t>(params.mismatch_views);
+    h = mix(h ^ ((frame_index + h % views) / views));  // the patch's window of frames
+  }
   std::mt19937_64 rng(h);
   if (!(unit(&rng) < params.mismatch_fraction)) return 0.0;
   const double size =
@@ -90,8 +94,9 @@ double surfaceMismatchPx(const Eigen::Vector3d& p_world, const MatcherErrorParam
 }
 
 void addMatcherErrors(cv::Mat* disparity_px, const cv::Mat& depth_m, const StereoCamera& camera,
-                      const Eigen::Isometry3d& T_world_left, const MatcherErrorParams& params,
-                      uint64_t scene_seed, uint64_t frame_seed) {
+                      const Eigen::Isometry3d& T_world_left, uint64_t frame_index,
+                      const MatcherErrorParams& params, uint64_t scene_seed) {
+  const uint64_t frame_seed = mix(scene_seed) ^ mix(frame_index + 0x3a7c);
   CV_Assert(disparity_px->type() == CV_32FC1 && depth_m.type() == CV_32FC1 &&
             disparity_px->size() == depth_m.size());
   std::mt19937_64 rng(mix(frame_seed ^ 0x6e6f697365ull));
@@ -105,7 +110,8 @@ void addMatcherErrors(cv::Mat* disparity_px, const cv::Mat& depth_m, const Stere
         d += params.sigma_px * std::sqrt(-2.0 * std::log(unit(&rng))) *
              std::cos(2 * M_PI * unit(&rng));
       if (z[u] > 0.0f)
-        d += surfaceMismatchPx(T_world_left * camera.backProject(u, v, z[u]), params, scene_seed);
+        d += surfaceMismatchPx(T_world_left * camera.backProject(u, v, z[u]), frame_index, params,
+                               scene_seed);
       row[u] = d > 0.0 ? static_cast<float>(d) : 0.0f;
     }
   }
@@ -158,8 +164,8 @@ StereoView StereoRenderer::render(const Eigen::Isometry3d& T_world_left, uint64_
       break;
   }
   if (config_.matcher.any())
-    addMatcherErrors(&view.disparity_px, view.depth_m, camera_, T_world_left, config_.matcher,
-                     config_.seed, mix(config_.seed) ^ mix(frame_index + 0x3a7c));
+    addMatcherErrors(&view.disparity_px, view.depth_m, camera_, T_world_left, frame_index,
+                     config_.matcher, config_.seed);
   return view;
 }
 

@@ -36,29 +36,32 @@ struct DisparityNoiseParams {
 };
 
 /// Matcher errors added on top of any disparity mode, as real matchers make them: Gaussian
-/// noise per pixel and frame, and mismatches tied to the surface — a share of the scene's
-/// surface patches (cubes of `mismatch_patch_m` in the world) where the matcher errs by the same
-/// 1–3 px, towards or away from the camera, in every view that sees them (it errs on the same
-/// texture, so the errors agree across views as true surfaces do).
+/// noise per pixel and frame, and mismatches tied to the surface — in a window of
+/// `mismatch_views` consecutive frames, a share of the scene's surface patches (cubes of
+/// `mismatch_patch_m` in the world) where the matcher errs by the same 1–3 px, towards or away
+/// from the camera, in every view of the window (it errs on the same texture seen alike, so the
+/// errors agree across neighbouring views as true surfaces do). Each patch's windows start at
+/// their own frame; `mismatch_views` 0 ties a patch's error to every view.
 struct MatcherErrorParams {
   double sigma_px = 0.0;
   double mismatch_fraction = 0.0;
   double mismatch_patch_m = 0.05;
   double mismatch_min_px = 1.0, mismatch_max_px = 3.0;
+  int mismatch_views = 5;
   bool any() const { return sigma_px > 0.0 || mismatch_fraction > 0.0; }
 };
 
-/// The mismatch of the surface patch holding `p_world` (0 for most patches): a function of the
-/// patch and `scene_seed` only.
-double surfaceMismatchPx(const Eigen::Vector3d& p_world, const MatcherErrorParams& params,
-                         uint64_t scene_seed);
+/// The mismatch of the surface patch holding `p_world` in frame `frame_index` (0 for most
+/// patches): a function of the patch, the patch's window of frames and `scene_seed` only.
+double surfaceMismatchPx(const Eigen::Vector3d& p_world, uint64_t frame_index,
+                         const MatcherErrorParams& params, uint64_t scene_seed);
 
 /// Adds MatcherErrorParams' errors to the valid (d > 0) pixels of `disparity_px`; a pixel's
 /// surface point comes from the exact `depth_m` of the view at T_world_left (no mismatch where
 /// it hit nothing). Pixels whose value is no longer positive become invalid (0).
 void addMatcherErrors(cv::Mat* disparity_px, const cv::Mat& depth_m, const StereoCamera& camera,
-                      const Eigen::Isometry3d& T_world_left, const MatcherErrorParams& params,
-                      uint64_t scene_seed, uint64_t frame_seed);
+                      const Eigen::Isometry3d& T_world_left, uint64_t frame_index,
+                      const MatcherErrorParams& params, uint64_t scene_seed);
 
 /// Everything that decides a rendered frame besides the scene, camera and pose.
 struct StereoRenderConfig {

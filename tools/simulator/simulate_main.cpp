@@ -43,6 +43,7 @@ struct Options {
   double outlier_fraction = 0.01;
   double matcher_noise_px = 0.0;
   double mismatch_fraction = 0.0;
+  int mismatch_views = 5;
   uint32_t seed = 0;
   double rate_hz = 10.0;
   std::string bag;  ///< also write the frames as a rosbag here (empty: no bag)
@@ -76,9 +77,11 @@ calibration.yaml, poses.txt, disparity/ color/ right/ NNNNNN.png, gt_mesh.ply.
   --outlier-fraction P            noisy: share of outliers in [0, 1] (default 0.01)
   --matcher-noise-px S            any mode: Gaussian sigma added per pixel and frame (default 0)
   --mismatch-fraction P           any mode: share in [0, 1] of 5 cm surface patches where the
-                                  matcher errs by the same 1-3 px in every view (default 0);
-                                  real SGBM on far walls: --matcher-noise-px 0.2
-                                  --mismatch-fraction 0.03
+                                  matcher errs by the same 1-3 px in every view of a window of
+                                  neighbouring frames (default 0); real SGBM on far walls:
+                                  --matcher-noise-px 0.2 --mismatch-fraction 0.03
+  --mismatch-views K              frames per window of equal mismatches (default 5; 0: every
+                                  frame of the sequence errs alike)
   --sgbm-num-disparities N        sgbm: search range, a multiple of 16 (default 128)
   --sgbm-block-size N             sgbm: odd matching window size (default 5)
   --seed K                        scene, path and noise seed, 0..4294967295 (default 0)
@@ -192,6 +195,10 @@ bool parseArguments(int argc, char** argv, Options* o) {
        [&](auto& f, auto& v) { o->matcher_noise_px = parseDouble(f, v, 0, 100, false); }},
       {"--mismatch-fraction",
        [&](auto& f, auto& v) { o->mismatch_fraction = parseDouble(f, v, 0, 1, false); }},
+      {"--mismatch-views",
+       [&](auto& f, auto& v) {
+         o->mismatch_views = static_cast<int>(parseInteger(f, v, 0, 1000000));
+       }},
       {"--sgbm-num-disparities",
        [&](auto& f, auto& v) {
          o->sgbm.num_disparities = static_cast<int>(parseInteger(f, v, 16, 1024));
@@ -368,6 +375,7 @@ int main(int argc, char** argv) {
   config.noise.outlier_max_px = o.sgbm.num_disparities;
   config.matcher.sigma_px = o.matcher_noise_px;
   config.matcher.mismatch_fraction = o.mismatch_fraction;
+  config.matcher.mismatch_views = o.mismatch_views;
   config.sgbm = o.sgbm;
   config.seed = o.seed;
   // With --dynamic the first half of the frames sees `first_half` (the preset + what later

@@ -527,10 +527,11 @@ TEST(SimulatorStereo, NoisyFramesAreReproducibleAndDifferPerFrame) {
   EXPECT_FALSE(sameImage(a3.disparity_px, c.render(pose, 3).disparity_px));
 }
 
-// Matcher errors on a wall 3 m away seen from two poses 0.2 m apart: about the requested share
-// of pixels is off by 1–3 px, and where both views see the same surface patch they are off by
-// the same amount (the matcher errs on the texture, not per view); the Gaussian part has the
-// requested σ and differs per frame.
+// Matcher errors on a wall 3 m away seen from two poses 0.2 m apart, frames 0 and 1 of one
+// window: about the requested share of pixels is off by 1–3 px, and where both views see the
+// same surface patch they are off by the same amount (the matcher errs on the texture, not per
+// view); with windows of one frame the two frames err on other patches. The Gaussian part has
+// the requested σ and differs per frame.
 TEST(SimulatorStereo, MatcherMismatchesAreTiedToTheSurfaceAndAgreeAcrossViews) {
   AnalyticScene scene;
   scene.add(makeBox(posed({0, 0, 3.5}, 0, Eigen::Vector3d::UnitZ()), {6, 6, 0.5}), {180, 160, 140});
@@ -538,6 +539,7 @@ TEST(SimulatorStereo, MatcherMismatchesAreTiedToTheSurfaceAndAgreeAcrossViews) {
   StereoRenderConfig config;
   config.mode = DisparityMode::kExact;
   config.matcher.mismatch_fraction = 0.03;
+  config.matcher.mismatch_views = 0;  // every frame in one window
   config.seed = 5;
   StereoRenderer renderer(scene, camera, config);
   const Eigen::Isometry3d first = Eigen::Isometry3d::Identity();
@@ -565,6 +567,21 @@ TEST(SimulatorStereo, MatcherMismatchesAreTiedToTheSurfaceAndAgreeAcrossViews) {
     }
   EXPECT_NEAR(off / double(valid), 0.03, 0.012);
   EXPECT_GT(shared, 200);
+
+  // Windows of one frame: the same view in frames 0 and 1 errs on (nearly) disjoint pixels.
+  config.matcher.mismatch_views = 1;
+  StereoRenderer per_frame(scene, camera, config);
+  const StereoView f0 = per_frame.render(first, 0), f1 = per_frame.render(first, 1);
+  int off0 = 0, both = 0;
+  for (int v = 0; v < 240; ++v)
+    for (int u = 0; u < 320; ++u) {
+      const bool e0 = std::abs(f0.disparity_px.at<float>(v, u) - exact) > 1e-3;
+      const bool e1 = std::abs(f1.disparity_px.at<float>(v, u) - exact) > 1e-3;
+      off0 += e0;
+      both += e0 && e1;
+    }
+  EXPECT_GT(off0, 1000);
+  EXPECT_LT(both, off0 / 5);
 
   config.matcher.mismatch_fraction = 0.0;
   config.matcher.sigma_px = 0.25;
