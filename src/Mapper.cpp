@@ -141,6 +141,12 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
   if (texture_consumer_)
     last_frame_ = frame;  // shares the images: what a deferred texture pass projects into
 
+  if (config_.contradiction_filter) {
+    Timer contradiction_timer;
+    result.contradiction =
+        contradiction_.apply(frame, octree_, queue_, config_, &pool_, &measurements_);
+    result.contradiction_ms = contradiction_timer.elapsedMs();
+  }
   stage.enter(MapperStage::kFusion);
   Timer fusion_timer;
   result.fusion =

@@ -73,6 +73,30 @@ const Table& table() {
                 "plane's disparity changes by at most b/D px per pixel (D: its distance from "
                 "the camera centre), so planes farther than radius·b/jump are never cut.",
                 member(&MapperConfig::edge_reject_jump_px));
+    t.addBool("contradiction_filter",
+              "Robust fusion against mismatches that repeat across neighbouring views: a "
+              "measurement beyond every confident surface of its 8×8-px tile by more than "
+              "contradiction_sigmas σ_z is dropped before fusion when it is isolated "
+              "(ContradictionFilter), so a matcher's errors do not grow a second skin behind "
+              "well-observed walls; where many measurements around it do the same (an object "
+              "left) it is kept and carving clears the map. Counted as 'pixels rejected: behind "
+              "a confident surface'. false: every measurement is fused.",
+              member(&MapperConfig::contradiction_filter));
+    t.addDouble("contradiction_min_weight", "", 0.0, false, 1e6,
+                "contradiction_filter: voxel weight from which a surface counts as confident "
+                "(about the number of frames that agree on it, less what the free-space decay "
+                "took).",
+                member(&MapperConfig::contradiction_min_weight));
+    t.addDouble("contradiction_sigmas", "", 0.0, false, 100.0,
+                "contradiction_filter: how far behind a confident surface a measurement must "
+                "lie to contradict it, in depth errors σ_z = z²·disparity_noise_px/(f·b) at its "
+                "depth (plus a voxel of the surface's level).",
+                member(&MapperConfig::contradiction_sigmas));
+    t.addDouble("contradiction_max_share", "", 0.0, true, 1.0,
+                "contradiction_filter: a contradicting measurement is dropped only while at most "
+                "this share of the usable measurements of the 5×5 tiles (40×40 px) around it "
+                "contradict too; more means the world changed there.",
+                member(&MapperConfig::contradiction_max_share));
     t.addDouble("scale2_min_depth_m", "m", 0.0, false, 1000.0,
                 "level_mode depth: depth from which a measurement is fused at the 4³ "
                 "level and coarser (eq. 3.2; thesis: 2 m).",

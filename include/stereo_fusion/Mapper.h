@@ -11,6 +11,7 @@
 #include "stereo_fusion/integration/FrameGate.h"
 #include "stereo_fusion/integration/FreeSpaceCarver.h"
 #include "stereo_fusion/integration/OutlierRejection.h"
+#include "stereo_fusion/integration/ContradictionFilter.h"
 #include "stereo_fusion/integration/StereoFrame.h"
 #include "stereo_fusion/integration/SurfaceFuser.h"
 #include "stereo_fusion/io/MapFile.h"
@@ -64,6 +65,7 @@ struct IntegrationResult {
       0.0;  ///< converting the frame's disparities to depths and colours, then the lookup
   double fusion_ms = 0.0;
   double carve_ms = 0.0;  ///< free-space carving (FreeSpaceCarver), included in nothing else
+  double contradiction_ms = 0.0;  ///< ContradictionFilter, included in nothing else
   double free_space_ms =
       0.0;  ///< recording the space the frame saw empty (planning layer), included in nothing else
   FreeSpaceStats free_space;
@@ -73,6 +75,8 @@ struct IntegrationResult {
   double planning_catch_up_ms = 0.0;
   OutlierRejectionStats
       rejected;  ///< usable pixels the outlier rejection dropped (counted, not fused)
+  /// Usable pixels dropped as isolated contradictions of confident surfaces (counted, not fused).
+  ContradictionStats contradiction;
   LookupStats lookup;
   FusionStats fusion;
   CarveStats carve;
@@ -209,6 +213,7 @@ class Mapper {
   BlockOctree octree_;
   MeasurementImage measurements_;  // the frame's depths and colours, read by lookup and fusion
   OutlierRejection outlier_rejection_;
+  ContradictionFilter contradiction_;
   BlockLookup lookup_;
   SurfaceFuser fuser_;
   FreeSpaceCarver carver_;

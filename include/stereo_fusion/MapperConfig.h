@@ -48,7 +48,11 @@ struct MapperConfig {
   int edge_reject_radius_px = 1;     ///< Near side of a depth edge: pixels with a farther neighbour
                                      ///< within this radius are rejected. 0 = off.
   double edge_reject_jump_px = 1.0;  ///< ... farther by more than this disparity.
-  LevelThresholds levels;            ///< eq. 3.2 switch depths for LevelMode::kDepth.
+  bool contradiction_filter = true;  ///< Drop isolated measurements far behind confident surfaces.
+  double contradiction_min_weight = 2.0;  ///< A surface is confident from this voxel weight on.
+  double contradiction_sigmas = 2.0;      ///< "Far behind": by more than this many σ_z.
+  double contradiction_max_share = 0.25;  ///< Kept where more of the 5×5 tiles around are behind.
+  LevelThresholds levels;                 ///< eq. 3.2 switch depths for LevelMode::kDepth.
   bool update_allocated_finer_level =
       true;  ///< A measurement also updates the next finer level where a block already holds it
              ///< (never allocates it).

@@ -229,6 +229,7 @@ void FrameInput::processFrame(const QueuedFrame& f) {
   const IntegrationResult& r = out.result;
   stats_->pixels_rejected_speckle += r.rejected.speckle_pixels;
   stats_->pixels_rejected_edge += r.rejected.edge_pixels;
+  stats_->pixels_contradicting += r.contradiction.pixels_rejected;
   // Free-space carving counts as fusion: it is the frame's update of the map.
   stats_->recordFrame(
       r.lookup_ms, r.fusion_ms + r.carve_ms,

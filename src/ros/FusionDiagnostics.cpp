@@ -59,6 +59,7 @@ void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   status.add("ignored: image / camera_info repeating a stamp", frames_->ignoredDuplicateParts());
   status.add("pixels rejected: speckles", stats_->pixels_rejected_speckle.load());
   status.add("pixels rejected: near side of depth edges", stats_->pixels_rejected_edge.load());
+  status.add("pixels rejected: behind a confident surface", stats_->pixels_contradicting.load());
   status.add("re-anchored (relocalisation or clock reset)", stats_->reanchored.load());
   status.add("regions cleared (~clear_box, ~clear_sphere)", session_->regionsCleared());
   // Frames from before a clear whose fusion refilled the region, which was then cleared again.

@@ -16,9 +16,9 @@ std::vector<uint8_t> seenTriangles(const TriangleMesh& mesh, const FrameSource& 
     if (tri[0] >= mesh.positions.size() || tri[1] >= mesh.positions.size() ||
         tri[2] >= mesh.positions.size())
       continue;
-    centroids[t] = (mesh.positions[tri[0]] + mesh.positions[tri[1]] + mesh.positions[tri[2]])
-                       .cast<double>() /
-                   3.0;
+    centroids[t] =
+        (mesh.positions[tri[0]] + mesh.positions[tri[1]] + mesh.positions[tri[2]]).cast<double>() /
+        3.0;
   }
   ThreadPool pool(num_threads);
   for (size_t f = 0; f < frames.size(); ++f) {

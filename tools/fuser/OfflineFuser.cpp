@@ -315,6 +315,7 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
         ++report->frames_used;
         report->pixels_rejected.speckle_pixels += r.rejected.speckle_pixels;
         report->pixels_rejected.edge_pixels += r.rejected.edge_pixels;
+        report->pixels_contradicting += r.contradiction.pixels_rejected;
         if (r.reanchored) {
           ++report->frames_reanchored;
           std::fprintf(stderr, "%sframe %zu: %s\n", terminal && options.progress ? "\n" : "", i,
@@ -323,6 +324,7 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
         StageTimings timings{r.lookup_ms,          r.fusion_ms, r.carve_ms, r.mesh.meshing_ms,
                              r.texture.texture_ms, 0.0,         mesh_now};
         timings.free_space_ms = r.free_space_ms;
+        timings.contradiction_ms = r.contradiction_ms;
         timings.free_space_nodes = static_cast<double>(r.free_space.nodes_visited);
         if (mapper->planning() && report->frames_used % options.esdf_every == 0) {
           const PlanningPass pass = mapper->updatePlanning();
@@ -464,6 +466,7 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   j["frames"]["reanchored"] = report.frames_reanchored;
   j["pixels_rejected"]["speckle"] = report.pixels_rejected.speckle_pixels;
   j["pixels_rejected"]["depth_edge"] = report.pixels_rejected.edge_pixels;
+  j["pixels_rejected"]["behind_confident_surface"] = report.pixels_contradicting;
   size_t skipped = 0;
   for (const auto& [reason, n] : report.skipped) skipped += n;
   j["frames"]["skipped"] = skipped;
@@ -515,6 +518,7 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   j["timings_ms"]["lookup"] = stage(&StageTimings::lookup_ms, false);
   j["timings_ms"]["fusion"] = stage(&StageTimings::fusion_ms, false);
   j["timings_ms"]["carve"] = stage(&StageTimings::carve_ms, false);
+  j["timings_ms"]["contradiction"] = stage(&StageTimings::contradiction_ms, false);
   j["timings_ms"]["meshing"] = stage(&StageTimings::meshing_ms, true);
   j["timings_ms"]["texture"] = stage(&StageTimings::texture_ms, true);
   j["timings_ms"]["free_space"] = stage(&StageTimings::free_space_ms, false);

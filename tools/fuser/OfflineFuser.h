@@ -58,8 +58,9 @@ struct TrajectoryReport {
 struct StageTimings {
   double lookup_ms = 0, fusion_ms = 0, carve_ms = 0, meshing_ms = 0, texture_ms = 0, total_ms = 0;
   bool meshed = false;
-  double free_space_ms = 0;  ///< recording the space the frame saw empty (planning layer)
-  double esdf_ms = 0;        ///< the planning update after this frame (with `esdf_updated`)
+  double free_space_ms = 0;     ///< recording the space the frame saw empty (planning layer)
+  double contradiction_ms = 0;  ///< dropping isolated contradictions (ContradictionFilter)
+  double esdf_ms = 0;           ///< the planning update after this frame (with `esdf_updated`)
   bool esdf_updated = false;
   /// That update's work: TSDF blocks re-read, cells flipped (occupied ↔ not), raised, lowered.
   double esdf_read_ms = 0, esdf_propagate_ms = 0, esdf_transit_ms = 0, esdf_tsdf_blocks = 0,
@@ -81,6 +82,7 @@ struct FuseReport {
   size_t frames_reanchored =
       0;  ///< of those, accepted as a relocalisation / clock reset (FrameGate)
   OutlierRejectionStats pixels_rejected;      ///< summed over the used frames (OutlierRejection)
+  uint64_t pixels_contradicting = 0;          ///< summed over the used frames (ContradictionFilter)
   std::map<std::string, size_t> skipped;      ///< reason → count
   std::vector<std::string> skipped_examples;  ///< the first few messages, verbatim
   std::vector<StageTimings> timings;          ///< one per used frame

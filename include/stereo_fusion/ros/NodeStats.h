@@ -73,7 +73,8 @@ class NodeStats {
   }
 
   std::atomic<uint64_t> pixels_rejected_speckle{0},
-      pixels_rejected_edge{0};  // OutlierRejection, fused frames
+      pixels_rejected_edge{0};                    // OutlierRejection, fused frames
+  std::atomic<uint64_t> pixels_contradicting{0};  // ContradictionFilter, fused frames
   std::atomic<uint64_t> reanchored{
       0};  // frames the gate accepted as a relocalisation / clock reset
   // The occupancy grid last built (PlanningPublisher; 0 × 0 until someone subscribed).
