@@ -78,12 +78,13 @@ ContradictionStats ContradictionFilter::apply(const StereoFrame& frame, const Bl
   std::vector<std::vector<Splat>> splats(blocks.size());
   pool->parallelFor(blocks.size(), 64, [&](size_t begin, size_t end) {
     for (size_t b = begin; b < end; ++b)
-      splatBlock(*blocks[b], octree, camera, T_camera_world, block_m, min_weight, tiles_x,
-                 tiles_y, &splats[b]);
+      splatBlock(*blocks[b], octree, camera, T_camera_world, block_m, min_weight, tiles_x, tiles_y,
+                 &splats[b]);
   });
   tile_far_m_.assign(tiles, -1.0f);
   for (const auto& block_splats : splats)
-    for (const Splat& s : block_splats) tile_far_m_[s.tile] = std::max(tile_far_m_[s.tile], s.far_m);
+    for (const Splat& s : block_splats)
+      tile_far_m_[s.tile] = std::max(tile_far_m_[s.tile], s.far_m);
 
   // 2. Trust: the median measured depth of each tile (over its pixels at even rows and
   // columns: a quarter of the work, as robust), then of its 3×3 tiles.
@@ -127,7 +128,8 @@ ContradictionStats ContradictionFilter::apply(const StereoFrame& frame, const Bl
   reject_.create(height, width, CV_8UC1);
   reject_.setTo(0);
   pool->parallelFor(static_cast<size_t>(tiles_y), 4, [&](size_t begin, size_t end) {
-    for (int v = static_cast<int>(begin) * kTile; v < std::min(height, static_cast<int>(end) * kTile); ++v)
+    for (int v = static_cast<int>(begin) * kTile;
+         v < std::min(height, static_cast<int>(end) * kTile); ++v)
       for (int u = 0; u < width; ++u) {
         const float z = depth[v * width + u];
         if (std::isnan(z)) continue;
@@ -154,8 +156,8 @@ ContradictionStats ContradictionFilter::apply(const StereoFrame& frame, const Bl
           behind += tile_behind_[y * tiles_x + x];
         }
       stats.pixels_behind += tile_behind_[ty * tiles_x + tx];
-      isolated[ty * tiles_x + tx] =
-          static_cast<double>(behind) <= config.contradiction_max_share * static_cast<double>(valid);
+      isolated[ty * tiles_x + tx] = static_cast<double>(behind) <=
+                                    config.contradiction_max_share * static_cast<double>(valid);
     }
   for (int v = 0; v < height; ++v) {
     uint8_t* row = reject_.ptr<uint8_t>(v);

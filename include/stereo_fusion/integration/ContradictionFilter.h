@@ -14,7 +14,7 @@ namespace stereo_fusion {
 
 struct ContradictionStats {
   uint64_t tiles_with_surface = 0;  ///< 8×8-px tiles where a trusted confident surface lies
-  uint64_t pixels_behind = 0;  ///< measurements beyond every confident surface of their tile
+  uint64_t pixels_behind = 0;       ///< measurements beyond every confident surface of their tile
   uint64_t pixels_rejected = 0;     ///< of those, the isolated ones, made unusable (not fused)
 };
 
@@ -34,9 +34,9 @@ struct ContradictionStats {
 ///    confident surface there.
 /// 4. Isolated: it is dropped, where its tile's surface is trusted, when at most
 ///    `contradiction_max_share` of the valid measurements of the 5×5 tiles around its own are
-///    behind the confident surfaces of their tiles too (trusted or not). A moved object or a person who left
-///    makes a whole region contradict the map: kept, so carving and the free-space decay clear
-///    it as before.
+///    behind the confident surfaces of their tiles too (trusted or not). A moved object or a person
+///    who left makes a whole region contradict the map: kept, so carving and the free-space decay
+///    clear it as before.
 ///
 /// Runs after the lookup (it splats the blocks the lookup queued) and before fusion; the lookup
 /// may have queued a block only a dropped measurement reached: fusion then creates none.

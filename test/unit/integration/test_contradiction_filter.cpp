@@ -80,8 +80,8 @@ Filtered filterFrame(const cv::Rect& rect, float delta_px, int threads = 2,
   measurements.build(frame, c, &pool);
   ContradictionFilter filter;
   Filtered out;
-  out.stats = filter.apply(frame, mapper.map(), mapper.map().blocksSortedByKey(), c, &pool,
-                           &measurements);
+  out.stats =
+      filter.apply(frame, mapper.map(), mapper.map().blocksSortedByKey(), c, &pool, &measurements);
   for (int i = 0; i < measurements.width() * measurements.height(); ++i)
     out.unusable += std::isnan(measurements.depths()[i]);
   return out;
@@ -120,7 +120,7 @@ TEST(ContradictionFilter, ARegionBehindIsAChangeAndKept) {
 // wall's pixels behind it are kept.
 TEST(ContradictionFilter, AFloaterTheFrameSeesThroughDropsNothing) {
   const Filtered f = filterFrame(cv::Rect(0, 0, 1, 1), 0.0f, 2, /*map_with_floater=*/true);
-  EXPECT_GT(f.stats.pixels_behind, 40u);  // behind the floater's surface ...
+  EXPECT_GT(f.stats.pixels_behind, 40u);   // behind the floater's surface ...
   EXPECT_EQ(f.stats.pixels_rejected, 0u);  // ... which is not trusted
   EXPECT_EQ(f.unusable, 0);
 }
