@@ -8,6 +8,7 @@ if(CATKIN_ENABLE_TESTING)
     ${PROJECT_SOURCE_DIR}/test/unit/map/test_octree.cpp
     ${PROJECT_SOURCE_DIR}/test/unit/map/test_octree_links.cpp
     ${PROJECT_SOURCE_DIR}/test/unit/integration/test_lookup.cpp
+    ${PROJECT_SOURCE_DIR}/test/unit/integration/test_contradiction_filter.cpp
     ${PROJECT_SOURCE_DIR}/test/unit/mapper/test_mapper_properties.cpp
     ${PROJECT_SOURCE_DIR}/test/unit/mesh/test_block_mesher.cpp
     ${PROJECT_SOURCE_DIR}/test/unit/planning/test_planning_scenes.cpp
