@@ -102,6 +102,7 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
   stage.enter(MapperStage::kLookup);
   Timer lookup_timer;
   measurements_.build(frame, config_, &pool_);
+  result.disparity_noise_px = measureDisparityNoise(frame.disparity_px, measurements_).sigma_px;
   if (config_.min_coherent_pixel_share > 0.0) {
     const DisparityCoherence coherence =
         measureDisparityCoherence(frame.disparity_px, measurements_, &pool_);
@@ -137,14 +138,22 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
             std::to_string(config_.max_new_blocks_per_frame) + "): noise or a wrong calibration?");
   gate_.accepted(frame);
   result.accepted = true;
+  if (std::isfinite(result.disparity_noise_px)) {
+    recent_noise_px_.push_back(result.disparity_noise_px);
+    if (recent_noise_px_.size() > kNoiseFrames) recent_noise_px_.pop_front();
+  }
   ++frames_integrated_;
   if (texture_consumer_)
     last_frame_ = frame;  // shares the images: what a deferred texture pass projects into
 
   if (config_.contradiction_filter) {
     Timer contradiction_timer;
+    // Never finer than configured; noisier where the frame itself measures more.
+    const double sigma_d_px = std::isfinite(result.disparity_noise_px)
+                                  ? std::max(config_.disparity_noise_px, result.disparity_noise_px)
+                                  : config_.disparity_noise_px;
     result.contradiction =
-        contradiction_.apply(frame, octree_, queue_, config_, &pool_, &measurements_);
+        contradiction_.apply(frame, octree_, queue_, config_, sigma_d_px, &pool_, &measurements_);
     result.contradiction_ms = contradiction_timer.elapsedMs();
   }
   stage.enter(MapperStage::kFusion);
@@ -414,6 +423,13 @@ void Mapper::reset() {
   frames_integrated_ = 0;
   blocks_evicted_ = 0;
   gate_.reset();
+}
+
+double Mapper::measuredDisparityNoisePx() const {
+  if (recent_noise_px_.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> values(recent_noise_px_.begin(), recent_noise_px_.end());
+  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+  return values[values.size() / 2];
 }
 
 }  // namespace stereo_fusion

@@ -42,6 +42,7 @@ add_library(stereo_fusion_core STATIC
   ${STEREO_FUSION_ROOT}/src/integration/DisparityCoherence.cpp
   ${STEREO_FUSION_ROOT}/src/integration/OutlierRejection.cpp
   ${STEREO_FUSION_ROOT}/src/integration/ContradictionFilter.cpp
+  ${STEREO_FUSION_ROOT}/src/integration/DisparityNoise.cpp
   ${STEREO_FUSION_ROOT}/src/integration/LevelSelection.cpp
   ${STEREO_FUSION_ROOT}/src/integration/DepthTiles.cpp
   ${STEREO_FUSION_ROOT}/src/integration/FusionKernels.cpp

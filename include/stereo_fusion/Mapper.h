@@ -1,4 +1,6 @@
 #pragma once
+#include <deque>
+#include <limits>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -12,6 +14,7 @@
 #include "stereo_fusion/integration/FreeSpaceCarver.h"
 #include "stereo_fusion/integration/OutlierRejection.h"
 #include "stereo_fusion/integration/ContradictionFilter.h"
+#include "stereo_fusion/integration/DisparityNoise.h"
 #include "stereo_fusion/integration/StereoFrame.h"
 #include "stereo_fusion/integration/SurfaceFuser.h"
 #include "stereo_fusion/io/MapFile.h"
@@ -77,6 +80,9 @@ struct IntegrationResult {
       rejected;  ///< usable pixels the outlier rejection dropped (counted, not fused)
   /// Usable pixels dropped as isolated contradictions of confident surfaces (counted, not fused).
   ContradictionStats contradiction;
+  /// The frame's disparity noise σ_d measured from its own disparities (DisparityNoise), px;
+  /// NaN when it had too few usable samples or the frame was rejected before.
+  double disparity_noise_px = std::numeric_limits<double>::quiet_NaN();
   LookupStats lookup;
   FusionStats fusion;
   CarveStats carve;
@@ -155,6 +161,11 @@ class Mapper {
   const MapperConfig& config() const { return config_; }
   /// Frames accepted so far.
   uint64_t framesIntegrated() const { return frames_integrated_; }
+  /// The median of the last kNoiseFrames frames' measured disparity noise (px), NaN before
+  /// any: what /diagnostics and the warnings report. (The contradiction filter uses each
+  /// frame's own estimate, so a map continued after a load fuses as if never interrupted.)
+  double measuredDisparityNoisePx() const;
+  static constexpr size_t kNoiseFrames = 31;
   /// Blocks evicted by the memory bound since construction, reset() or loadMap().
   uint64_t blocksEvicted() const { return blocks_evicted_; }
   /// The frame that last updated `block` (the eviction order).
@@ -234,6 +245,7 @@ class Mapper {
   /// The latest accepted frame: what a deferred meshing pass textures from.
   StereoFrame last_frame_;
   uint64_t frames_integrated_ = 0;
+  std::deque<double> recent_noise_px_;  // the last kNoiseFrames frames' measured σ_d
   uint64_t blocks_evicted_ = 0;
   StageMonitor* monitor_ = nullptr;
   FrameGate gate_;

@@ -59,8 +59,8 @@ float median(std::vector<float>* values) {
 
 ContradictionStats ContradictionFilter::apply(const StereoFrame& frame, const BlockOctree& octree,
                                               const std::vector<VoxelBlock*>& blocks,
-                                              const MapperConfig& config, ThreadPool* pool,
-                                              MeasurementImage* measurements) {
+                                              const MapperConfig& config, double sigma_d_px,
+                                              ThreadPool* pool, MeasurementImage* measurements) {
   ContradictionStats stats;
   const StereoCamera& camera = frame.camera;
   const int width = measurements->width(), height = measurements->height();
@@ -68,7 +68,7 @@ ContradictionStats ContradictionFilter::apply(const StereoFrame& frame, const Bl
   const size_t tiles = static_cast<size_t>(tiles_x) * tiles_y;
   const float* depth = measurements->depths();
   const double fb = camera.fx() * camera.baseline();
-  const double sigma_d = config.disparity_noise_px;
+  const double sigma_d = sigma_d_px;
   auto margin = [&](double z) { return config.contradiction_sigmas * z * z * sigma_d / fb; };
 
   // 1. Confident surfaces, block by block in parallel, merged in block order.

@@ -60,6 +60,8 @@ void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   status.add("pixels rejected: speckles", stats_->pixels_rejected_speckle.load());
   status.add("pixels rejected: near side of depth edges", stats_->pixels_rejected_edge.load());
   status.add("pixels rejected: behind a confident surface", stats_->pixels_contradicting.load());
+  status.add("disparity noise measured (px, median of the last frames)",
+             stats_->disparity_noise_measured_px.load());
   status.add("re-anchored (relocalisation or clock reset)", stats_->reanchored.load());
   status.add("regions cleared (~clear_box, ~clear_sphere)", session_->regionsCleared());
   // Frames from before a clear whose fusion refilled the region, which was then cleared again.

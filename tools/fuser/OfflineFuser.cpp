@@ -316,6 +316,8 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
         report->pixels_rejected.speckle_pixels += r.rejected.speckle_pixels;
         report->pixels_rejected.edge_pixels += r.rejected.edge_pixels;
         report->pixels_contradicting += r.contradiction.pixels_rejected;
+        if (std::isfinite(r.disparity_noise_px))
+          report->disparity_noise_px.push_back(r.disparity_noise_px);
         if (r.reanchored) {
           ++report->frames_reanchored;
           std::fprintf(stderr, "%sframe %zu: %s\n", terminal && options.progress ? "\n" : "", i,
@@ -373,6 +375,16 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
     last.esdf_ms = mapper->updatePlanning().esdf_ms;
     last.total_ms += last.esdf_ms;
     last.esdf_updated = true;
+  }
+  {
+    // Once, at the end: what the data say against what was configured.
+    const double measured = mapper->measuredDisparityNoisePx();
+    const double configured = mapper->config().disparity_noise_px;
+    if (std::isfinite(measured) && measured > 1.5 * configured)
+      std::fprintf(stderr,
+                   "warning: the disparities measure a noise of %.2f px (median of the last %zu "
+                   "frames), disparity_noise_px is %.2f: set it to what the source gives\n",
+                   measured, Mapper::kNoiseFrames, configured);
   }
   if (!trajectory.empty() && report->frames_used > 0) {
     if (options.progress)
@@ -467,6 +479,9 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   j["pixels_rejected"]["speckle"] = report.pixels_rejected.speckle_pixels;
   j["pixels_rejected"]["depth_edge"] = report.pixels_rejected.edge_pixels;
   j["pixels_rejected"]["behind_confident_surface"] = report.pixels_contradicting;
+  j["disparity_noise_px"] = {{"configured", config.disparity_noise_px},
+                             {"measured_p50", summarize(report.disparity_noise_px).p50},
+                             {"frames_measured", report.disparity_noise_px.size()}};
   size_t skipped = 0;
   for (const auto& [reason, n] : report.skipped) skipped += n;
   j["frames"]["skipped"] = skipped;

@@ -83,6 +83,7 @@ struct FuseReport {
       0;  ///< of those, accepted as a relocalisation / clock reset (FrameGate)
   OutlierRejectionStats pixels_rejected;      ///< summed over the used frames (OutlierRejection)
   uint64_t pixels_contradicting = 0;          ///< summed over the used frames (ContradictionFilter)
+  std::vector<double> disparity_noise_px;     ///< per used frame, where measured (DisparityNoise)
   std::map<std::string, size_t> skipped;      ///< reason → count
   std::vector<std::string> skipped_examples;  ///< the first few messages, verbatim
   std::vector<StageTimings> timings;          ///< one per used frame

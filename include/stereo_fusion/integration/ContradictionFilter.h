@@ -46,9 +46,11 @@ class ContradictionFilter {
   static constexpr int kTilePx = 8;
   static constexpr int kShareWindowTiles = 2;  ///< on each side: 5×5 tiles
 
+  /// `sigma_d_px`: the source's disparity noise for σ_z (the Mapper passes the larger of
+  /// disparity_noise_px and the frame's own DisparityNoise).
   ContradictionStats apply(const StereoFrame& frame, const BlockOctree& octree,
                            const std::vector<VoxelBlock*>& blocks, const MapperConfig& config,
-                           ThreadPool* pool, MeasurementImage* measurements);
+                           double sigma_d_px, ThreadPool* pool, MeasurementImage* measurements);
 
  private:
   std::vector<float> tile_far_m_, tile_median_m_;

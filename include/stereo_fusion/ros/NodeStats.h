@@ -1,4 +1,5 @@
 #pragma once
+#include <limits>
 // What the node measured about its own work, for /diagnostics: stage timings, latencies and
 // per-frame pixel counts, the last 1000 of each.
 #include <array>
@@ -75,6 +76,9 @@ class NodeStats {
   std::atomic<uint64_t> pixels_rejected_speckle{0},
       pixels_rejected_edge{0};                    // OutlierRejection, fused frames
   std::atomic<uint64_t> pixels_contradicting{0};  // ContradictionFilter, fused frames
+  // Mapper::measuredDisparityNoisePx() after the last fused frame (NaN before any).
+  std::atomic<double> disparity_noise_measured_px{std::numeric_limits<double>::quiet_NaN()};
+  std::atomic<bool> disparity_noise_warned{false};
   std::atomic<uint64_t> reanchored{
       0};  // frames the gate accepted as a relocalisation / clock reset
   // The occupancy grid last built (PlanningPublisher; 0 × 0 until someone subscribed).

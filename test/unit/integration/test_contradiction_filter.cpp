@@ -80,8 +80,8 @@ Filtered filterFrame(const cv::Rect& rect, float delta_px, int threads = 2,
   measurements.build(frame, c, &pool);
   ContradictionFilter filter;
   Filtered out;
-  out.stats =
-      filter.apply(frame, mapper.map(), mapper.map().blocksSortedByKey(), c, &pool, &measurements);
+  out.stats = filter.apply(frame, mapper.map(), mapper.map().blocksSortedByKey(), c,
+                           c.disparity_noise_px, &pool, &measurements);
   for (int i = 0; i < measurements.width() * measurements.height(); ++i)
     out.unusable += std::isnan(measurements.depths()[i]);
   return out;
