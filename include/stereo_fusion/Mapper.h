@@ -65,7 +65,7 @@ struct IntegrationResult {
   bool reanchored = false;
   std::string note;
   double lookup_ms =
-      0.0;  ///< converting the frame's disparities to depths and colours, then the lookup
+      0.0;  ///< the frame's depths and colours, its disparity noise (DisparityNoise), the lookup
   double fusion_ms = 0.0;
   double carve_ms = 0.0;  ///< free-space carving (FreeSpaceCarver), included in nothing else
   double contradiction_ms = 0.0;  ///< ContradictionFilter, included in nothing else
