@@ -76,6 +76,14 @@ EsdfTransit::EsdfTransit(uint32_t max_dist2) : max_dist2_(max_dist2) {
   reach_ = 0;
   while ((s * (reach_ + 1) - (s - 1)) * (s * (reach_ + 1) - (s - 1)) <= int64_t{max_dist2})
     ++reach_;
+  // The offsets whose blocks hold cells within reach of the origin block's (the corners of the
+  // cube of the reach do not).
+  const CellBox origin = blockBox({0, 0, 0});
+  for (int dz = -reach_; dz <= reach_; ++dz)
+    for (int dy = -reach_; dy <= reach_; ++dy)
+      for (int dx = -reach_; dx <= reach_; ++dx)
+        if ((dx | dy | dz) && withinReach(origin, blockBox({dx, dy, dz})))
+          offsets_.emplace_back(dx, dy, dz);
 }
 
 bool EsdfTransit::withinReach(const CellBox& a, const CellBox& b) const {
@@ -137,24 +145,23 @@ std::vector<BlockKey> EsdfTransit::needed(const PlanningBlockMap& blocks, const 
     return state[((dz + r) * side + (dy + r)) * side + (dx + r)];
   };
   std::vector<std::pair<CellBox, CellBox>> pairs;  // occupied box, free box within reach
-  for (int dz = -r; dz <= r; ++dz)
-    for (int dy = -r; dy <= r; ++dy)
-      for (int dx = -r; dx <= r; ++dx) {
-        if (!(dx | dy | dz)) continue;
-        const BlockKey other = key.offset(dx, dy, dz);
-        const auto it = blocks.find(other);
-        if (it == blocks.end()) {
-          at(dx, dy, dz) = kAbsent;
-          continue;
-        }
-        const PlanningBlock& theirs = summarized(other, *it->second);
-        if ((kinds & kHoldsOccupied) && (theirs.summary_kinds & kHoldsFree) &&
-            withinReach(own_occupied, theirs.summary_free))
-          pairs.emplace_back(own_occupied, theirs.summary_free);
-        if ((kinds & kHoldsFree) && (theirs.summary_kinds & kHoldsOccupied) &&
-            withinReach(theirs.summary_occupied, own_free))
-          pairs.emplace_back(theirs.summary_occupied, own_free);
-      }
+  // A partner lies at an offset within reach; a block between the two at an offset no farther
+  // on any axis, so within reach too: the offsets within reach are all there is to look at.
+  for (const Eigen::Vector3i& d : offsets_) {
+    const BlockKey other = key.offset(d.x(), d.y(), d.z());
+    const auto it = blocks.find(other);
+    if (it == blocks.end()) {
+      at(d.x(), d.y(), d.z()) = kAbsent;
+      continue;
+    }
+    const PlanningBlock& theirs = summarized(other, *it->second);
+    if ((kinds & kHoldsOccupied) && (theirs.summary_kinds & kHoldsFree) &&
+        withinReach(own_occupied, theirs.summary_free))
+      pairs.emplace_back(own_occupied, theirs.summary_free);
+    if ((kinds & kHoldsFree) && (theirs.summary_kinds & kHoldsOccupied) &&
+        withinReach(theirs.summary_occupied, own_free))
+      pairs.emplace_back(theirs.summary_occupied, own_free);
+  }
   // Each pair's hull lies in the box around both: only the absent blocks there are tried.
   for (const auto& [p, q] : pairs) {
     const Eigen::Vector3i lo = p.min.cwiseMin(q.min), hi = p.max.cwiseMax(q.max);

@@ -46,6 +46,22 @@ PlanningBlock* PlanningMap::allocate(const BlockKey& key) {
   return slot.get();
 }
 
+namespace {
+bool inside(const CellBox& inner, const CellBox& outer) {
+  return !outer.empty() && (inner.min.array() >= outer.min.array()).all() &&
+         (inner.max.array() <= outer.max.array()).all();
+}
+/// The kinds whose box grew past the one the transit rule last acted on: a box that grows can
+/// come within reach of new blocks, or see them along other lines.
+uint8_t grownKinds(const BlockKey& key, const PlanningBlock& block) {
+  uint8_t grown = 0;
+  const CellBox occupied = occupiedBox(key, block), free = freeBox(key, block);
+  if (!occupied.empty() && !inside(occupied, block.rule_occupied_box)) grown |= kHoldsOccupied;
+  if (!free.empty() && !inside(free, block.rule_free_box)) grown |= kHoldsFree;
+  return grown;
+}
+}  // namespace
+
 uint64_t PlanningMap::applyTransitRule(std::vector<BlockKey> keys) {
   std::sort(keys.begin(), keys.end());
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
@@ -55,12 +71,12 @@ uint64_t PlanningMap::applyTransitRule(std::vector<BlockKey> keys) {
     const auto it = blocks_.find(key);
     if (it == blocks_.end()) continue;
     PlanningBlock& block = *it->second;
-    const uint8_t kinds = blockKinds(block);
-    const uint8_t gained = kinds & ~block.kinds_seen;
-    block.kinds_seen = kinds;
-    block.kinds_queued = false;
-    if (!gained) continue;
-    for (const BlockKey& transit : transit_.needed(blocks_, key, gained)) {
+    const uint8_t grown = grownKinds(key, block);
+    block.rule_occupied_box = occupiedBox(key, block);
+    block.rule_free_box = freeBox(key, block);
+    block.rule_queued = false;
+    if (!grown) continue;
+    for (const BlockKey& transit : transit_.needed(blocks_, key, grown)) {
       allocate(transit);
       ++allocated;
     }
@@ -87,8 +103,9 @@ uint64_t PlanningMap::eraseUnknownBlocks(std::vector<BlockKey> keys) {
       for (int dy = -r; dy <= r; ++dy)
         for (int dx = -r; dx <= r; ++dx) {
           const auto it = blocks_.find(key.offset(dx, dy, dz));
-          if (it != blocks_.end() && it->second->kinds_seen) {
-            it->second->kinds_seen = 0;  // acts on all its kinds again
+          PlanningBlock* block = it == blocks_.end() ? nullptr : it->second.get();
+          if (block && !(block->rule_occupied_box.empty() && block->rule_free_box.empty())) {
+            block->rule_occupied_box = block->rule_free_box = CellBox{};  // acts on all again
             neighbours.push_back(it->first);
           }
         }
@@ -157,9 +174,9 @@ PlanningUpdateStats PlanningMap::update(const BlockOctree& octree,
       }
     }
   touched.insert(touched.end(), fresh_.begin(), fresh_.end());
-  touched.insert(touched.end(), kinds_gained_.begin(), kinds_gained_.end());
+  touched.insert(touched.end(), boxes_grown_.begin(), boxes_grown_.end());
   touched.insert(touched.end(), maybe_empty.begin(), maybe_empty.end());
-  kinds_gained_.clear();
+  boxes_grown_.clear();
   Timer transit_timer;
   stats.transit_allocated = applyTransitRule(std::move(touched));
   stats.transit_ms = transit_timer.elapsedMs();
@@ -196,7 +213,7 @@ PlanningUpdateStats PlanningMap::rebuild(const BlockOctree& octree) {
   std::vector<BlockKey> all;
   for (auto it = blocks_.begin(); it != blocks_.end();) {
     if (it->second->anyKnown()) {
-      it->second->kinds_seen = 0;
+      it->second->rule_occupied_box = it->second->rule_free_box = CellBox{};
       all.push_back(it->first);
       ++it;
     } else {
@@ -209,7 +226,7 @@ PlanningUpdateStats PlanningMap::rebuild(const BlockOctree& octree) {
   fresh_.clear();
   pending_flips_.clear();
   maybe_empty_.clear();
-  kinds_gained_.clear();
+  boxes_grown_.clear();
   stats.esdf = propagator_.rebuild(&blocks_, max_dist2_);
   return stats;
 }
@@ -252,7 +269,7 @@ void PlanningMap::clear() {
   fresh_.clear();
   pending_flips_.clear();
   maybe_empty_.clear();
-  kinds_gained_.clear();
+  boxes_grown_.clear();
 }
 
 double PlanningMap::signedDistance(const PlanningBlock& block, int cell) const {
@@ -366,9 +383,9 @@ void PlanningMap::addSeenFree(
   for (const auto& [key, bits] : seen_free) {
     PlanningBlock* block = allocate(key);
     for (size_t w = 0; w < bits.size(); ++w) block->seen_free[w] |= bits[w];
-    if (!block->kinds_queued && (blockKinds(*block) & ~block->kinds_seen)) {
-      block->kinds_queued = true;
-      kinds_gained_.push_back(key);
+    if (!block->rule_queued && (grownKinds(key, *block) & kHoldsFree)) {
+      block->rule_queued = true;
+      boxes_grown_.push_back(key);
     }
   }
 }

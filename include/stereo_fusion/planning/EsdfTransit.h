@@ -54,6 +54,7 @@ class EsdfTransit {
 
   uint32_t max_dist2_;
   int reach_;
+  std::vector<Eigen::Vector3i> offsets_;  ///< of the blocks within reach of a block, key order
   uint32_t pass_ = 1;
 };
 

@@ -68,10 +68,10 @@ struct PlanningBlock {
   /// occupied one — and the site as an offset from the cell; kNoSite beyond the max distance.
   std::array<uint16_t, kCells> dist2;
   std::array<std::array<int8_t, 3>, kCells> site;
-  /// The kinds (EsdfTransit's BlockKind bits) the transit rule last acted on, and whether the
-  /// block waits for it to act again.
-  uint8_t kinds_seen = 0;
-  bool kinds_queued = false;
+  /// The boxes around the occupied and the free cells the transit rule last acted on (empty:
+  /// never), and whether the block waits for it to act again (its free box grew since).
+  CellBox rule_occupied_box, rule_free_box;
+  bool rule_queued = false;
   /// The transit rule's summary of the block — its kinds and the boxes around its occupied and
   /// its free cells — valid while `summary_pass` is the rule's current pass (EsdfTransit).
   mutable uint32_t summary_pass = 0;

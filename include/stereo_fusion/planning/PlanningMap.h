@@ -105,8 +105,8 @@ class PlanningMap {
 
  private:
   PlanningBlock* allocate(const BlockKey& key);
-  /// Allocates the transit blocks that the kinds `keys` gained since the rule last saw them
-  /// call for; returns how many.
+  /// Allocates the transit blocks that `keys` call for where their occupied or free cells
+  /// spread past the boxes the rule last acted on; returns how many.
   uint64_t applyTransitRule(std::vector<BlockKey> keys);
   /// Erases `keys` that hold no known cell, then allocates the transit blocks their neighbours
   /// still need (seeded at the next update); returns how many were erased.
@@ -129,8 +129,8 @@ class PlanningMap {
   /// blocks that may have lost their last known cell (erased at the update if so).
   std::vector<CellIndex> pending_flips_;
   std::vector<BlockKey> maybe_empty_;
-  /// Since the previous update(): blocks whose seen-free bits gave them a kind (kinds_queued).
-  std::vector<BlockKey> kinds_gained_;
+  /// Since the previous update(): blocks whose seen-free bits grew their free box (rule_queued).
+  std::vector<BlockKey> boxes_grown_;
   std::vector<std::pair<BlockKey, PlanningBlock::Bits>> seen_scratch_;
 };
 

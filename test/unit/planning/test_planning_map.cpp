@@ -220,6 +220,43 @@ TEST(PlanningMap, DistancesCrossAHoleTheClearLeft) {
   EXPECT_EQ(differing, 0u);
 }
 
+// The transit rule runs again when a block's cells spread, not only when it first holds a
+// kind. An occupied cell (0, 4, 4) and, three blocks on, a free cell at x = 31: 31 cells apart,
+// beyond the 25-cell reach, so nothing lies between them. Then x = 24 of that block is seen free:
+// 24 cells from the obstacle, across two absent blocks, which the grown box now calls for —
+// the cell reads 24 · 8 cm = 1.92 m, not the 2 m of "no site", and a rebuild agrees.
+TEST(PlanningMap, AFreeBoxThatGrowsWithinReachGetsItsTransitBlocks) {
+  PlanningConfig config;  // 8 cm cells of 4 voxels of 2 cm, 2 m
+  ThreadPool pool(1);
+  PlanningMap planning(config, &pool);
+  BlockOctree octree(0.16);
+  auto tsdf = std::make_unique<VoxelBlock>();
+  tsdf->key = {0, 2, 2};  // voxels 0–7, 16–23, 16–23: planning cells x 0–1, y 4–5, z 4–5
+  Voxel& behind = tsdf->writableAt(0, 0, 0, 0);
+  behind.sdf_m = 0.01f;  // just behind a surface: occupied
+  behind.weight = 1.0f;
+  octree.insert(std::move(tsdf));
+  planning.update(octree, {{0, 2, 2}}, {});
+  auto seeFree = [&](int x) {
+    PlanningBlock::Bits bits{};
+    PlanningBlock::set(&bits, PlanningBlock::index(x - 24, 4, 4), true);
+    planning.addSeenFree({{BlockKey{3, 0, 0}, bits}});
+    planning.update(octree, {}, {});
+  };
+  const Eigen::Vector3d far_cell(31.5 * 0.08, 4.5 * 0.08, 4.5 * 0.08);
+  const Eigen::Vector3d near_cell(24.5 * 0.08, 4.5 * 0.08, 4.5 * 0.08);
+  seeFree(31);
+  ASSERT_EQ(planning.state({0.04, 0.36, 0.36}), CellState::kOccupied);
+  EXPECT_EQ(planning.blockCount(), 2u);
+  EXPECT_DOUBLE_EQ(planning.sample(far_cell).distance_m, 2.0);  // 31 cells: beyond the max
+  seeFree(24);
+  EXPECT_EQ(planning.blockCount(), 4u);  // (1, 0, 0) and (2, 0, 0) between them
+  EXPECT_NEAR(planning.sample(near_cell).distance_m, 1.92, 1e-9);
+  planning.rebuild(octree);
+  EXPECT_EQ(planning.blockCount(), 4u);
+  EXPECT_NEAR(planning.sample(near_cell).distance_m, 1.92, 1e-9);
+}
+
 // A box that was there and has gone: carving turns its cells free, and the distance field follows.
 TEST(PlanningMap, AnObjectThatLeftBecomesFree) {
   sim::AnalyticScene with_box;
