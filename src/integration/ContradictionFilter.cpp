@@ -40,7 +40,9 @@ void splatBlock(const VoxelBlock& block, const BlockOctree& octree, const Stereo
         if (!camera.project(p_c, &uv) || !camera.isInImage(uv)) continue;
         // sdf > 0 behind the surface, measured along the ray: the surface lies that much nearer.
         const float far_m = static_cast<float>(p_c.z() - v.sdf_m * p_c.z() / p_c.norm() + voxel_m);
-        const double r = 0.5 * camera.fx() * voxel_m / p_c.z();
+        // At most the image: a voxel at the camera covers it, and the tile loops stay in int.
+        const double r = std::min(0.5 * camera.fx() * voxel_m / p_c.z(),
+                                  static_cast<double>(camera.width() + camera.height()));
         auto tileOf = [](double px, int tiles) {
           return std::clamp(static_cast<int>(std::floor(px + 0.5)) / kTile, 0, tiles - 1);
         };
