@@ -51,14 +51,10 @@ bool inside(const CellBox& inner, const CellBox& outer) {
   return !outer.empty() && (inner.min.array() >= outer.min.array()).all() &&
          (inner.max.array() <= outer.max.array()).all();
 }
-/// The kinds whose box grew past the one the transit rule last acted on: a box that grows can
-/// come within reach of new blocks, or see them along other lines.
-uint8_t grownKinds(const BlockKey& key, const PlanningBlock& block) {
-  uint8_t grown = 0;
-  const CellBox occupied = occupiedBox(key, block), free = freeBox(key, block);
-  if (!occupied.empty() && !inside(occupied, block.rule_occupied_box)) grown |= kHoldsOccupied;
-  if (!free.empty() && !inside(free, block.rule_free_box)) grown |= kHoldsFree;
-  return grown;
+/// Whether `now` grew past `acted_on`, the box the transit rule last acted on: a box that grows
+/// can come within reach of new blocks, or see them along other lines.
+bool grew(const CellBox& now, const CellBox& acted_on) {
+  return !now.empty() && !inside(now, acted_on);
 }
 }  // namespace
 
@@ -71,9 +67,11 @@ uint64_t PlanningMap::applyTransitRule(std::vector<BlockKey> keys) {
     const auto it = blocks_.find(key);
     if (it == blocks_.end()) continue;
     PlanningBlock& block = *it->second;
-    const uint8_t grown = grownKinds(key, block);
-    block.rule_occupied_box = occupiedBox(key, block);
-    block.rule_free_box = freeBox(key, block);
+    const CellBox occupied = occupiedBox(key, block), free = freeBox(key, block);
+    const uint8_t grown = (grew(occupied, block.rule_occupied_box) ? kHoldsOccupied : 0) |
+                          (grew(free, block.rule_free_box) ? kHoldsFree : 0);
+    block.rule_occupied_box = occupied;
+    block.rule_free_box = free;
     block.rule_queued = false;
     if (!grown) continue;
     for (const BlockKey& transit : transit_.needed(blocks_, key, grown)) {
@@ -383,7 +381,7 @@ void PlanningMap::addSeenFree(
   for (const auto& [key, bits] : seen_free) {
     PlanningBlock* block = allocate(key);
     for (size_t w = 0; w < bits.size(); ++w) block->seen_free[w] |= bits[w];
-    if (!block->rule_queued && (grownKinds(key, *block) & kHoldsFree)) {
+    if (!block->rule_queued && grew(freeBox(key, *block), block->rule_free_box)) {
       block->rule_queued = true;
       boxes_grown_.push_back(key);
     }
