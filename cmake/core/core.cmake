@@ -76,6 +76,7 @@ add_library(stereo_fusion_core STATIC
   ${STEREO_FUSION_ROOT}/src/util/ThreadPool.cpp
   ${STEREO_FUSION_ROOT}/src/util/Crc32.cpp
   ${STEREO_FUSION_ROOT}/src/util/CpuFeatures.cpp
+  ${STEREO_FUSION_ROOT}/src/util/ProcessMemory.cpp
 )
 target_include_directories(stereo_fusion_core PUBLIC ${STEREO_FUSION_ROOT}/include ${EIGEN3_INCLUDE_DIR}
                                                      ${OpenCV_INCLUDE_DIRS})

@@ -98,8 +98,13 @@ MeshChanges MeshStore::remesh(const BlockOctree& map, const std::vector<Owner>& 
       fillFacesFromCoarserLevels(*filled[i], states_[*filled[i]].level, &seam_fills_[*filled[i]]);
   });
   pool->parallelFor(owners.size(), 4, [&](size_t begin, size_t end) {
-    for (size_t i = begin; i < end; ++i)
-      mesher_.mesh(map, states_, *owners[i].block, &scratch_[i], &seam_fills_);
+    // Meshed into a per-thread buffer that keeps its capacity, then copied at its exact size:
+    // kept submeshes grown by push_back would hold up to twice their bytes.
+    thread_local SubMesh work;
+    for (size_t i = begin; i < end; ++i) {
+      mesher_.mesh(map, states_, *owners[i].block, &work, &seam_fills_);
+      if (!work.empty()) scratch_[i] = SubMesh(work);
+    }
   });
   for (const VoxelBlock* block : filled) std::vector<Voxel>().swap(seam_fills_[*block]);
   MeshChanges update;
@@ -113,6 +118,7 @@ MeshChanges MeshStore::remesh(const BlockOctree& map, const std::vector<Owner>& 
       update.removed.push_back(key);
     }
   }
+  scratch_.clear();  // the replaced submeshes: freed now, not held until the next pass
   update.meshing_ms = timer.elapsedMs();
   return update;
 }
@@ -181,36 +187,79 @@ size_t MeshStore::triangleCount() const {
   return n;
 }
 
+size_t MeshStore::memoryBytes() const {
+  size_t n = 0;
+  for (const auto& [key, mesh] : meshes_)
+    n += sizeof(std::pair<const BlockKey, SubMesh>) + 2 * sizeof(void*) +  // table entry
+         mesh.positions.capacity() * sizeof(mesh.positions[0]) +
+         mesh.normals.capacity() * sizeof(mesh.normals[0]) +
+         mesh.colors.capacity() * sizeof(mesh.colors[0]) +
+         mesh.triangles.capacity() * sizeof(mesh.triangles[0]);
+  return n + meshes_.bucket_count() * sizeof(void*);
+}
+
 TriangleMesh weldSubmeshes(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes) {
   std::vector<const SubMesh*> ordered;
   for (const auto& [key, mesh] : submeshes) ordered.push_back(&mesh);
   std::sort(ordered.begin(), ordered.end(),
             [](const SubMesh* a, const SubMesh* b) { return a->key < b->key; });
-  struct PositionHash {
-    size_t operator()(const std::array<uint32_t, 3>& p) const {
-      return (size_t{p[0]} * 73856093u) ^ (size_t{p[1]} * 19349663u) ^ (size_t{p[2]} * 83492791u);
-    }
+  // Every vertex of every submesh in that order, by its position's bits: sorted, equal bits
+  // lie together with the first seen first, which keeps the vertex's place and colour. A
+  // sorted array instead of a hash table: a third of the bytes at the end of a large run.
+  struct Entry {
+    std::array<uint32_t, 3> bits;
+    uint32_t seq;  // the vertex's place among all submeshes' vertices
+    bool operator<(const Entry& o) const { return bits != o.bits ? bits < o.bits : seq < o.seq; }
   };
-  std::unordered_map<std::array<uint32_t, 3>, uint32_t, PositionHash> index_of;
-  TriangleMesh mesh;
+  size_t vertex_total = 0, triangle_total = 0;
   for (const SubMesh* sub : ordered) {
-    std::vector<uint32_t> remap(sub->positions.size());
-    for (size_t v = 0; v < sub->positions.size(); ++v) {
-      std::array<uint32_t, 3> bits;
-      std::memcpy(bits.data(), sub->positions[v].data(), sizeof(bits));
-      auto [it, inserted] =
-          index_of.try_emplace(bits, static_cast<uint32_t>(mesh.positions.size()));
-      if (inserted) {
+    vertex_total += sub->positions.size();
+    triangle_total += sub->triangles.size();
+  }
+  std::vector<Entry> entries;
+  entries.reserve(vertex_total);
+  for (const SubMesh* sub : ordered)
+    for (const Eigen::Vector3f& p : sub->positions) {
+      Entry e{};
+      std::memcpy(e.bits.data(), p.data(), sizeof(e.bits));
+      e.seq = static_cast<uint32_t>(entries.size());
+      entries.push_back(e);
+    }
+  std::sort(entries.begin(), entries.end());
+  // first_of[seq]: the seq of the first vertex with the same bits; the welded vertices are the
+  // first ones, numbered in their order.
+  std::vector<uint32_t> first_of(vertex_total);
+  for (size_t i = 0; i < entries.size(); ++i)
+    first_of[entries[i].seq] = i > 0 && entries[i].bits == entries[i - 1].bits
+                                   ? first_of[entries[i - 1].seq]
+                                   : entries[i].seq;
+  std::vector<Entry>().swap(entries);
+  size_t welded = 0;
+  for (size_t seq = 0; seq < vertex_total; ++seq) welded += first_of[seq] == seq;
+  TriangleMesh mesh;
+  mesh.positions.reserve(welded);
+  mesh.normals.reserve(welded);
+  mesh.colors.reserve(welded);
+  mesh.triangles.reserve(triangle_total);
+  // index_of[seq]: the welded index, for first vertices; duplicates read their first's.
+  std::vector<uint32_t>& index_of = first_of;
+  size_t seq = 0;
+  for (const SubMesh* sub : ordered) {
+    const size_t base = seq;
+    for (size_t v = 0; v < sub->positions.size(); ++v, ++seq) {
+      if (first_of[seq] == seq) {
+        index_of[seq] = static_cast<uint32_t>(mesh.positions.size());
         mesh.positions.push_back(sub->positions[v]);
         mesh.normals.push_back(sub->normals[v]);
         mesh.colors.push_back(sub->colors[v]);
       } else {
-        mesh.normals[it->second] += sub->normals[v];
+        index_of[seq] = index_of[first_of[seq]];  // first_of[seq] < seq: already an index
+        mesh.normals[index_of[seq]] += sub->normals[v];
       }
-      remap[v] = it->second;
     }
     for (const auto& t : sub->triangles)
-      mesh.triangles.push_back({remap[t[0]], remap[t[1]], remap[t[2]]});
+      mesh.triangles.push_back(
+          {index_of[base + t[0]], index_of[base + t[1]], index_of[base + t[2]]});
   }
   for (Eigen::Vector3f& n : mesh.normals) {
     const float len = n.norm();

@@ -22,6 +22,7 @@
 #include "stereo_fusion/session/MappingSession.h"
 #include "stereo_fusion/trajectory/PoseCorrection.h"
 #include "stereo_fusion/util/Percentile.h"
+#include "stereo_fusion/util/ProcessMemory.h"
 #include "stereo_fusion/util/Timer.h"
 
 namespace stereo_fusion {
@@ -277,6 +278,7 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
     std::fprintf(stderr, "%sskipping frame: %s\n", terminal && options.progress ? "\n" : "",
                  message.c_str());
   };
+  report->start_rss_bytes = readProcessMemory().resident_mb * 1048576.0;
   for (size_t i = 0; i < total; ++i) {
     StereoFrame frame;
     std::string why;
@@ -429,6 +431,12 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
   struct rusage usage {};
   if (getrusage(RUSAGE_SELF, &usage) == 0)
     report->peak_rss_bytes = usage.ru_maxrss * 1024.0;  // KiB on Linux
+  report->file_rss_bytes = readProcessMemory().file_mb * 1048576.0;
+  report->mesh_store_bytes = mapper->mesh().memoryBytes();
+  report->mesh_output_bytes = mesh.positions.size() * sizeof(mesh.positions[0]) +
+                              mesh.normals.size() * sizeof(mesh.normals[0]) +
+                              mesh.colors.size() * sizeof(mesh.colors[0]) +
+                              mesh.triangles.size() * sizeof(mesh.triangles[0]);
   if (!mapper->map().blocks().empty()) {
     BlockKey lo = mapper->map().blocks().front()->key, hi = lo;
     for (const VoxelBlock* b : mapper->map().blocks()) {
@@ -509,6 +517,10 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
     l["bytes_per_block"] = levelVoxelCount(level) * sizeof(Voxel);
   }
   j["memory"]["peak_rss_megabytes"] = report.peak_rss_bytes / 1048576.0;
+  j["memory"]["start_rss_megabytes"] = report.start_rss_bytes / 1048576.0;
+  j["memory"]["file_rss_megabytes"] = report.file_rss_bytes / 1048576.0;
+  j["memory"]["mesh_store_megabytes"] = report.mesh_store_bytes / 1048576.0;
+  j["memory"]["mesh_output_megabytes"] = report.mesh_output_bytes / 1048576.0;
   j["memory"]["dense_grid_megabytes"] = report.dense_grid_bytes / 1048576.0;
   j["memory"]["dense_grid_ratio"] =
       report.memory_bytes > 0 ? report.dense_grid_bytes / report.memory_bytes : 0.0;

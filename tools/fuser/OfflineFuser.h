@@ -98,6 +98,11 @@ struct FuseReport {
   double bytes_per_block = 0;
   BlockOctree::MemoryUse memory;  ///< memory_bytes by part: blocks, voxel levels, nodes
   double peak_rss_bytes = 0;      ///< the whole process's peak resident set (getrusage)
+  /// Where the peak goes besides the map: the process before the first frame (program,
+  /// libraries, session), the pages of the program's and libraries' files at the end, the
+  /// submeshes kept for incremental meshing and the welded mesh written to mesh.ply.
+  double start_rss_bytes = 0, file_rss_bytes = 0;
+  size_t mesh_store_bytes = 0, mesh_output_bytes = 0;
   /// A dense grid of finest-level voxels (same 12-byte voxel) over the blocks' bounding box:
   /// what the sparse block octree saves.
   double dense_grid_bytes = 0;

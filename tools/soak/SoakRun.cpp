@@ -10,23 +10,10 @@
 
 #include "simulator/AnalyticScene.h"
 #include "stereo_fusion/Mapper.h"
+#include "stereo_fusion/util/ProcessMemory.h"
 #include "stereo_fusion/util/Timer.h"
 
 namespace stereo_fusion::soak {
-
-double residentMegabytes() {
-  std::ifstream status("/proc/self/status");
-  std::string line;
-  while (std::getline(status, line)) {
-    if (line.rfind("VmRSS:", 0) == 0) {
-      std::istringstream in(line.substr(6));
-      double kb = 0;
-      in >> kb;
-      return kb / 1024.0;
-    }
-  }
-  return 0.0;
-}
 
 bool runSoak(const SoakOptions& options, std::vector<SoakSample>* samples, std::string* error) {
   std::string why;
@@ -70,7 +57,7 @@ bool runSoak(const SoakOptions& options, std::vector<SoakSample>* samples, std::
   auto sample = [&](size_t frame) {
     SoakSample s;
     s.frame = frame;
-    s.rss_mb = residentMegabytes();
+    s.rss_mb = readProcessMemory().resident_mb;
     s.blocks = mapper.map().blockCount();
     s.evicted = mapper.blocksEvicted();
     s.map_mb = mapper.map().memoryBytes() / 1048576.0;

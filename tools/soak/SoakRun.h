@@ -31,9 +31,6 @@ struct SoakSample {
   double mean_frame_ms = 0;        ///< mean integrate() time since the previous sample
 };
 
-/// VmRSS of this process in MiB from /proc/self/status (0 if unavailable).
-double residentMegabytes();
-
 /// Fuses `options.frames` frames of a corridor (floor 0.5 m below, wall 2 m ahead; both
 /// infinite, so a few rendered views shifted along x are exact for any x) and samples memory.
 /// Writes the CSV as it goes (a killed run keeps its samples). False with a message on error.

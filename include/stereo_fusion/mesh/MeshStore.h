@@ -39,6 +39,8 @@ class MeshStore {
   /// The mesher's per-block state (level and sign bits), current for every block meshed.
   const MeshStates& states() const { return states_; }
   size_t triangleCount() const;
+  /// Bytes the submeshes hold (their arrays and the key table's entries).
+  size_t memoryBytes() const;
   void clear() {
     meshes_.clear();
     states_.clear();
@@ -76,8 +78,8 @@ class MeshStore {
       states_;  // the mesher's per-block cache, refreshed for every block before it is meshed
   SeamFills seam_fills_;  // during a pass: the face-filled copies its owners read, then freed
   std::unordered_map<BlockKey, SubMesh, BlockKeyHash> meshes_;
-  std::vector<SubMesh> scratch_;
-  BlockKeySet owner_keys_;  // ownersOf()'s de-duplication, reused frame after frame
+  std::vector<SubMesh> scratch_;  // during a pass: each owner's new submesh; empty between passes
+  BlockKeySet owner_keys_;        // ownersOf()'s de-duplication, reused frame after frame
 };
 
 /// All submeshes as one mesh, vertices shared between submeshes welded (they are computed
