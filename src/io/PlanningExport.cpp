@@ -10,7 +10,10 @@
 namespace stereo_fusion {
 
 bool writeEsdfPly(const std::string& path, const PlanningMap& planning, std::string* error) {
+  size_t cells = 0;  // counted first: a vector grown by doubling would hold up to twice the bytes
+  planning.forEachKnownCell([&](const CellIndex&, CellState, double) { ++cells; });
   std::vector<float> vertices;  // x y z distance
+  vertices.reserve(4 * cells);
   planning.forEachKnownCell([&](const CellIndex& cell, CellState, double distance_m) {
     const Eigen::Vector3d p = planning.grid().centre(cell);
     vertices.insert(vertices.end(), {static_cast<float>(p.x()), static_cast<float>(p.y()),

@@ -419,24 +419,24 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
   }
   report->wall_time_s = wall.elapsedMs() / 1000.0;
 
-  const TriangleMesh mesh = mapper->extractMesh();
-  report->mesh_vertices = mesh.positions.size();
-  report->mesh_triangles = mesh.triangles.size();
+  {
+    // Welded, written and let go: the copy is not kept beside the outputs that follow.
+    const TriangleMesh mesh = mapper->extractMesh();
+    report->mesh_vertices = mesh.positions.size();
+    report->mesh_triangles = mesh.triangles.size();
+    report->mesh_output_bytes = mesh.positions.size() * sizeof(mesh.positions[0]) +
+                                mesh.normals.size() * sizeof(mesh.normals[0]) +
+                                mesh.colors.size() * sizeof(mesh.colors[0]) +
+                                mesh.triangles.size() * sizeof(mesh.triangles[0]);
+    if (!writePly((fs::path(options.out_dir) / "mesh.ply").string(), mesh, error)) return false;
+  }
   report->blocks = mapper->map().blockCount();
   report->blocks_evicted = mapper->blocksEvicted();
   if (!options.save_map.empty() && !mapper->saveMap(options.save_map, error)) return false;
   report->memory_bytes = mapper->map().memoryBytes();
   report->bytes_per_block = mapper->map().bytesPerBlock();
   report->memory = mapper->map().memoryUse();
-  struct rusage usage {};
-  if (getrusage(RUSAGE_SELF, &usage) == 0)
-    report->peak_rss_bytes = usage.ru_maxrss * 1024.0;  // KiB on Linux
-  report->file_rss_bytes = readProcessMemory().file_mb * 1048576.0;
   report->mesh_store_bytes = mapper->mesh().memoryBytes();
-  report->mesh_output_bytes = mesh.positions.size() * sizeof(mesh.positions[0]) +
-                              mesh.normals.size() * sizeof(mesh.normals[0]) +
-                              mesh.colors.size() * sizeof(mesh.colors[0]) +
-                              mesh.triangles.size() * sizeof(mesh.triangles[0]);
   if (!mapper->map().blocks().empty()) {
     BlockKey lo = mapper->map().blocks().front()->key, hi = lo;
     for (const VoxelBlock* b : mapper->map().blocks()) {
@@ -456,7 +456,6 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
     report->seam_filled_blocks += state.seam_filled;
   }
 
-  if (!writePly((fs::path(options.out_dir) / "mesh.ply").string(), mesh, error)) return false;
   report->textured_blocks = mapper->textures().patches().size();
   report->texture_bytes = mapper->textures().memoryBytes();
   if (options.config.texture == TextureMode::kPatches) {
@@ -470,6 +469,11 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
   if (!writePlanningOutputs(options.out_dir, mapper, options.time_planning, &report->planning,
                             error))
     return false;
+  // After every output: the peak of the whole run.
+  struct rusage usage {};
+  if (getrusage(RUSAGE_SELF, &usage) == 0)
+    report->peak_rss_bytes = usage.ru_maxrss * 1024.0;  // KiB on Linux
+  report->file_rss_bytes = readProcessMemory().file_mb * 1048576.0;
   std::ofstream stats(fs::path(options.out_dir) / "stats.json");
   stats << statsJson(*report, options.config) << "\n";
   if (!stats) {
