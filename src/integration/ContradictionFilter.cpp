@@ -12,17 +12,11 @@ namespace {
 
 constexpr int kTile = ContradictionFilter::kTilePx;
 
-/// One voxel's surface over one tile: the tile's farthest such depth wins.
-struct Splat {
-  uint32_t tile;
-  float far_m;
-};
-
-/// The confident surfaces `block` shows the camera: a splat per tile each voxel's footprint
-/// covers.
+/// The confident surfaces `block` shows the camera, splatted into `tile_far_m`: every tile a
+/// voxel's footprint covers keeps the farthest such surface depth.
 void splatBlock(const VoxelBlock& block, const BlockOctree& octree, const StereoCamera& camera,
                 const Eigen::Isometry3d& T_camera_world, double block_m, float min_weight,
-                int tiles_x, int tiles_y, std::vector<Splat>* out) {
+                int tiles_x, int tiles_y, float* tile_far_m) {
   const int level = block.hasLevel(1) ? 1 : (block.hasLevel(2) ? 2 : -1);
   if (level < 0) return;
   const int side = levelSide(level);
@@ -40,6 +34,7 @@ void splatBlock(const VoxelBlock& block, const BlockOctree& octree, const Stereo
         if (!camera.project(p_c, &uv) || !camera.isInImage(uv)) continue;
         // sdf > 0 behind the surface, measured along the ray: the surface lies that much nearer.
         const float far_m = static_cast<float>(p_c.z() - v.sdf_m * p_c.z() / p_c.norm() + voxel_m);
+        if (!std::isfinite(far_m)) continue;  // the maxima below must not depend on order
         // At most the image: a voxel at the camera covers it, and the tile loops stay in int.
         const double r = std::min(0.5 * camera.fx() * voxel_m / p_c.z(),
                                   static_cast<double>(camera.width() + camera.height()));
@@ -48,7 +43,7 @@ void splatBlock(const VoxelBlock& block, const BlockOctree& octree, const Stereo
         };
         for (int ty = tileOf(uv.y() - r, tiles_y); ty <= tileOf(uv.y() + r, tiles_y); ++ty)
           for (int tx = tileOf(uv.x() - r, tiles_x); tx <= tileOf(uv.x() + r, tiles_x); ++tx)
-            out->push_back({static_cast<uint32_t>(ty * tiles_x + tx), far_m});
+            tile_far_m[ty * tiles_x + tx] = std::max(tile_far_m[ty * tiles_x + tx], far_m);
       }
 }
 
@@ -73,20 +68,26 @@ ContradictionStats ContradictionFilter::apply(const StereoFrame& frame, const Bl
   const double sigma_d = sigma_d_px;
   auto margin = [&](double z) { return config.contradiction_sigmas * z * z * sigma_d / fb; };
 
-  // 1. Confident surfaces, block by block in parallel, merged in block order.
+  // 1. Confident surfaces: each share of the blocks splatted into tiles of its own, in
+  // parallel, then the shares' maxima. A maximum is exact in any order: thread-count independent.
   const Eigen::Isometry3d T_camera_world = frame.T_world_camera.inverse();
   const double block_m = config.voxel_size_m * kFinestSide;
   const auto min_weight = static_cast<float>(config.contradiction_min_weight);
-  std::vector<std::vector<Splat>> splats(blocks.size());
-  pool->parallelFor(blocks.size(), 64, [&](size_t begin, size_t end) {
-    for (size_t b = begin; b < end; ++b)
-      splatBlock(*blocks[b], octree, camera, T_camera_world, block_m, min_weight, tiles_x, tiles_y,
-                 &splats[b]);
+  const size_t shares = std::min(blocks.size(), static_cast<size_t>(4 * pool->size()));
+  share_far_m_.assign(shares * tiles, -1.0f);
+  pool->parallelFor(shares, 1, [&](size_t begin, size_t end) {
+    for (size_t share = begin; share < end; ++share)
+      for (size_t b = share * blocks.size() / shares; b < (share + 1) * blocks.size() / shares; ++b)
+        splatBlock(*blocks[b], octree, camera, T_camera_world, block_m, min_weight, tiles_x,
+                   tiles_y, share_far_m_.data() + share * tiles);
   });
   tile_far_m_.assign(tiles, -1.0f);
-  for (const auto& block_splats : splats)
-    for (const Splat& s : block_splats)
-      tile_far_m_[s.tile] = std::max(tile_far_m_[s.tile], s.far_m);
+  pool->parallelFor(tiles, 1024, [&](size_t begin, size_t end) {
+    for (size_t share = 0; share < shares; ++share) {
+      const float* far_m = share_far_m_.data() + share * tiles;
+      for (size_t t = begin; t < end; ++t) tile_far_m_[t] = std::max(tile_far_m_[t], far_m[t]);
+    }
+  });
 
   // 2. Trust: the median measured depth of each tile (over its pixels at even rows and
   // columns: a quarter of the work, as robust), then of its 3×3 tiles.

@@ -54,6 +54,7 @@ class ContradictionFilter {
 
  private:
   std::vector<float> tile_far_m_, tile_median_m_;
+  std::vector<float> share_far_m_;  // step 1: the tiles of each share of the blocks
   std::vector<uint32_t> tile_valid_, tile_behind_;
   cv::Mat reject_;
 };
