@@ -37,7 +37,7 @@ PACKAGES=(
   # running: demo, replay, command-line tools
   python3-rosbag python3-rosnode python3-rosservice python3-rostopic python3-rospy
   python3-sensor-msgs python3-stereo-msgs python3-visualization-msgs python3-tf2-msgs
-  python3-diagnostic-msgs tf2-tools
+  python3-diagnostic-msgs python3-std-srvs tf2-tools
   # launch/stereo_pipeline.launch and its rostest: image_proc + stereo_image_proc nodelets (the
   # -dev packages hold their package.xml and plugin XML: without them roslaunch cannot load them)
   ros-image-proc libimage-proc-dev ros-stereo-image-proc libstereo-image-proc-dev

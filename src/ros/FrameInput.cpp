@@ -7,6 +7,7 @@
 #include <algorithm>
 
 #include "stereo_fusion/ros/MessageConversions.h"
+#include "stereo_fusion/util/Timer.h"
 
 namespace stereo_fusion {
 
@@ -153,7 +154,10 @@ void FrameInput::workerLoop() {
       queue_.pop_front();
     }
     try {
-      processFrame(frame);
+      const Timer worker;
+      double publish_ms = -1.0;  // set once the frame is fused
+      processFrame(frame, &publish_ms);
+      if (publish_ms >= 0.0) stats_->recordWorkerFrame(worker.elapsedMs(), publish_ms);
     } catch (const std::exception& e) {
       // One bad frame (or an allocation failure) must not take the nodelet manager down.
       drop(RejectReason::kError, std::string("an error: ") + e.what());
@@ -186,7 +190,7 @@ bool FrameInput::waitForPose(const std_msgs::Header& header, Eigen::Isometry3d* 
   return true;
 }
 
-void FrameInput::processFrame(const QueuedFrame& f) {
+void FrameInput::processFrame(const QueuedFrame& f, double* publish_ms) {
   const std_msgs::Header& header = f.disparity->header;
   if (!session_->isCurrent(f.ticket))  // a reset or load_map came while it waited in the queue
     return session_->countDrop(RejectReason::kSuperseded);
@@ -266,7 +270,9 @@ void FrameInput::processFrame(const QueuedFrame& f) {
     ++stats_->reanchored;
     ROS_WARN("stereo_fusion: %s", r.note.c_str());
   }
+  const Timer publishing;
   publisher_->publishPending(header.stamp, false);
+  *publish_ms = publishing.elapsedMs();
 }
 
 }  // namespace stereo_fusion

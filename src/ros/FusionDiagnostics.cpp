@@ -97,6 +97,12 @@ void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
     status.add(std::string(names[k]) + " p99 (ms)", percentile(v.stage_ms[k], 0.99));
   }
   status.add("timings", "lookup, fusion, total: per frame; meshing, texture: per meshing pass");
+  // The whole frame on the worker (fusion, publishing, meshing when due): above the frame period
+  // frames wait in the queue, and a full queue drops them.
+  status.add("worker per frame p50 (ms)", percentile(v.worker_ms, 0.5));
+  status.add("worker per frame p99 (ms)", percentile(v.worker_ms, 0.99));
+  status.add("publishing per frame p50 (ms)", percentile(v.publish_ms, 0.5));
+  status.add("publishing per frame p99 (ms)", percentile(v.publish_ms, 0.99));
   status.add("meshing passes", v.mesh_passes);
   status.add("block changes awaiting meshing", map_status_.awaiting_mesh);
   status.add("blocks", map_status_.blocks);

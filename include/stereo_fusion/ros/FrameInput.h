@@ -78,7 +78,8 @@ class FrameInput {
   void onFrame(const DisparityMsg::ConstPtr& d, const ImageMsg::ConstPtr& i,
                const InfoMsg::ConstPtr& c);
   void workerLoop();
-  void processFrame(const QueuedFrame& frame);
+  /// Fuses and publishes one frame; `publish_ms`: the publishing's time, if it was fused.
+  void processFrame(const QueuedFrame& frame, double* publish_ms);
   /// Counts a frame dropped before the map under `reason` and says why (throttled).
   void drop(RejectReason reason, const std::string& why);
   /// Waits (wall time: a paused bag stops the ROS clock) up to tf_timeout_s for the camera pose.

@@ -33,6 +33,13 @@ class NodeStats {
     if (planning_ms_.size() > kWindow) planning_ms_.pop_front();
     ++planning_updates_;
   }
+  /// One frame on the worker, from the queue to after its publishing: what must stay under the
+  /// frame period for no frame to wait (pose wait, conversion, fusion, meshing and publishing
+  /// when due); `publish_ms` the publishing part (deferred meshing, messages, planning).
+  void recordWorkerFrame(double worker_ms, double publish_ms) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    push(&worker_ms_, {worker_ms, publish_ms, 0.0});
+  }
   /// Frame stamp → publish of its mesh.
   void recordLatency(double seconds) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -44,6 +51,7 @@ class NodeStats {
     std::lock_guard<std::mutex> lock(mutex_);
     frame_ms_.clear();
     mesh_pass_ms_.clear();
+    worker_ms_.clear();
     planning_ms_.clear();
   }
 
@@ -53,6 +61,7 @@ class NodeStats {
     uint64_t mesh_passes = 0;
     std::vector<double> planning_ms;
     uint64_t planning_updates = 0;
+    std::vector<double> worker_ms, publish_ms;
   };
   View view() const {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -66,6 +75,10 @@ class NodeStats {
     for (const auto& s : mesh_pass_ms_) {
       v.stage_ms[2].push_back(s[0]);
       v.stage_ms[3].push_back(s[1]);
+    }
+    for (const auto& s : worker_ms_) {
+      v.worker_ms.push_back(s[0]);
+      v.publish_ms.push_back(s[1]);
     }
     v.mesh_passes = mesh_passes_;
     v.planning_ms.assign(planning_ms_.begin(), planning_ms_.end());
@@ -91,7 +104,7 @@ class NodeStats {
     if (rows->size() > kWindow) rows->pop_front();
   }
   mutable std::mutex mutex_;
-  std::deque<Row> frame_ms_, mesh_pass_ms_;
+  std::deque<Row> frame_ms_, mesh_pass_ms_, worker_ms_;
   std::deque<double> latencies_s_, planning_ms_;
   uint64_t mesh_passes_ = 0, planning_updates_ = 0;
 };
