@@ -119,7 +119,7 @@ CarveStats FreeSpaceCarver::carve(const StereoFrame& frame, const MeasurementIma
       [&](const Eigen::AlignedBox3d& box_world) {
         return frustum.mayIntersect(boxCornersInCamera(f.T_camera_world, box_world));
       },
-      &candidates_);
+      &candidates_, pool_);
   // Only blocks with a corner nearer than the largest depth under their footprint can hold a
   // voxel in front of its free depth (d < 0 ⇔ F > z_c, and F is at most the pixel's own depth):
   // the others are behind every surface they face.
@@ -151,12 +151,16 @@ CarveStats FreeSpaceCarver::carve(const StereoFrame& frame, const MeasurementIma
         if (tile_max_depth_m_[static_cast<size_t>(ty) * tiles_x_ + tx] > z_near) return true;
     return false;
   };
-  candidates_.erase(std::remove_if(candidates_.begin(), candidates_.end(),
-                                   [&](const VoxelBlock* b) {
-                                     return queued_stamp_[b->row] == stamp_ ||
-                                            !mayBeSeenThrough(*b);
-                                   }),
-                    candidates_.end());
+  // Decided in parallel (a block's own test), then compacted in order.
+  keep_.assign(candidates_.size(), 0);
+  pool_->parallelFor(candidates_.size(), 256, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i)
+      keep_[i] = queued_stamp_[candidates_[i]->row] != stamp_ && mayBeSeenThrough(*candidates_[i]);
+  });
+  size_t kept = 0;
+  for (size_t i = 0; i < candidates_.size(); ++i)
+    if (keep_[i]) candidates_[kept++] = candidates_[i];
+  candidates_.resize(kept);
   stats.blocks_visited = candidates_.size();
 
   const float keep = static_cast<float>(1.0 - config_.fusion.free_space_decay);

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <unordered_set>
 
+#include "stereo_fusion/util/ThreadPool.h"
+
 namespace stereo_fusion {
 
 struct BlockOctree::Node {
@@ -69,23 +71,21 @@ VoxelBlock* BlockOctree::findBelow(const Node* node, const BlockKey& key) {
   }
 }
 
-void BlockOctree::collectBlocks(
-    const std::function<bool(const Eigen::AlignedBox3d& box_world)>& may_contain,
-    std::vector<VoxelBlock*>* out) const {
-  const Node* root = root_.load(std::memory_order_acquire);
-  if (root == nullptr) return;
-  auto box = [this](const std::array<int64_t, 3>& origin, int64_t side) {
-    const Eigen::Vector3d lo(static_cast<double>(origin[0]), static_cast<double>(origin[1]),
-                             static_cast<double>(origin[2]));
-    return Eigen::AlignedBox3d(
-        lo * block_size_m_,
-        (lo + Eigen::Vector3d::Constant(static_cast<double>(side))) * block_size_m_);
-  };
-  std::vector<const Node*> stack{root};
+Eigen::AlignedBox3d BlockOctree::boxOf(const std::array<int64_t, 3>& origin, int64_t side) const {
+  const Eigen::Vector3d lo(static_cast<double>(origin[0]), static_cast<double>(origin[1]),
+                           static_cast<double>(origin[2]));
+  return Eigen::AlignedBox3d(
+      lo * block_size_m_,
+      (lo + Eigen::Vector3d::Constant(static_cast<double>(side))) * block_size_m_);
+}
+
+void BlockOctree::collectBelow(const Node* start, const BoxTest& may_contain,
+                               std::vector<VoxelBlock*>* out) const {
+  std::vector<const Node*> stack{start};
   while (!stack.empty()) {
     const Node* node = stack.back();
     stack.pop_back();
-    if (!may_contain(box(node->origin, int64_t{1} << node->height))) continue;
+    if (!may_contain(boxOf(node->origin, int64_t{1} << node->height))) continue;
     if (node->height > 1) {
       for (int octant = 7; octant >= 0; --octant)  // pushed in reverse: visited 0..7
         if (void* child = node->child[octant].load(std::memory_order_acquire))
@@ -96,9 +96,41 @@ void BlockOctree::collectBlocks(
       auto* block = static_cast<VoxelBlock*>(node->child[octant].load(std::memory_order_acquire));
       if (block == nullptr) continue;
       const std::array<int64_t, 3> origin{block->key.x, block->key.y, block->key.z};
-      if (may_contain(box(origin, 1))) out->push_back(block);
+      if (may_contain(boxOf(origin, 1))) out->push_back(block);
     }
   }
+}
+
+void BlockOctree::collectBlocks(const BoxTest& may_contain, std::vector<VoxelBlock*>* out,
+                                ThreadPool* pool) const {
+  const Node* root = root_.load(std::memory_order_acquire);
+  if (root == nullptr) return;
+  if (pool == nullptr || pool->size() < 2) return collectBelow(root, may_contain, out);
+  // Subtrees to share out: nodes replaced by their children in octant order, so that their
+  // results concatenated in this order are the depth-first order of the serial walk.
+  std::vector<const Node*> frontier{root}, next;
+  const size_t wanted = 16 * static_cast<size_t>(pool->size());
+  while (frontier.size() < wanted) {
+    next.clear();
+    bool expanded = false;
+    for (const Node* node : frontier) {
+      if (node->height == 1 || !may_contain(boxOf(node->origin, int64_t{1} << node->height))) {
+        next.push_back(node);  // a leaf node, or one the walk below rejects at once
+        continue;
+      }
+      expanded = true;
+      for (int octant = 0; octant < 8; ++octant)
+        if (void* child = node->child[octant].load(std::memory_order_acquire))
+          next.push_back(static_cast<const Node*>(child));
+    }
+    frontier.swap(next);
+    if (!expanded) break;
+  }
+  std::vector<std::vector<VoxelBlock*>> found(frontier.size());
+  pool->parallelFor(frontier.size(), 1, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) collectBelow(frontier[i], may_contain, &found[i]);
+  });
+  for (const auto& blocks : found) out->insert(out->end(), blocks.begin(), blocks.end());
 }
 
 void BlockOctree::growToContain(const BlockKey& key) {

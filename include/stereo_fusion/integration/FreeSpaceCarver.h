@@ -65,6 +65,7 @@ class FreeSpaceCarver {
   std::vector<uint32_t> queued_stamp_;  // by block row: the frame that queued it
   uint32_t stamp_ = 0;
   std::vector<VoxelBlock*> candidates_;  // reused across frames
+  std::vector<uint8_t> keep_;            // per candidate: in view and seen through
   std::vector<uint64_t> block_updates_;  // per candidate
 };
 

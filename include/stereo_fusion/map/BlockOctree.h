@@ -15,6 +15,8 @@
 
 namespace stereo_fusion {
 
+class ThreadPool;
+
 /// Sparse octree whose leaves are voxel blocks at a fixed depth (thesis §3.3).
 ///
 /// A node of height h covers 2^h × 2^h × 2^h blocks starting at its integer `origin`;
@@ -125,8 +127,11 @@ class BlockOctree {
   /// frustum) that costs the nodes and blocks near the region, not the whole map.
   /// `may_contain` must accept a node's box whenever it accepts a block's box inside it (a
   /// conservative "does the box reach the region" test). Order: depth-first by octant.
-  void collectBlocks(const std::function<bool(const Eigen::AlignedBox3d& box_world)>& may_contain,
-                     std::vector<VoxelBlock*>* out) const;
+  /// With `pool` the subtrees are walked in parallel (`may_contain` then runs on several
+  /// threads at once); the blocks come out in the same order.
+  using BoxTest = std::function<bool(const Eigen::AlignedBox3d& box_world)>;
+  void collectBlocks(const BoxTest& may_contain, std::vector<VoxelBlock*>* out,
+                     ThreadPool* pool = nullptr) const;
 
   /// All blocks, in allocation order. Not safe while another thread allocates.
   const std::vector<VoxelBlock*>& blocks() const { return blocks_; }
@@ -168,6 +173,11 @@ class BlockOctree {
   /// Clears the links of `block`'s neighbours back to it, before it is freed.
   static void unlink(VoxelBlock* block);
   static bool contains(const Node* node, const BlockKey& key);
+  /// The world box of `side`³ blocks from block coordinates `origin`.
+  Eigen::AlignedBox3d boxOf(const std::array<int64_t, 3>& origin, int64_t side) const;
+  /// collectBlocks() below `start`, depth-first by octant, on the calling thread.
+  void collectBelow(const Node* start, const BoxTest& may_contain,
+                    std::vector<VoxelBlock*>* out) const;
 
   double block_size_m_;
   std::atomic<Node*> root_{nullptr};

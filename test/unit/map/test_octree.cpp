@@ -8,6 +8,7 @@
 
 #include "stereo_fusion/map/BlockColumn.h"
 #include "stereo_fusion/map/BlockOctree.h"
+#include "stereo_fusion/util/ThreadPool.h"
 
 using namespace stereo_fusion;
 
@@ -304,4 +305,31 @@ TEST(BlockOctree, RowsAreDenseUniqueAndReusedAfterErase) {
   map.clear();
   EXPECT_EQ(map.rowCount(), 0u);
   EXPECT_EQ(map.findOrAllocate({1, 1, 1})->row, 0u);
+}
+
+// collectBlocks() with a pool walks subtrees in parallel and must give exactly the serial walk:
+// the same blocks in the same order, and exactly those a brute-force test of every block keeps.
+TEST(BlockOctree, CollectBlocksInParallelEqualsTheSerialWalk) {
+  BlockOctree tree(0.16);
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> coord(-200, 200);
+  for (int n = 0; n < 30000; ++n) tree.findOrAllocate({coord(rng), coord(rng), coord(rng)});
+  // A ball of 12 m around (3, -2, 1): a conservative test for nodes (the boxes' distance).
+  const Eigen::Vector3d centre(3.0, -2.0, 1.0);
+  const auto in_ball = [&](const Eigen::AlignedBox3d& box) {
+    return box.squaredExteriorDistance(centre) <= 12.0 * 12.0;
+  };
+  std::vector<VoxelBlock*> serial, parallel;
+  tree.collectBlocks(in_ball, &serial);
+  ThreadPool pool(3);
+  tree.collectBlocks(in_ball, &parallel, &pool);
+  EXPECT_EQ(parallel, serial);
+  size_t expected = 0;
+  for (const VoxelBlock* b : tree.blocks()) {
+    const Eigen::Vector3d lo = tree.blockOrigin(b->key);
+    expected += in_ball(Eigen::AlignedBox3d(lo, lo + Eigen::Vector3d::Constant(0.16)));
+  }
+  EXPECT_EQ(serial.size(), expected);
+  EXPECT_GT(expected, 500u);
+  EXPECT_LT(expected, tree.blockCount());
 }
