@@ -22,7 +22,8 @@ MeshPublisher::MeshPublisher(ros::NodeHandle& pnh, const NodeConfig& node, Mappi
                              NodeStats* stats)
     : node_(node), session_(session), stats_(stats) {
   session_id_ = ros::WallTime::now().toNSec();
-  last_publish_ = ros::WallTime(0, 0);
+  last_publish_ = last_markers_ = ros::WallTime(0, 0);
+  markers_header_.frame_id = node_.world_frame;
   session_->withMapper([&](Mapper& map) {
     consumer_ = map.subscribeToMeshChanges("mesh_update publisher");
     subscribed_to_ = &map;
@@ -81,13 +82,12 @@ void MeshPublisher::publishPending(const ros::Time& stamp, bool force) {
 
 void MeshPublisher::publishPendingLocked(Mapper& map, const ros::Time& stamp, bool force) {
   {
-    if (map.blocksAwaitingMesh() == 0 && map.pendingMeshChanges(consumer_) == 0 &&
-        !markers_full_pending_)
-      return;
+    if (map.blocksAwaitingMesh() == 0 && map.pendingMeshChanges(consumer_) == 0)
+      return publishMarkersLocked(map, force);  // the backlog may still wait for its turn
     const ros::WallTime now = ros::WallTime::now();
     if (!force && node_.mesh_publish_rate_hz > 0 &&
         (now - last_publish_).toSec() < 1.0 / node_.mesh_publish_rate_hz)
-      return;
+      return publishMarkersLocked(map, force);
     last_publish_ = now;
     catchUpLocked(map);
     std_msgs::Header header;
@@ -110,12 +110,9 @@ void MeshPublisher::publishPendingLocked(Mapper& map, const ros::Time& stamp, bo
         mesh_update_pub_.publish(update);
       }
     }
-    if (node_.publish_markers && markers_pub_.getNumSubscribers() > 0) {
-      const bool full = markers_full_pending_;
-      markers_pub_.publish(
-          markers_.build(map.mesh().submeshes(), full ? allBlocks(map) : changed, removed, header));
-      markers_full_pending_ = false;
-    }
+    marker_backlog_.add(changed, removed);
+    markers_header_ = header;
+    publishMarkersLocked(map, force);
     // Latched and opt-in (debug): published even unheard, so a display ticked later shows it.
     if (node_.publish_block_bounds)
       block_bounds_pub_.publish(
@@ -160,6 +157,7 @@ void MeshPublisher::onMapReplaced(const MapReplaced& replaced) {
       std_msgs::Header header;
       header.frame_id = node_.world_frame;
       header.stamp = ros::Time::now();
+      marker_backlog_.clear();
       markers_pub_.publish(markers_.clear(header));
       MeshUpdate empty = toMeshUpdate(map.mesh().submeshes(), {}, {}, header,
                                       map.config().voxel_size_m, ++sequence_, true);
@@ -182,6 +180,24 @@ void MeshPublisher::onMapReplaced(const MapReplaced& replaced) {
   }
 }
 
+void MeshPublisher::publishMarkersLocked(Mapper& map, bool force) {
+  if (!node_.publish_markers || markers_pub_.getNumSubscribers() == 0) {
+    marker_backlog_.clear();  // a subscriber that connects later gets every block
+    return;
+  }
+  if (marker_backlog_.empty() && !markers_full_pending_) return;
+  const ros::WallTime now = ros::WallTime::now();
+  if (!force && !markers_full_pending_ && node_.markers_publish_rate_hz > 0 &&
+      (now - last_markers_).toSec() < 1.0 / node_.markers_publish_rate_hz)
+    return;
+  last_markers_ = now;
+  std::vector<BlockKey> changed, removed;
+  marker_backlog_.take(&changed, &removed);
+  if (markers_full_pending_) changed = allBlocks(map);
+  markers_full_pending_ = false;
+  markers_pub_.publish(markers_.build(map.mesh().submeshes(), changed, removed, markers_header_));
+}
+
 void MeshPublisher::publishFullLocked(Mapper& map, const std::vector<BlockKey>& removed) {
   map.takeMeshChanges(consumer_);  // a full update replaces whatever was pending
   unpublished_stamps_.clear();
@@ -195,6 +211,8 @@ void MeshPublisher::publishFullLocked(Mapper& map, const std::vector<BlockKey>& 
                    true, node_.mesh_encoding, &map.textures());
   update.session = session_id_;
   mesh_update_pub_.publish(update);
+  marker_backlog_.clear();  // the full set below supersedes it
+  markers_header_ = header;
   if (node_.publish_markers)
     markers_pub_.publish(markers_.build(map.mesh().submeshes(), all, removed, header));
 }

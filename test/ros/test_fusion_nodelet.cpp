@@ -8,6 +8,7 @@
 #include <stereo_fusion/SaveMap.h>
 #include <stereo_fusion/SaveMesh.h>
 #include <nav_msgs/Path.h>
+#include <visualization_msgs/MarkerArray.h>
 #include <tf2_ros/transform_broadcaster.h>
 
 #include <unistd.h>
@@ -197,6 +198,52 @@ TEST_F(NodeletFixture, StreamedMeshEqualsFullMeshAndSavedPly) {
   for (const ObjMaterial& m : obj.materials)
     atlas_found |= !m.diffuse_map.empty() && std::ifstream(m.diffuse_map).good();
   EXPECT_TRUE(atlas_found);
+}
+
+// ~mesh_markers go out at markers_publish_rate_hz (2 Hz) while the mesh follows every frame
+// here (texture patches): each carries the changes merged since the last, so rviz ends with
+// every triangle of the mesh.
+TEST_F(NodeletFixture, MarkersAtTheirOwnRateEndWithTheWholeMesh) {
+  std::mutex markers_mutex;
+  std::map<int, size_t> triangles_by_id;  // what rviz would draw
+  size_t arrays = 0;
+  ros::NodeHandle nh;
+  ros::Subscriber markers_sub = nh.subscribe<visualization_msgs::MarkerArray>(
+      "/stereo_fusion/mesh_markers", 100, [&](const visualization_msgs::MarkerArray::ConstPtr& a) {
+        std::lock_guard<std::mutex> lock(markers_mutex);
+        ++arrays;
+        for (const visualization_msgs::Marker& m : a->markers) {
+          if (m.action == visualization_msgs::Marker::DELETEALL) triangles_by_id.clear();
+          if (m.action == visualization_msgs::Marker::DELETE) triangles_by_id.erase(m.id);
+          if (m.action == visualization_msgs::Marker::ADD)
+            triangles_by_id[m.id] = m.points.size() / 3;
+        }
+      });
+  ASSERT_TRUE(waitFor([&] { return markers_sub.getNumPublishers() > 0; }, 30.0));
+  const long fused_before = std::max(0L, diag("frames fused"));
+  const sim::AnalyticScene s = scene();
+  for (int f = 0; f < 6; ++f) {
+    const auto pose =
+        sim::lookAt({-0.2 + 0.08 * f, -0.15, 0.0}, {0.05, 0.1, 1.2}, -Eigen::Vector3d::UnitY());
+    publish(test::renderFrame(s, qvga(), pose), "left_optical", true);
+  }
+  ASSERT_TRUE(waitFor([&] { return diag("frames fused") >= fused_before + 6; }, 60.0));
+  GetFullMesh full;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", full));
+  size_t mesh_triangles = 0;
+  for (const MeshBlock& b : full.response.mesh.blocks) mesh_triangles += b.triangles.size() / 3;
+  ASSERT_GT(mesh_triangles, 0u);
+  auto drawn = [&] {
+    std::lock_guard<std::mutex> lock(markers_mutex);
+    size_t n = 0;
+    for (const auto& [id, triangles] : triangles_by_id) n += triangles;
+    return n;
+  };
+  EXPECT_TRUE(waitFor([&] { return drawn() == mesh_triangles; }, 10.0))
+      << drawn() << " triangles drawn, the mesh has " << mesh_triangles;
+  std::lock_guard<std::mutex> lock(markers_mutex);
+  EXPECT_GE(arrays, 1u);
+  markers_sub.shutdown();
 }
 
 TEST_F(NodeletFixture, MissingTfAndBadInputAreDroppedCountedAndSurvived) {

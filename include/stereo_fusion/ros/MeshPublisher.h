@@ -8,8 +8,9 @@
 #include <optional>
 #include <vector>
 
-#include "stereo_fusion/ros/NodeStats.h"
+#include "stereo_fusion/ros/MarkerBacklog.h"
 #include "stereo_fusion/ros/MeshMessages.h"
+#include "stereo_fusion/ros/NodeStats.h"
 #include "stereo_fusion/ros/RosParameters.h"
 #include "stereo_fusion/session/MappingSession.h"
 
@@ -39,6 +40,9 @@ class MeshPublisher {
  private:
   void publishPendingLocked(Mapper& map, const ros::Time& stamp, bool force);
   void publishFullLocked(Mapper& map, const std::vector<BlockKey>& removed);
+  /// Sends the marker backlog (or every block, for a new subscriber) at
+  /// markers_publish_rate_hz unless `force`.
+  void publishMarkersLocked(Mapper& map, bool force);
   nav_msgs::Path correctedPathLocked() const;
 
   const NodeConfig& node_;
@@ -51,6 +55,9 @@ class MeshPublisher {
       nullptr;  // the mapper consumer_ belongs to (a correction swaps it)
   MeshMarkers markers_;
   bool markers_full_pending_ = false;
+  MarkerBacklog marker_backlog_;     // the mesh's changes ~mesh_markers has not sent yet
+  std_msgs::Header markers_header_;  // of the newest mesh flush: the markers' stamp
+  ros::WallTime last_markers_;
   uint64_t sequence_ = 0;
   /// MeshUpdate::session of this run (wall clock at start, ns): tells subscribers that a
   /// restarted nodelet's sequence numbers begin again.

@@ -25,6 +25,9 @@ struct NodeConfig {
   double max_stamp_ahead_s = 10.0;
   double mesh_publish_rate_hz = 2.0;  ///< 0 = publish after every frame
   bool publish_markers = true;        ///< ~mesh_markers for rviz
+  /// Rate of ~mesh_markers, the mesh's changes since the last one merged; 0 = with every
+  /// ~mesh_update. Below the mesh rate: rviz's triangle lists cost ~40 B per corner to build.
+  double markers_publish_rate_hz = 2.0;
   bool publish_path = true;           ///< ~camera_path (nav_msgs/Path) of the fused frames
   bool publish_frustum = true;        ///< ~frustum: the newest fused frame's view (Marker)
   double frustum_depth_m = 1.0;       ///< depth at which ~frustum is drawn

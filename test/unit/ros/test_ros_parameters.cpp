@@ -50,6 +50,7 @@ TEST(NodeParameterRegistry, DefaultsAreNodeConfigsAndValid) {
                                              "max_stamp_ahead_s",
                                              "mesh_publish_rate_hz",
                                              "publish_markers",
+                                             "markers_publish_rate_hz",
                                              "publish_path",
                                              "publish_frustum",
                                              "frustum_depth_m",
