@@ -14,14 +14,21 @@
 using namespace stereo_fusion;
 using namespace stereo_fusion::test;
 
+namespace {
+/// The exact SDF of a 0.25 m sphere off the block grid, at the finest level of every block near it.
+void fillSphere(BlockOctree* map, double voxel_m) {
+  sim::AnalyticScene scene;
+  scene.add(sim::makeSphere({0.013, -0.021, 0.037}, 0.25));
+  fillAnalytic(map, scene,
+               Eigen::AlignedBox3d(Eigen::Vector3d::Constant(-0.4), Eigen::Vector3d::Constant(0.4)),
+               3 * voxel_m, [](const BlockKey&) { return 0; });
+}
+}  // namespace
+
 TEST(MeshStore, UpdateByKeysEqualsARebuildBeforeAndAfterErase) {
   const double voxel_m = 0.02;
   BlockOctree map(8 * voxel_m);
-  sim::AnalyticScene scene;
-  scene.add(sim::makeSphere({0.013, -0.021, 0.037}, 0.25));
-  fillAnalytic(&map, scene,
-               Eigen::AlignedBox3d(Eigen::Vector3d::Constant(-0.4), Eigen::Vector3d::Constant(0.4)),
-               3 * voxel_m, [](const BlockKey&) { return 0; });
+  fillSphere(&map, voxel_m);
   ASSERT_GT(map.blockCount(), 100u);
   ThreadPool pool(2);
   const MeshingParams params{voxel_m, 4.0, 0.8};
@@ -101,11 +108,7 @@ TEST(MeshStore, WeldJoinsBitEqualVerticesInKeyOrder) {
 TEST(MeshStore, KeepsSubmeshesAtTheirSize) {
   const double voxel_m = 0.02;
   BlockOctree map(8 * voxel_m);
-  sim::AnalyticScene scene;
-  scene.add(sim::makeSphere({0.013, -0.021, 0.037}, 0.25));
-  fillAnalytic(&map, scene,
-               Eigen::AlignedBox3d(Eigen::Vector3d::Constant(-0.4), Eigen::Vector3d::Constant(0.4)),
-               3 * voxel_m, [](const BlockKey&) { return 0; });
+  fillSphere(&map, voxel_m);
   ThreadPool pool(2);
   MeshStore store(MeshingParams{voxel_m, 4.0, 0.8});
   store.rebuild(map, &pool);
