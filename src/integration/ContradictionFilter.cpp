@@ -34,7 +34,7 @@ void splatBlock(const VoxelBlock& block, const BlockOctree& octree, const Stereo
         if (!camera.project(p_c, &uv) || !camera.isInImage(uv)) continue;
         // sdf > 0 behind the surface, measured along the ray: the surface lies that much nearer.
         const float far_m = static_cast<float>(p_c.z() - v.sdf_m * p_c.z() / p_c.norm() + voxel_m);
-        if (!std::isfinite(far_m)) continue;  // the maxima below must not depend on order
+        if (!std::isfinite(far_m)) continue;  // no surface to keep (std::max would skip a NaN too)
         // At most the image: a voxel at the camera covers it, and the tile loops stay in int.
         const double r = std::min(0.5 * camera.fx() * voxel_m / p_c.z(),
                                   static_cast<double>(camera.width() + camera.height()));

@@ -80,7 +80,10 @@ std::vector<BlockKey> MeshStore::affectedOwners(const BlockOctree& map,
 MeshChanges MeshStore::remesh(const BlockOctree& map, const std::vector<Owner>& owners,
                               ThreadPool* pool) {
   Timer timer;
-  if (scratch_.size() < owners.size()) scratch_.resize(owners.size());
+  // Empty slots, every pass: only owners with triangles write theirs, and a pass that threw
+  // must not leave another block's submesh behind.
+  scratch_.clear();
+  scratch_.resize(owners.size());
   // The face-filled copies the owners read, each built once for the pass instead of once per
   // owner reading it (up to 8), and freed after it: they are not kept between passes.
   seam_fills_.fit(map);

@@ -419,6 +419,7 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
   }
   report->wall_time_s = wall.elapsedMs() / 1000.0;
 
+  if (!options.save_map.empty() && !mapper->saveMap(options.save_map, error)) return false;
   {
     // Welded, written and let go: the copy is not kept beside the outputs that follow.
     const TriangleMesh mesh = mapper->extractMesh();
@@ -432,7 +433,6 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
   }
   report->blocks = mapper->map().blockCount();
   report->blocks_evicted = mapper->blocksEvicted();
-  if (!options.save_map.empty() && !mapper->saveMap(options.save_map, error)) return false;
   report->memory_bytes = mapper->map().memoryBytes();
   report->bytes_per_block = mapper->map().bytesPerBlock();
   report->memory = mapper->map().memoryUse();
