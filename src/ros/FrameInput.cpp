@@ -157,7 +157,10 @@ void FrameInput::workerLoop() {
       const Timer worker;
       double publish_ms = -1.0;  // set once the frame is fused
       processFrame(frame, &publish_ms);
-      if (publish_ms >= 0.0) stats_->recordWorkerFrame(worker.elapsedMs(), publish_ms);
+      if (publish_ms >= 0.0)
+        stats_->recordWorkerFrame(worker.elapsedMs(), publish_ms);
+      else  // dropped or rejected: what earlier frames changed still goes out when due
+        publisher_->publishPending(ros::Time(0), false);
     } catch (const std::exception& e) {
       // One bad frame (or an allocation failure) must not take the nodelet manager down.
       drop(RejectReason::kError, std::string("an error: ") + e.what());

@@ -4,6 +4,7 @@
 #include <visualization_msgs/MarkerArray.h>
 
 #include <algorithm>
+#include <iterator>
 
 #include "stereo_fusion/ros/DebugMarkers.h"
 
@@ -15,6 +16,15 @@ std::vector<BlockKey> allBlocks(const Mapper& map) {
   for (const auto& [key, sub] : map.mesh().submeshes()) all.push_back(key);
   std::sort(all.begin(), all.end());
   return all;
+}
+
+/// `keys` (sorted) without those in `present` (sorted).
+std::vector<BlockKey> withoutKeysOf(const std::vector<BlockKey>& keys,
+                                    const std::vector<BlockKey>& present) {
+  std::vector<BlockKey> out;
+  std::set_difference(keys.begin(), keys.end(), present.begin(), present.end(),
+                      std::back_inserter(out));
+  return out;
 }
 }  // namespace
 
@@ -158,6 +168,7 @@ void MeshPublisher::onMapReplaced(const MapReplaced& replaced) {
       header.frame_id = node_.world_frame;
       header.stamp = ros::Time::now();
       marker_backlog_.clear();
+      markers_header_.stamp = ros::Time();
       markers_pub_.publish(markers_.clear(header));
       MeshUpdate empty = toMeshUpdate(map.mesh().submeshes(), {}, {}, header,
                                       map.config().voxel_size_m, ++sequence_, true);
@@ -193,9 +204,14 @@ void MeshPublisher::publishMarkersLocked(Mapper& map, bool force) {
   last_markers_ = now;
   std::vector<BlockKey> changed, removed;
   marker_backlog_.take(&changed, &removed);
-  if (markers_full_pending_) changed = allBlocks(map);
+  if (markers_full_pending_) {
+    changed = allBlocks(map);
+    removed = withoutKeysOf(removed, changed);  // removed, then meshed again since
+  }
   markers_full_pending_ = false;
-  markers_pub_.publish(markers_.build(map.mesh().submeshes(), changed, removed, markers_header_));
+  std_msgs::Header header = markers_header_;
+  if (header.stamp.isZero()) header.stamp = ros::Time::now();  // no frame fused since a reset
+  markers_pub_.publish(markers_.build(map.mesh().submeshes(), changed, removed, header));
 }
 
 void MeshPublisher::publishFullLocked(Mapper& map, const std::vector<BlockKey>& removed) {
@@ -211,10 +227,19 @@ void MeshPublisher::publishFullLocked(Mapper& map, const std::vector<BlockKey>& 
                    true, node_.mesh_encoding, &map.textures());
   update.session = session_id_;
   mesh_update_pub_.publish(update);
-  marker_backlog_.clear();  // the full set below supersedes it
+  // The full set supersedes the backlog, but not its removals: blocks gone from the mesh
+  // before the replacement are in neither `all` nor `removed`, and rviz still draws them.
+  std::vector<BlockKey> backlog_changed, gone;
+  marker_backlog_.take(&backlog_changed, &gone);
+  gone.insert(gone.end(), removed.begin(), removed.end());
+  std::sort(gone.begin(), gone.end());
+  gone.erase(std::unique(gone.begin(), gone.end()), gone.end());
   markers_header_ = header;
-  if (node_.publish_markers)
-    markers_pub_.publish(markers_.build(map.mesh().submeshes(), all, removed, header));
+  if (node_.publish_markers) {
+    markers_pub_.publish(
+        markers_.build(map.mesh().submeshes(), all, withoutKeysOf(gone, all), header));
+    markers_full_pending_ = false;
+  }
 }
 
 nav_msgs::Path MeshPublisher::correctedPathLocked() const {

@@ -123,8 +123,9 @@ TEST_F(NodeletFixture, StreamedMeshEqualsFullMeshAndSavedPly) {
   ros::WallDuration(1.0).sleep();  // let the last update arrive
   EXPECT_EQ(diag("dropped: tf timeout"), 0);
   EXPECT_EQ(diag("dropped: bad input"), 0);
-  // The worker's time per frame holds the frame's publishing, so it is never the smaller.
-  EXPECT_GE(diag("publishing per frame p50 (ms)"), 0) << "not reported";
+  // Recorded (a fused frame with textures takes over a millisecond on the worker), and the
+  // worker's time per frame holds the frame's publishing, so it is never the smaller.
+  EXPECT_GE(diag("worker per frame p99 (ms)"), 1);
   EXPECT_GE(diag("worker per frame p99 (ms)"), diag("publishing per frame p99 (ms)"));
 
   GetFullMesh full;
@@ -220,7 +221,12 @@ TEST_F(NodeletFixture, MarkersAtTheirOwnRateEndWithTheWholeMesh) {
         }
       });
   ASSERT_TRUE(waitFor([&] { return markers_sub.getNumPublishers() > 0; }, 30.0));
+  // An empty map: the fixture's ~mesh_update copy (subscribed for this test) is then whole.
+  std_srvs::Empty reset;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/reset", reset));
+  ASSERT_TRUE(diagnostics_.waitForNextReport(30.0));  // baselines no older than the reset
   const long fused_before = std::max(0L, diag("frames fused"));
+  const ros::WallTime start = ros::WallTime::now();
   const sim::AnalyticScene s = scene();
   for (int f = 0; f < 6; ++f) {
     const auto pose =
@@ -228,21 +234,34 @@ TEST_F(NodeletFixture, MarkersAtTheirOwnRateEndWithTheWholeMesh) {
     publish(test::renderFrame(s, qvga(), pose), "left_optical", true);
   }
   ASSERT_TRUE(waitFor([&] { return diag("frames fused") >= fused_before + 6; }, 60.0));
-  GetFullMesh full;
-  ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", full));
-  size_t mesh_triangles = 0;
-  for (const MeshBlock& b : full.response.mesh.blocks) mesh_triangles += b.triangles.size() / 3;
-  ASSERT_GT(mesh_triangles, 0u);
   auto drawn = [&] {
     std::lock_guard<std::mutex> lock(markers_mutex);
     size_t n = 0;
     for (const auto& [id, triangles] : triangles_by_id) n += triangles;
     return n;
   };
+  auto streamed = [&] {  // the ~mesh_update subscriber's mesh
+    std::lock_guard<std::mutex> lock(mutex_);
+    size_t n = 0;
+    for (const auto& [key, sub] : streamed_) n += sub.triangles.size();
+    return n;
+  };
+  // Unforced: the backlog goes out by the rate (and the idle worker's flush) alone.
+  EXPECT_TRUE(waitFor([&] { return streamed() > 0 && drawn() == streamed(); }, 10.0))
+      << drawn() << " triangles drawn, ~mesh_update holds " << streamed();
+  const double elapsed_s = (ros::WallTime::now() - start).toSec();
+  {
+    std::lock_guard<std::mutex> lock(markers_mutex);
+    // The whole mesh on connecting, then at most one array per 0.5 s: not one per mesh pass.
+    EXPECT_LE(arrays, 2u + static_cast<size_t>(2.0 * elapsed_s)) << "in " << elapsed_s << " s";
+  }
+  GetFullMesh full;
+  ASSERT_TRUE(ros::service::call("/stereo_fusion/get_full_mesh", full));
+  size_t mesh_triangles = 0;
+  for (const MeshBlock& b : full.response.mesh.blocks) mesh_triangles += b.triangles.size() / 3;
+  ASSERT_GT(mesh_triangles, 0u);
   EXPECT_TRUE(waitFor([&] { return drawn() == mesh_triangles; }, 10.0))
       << drawn() << " triangles drawn, the mesh has " << mesh_triangles;
-  std::lock_guard<std::mutex> lock(markers_mutex);
-  EXPECT_GE(arrays, 1u);
   markers_sub.shutdown();
 }
 

@@ -85,13 +85,14 @@ def main():
         return on_message
 
     subscribers = [rospy.Subscriber(t, rospy.AnyMsg, counter(t), queue_size=10) for t in args.subscribe]
-    pids, cpu_start, wall_start = {}, {}, time.time()
+    pids = {}
     for node in args.cpu_node:
         for _ in range(300):
             pids[node] = node_pid(node)
             if pids[node]:
                 break
             time.sleep(0.1)
+    cpu_start, wall_start = {n: cpu_seconds(p) for n, p in pids.items() if p}, time.time()
     if args.unpause:
         rospy.wait_for_service(args.unpause, timeout=60)
         # Subscribers connect asynchronously: give the node's publishers time to see them.
