@@ -432,4 +432,17 @@ double Mapper::measuredDisparityNoisePx() const {
   return values[values.size() / 2];
 }
 
+std::string Mapper::disparityNoiseWarning() const {
+  const double measured = measuredDisparityNoisePx();
+  const double configured = config_.disparity_noise_px;
+  if (!std::isfinite(measured) || !(measured > 1.5 * configured)) return {};
+  char text[256];
+  std::snprintf(text, sizeof(text),
+                "the disparities measure a noise of %.2f px (median of the last %zu frames), "
+                "disparity_noise_px is %.2f: set disparity_noise_px to what the source gives "
+                "(the contradiction rule already uses the larger of the two)",
+                measured, kNoiseFrames, configured);
+  return text;
+}
+
 }  // namespace stereo_fusion

@@ -166,6 +166,10 @@ class Mapper {
   /// frame's own estimate, so a map continued after a load fuses as if never interrupted.)
   double measuredDisparityNoisePx() const;
   static constexpr size_t kNoiseFrames = 31;
+  /// The warning that disparity_noise_px is set finer than the frames measure (the measured
+  /// median above 1.5× the configured value), empty when it is not. The estimate sees only the
+  /// noise that varies from pixel to pixel, so it can say "noisier", never "finer".
+  std::string disparityNoiseWarning() const;
   /// Blocks evicted by the memory bound since construction, reset() or loadMap().
   uint64_t blocksEvicted() const { return blocks_evicted_; }
   /// The frame that last updated `block` (the eviction order).

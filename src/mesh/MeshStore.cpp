@@ -80,10 +80,9 @@ std::vector<BlockKey> MeshStore::affectedOwners(const BlockOctree& map,
 MeshChanges MeshStore::remesh(const BlockOctree& map, const std::vector<Owner>& owners,
                               ThreadPool* pool) {
   Timer timer;
-  // Empty slots, every pass: only owners with triangles write theirs, and a pass that threw
-  // must not leave another block's submesh behind.
-  scratch_.clear();
-  scratch_.resize(owners.size());
+  // Each owner's new submesh, empty where it has no triangles; the replaced ones are freed
+  // with it at the end of the pass.
+  std::vector<SubMesh> remeshed(owners.size());
   // The face-filled copies the owners read, each built once for the pass instead of once per
   // owner reading it (up to 8), and freed after it: they are not kept between passes.
   seam_fills_.fit(map);
@@ -106,7 +105,7 @@ MeshChanges MeshStore::remesh(const BlockOctree& map, const std::vector<Owner>& 
     thread_local SubMesh work;
     for (size_t i = begin; i < end; ++i) {
       mesher_.mesh(map, states_, *owners[i].block, &work, &seam_fills_);
-      if (!work.empty()) scratch_[i] = SubMesh(work);
+      if (!work.empty()) remeshed[i] = SubMesh(work);
     }
   });
   for (const VoxelBlock* block : filled) std::vector<Voxel>().swap(seam_fills_[*block]);
@@ -114,14 +113,13 @@ MeshChanges MeshStore::remesh(const BlockOctree& map, const std::vector<Owner>& 
   update.blocks_meshed = owners.size();
   for (size_t i = 0; i < owners.size(); ++i) {
     const BlockKey& key = owners[i].key;
-    if (!scratch_[i].empty()) {
-      std::swap(meshes_[key], scratch_[i]);
+    if (!remeshed[i].empty()) {
+      std::swap(meshes_[key], remeshed[i]);
       update.changed.push_back(key);
     } else if (meshes_.erase(key) > 0) {
       update.removed.push_back(key);
     }
   }
-  scratch_.clear();  // the replaced submeshes: freed now, not held until the next pass
   update.meshing_ms = timer.elapsedMs();
   return update;
 }

@@ -1,7 +1,5 @@
 #include "stereo_fusion/ros/FrameInput.h"
 
-#include <cmath>
-
 #include <tf2_eigen/tf2_eigen.h>
 
 #include <algorithm>
@@ -250,25 +248,20 @@ void FrameInput::processFrame(const QueuedFrame& f, double* publish_ms) {
     camera_frame_ = header.frame_id;
     newest_fused_ = {f.ticket.epoch, header.stamp.toNSec()};
   }
-  double configured_noise_px = 0.0, measured_noise_px = 0.0;
+  double measured_noise_px = 0.0;
   uint64_t frames_fused = 0;
+  std::string noise_warning;
   session_->withMapper([&](Mapper& mapper) {
     publisher_->frameFusedLocked(frame, header);
-    configured_noise_px = mapper.config().disparity_noise_px;
     measured_noise_px = mapper.measuredDisparityNoisePx();
     frames_fused = mapper.framesIntegrated();
+    noise_warning = mapper.disparityNoiseWarning();
   });
   stats_->disparity_noise_measured_px = measured_noise_px;
-  // Once the estimate has settled: a source noisier than configured (the estimate sees only
-  // the noise that varies from pixel to pixel, so it can say "noisier", never "finer").
-  if (std::isfinite(measured_noise_px) && frames_fused >= Mapper::kNoiseFrames &&
-      measured_noise_px > 1.5 * configured_noise_px &&
+  // Once, when the estimate has settled (a full window of frames).
+  if (!noise_warning.empty() && frames_fused >= Mapper::kNoiseFrames &&
       !stats_->disparity_noise_warned.exchange(true))
-    ROS_WARN(
-        "stereo_fusion: the disparities measure a noise of %.2f px (median of the last %zu "
-        "frames), disparity_noise_px is %.2f: set disparity_noise_px to what the source "
-        "gives (the contradiction rule already uses the larger of the two)",
-        measured_noise_px, Mapper::kNoiseFrames, configured_noise_px);
+    ROS_WARN("stereo_fusion: %s", noise_warning.c_str());
   if (r.reanchored) {
     ++stats_->reanchored;
     ROS_WARN("stereo_fusion: %s", r.note.c_str());

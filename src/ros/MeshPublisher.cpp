@@ -18,6 +18,11 @@ std::vector<BlockKey> allBlocks(const Mapper& map) {
   return all;
 }
 
+/// Whether a publisher limited to `rate_hz` (0: unlimited) may send at `now` after `last`.
+bool due(const ros::WallTime& now, const ros::WallTime& last, double rate_hz) {
+  return rate_hz <= 0 || (now - last).toSec() >= 1.0 / rate_hz;
+}
+
 /// `keys` (sorted) without those in `present` (sorted).
 std::vector<BlockKey> withoutKeysOf(const std::vector<BlockKey>& keys,
                                     const std::vector<BlockKey>& present) {
@@ -95,8 +100,7 @@ void MeshPublisher::publishPendingLocked(Mapper& map, const ros::Time& stamp, bo
     if (map.blocksAwaitingMesh() == 0 && map.pendingMeshChanges(consumer_) == 0)
       return publishMarkersLocked(map, force);  // the backlog may still wait for its turn
     const ros::WallTime now = ros::WallTime::now();
-    if (!force && node_.mesh_publish_rate_hz > 0 &&
-        (now - last_publish_).toSec() < 1.0 / node_.mesh_publish_rate_hz)
+    if (!force && !due(now, last_publish_, node_.mesh_publish_rate_hz))
       return publishMarkersLocked(map, force);
     last_publish_ = now;
     catchUpLocked(map);
@@ -198,8 +202,7 @@ void MeshPublisher::publishMarkersLocked(Mapper& map, bool force) {
   }
   if (marker_backlog_.empty() && !markers_full_pending_) return;
   const ros::WallTime now = ros::WallTime::now();
-  if (!force && !markers_full_pending_ && node_.markers_publish_rate_hz > 0 &&
-      (now - last_markers_).toSec() < 1.0 / node_.markers_publish_rate_hz)
+  if (!force && !markers_full_pending_ && !due(now, last_markers_, node_.markers_publish_rate_hz))
     return;
   last_markers_ = now;
   std::vector<BlockKey> changed, removed;

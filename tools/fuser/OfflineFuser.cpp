@@ -378,16 +378,9 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
     last.total_ms += last.esdf_ms;
     last.esdf_updated = true;
   }
-  {
-    // Once, at the end: what the data say against what was configured.
-    const double measured = mapper->measuredDisparityNoisePx();
-    const double configured = mapper->config().disparity_noise_px;
-    if (std::isfinite(measured) && measured > 1.5 * configured)
-      std::fprintf(stderr,
-                   "warning: the disparities measure a noise of %.2f px (median of the last %zu "
-                   "frames), disparity_noise_px is %.2f: set it to what the source gives\n",
-                   measured, Mapper::kNoiseFrames, configured);
-  }
+  // Once, at the end: what the data say against what was configured.
+  if (const std::string warning = mapper->disparityNoiseWarning(); !warning.empty())
+    std::fprintf(stderr, "warning: %s\n", warning.c_str());
   if (!trajectory.empty() && report->frames_used > 0) {
     if (options.progress)
       std::fprintf(stderr, "applying %s: fusing %zu frames again at their corrected poses\n",

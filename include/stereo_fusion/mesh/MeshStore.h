@@ -78,8 +78,7 @@ class MeshStore {
       states_;  // the mesher's per-block cache, refreshed for every block before it is meshed
   SeamFills seam_fills_;  // during a pass: the face-filled copies its owners read, then freed
   std::unordered_map<BlockKey, SubMesh, BlockKeyHash> meshes_;
-  std::vector<SubMesh> scratch_;  // during a pass: each owner's new submesh; empty between passes
-  BlockKeySet owner_keys_;        // ownersOf()'s de-duplication, reused frame after frame
+  BlockKeySet owner_keys_;  // ownersOf()'s de-duplication, reused frame after frame
 };
 
 /// All submeshes as one mesh, vertices shared between submeshes welded (they are computed
