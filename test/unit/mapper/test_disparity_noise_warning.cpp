@@ -13,7 +13,8 @@ std::string warningAfterNoisyFrames(double configured_px, double rendered_px) {
   Mapper mapper(config);
   EXPECT_TRUE(mapper.disparityNoiseWarning().empty()) << "nothing measured yet";
   for (int i = 0; i < 3; ++i) {
-    StereoFrame f = renderFrame(floorAndSphere(), qvgaCamera(), floorAndSphereView(i), rendered_px, i);
+    StereoFrame f =
+        renderFrame(floorAndSphere(), qvgaCamera(), floorAndSphereView(i), rendered_px, i);
     f.timestamp_s = 1.0 + i;
     EXPECT_TRUE(mapper.integrate(f).accepted);
   }
