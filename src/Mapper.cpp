@@ -241,13 +241,33 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
 }
 
 PlanningPass Mapper::updatePlanning() {
-  PlanningPass pass;
-  if (!planning_) return pass;
   StageScope stage(monitor_, MapperStage::kPlanning);
-  Timer timer;
+  std::optional<PlanningMap::PendingUpdate> pending = beginPlanningUpdate();
+  return pending ? finishPlanningUpdate(std::move(*pending)) : PlanningPass{};
+}
+
+std::optional<PlanningMap::PendingUpdate> Mapper::beginPlanningUpdate() {
+  if (!planning_) return std::nullopt;
+  StageScope stage(monitor_, MapperStage::kPlanning);
   const BlockChangeLog::Changes changes = map_changes_.take(*planning_consumer_);
-  pass.stats = planning_->update(octree_, changes.updated, changes.erased);
-  pass.esdf_ms = timer.elapsedMs();
+  return planning_->beginUpdate(octree_, changes.updated, changes.erased);
+}
+
+PlanningPass Mapper::finishPlanningUpdate(
+    PlanningMap::PendingUpdate pending,
+    const std::function<void(const PlanningPass&)>& before_end) {
+  // No StageScope: the monitor follows the map lock's holder, and this half may run without it.
+  Timer timer;
+  PlanningPass pass;
+  std::function<void(const PlanningUpdateStats&)> then;
+  if (before_end)
+    then = [&](const PlanningUpdateStats& stats) {
+      pass.stats = stats;
+      pass.esdf_ms = stats.read_ms + timer.elapsedMs();
+      before_end(pass);
+    };
+  pass.stats = planning_->finishUpdate(std::move(pending), then);
+  if (!before_end) pass.esdf_ms = pass.stats.read_ms + timer.elapsedMs();
   return pass;
 }
 

@@ -2,6 +2,7 @@
 #include <deque>
 #include <limits>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -134,6 +135,17 @@ class Mapper {
   /// caller's rate: between calls the free space is recorded every frame, the rest waits in the
   /// map log (integrate() runs it when more than kMaxPendingPlanningChanges wait).
   PlanningPass updatePlanning();
+  /// updatePlanning() in two halves. The first, with the map as for any call, reads the
+  /// changed TSDF blocks' cells (nullopt without planning_enabled). The second touches only
+  /// the planning layer: it may run on another thread while this Mapper integrates frames
+  /// (their free space joins the layer when it ends), as long as the Mapper lives; `before_end`
+  /// as PlanningMap::finishUpdate(). Until the second half ends, the first half's thread must
+  /// not call integrate(), updatePlanning(), rebuildPlanning(), clears or encodeMap(): they
+  /// wait for it.
+  std::optional<PlanningMap::PendingUpdate> beginPlanningUpdate();
+  PlanningPass finishPlanningUpdate(
+      PlanningMap::PendingUpdate pending,
+      const std::function<void(const PlanningPass&)>& before_end = {});
   /// Re-reads every TSDF block into the planning layer and recomputes its distance field from
   /// scratch (the same result as the incremental updates); returns its work.
   PlanningPass rebuildPlanning();

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <mutex>
+#include <stdexcept>
 
 #include "stereo_fusion/planning/TsdfOccupancy.h"
 #include "stereo_fusion/util/Timer.h"
@@ -135,16 +136,37 @@ std::vector<std::vector<TsdfCellState>> readTsdfCells(const BlockOctree& octree,
 PlanningUpdateStats PlanningMap::update(const BlockOctree& octree,
                                         const std::vector<BlockKey>& updated,
                                         const std::vector<BlockKey>& erased) {
-  PlanningUpdateStats stats;
+  return finishUpdate(beginUpdate(octree, updated, erased));
+}
+
+PlanningMap::PendingUpdate PlanningMap::beginUpdate(const BlockOctree& octree,
+                                                    const std::vector<BlockKey>& updated,
+                                                    const std::vector<BlockKey>& erased) {
+  {
+    std::unique_lock<std::mutex> order = awaitNoUpdate();
+    update_running_ = true;
+  }
+  PendingUpdate pending;
+  pending.map_ = this;
+  PlanningUpdateStats& stats = pending.stats;
   std::vector<BlockKey> keys = updated;
   keys.insert(keys.end(), erased.begin(), erased.end());
   std::sort(keys.begin(), keys.end());
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
   stats.tsdf_blocks = keys.size();
   Timer read_timer;
-  const auto states = readTsdfCells(octree, keys, config_.voxels_per_cell, pool_);
+  pending.states = readTsdfCells(octree, keys, config_.voxels_per_cell, pool_);
   stats.read_ms = read_timer.elapsedMs();
+  return pending;
+}
 
+PlanningUpdateStats PlanningMap::finishUpdate(
+    PendingUpdate pending, const std::function<void(const PlanningUpdateStats&)>& before_end) {
+  if (pending.map_ != this)
+    throw std::logic_error("PlanningMap::finishUpdate: not an update this layer began");
+  // `pending` ends the update if anything below throws (its destructor).
+  PlanningUpdateStats stats = pending.stats;
+  const auto& states = pending.states;
   std::unique_lock lock(mutex_);
   const size_t fresh_before = fresh_.size();
   std::vector<CellIndex> flipped;
@@ -184,7 +206,82 @@ PlanningUpdateStats PlanningMap::update(const BlockOctree& octree,
   stats.propagate_ms = propagate_timer.elapsedMs();
   fresh_.clear();
   stats.blocks_erased = eraseUnknownBlocks(std::move(maybe_empty));
+  lock.unlock();  // never held while taking update_mutex_ (clears take that one first)
+  if (before_end) before_end(stats);  // frame writes are still kept: readers see this update
+  pending.map_ = nullptr;
+  endUpdate();
   return stats;
+}
+
+void PlanningMap::endUpdate() {
+  // The next update may begin even if adding a write throws (bad_alloc): never left running.
+  struct Ender {
+    PlanningMap* map;
+    ~Ender() {
+      {
+        std::lock_guard<std::mutex> order(map->update_mutex_);
+        map->update_running_ = false;
+        map->kept_writes_.clear();
+      }
+      map->update_done_.notify_all();
+    }
+  } ender{this};
+  // The frame writes that came meanwhile, in order; more may come while these are added.
+  std::unique_lock lock(mutex_, std::defer_lock);
+  for (;;) {
+    std::vector<KeptWrite> kept;
+    {
+      std::lock_guard<std::mutex> order(update_mutex_);
+      if (kept_writes_.empty()) break;  // the Ender ends the update under this same lock
+      kept.swap(kept_writes_);
+    }
+    lock.lock();
+    for (const KeptWrite& write : kept) {
+      if (const auto* seen = std::get_if<SeenFree>(&write))
+        addSeenFreeLocked(*seen);
+      else
+        dropFartherThanLocked(std::get<DropFarther>(write).point_m,
+                              std::get<DropFarther>(write).max_distance_m);
+    }
+    lock.unlock();
+  }
+}
+
+PlanningMap::PendingUpdate::~PendingUpdate() {
+  if (map_ == nullptr) return;
+  // Never finished (an exception): its reading is lost, the next update may begin.
+  try {
+    map_->endUpdate();
+  } catch (...) {
+  }
+}
+
+PlanningMap::PendingUpdate& PlanningMap::PendingUpdate::operator=(PendingUpdate&& other) noexcept {
+  if (this == &other) return *this;
+  PendingUpdate ended(std::move(*this));  // ends an unfinished update, as the destructor does
+  map_ = std::exchange(other.map_, nullptr);
+  stats = other.stats;
+  states = std::move(other.states);
+  return *this;
+}
+
+bool PlanningMap::keepForUpdate(KeptWrite&& write) {
+  std::lock_guard<std::mutex> order(update_mutex_);
+  if (!update_running_) return false;
+  kept_writes_.push_back(std::move(write));
+  ++writes_kept_;
+  return true;
+}
+
+std::unique_lock<std::mutex> PlanningMap::awaitNoUpdate() const {
+  std::unique_lock<std::mutex> order(update_mutex_);
+  update_done_.wait(order, [&] { return !update_running_; });
+  return order;
+}
+
+uint64_t PlanningMap::writesKeptForUpdate() const {
+  std::lock_guard<std::mutex> order(update_mutex_);
+  return writes_kept_;
 }
 
 PlanningUpdateStats PlanningMap::rebuild(const BlockOctree& octree) {
@@ -195,6 +292,7 @@ PlanningUpdateStats PlanningMap::rebuild(const BlockOctree& octree) {
   for (const VoxelBlock* b : tsdf) keys.push_back(b->key);
   stats.tsdf_blocks = keys.size();
   const auto states = readTsdfCells(octree, keys, config_.voxels_per_cell, pool_);
+  const std::unique_lock<std::mutex> order = awaitNoUpdate();
   std::unique_lock lock(mutex_);
   for (auto& [key, block] : blocks_) {
     block->tsdf_observed.fill(0);
@@ -230,6 +328,7 @@ PlanningUpdateStats PlanningMap::rebuild(const BlockOctree& octree) {
 }
 
 void PlanningMap::clearRegion(const MapRegion& region) {
+  const std::unique_lock<std::mutex> order = awaitNoUpdate();
   std::unique_lock lock(mutex_);
   const double block_m = grid_.blockM();
   for (auto& [key, block] : blocks_) {
@@ -245,7 +344,12 @@ void PlanningMap::clearRegion(const MapRegion& region) {
 }
 
 void PlanningMap::dropFartherThan(const Eigen::Vector3d& point_m, double max_distance_m) {
+  if (keepForUpdate(DropFarther{point_m, max_distance_m})) return;
   std::unique_lock lock(mutex_);
+  dropFartherThanLocked(point_m, max_distance_m);
+}
+
+void PlanningMap::dropFartherThanLocked(const Eigen::Vector3d& point_m, double max_distance_m) {
   const double block_m = grid_.blockM();
   for (auto& [key, block] : blocks_) {
     const Eigen::Vector3d centre((key.x + 0.5) * block_m, (key.y + 0.5) * block_m,
@@ -262,6 +366,7 @@ void PlanningMap::dropFartherThan(const Eigen::Vector3d& point_m, double max_dis
 }
 
 void PlanningMap::clear() {
+  const std::unique_lock<std::mutex> order = awaitNoUpdate();
   std::unique_lock lock(mutex_);
   blocks_.clear();
   fresh_.clear();
@@ -367,6 +472,7 @@ void PlanningMap::forEachKnownCell(
 }
 
 std::vector<std::pair<BlockKey, PlanningBlock::Bits>> PlanningMap::seenFree() const {
+  const std::unique_lock<std::mutex> order = awaitNoUpdate();  // with the writes kept for it
   std::shared_lock lock(mutex_);
   std::vector<std::pair<BlockKey, PlanningBlock::Bits>> out;
   for (const auto& [key, block] : blocks_)
@@ -377,7 +483,12 @@ std::vector<std::pair<BlockKey, PlanningBlock::Bits>> PlanningMap::seenFree() co
 
 void PlanningMap::addSeenFree(
     const std::vector<std::pair<BlockKey, PlanningBlock::Bits>>& seen_free) {
+  if (keepForUpdate(SeenFree(seen_free))) return;
   std::unique_lock lock(mutex_);
+  addSeenFreeLocked(seen_free);
+}
+
+void PlanningMap::addSeenFreeLocked(const SeenFree& seen_free) {
   for (const auto& [key, bits] : seen_free) {
     PlanningBlock* block = allocate(key);
     for (size_t w = 0; w < bits.size(); ++w) block->seen_free[w] |= bits[w];

@@ -108,31 +108,29 @@ void PlanningPublisher::tick() {
     grid_.reset();
   }
 
-  // Under the map lock: the update and copies of what the topics need, nothing else.
+  // The map lock is held only while the update reads the TSDF; the distance field's update
+  // and the copies of what the topics need run while frames are fused.
   bool have_layer = false, full = false;
-  ros::Time stamp;
+  // Before the update: every edit that returned before it is in what this tick sends.
+  const ros::Time stamp = ros::Time::now();
   OccupancyGrid2D grid;
   std::vector<std::array<float, 4>> slice;  // x y z distance
   std::vector<std::array<float, 3>> occupied;
-  session_->withMapper([&](Mapper& map) {
-    stamp = ros::Time::now();  // after every edit that returned before this tick took the lock
-    const PlanningPass pass = map.updatePlanning();
-    const PlanningMap* planning = map.planning();
-    if (!planning) return;
+  session_->updatePlanning([&](const PlanningMap& layer, const PlanningPass& pass) {
+    const PlanningMap* planning = &layer;
     have_layer = true;
     const PlanningUpdateStats& s = pass.stats;
     if (s.tsdf_blocks > 0 || s.blocks_allocated > 0 || s.blocks_erased > 0)
       stats_->recordPlanningUpdate(pass.esdf_ms);
     if (want_grid) {
       grid = projectOccupancy(*planning, grid_min_z_m_, grid_max_z_m_);
-      full = replaced_;
-      replaced_ = false;
+      full = replaced_.exchange(false);
     }
     if (want_slice || want_occupied) {
       const PlanningGrid& g = planning->grid();
-      const auto layer = static_cast<int32_t>(std::floor(node_.esdf_slice_height_m / g.cell_m));
+      const auto slice_z = static_cast<int32_t>(std::floor(node_.esdf_slice_height_m / g.cell_m));
       planning->forEachKnownCell([&](const CellIndex& c, CellState state, double distance_m) {
-        if (want_slice && c.z == layer) {
+        if (want_slice && c.z == slice_z) {
           const Eigen::Vector3d p = g.centre(c);
           slice.push_back({float(p.x()), float(p.y()), float(p.z()), float(distance_m)});
         }

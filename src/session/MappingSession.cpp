@@ -198,6 +198,7 @@ bool MappingSession::reset() {
   std::vector<BlockKey> removed;
   for (const auto& [key, sub] : mapper_->mesh().submeshes()) removed.push_back(key);
   std::sort(removed.begin(), removed.end());
+  const std::lock_guard<std::mutex> pass(planning_pass_mutex_);
   mapper_->reset();
   startEpochLocked({});
   notifyLocked(MapChange::kReset, removed);
@@ -222,6 +223,7 @@ MappingSession::LoadOutcome MappingSession::load(const std::string& path) {
     out.message = error + " (the current map is unchanged)";
     return out;
   }
+  const std::lock_guard<std::mutex> pass(planning_pass_mutex_);
   const MeshChanges changes = mapper_->adoptMap(&loaded, info);
   std::vector<uint8_t> base;
   if (timeline_.maxFrames() > 0) {
@@ -412,6 +414,7 @@ void MappingSession::adoptCorrectedLocked(std::unique_ptr<Mapper> rebuilt, EditR
   for (const auto& [key, sub] : mapper_->mesh().submeshes())
     if (!kept.count(key)) removed.push_back(key);
   std::sort(removed.begin(), removed.end());
+  const std::lock_guard<std::mutex> pass(planning_pass_mutex_);
   mapper_->setStageMonitor(nullptr);
   rebuilt->setStageMonitor(&monitor_);
   mapper_ = std::move(rebuilt);

@@ -139,6 +139,9 @@ def main():
     print(f"worker per frame (the frame period bounds it): p50 {number('worker per frame p50 (ms)'):.1f} ms, "
           f"p99 {number('worker per frame p99 (ms)'):.1f} ms; of it publishing p50 "
           f"{number('publishing per frame p50 (ms)'):.1f} ms, p99 {number('publishing per frame p99 (ms)'):.1f} ms")
+    if number("planning updates") > 0:
+        print(f"planning updates (distance field, beside the frames): {int(number('planning updates'))}, "
+              f"p50 {number('planning update p50 (ms)'):.1f} ms, p99 {number('planning update p99 (ms)'):.1f} ms")
     print(f"latency stamp -> publish: p50 {number('latency p50 (s)') * 1000:.0f} ms, "
           f"p99 {number('latency p99 (s)') * 1000:.0f} ms")
     for k in dropped_keys():
@@ -159,6 +162,9 @@ def main():
                    "worker_ms": {"p50": number("worker per frame p50 (ms)"), "p99": number("worker per frame p99 (ms)")},
                    "publishing_ms": {"p50": number("publishing per frame p50 (ms)"),
                                      "p99": number("publishing per frame p99 (ms)")},
+                   "planning_update_ms": {"updates": int(number("planning updates")),
+                                          "p50": number("planning update p50 (ms)"),
+                                          "p99": number("planning update p99 (ms)")},
                    "cpu_cores": cpu_cores, "messages_received": received}
         with open(args.json, "w") as f:
             json.dump(figures, f, indent=1)

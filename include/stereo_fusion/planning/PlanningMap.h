@@ -1,7 +1,11 @@
 #pragma once
+#include <condition_variable>
 #include <cstdint>
 #include <functional>
+#include <mutex>
 #include <shared_mutex>
+#include <utility>
+#include <variant>
 #include <vector>
 
 #include <Eigen/Core>
@@ -13,6 +17,7 @@
 #include "stereo_fusion/planning/EsdfTransit.h"
 #include "stereo_fusion/planning/FreeSpaceRecorder.h"
 #include "stereo_fusion/planning/PlanningBlock.h"
+#include "stereo_fusion/planning/TsdfOccupancy.h"
 
 namespace stereo_fusion {
 
@@ -58,9 +63,17 @@ struct PlanningUpdateStats {
 /// TSDF blocks changed since its last update), and adds what only the frames know — the space
 /// they saw empty beyond the TSDF's bands (FreeSpaceRecorder).
 ///
-/// Writers run on the integrating thread; readers (state(), sample(), sampleBatch(), the
-/// visitors) may run on any thread at any time: a shared lock guards the blocks, and each
-/// writer holds it exclusively only while it changes them.
+/// Writers run on the integrating thread (but for finishUpdate(), below); readers (state(),
+/// sample(), sampleBatch(), the visitors) may run on any thread at any time: a shared lock guards
+/// the blocks, and each writer holds it exclusively only while it changes them.
+///
+/// An update may also run in two halves (beginUpdate(), then finishUpdate() on any thread):
+/// the first reads the TSDF and needs the octree, the second — the distance field's
+/// wavefronts, most of the time — needs only this layer, so the node runs it without the map
+/// lock while frames are fused. Updates finish in the order they began; the free space a frame
+/// records meanwhile (recordFreeSpace(), dropFartherThan()) is kept in order and added when
+/// the update finishes, as if the frame had come after it, which it did; clears, rebuild and
+/// seenFree() wait for it.
 class PlanningMap {
  public:
   PlanningMap(const PlanningConfig& config, ThreadPool* pool);
@@ -75,6 +88,19 @@ class PlanningMap {
   /// the distance field up to date with every change since the previous update.
   PlanningUpdateStats update(const BlockOctree& octree, const std::vector<BlockKey>& updated,
                              const std::vector<BlockKey>& erased);
+  /// update()'s first half: the cells of TSDF blocks `updated` and `erased`, read from
+  /// `octree` (which must not change meanwhile). Waits for an update begun before it to
+  /// finish; until finishUpdate(), frame writes are kept for its end.
+  class PendingUpdate;
+  PendingUpdate beginUpdate(const BlockOctree& octree, const std::vector<BlockKey>& updated,
+                            const std::vector<BlockKey>& erased);
+  /// update()'s second half, on any thread: reads no octree. `before_end` runs after the
+  /// distance field is updated and before the frame writes kept for it are added: readers
+  /// called from it see exactly this update's layer. It must not wait for the update (clears,
+  /// rebuild(), seenFree(), beginUpdate()). Throws std::logic_error for a foreign `pending`.
+  PlanningUpdateStats finishUpdate(
+      PendingUpdate pending,
+      const std::function<void(const PlanningUpdateStats&)>& before_end = {});
   /// Re-reads every TSDF block and recomputes the distance field from scratch.
   PlanningUpdateStats rebuild(const BlockOctree& octree);
   /// Forgets the free space seen in `region` (cells whose centre lies in it). The TSDF's own
@@ -102,8 +128,25 @@ class PlanningMap {
   /// per-cell distance and site.
   size_t freeSpaceBytes() const;
   size_t esdfBytes() const;
+  /// Frame writes that came while an update ran, added at its end (a counter).
+  uint64_t writesKeptForUpdate() const;
 
  private:
+  /// A frame write kept while an update runs: a frame's seen-free cells, or a drop.
+  struct DropFarther {
+    Eigen::Vector3d point_m;
+    double max_distance_m;
+  };
+  using SeenFree = std::vector<std::pair<BlockKey, PlanningBlock::Bits>>;
+  using KeptWrite = std::variant<SeenFree, DropFarther>;
+  /// Keeps `write` for the running update's end; false (nothing kept) if none runs.
+  bool keepForUpdate(KeptWrite&& write);
+  /// Adds the frame writes kept for the running update and lets the next one begin.
+  void endUpdate();
+  /// Waits until no update runs; the returned lock keeps a new one from beginning.
+  std::unique_lock<std::mutex> awaitNoUpdate() const;
+  void addSeenFreeLocked(const SeenFree& seen_free);
+  void dropFartherThanLocked(const Eigen::Vector3d& point_m, double max_distance_m);
   PlanningBlock* allocate(const BlockKey& key);
   /// Allocates the transit blocks that `keys` call for where their occupied or free cells
   /// spread past the boxes the rule last acted on; returns how many.
@@ -132,6 +175,31 @@ class PlanningMap {
   /// Since the previous update(): blocks whose seen-free bits grew their free box (rule_queued).
   std::vector<BlockKey> boxes_grown_;
   std::vector<std::pair<BlockKey, PlanningBlock::Bits>> seen_scratch_;
+  /// Whether an update runs (beginUpdate() to finishUpdate()), and the frame writes kept for
+  /// its end, in order. Taken before mutex_ when both are held.
+  mutable std::mutex update_mutex_;
+  mutable std::condition_variable update_done_;
+  bool update_running_ = false;         // guarded by update_mutex_
+  std::vector<KeptWrite> kept_writes_;  // guarded by update_mutex_
+  uint64_t writes_kept_ = 0;            // guarded by update_mutex_
+};
+
+/// An update's TSDF reading between beginUpdate() and finishUpdate() (move-only).
+class PlanningMap::PendingUpdate {
+ public:
+  PendingUpdate(PendingUpdate&& other) noexcept
+      : map_(std::exchange(other.map_, nullptr)),
+        stats(other.stats),
+        states(std::move(other.states)) {}
+  PendingUpdate& operator=(PendingUpdate&& other) noexcept;
+  ~PendingUpdate();
+
+ private:
+  friend class PlanningMap;
+  PendingUpdate() = default;
+  PlanningMap* map_ = nullptr;  // until finishUpdate() takes it
+  PlanningUpdateStats stats;
+  std::vector<std::vector<TsdfCellState>> states;
 };
 
 }  // namespace stereo_fusion

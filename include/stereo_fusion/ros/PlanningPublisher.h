@@ -8,6 +8,7 @@
 #include <nav_msgs/OccupancyGrid.h>
 #include <ros/ros.h>
 
+#include <atomic>
 #include <mutex>
 #include <optional>
 
@@ -18,9 +19,10 @@
 
 namespace stereo_fusion {
 
-/// Each tick takes the session's map lock only to update the layer and copy what the
-/// subscribed topics need (the projected grid, the slice's and the occupied cells); the
-/// messages are built and published after it.
+/// Each tick takes the session's map lock only while the update reads the changed TSDF blocks
+/// (MappingSession::updatePlanning()); the distance field's update and the copies the
+/// subscribed topics need (the projected grid, the slice's and the occupied cells) run beside
+/// the frames, and the messages are built and published after them.
 ///
 /// The grid: a subscriber gets the current full grid when it connects (as costmap_2d's own
 /// publisher does), then an update of the bounding window of the cells that changed; a full
@@ -56,7 +58,7 @@ class PlanningPublisher {
   ros::Publisher grid_pub_, grid_updates_pub_, slice_pub_, occupied_pub_;
   ros::WallTimer timer_;
   std::mutex tick_mutex_;  // one tick at a time (the timer may run on a multi-threaded queue)
-  bool replaced_ = true;   // guarded by the session's map lock: send the next grid whole
+  std::atomic<bool> replaced_{true};  // send the next grid whole
   std::mutex grid_mutex_;  // guards the two below (the tick and new subscribers' callbacks)
   std::optional<OccupancyGrid2D> grid_;  // the grid subscribers hold now
   nav_msgs::OccupancyGrid grid_msg_;     // the same as a message, for a new subscriber

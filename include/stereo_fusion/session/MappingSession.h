@@ -69,8 +69,9 @@ struct CorrectionReport {
 /// offline fuser are adapters over it. Every public method is thread-safe; the map lock is
 /// held only inside them (and in withMapper()).
 ///
-/// Lock order: the map lock, then the trajectory queue's lock; a re-fusion holds neither while
-/// it fuses, and only the last few catch-up frames run under the map lock.
+/// Lock order: the map lock, then the planning pass's (updatePlanning()), then the trajectory
+/// queue's lock; a re-fusion holds none of them while it fuses, and only the last few catch-up
+/// frames run under the map lock.
 class MappingSession {
  public:
   /// Throws std::invalid_argument for an invalid `config` (as Mapper).
@@ -160,6 +161,28 @@ class MappingSession {
     f(*mapper_);
     return true;
   }
+  /// Brings the planning layer up to date holding the map lock only while it reads the TSDF
+  /// blocks changed since the last update; the distance field's update, then
+  /// `then(const PlanningMap&, const PlanningPass&)`, run after the lock is released, while
+  /// frames go on being fused (the node's planning timer). `then` reads the layer as this
+  /// update left it (frames' free space waits for its end) and must not call the session:
+  /// the map is not replaced (reset, load, a correction) until it returns, and those hold the
+  /// map lock while they wait. Nothing runs without the planning layer.
+  template <typename F>
+  void updatePlanning(F&& then) {
+    std::unique_lock<std::mutex> pass_lock(planning_pass_mutex_, std::defer_lock);
+    Mapper* mapper = nullptr;
+    std::optional<PlanningMap::PendingUpdate> pending;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      mapper = mapper_.get();
+      pending = mapper->beginPlanningUpdate();
+      if (!pending) return;
+      pass_lock.lock();  // before the map lock is released: replacements wait for it
+    }
+    mapper->finishPlanningUpdate(
+        std::move(*pending), [&](const PlanningPass& pass) { then(*mapper->planning(), pass); });
+  }
   /// The answer of a request that found the map busy.
   std::string busyMessage() const;
   /// Seconds the live map's current operation has run (0 while idle) and its stage: read
@@ -220,7 +243,10 @@ class MappingSession {
   const SessionConfig session_config_;
 
   mutable std::mutex mutex_;  // the map lock: guards everything up to the trajectory queue
-  StageMonitor monitor_;      // the live mapper's (a correction's rebuilt one gets it at the swap)
+  // Held by updatePlanning() from its reading to its end; taken after the map lock by whatever
+  // replaces the map, which then waits for it (the update runs without the map lock).
+  std::mutex planning_pass_mutex_;
+  StageMonitor monitor_;  // the live mapper's (a correction's rebuilt one gets it at the swap)
   std::unique_ptr<Mapper> mapper_;
   EditReplay live_replay_;
   EditTimeline timeline_;

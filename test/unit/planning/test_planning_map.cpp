@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <thread>
+#include <optional>
 #include <tuple>
 
 #include "TestSupport.h"
@@ -140,6 +142,61 @@ TEST(PlanningMap, IncrementalEqualsOneUpdateAndDoesNotDependOnThreads) {
     differing += record.state != it->second.state || record.distance_m != it->second.distance_m;
   }
   EXPECT_EQ(differing, 0u);
+}
+
+// An update in two halves, as the node runs it (the second without the map lock): frames fused
+// between the halves keep their free space, and their drops of far blocks, for the update's
+// end. The layer then equals the one of updating before those frames — with the second half
+// after them on the same thread, or on another thread beside them.
+TEST(PlanningMap, FramesFusedWhileAnUpdateFinishesGiveTheLayerOfTheSerialOrder) {
+  const sim::AnalyticScene scene = roomWithSphere();
+  const std::vector<Eigen::Isometry3d> poses = circlePoses(8);
+  auto frame = [&](int i) { return renderFrame(scene, vgaCamera(), poses[i], 0.1, 7 + i); };
+  MapperConfig config = planningConfig();
+  config.max_depth_m = 3.0;
+  config.max_distance_from_camera_m = 3.0;  // each frame also drops the room's far corners
+  Mapper serial(config), after(config), beside(config);
+  for (int i = 0; i < 4; ++i)
+    for (Mapper* m : {&serial, &after, &beside}) ASSERT_TRUE(m->integrate(frame(i)).accepted);
+  serial.updatePlanning();
+  // In front of frame 5's camera, outside the views of frames 0-3.
+  const Eigen::Vector3d seen_later(-0.7, -0.7, 1.1);
+  ASSERT_EQ(serial.planning()->state(seen_later), CellState::kUnknown);
+  for (int i = 4; i < 8; ++i) ASSERT_TRUE(serial.integrate(frame(i)).accepted);
+  serial.updatePlanning();
+  ASSERT_EQ(serial.planning()->state(seen_later), CellState::kFree);
+
+  std::optional<PlanningMap::PendingUpdate> pending = after.beginPlanningUpdate();
+  ASSERT_TRUE(pending);
+  for (int i = 4; i < 8; ++i) ASSERT_TRUE(after.integrate(frame(i)).accepted);
+  EXPECT_EQ(after.planning()->writesKeptForUpdate(), 8u) << "each frame's free space and drop";
+  EXPECT_EQ(after.planning()->state(seen_later), CellState::kUnknown) << "not added yet";
+  after.finishPlanningUpdate(std::move(*pending));
+  EXPECT_EQ(after.planning()->state(seen_later), CellState::kFree) << "added at the end";
+  after.updatePlanning();
+
+  pending = beside.beginPlanningUpdate();
+  ASSERT_TRUE(pending);
+  ASSERT_TRUE(beside.integrate(frame(4)).accepted);  // kept whatever the timing below
+  std::thread finisher([&] { beside.finishPlanningUpdate(std::move(*pending)); });
+  for (int i = 5; i < 8; ++i) EXPECT_TRUE(beside.integrate(frame(i)).accepted);
+  finisher.join();
+  EXPECT_GE(beside.planning()->writesKeptForUpdate(), 2u);
+  beside.updatePlanning();
+
+  const auto expected = cells(*serial.planning());
+  for (const Mapper* m : {&after, &beside}) {
+    const auto got = cells(*m->planning());
+    ASSERT_EQ(got.size(), expected.size());
+    size_t differing = 0;
+    for (const auto& [key, record] : expected) {
+      const auto it = got.find(key);
+      differing += it == got.end() || it->second.state != record.state ||
+                   it->second.distance_m != record.distance_m;
+    }
+    EXPECT_EQ(differing, 0u);
+    EXPECT_TRUE(m->planning()->seenFree() == serial.planning()->seenFree());
+  }
 }
 
 // A clear makes its region unknown (free cells and surfaces alike); a later frame fills it again.

@@ -359,3 +359,43 @@ TEST(MappingSession, ARequestFindingTheMapBusyAnswersBusyInBoundedTimeAndChanges
   EXPECT_TRUE(session.clear(kBall, 100.0).success) << "free again";
   EXPECT_TRUE(session.tryStatus(1.0).has_value());
 }
+
+// The planning update holds the map lock only while it reads the TSDF: while its topics are
+// copied, frames are fused and requests answered (from other threads: `then` must not call the
+// session), and a reset waits for its end (the layer it reads must live until then).
+TEST(MappingSession, ThePlanningUpdateLetsFramesInAndHoldsOffAReplacement) {
+  SessionConfig config = keepAll(false);
+  config.max_request_wait_s = 0.05;
+  MappingSession session(sessionTestConfig(), config);
+  ASSERT_EQ(session.fuse(driftingFrame(0), session.arrive(), MeshTiming::kNow).reason,
+            RejectReason::kNone);
+  std::atomic<bool> reset_done{false};
+  std::thread resetter;
+  bool ran = false;
+  session.updatePlanning([&](const PlanningMap& layer, const PlanningPass& pass) {
+    ran = true;
+    EXPECT_GT(pass.stats.tsdf_blocks, 0u);
+    std::thread frames([&] {
+      EXPECT_TRUE(session.tryWithMapper([](Mapper&) {})) << "the map lock is free";
+      EXPECT_EQ(session.fuse(driftingFrame(1), session.arrive(), MeshTiming::kNow).reason,
+                RejectReason::kNone);
+    });
+    frames.join();
+    resetter = std::thread([&] {
+      EXPECT_TRUE(session.reset());
+      reset_done = true;
+    });
+    // Once the reset holds the map lock it waits for this update; then it must not be done.
+    std::thread probe([&] {
+      EXPECT_TRUE(waitFor([&] { return !session.tryWithMapper([](Mapper&) {}); }, 60.0));
+    });
+    probe.join();
+    EXPECT_FALSE(reset_done.load()) << "a reset waits for the update's end";
+    EXPECT_GT(layer.blockCount(), 0u);
+  });
+  EXPECT_TRUE(ran);
+  if (resetter.joinable()) resetter.join();
+  EXPECT_TRUE(reset_done.load());
+  session.withMapper([](Mapper& m) { EXPECT_EQ(m.planning()->blockCount(), 0u); });
+  EXPECT_EQ(session.framesFused(), 2u);
+}
