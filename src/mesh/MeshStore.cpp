@@ -27,30 +27,46 @@ void splitByPresence(const std::vector<BlockKey>& keys, const std::vector<const 
 }
 }  // namespace
 
+void MeshStore::PassClaims::begin(const BlockOctree& map) {
+  if (++pass_ == 0) {  // wrapped: older stamps could read as this pass
+    stamps_.clear();
+    pass_ = 1;
+  }
+  stamps_.fit(map);
+}
+
 std::vector<MeshStore::Owner> MeshStore::ownersOf(const BlockOctree& map,
                                                   const std::vector<const VoxelBlock*>& present,
                                                   const std::vector<BlockKey>& absent,
-                                                  BlockKeySet* seen) {
-  // Up to 8 candidates per updated block but ~1.4 distinct owners each: de-duplicate on the
-  // way, then sort only the distinct ones.
-  seen->reset(8 * present.size() + 7 * absent.size());
+                                                  PassClaims* claims, ThreadPool* pool) {
+  // Up to 8 candidates per updated block but ~1.4 distinct owners each: each owner is claimed
+  // once, by whichever of its updated blocks comes first; then only the distinct ones are sorted.
+  claims->begin(map);
+  std::vector<Owner> candidates(8 * present.size(), Owner{BlockKey{}, nullptr});
+  auto claim = [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i)
+      for (int d = 0; d < 8; ++d) {
+        const int dx = ownerOffset(d, 0), dy = ownerOffset(d, 1), dz = ownerOffset(d, 2);
+        const VoxelBlock* owner = map.neighbour(*present[i], dx, dy, dz);
+        // The key by arithmetic: owner->key would touch one more block's memory per owner.
+        if (owner != nullptr && claims->claim(*owner))
+          candidates[8 * i + d] = {present[i]->key.offset(dx, dy, dz), owner};
+      }
+  };
+  if (pool != nullptr)
+    pool->parallelFor(present.size(), 64, claim);
+  else
+    claim(0, present.size());
   std::vector<Owner> owners;
   owners.reserve(2 * present.size() + absent.size());
-  for (const VoxelBlock* block : present)
-    for (int d = 0; d < 8; ++d) {
-      const int dx = ownerOffset(d, 0), dy = ownerOffset(d, 1), dz = ownerOffset(d, 2);
-      // The key by arithmetic: owner->key would touch one more block's memory per owner.
-      const BlockKey owner_key = block->key.offset(dx, dy, dz);
-      if (!seen->insert(owner_key)) continue;
-      if (const VoxelBlock* owner = map.neighbour(*block, dx, dy, dz))
-        owners.push_back({owner_key, owner});
-    }
+  for (const Owner& owner : candidates)
+    if (owner.block != nullptr) owners.push_back(owner);
   for (const BlockKey& key : absent)
     for (int d = 1; d < 8; ++d) {
       const BlockKey owner_key =
           key.offset(ownerOffset(d, 0), ownerOffset(d, 1), ownerOffset(d, 2));
-      if (!seen->insert(owner_key)) continue;
-      if (const VoxelBlock* owner = map.find(owner_key)) owners.push_back({owner_key, owner});
+      const VoxelBlock* owner = map.find(owner_key);
+      if (owner != nullptr && claims->claim(*owner)) owners.push_back({owner_key, owner});
     }
   std::sort(owners.begin(), owners.end(),
             [](const Owner& a, const Owner& b) { return a.key < b.key; });
@@ -72,8 +88,9 @@ std::vector<BlockKey> MeshStore::affectedOwners(const BlockOctree& map,
   std::vector<BlockKey> absent;
   splitByPresence(updated, found, &present, &absent);
   std::vector<BlockKey> keys;
-  BlockKeySet seen;
-  for (const Owner& owner : ownersOf(map, present, absent, &seen)) keys.push_back(owner.key);
+  PassClaims claims;
+  for (const Owner& owner : ownersOf(map, present, absent, &claims, pool))
+    keys.push_back(owner.key);
   return keys;
 }
 
@@ -84,20 +101,21 @@ MeshChanges MeshStore::remesh(const BlockOctree& map, const std::vector<Owner>& 
   // with it at the end of the pass.
   std::vector<SubMesh> remeshed(owners.size());
   // The face-filled copies the owners read, each built once for the pass instead of once per
-  // owner reading it (up to 8), and freed after it: they are not kept between passes.
+  // owner reading it (up to 8), by the thread that claims it first, and freed after it: they
+  // are not kept between passes.
   seam_fills_.fit(map);
-  std::vector<const VoxelBlock*> filled;
-  for (const Owner& owner : owners)
-    for (int d = 0; d < 8; ++d) {
-      const VoxelBlock* block = map.neighbour(*owner.block, d & 1, (d >> 1) & 1, (d >> 2) & 1);
-      if (block == nullptr || !states_[*block].seam_filled || !seam_fills_[*block].empty())
-        continue;
-      seam_fills_[*block].resize(1);  // marks it taken; filled below
-      filled.push_back(block);
-    }
-  pool->parallelFor(filled.size(), 16, [&](size_t begin, size_t end) {
+  fill_claims_.begin(map);
+  std::vector<const VoxelBlock*> filled(8 * owners.size(), nullptr);
+  pool->parallelFor(owners.size(), 16, [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i)
-      fillFacesFromCoarserLevels(*filled[i], states_[*filled[i]].level, &seam_fills_[*filled[i]]);
+      for (int d = 0; d < 8; ++d) {
+        const VoxelBlock* block =
+            map.neighbour(*owners[i].block, d & 1, (d >> 1) & 1, (d >> 2) & 1);
+        if (block == nullptr || !states_[*block].seam_filled || !fill_claims_.claim(*block))
+          continue;
+        fillFacesFromCoarserLevels(*block, states_[*block].level, &seam_fills_[*block]);
+        filled[8 * i + d] = block;
+      }
   });
   pool->parallelFor(owners.size(), 4, [&](size_t begin, size_t end) {
     // Meshed into a per-thread buffer that keeps its capacity, then copied at its exact size:
@@ -108,15 +126,35 @@ MeshChanges MeshStore::remesh(const BlockOctree& map, const std::vector<Owner>& 
       if (!work.empty()) remeshed[i] = SubMesh(work);
     }
   });
-  for (const VoxelBlock* block : filled) std::vector<Voxel>().swap(seam_fills_[*block]);
+  // The submeshes kept so far are replaced in place, in parallel (no entry is added or erased
+  // meanwhile), the replaced ones freed on the way; the table itself changes only below, for
+  // owners that gain or lose their submesh.
+  enum : uint8_t { kWasKept = 1, kMeshed = 2 };
+  std::vector<uint8_t> outcome(owners.size(), 0);
+  pool->parallelFor(owners.size(), 64, [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) {
+      for (int d = 0; d < 8; ++d)
+        if (const VoxelBlock* block = filled[8 * i + d])
+          std::vector<Voxel>().swap(seam_fills_[*block]);
+      outcome[i] = remeshed[i].empty() ? 0 : kMeshed;
+      const auto it = meshes_.find(owners[i].key);
+      if (it == meshes_.end()) continue;
+      outcome[i] |= kWasKept;
+      if (outcome[i] & kMeshed) {
+        std::swap(it->second, remeshed[i]);
+        remeshed[i] = SubMesh();
+      }
+    }
+  });
   MeshChanges update;
   update.blocks_meshed = owners.size();
   for (size_t i = 0; i < owners.size(); ++i) {
     const BlockKey& key = owners[i].key;
-    if (!remeshed[i].empty()) {
-      std::swap(meshes_[key], remeshed[i]);
+    if (outcome[i] & kMeshed) {
+      if (!(outcome[i] & kWasKept)) meshes_.emplace(key, std::move(remeshed[i]));
       update.changed.push_back(key);
-    } else if (meshes_.erase(key) > 0) {
+    } else if (outcome[i] & kWasKept) {
+      meshes_.erase(key);
       update.removed.push_back(key);
     }
   }
@@ -126,6 +164,7 @@ MeshChanges MeshStore::remesh(const BlockOctree& map, const std::vector<Owner>& 
 
 MeshChanges MeshStore::update(const BlockOctree& map, const std::vector<BlockKey>& updated,
                               ThreadPool* pool, const std::vector<BlockKey>& erased) {
+  const Timer timer;  // the whole pass: the levels, the owners' search, meshing, the table
   // The one search per updated block: owners and neighbours are then reached through links.
   std::vector<const VoxelBlock*> found(updated.size());
   states_.fit(map);
@@ -141,7 +180,9 @@ MeshChanges MeshStore::update(const BlockOctree& map, const std::vector<BlockKey
   std::vector<BlockKey> absent;
   present.reserve(updated.size());
   splitByPresence(updated, found, &present, &absent);
-  return remeshAround(map, std::move(present), std::move(absent), pool, erased);
+  MeshChanges changes = remeshAround(map, std::move(present), std::move(absent), pool, erased);
+  changes.meshing_ms = timer.elapsedMs();
+  return changes;
 }
 
 MeshChanges MeshStore::remeshAround(const BlockOctree& map, std::vector<const VoxelBlock*> present,
@@ -153,7 +194,7 @@ MeshChanges MeshStore::remeshAround(const BlockOctree& map, std::vector<const Vo
   std::vector<BlockKey> erased_absent;
   splitByPresence(erased, erased_found, &present, &erased_absent);
   absent.insert(absent.end(), erased_absent.begin(), erased_absent.end());
-  MeshChanges changes = remesh(map, ownersOf(map, present, absent, &owner_keys_), pool);
+  MeshChanges changes = remesh(map, ownersOf(map, present, absent, &owner_claims_, pool), pool);
   if (erased.empty()) return changes;
   for (const BlockKey& key : erased_absent)
     if (meshes_.erase(key) > 0) changes.removed.push_back(key);

@@ -2,7 +2,7 @@
 #include <unordered_map>
 #include <vector>
 
-#include "stereo_fusion/map/BlockKeySet.h"
+#include "stereo_fusion/map/BlockColumn.h"
 #include "stereo_fusion/map/BlockOctree.h"
 #include "stereo_fusion/mesh/BlockMesher.h"
 #include "stereo_fusion/mesh/SubMesh.h"
@@ -15,6 +15,7 @@ struct MeshChanges {
   std::vector<BlockKey> changed;  ///< blocks whose submesh was (re)built and is non-empty, sorted
   std::vector<BlockKey> removed;  ///< blocks whose submesh disappeared, sorted
   size_t blocks_meshed = 0;       ///< owners re-meshed in this pass
+  /// The whole pass (update(): mesh levels, owners, meshing and the submesh table).
   double meshing_ms = 0.0;
 };
 
@@ -60,11 +61,27 @@ class MeshStore {
     BlockKey key;
     const VoxelBlock* block;
   };
-  /// Owners of the seams of `present` blocks (through their links) and of `absent` keys (through
-  /// searches), sorted by key without duplicates (`seen`: scratch for the de-duplication).
+  /// Per row, the last pass that claimed the block: each block is taken once per pass by
+  /// whichever thread claims it first (an atomic exchange), whatever the order.
+  class PassClaims {
+   public:
+    /// A new pass over `map`'s rows: nothing claimed yet.
+    void begin(const BlockOctree& map);
+    /// True for the first claim of `block` in this pass (thread-safe).
+    bool claim(const VoxelBlock& block) {
+      return __atomic_exchange_n(&stamps_[block], pass_, __ATOMIC_RELAXED) != pass_;
+    }
+
+   private:
+    BlockColumn<uint32_t> stamps_;
+    uint32_t pass_ = 0;
+  };
+  /// Owners of the seams of `present` blocks (through their links, on `pool` when given) and of
+  /// `absent` keys (through searches), sorted by key without duplicates.
   static std::vector<Owner> ownersOf(const BlockOctree& map,
                                      const std::vector<const VoxelBlock*>& present,
-                                     const std::vector<BlockKey>& absent, BlockKeySet* seen);
+                                     const std::vector<BlockKey>& absent, PassClaims* claims,
+                                     ThreadPool* pool);
   MeshChanges remesh(const BlockOctree& map, const std::vector<Owner>& owners, ThreadPool* pool);
   /// The part of update() after the mesh levels are refreshed: `present` updated blocks and
   /// `absent` updated keys with no block, plus `erased`.
@@ -78,7 +95,8 @@ class MeshStore {
       states_;  // the mesher's per-block cache, refreshed for every block before it is meshed
   SeamFills seam_fills_;  // during a pass: the face-filled copies its owners read, then freed
   std::unordered_map<BlockKey, SubMesh, BlockKeyHash> meshes_;
-  BlockKeySet owner_keys_;  // ownersOf()'s de-duplication, reused frame after frame
+  PassClaims owner_claims_;  // ownersOf()'s de-duplication, reused pass after pass
+  PassClaims fill_claims_;   // remesh(): each seam-filled neighbour filled once per pass
 };
 
 /// All submeshes as one mesh, vertices shared between submeshes welded (they are computed

@@ -2,6 +2,8 @@
 // incremental == batch, accurate, deterministic.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "MeshTestSupport.h"
 #include "QuickMode.h"
 
@@ -255,6 +257,11 @@ TEST(BlockMesher, RemeshingTouchesExactlyTheOwnersOfTheUpdatedBlocks) {
   EXPECT_LT(r.mesh.blocks_meshed, mapper.map().blockCount() + 1);
   for (const BlockKey& k : r.mesh.changed) EXPECT_TRUE(expected.count({k.x, k.y, k.z}));
   for (const BlockKey& k : r.mesh.removed) EXPECT_TRUE(expected.count({k.x, k.y, k.z}));
+  // Each owner once, in key order (the parallel claims must not take one twice).
+  for (const auto* keys : {&r.mesh.changed, &r.mesh.removed}) {
+    EXPECT_TRUE(std::is_sorted(keys->begin(), keys->end()));
+    EXPECT_TRUE(std::adjacent_find(keys->begin(), keys->end()) == keys->end());
+  }
 }
 
 TEST(BlockMesher, RemeshingAnIsolatedBlockHandWorked) {
