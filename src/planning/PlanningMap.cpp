@@ -43,8 +43,14 @@ PlanningBlock* PlanningMap::allocate(const BlockKey& key) {
   if (!slot) {
     slot = std::make_unique<PlanningBlock>();
     fresh_.push_back(key);
+    noteSizeLocked();
   }
   return slot.get();
+}
+
+void PlanningMap::noteSizeLocked() {
+  block_count_.store(blocks_.size(), std::memory_order_relaxed);
+  bucket_count_.store(blocks_.bucket_count(), std::memory_order_relaxed);
 }
 
 namespace {
@@ -94,6 +100,7 @@ uint64_t PlanningMap::eraseUnknownBlocks(std::vector<BlockKey> keys) {
       erased.push_back(key);
     }
   }
+  noteSizeLocked();
   // An erased block may have been one a pair of its neighbours needed: they look again.
   std::vector<BlockKey> neighbours;
   const int r = transit_.reachBlocks() + 1;
@@ -317,6 +324,7 @@ PlanningUpdateStats PlanningMap::rebuild(const BlockOctree& octree) {
       ++stats.blocks_erased;
     }
   }
+  noteSizeLocked();
   stats.transit_allocated = applyTransitRule(std::move(all));
   stats.blocks_allocated = fresh_.size();
   fresh_.clear();
@@ -369,6 +377,7 @@ void PlanningMap::clear() {
   const std::unique_lock<std::mutex> order = awaitNoUpdate();
   std::unique_lock lock(mutex_);
   blocks_.clear();
+  noteSizeLocked();
   fresh_.clear();
   pending_flips_.clear();
   maybe_empty_.clear();
@@ -499,10 +508,7 @@ void PlanningMap::addSeenFreeLocked(const SeenFree& seen_free) {
   }
 }
 
-size_t PlanningMap::blockCount() const {
-  std::shared_lock lock(mutex_);
-  return blocks_.size();
-}
+size_t PlanningMap::blockCount() const { return block_count_.load(std::memory_order_relaxed); }
 
 namespace {
 // Per block: key, pointer and hash-node overhead of the table entry.
@@ -511,13 +517,12 @@ constexpr size_t kBitsBytes = 3 * sizeof(PlanningBlock::Bits);
 }  // namespace
 
 size_t PlanningMap::freeSpaceBytes() const {
-  std::shared_lock lock(mutex_);
-  return blocks_.size() * (kEntryBytes + kBitsBytes) + blocks_.bucket_count() * sizeof(void*);
+  return blockCount() * (kEntryBytes + kBitsBytes) +
+         bucket_count_.load(std::memory_order_relaxed) * sizeof(void*);
 }
 
 size_t PlanningMap::esdfBytes() const {
-  std::shared_lock lock(mutex_);
-  return blocks_.size() * (sizeof(PlanningBlock) - kBitsBytes);
+  return blockCount() * (sizeof(PlanningBlock) - kBitsBytes);
 }
 
 }  // namespace stereo_fusion

@@ -1,4 +1,5 @@
 #pragma once
+#include <atomic>
 #include <condition_variable>
 #include <cstdint>
 #include <functional>
@@ -123,6 +124,8 @@ class PlanningMap {
   /// blocks distances.
   void addSeenFree(const std::vector<std::pair<BlockKey, PlanningBlock::Bits>>& seen_free);
 
+  /// These three never wait for a writer (a status report under the map lock must not wait
+  /// for an update running beside the frames): they read sizes each writer leaves behind.
   size_t blockCount() const;
   /// Bytes of the free/occupied bits with their block keys and table entries, and of the ESDF's
   /// per-cell distance and site.
@@ -146,6 +149,8 @@ class PlanningMap {
   /// Waits until no update runs; the returned lock keeps a new one from beginning.
   std::unique_lock<std::mutex> awaitNoUpdate() const;
   void addSeenFreeLocked(const SeenFree& seen_free);
+  /// Publishes blocks_'s size for the readers that do not lock (after every insert or erase).
+  void noteSizeLocked();
   void dropFartherThanLocked(const Eigen::Vector3d& point_m, double max_distance_m);
   PlanningBlock* allocate(const BlockKey& key);
   /// Allocates the transit blocks that `keys` call for where their occupied or free cells
@@ -166,6 +171,7 @@ class PlanningMap {
   EsdfTransit transit_;
   mutable std::shared_mutex mutex_;
   PlanningBlockMap blocks_;
+  std::atomic<size_t> block_count_{0}, bucket_count_{0};  // blocks_'s, for blockCount() & co.
   /// Since the previous update(): blocks allocated (their cells have no site yet).
   std::vector<BlockKey> fresh_;
   /// Since the previous update(): occupied cells of dropped blocks (flips for the ESDF), and

@@ -196,6 +196,8 @@ TEST(PlanningMap, FramesFusedWhileAnUpdateFinishesGiveTheLayerOfTheSerialOrder) 
     }
     EXPECT_EQ(differing, 0u);
     EXPECT_TRUE(m->planning()->seenFree() == serial.planning()->seenFree());
+    EXPECT_EQ(m->planning()->blockCount(), serial.planning()->blockCount());  // read unlocked
+    EXPECT_EQ(m->planning()->esdfBytes(), serial.planning()->esdfBytes());
   }
 }
 
