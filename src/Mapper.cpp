@@ -259,15 +259,12 @@ PlanningPass Mapper::finishPlanningUpdate(
   // No StageScope: the monitor follows the map lock's holder, and this half may run without it.
   Timer timer;
   PlanningPass pass;
-  std::function<void(const PlanningUpdateStats&)> then;
-  if (before_end)
-    then = [&](const PlanningUpdateStats& stats) {
-      pass.stats = stats;
-      pass.esdf_ms = stats.read_ms + timer.elapsedMs();
-      before_end(pass);
-    };
-  pass.stats = planning_->finishUpdate(std::move(pending), then);
-  if (!before_end) pass.esdf_ms = pass.stats.read_ms + timer.elapsedMs();
+  // Timed up to the update's end proper: adding the frames' kept free space is theirs.
+  planning_->finishUpdate(std::move(pending), [&](const PlanningUpdateStats& stats) {
+    pass.stats = stats;
+    pass.esdf_ms = stats.read_ms + timer.elapsedMs();
+    if (before_end) before_end(pass);
+  });
   return pass;
 }
 

@@ -116,20 +116,19 @@ void PlanningPublisher::tick() {
   OccupancyGrid2D grid;
   std::vector<std::array<float, 4>> slice;  // x y z distance
   std::vector<std::array<float, 3>> occupied;
-  session_->updatePlanning([&](const PlanningMap& layer, const PlanningPass& pass) {
-    const PlanningMap* planning = &layer;
+  session_->updatePlanning([&](const PlanningMap& planning, const PlanningPass& pass) {
     have_layer = true;
     const PlanningUpdateStats& s = pass.stats;
     if (s.tsdf_blocks > 0 || s.blocks_allocated > 0 || s.blocks_erased > 0)
       stats_->recordPlanningUpdate(pass.esdf_ms);
     if (want_grid) {
-      grid = projectOccupancy(*planning, grid_min_z_m_, grid_max_z_m_);
+      grid = projectOccupancy(planning, grid_min_z_m_, grid_max_z_m_);
       full = replaced_.exchange(false);
     }
     if (want_slice || want_occupied) {
-      const PlanningGrid& g = planning->grid();
+      const PlanningGrid& g = planning.grid();
       const auto slice_z = static_cast<int32_t>(std::floor(node_.esdf_slice_height_m / g.cell_m));
-      planning->forEachKnownCell([&](const CellIndex& c, CellState state, double distance_m) {
+      planning.forEachKnownCell([&](const CellIndex& c, CellState state, double distance_m) {
         if (want_slice && c.z == slice_z) {
           const Eigen::Vector3d p = g.centre(c);
           slice.push_back({float(p.x()), float(p.y()), float(p.z()), float(distance_m)});
