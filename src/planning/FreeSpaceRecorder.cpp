@@ -36,6 +36,7 @@ void FreeSpaceRecorder::buildTiles(const MeasurementImage& measurements) {
   base.tiles_y = (height + kTilePx - 1) / kTilePx;
   base.min_free_m.assign(static_cast<size_t>(base.tiles_x) * base.tiles_y, 0.0f);
   base.max_free_m.assign(base.min_free_m.size(), 0.0f);
+  base.max_min_free_m.assign(base.min_free_m.size(), 0.0f);
   const float* depth = measurements.depths();
   pool_->parallelFor(static_cast<size_t>(base.tiles_y), 4, [&](size_t begin, size_t end) {
     for (size_t ty = begin; ty < end; ++ty)
@@ -63,6 +64,7 @@ void FreeSpaceRecorder::buildTiles(const MeasurementImage& measurements) {
         const size_t t = ty * base.tiles_x + tx;
         base.min_free_m[t] = said ? std::max(lo, 0.0f) : 0.0f;
         base.max_free_m[t] = said ? std::max(hi, 0.0f) : 0.0f;
+        base.max_min_free_m[t] = base.min_free_m[t];
       }
   });
   // Coarser levels: min and max over 2×2 children, until one tile is left.
@@ -75,12 +77,14 @@ void FreeSpaceRecorder::buildTiles(const MeasurementImage& measurements) {
     coarse.min_free_m.assign(static_cast<size_t>(coarse.tiles_x) * coarse.tiles_y,
                              std::numeric_limits<float>::infinity());
     coarse.max_free_m.assign(coarse.min_free_m.size(), 0.0f);
+    coarse.max_min_free_m.assign(coarse.min_free_m.size(), 0.0f);
     for (int y = 0; y < fine.tiles_y; ++y)
       for (int x = 0; x < fine.tiles_x; ++x) {
         const size_t f = static_cast<size_t>(y) * fine.tiles_x + x;
         const size_t c = static_cast<size_t>(y / 2) * coarse.tiles_x + x / 2;
         coarse.min_free_m[c] = std::min(coarse.min_free_m[c], fine.min_free_m[f]);
         coarse.max_free_m[c] = std::max(coarse.max_free_m[c], fine.max_free_m[f]);
+        coarse.max_min_free_m[c] = std::max(coarse.max_min_free_m[c], fine.max_min_free_m[f]);
       }
     pyramid_.push_back(std::move(coarse));
   }
@@ -175,8 +179,9 @@ FreeSpaceStats FreeSpaceRecorder::record(
       // child's footprint lies within its parent's, so a depth beyond the parent's largest free
       // depth is behind for the child too, and one before its smallest is free: most children of
       // a node astride a surface are decided without a footprint of their own.
+      const bool skip_past_minima = params_.skip_past_tile_minima;
       struct ParentBounds {
-        float min_free_m, max_free_m;
+        float min_free_m, max_free_m, max_min_free_m;
       };
       auto visit = [&](auto&& self, const CellIndex& o, const Eigen::Vector3f& corner_c, int size,
                        const ParentBounds* bounds) -> void {
@@ -188,6 +193,7 @@ FreeSpaceStats FreeSpaceRecorder::record(
         bool inside = true;
         if (bounds) {  // inside the view like its parent
           if (z_near >= bounds->max_free_m) return;
+          if (skip_past_minima && z_near >= bounds->max_min_free_m) return;
           if (z_far < bounds->min_free_m) {
             markFree(o, size);
             return;
@@ -236,12 +242,14 @@ FreeSpaceStats FreeSpaceRecorder::record(
                 (py1 / pyramid_[level].tile_px - py0 / pyramid_[level].tile_px > 3)))
           ++level;
         const TileLevel& tiles = pyramid_[level];
-        float min_free = std::numeric_limits<float>::infinity(), max_free = 0.0f;
+        float min_free = std::numeric_limits<float>::infinity(), max_free = 0.0f,
+              max_min_free = 0.0f;
         for (int ty = py0 / tiles.tile_px; ty <= py1 / tiles.tile_px; ++ty)
           for (int tx = px0 / tiles.tile_px; tx <= px1 / tiles.tile_px; ++tx) {
             const size_t t = static_cast<size_t>(ty) * tiles.tiles_x + tx;
             min_free = std::min(min_free, tiles.min_free_m[t]);
             max_free = std::max(max_free, tiles.max_free_m[t]);
+            max_min_free = std::max(max_min_free, tiles.max_min_free_m[t]);
           }
         if (max_free <= z_near) return;  // behind every free depth it can see
         if (!inside) {
@@ -252,7 +260,10 @@ FreeSpaceStats FreeSpaceRecorder::record(
           markFree(o, size);
           return;
         }
-        const ParentBounds mine{min_free, max_free};
+        // Every part of the node sees some finest tile of its footprint, so frees nothing
+        // beyond the largest of their smallest free depths: past it, nothing here is free.
+        if (skip_past_minima && z_near >= max_min_free) return;
+        const ParentBounds mine{min_free, max_free, max_min_free};
         if (size > 1) split(&mine);
       };
       const Eigen::Vector3f root_c =

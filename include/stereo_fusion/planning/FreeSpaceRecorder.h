@@ -28,14 +28,20 @@ struct FreeSpaceStats {
 ///
 /// The test runs on an octree of the frustum's cells, from 32³-cell nodes down to cells: a node
 /// whose footprint is free beyond its far side is free whole, one whose footprint is free
-/// nowhere as far as its near side is skipped whole, the rest split. So the cost follows the
-/// surfaces in view, not the volume or the pixel count: coarse where far or uniform.
+/// nowhere as far as its near side is skipped whole, the rest split. A node is skipped too when
+/// it starts beyond every finest tile's smallest free depth in its footprint: each of its parts
+/// sees one of those tiles, so none can be free (the band of a ground seen at a grazing angle
+/// would otherwise be visited cell by cell). So the cost follows the surfaces in view, not the
+/// volume or the pixel count: coarse where far or uniform.
 class FreeSpaceRecorder {
  public:
   struct Params {
     double cell_m = 0.08;
     double unmeasured_range_m = 0.0;
     TruncationBand band{0.02, 4.0};
+    /// false: without the skip past the tiles' smallest free depths (the same cells, more
+    /// nodes visited), the reference the tests compare with.
+    bool skip_past_tile_minima = true;
   };
   FreeSpaceRecorder(const Params& params, ThreadPool* pool) : params_(params), pool_(pool) {}
 
@@ -46,7 +52,9 @@ class FreeSpaceRecorder {
  private:
   struct TileLevel {
     int tile_px = 0, tiles_x = 0, tiles_y = 0;
-    std::vector<float> min_free_m, max_free_m;
+    // Per tile: the smallest and largest free depth of its pixels, and the largest of its
+    // finest tiles' smallest ones.
+    std::vector<float> min_free_m, max_free_m, max_min_free_m;
   };
   void buildTiles(const MeasurementImage& measurements);
 

@@ -92,5 +92,39 @@ TEST(FreeSpaceRecorder, ThreadCountIndependent) {
   EXPECT_FALSE(results[0].empty());
 }
 
+// Skipping a node that starts past every finest tile's smallest free depth in its footprint
+// changes no cell: each of its parts sees one of those tiles. The scene has what makes the skip
+// work: a ground seen at a grazing angle out to the far wall, an object's depth edges, noise,
+// and a camera turned off the axes; the walk without the skip is the reference.
+TEST(FreeSpaceRecorder, SkippingPastTheTilesSmallestFreeDepthsKeepsEveryCell) {
+  sim::AnalyticScene scene;
+  scene.add(sim::makePlane(Eigen::Vector3d(0, 1.2, 0), Eigen::Vector3d(0, -1, 0)));  // ground
+  scene.add(sim::makePlane(Eigen::Vector3d(0, 0, 9.0), Eigen::Vector3d(0, 0, -1)));
+  scene.add(sim::makeSphere(Eigen::Vector3d(-0.4, 0.6, 3.0), 0.6));
+  Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();
+  T_world_camera.linear() = (Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY()) *
+                             Eigen::AngleAxisd(0.05, Eigen::Vector3d::UnitX()))
+                                .toRotationMatrix();
+  T_world_camera.translation() = Eigen::Vector3d(0.13, -0.05, 0.21);
+  const StereoFrame frame = test::renderFrame(scene, test::vgaCamera(), T_world_camera, 0.2, 5);
+  MapperConfig config;
+  ThreadPool pool(2);
+  MeasurementImage measurements;
+  measurements.build(frame, config, &pool);
+  std::vector<std::pair<BlockKey, PlanningBlock::Bits>> cells[2];
+  FreeSpaceStats stats[2];
+  for (int skip : {0, 1}) {
+    FreeSpaceRecorder::Params params{0.05, 0.0, config.truncationBand()};
+    params.skip_past_tile_minima = skip == 1;
+    FreeSpaceRecorder recorder(params, &pool);
+    stats[skip] = recorder.record(frame, measurements, &cells[skip]);
+  }
+  EXPECT_TRUE(cells[1] == cells[0]);  // (printing them would be thousands of words)
+  EXPECT_EQ(stats[1].cells_seen_free, stats[0].cells_seen_free);
+  EXPECT_GT(stats[0].cells_seen_free, 100000u);
+  // The skip is what the test is about: it must cut the walk here.
+  EXPECT_LT(stats[1].nodes_visited, stats[0].nodes_visited * 9 / 10);
+}
+
 }  // namespace
 }  // namespace stereo_fusion
