@@ -141,6 +141,23 @@ void meshMixedBoxes(MesherContext& ctx) {
   for (int d = 0; d < 8; ++d) {
     if (ctx.nb[d] == nullptr) continue;
     intervals.build(d, ctx.step[d]);
+    // The skin slab of each axis: the boxes in the last interval along it (the boxes touching
+    // a block face lie in one). A box's support lies within its slab's: one sign there (or
+    // nothing observed) and mixedBoxIsEmpty() would return true for each of them.
+    const int* count = intervals.count;
+    bool skin_is_empty[3];
+    for (int a = 0; a < 3; ++a) {
+      int lo[3], hi[3];
+      for (int b = 0; b < 3; ++b) {
+        lo[b] = intervals.bounds[b][a == b ? count[b] - 1 : 0].first;
+        hi[b] = intervals.bounds[b][count[b] - 1].second;
+      }
+      skin_is_empty[a] = masks.boxSupportHasOneSign(ctx, lo, hi);
+    }
+    // Past the owner, the region is its skin along the axes of d.
+    if (((d & 1) && skin_is_empty[0]) || ((d & 2) && skin_is_empty[1]) ||
+        ((d & 4) && skin_is_empty[2]))
+      continue;
     auto visit = [&](int ix, int iy, int iz) {
       const int lo[3] = {intervals.bounds[0][ix].first, intervals.bounds[1][iy].first,
                          intervals.bounds[2][iz].first};
@@ -151,12 +168,13 @@ void meshMixedBoxes(MesherContext& ctx) {
         // Most boxes: no voxel-level sign change. The exact corner signs decide here, so
         // the mask pre-test below could not reject a box that passes.
         if (ctx.coreBoxIsEmpty(lo)) return;
-      } else if (mixedBoxIsEmpty(ctx, masks, lo, hi)) {
+      } else if ((ix == count[0] - 1 && skin_is_empty[0]) ||
+                 (iy == count[1] - 1 && skin_is_empty[1]) ||
+                 (iz == count[2] - 1 && skin_is_empty[2]) || mixedBoxIsEmpty(ctx, masks, lo, hi)) {
         return;
       }
       meshBox(ctx, lo, hi);
     };
-    const int* count = intervals.count;
     for (int iz = 0; iz < count[2]; ++iz)
       for (int iy = 0; iy < count[1]; ++iy) {
         if (d == 0 && iy + 1 < count[1] && iz + 1 < count[2]) {
