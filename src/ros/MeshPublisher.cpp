@@ -49,6 +49,10 @@ MeshPublisher::MeshPublisher(ros::NodeHandle& pnh, const NodeConfig& node, Mappi
       "mesh_markers", 10, [this](const ros::SingleSubscriberPublisher&) {
         session_->withMapper([&](Mapper&) { markers_full_pending_ = true; });
       });
+  marker_sender_ = std::make_unique<MarkerSender>(
+      [publisher = markers_pub_](const visualization_msgs::MarkerArray& markers) {
+        publisher.publish(markers);
+      });
   if (node_.publish_path) path_pub_ = pnh.advertise<nav_msgs::Path>("camera_path", 1, true);
   path_.header.frame_id = node_.world_frame;
   if (node_.publish_frustum)
@@ -173,7 +177,7 @@ void MeshPublisher::onMapReplaced(const MapReplaced& replaced) {
       header.stamp = ros::Time::now();
       marker_backlog_.clear();
       markers_header_.stamp = ros::Time();
-      markers_pub_.publish(markers_.clear(header));
+      marker_sender_->sendClear(header);
       MeshUpdate empty = toMeshUpdate(map.mesh().submeshes(), {}, {}, header,
                                       map.config().voxel_size_m, ++sequence_, true);
       empty.session = session_id_;
@@ -204,6 +208,8 @@ void MeshPublisher::publishMarkersLocked(Mapper& map, bool force) {
   const ros::WallTime now = ros::WallTime::now();
   if (!force && !markers_full_pending_ && !due(now, last_markers_, node_.markers_publish_rate_hz))
     return;
+  // The previous arrays not out yet: the backlog goes on merging (what must go, queues).
+  if (!force && !markers_full_pending_ && !marker_sender_->idle()) return;
   last_markers_ = now;
   std::vector<BlockKey> changed, removed;
   marker_backlog_.take(&changed, &removed);
@@ -214,7 +220,7 @@ void MeshPublisher::publishMarkersLocked(Mapper& map, bool force) {
   markers_full_pending_ = false;
   std_msgs::Header header = markers_header_;
   if (header.stamp.isZero()) header.stamp = ros::Time::now();  // no frame fused since a reset
-  markers_pub_.publish(markers_.build(map.mesh().submeshes(), changed, removed, header));
+  marker_sender_->send(map.mesh().submeshes(), changed, removed, header);
 }
 
 void MeshPublisher::publishFullLocked(Mapper& map, const std::vector<BlockKey>& removed) {
@@ -239,8 +245,7 @@ void MeshPublisher::publishFullLocked(Mapper& map, const std::vector<BlockKey>& 
   gone.erase(std::unique(gone.begin(), gone.end()), gone.end());
   markers_header_ = header;
   if (node_.publish_markers) {
-    markers_pub_.publish(
-        markers_.build(map.mesh().submeshes(), all, withoutKeysOf(gone, all), header));
+    marker_sender_->send(map.mesh().submeshes(), all, withoutKeysOf(gone, all), header);
     markers_full_pending_ = false;
   }
 }

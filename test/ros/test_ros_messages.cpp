@@ -5,11 +5,13 @@
 
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <opencv2/imgcodecs.hpp>
 #include <random>
 #include <set>
 
 #include "stereo_fusion/ros/DebugMarkers.h"
+#include "stereo_fusion/ros/MarkerSender.h"
 #include "stereo_fusion/ros/MeshMessages.h"
 
 using namespace stereo_fusion;
@@ -281,6 +283,44 @@ TEST(MeshMarkers, IdsOfRemovedBlocksAreForgotten) {
   }
   EXPECT_EQ(markers.size(), 0u);
   EXPECT_EQ(ids.size(), 5000u);  // ids are not reused: a late DELETE cannot hit a newer block
+}
+
+// The sender builds on its own thread what was handed over, from copies taken at hand-over,
+// in the order handed over: a reset's DELETEALL after the markers before it, before those after.
+TEST(MarkerSender, SendsCopiesInTheOrderHandedOver) {
+  const BlockKey a{1, 2, 3}, b{-4, 0, 7};
+  SubmeshMap store;
+  store[a] = randomSubmesh(a, 30, 11);
+  store[b] = randomSubmesh(b, 30, 12);
+  std::mutex mutex;
+  std::vector<visualization_msgs::MarkerArray> sent;
+  MarkerSender sender([&](const visualization_msgs::MarkerArray& markers) {
+    std::lock_guard<std::mutex> lock(mutex);
+    sent.push_back(markers);
+  });
+  std_msgs::Header header;
+  header.seq = 1;
+  sender.send(store, {a, b}, {}, header);
+  const size_t a_corners = 3 * store[a].triangles.size();
+  store[a] = randomSubmesh(a, 60, 13);  // changed after the hand-over
+  store.erase(b);
+  header.seq = 2;
+  sender.sendClear(header);
+  header.seq = 3;
+  sender.send(store, {a, b}, {}, header);  // b has no submesh now: skipped
+  sender.flush();
+  EXPECT_TRUE(sender.idle());
+  std::lock_guard<std::mutex> lock(mutex);
+  ASSERT_EQ(sent.size(), 3u);
+  ASSERT_EQ(sent[0].markers.size(), 2u);
+  EXPECT_EQ(sent[0].markers[0].header.seq, 1u);
+  EXPECT_EQ(sent[0].markers[0].action, visualization_msgs::Marker::ADD);
+  EXPECT_EQ(sent[0].markers[0].points.size(), a_corners);  // the copy, not the later submesh
+  ASSERT_EQ(sent[1].markers.size(), 1u);
+  EXPECT_EQ(sent[1].markers[0].action, visualization_msgs::Marker::DELETEALL);
+  ASSERT_EQ(sent[2].markers.size(), 1u);
+  EXPECT_EQ(sent[2].markers[0].header.seq, 3u);
+  EXPECT_EQ(sent[2].markers[0].points.size(), 3 * store[a].triangles.size());
 }
 
 TEST(DebugMarkers, FrustumCornersAtTheGivenDepth) {

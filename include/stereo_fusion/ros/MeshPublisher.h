@@ -5,10 +5,12 @@
 #include <ros/ros.h>
 #include <stereo_fusion/MeshUpdate.h>
 
+#include <memory>
 #include <optional>
 #include <vector>
 
 #include "stereo_fusion/ros/MarkerBacklog.h"
+#include "stereo_fusion/ros/MarkerSender.h"
 #include "stereo_fusion/ros/MeshMessages.h"
 #include "stereo_fusion/ros/NodeStats.h"
 #include "stereo_fusion/ros/RosParameters.h"
@@ -18,7 +20,7 @@ namespace stereo_fusion {
 
 /// Every member is touched only with the session's map lock held (inside withMapper() or the
 /// session's MapReplaced listener): the publisher's place in the mesh's change log moves with
-/// the map it reads.
+/// the map it reads. The markers are built and sent on a thread of their own (MarkerSender).
 class MeshPublisher {
  public:
   MeshPublisher(ros::NodeHandle& private_nh, const NodeConfig& node, MappingSession* session,
@@ -40,8 +42,8 @@ class MeshPublisher {
  private:
   void publishPendingLocked(Mapper& map, const ros::Time& stamp, bool force);
   void publishFullLocked(Mapper& map, const std::vector<BlockKey>& removed);
-  /// Sends the marker backlog (or every block, for a new subscriber) at
-  /// markers_publish_rate_hz unless `force`.
+  /// Hands the marker backlog (or every block, for a new subscriber) to the sender at
+  /// markers_publish_rate_hz, once it is idle, unless `force`.
   void publishMarkersLocked(Mapper& map, bool force);
   nav_msgs::Path correctedPathLocked() const;
 
@@ -53,7 +55,7 @@ class MeshPublisher {
   BlockChangeLog::Consumer consumer_ = 0;
   const Mapper* subscribed_to_ =
       nullptr;  // the mapper consumer_ belongs to (a correction swaps it)
-  MeshMarkers markers_;
+  std::unique_ptr<MarkerSender> marker_sender_;
   bool markers_full_pending_ = false;
   MarkerBacklog marker_backlog_;     // the mesh's changes ~mesh_markers has not sent yet
   std_msgs::Header markers_header_;  // of the newest mesh flush: the markers' stamp
