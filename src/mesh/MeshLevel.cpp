@@ -148,29 +148,31 @@ void refreshMeshSigns(const VoxelBlock& block, MeshBlockState* state) {
   state->sign_bits = meshSignBits(meshVoxels(block, *state, &refreshScratch()), state->level);
 }
 
-void refreshMeshLevel(const VoxelBlock& block, const MeshingParams& params, MeshBlockState* state) {
+void refreshMeshLevel(const VoxelBlock& block, const MeshingParams& params, MeshBlockState* state,
+                      std::vector<Voxel>* fill) {
   static const bool use_avx2 = avx2Supported();
   if (use_avx2)
-    refreshMeshLevelAvx2(block, params, state);
+    refreshMeshLevelAvx2(block, params, state, fill);
   else
-    refreshMeshLevelScalar(block, params, state);
+    refreshMeshLevelScalar(block, params, state, fill);
 }
 
 namespace {
 /// Sets state->seam_filled for state->level; returns the voxels to take the signs of.
 const Voxel* refreshSeamFill(const VoxelBlock& block, const MeshingParams& params,
-                             MeshBlockState* state) {
-  std::vector<Voxel>& scratch = refreshScratch();
+                             MeshBlockState* state, std::vector<Voxel>* fill) {
+  std::vector<Voxel>& out = fill != nullptr ? *fill : refreshScratch();
+  out.clear();
   state->seam_filled = params.fill_faces_from_coarser_levels &&
-                       fillFacesFromCoarserLevels(block, state->level, &scratch);
-  return state->seam_filled ? scratch.data() : block.level(state->level);
+                       fillFacesFromCoarserLevels(block, state->level, &out);
+  return state->seam_filled ? out.data() : block.level(state->level);
 }
 }  // namespace
 
 void refreshMeshLevelScalar(const VoxelBlock& block, const MeshingParams& params,
-                            MeshBlockState* state) {
+                            MeshBlockState* state, std::vector<Voxel>* fill) {
   state->level = static_cast<int8_t>(chooseMeshLevel(block, params.level_min_coverage));
-  state->sign_bits = meshSignBits(refreshSeamFill(block, params, state), state->level);
+  state->sign_bits = meshSignBits(refreshSeamFill(block, params, state, fill), state->level);
 }
 
 #ifdef STEREO_FUSION_HAVE_AVX2_REFRESH
@@ -318,7 +320,8 @@ __attribute__((target("avx2"), noinline)) uint16_t meshSignBitsAvx2(const Voxel*
 
 __attribute__((target("avx2"))) void refreshMeshLevelAvx2(const VoxelBlock& block,
                                                           const MeshingParams& params,
-                                                          MeshBlockState* state) {
+                                                          MeshBlockState* state,
+                                                          std::vector<Voxel>* fill) {
   static_assert(levelOffset(1) % 8 == 0 && levelOffset(2) % 8 == 0 && levelVoxelCount(2) == 8,
                 "every level is whole groups of eight voxels");
   // A level never updated has nothing observed: no need to count it.
@@ -327,7 +330,7 @@ __attribute__((target("avx2"))) void refreshMeshLevelAvx2(const VoxelBlock& bloc
                                     block.hasLevel(2) ? countObservedAvx2<2>(block.level(2)) : 0};
   const int level = levelFromObservedCounts(observed, params.level_min_coverage);
   state->level = static_cast<int8_t>(level);
-  const Voxel* voxels = refreshSeamFill(block, params, state);
+  const Voxel* voxels = refreshSeamFill(block, params, state, fill);
   if (level == 0) state->sign_bits = meshSignBitsAvx2<0>(voxels);
   if (level == 1) state->sign_bits = meshSignBitsAvx2<1>(voxels);
   if (level == 2) state->sign_bits = meshSignBitsAvx2<2>(voxels);
@@ -336,8 +339,8 @@ __attribute__((target("avx2"))) void refreshMeshLevelAvx2(const VoxelBlock& bloc
 #else  // not x86: only the scalar path
 
 void refreshMeshLevelAvx2(const VoxelBlock& block, const MeshingParams& params,
-                          MeshBlockState* state) {
-  refreshMeshLevelScalar(block, params, state);
+                          MeshBlockState* state, std::vector<Voxel>* fill) {
+  refreshMeshLevelScalar(block, params, state, fill);
 }
 
 #endif

@@ -113,7 +113,8 @@ MeshChanges MeshStore::remesh(const BlockOctree& map, const std::vector<Owner>& 
             map.neighbour(*owners[i].block, d & 1, (d >> 1) & 1, (d >> 2) & 1);
         if (block == nullptr || !states_[*block].seam_filled || !fill_claims_.claim(*block))
           continue;
-        fillFacesFromCoarserLevels(*block, states_[*block].level, &seam_fills_[*block]);
+        if (seam_fills_[*block].empty())  // not left by this pass's level refresh
+          fillFacesFromCoarserLevels(*block, states_[*block].level, &seam_fills_[*block]);
         filled[8 * i + d] = block;
       }
   });
@@ -165,12 +166,24 @@ MeshChanges MeshStore::update(const BlockOctree& map, const std::vector<BlockKey
   // The one search per updated block: owners and neighbours are then reached through links.
   std::vector<const VoxelBlock*> found(updated.size());
   states_.fit(map);
-  // Each level choice reads one block's voxels: independent, so in parallel.
+  seam_fills_.fit(map);
+  // The fills the refresh leaves are freed when the pass ends, thrown out of or not: one left
+  // over would be read by a later pass as its block's (remesh() frees those its owners read).
+  struct FreeFills {
+    SeamFills& fills;
+    const std::vector<const VoxelBlock*>& blocks;
+    ~FreeFills() {
+      for (const VoxelBlock* block : blocks)
+        if (block != nullptr) std::vector<Voxel>().swap(fills[*block]);
+    }
+  } free_fills{seam_fills_, found};
+  // Each level choice reads one block's voxels: independent, so in parallel. Its face fill
+  // stays for the owners (remesh() builds only the neighbours' that are missing).
   pool->parallelFor(updated.size(), 16, [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i)
       if (const VoxelBlock* block = map.find(updated[i])) {
-        refreshMeshLevel(*block, params_, &states_[*block]);
         found[i] = block;
+        refreshMeshLevel(*block, params_, &states_[*block], &seam_fills_[*block]);
       }
   });
   std::vector<const VoxelBlock*> present;

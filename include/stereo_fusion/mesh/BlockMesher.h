@@ -109,17 +109,20 @@ void refreshMeshSigns(const VoxelBlock& block, MeshBlockState* state);
 /// Sets state->level (chooseMeshLevel), its face fill (fillFacesFromCoarserLevels(), when
 /// params.fill_faces_from_coarser_levels) and then its sign bits (refreshMeshSigns()).
 /// Runs for every updated block before it is meshed, so on CPUs with AVX2 it takes the AVX2 path.
-void refreshMeshLevel(const VoxelBlock& block, const MeshingParams& params, MeshBlockState* state);
+/// With `fill`, the face-filled copy is left there (empty when the block is not seam-filled)
+/// for the pass's owners to read, instead of in a scratch of the thread.
+void refreshMeshLevel(const VoxelBlock& block, const MeshingParams& params, MeshBlockState* state,
+                      std::vector<Voxel>* fill = nullptr);
 
 /// refreshMeshLevel() as written: chooseMeshLevel(), the fill, then refreshMeshSigns(). The
 /// reference the AVX2 path is tested against.
 void refreshMeshLevelScalar(const VoxelBlock& block, const MeshingParams& params,
-                            MeshBlockState* state);
+                            MeshBlockState* state, std::vector<Voxel>* fill = nullptr);
 
 /// Same level, fill and sign bits as refreshMeshLevelScalar(), eight voxels per step, counting
 /// each level once and reading signs of the meshed voxels only. Only call it when avx2Supported().
 void refreshMeshLevelAvx2(const VoxelBlock& block, const MeshingParams& params,
-                          MeshBlockState* state);
+                          MeshBlockState* state, std::vector<Voxel>* fill = nullptr);
 
 /// Which of BlockMesher's paths mesh a neighbourhood. Production meshes with kFast; kGeneralOnly
 /// exists for tests: every box of every neighbourhood through the general path (every point
