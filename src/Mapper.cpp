@@ -118,7 +118,7 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
                                    "): a broken matcher or a wrong topic?");
   }
   // After the coherence check: rejection would leave a random frame's few coherent pixels.
-  result.rejected = outlier_rejection_.apply(frame.disparity_px, config_, &measurements_);
+  result.rejected = outlier_rejection_.apply(frame.disparity_px, config_, &measurements_, &pool_);
   result.lookup = lookup_.run(frame, measurements_, &octree_, &queue_, &missing_);
   result.lookup_ms = lookup_timer.elapsedMs();
   if (result.lookup.over_work_bound)

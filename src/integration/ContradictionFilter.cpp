@@ -167,7 +167,7 @@ ContradictionStats ContradictionFilter::apply(const StereoFrame& frame, const Bl
     for (int u = 0; u < width; ++u)
       if (row[u] && !isolated[static_cast<size_t>(v / kTile) * tiles_x + u / kTile]) row[u] = 0;
   }
-  stats.pixels_rejected = measurements->invalidate(reject_);
+  stats.pixels_rejected = measurements->invalidate(reject_, pool);
   return stats;
 }
 

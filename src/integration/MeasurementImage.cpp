@@ -129,19 +129,30 @@ void MeasurementImage::build(const StereoFrame& frame, const MapperConfig& confi
   levels_ = levelThresholdsFor(config, camera.fx() * camera.baseline(), frame.disparity_step_px);
 }
 
-uint64_t MeasurementImage::invalidate(const cv::Mat& reject) {
+uint64_t MeasurementImage::invalidate(const cv::Mat& reject, ThreadPool* pool) {
   CV_Assert(reject.type() == CV_8UC1 && reject.rows == height_ && reject.cols == width_);
   const float no_measurement = std::numeric_limits<float>::quiet_NaN();
-  uint64_t invalidated = 0;
-  for (int v = 0; v < height_; ++v) {
-    const uint8_t* row = reject.ptr<uint8_t>(v);
-    float* depth = &depth_m_[static_cast<size_t>(v) * width_];
-    for (int u = 0; u < width_; ++u) {
-      if (row[u] == 0 || depth[u] != depth[u]) continue;
-      depth[u] = no_measurement;
-      ++invalidated;
+  std::vector<uint32_t> per_row(static_cast<size_t>(height_), 0);
+  auto rows = [&](size_t begin, size_t end) {
+    for (size_t v = begin; v < end; ++v) {
+      const uint8_t* row = reject.ptr<uint8_t>(static_cast<int>(v));
+      float* depth = &depth_m_[v * width_];
+      uint32_t invalidated = 0;
+      // Branch-free, a store to every pixel: the compiler vectorises it.
+      for (int u = 0; u < width_; ++u) {
+        const bool usable_and_rejected = row[u] != 0 && depth[u] == depth[u];
+        invalidated += usable_and_rejected;
+        depth[u] = usable_and_rejected ? no_measurement : depth[u];
+      }
+      per_row[v] = invalidated;
     }
-  }
+  };
+  if (pool != nullptr)
+    pool->parallelFor(per_row.size(), 32, rows);
+  else
+    rows(0, per_row.size());
+  uint64_t invalidated = 0;
+  for (uint32_t n : per_row) invalidated += n;
   return invalidated;
 }
 

@@ -1,5 +1,6 @@
 #include "stereo_fusion/integration/OutlierRejection.h"
 
+#include <functional>
 #include <limits>
 
 #include <opencv2/calib3d.hpp>
@@ -16,7 +17,14 @@ constexpr int16_t kNoDisparity16 = -16;
 
 OutlierRejectionStats OutlierRejection::apply(const cv::Mat& disparity_px,
                                               const MapperConfig& config,
-                                              MeasurementImage* measurements) {
+                                              MeasurementImage* measurements, ThreadPool* pool) {
+  // Row bands on the pool, or all rows here.
+  auto forRows = [pool](int rows, const std::function<void(size_t, size_t)>& fn) {
+    if (pool != nullptr)
+      pool->parallelFor(static_cast<size_t>(rows), 32, fn);
+    else
+      fn(0, static_cast<size_t>(rows));
+  };
   OutlierRejectionStats stats;
   CV_Assert(disparity_px.type() == CV_32FC1 && disparity_px.rows == measurements->height() &&
             disparity_px.cols == measurements->width());
@@ -34,31 +42,35 @@ OutlierRejectionStats OutlierRejection::apply(const cv::Mat& disparity_px,
                        config.speckle_max_diff_px * 16.0, speckle_buffer_);
     cv::compare(fixed_point_, kNoDisparity16, reject_, cv::CMP_EQ);
     stats.speckle_pixels =
-        measurements->invalidate(reject_);  // counts only pixels that were usable
+        measurements->invalidate(reject_, pool);  // counts only pixels that were usable
   }
   if (config.edge_reject_radius_px > 0) {
     masked_.create(height, width, CV_32FC1);
     const float unusable = std::numeric_limits<float>::infinity();
-    for (int v = 0; v < height; ++v) {
-      const float* d = disparity_px.ptr<float>(v);
-      const float* z = depth_m + static_cast<size_t>(v) * width;
-      float* out = masked_.ptr<float>(v);
-      for (int u = 0; u < width; ++u) out[u] = z[u] == z[u] ? d[u] : unusable;
-    }
+    forRows(height, [&](size_t begin, size_t end) {
+      for (int v = static_cast<int>(begin); v < static_cast<int>(end); ++v) {
+        const float* d = disparity_px.ptr<float>(v);
+        const float* z = depth_m + static_cast<size_t>(v) * width;
+        float* out = masked_.ptr<float>(v);
+        for (int u = 0; u < width; ++u) out[u] = z[u] == z[u] ? d[u] : unusable;
+      }
+    });
     const int side = 2 * config.edge_reject_radius_px + 1;
     // erode = the window's minimum (the farthest usable disparity); outside the image it
     // counts as +inf, so borders reject nothing by themselves.
     cv::erode(masked_, farthest_, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(side, side)));
     reject_.create(height, width, CV_8UC1);
     const float jump_px = static_cast<float>(config.edge_reject_jump_px);
-    for (int v = 0; v < height; ++v) {
-      const float* d = masked_.ptr<float>(v);
-      const float* far = farthest_.ptr<float>(v);
-      uint8_t* out = reject_.ptr<uint8_t>(v);
-      // inf − inf is NaN and fails the compare: unusable pixels are never rejected.
-      for (int u = 0; u < width; ++u) out[u] = d[u] - far[u] > jump_px ? 255 : 0;
-    }
-    stats.edge_pixels = measurements->invalidate(reject_);
+    forRows(height, [&](size_t begin, size_t end) {
+      for (int v = static_cast<int>(begin); v < static_cast<int>(end); ++v) {
+        const float* d = masked_.ptr<float>(v);
+        const float* far = farthest_.ptr<float>(v);
+        uint8_t* out = reject_.ptr<uint8_t>(v);
+        // inf − inf is NaN and fails the compare: unusable pixels are never rejected.
+        for (int u = 0; u < width; ++u) out[u] = d[u] - far[u] > jump_px ? 255 : 0;
+      }
+    });
+    stats.edge_pixels = measurements->invalidate(reject_, pool);
   }
   return stats;
 }

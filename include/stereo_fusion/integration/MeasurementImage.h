@@ -41,8 +41,8 @@ class MeasurementImage {
   /// Row-major depths, width() per row, no padding.
   const float* depths() const { return depth_m_.data(); }
   /// Makes the pixels where `reject` (CV_8UC1, this size) is non-zero unusable (depth NaN);
-  /// returns how many of them had a depth (OutlierRejection).
-  uint64_t invalidate(const cv::Mat& reject);
+  /// returns how many of them had a depth (OutlierRejection). Rows in parallel on `pool`.
+  uint64_t invalidate(const cv::Mat& reject, ThreadPool* pool = nullptr);
   /// Row-major packed colours, width() per row, no padding.
   const uint32_t* colours() const { return rgb_.data(); }
 

@@ -37,9 +37,10 @@ struct OutlierRejectionStats {
 class OutlierRejection {
  public:
   /// Applies both rules (each off when its size parameter is 0) to the usable pixels of
-  /// `measurements`, built from `disparity_px` (CV_32FC1, same size).
+  /// `measurements`, built from `disparity_px` (CV_32FC1, same size); the edge rule's per-pixel
+  /// passes in rows on `pool` when given (the same result).
   OutlierRejectionStats apply(const cv::Mat& disparity_px, const MapperConfig& config,
-                              MeasurementImage* measurements);
+                              MeasurementImage* measurements, ThreadPool* pool = nullptr);
 
  private:
   cv::Mat usable_;       // CV_8U: 255 where the measurement image holds a depth (speckles)

@@ -148,3 +148,34 @@ TEST(OutlierRejection, BothRulesOffChangeNothing) {
   EXPECT_EQ(r.stats.edge_pixels + r.stats.speckle_pixels, 0u);
   EXPECT_EQ(cv::countNonZero(r.usable), kWidth * kHeight);
 }
+
+// The per-pixel passes run in row bands on a pool: the same depths and counts as on one thread,
+// on a large image of random steps (many edges, speckles and unusable pixels).
+TEST(OutlierRejection, ThePoolsRowBandsGiveTheSameResultAsOneThread) {
+  cv::Mat disparity(480, 640, CV_32FC1);
+  cv::RNG rng(7);
+  for (int v = 0; v < disparity.rows; ++v)
+    for (int u = 0; u < disparity.cols; ++u) {
+      const int cell = (v / 5) * 131 + (u / 7);  // piecewise constant patches, then noise
+      disparity.at<float>(v, u) =
+          (cell % 11 == 0) ? 0.0f : 5.0f + static_cast<float>(cell % 17) + rng.uniform(0.0f, 0.3f);
+    }
+  const MapperConfig config = rejectionConfig(20, 1);
+  ThreadPool one(1), two(2);
+  MeasurementImage serial, banded;
+  serial.build(disparity, cv::Mat(), kFb, 0.1f, 100.0f, &one);
+  banded.build(disparity, cv::Mat(), kFb, 0.1f, 100.0f, &one);
+  OutlierRejection a, b;
+  const OutlierRejectionStats s = a.apply(disparity, config, &serial);
+  const OutlierRejectionStats p = b.apply(disparity, config, &banded, &two);
+  EXPECT_GT(s.edge_pixels, 1000u);
+  EXPECT_EQ(p.edge_pixels, s.edge_pixels);
+  EXPECT_EQ(p.speckle_pixels, s.speckle_pixels);
+  const size_t n = static_cast<size_t>(disparity.rows) * disparity.cols;
+  size_t same = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const float x = serial.depths()[i], y = banded.depths()[i];
+    same += (std::isnan(x) && std::isnan(y)) || x == y;
+  }
+  EXPECT_EQ(same, n);
+}
