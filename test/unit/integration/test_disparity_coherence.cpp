@@ -65,6 +65,48 @@ TEST(DisparityCoherence, CountsDoNotDependOnTheThreads) {
   }
 }
 
+// Against the rule written out pixel by pixel: a usable pixel is coherent if a usable one of
+// its 8 neighbours is within the tolerance. Random disparities near the tolerance, a quarter of
+// them unusable (0, NaN or beyond the depth range), on an image whose inside and border the
+// function treats apart.
+TEST(DisparityCoherence, CountsTheRuleWrittenOutPixelByPixel) {
+  cv::Mat disparity(53, 71, CV_32F);
+  cv::RNG rng(11);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (int v = 0; v < disparity.rows; ++v)
+    for (int u = 0; u < disparity.cols; ++u) {
+      const int kind = rng.uniform(0, 12);
+      disparity.at<float>(v, u) = kind == 0   ? 0.0f
+                                  : kind == 1 ? nan
+                                  : kind == 2 ? 0.1f  // 10 m: beyond 4 m
+                                              : 1.0f + rng.uniform(0.0f, 1.2f);
+    }
+  auto usable = [&](int v, int u) {
+    const float d = disparity.at<float>(v, u);
+    return d >= 0.25f && d <= 4.0f;  // z = 1 / d within 0.25..4 m
+  };
+  size_t usable_pixels = 0, coherent_pixels = 0;
+  for (int v = 0; v < disparity.rows; ++v)
+    for (int u = 0; u < disparity.cols; ++u) {
+      if (!usable(v, u)) continue;
+      ++usable_pixels;
+      bool agrees = false;
+      for (int nv = v - 1; nv <= v + 1; ++nv)
+        for (int nu = u - 1; nu <= u + 1; ++nu)
+          if ((nv != v || nu != u) && nv >= 0 && nu >= 0 && nv < disparity.rows &&
+              nu < disparity.cols && usable(nv, nu) &&
+              std::fabs(disparity.at<float>(nv, nu) - disparity.at<float>(v, u)) <=
+                  kCoherenceTolerancePx)
+            agrees = true;
+      coherent_pixels += agrees;
+    }
+  const DisparityCoherence c = coherenceOf(disparity, 2);
+  EXPECT_EQ(c.usable_pixels, usable_pixels);
+  EXPECT_EQ(c.coherent_pixels, coherent_pixels);
+  EXPECT_GT(coherent_pixels, usable_pixels / 4);
+  EXPECT_LT(coherent_pixels, usable_pixels);
+}
+
 TEST(DisparityCoherence, SeparatesANoisySurfaceFromRandomDisparities) {
   // A rendered floor and sphere with 0.3 px of Gaussian disparity noise (twice the default
   // disparity_noise_px) against disparities drawn uniformly over 1–64 px.
