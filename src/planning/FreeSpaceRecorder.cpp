@@ -9,7 +9,8 @@ namespace stereo_fusion {
 
 namespace {
 
-constexpr int kTilePx = 8;
+constexpr int kTileShift = 3;
+constexpr int kTilePx = 1 << kTileShift;
 /// Edge of the octree's roots in cells: 4³ planning blocks.
 constexpr int kRootCells = 16;
 constexpr int kRootBlocks = kRootCells / PlanningBlock::kSide;
@@ -31,7 +32,7 @@ void FreeSpaceRecorder::buildTiles(const MeasurementImage& measurements) {
 
   pyramid_.resize(1);
   TileLevel& base = pyramid_[0];
-  base.tile_px = kTilePx;
+  base.tile_shift = kTileShift;
   base.tiles_x = (width + kTilePx - 1) / kTilePx;
   base.tiles_y = (height + kTilePx - 1) / kTilePx;
   base.min_free_m.assign(static_cast<size_t>(base.tiles_x) * base.tiles_y, 0.0f);
@@ -71,7 +72,7 @@ void FreeSpaceRecorder::buildTiles(const MeasurementImage& measurements) {
   while (pyramid_.back().tiles_x > 1 || pyramid_.back().tiles_y > 1) {
     const TileLevel& fine = pyramid_.back();
     TileLevel coarse;
-    coarse.tile_px = fine.tile_px * 2;
+    coarse.tile_shift = fine.tile_shift + 1;
     coarse.tiles_x = (fine.tiles_x + 1) / 2;
     coarse.tiles_y = (fine.tiles_y + 1) / 2;
     coarse.min_free_m.assign(static_cast<size_t>(coarse.tiles_x) * coarse.tiles_y,
@@ -238,14 +239,15 @@ FreeSpaceStats FreeSpaceRecorder::record(
         const int py0 = pixel(v_lo, height), py1 = pixel(v_hi, height);
         int level = 0;
         while (level < top_level &&
-               ((px1 / pyramid_[level].tile_px - px0 / pyramid_[level].tile_px > 3) ||
-                (py1 / pyramid_[level].tile_px - py0 / pyramid_[level].tile_px > 3)))
+               (((px1 >> pyramid_[level].tile_shift) - (px0 >> pyramid_[level].tile_shift) > 3) ||
+                ((py1 >> pyramid_[level].tile_shift) - (py0 >> pyramid_[level].tile_shift) > 3)))
           ++level;
         const TileLevel& tiles = pyramid_[level];
         float min_free = std::numeric_limits<float>::infinity(), max_free = 0.0f,
               max_min_free = 0.0f;
-        for (int ty = py0 / tiles.tile_px; ty <= py1 / tiles.tile_px; ++ty)
-          for (int tx = px0 / tiles.tile_px; tx <= px1 / tiles.tile_px; ++tx) {
+        // (Pixels are ≥ 0: a shift is their division by the tile size, without its cost.)
+        for (int ty = py0 >> tiles.tile_shift; ty <= py1 >> tiles.tile_shift; ++ty)
+          for (int tx = px0 >> tiles.tile_shift; tx <= px1 >> tiles.tile_shift; ++tx) {
             const size_t t = static_cast<size_t>(ty) * tiles.tiles_x + tx;
             min_free = std::min(min_free, tiles.min_free_m[t]);
             max_free = std::max(max_free, tiles.max_free_m[t]);

@@ -51,7 +51,8 @@ class FreeSpaceRecorder {
 
  private:
   struct TileLevel {
-    int tile_px = 0, tiles_x = 0, tiles_y = 0;
+    int tile_shift = 0;  // tiles are 2^tile_shift px square (pixel >> shift: its tile)
+    int tiles_x = 0, tiles_y = 0;
     // Per tile: the smallest and largest free depth of its pixels, and the largest of its
     // finest tiles' smallest ones.
     std::vector<float> min_free_m, max_free_m, max_min_free_m;
