@@ -147,10 +147,7 @@ uint64_t MeasurementImage::invalidate(const cv::Mat& reject, ThreadPool* pool) {
       per_row[v] = invalidated;
     }
   };
-  if (pool != nullptr)
-    pool->parallelFor(per_row.size(), 32, rows);
-  else
-    rows(0, per_row.size());
+  parallelForOrHere(pool, per_row.size(), 32, rows);
   uint64_t invalidated = 0;
   for (uint32_t n : per_row) invalidated += n;
   return invalidated;

@@ -1,6 +1,5 @@
 #include "stereo_fusion/integration/OutlierRejection.h"
 
-#include <functional>
 #include <limits>
 
 #include <opencv2/calib3d.hpp>
@@ -18,13 +17,6 @@ constexpr int16_t kNoDisparity16 = -16;
 OutlierRejectionStats OutlierRejection::apply(const cv::Mat& disparity_px,
                                               const MapperConfig& config,
                                               MeasurementImage* measurements, ThreadPool* pool) {
-  // Row bands on the pool, or all rows here.
-  auto forRows = [pool](int rows, const std::function<void(size_t, size_t)>& fn) {
-    if (pool != nullptr)
-      pool->parallelFor(static_cast<size_t>(rows), 32, fn);
-    else
-      fn(0, static_cast<size_t>(rows));
-  };
   OutlierRejectionStats stats;
   CV_Assert(disparity_px.type() == CV_32FC1 && disparity_px.rows == measurements->height() &&
             disparity_px.cols == measurements->width());
@@ -47,7 +39,7 @@ OutlierRejectionStats OutlierRejection::apply(const cv::Mat& disparity_px,
   if (config.edge_reject_radius_px > 0) {
     masked_.create(height, width, CV_32FC1);
     const float unusable = std::numeric_limits<float>::infinity();
-    forRows(height, [&](size_t begin, size_t end) {
+    parallelForOrHere(pool, static_cast<size_t>(height), 32, [&](size_t begin, size_t end) {
       for (int v = static_cast<int>(begin); v < static_cast<int>(end); ++v) {
         const float* d = disparity_px.ptr<float>(v);
         const float* z = depth_m + static_cast<size_t>(v) * width;
@@ -61,7 +53,7 @@ OutlierRejectionStats OutlierRejection::apply(const cv::Mat& disparity_px,
     cv::erode(masked_, farthest_, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(side, side)));
     reject_.create(height, width, CV_8UC1);
     const float jump_px = static_cast<float>(config.edge_reject_jump_px);
-    forRows(height, [&](size_t begin, size_t end) {
+    parallelForOrHere(pool, static_cast<size_t>(height), 32, [&](size_t begin, size_t end) {
       for (int v = static_cast<int>(begin); v < static_cast<int>(end); ++v) {
         const float* d = masked_.ptr<float>(v);
         const float* far = farthest_.ptr<float>(v);

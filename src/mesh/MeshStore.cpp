@@ -53,10 +53,7 @@ std::vector<MeshStore::Owner> MeshStore::ownersOf(const BlockOctree& map,
           candidates[8 * i + d] = {present[i]->key.offset(dx, dy, dz), owner};
       }
   };
-  if (pool != nullptr)
-    pool->parallelFor(present.size(), 64, claim);
-  else
-    claim(0, present.size());
+  parallelForOrHere(pool, present.size(), 64, claim);
   std::vector<Owner> owners;
   owners.reserve(2 * present.size() + absent.size());
   for (const Owner& owner : candidates)
@@ -80,10 +77,7 @@ std::vector<BlockKey> MeshStore::affectedOwners(const BlockOctree& map,
   auto search = [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i) found[i] = map.find(updated[i]);
   };
-  if (pool != nullptr)
-    pool->parallelFor(updated.size(), 64, search);
-  else
-    search(0, updated.size());
+  parallelForOrHere(pool, updated.size(), 64, search);
   std::vector<const VoxelBlock*> present;
   std::vector<BlockKey> absent;
   splitByPresence(updated, found, &present, &absent);

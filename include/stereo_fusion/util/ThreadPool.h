@@ -51,4 +51,13 @@ class ThreadPool {
   bool stopping_ = false;
 };
 
+/// pool->parallelFor(n, grain, fn) when a pool is given; otherwise fn(0, n) on this thread.
+inline void parallelForOrHere(ThreadPool* pool, size_t n, size_t grain,
+                              const std::function<void(size_t, size_t)>& fn) {
+  if (pool != nullptr)
+    pool->parallelFor(n, grain, fn);
+  else
+    fn(0, n);
+}
+
 }  // namespace stereo_fusion
