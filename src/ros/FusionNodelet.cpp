@@ -17,6 +17,7 @@ FusionNodelet::~FusionNodelet() {
 }
 
 void FusionNodelet::onInit() {
+  queues_.hold({&getSTCallbackQueue(), &getMTCallbackQueue()});
   ros::NodeHandle& nh = getNodeHandle();
   ros::NodeHandle& pnh = getPrivateNodeHandle();
   std::string error;

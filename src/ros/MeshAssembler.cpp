@@ -10,6 +10,7 @@
 namespace stereo_fusion {
 
 void MeshAssembler::onInit() {
+  queues_.hold({&getSTCallbackQueue(), &getMTCallbackQueue()});
   ros::NodeHandle& nh = getNodeHandle();
   ros::NodeHandle& pnh = getPrivateNodeHandle();
   pnh.param("publish_markers", publish_markers_, publish_markers_);

@@ -20,10 +20,12 @@
 #include <mutex>
 
 #include "../unit/TestSupport.h"
+#include "NodeletUnload.h"
 #include "RosTestSupport.h"
 #include "readers/ObjReader.h"
 #include "readers/PlyReader.h"
 #include "stereo_fusion/io/MapFile.h"
+#include "stereo_fusion/ros/FusionNodelet.h"
 #include "stereo_fusion/ros/MeshMessages.h"
 #include "stereo_fusion/ros/MessageConversions.h"
 #include "stereo_fusion/ros/RosParameters.h"
@@ -935,6 +937,11 @@ TEST(NodeParameters, MeshEncodingLabelsAreTheMessages) {
     return;
   }
   FAIL() << "no mesh_encoding in the node registry";
+}
+
+// Last in this file: the probe runs beside the launched nodelet, in a namespace of its own.
+TEST(NodeletUnload, QueuesLiveUntilTheNodeletIsDestroyed) {
+  test::expectQueuesLiveUntilTheNodeletIsDestroyed<FusionNodelet>("/queue_probe/stereo_fusion");
 }
 
 int main(int argc, char** argv) { return test::runRosTests(argc, argv, "stereo_fusion_rostest"); }

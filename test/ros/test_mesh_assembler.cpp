@@ -16,9 +16,11 @@
 #include <map>
 
 #include "../unit/TestSupport.h"
+#include "NodeletUnload.h"
 #include "RosTestSupport.h"
 #include "readers/ObjReader.h"
 #include "stereo_fusion/Mapper.h"
+#include "stereo_fusion/ros/MeshAssembler.h"
 #include "stereo_fusion/ros/MeshMessages.h"
 #include "stereo_fusion/ros/MessageConversions.h"
 #include "stereo_fusion/ros/RosParameters.h"
@@ -372,6 +374,11 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   EXPECT_EQ(assembler_diagnostics.value("full mesh requests"), 4);
   EXPECT_EQ(assembler_diagnostics.value("sequence gaps"), 1);
   EXPECT_EQ(assembler_diagnostics.value("malformed updates"), 0);
+}
+
+// Last in this file: the probe runs beside the launched assembler, in a namespace of its own.
+TEST(NodeletUnload, QueuesLiveUntilTheNodeletIsDestroyed) {
+  test::expectQueuesLiveUntilTheNodeletIsDestroyed<MeshAssembler>("/queue_probe/mesh_assembler");
 }
 
 int main(int argc, char** argv) {

@@ -11,6 +11,7 @@
 
 #include <memory>
 
+#include "stereo_fusion/ros/CallbackQueueHold.h"
 #include "stereo_fusion/ros/FrameInput.h"
 #include "stereo_fusion/ros/FusionDiagnostics.h"
 #include "stereo_fusion/ros/NodeStats.h"
@@ -33,6 +34,7 @@ class FusionNodelet : public nodelet::Nodelet {
  private:
   void onInit() override;
 
+  CallbackQueueHold queues_;  // first: destroyed after everything registered on the queues
   NodeConfig node_config_;
   MapperConfig mapper_config_;
   std::unique_ptr<MappingSession> session_;

@@ -15,6 +15,7 @@
 #include <unordered_map>
 
 #include "stereo_fusion/mesh/SubMesh.h"
+#include "stereo_fusion/ros/CallbackQueueHold.h"
 #include "stereo_fusion/ros/MeshMessages.h"
 
 namespace stereo_fusion {
@@ -50,6 +51,7 @@ class MeshAssembler : public nodelet::Nodelet {
   bool getFullMesh(GetFullMesh::Request& req, GetFullMesh::Response& res);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
 
+  CallbackQueueHold queues_;  // first: destroyed after everything registered on the queues
   std::mutex mutex_;  // the node handle is single-threaded; this guards against the timer anyway
   std::unordered_map<BlockKey, SubMesh, BlockKeyHash> mesh_;
   /// The robot's texture patches (image and UVs only), kept in step with mesh_ by applyMeshUpdate.
