@@ -25,6 +25,12 @@ void splitByPresence(const std::vector<BlockKey>& keys, const std::vector<const 
       absent->push_back(keys[i]);
   }
 }
+
+/// Frees the face fills of `blocks` (nullptr entries skipped): they live for one pass only.
+void freeFills(const std::vector<const VoxelBlock*>& blocks, SeamFills* fills) {
+  for (const VoxelBlock* block : blocks)
+    if (block != nullptr) std::vector<Voxel>().swap((*fills)[*block]);
+}
 }  // namespace
 
 void MeshStore::PassClaims::begin(const BlockOctree& map) {
@@ -121,8 +127,7 @@ MeshChanges MeshStore::remesh(const BlockOctree& map, const std::vector<Owner>& 
       if (!work.empty()) remeshed[i] = SubMesh(work);
     }
   });
-  for (const VoxelBlock* block : filled)
-    if (block != nullptr) std::vector<Voxel>().swap(seam_fills_[*block]);
+  freeFills(filled, &seam_fills_);
   // The submeshes kept so far are replaced in place, in parallel (no entry is added or erased
   // meanwhile); the table itself changes only below, for owners that gain or lose their
   // submesh. The replaced ones are freed with `remeshed`, on this thread: freeing them on the
@@ -166,10 +171,7 @@ MeshChanges MeshStore::update(const BlockOctree& map, const std::vector<BlockKey
   struct FreeFills {
     SeamFills& fills;
     const std::vector<const VoxelBlock*>& blocks;
-    ~FreeFills() {
-      for (const VoxelBlock* block : blocks)
-        if (block != nullptr) std::vector<Voxel>().swap(fills[*block]);
-    }
+    ~FreeFills() { freeFills(blocks, &fills); }
   } free_fills{seam_fills_, found};
   // Each level choice reads one block's voxels: independent, so in parallel. Its face fill
   // stays for the owners (remesh() builds only the neighbours' that are missing).

@@ -35,17 +35,17 @@ void MarkerSender::send(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash
   batch.changed = changed;
   batch.removed = removed;
   batch.header = header;
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    queue_.push_back(std::move(batch));
-  }
-  wake_.notify_one();
+  enqueue(std::move(batch));
 }
 
 void MarkerSender::sendClear(const std_msgs::Header& header) {
   Batch batch;
   batch.clear = true;
   batch.header = header;
+  enqueue(std::move(batch));
+}
+
+void MarkerSender::enqueue(Batch&& batch) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     queue_.push_back(std::move(batch));

@@ -47,6 +47,7 @@ class MarkerSender {
     std::vector<BlockKey> changed, removed;
     std_msgs::Header header;
   };
+  void enqueue(Batch&& batch);
   void run();
 
   Publish publish_;
