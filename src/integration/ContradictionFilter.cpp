@@ -105,9 +105,9 @@ ContradictionStats ContradictionFilter::apply(const StereoFrame& frame, const Bl
       }
   });
   std::vector<float> trusted(tiles, -1.0f);
-  {
+  pool->parallelFor(static_cast<size_t>(tiles_y), 4, [&](size_t begin, size_t end) {
     std::vector<float> around;
-    for (int ty = 0; ty < tiles_y; ++ty)
+    for (int ty = static_cast<int>(begin); ty < static_cast<int>(end); ++ty)
       for (int tx = 0; tx < tiles_x; ++tx) {
         const float far_m = tile_far_m_[ty * tiles_x + tx];
         if (far_m < 0.0f) continue;
@@ -118,12 +118,11 @@ ContradictionStats ContradictionFilter::apply(const StereoFrame& frame, const Bl
               around.push_back(tile_median_m_[y * tiles_x + x]);
         if (around.empty()) continue;
         const float m = median(&around);
-        if (m <= far_m + margin(m)) {
-          trusted[ty * tiles_x + tx] = far_m;
-          ++stats.tiles_with_surface;
-        }
+        if (m <= far_m + margin(m)) trusted[ty * tiles_x + tx] = far_m;
       }
-  }
+  });
+  stats.tiles_with_surface = static_cast<uint64_t>(
+      std::count_if(trusted.begin(), trusted.end(), [](float far_m) { return far_m >= 0.0f; }));
 
   // 3. Behind, per tile row in parallel (a row of tiles owns its pixels and counters).
   tile_valid_.assign(tiles, 0);
@@ -150,23 +149,27 @@ ContradictionStats ContradictionFilter::apply(const StereoFrame& frame, const Bl
   // 4. Isolated: few of the measurements around are behind as well.
   std::vector<uint8_t> isolated(tiles, 0);
   const int w = kShareWindowTiles;
-  for (int ty = 0; ty < tiles_y; ++ty)
-    for (int tx = 0; tx < tiles_x; ++tx) {
-      uint64_t valid = 0, behind = 0;
-      for (int y = std::max(0, ty - w); y <= std::min(tiles_y - 1, ty + w); ++y)
-        for (int x = std::max(0, tx - w); x <= std::min(tiles_x - 1, tx + w); ++x) {
-          valid += tile_valid_[y * tiles_x + x];
-          behind += tile_behind_[y * tiles_x + x];
-        }
-      stats.pixels_behind += tile_behind_[ty * tiles_x + tx];
-      isolated[ty * tiles_x + tx] = static_cast<double>(behind) <=
-                                    config.contradiction_max_share * static_cast<double>(valid);
+  pool->parallelFor(static_cast<size_t>(tiles_y), 4, [&](size_t begin, size_t end) {
+    for (int ty = static_cast<int>(begin); ty < static_cast<int>(end); ++ty)
+      for (int tx = 0; tx < tiles_x; ++tx) {
+        uint64_t valid = 0, behind = 0;
+        for (int y = std::max(0, ty - w); y <= std::min(tiles_y - 1, ty + w); ++y)
+          for (int x = std::max(0, tx - w); x <= std::min(tiles_x - 1, tx + w); ++x) {
+            valid += tile_valid_[y * tiles_x + x];
+            behind += tile_behind_[y * tiles_x + x];
+          }
+        isolated[ty * tiles_x + tx] = static_cast<double>(behind) <=
+                                      config.contradiction_max_share * static_cast<double>(valid);
+      }
+    // Then the rejections of these tile rows that are not isolated are withdrawn.
+    for (int v = static_cast<int>(begin) * kTile;
+         v < std::min(height, static_cast<int>(end) * kTile); ++v) {
+      uint8_t* row = reject_.ptr<uint8_t>(v);
+      for (int u = 0; u < width; ++u)
+        if (row[u] && !isolated[static_cast<size_t>(v / kTile) * tiles_x + u / kTile]) row[u] = 0;
     }
-  for (int v = 0; v < height; ++v) {
-    uint8_t* row = reject_.ptr<uint8_t>(v);
-    for (int u = 0; u < width; ++u)
-      if (row[u] && !isolated[static_cast<size_t>(v / kTile) * tiles_x + u / kTile]) row[u] = 0;
-  }
+  });
+  for (uint32_t behind : tile_behind_) stats.pixels_behind += behind;
   stats.pixels_rejected = measurements->invalidate(reject_, pool);
   return stats;
 }
