@@ -266,8 +266,13 @@ void FrameInput::processFrame(const QueuedFrame& f, double* publish_ms) {
     ++stats_->reanchored;
     ROS_WARN("stereo_fusion: %s", r.note.c_str());
   }
+  bool frames_waiting;
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    frames_waiting = !queue_.empty();
+  }
   const Timer publishing;
-  publisher_->publishPending(header.stamp, false);
+  publisher_->publishPending(header.stamp, false, frames_waiting);
   *publish_ms = publishing.elapsedMs();
 }
 

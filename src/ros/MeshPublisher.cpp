@@ -18,11 +18,6 @@ std::vector<BlockKey> allBlocks(const Mapper& map) {
   return all;
 }
 
-/// Whether a publisher limited to `rate_hz` (0: unlimited) may send at `now` after `last`.
-bool due(const ros::WallTime& now, const ros::WallTime& last, double rate_hz) {
-  return rate_hz <= 0 || (now - last).toSec() >= 1.0 / rate_hz;
-}
-
 /// `keys` (sorted) without those in `present` (sorted).
 std::vector<BlockKey> withoutKeysOf(const std::vector<BlockKey>& keys,
                                     const std::vector<BlockKey>& present) {
@@ -35,9 +30,12 @@ std::vector<BlockKey> withoutKeysOf(const std::vector<BlockKey>& keys,
 
 MeshPublisher::MeshPublisher(ros::NodeHandle& pnh, const NodeConfig& node, MappingSession* session,
                              NodeStats* stats)
-    : node_(node), session_(session), stats_(stats) {
+    : node_(node),
+      session_(session),
+      stats_(stats),
+      markers_schedule_(node.markers_publish_rate_hz),
+      mesh_schedule_(node.mesh_publish_rate_hz) {
   session_id_ = ros::WallTime::now().toNSec();
-  last_publish_ = last_markers_ = ros::WallTime(0, 0);
   markers_header_.frame_id = node_.world_frame;
   session_->withMapper([&](Mapper& map) {
     consumer_ = map.subscribeToMeshChanges("mesh_update publisher");
@@ -95,18 +93,23 @@ void MeshPublisher::catchUpLocked(Mapper& map) {
   // The planning layer follows at its own rate (PlanningPublisher, planning_publish_rate_hz).
 }
 
-void MeshPublisher::publishPending(const ros::Time& stamp, bool force) {
-  session_->withMapper([&](Mapper& map) { publishPendingLocked(map, stamp, force); });
+void MeshPublisher::publishPending(const ros::Time& stamp, bool force, bool frames_waiting) {
+  session_->withMapper(
+      [&](Mapper& map) { publishPendingLocked(map, stamp, force, frames_waiting); });
 }
 
-void MeshPublisher::publishPendingLocked(Mapper& map, const ros::Time& stamp, bool force) {
+void MeshPublisher::publishPendingLocked(Mapper& map, const ros::Time& stamp, bool force,
+                                         bool frames_waiting) {
   {
     if (map.blocksAwaitingMesh() == 0 && map.pendingMeshChanges(consumer_) == 0)
       return publishMarkersLocked(map, force);  // the backlog may still wait for its turn
-    const ros::WallTime now = ros::WallTime::now();
-    if (!force && !due(now, last_publish_, node_.mesh_publish_rate_hz))
-      return publishMarkersLocked(map, force);
-    last_publish_ = now;
+    if (!force) {
+      const double now_s = ros::WallTime::now().toSec();
+      // A frame waiting in the queue is fused first: this pass then carries it too, where
+      // meshing now would make it wait a whole period more (and the queue behind the pass).
+      if (!mesh_schedule_.due(now_s, frames_waiting)) return publishMarkersLocked(map, force);
+      mesh_schedule_.sent(now_s);
+    }
     catchUpLocked(map);
     std_msgs::Header header;
     header.frame_id = node_.world_frame;
@@ -146,7 +149,7 @@ std::optional<MeshUpdate> MeshPublisher::tryFullMesh() {
   session_->tryWithMapper([&](Mapper& map) {
     // Frames already fused are in the answer even if their meshing waits for the publish rate:
     // their changes go out as an update first, so the full mesh's sequence covers them.
-    publishPendingLocked(map, ros::Time(0), true);
+    publishPendingLocked(map, ros::Time(0), true, false);
     std_msgs::Header header;
     header.frame_id = node_.world_frame;
     header.stamp = ros::Time::now();
@@ -205,12 +208,13 @@ void MeshPublisher::publishMarkersLocked(Mapper& map, bool force) {
     return;
   }
   if (marker_backlog_.empty() && !markers_full_pending_) return;
-  const ros::WallTime now = ros::WallTime::now();
-  if (!force && !markers_full_pending_ && !due(now, last_markers_, node_.markers_publish_rate_hz))
-    return;
-  // The previous arrays not out yet: the backlog goes on merging (what must go, queues).
-  if (!force && !markers_full_pending_ && !marker_sender_->idle()) return;
-  last_markers_ = now;
+  if (!force && !markers_full_pending_) {
+    const double now_s = ros::WallTime::now().toSec();
+    if (!markers_schedule_.due(now_s)) return;
+    // The previous arrays not out yet: the backlog goes on merging (what must go, queues).
+    if (!marker_sender_->idle()) return;
+    markers_schedule_.sent(now_s);
+  }
   std::vector<BlockKey> changed, removed;
   marker_backlog_.take(&changed, &removed);
   if (markers_full_pending_) {

@@ -50,8 +50,9 @@ const Table& table() {
         member(&NodeConfig::max_stamp_ahead_s));
     t.addDouble(
         "mesh_publish_rate_hz", "Hz", 0.0, true, 1000.0,
-        "Rate of meshing and of `~mesh_update` (`~mesh_markers`: markers_publish_rate_hz). 0 = "
-        "mesh and publish after "
+        "Rate of meshing and of `~mesh_update` (`~mesh_markers`: markers_publish_rate_hz), on "
+        "average: a pass falls due a period after the previous one fell due, and one due while "
+        "frames wait in the queue waits for them (up to a period). 0 = mesh and publish after "
         "every frame; with texture = patches it meshes after every frame whatever the rate (a "
         "patch is cut from the frame that changed its submesh).",
         member(&NodeConfig::mesh_publish_rate_hz));

@@ -15,6 +15,7 @@
 #include "stereo_fusion/ros/NodeStats.h"
 #include "stereo_fusion/ros/RosParameters.h"
 #include "stereo_fusion/session/MappingSession.h"
+#include "stereo_fusion/util/RateSchedule.h"
 
 namespace stereo_fusion {
 
@@ -29,8 +30,9 @@ class MeshPublisher {
   /// A frame was fused (path, frustum, latency): call with the map lock held.
   void frameFusedLocked(const StereoFrame& frame, const std_msgs::Header& header);
   /// Brings the mesh up to date and sends what changed, at most at
-  /// mesh_publish_rate_hz unless `force`. `stamp` 0: the newest fused frame's.
-  void publishPending(const ros::Time& stamp, bool force);
+  /// mesh_publish_rate_hz unless `force`; while `frames_waiting` (to be fused), a pass due waits
+  /// for them, up to a period. `stamp` 0: the newest fused frame's.
+  void publishPending(const ros::Time& stamp, bool force, bool frames_waiting = false);
   /// Meshes what fusion changed since the last pass (map lock held; save_mesh).
   void catchUpLocked(Mapper& map);
   /// The whole mesh as one full MeshUpdate whose sequence the published updates continue;
@@ -40,7 +42,7 @@ class MeshPublisher {
   void onMapReplaced(const MapReplaced& replaced);
 
  private:
-  void publishPendingLocked(Mapper& map, const ros::Time& stamp, bool force);
+  void publishPendingLocked(Mapper& map, const ros::Time& stamp, bool force, bool frames_waiting);
   void publishFullLocked(Mapper& map, const std::vector<BlockKey>& removed);
   /// Hands the marker backlog (or every block, for a new subscriber) to the sender at
   /// markers_publish_rate_hz, once it is idle, unless `force`.
@@ -59,12 +61,12 @@ class MeshPublisher {
   bool markers_full_pending_ = false;
   MarkerBacklog marker_backlog_;     // the mesh's changes ~mesh_markers has not sent yet
   std_msgs::Header markers_header_;  // of the newest mesh flush: the markers' stamp
-  ros::WallTime last_markers_;
+  RateSchedule markers_schedule_;    // markers_publish_rate_hz
   uint64_t sequence_ = 0;
   /// MeshUpdate::session of this run (wall clock at start, ns): tells subscribers that a
   /// restarted nodelet's sequence numbers begin again.
   uint64_t session_id_ = 0;
-  ros::WallTime last_publish_;
+  RateSchedule mesh_schedule_;                   // mesh_publish_rate_hz: meshing and ~mesh_update
   static constexpr size_t kMaxPathPoses = 4000;  // ~/camera_path length bound
   nav_msgs::Path path_;
   PoseCorrection correction_;  // the latest applied, for the path
