@@ -69,6 +69,15 @@ bool decodeTexture(const std::vector<uint8_t>& png, cv::Mat* rgb) {
   return true;
 }
 
+/// `from`'s elements (each three `T`s, packed) as one flat array: one copy, not a push per value
+/// (at 1 cm a 10 Hz update took 2.8 ms to build element by element).
+template <typename T, typename Triple>
+void assignFlat(const std::vector<Triple>& from, std::vector<T>* to) {
+  static_assert(sizeof(Triple) == 3 * sizeof(T), "a triple of T, without padding");
+  const T* first = from.empty() ? nullptr : &from.front()[0];
+  to->assign(first, first + 3 * from.size());
+}
+
 /// Fills the compact fields of `b` from `s`; false (b's compact fields then unspecified) when a
 /// vertex is outside the quantised range or there are too many vertices for uint16 indices.
 bool encodeCompact(const SubMesh& s, double block_size_m, MeshBlock* b) {
@@ -107,8 +116,7 @@ MeshBlock toMeshBlock(const SubMesh& s, MeshEncoding encoding, double block_size
     encodeTexture(*patch, &b);
   if (encoding == MeshEncoding::kCompact) {
     if (encodeCompact(s, block_size_m, &b)) {
-      b.colors.reserve(3 * s.colors.size());
-      for (const auto& c : s.colors) b.colors.insert(b.colors.end(), c.begin(), c.end());
+      assignFlat(s.colors, &b.colors);
       return b;
     }
     b.position_step_m = 0.0f;  // does not fit: this block goes as float32
@@ -116,18 +124,10 @@ MeshBlock toMeshBlock(const SubMesh& s, MeshEncoding encoding, double block_size
     b.normals_q.clear();
     b.triangles_q.clear();
   }
-  b.vertices.reserve(3 * s.positions.size());
-  b.normals.reserve(3 * s.normals.size());
-  b.colors.reserve(3 * s.colors.size());
-  for (size_t v = 0; v < s.positions.size(); ++v) {
-    for (int k = 0; k < 3; ++k) {
-      b.vertices.push_back(s.positions[v][k]);
-      b.normals.push_back(s.normals[v][k]);
-      b.colors.push_back(s.colors[v][k]);
-    }
-  }
-  b.triangles.reserve(3 * s.triangles.size());
-  for (const auto& t : s.triangles) b.triangles.insert(b.triangles.end(), t.begin(), t.end());
+  assignFlat(s.positions, &b.vertices);
+  assignFlat(s.normals, &b.normals);
+  assignFlat(s.colors, &b.colors);
+  assignFlat(s.triangles, &b.triangles);
   return b;
 }
 

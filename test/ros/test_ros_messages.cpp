@@ -50,6 +50,29 @@ MeshUpdate updateOf(const SubMesh& s, MeshEncoding encoding) {
 
 }  // namespace
 
+// float32: each vertex's x y z, normal and colour in vertex order, the triangles' indices in
+// triangle order — hand-set values, read back exactly.
+TEST(Float32Encoding, FieldsAreTheSubmeshFlattenedInOrder) {
+  SubMesh s;
+  s.key = {2, -1, 5};
+  s.level = 1;
+  s.positions = {{0.5f, -1.25f, 3.0f}, {0.75f, -1.0f, 3.125f}, {1.0f, -1.5f, 2.875f}};
+  s.normals = {{0.0f, 0.0f, -1.0f}, {0.6f, 0.0f, -0.8f}, {0.0f, 1.0f, 0.0f}};
+  s.colors = {{{1, 2, 3}}, {{40, 50, 60}}, {{255, 0, 128}}};
+  s.triangles = {{{0, 1, 2}}, {{2, 1, 0}}};
+  const MeshBlock b = toMeshBlock(s, MeshEncoding::kFloat32, kBlockM, nullptr);
+  EXPECT_EQ(b.vertices,
+            (std::vector<float>{0.5f, -1.25f, 3.0f, 0.75f, -1.0f, 3.125f, 1.0f, -1.5f, 2.875f}));
+  EXPECT_EQ(b.normals,
+            (std::vector<float>{0.0f, 0.0f, -1.0f, 0.6f, 0.0f, -0.8f, 0.0f, 1.0f, 0.0f}));
+  EXPECT_EQ(b.colors, (std::vector<uint8_t>{1, 2, 3, 40, 50, 60, 255, 0, 128}));
+  EXPECT_EQ(b.triangles, (std::vector<uint32_t>{0, 1, 2, 2, 1, 0}));
+  EXPECT_EQ(b.level, 1);
+  const SubMesh empty_mesh;
+  const MeshBlock e = toMeshBlock(empty_mesh, MeshEncoding::kFloat32, kBlockM, nullptr);
+  EXPECT_TRUE(e.vertices.empty() && e.normals.empty() && e.colors.empty() && e.triangles.empty());
+}
+
 TEST(CompactEncoding, RoundTripWithinHalfAStep) {
   const SubMesh s = randomSubmesh({-3, 7, 120}, 3000, 1);
   const MeshUpdate u = updateOf(s, MeshEncoding::kCompact);
