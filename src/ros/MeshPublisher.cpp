@@ -1,6 +1,7 @@
 #include "stereo_fusion/ros/MeshPublisher.h"
 
 #include <tf2_eigen/tf2_eigen.h>
+#include <boost/make_shared.hpp>
 #include <visualization_msgs/MarkerArray.h>
 
 #include <algorithm>
@@ -34,7 +35,8 @@ MeshPublisher::MeshPublisher(ros::NodeHandle& pnh, const NodeConfig& node, Mappi
       session_(session),
       stats_(stats),
       markers_schedule_(node.markers_publish_rate_hz),
-      mesh_schedule_(node.mesh_publish_rate_hz) {
+      mesh_schedule_(node.mesh_publish_rate_hz),
+      update_sender_("~mesh_update") {
   session_id_ = ros::WallTime::now().toNSec();
   markers_header_.frame_id = node_.world_frame;
   session_->withMapper([&](Mapper& map) {
@@ -121,14 +123,14 @@ void MeshPublisher::publishPendingLocked(Mapper& map, const ros::Time& stamp, bo
     const double voxel_size_m = map.config().voxel_size_m;
     // Every flush of changes gets a sequence number, sent or not: a subscriber that was not
     // connected for one sees the gap and asks ~get_full_mesh. Publish only what someone hears.
+    boost::shared_ptr<MeshUpdate> update;
     if (!changed.empty() || !removed.empty()) {
       ++sequence_;
       if (mesh_update_pub_.getNumSubscribers() > 0) {
-        MeshUpdate update =
+        update = boost::make_shared<MeshUpdate>(
             toMeshUpdate(map.mesh().submeshes(), changed, removed, header, voxel_size_m, sequence_,
-                         false, node_.mesh_encoding, &map.textures());
-        update.session = session_id_;
-        mesh_update_pub_.publish(update);
+                         false, node_.mesh_encoding, &map.textures()));
+        update->session = session_id_;
       }
     }
     marker_backlog_.add(changed, removed);
@@ -138,8 +140,13 @@ void MeshPublisher::publishPendingLocked(Mapper& map, const ros::Time& stamp, bo
     if (node_.publish_block_bounds)
       block_bounds_pub_.publish(
           blockBoundsMarker(map.mesh().submeshes(), 8.0 * voxel_size_m, header));
-    const ros::Time ros_now = ros::Time::now();
-    for (const ros::Time& t : unpublished_stamps_) stats_->recordLatency((ros_now - t).toSec());
+    // Serialised on the send thread; the frames' latency runs until it is out.
+    update_sender_.post([publisher = mesh_update_pub_, update,
+                         stamps = std::move(unpublished_stamps_), stats = stats_] {
+      if (update) publisher.publish(update);
+      const ros::Time now = ros::Time::now();
+      for (const ros::Time& t : stamps) stats->recordLatency((now - t).toSec());
+    });
     unpublished_stamps_.clear();
   }
 }
@@ -184,7 +191,7 @@ void MeshPublisher::onMapReplaced(const MapReplaced& replaced) {
       MeshUpdate empty = toMeshUpdate(map.mesh().submeshes(), {}, {}, header,
                                       map.config().voxel_size_m, ++sequence_, true);
       empty.session = session_id_;
-      mesh_update_pub_.publish(empty);
+      sendUpdate(std::move(empty));
       return;
     }
     case MapChange::kLoaded:
@@ -239,7 +246,7 @@ void MeshPublisher::publishFullLocked(Mapper& map, const std::vector<BlockKey>& 
       toMeshUpdate(map.mesh().submeshes(), all, {}, header, map.config().voxel_size_m, ++sequence_,
                    true, node_.mesh_encoding, &map.textures());
   update.session = session_id_;
-  mesh_update_pub_.publish(update);
+  sendUpdate(std::move(update));
   // The full set supersedes the backlog, but not its removals: blocks gone from the mesh
   // before the replacement are in neither `all` nor `removed`, and rviz still draws them.
   std::vector<BlockKey> backlog_changed, gone;
@@ -252,6 +259,11 @@ void MeshPublisher::publishFullLocked(Mapper& map, const std::vector<BlockKey>& 
     marker_sender_->send(map.mesh().submeshes(), all, withoutKeysOf(gone, all), header);
     markers_full_pending_ = false;
   }
+}
+
+void MeshPublisher::sendUpdate(MeshUpdate&& update) {
+  auto message = boost::make_shared<MeshUpdate>(std::move(update));
+  update_sender_.post([publisher = mesh_update_pub_, message] { publisher.publish(message); });
 }
 
 nav_msgs::Path MeshPublisher::correctedPathLocked() const {

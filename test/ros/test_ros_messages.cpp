@@ -3,15 +3,19 @@
 // encodings, the decoder's input checks and the markers.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <mutex>
 #include <opencv2/imgcodecs.hpp>
 #include <random>
 #include <set>
+#include <stdexcept>
+#include <thread>
 
 #include "stereo_fusion/ros/DebugMarkers.h"
 #include "stereo_fusion/ros/MarkerSender.h"
+#include "stereo_fusion/ros/SendThread.h"
 #include "stereo_fusion/ros/MeshMessages.h"
 
 using namespace stereo_fusion;
@@ -306,6 +310,33 @@ TEST(MeshMarkers, IdsOfRemovedBlocksAreForgotten) {
   }
   EXPECT_EQ(markers.size(), 0u);
   EXPECT_EQ(ids.size(), 5000u);  // ids are not reused: a late DELETE cannot hit a newer block
+}
+
+// Jobs run one at a time in the order posted, off the poster's thread; one that throws is
+// logged and the next still runs; flush() returns once all have run.
+TEST(SendThread, RunsJobsInOrderAndGoesOnAfterAFailure) {
+  std::vector<int> ran;  // written by the send thread only, read after flush()
+  std::atomic<int> running{0}, most_at_once{0};
+  const std::thread::id poster = std::this_thread::get_id();
+  std::atomic<bool> on_poster{false};
+  SendThread thread("test jobs");
+  for (int i = 0; i < 200; ++i)
+    thread.post([&, i] {
+      most_at_once = std::max(most_at_once.load(), ++running);
+      if (std::this_thread::get_id() == poster) on_poster = true;
+      if (i == 50) {
+        --running;
+        throw std::runtime_error("job 50 fails");
+      }
+      ran.push_back(i);
+      --running;
+    });
+  thread.flush();
+  EXPECT_TRUE(thread.idle());
+  ASSERT_EQ(ran.size(), 199u);
+  for (size_t k = 0; k < ran.size(); ++k) EXPECT_EQ(ran[k], static_cast<int>(k < 50 ? k : k + 1));
+  EXPECT_EQ(most_at_once.load(), 1);
+  EXPECT_FALSE(on_poster.load());
 }
 
 // The sender builds on its own thread what was handed over, from copies taken at hand-over,

@@ -2,18 +2,15 @@
 // ~mesh_markers off the frame worker: rviz's triangle lists cost ~84 B a triangle to build and
 // as much to serialise (at 1 cm, 16-30 ms every half second on the worker, which frames queued
 // behind). The mesh publisher hands over copies of the changed submeshes under the map lock;
-// a thread of its own builds and publishes them, in the order handed over.
+// a SendThread builds and publishes them, in the order handed over.
 #include <visualization_msgs/MarkerArray.h>
 
-#include <condition_variable>
-#include <deque>
 #include <functional>
-#include <mutex>
-#include <thread>
 #include <unordered_map>
 #include <vector>
 
 #include "stereo_fusion/ros/MeshMessages.h"
+#include "stereo_fusion/ros/SendThread.h"
 
 namespace stereo_fusion {
 
@@ -22,14 +19,10 @@ class MarkerSender {
   using Publish = std::function<void(const visualization_msgs::MarkerArray&)>;
   /// `publish` is called on the sender's thread, one array at a time.
   explicit MarkerSender(Publish publish);
-  /// Stops after the array in hand; what is still queued is not sent (the node is going).
-  ~MarkerSender();
-  MarkerSender(const MarkerSender&) = delete;
-  MarkerSender& operator=(const MarkerSender&) = delete;
 
   /// Nothing queued or being built: the mesh publisher keeps merging its backlog until then,
   /// so a slow subscriber's markers fall behind in time, not in memory.
-  bool idle() const;
+  bool idle() const { return thread_.idle(); }
   /// Queues the markers of `changed` (their submeshes copied from `submeshes` now; a key
   /// without one is skipped) and a DELETE for each of `removed`.
   void send(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes,
@@ -38,26 +31,12 @@ class MarkerSender {
   /// Queues a DELETEALL (a reset), after what is queued already.
   void sendClear(const std_msgs::Header& header);
   /// Returns when everything queued so far has been published.
-  void flush();
+  void flush() { thread_.flush(); }
 
  private:
-  struct Batch {
-    bool clear = false;
-    std::unordered_map<BlockKey, SubMesh, BlockKeyHash> submeshes;
-    std::vector<BlockKey> changed, removed;
-    std_msgs::Header header;
-  };
-  void enqueue(Batch&& batch);
-  void run();
-
   Publish publish_;
   MeshMarkers markers_;  // its ids: touched by the sender's thread only
-  mutable std::mutex mutex_;
-  std::condition_variable wake_, done_;
-  std::deque<Batch> queue_;  // guarded by mutex_
-  bool building_ = false;    // guarded by mutex_
-  bool stopping_ = false;    // guarded by mutex_
-  std::thread thread_;       // last: started once the members above exist
+  SendThread thread_;    // last: stopped before the members its jobs use go
 };
 
 }  // namespace stereo_fusion

@@ -14,6 +14,7 @@
 #include "stereo_fusion/ros/MeshMessages.h"
 #include "stereo_fusion/ros/NodeStats.h"
 #include "stereo_fusion/ros/RosParameters.h"
+#include "stereo_fusion/ros/SendThread.h"
 #include "stereo_fusion/session/MappingSession.h"
 #include "stereo_fusion/util/RateSchedule.h"
 
@@ -48,6 +49,8 @@ class MeshPublisher {
   /// markers_publish_rate_hz, once it is idle, unless `force`.
   void publishMarkersLocked(Mapper& map, bool force);
   nav_msgs::Path correctedPathLocked() const;
+  /// Publishes `update` on the send thread, after the updates handed over before it.
+  void sendUpdate(MeshUpdate&& update);
 
   const NodeConfig& node_;
   MappingSession* session_;
@@ -71,6 +74,9 @@ class MeshPublisher {
   nav_msgs::Path path_;
   PoseCorrection correction_;  // the latest applied, for the path
   std::vector<ros::Time> unpublished_stamps_;
+  /// ~mesh_update's messages are serialised (1.9 ms per 10 Hz update at 1 cm) and sent here, in
+  /// order. Last: stopped before the members above go.
+  SendThread update_sender_;
 };
 
 }  // namespace stereo_fusion
