@@ -35,9 +35,7 @@ void FreeSpaceRecorder::buildTiles(const MeasurementImage& measurements) {
   base.tile_shift = kTileShift;
   base.tiles_x = (width + kTilePx - 1) / kTilePx;
   base.tiles_y = (height + kTilePx - 1) / kTilePx;
-  base.min_free_m.assign(static_cast<size_t>(base.tiles_x) * base.tiles_y, 0.0f);
-  base.max_free_m.assign(base.min_free_m.size(), 0.0f);
-  base.max_min_free_m.assign(base.min_free_m.size(), 0.0f);
+  base.bounds.assign(static_cast<size_t>(base.tiles_x) * base.tiles_y, {0.0f, 0.0f, 0.0f});
   const float* depth = measurements.depths();
   pool_->parallelFor(static_cast<size_t>(base.tiles_y), 4, [&](size_t begin, size_t end) {
     for (size_t ty = begin; ty < end; ++ty)
@@ -62,10 +60,9 @@ void FreeSpaceRecorder::buildTiles(const MeasurementImage& measurements) {
           hi = std::max(hi, unmeasured);
           said = true;
         }
-        const size_t t = ty * base.tiles_x + tx;
-        base.min_free_m[t] = said ? std::max(lo, 0.0f) : 0.0f;
-        base.max_free_m[t] = said ? std::max(hi, 0.0f) : 0.0f;
-        base.max_min_free_m[t] = base.min_free_m[t];
+        const float min_free = said ? std::max(lo, 0.0f) : 0.0f;
+        base.bounds[ty * base.tiles_x + tx] = {min_free, said ? std::max(hi, 0.0f) : 0.0f,
+                                               min_free};
       }
   });
   // Coarser levels: min and max over 2×2 children, until one tile is left.
@@ -75,17 +72,15 @@ void FreeSpaceRecorder::buildTiles(const MeasurementImage& measurements) {
     coarse.tile_shift = fine.tile_shift + 1;
     coarse.tiles_x = (fine.tiles_x + 1) / 2;
     coarse.tiles_y = (fine.tiles_y + 1) / 2;
-    coarse.min_free_m.assign(static_cast<size_t>(coarse.tiles_x) * coarse.tiles_y,
-                             std::numeric_limits<float>::infinity());
-    coarse.max_free_m.assign(coarse.min_free_m.size(), 0.0f);
-    coarse.max_min_free_m.assign(coarse.min_free_m.size(), 0.0f);
+    coarse.bounds.assign(static_cast<size_t>(coarse.tiles_x) * coarse.tiles_y,
+                         {std::numeric_limits<float>::infinity(), 0.0f, 0.0f});
     for (int y = 0; y < fine.tiles_y; ++y)
       for (int x = 0; x < fine.tiles_x; ++x) {
-        const size_t f = static_cast<size_t>(y) * fine.tiles_x + x;
-        const size_t c = static_cast<size_t>(y / 2) * coarse.tiles_x + x / 2;
-        coarse.min_free_m[c] = std::min(coarse.min_free_m[c], fine.min_free_m[f]);
-        coarse.max_free_m[c] = std::max(coarse.max_free_m[c], fine.max_free_m[f]);
-        coarse.max_min_free_m[c] = std::max(coarse.max_min_free_m[c], fine.max_min_free_m[f]);
+        const TileLevel::Bounds& f = fine.bounds[static_cast<size_t>(y) * fine.tiles_x + x];
+        TileLevel::Bounds& c = coarse.bounds[static_cast<size_t>(y / 2) * coarse.tiles_x + x / 2];
+        c.min_free_m = std::min(c.min_free_m, f.min_free_m);
+        c.max_free_m = std::max(c.max_free_m, f.max_free_m);
+        c.max_min_free_m = std::max(c.max_min_free_m, f.max_min_free_m);
       }
     pyramid_.push_back(std::move(coarse));
   }
@@ -98,7 +93,7 @@ FreeSpaceStats FreeSpaceRecorder::record(
   FreeSpaceStats stats;
   if (measurements.width() <= 0 || measurements.height() <= 0) return stats;
   buildTiles(measurements);
-  const double far_m = pyramid_.back().max_free_m[0];
+  const double far_m = pyramid_.back().bounds[0].max_free_m;
   if (!(far_m > 0.0)) return stats;
 
   const StereoCamera& camera = frame.camera;
@@ -248,10 +243,10 @@ FreeSpaceStats FreeSpaceRecorder::record(
         // (Pixels are ≥ 0: a shift is their division by the tile size, without its cost.)
         for (int ty = py0 >> tiles.tile_shift; ty <= py1 >> tiles.tile_shift; ++ty)
           for (int tx = px0 >> tiles.tile_shift; tx <= px1 >> tiles.tile_shift; ++tx) {
-            const size_t t = static_cast<size_t>(ty) * tiles.tiles_x + tx;
-            min_free = std::min(min_free, tiles.min_free_m[t]);
-            max_free = std::max(max_free, tiles.max_free_m[t]);
-            max_min_free = std::max(max_min_free, tiles.max_min_free_m[t]);
+            const TileLevel::Bounds& t = tiles.bounds[static_cast<size_t>(ty) * tiles.tiles_x + tx];
+            min_free = std::min(min_free, t.min_free_m);
+            max_free = std::max(max_free, t.max_free_m);
+            max_min_free = std::max(max_min_free, t.max_min_free_m);
           }
         if (max_free <= z_near) return;  // behind every free depth it can see
         if (!inside) {

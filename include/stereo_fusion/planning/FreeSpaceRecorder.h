@@ -54,8 +54,11 @@ class FreeSpaceRecorder {
     int tile_shift = 0;  // tiles are 2^tile_shift px square (pixel >> shift: its tile)
     int tiles_x = 0, tiles_y = 0;
     // Per tile: the smallest and largest free depth of its pixels, and the largest of its
-    // finest tiles' smallest ones.
-    std::vector<float> min_free_m, max_free_m, max_min_free_m;
+    // finest tiles' smallest ones; together, as the walk reads them.
+    struct Bounds {
+      float min_free_m, max_free_m, max_min_free_m;
+    };
+    std::vector<Bounds> bounds;
   };
   void buildTiles(const MeasurementImage& measurements);
 
