@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 namespace stereo_fusion {
@@ -76,6 +77,14 @@ void assignFlat(const std::vector<Triple>& from, std::vector<T>* to) {
   static_assert(sizeof(Triple) == 3 * sizeof(T), "a triple of T, without padding");
   const T* first = from.empty() ? nullptr : &from.front()[0];
   to->assign(first, first + 3 * from.size());
+}
+
+/// The reverse of assignFlat(): `from` (a multiple of three values) as packed triples.
+template <typename Triple, typename T>
+void assignTriples(const std::vector<T>& from, std::vector<Triple>* to) {
+  static_assert(sizeof(Triple) == 3 * sizeof(T), "a triple of T, without padding");
+  to->resize(from.size() / 3);
+  if (!to->empty()) std::memcpy(&to->front()[0], from.data(), to->size() * sizeof(Triple));
 }
 
 /// Fills the compact fields of `b` from `s`; false (b's compact fields then unspecified) when a
@@ -245,21 +254,18 @@ bool applyMeshUpdate(const MeshUpdate& update,
         if (normal.norm() > 0) normal.normalize();
         s.positions.push_back(p.cast<float>());
         s.normals.push_back(normal.cast<float>());
-        s.colors.push_back({b.colors[3 * v], b.colors[3 * v + 1], b.colors[3 * v + 2]});
       }
+      assignTriples(b.colors, &s.colors);
       for (size_t t = 0; t < b.triangles_q.size(); t += 3)
         s.triangles.push_back({b.triangles_q[t], b.triangles_q[t + 1], b.triangles_q[t + 2]});
       (*mesh)[s.key] = std::move(s);
       continue;
     }
-    const size_t n = b.vertices.size() / 3;
-    for (size_t v = 0; v < n; ++v) {
-      s.positions.emplace_back(b.vertices[3 * v], b.vertices[3 * v + 1], b.vertices[3 * v + 2]);
-      s.normals.emplace_back(b.normals[3 * v], b.normals[3 * v + 1], b.normals[3 * v + 2]);
-      s.colors.push_back({b.colors[3 * v], b.colors[3 * v + 1], b.colors[3 * v + 2]});
-    }
-    for (size_t t = 0; t < b.triangles.size(); t += 3)
-      s.triangles.push_back({b.triangles[t], b.triangles[t + 1], b.triangles[t + 2]});
+    // Sizes checked above: three values per vertex in each field, three indices per triangle.
+    assignTriples(b.vertices, &s.positions);
+    assignTriples(b.normals, &s.normals);
+    assignTriples(b.colors, &s.colors);
+    assignTriples(b.triangles, &s.triangles);
     (*mesh)[s.key] = std::move(s);
   }
   return true;

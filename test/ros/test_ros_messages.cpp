@@ -55,7 +55,7 @@ MeshUpdate updateOf(const SubMesh& s, MeshEncoding encoding) {
 }  // namespace
 
 // float32: each vertex's x y z, normal and colour in vertex order, the triangles' indices in
-// triangle order — hand-set values, read back exactly.
+// triangle order — hand-set values; applyMeshUpdate() reads them back exactly.
 TEST(Float32Encoding, FieldsAreTheSubmeshFlattenedInOrder) {
   SubMesh s;
   s.key = {2, -1, 5};
@@ -72,6 +72,15 @@ TEST(Float32Encoding, FieldsAreTheSubmeshFlattenedInOrder) {
   EXPECT_EQ(b.colors, (std::vector<uint8_t>{1, 2, 3, 40, 50, 60, 255, 0, 128}));
   EXPECT_EQ(b.triangles, (std::vector<uint32_t>{0, 1, 2, 2, 1, 0}));
   EXPECT_EQ(b.level, 1);
+  // And read back by a subscriber, field for field.
+  std::unordered_map<BlockKey, SubMesh, BlockKeyHash> mesh;
+  ASSERT_TRUE(applyMeshUpdate(updateOf(s, MeshEncoding::kFloat32), &mesh));
+  const SubMesh& d = mesh.at(s.key);
+  EXPECT_EQ(d.positions, s.positions);
+  EXPECT_EQ(d.normals, s.normals);
+  EXPECT_EQ(d.colors, s.colors);
+  EXPECT_EQ(d.triangles, s.triangles);
+  EXPECT_EQ(d.level, 1);
   const SubMesh empty_mesh;
   const MeshBlock e = toMeshBlock(empty_mesh, MeshEncoding::kFloat32, kBlockM, nullptr);
   EXPECT_TRUE(e.vertices.empty() && e.normals.empty() && e.colors.empty() && e.triangles.empty());
