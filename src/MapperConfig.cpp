@@ -278,6 +278,14 @@ const Table& table() {
                 "depth (a sky, a far open field the matcher cannot reach). 0 = off: only "
                 "rays with a measurement mark space free, up to their depth minus the band.",
                 member(&MapperConfig::free_space_unmeasured_range_m));
+    t.addDouble("occupancy_min_weight", "", 0.0, false, 1e6,
+                "Evidence for the planning layer: a TSDF voxel counts towards a cell's "
+                "occupied / free state only once its weight reaches this (about the number of "
+                "views that agree on it, less what carving's decay took). A cell is occupied "
+                "when the finest level with evidence over it has an evidence voxel on or behind "
+                "the surface, so one view of a mismatch is no obstacle, and one that later "
+                "views see through decays until it is free. At most max_weight.",
+                member(&MapperConfig::occupancy_min_weight));
     t.addDouble("grid_min_z_m", "m", -1e4, true, 1e4,
                 "Lower bound of the height band (world z) that the 2D occupancy grid "
                 "(occupancy.pgm, ~occupancy_grid) projects.",

@@ -107,6 +107,8 @@ struct MapperConfig {
       2.0;  ///< Distances are exact up to this; farther cells read "at least this".
   double free_space_unmeasured_range_m =
       0.0;  ///< Rays without a measurement count as free up to this range. 0 = off.
+  double occupancy_min_weight =
+      2.0;  ///< A TSDF voxel is evidence for the planning layer from this weight on.
   double grid_min_z_m = 0.1;  ///< Height band of the 2D occupancy grid (world z), lower bound.
   double grid_max_z_m = 1.5;  ///< ... upper bound.
 

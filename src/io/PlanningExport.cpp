@@ -12,12 +12,13 @@ namespace stereo_fusion {
 bool writeEsdfPly(const std::string& path, const PlanningMap& planning, std::string* error) {
   size_t cells = 0;  // counted first: a vector grown by doubling would hold up to twice the bytes
   planning.forEachKnownCell([&](const CellIndex&, CellState, double) { ++cells; });
-  std::vector<float> vertices;  // x y z distance
-  vertices.reserve(4 * cells);
+  std::vector<float> vertices;  // x y z distance centre_sdf
+  vertices.reserve(5 * cells);
   planning.forEachKnownCell([&](const CellIndex& cell, CellState, double distance_m) {
     const Eigen::Vector3d p = planning.grid().centre(cell);
     vertices.insert(vertices.end(), {static_cast<float>(p.x()), static_cast<float>(p.y()),
-                                     static_cast<float>(p.z()), static_cast<float>(distance_m)});
+                                     static_cast<float>(p.z()), static_cast<float>(distance_m),
+                                     static_cast<float>(planning.centreSdfM(cell))});
   });
   return writeThroughTemporary(
       path, "ESDF point cloud",
@@ -25,9 +26,9 @@ bool writeEsdfPly(const std::string& path, const PlanningMap& planning, std::str
         std::ofstream out(temporary, std::ios::binary);
         out << "ply\nformat binary_little_endian 1.0\ncomment stereo_fusion ESDF, cell "
             << planning.grid().cell_m << " m, max distance " << planning.config().max_distance_m
-            << " m\nelement vertex " << vertices.size() / 4
+            << " m\nelement vertex " << vertices.size() / 5
             << "\nproperty float x\nproperty float y\nproperty float z\nproperty float "
-               "distance\nend_header\n";
+               "distance\nproperty float centre_sdf\nend_header\n";
         out.write(reinterpret_cast<const char*>(vertices.data()),
                   static_cast<std::streamsize>(vertices.size() * sizeof(float)));
         if (!out) *e = temporary + ": write failed";

@@ -96,12 +96,17 @@ class Propagation {
   }
   void clearSite(const Ref& r) { r.block->dist2[r.cell] = PlanningBlock::kNoSite; }
 
-  /// Gives `n` the site `candidate` if it is nearer (or as near and smaller) than its own.
+  /// Gives `n` the site `candidate` if it is nearer than its own, or as near and smaller in
+  /// coordinates: the site among equally near ones does not depend on the order of the offers,
+  /// so an incremental update picks the one a rebuild picks (distances read the site's
+  /// centre_sdf: equally near sites give different sub-cell distances).
   void consider(const CellIndex& n, const Ref& rn, const CellIndex& candidate) {
     const uint32_t d2 = squaredDistance(candidate, n);
     if (d2 > max_dist2_) return;
     const uint16_t current = rn.block->dist2[rn.cell];
-    if (current != PlanningBlock::kNoSite && d2 >= current) return;
+    if (current != PlanningBlock::kNoSite &&
+        (d2 > current || (d2 == current && !lexLess(candidate, siteOf(n, rn)))))
+      return;
     rn.block->dist2[rn.cell] = static_cast<uint16_t>(d2);
     rn.block->site[rn.cell] = {static_cast<int8_t>(candidate.x - n.x),
                                static_cast<int8_t>(candidate.y - n.y),

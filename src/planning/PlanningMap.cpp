@@ -17,11 +17,13 @@ PlanningConfig PlanningConfig::from(const MapperConfig& config) {
   p.voxels_per_cell = static_cast<int>(std::lround(p.cell_m / config.voxel_size_m));
   p.max_distance_m = config.esdf_max_distance_m;
   p.unmeasured_range_m = config.free_space_unmeasured_range_m;
+  p.min_weight = static_cast<float>(config.occupancy_min_weight);
   p.band = config.truncationBand();
   return p;
 }
 
 namespace {
+constexpr double kMinObstacleDepthM = 1e-3;
 /// The max distance in cells², rounded down: the ESDF's integer bound.
 uint32_t maxDist2(const PlanningConfig& config) {
   const double cells = config.max_distance_m / config.cell_m;
@@ -130,11 +132,12 @@ namespace {
 /// The TSDF's cell states of `keys`, computed in parallel (reads the octree only).
 std::vector<std::vector<TsdfCellState>> readTsdfCells(const BlockOctree& octree,
                                                       const std::vector<BlockKey>& keys,
-                                                      int voxels_per_cell, ThreadPool* pool) {
+                                                      int voxels_per_cell, float min_weight,
+                                                      ThreadPool* pool) {
   std::vector<std::vector<TsdfCellState>> states(keys.size());
   pool->parallelFor(keys.size(), 16, [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i)
-      tsdfCellStates(keys[i], octree.find(keys[i]), voxels_per_cell, &states[i]);
+      tsdfCellStates(keys[i], octree.find(keys[i]), voxels_per_cell, min_weight, &states[i]);
   });
   return states;
 }
@@ -162,7 +165,7 @@ PlanningMap::PendingUpdate PlanningMap::beginUpdate(const BlockOctree& octree,
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
   stats.tsdf_blocks = keys.size();
   Timer read_timer;
-  pending.states = readTsdfCells(octree, keys, config_.voxels_per_cell, pool_);
+  pending.states = readTsdfCells(octree, keys, config_.voxels_per_cell, config_.min_weight, pool_);
   stats.read_ms = read_timer.elapsedMs();
   return pending;
 }
@@ -195,6 +198,7 @@ PlanningUpdateStats PlanningMap::finishUpdate(
       }
       if (touched.empty() || touched.back() != key) touched.push_back(key);
       PlanningBlock::set(&block->tsdf_observed, cell, s.observed);
+      block->centre_sdf[cell] = PlanningBlock::quantizeCentreSdf(s.centre_sdf_m, grid_.cell_m);
       if (PlanningBlock::test(block->occupied, cell) != s.occupied) {
         PlanningBlock::set(&block->occupied, cell, s.occupied);
         flipped.push_back(s.cell);
@@ -298,12 +302,14 @@ PlanningUpdateStats PlanningMap::rebuild(const BlockOctree& octree) {
   keys.reserve(tsdf.size());
   for (const VoxelBlock* b : tsdf) keys.push_back(b->key);
   stats.tsdf_blocks = keys.size();
-  const auto states = readTsdfCells(octree, keys, config_.voxels_per_cell, pool_);
+  const auto states =
+      readTsdfCells(octree, keys, config_.voxels_per_cell, config_.min_weight, pool_);
   const std::unique_lock<std::mutex> order = awaitNoUpdate();
   std::unique_lock lock(mutex_);
   for (auto& [key, block] : blocks_) {
     block->tsdf_observed.fill(0);
     block->occupied.fill(0);
+    block->centre_sdf.fill(0);
   }
   for (const auto& block_states : states)
     for (const TsdfCellState& s : block_states) {
@@ -312,6 +318,7 @@ PlanningUpdateStats PlanningMap::rebuild(const BlockOctree& octree) {
       const int cell = cellInBlock(s.cell);
       PlanningBlock::set(&block->tsdf_observed, cell, true);
       PlanningBlock::set(&block->occupied, cell, s.occupied);
+      block->centre_sdf[cell] = PlanningBlock::quantizeCentreSdf(s.centre_sdf_m, grid_.cell_m);
     }
   std::vector<BlockKey> all;
   for (auto it = blocks_.begin(); it != blocks_.end();) {
@@ -369,6 +376,7 @@ void PlanningMap::dropFartherThanLocked(const Eigen::Vector3d& point_m, double m
     block->seen_free.fill(0);
     block->tsdf_observed.fill(0);
     block->occupied.fill(0);
+    block->centre_sdf.fill(0);
     maybe_empty_.push_back(key);
   }
 }
@@ -384,11 +392,29 @@ void PlanningMap::clear() {
   boxes_grown_.clear();
 }
 
-double PlanningMap::signedDistance(const PlanningBlock& block, int cell) const {
+double PlanningMap::signedDistance(const BlockKey& key, const PlanningBlock& block,
+                                   int cell) const {
   const uint16_t d2 = block.dist2[cell];
-  const double distance =
-      d2 == PlanningBlock::kNoSite ? config_.max_distance_m : std::sqrt(double(d2)) * grid_.cell_m;
-  return PlanningBlock::test(block.occupied, cell) ? -distance : distance;
+  const bool occupied = PlanningBlock::test(block.occupied, cell);
+  if (d2 == PlanningBlock::kNoSite)
+    return occupied ? -config_.max_distance_m : config_.max_distance_m;
+  // The site's surface lies centre_sdf behind its centre (in front where negative): a free cell
+  // reads its distance to that surface, an occupied cell its depth behind it.
+  const auto& offset = block.site[cell];
+  const CellIndex site = cellOf(key, cell).offset(offset[0], offset[1], offset[2]);
+  const BlockKey site_key = planningBlockOf(site);
+  const PlanningBlock* site_block = &block;
+  if (!(site_key == key)) {
+    const auto it = blocks_.find(site_key);
+    site_block = it == blocks_.end() ? nullptr : it->second.get();
+  }
+  const double site_sdf_m =
+      site_block ? site_block->centreSdfM(cellInBlock(site), grid_.cell_m) : 0.0;
+  const double centres_m = std::sqrt(double(d2)) * grid_.cell_m;
+  // An occupied cell reads at least kMinObstacleDepthM deep: its sign must say occupied.
+  const double distance = std::clamp(occupied ? centres_m + site_sdf_m : centres_m - site_sdf_m,
+                                     occupied ? kMinObstacleDepthM : 0.0, config_.max_distance_m);
+  return occupied ? -distance : distance;
 }
 
 CellState PlanningMap::state(const Eigen::Vector3d& p_world) const {
@@ -397,6 +423,12 @@ CellState PlanningMap::state(const Eigen::Vector3d& p_world) const {
   std::shared_lock lock(mutex_);
   const auto it = blocks_.find(planningBlockOf(cell));
   return it == blocks_.end() ? CellState::kUnknown : it->second->state(cellInBlock(cell));
+}
+
+double PlanningMap::centreSdfM(const CellIndex& cell) const {
+  std::shared_lock lock(mutex_);
+  const auto it = blocks_.find(planningBlockOf(cell));
+  return it == blocks_.end() ? 0.0 : it->second->centreSdfM(cellInBlock(cell), grid_.cell_m);
 }
 
 EsdfSample PlanningMap::sampleLocked(const Eigen::Vector3d& p_world) const {
@@ -409,7 +441,7 @@ EsdfSample PlanningMap::sampleLocked(const Eigen::Vector3d& p_world) const {
   const int index = cellInBlock(cell);
   s.state = it->second->state(index);
   if (s.state == CellState::kUnknown) return s;
-  s.distance_m = s.interpolated_m = signedDistance(*it->second, index);
+  s.distance_m = s.interpolated_m = signedDistance(it->first, *it->second, index);
   // Trilinear over the 8 cell centres around the point, all of them known.
   const Eigen::Vector3d q = p_world / grid_.cell_m - Eigen::Vector3d::Constant(0.5);
   const Eigen::Vector3d base = q.array().floor();
@@ -430,7 +462,7 @@ EsdfSample PlanningMap::sampleLocked(const Eigen::Vector3d& p_world) const {
           cached_key = key;
         }
         if (cached->state(cellInBlock(c)) == CellState::kUnknown) return s;
-        corner[k][j][i] = signedDistance(*cached, cellInBlock(c));
+        corner[k][j][i] = signedDistance(cached_key, *cached, cellInBlock(c));
       }
   double value = 0.0;
   Eigen::Vector3d gradient = Eigen::Vector3d::Zero();
@@ -475,7 +507,8 @@ void PlanningMap::forEachKnownCell(
     const PlanningBlock& block = *blocks_.at(key);
     for (int cell = 0; cell < PlanningBlock::kCells; ++cell) {
       const CellState state = block.state(cell);
-      if (state != CellState::kUnknown) fn(cellOf(key, cell), state, signedDistance(block, cell));
+      if (state != CellState::kUnknown)
+        fn(cellOf(key, cell), state, signedDistance(key, block, cell));
     }
   }
 }

@@ -21,8 +21,9 @@ struct EsdfStats {
 /// occupied cell for a cell that is not occupied, the nearest cell that is not occupied for an
 /// occupied one — and its distance is the exact Euclidean distance to that site, |cell − site|
 /// in cells (squared, integer: no rounding). Among sites at the same distance a cell keeps the
-/// first it was offered (breaking ties by coordinates re-propagated every tie and cost 20 %
-/// more on the hall; the distances, which the tests compare with a rebuild, are the same).
+/// smallest in (z, y, x): the choice does not depend on the order of the offers, so an update
+/// and a rebuild pick the same site — they must, since a distance reads its site's centre_sdf
+/// (PlanningMap: sub-cell distances), and equally near sites carry different ones.
 ///
 /// When cells flip (occupied ↔ not), a raise wavefront clears every cell whose site is no
 /// longer of the opposite kind, then a lower wavefront (a priority queue by distance) offers

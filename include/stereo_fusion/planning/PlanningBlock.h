@@ -1,4 +1,5 @@
 #pragma once
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -63,6 +64,19 @@ struct PlanningBlock {
   Bits tsdf_observed{};
   /// ... and the finest such level has one with sdf ≥ 0 (TsdfOccupancy).
   Bits occupied{};
+  /// The TSDF's signed distance at the cell's centre (TsdfOccupancy: > 0 behind the surface), in
+  /// units of cell / kCentreSdfScale, clamped to ±1 cell; 0 where the TSDF holds none. A site's
+  /// value moves the distances read from it off the cell centres onto the surface (sub-cell).
+  std::array<int8_t, kCells> centre_sdf{};
+  static constexpr float kCentreSdfScale = 127.0f;
+  static int8_t quantizeCentreSdf(float sdf_m, double cell_m) {
+    if (!std::isfinite(sdf_m)) return 0;
+    const double units = std::clamp(sdf_m / cell_m, -1.0, 1.0) * kCentreSdfScale;
+    return static_cast<int8_t>(std::lround(units));
+  }
+  double centreSdfM(int cell, double cell_m) const {
+    return centre_sdf[cell] * cell_m / kCentreSdfScale;
+  }
   /// ESDF (EsdfPropagator): per cell the squared distance, in cells², to its site — the nearest
   /// occupied cell for a cell that is not occupied, the nearest cell that is not for an
   /// occupied one — and the site as an offset from the cell; kNoSite beyond the max distance.

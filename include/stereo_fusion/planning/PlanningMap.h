@@ -29,6 +29,7 @@ struct PlanningConfig {
   int voxels_per_cell = 4;          ///< cell_m / voxel_size_m: 1, 2, 4 or 8
   double max_distance_m = 2.0;      ///< esdf_max_distance_m
   double unmeasured_range_m = 0.0;  ///< free_space_unmeasured_range_m
+  float min_weight = 2.0f;          ///< occupancy_min_weight
   TruncationBand band{0.02, 4.0};
   static PlanningConfig from(const MapperConfig& config);
 };
@@ -113,6 +114,9 @@ class PlanningMap {
 
   // Readers (thread-safe).
   CellState state(const Eigen::Vector3d& p_world) const;
+  /// The TSDF's signed distance at `cell`'s centre as the layer keeps it (quantised; 0 where the
+  /// TSDF holds none): what a distance read from the cell as a site is moved by.
+  double centreSdfM(const CellIndex& cell) const;
   EsdfSample sample(const Eigen::Vector3d& p_world) const;
   void sampleBatch(const std::vector<Eigen::Vector3d>& points, std::vector<EsdfSample>* out) const;
   /// Calls `fn(cell, state, signed distance m)` for every known cell (unknown cells skipped), in
@@ -159,7 +163,9 @@ class PlanningMap {
   /// Erases `keys` that hold no known cell, then allocates the transit blocks their neighbours
   /// still need (seeded at the next update); returns how many were erased.
   uint64_t eraseUnknownBlocks(std::vector<BlockKey> keys);
-  double signedDistance(const PlanningBlock& block, int cell) const;
+  /// The cell's signed distance: to its site's centre, moved onto the surface by the site's
+  /// centre_sdf (sub-cell), clamped to [0, max] in magnitude.
+  double signedDistance(const BlockKey& key, const PlanningBlock& block, int cell) const;
   EsdfSample sampleLocked(const Eigen::Vector3d& p_world) const;
 
   PlanningConfig config_;

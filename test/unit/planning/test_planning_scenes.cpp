@@ -98,6 +98,7 @@ TEST(PlanningScenes, EvictionMakesForgottenSpaceUnknown) {
   MapperConfig config = sceneConfig();
   config.max_depth_m = 4.0;
   config.max_distance_from_camera_m = 6.0;
+  config.occupancy_min_weight = 1.0;  // the wall ahead is seen by one or two views at a time
   Mapper mapper(config);
   for (int i = 0; i < 16; ++i) {
     const Eigen::Vector3d eye(1.0 * i, 0.0, 1.0);
