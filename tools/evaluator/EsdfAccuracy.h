@@ -26,6 +26,9 @@ struct EsdfAccuracy {
 struct EsdfCells {
   std::vector<Eigen::Vector3d> free_centres, occupied_centres;
   std::vector<double> free_distances_m;
+  /// Per occupied cell, its `centre_sdf` (0 for files without it, written before sub-cell
+  /// distances): a free cell's distance is |c − site| − centre_sdf(site).
+  std::vector<double> occupied_centre_sdf_m;
 };
 
 /// Compares every free cell's distance, capped at `max_distance_m` on both sides, with

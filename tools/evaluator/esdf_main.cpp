@@ -1,25 +1,35 @@
-// stereo_fusion_evaluate_esdf OUT/esdf.ply [SEQ | gt_mesh.ply] [--max-distance-m D] [--json FILE]
+// stereo_fusion_evaluate_esdf OUT/esdf.ply [SEQ | gt_mesh.ply] [--max-distance-m D]
+//                             [--grid-band ZMIN,ZMAX] [--json FILE]
 //
 // How exact an ESDF is: every free cell's distance against (1) the brute force — the distance
 // from its centre to the nearest occupied cell centre of the same file, by an exact k-d tree
 // search (PCL) — and (2) with a ground-truth mesh, the distance from its centre to the true
 // surface (exact point-to-triangle distances). Both by band of the reference distance.
+// (3) With a ground-truth mesh also the planning report: the truth read as solids
+// (evaluator/SolidTruth), scored as a planner meets it (evaluator/PlanningScore), and the
+// folder's occupancy.pgm against the true surface of its height band (evaluator/OccupancyScore).
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/io/ply_io.h>
 #include <pcl/kdtree/kdtree_flann.h>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 #include <nlohmann/json.hpp>
 
 #include "evaluator/EsdfAccuracy.h"
+#include "evaluator/OccupancyMapFile.h"
+#include "evaluator/OccupancyScore.h"
+#include "evaluator/PlanningScore.h"
+#include "evaluator/SolidTruth.h"
 #include "evaluator/TriangleBvh.h"
 #include "readers/PlyReader.h"
 
@@ -31,7 +41,8 @@ namespace {
 int usage(const char* why) {
   std::fprintf(stderr,
                "%s\nusage: stereo_fusion_evaluate_esdf OUT/esdf.ply [SEQ-FOLDER | gt_mesh.ply] "
-               "[--max-distance-m D (default: the file's)] [--json FILE]\n",
+               "[--max-distance-m D (default: the file's)] [--grid-band ZMIN,ZMAX (default: "
+               "the run's stats.json, else 0.1,1.5)] [--json FILE]\n",
                why);
   return 2;
 }
@@ -55,6 +66,10 @@ bool readEsdf(const std::string& path, EsdfCells* cells, double* max_distance_m,
       *error = path + ": no float property '" + names[i] + "' (not an esdf.ply?)";
       return false;
     }
+  int centre_sdf_offset = -1;  // optional: files written before sub-cell distances lack it
+  for (const pcl::PCLPointField& f : cloud.fields)
+    if (f.name == "centre_sdf" && f.datatype == pcl::PCLPointField::FLOAT32)
+      centre_sdf_offset = static_cast<int>(f.offset);
   const size_t n = static_cast<size_t>(cloud.width) * cloud.height;
   double largest = 0.0;
   for (size_t i = 0; i < n; ++i) {
@@ -62,9 +77,13 @@ bool readEsdf(const std::string& path, EsdfCells* cells, double* max_distance_m,
     float v[4];
     for (int k = 0; k < 4; ++k) std::memcpy(&v[k], point + offsets[k], sizeof(float));
     const Eigen::Vector3d p(v[0], v[1], v[2]);
-    if (v[3] < 0.0f)
+    if (v[3] < 0.0f) {
       cells->occupied_centres.push_back(p);
-    else {
+      float centre_sdf = 0.0f;
+      if (centre_sdf_offset >= 0)
+        std::memcpy(&centre_sdf, point + centre_sdf_offset, sizeof(float));
+      cells->occupied_centre_sdf_m.push_back(centre_sdf);
+    } else {
       cells->free_centres.push_back(p);
       cells->free_distances_m.push_back(v[3]);
     }
@@ -89,15 +108,90 @@ nlohmann::ordered_json toJson(const EsdfAccuracy& a) {
   return bands;
 }
 
+nlohmann::ordered_json toJson(const PlanningScore& s) {
+  const PlanningScoreOptions& o = s.options;
+  nlohmann::ordered_json j;
+  j["truth"] = "solid: negative behind the nearest triangle's winding normal";
+  j["free_near_surface"] = {{"lo_m", o.near_lo_m},
+                            {"hi_m", std::min(o.near_hi_m, s.max_distance_m)},
+                            {"cells", s.near_cells},
+                            {"median_m", s.near_median_m},
+                            {"p90_m", s.near_p90_m},
+                            {"too_close_m", o.too_close_m},
+                            {"too_close_cells", s.near_too_close},
+                            {"too_close_share", shareOf(s.near_too_close, s.near_cells)}};
+  j["phantom_occupied"] = {{"min_distance_m", o.phantom_m},
+                           {"cells", s.phantom_cells},
+                           {"occupied_cells", s.occupied_cells},
+                           {"share", shareOf(s.phantom_cells, s.occupied_cells)},
+                           {"median_distance_m", s.phantom_median_distance_m},
+                           {"median_z_m", s.phantom_median_z_m}};
+  j["free_inside_solid"] = {{"min_esdf_m", o.clear_min_m},
+                            {"cells", s.clear_cells},
+                            {"inside_cells", s.clear_inside_solid},
+                            {"share", shareOf(s.clear_inside_solid, s.clear_cells)}};
+  return j;
+}
+
+nlohmann::ordered_json toJson(const eval::OccupancyScore& s, const std::string& yaml,
+                              const std::string& band_from) {
+  return {{"map", yaml},
+          {"band_m", {s.options.min_z_m, s.options.max_z_m}},
+          {"band_from", band_from},
+          {"reach_m", s.options.reach_m},
+          {"precision", s.precision()},
+          {"occupied_pixels", s.occupied_pixels},
+          {"occupied_on_surface", s.occupied_on_surface},
+          {"wall_recall", s.wallRecall()},
+          {"wall_pixels_known", s.obstacle_pixels_known},
+          {"wall_pixels_found", s.obstacle_pixels_found},
+          {"wall_pixels_unseen", s.obstacle_pixels_unknown}};
+}
+
+/// The occupancy grid's height band: --grid-band, else the run's own (the config in the
+/// stats.json beside esdf.ply, as the fuser writes it), else the mapper's defaults (0.1, 1.5 m,
+/// already in `min_z_m`, `max_z_m`). Sets `source`; false for a malformed --grid-band.
+bool gridBand(const std::string& option, const fs::path& run_dir, double* min_z_m, double* max_z_m,
+              std::string* source) {
+  if (!option.empty()) {
+    *source = "--grid-band";
+    char comma = 0;
+    std::istringstream in(option);
+    return (in >> *min_z_m >> comma >> *max_z_m) && comma == ',' && in.peek() == EOF &&
+           *min_z_m < *max_z_m;
+  }
+  *source = "defaults";
+  std::ifstream stats(run_dir / "stats.json");
+  if (!stats) return true;
+  const nlohmann::json j = nlohmann::json::parse(stats, nullptr, false);
+  if (j.is_discarded() || !j.contains("config") || !j["config"].is_object()) return true;
+  // The fuser writes every parameter as text (getMapperParameter).
+  const auto number = [&](const char* key, double* value) {
+    const nlohmann::json v = j["config"].value(key, nlohmann::json());
+    if (v.is_number()) *value = v.get<double>();
+    if (!v.is_string()) return v.is_number();
+    std::istringstream in(v.get<std::string>());
+    return static_cast<bool>(in >> *value);
+  };
+  double lo = 0.0, hi = 0.0;
+  if (number("grid_min_z_m", &lo) && number("grid_max_z_m", &hi) && lo < hi) {
+    *min_z_m = lo, *max_z_m = hi;
+    *source = "stats.json";
+  }
+  return true;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string esdf_path, reference, json_path;
+  std::string esdf_path, reference, json_path, grid_band;
   double max_distance_m = 0.0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--max-distance-m" && i + 1 < argc) {
       max_distance_m = std::atof(argv[++i]);
+    } else if (a == "--grid-band" && i + 1 < argc) {
+      grid_band = argv[++i];
     } else if (a == "--json" && i + 1 < argc) {
       json_path = argv[++i];
     } else if (a == "-h" || a == "--help") {
@@ -111,6 +205,11 @@ int main(int argc, char** argv) {
     }
   }
   if (esdf_path.empty()) return usage("no esdf.ply given");
+  const fs::path run_dir = fs::path(esdf_path).parent_path();
+  eval::OccupancyScoreOptions grid_options;
+  std::string band_from;
+  if (!gridBand(grid_band, run_dir, &grid_options.min_z_m, &grid_options.max_z_m, &band_from))
+    return usage(("--grid-band " + grid_band + ": expected ZMIN,ZMAX with ZMIN < ZMAX").c_str());
   EsdfCells cells;
   std::string error;
   if (!readEsdf(esdf_path, &cells, &max_distance_m, &error)) {
@@ -143,11 +242,15 @@ int main(int argc, char** argv) {
           // measure in double.
           if (tree.nearestKSearch(pcl::PointXYZ(p.x(), p.y(), p.z()), 1, index, squared) < 1)
             return double(INFINITY);
-          return std::min((cells.occupied_centres[index[0]] - p).norm(), max_distance_m);
+          // Moved onto the site's surface as the ESDF reads it (sub-cell distances).
+          const double centres_m = (cells.occupied_centres[index[0]] - p).norm();
+          return std::clamp(centres_m - cells.occupied_centre_sdf_m[index[0]], 0.0, max_distance_m);
         },
         0.5 * cell_m);
-    std::printf("%s",
-                brute.describe("against the brute force (nearest occupied cell centre):").c_str());
+    std::printf(
+        "%s",
+        brute.describe("against the brute force (nearest occupied cell, its centre_sdf applied):")
+            .c_str());
     json["brute_force"] = toJson(brute);
   }
   // (2) Ground truth.
@@ -159,7 +262,8 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "%s\n", error.c_str());
       return 1;
     }
-    const eval::TriangleBvh bvh(mesh);
+    const eval::SolidTruth solid(mesh);
+    const eval::TriangleBvh& bvh = solid.bvh();
     const double diagonal = std::isfinite(cell_m) ? 0.5 * std::sqrt(3.0) * cell_m : 0.0;
     const EsdfAccuracy truth = compareEsdf(
         cells, max_distance_m, edges, [&](const Eigen::Vector3d& p) { return bvh.distance(p); },
@@ -190,6 +294,24 @@ int main(int argc, char** argv) {
           seen.describe("against the true surface where its nearest point was seen (occupied):")
               .c_str());
       json["ground_truth_seen"] = toJson(seen);
+    }
+    // (3) The planning report.
+    if (!bvh.empty()) {
+      const PlanningScore planning = scorePlanning(
+          cells, max_distance_m, [&](const Eigen::Vector3d& p) { return solid.signedDistance(p); });
+      std::printf("%s", planning.describe().c_str());
+      json["planning"] = toJson(planning);
+      const fs::path yaml = run_dir / "occupancy.yaml";
+      if (fs::exists(yaml)) {
+        eval::OccupancyMap map;
+        if (!eval::readOccupancyMap(yaml.string(), &map, &error)) {
+          std::fprintf(stderr, "%s\n", error.c_str());
+          return 1;
+        }
+        const eval::OccupancyScore grid = eval::scoreOccupancy(map, mesh, grid_options, &solid);
+        std::printf("%s", grid.describe("occupancy.pgm", band_from).c_str());
+        json["planning"]["occupancy"] = toJson(grid, yaml.string(), band_from);
+      }
     }
   }
   if (!json_path.empty()) std::ofstream(json_path) << json.dump(2) << "\n";

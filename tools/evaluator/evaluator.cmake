@@ -1,7 +1,8 @@
 # Targets of the mesh evaluator (owned by the evaluator work; included from the root).
 #
 #   stereo_fusion_evaluator   static library: exact mesh distances (BVH), surface sampling,
-#                             ground-truth and held-out scoring, reports, the error-coloured mesh
+#                             ground-truth and held-out scoring, reports, the error-coloured mesh,
+#                             the ESDF's planning report (solid truth, occupancy map scores)
 #   stereo_fusion_evaluate    the command line tool behind scripts/evaluate.sh (reads the PLY
 #                             and the sequence with stereo_fusion_readers, tools/readers/)
 
@@ -25,6 +26,10 @@ set(EVALUATOR_SOURCES
   ${EVALUATOR_DIR}/EvaluationReport.cpp
   ${EVALUATOR_DIR}/ErrorColouredMesh.cpp
   ${EVALUATOR_DIR}/EsdfAccuracy.cpp
+  ${EVALUATOR_DIR}/SolidTruth.cpp
+  ${EVALUATOR_DIR}/PlanningScore.cpp
+  ${EVALUATOR_DIR}/OccupancyMapFile.cpp
+  ${EVALUATOR_DIR}/OccupancyScore.cpp
 )
 
 add_library(stereo_fusion_evaluator STATIC ${EVALUATOR_SOURCES})
