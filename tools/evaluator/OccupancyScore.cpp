@@ -92,9 +92,11 @@ OccupancyScore scoreOccupancy(const OccupancyMap& map, const TriangleMesh& truth
     if (map.cells[i] == OccupancyMap::kOccupied) {
       ++score.occupied_pixels;
       const int x = static_cast<int>(i % map.width), y = static_cast<int>(i / map.width);
-      score.occupied_on_surface +=
+      const bool right =
           on_surface[i] || (solid && columnInsideSolid(*solid, map.origin_x_m + (x + 0.5) * res,
                                                        map.origin_y_m + (y + 0.5) * res, options));
+      score.occupied_on_surface += right;
+      if (!right) score.false_pixels.emplace_back(x, y);
     }
   for (int ry = 0; ry < raster_h; ++ry)
     for (int rx = 0; rx < raster_w; ++rx) {

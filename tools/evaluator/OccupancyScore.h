@@ -4,6 +4,8 @@
 // (recall).
 
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "evaluator/OccupancyMapFile.h"
 #include "evaluator/SolidTruth.h"
@@ -38,6 +40,9 @@ struct OccupancyScore {
   /// are coverage, not the map's mistakes.
   size_t obstacle_pixels_known = 0, obstacle_pixels_found = 0;
   size_t obstacle_pixels_unknown = 0;  ///< no known pixel within reach_m (not scored)
+  /// The occupied pixels precision does not accept (map column x, row y; row 0 at the
+  /// smallest y): where a picture marks the false obstacles.
+  std::vector<std::pair<int, int>> false_pixels;
 
   double precision() const;
   double wallRecall() const;

@@ -40,6 +40,7 @@ PlanningScore scorePlanning(const EsdfCells& cells, double max_distance_m,
     if (std::isfinite(truth) && truth >= options.phantom_m) {
       phantom_distances.push_back(truth);
       phantom_z.push_back(centre.z());
+      score.phantom_centres.push_back(centre);
     }
   }
   score.occupied_cells = cells.occupied_centres.size();

@@ -4,6 +4,7 @@
 // inside a solid.
 
 #include <Eigen/Core>
+#include <vector>
 #include <functional>
 #include <string>
 
@@ -36,6 +37,7 @@ struct PlanningScore {
   // Occupied cells in free space.
   size_t occupied_cells = 0, phantom_cells = 0;
   double phantom_median_distance_m = 0.0, phantom_median_z_m = 0.0;
+  std::vector<Eigen::Vector3d> phantom_centres;  ///< where a picture marks them
   // Free cells the ESDF calls clear that lie inside a solid.
   size_t clear_cells = 0, clear_inside_solid = 0;
 

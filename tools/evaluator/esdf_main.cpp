@@ -125,7 +125,10 @@ nlohmann::ordered_json toJson(const PlanningScore& s) {
                            {"occupied_cells", s.occupied_cells},
                            {"share", shareOf(s.phantom_cells, s.occupied_cells)},
                            {"median_distance_m", s.phantom_median_distance_m},
-                           {"median_z_m", s.phantom_median_z_m}};
+                           {"median_z_m", s.phantom_median_z_m},
+                           {"centres", nlohmann::ordered_json::array()}};
+  for (const Eigen::Vector3d& c : s.phantom_centres)
+    j["phantom_occupied"]["centres"].push_back({c.x(), c.y(), c.z()});
   j["free_inside_solid"] = {{"min_esdf_m", o.clear_min_m},
                             {"cells", s.clear_cells},
                             {"inside_cells", s.clear_inside_solid},
@@ -145,7 +148,8 @@ nlohmann::ordered_json toJson(const eval::OccupancyScore& s, const std::string& 
           {"wall_recall", s.wallRecall()},
           {"wall_pixels_known", s.obstacle_pixels_known},
           {"wall_pixels_found", s.obstacle_pixels_found},
-          {"wall_pixels_unseen", s.obstacle_pixels_unknown}};
+          {"wall_pixels_unseen", s.obstacle_pixels_unknown},
+          {"false_pixels", s.false_pixels}};
 }
 
 /// The occupancy grid's height band: --grid-band, else the run's own (the config in the
