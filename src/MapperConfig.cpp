@@ -380,6 +380,9 @@ std::vector<std::string> validateMapperConfig(const MapperConfig& config) {
         (nearest != 1 && nearest != 2 && nearest != 4 && nearest != 8))
       errors.push_back("esdf_voxel_size_m must be 0 (auto) or voxel_size_m times 1, 2, 4 or 8");
   }
+  // A voxel's weight never exceeds max_weight: a larger minimum would leave no cell occupied.
+  if (config.planning_enabled && config.occupancy_min_weight > config.max_weight)
+    errors.push_back("occupancy_min_weight must be at most max_weight (a voxel never weighs more)");
   if (config.planning_enabled && config.esdf_max_distance_m > 100.0 * config.planningCellSizeM())
     errors.push_back("esdf_max_distance_m must be at most 100 planning cells (esdf_voxel_size_m)");
   if (config.grid_min_z_m >= config.grid_max_z_m)

@@ -95,6 +95,17 @@ TEST(Config, CrossParameterRules) {
   EXPECT_NE(errors[1].find("weight_falloff_start_vox"), std::string::npos);
 }
 
+TEST(Config, OccupancyEvidenceMustBeReachable) {
+  MapperConfig c;
+  c.max_weight = 10;
+  c.occupancy_min_weight = 10;
+  EXPECT_TRUE(validateMapperConfig(c).empty());
+  c.occupancy_min_weight = 10.5;
+  const auto errors = validateMapperConfig(c);
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("occupancy_min_weight"), std::string::npos);
+}
+
 TEST(Config, YamlFileErrorsNameFileLineAndParameter) {
   MapperConfig c;
   std::string error;
