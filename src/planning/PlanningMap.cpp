@@ -40,6 +40,11 @@ PlanningMap::PlanningMap(const PlanningConfig& config, ThreadPool* pool)
       max_dist2_(maxDist2(config)),
       transit_(max_dist2_) {}
 
+TsdfCellParams PlanningMap::cellParams() const {
+  return {config_.voxels_per_cell, static_cast<float>(config_.cell_m / config_.voxels_per_cell),
+          config_.min_weight};
+}
+
 PlanningBlock* PlanningMap::allocate(const BlockKey& key) {
   auto& slot = blocks_[key];
   if (!slot) {
@@ -132,12 +137,12 @@ namespace {
 /// The TSDF's cell states of `keys`, computed in parallel (reads the octree only).
 std::vector<std::vector<TsdfCellState>> readTsdfCells(const BlockOctree& octree,
                                                       const std::vector<BlockKey>& keys,
-                                                      int voxels_per_cell, float min_weight,
+                                                      const TsdfCellParams& params,
                                                       ThreadPool* pool) {
   std::vector<std::vector<TsdfCellState>> states(keys.size());
   pool->parallelFor(keys.size(), 16, [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i)
-      tsdfCellStates(keys[i], octree.find(keys[i]), voxels_per_cell, min_weight, &states[i]);
+      tsdfCellStates(keys[i], octree.find(keys[i]), params, &states[i]);
   });
   return states;
 }
@@ -165,7 +170,7 @@ PlanningMap::PendingUpdate PlanningMap::beginUpdate(const BlockOctree& octree,
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
   stats.tsdf_blocks = keys.size();
   Timer read_timer;
-  pending.states = readTsdfCells(octree, keys, config_.voxels_per_cell, config_.min_weight, pool_);
+  pending.states = readTsdfCells(octree, keys, cellParams(), pool_);
   stats.read_ms = read_timer.elapsedMs();
   return pending;
 }
@@ -302,8 +307,7 @@ PlanningUpdateStats PlanningMap::rebuild(const BlockOctree& octree) {
   keys.reserve(tsdf.size());
   for (const VoxelBlock* b : tsdf) keys.push_back(b->key);
   stats.tsdf_blocks = keys.size();
-  const auto states =
-      readTsdfCells(octree, keys, config_.voxels_per_cell, config_.min_weight, pool_);
+  const auto states = readTsdfCells(octree, keys, cellParams(), pool_);
   const std::unique_lock<std::mutex> order = awaitNoUpdate();
   std::unique_lock lock(mutex_);
   for (auto& [key, block] : blocks_) {

@@ -9,8 +9,10 @@ namespace stereo_fusion {
 namespace {
 
 /// Trilinear interpolation of `level`'s evidence voxels at a point given in finest-voxel units
-/// of the block, renormalised over the corners that are evidence; NaN if none is.
-float interpolateEvidence(const Voxel* voxels, int level, float min_weight,
+/// of the block, renormalised over the corners that are evidence; NaN if none is. With all 8
+/// corners evidence, divided by the gradient's length where that exceeds 1 (projective →
+/// Euclidean, see TsdfCellState::centre_sdf_m).
+float interpolateEvidence(const Voxel* voxels, int level, const TsdfCellParams& params,
                           const Eigen::Vector3f& point_vox) {
   const int side = levelSide(level), scale = levelScale(level);
   int base[3];
@@ -22,25 +24,39 @@ float interpolateEvidence(const Voxel* voxels, int level, float min_weight,
     t[a] = side < 2 ? 0.0f : std::clamp(q - static_cast<float>(base[a]), 0.0f, 1.0f);
   }
   float sum = 0.0f, total = 0.0f;
+  Eigen::Vector3f gradient = Eigen::Vector3f::Zero();  // of the trilinear field, per level voxel
+  int corners = 0;
   for (int k = 0; k < 2; ++k)
     for (int j = 0; j < 2; ++j)
       for (int i = 0; i < 2; ++i) {
         const int x = std::min(base[0] + i, side - 1), y = std::min(base[1] + j, side - 1),
                   z = std::min(base[2] + k, side - 1);
         const Voxel& v = voxels[VoxelBlock::indexInLevel(side, x, y, z)];
-        if (!(v.weight >= min_weight)) continue;
-        const float w =
-            (i ? t[0] : 1.0f - t[0]) * (j ? t[1] : 1.0f - t[1]) * (k ? t[2] : 1.0f - t[2]);
-        sum += w * v.sdf_m;
-        total += w;
+        if (!(v.weight >= params.min_weight)) continue;
+        const float wx = i ? t[0] : 1.0f - t[0], wy = j ? t[1] : 1.0f - t[1],
+                    wz = k ? t[2] : 1.0f - t[2];
+        sum += wx * wy * wz * v.sdf_m;
+        total += wx * wy * wz;
+        gradient += Eigen::Vector3f((i ? 1.0f : -1.0f) * wy * wz, (j ? 1.0f : -1.0f) * wx * wz,
+                                    (k ? 1.0f : -1.0f) * wx * wy) *
+                    v.sdf_m;
+        ++corners;
       }
-  return total > 0.0f ? sum / total : std::numeric_limits<float>::quiet_NaN();
+  if (!(total > 0.0f)) return std::numeric_limits<float>::quiet_NaN();
+  float sdf = sum / total;
+  if (corners == 8 && side >= 2) {
+    const float slope = gradient.norm() / (static_cast<float>(scale) * params.voxel_m);
+    if (slope > 1.0f) sdf /= slope;
+  }
+  return sdf;
 }
 
 }  // namespace
 
-void tsdfCellStates(const BlockKey& tsdf_key, const VoxelBlock* block, int voxels_per_cell,
-                    float min_weight, std::vector<TsdfCellState>* out) {
+void tsdfCellStates(const BlockKey& tsdf_key, const VoxelBlock* block, const TsdfCellParams& params,
+                    std::vector<TsdfCellState>* out) {
+  const int voxels_per_cell = params.voxels_per_cell;
+  const float min_weight = params.min_weight;
   const int cells = 8 / voxels_per_cell;  // per axis in one TSDF block
   const size_t first = out->size();
   for (int k = 0; k < cells; ++k)
@@ -87,7 +103,7 @@ void tsdfCellStates(const BlockKey& tsdf_key, const VoxelBlock* block, int voxel
             static_cast<float>(c % cells * voxels_per_cell) + half,
             static_cast<float>(c / cells % cells * voxels_per_cell) + half,
             static_cast<float>(c / (cells * cells) * voxels_per_cell) + half);
-        s.centre_sdf_m = interpolateEvidence(block->level(level), level, min_weight, centre_vox);
+        s.centre_sdf_m = interpolateEvidence(block->level(level), level, params, centre_vox);
         break;
       }
 }

@@ -65,13 +65,15 @@ struct PlanningBlock {
   /// ... and the finest such level has one with sdf ≥ 0 (TsdfOccupancy).
   Bits occupied{};
   /// The TSDF's signed distance at the cell's centre (TsdfOccupancy: > 0 behind the surface), in
-  /// units of cell / kCentreSdfScale, clamped to ±1 cell; 0 where the TSDF holds none. A site's
-  /// value moves the distances read from it off the cell centres onto the surface (sub-cell).
+  /// units of cell / kCentreSdfScale, clamped to ± half a cell (the farthest a surface that
+  /// crosses the cell square-on lies from its centre: projective and noisy distances beyond it
+  /// are not the cell's own surface); 0 where the TSDF holds none. A site's value moves the
+  /// distances read from it off the cell centres onto the surface (sub-cell).
   std::array<int8_t, kCells> centre_sdf{};
-  static constexpr float kCentreSdfScale = 127.0f;
+  static constexpr float kCentreSdfScale = 254.0f;  // ±0.5 cell ↔ ±127
   static int8_t quantizeCentreSdf(float sdf_m, double cell_m) {
     if (!std::isfinite(sdf_m)) return 0;
-    const double units = std::clamp(sdf_m / cell_m, -1.0, 1.0) * kCentreSdfScale;
+    const double units = std::clamp(sdf_m / cell_m, -0.5, 0.5) * kCentreSdfScale;
     return static_cast<int8_t>(std::lround(units));
   }
   double centreSdfM(int cell, double cell_m) const {

@@ -157,6 +157,8 @@ class PlanningMap {
   void noteSizeLocked();
   void dropFartherThanLocked(const Eigen::Vector3d& point_m, double max_distance_m);
   PlanningBlock* allocate(const BlockKey& key);
+  /// How the TSDF's cells are read (TsdfOccupancy).
+  TsdfCellParams cellParams() const;
   /// Allocates the transit blocks that `keys` call for where their occupied or free cells
   /// spread past the boxes the rule last acted on; returns how many.
   uint64_t applyTransitRule(std::vector<BlockKey> keys);

@@ -32,7 +32,7 @@ TEST(TsdfOccupancy, TheFinestObservedLevelOverACellDecides) {
   observe(&block, 2, 0, 0, 0, -0.05f);  // level 2 over cell (0, 0, 0): level 1 is finer there
   observe(&block, 2, 1, 1, 1, +0.05f);  // alone over cell (1, 1, 1)
   std::vector<TsdfCellState> states;
-  tsdfCellStates(block.key, &block, 4, 1.0f, &states);
+  tsdfCellStates(block.key, &block, {4, 0.02f, 1.0f}, &states);
   ASSERT_EQ(states.size(), 8u);
   EXPECT_TRUE(stateOf(states, {3, 0, 1}).observed);
   EXPECT_FALSE(stateOf(states, {3, 0, 1}).occupied);
@@ -49,13 +49,13 @@ TEST(TsdfOccupancy, CellsOfOneAndEightVoxelsAndErasedBlocks) {
   block.key = {-1, 2, 0};
   observe(&block, 2, 1, 1, 0, 0.0f);  // sdf 0 is on the surface: occupied
   std::vector<TsdfCellState> states;
-  tsdfCellStates(block.key, &block, 8, 1.0f, &states);
+  tsdfCellStates(block.key, &block, {8, 0.02f, 1.0f}, &states);
   ASSERT_EQ(states.size(), 1u);
   EXPECT_TRUE(states[0].cell == (CellIndex{-1, 2, 0}));
   EXPECT_TRUE(states[0].occupied);
 
   states.clear();
-  tsdfCellStates(block.key, &block, 1, 1.0f, &states);
+  tsdfCellStates(block.key, &block, {1, 0.02f, 1.0f}, &states);
   ASSERT_EQ(states.size(), 512u);
   size_t occupied = 0;
   for (const TsdfCellState& s : states) occupied += s.occupied;
@@ -64,7 +64,7 @@ TEST(TsdfOccupancy, CellsOfOneAndEightVoxelsAndErasedBlocks) {
   EXPECT_FALSE(stateOf(states, {-8 + 3, 16 + 4, 0}).observed);
 
   states.clear();
-  tsdfCellStates(block.key, nullptr, 4, 1.0f, &states);
+  tsdfCellStates(block.key, nullptr, {4, 0.02f, 1.0f}, &states);
   ASSERT_EQ(states.size(), 8u);
   for (const TsdfCellState& s : states) EXPECT_FALSE(s.observed);
 }
@@ -85,7 +85,7 @@ TEST(TsdfOccupancy, EvidenceNeedsTheMinimumWeightAndTheCentreIsInterpolated) {
     observe(&block, 2, 1, 1, 1, 0.05f, 5.0f);  // cell (1, 1, 1): one level-2 voxel, its centre
     observe(&block, 2, 1, 0, 0, 0.05f, 1.5f);  // cell (1, 0, 0): below the minimum: unobserved
     std::vector<TsdfCellState> states;
-    tsdfCellStates(block.key, &block, 4, 2.0f, &states);
+    tsdfCellStates(block.key, &block, {4, 0.02f, 2.0f}, &states);
     const TsdfCellState& cell = stateOf(states, {0, 0, 0});
     ASSERT_TRUE(cell.observed);
     if (weight_x2 >= 2.0f) {
@@ -100,6 +100,27 @@ TEST(TsdfOccupancy, EvidenceNeedsTheMinimumWeightAndTheCentreIsInterpolated) {
     EXPECT_FALSE(stateOf(states, {1, 0, 0}).observed);
     EXPECT_TRUE(std::isnan(stateOf(states, {1, 0, 0}).centre_sdf_m));
   }
+}
+
+// A surface seen at 60° from its normal stores projective distances, twice the Euclidean ones:
+// sdf = 0.04·(x + 0.5) − 0.09 over voxels 1–2: −0.03 at x = 1, +0.01 at x = 2, a slope of 2
+// (0.04 m per 2 cm voxel). The centre interpolates to −0.01 and, all 8 corners evidence, reads
+// −0.01 / 2 = −0.005. With a corner missing there is no gradient to trust: not divided.
+TEST(TsdfOccupancy, TheCentreDistanceIsMadeEuclideanByTheGradient) {
+  VoxelBlock block;
+  block.key = {0, 0, 0};
+  for (int z = 1; z <= 2; ++z)
+    for (int y = 1; y <= 2; ++y)
+      for (int x = 1; x <= 2; ++x) observe(&block, 0, x, y, z, 0.04f * (x + 0.5f) - 0.09f, 2.0f);
+  std::vector<TsdfCellState> states;
+  tsdfCellStates(block.key, &block, {4, 0.02f, 2.0f}, &states);
+  EXPECT_NEAR(stateOf(states, {0, 0, 0}).centre_sdf_m, -0.005f, 1e-6f);
+  // Without voxel (1, 1, 1) (−0.03): the 7 corners at weight 1/8 each renormalise to
+  // (3·(−0.03) + 4·(+0.01)) / 7 = −0.05 / 7, not divided.
+  block.writableAt(0, 1, 1, 1).weight = 1.0f;
+  states.clear();
+  tsdfCellStates(block.key, &block, {4, 0.02f, 2.0f}, &states);
+  EXPECT_NEAR(stateOf(states, {0, 0, 0}).centre_sdf_m, -0.05f / 7.0f, 1e-6f);
 }
 
 }  // namespace
