@@ -1,5 +1,5 @@
 // stereo_fusion_evaluate_esdf OUT/esdf.ply [SEQ | gt_mesh.ply] [--max-distance-m D]
-//                             [--grid-band ZMIN,ZMAX] [--json FILE]
+//                             [--grid-band ZMIN,ZMAX] [--before EARLIER/esdf.ply] [--json FILE]
 //
 // How exact an ESDF is: every free cell's distance against (1) the brute force — the distance
 // from its centre to the nearest occupied cell centre of the same file, by an exact k-d tree
@@ -8,6 +8,8 @@
 // (3) With a ground-truth mesh also the planning report: the truth read as solids
 // (evaluator/SolidTruth), scored as a planner meets it (evaluator/PlanningScore), and the
 // folder's occupancy.pgm against the true surface of its height band (evaluator/OccupancyScore).
+// With --before, the free cells an earlier run of the same frames also calls free, both
+// scored against the truth: how many read worse by more than half a cell (evaluator/EsdfDelta).
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/io/ply_io.h>
 #include <pcl/kdtree/kdtree_flann.h>
@@ -26,6 +28,7 @@
 #include <nlohmann/json.hpp>
 
 #include "evaluator/EsdfAccuracy.h"
+#include "evaluator/EsdfDelta.h"
 #include "evaluator/OccupancyMapFile.h"
 #include "evaluator/OccupancyScore.h"
 #include "evaluator/PlanningScore.h"
@@ -42,7 +45,7 @@ int usage(const char* why) {
   std::fprintf(stderr,
                "%s\nusage: stereo_fusion_evaluate_esdf OUT/esdf.ply [SEQ-FOLDER | gt_mesh.ply] "
                "[--max-distance-m D (default: the file's)] [--grid-band ZMIN,ZMAX (default: "
-               "the run's stats.json, else 0.1,1.5)] [--json FILE]\n",
+               "the run's stats.json, else 0.1,1.5)] [--before EARLIER/esdf.ply] [--json FILE]\n",
                why);
   return 2;
 }
@@ -188,7 +191,7 @@ bool gridBand(const std::string& option, const fs::path& run_dir, double* min_z_
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string esdf_path, reference, json_path, grid_band;
+  std::string esdf_path, reference, json_path, grid_band, before_path;
   double max_distance_m = 0.0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -198,6 +201,8 @@ int main(int argc, char** argv) {
       grid_band = argv[++i];
     } else if (a == "--json" && i + 1 < argc) {
       json_path = argv[++i];
+    } else if (a == "--before" && i + 1 < argc) {
+      before_path = argv[++i];
     } else if (a == "-h" || a == "--help") {
       return usage("");
     } else if (esdf_path.empty()) {
@@ -298,6 +303,21 @@ int main(int argc, char** argv) {
           seen.describe("against the true surface where its nearest point was seen (occupied):")
               .c_str());
       json["ground_truth_seen"] = toJson(seen);
+    }
+    // (2b) Against an earlier run of the same frames: the free cells both call free, each
+    // scored against the truth, and those that read worse than before by over half a cell.
+    if (!before_path.empty() && std::isfinite(cell_m)) {
+      EsdfCells before;
+      double before_max_m = 0.0;
+      if (!readEsdf(before_path, &before, &before_max_m, &error)) {
+        std::fprintf(stderr, "%s\n", error.c_str());
+        return 1;
+      }
+      const eval::CellDelta delta = eval::compareWithBefore(
+          cells, before, max_distance_m, cell_m,
+          [&](const Eigen::Vector3d& p) { return solid.signedDistance(p); });
+      std::printf("%s", delta.describe(before_path).c_str());
+      json["before"] = eval::toJson(delta, before_path);
     }
     // (3) The planning report.
     if (!bvh.empty()) {

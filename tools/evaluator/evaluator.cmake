@@ -26,6 +26,7 @@ set(EVALUATOR_SOURCES
   ${EVALUATOR_DIR}/EvaluationReport.cpp
   ${EVALUATOR_DIR}/ErrorColouredMesh.cpp
   ${EVALUATOR_DIR}/EsdfAccuracy.cpp
+  ${EVALUATOR_DIR}/EsdfDelta.cpp
   ${EVALUATOR_DIR}/SolidTruth.cpp
   ${EVALUATOR_DIR}/PlanningScore.cpp
   ${EVALUATOR_DIR}/OccupancyMapFile.cpp
