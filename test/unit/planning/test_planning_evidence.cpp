@@ -8,6 +8,7 @@
 #include <cmath>
 #include <vector>
 
+#include "PlanningSceneSupport.h"
 #include "TestSupport.h"
 #include "stereo_fusion/Mapper.h"
 
@@ -17,12 +18,7 @@ namespace {
 using test::renderFrame;
 using test::vgaCamera;
 
-MapperConfig sceneConfig() {
-  MapperConfig c;
-  c.max_depth_m = 6.0;
-  c.mesh_enabled = false;
-  return c;
-}
+using test::planningSceneConfig;
 
 /// A wall at x = 3 m, and optionally a floater: a 6 cm cube centred at (1.8, 0, 1) — a patch the
 /// matcher put in mid-air, 1.2 m in front of the wall.
@@ -54,7 +50,7 @@ const Eigen::Vector3d kFloater(1.78, 0.0, 1.0);  // inside the floater's front h
 TEST(PlanningEvidence, AFloaterSeenOnceIsNoObstacle) {
   const sim::AnalyticScene with = wallScene(true);
   for (const double min_weight : {2.0, 1e-3}) {
-    MapperConfig config = sceneConfig();
+    MapperConfig config = planningSceneConfig();
     config.occupancy_min_weight = min_weight;
     Mapper mapper(config);
     ASSERT_TRUE(mapper.integrate(wallFrame(with, 0)).accepted);
@@ -74,7 +70,7 @@ TEST(PlanningEvidence, AFloaterSeenOnceIsNoObstacle) {
 // the wall make its cell free again (carving's decay and −Φ), and the wall stays occupied.
 TEST(PlanningEvidence, AFloaterSeenThroughBecomesFree) {
   const sim::AnalyticScene with = wallScene(true), without = wallScene(false);
-  Mapper mapper(sceneConfig());
+  Mapper mapper(planningSceneConfig());
   int i = 0;
   for (; i < 4; ++i) ASSERT_TRUE(mapper.integrate(wallFrame(with, i)).accepted);
   mapper.updatePlanning();
@@ -98,7 +94,7 @@ TEST(PlanningEvidence, AThinPoleSeenFromThreeViewsStaysOccupied) {
   T.translation() = Eigen::Vector3d(2.0, 0.0, 1.0);
   scene.add(sim::makeCylinder(T, 0.02, 0.6));
   scene.add(sim::makePlane(Eigen::Vector3d(4.0, 0, 0), Eigen::Vector3d(-1, 0, 0)));
-  Mapper mapper(sceneConfig());
+  Mapper mapper(planningSceneConfig());
   for (int i = 0; i < 3; ++i) {
     const Eigen::Vector3d eye(0.0, -0.3 + 0.3 * i, 1.0);
     StereoFrame frame =
@@ -129,7 +125,7 @@ TEST(PlanningEvidence, AThinPoleSeenFromThreeViewsStaysOccupied) {
 TEST(PlanningEvidence, DistancesAboveAPlaneAreSubCell) {
   sim::AnalyticScene scene;
   scene.add(sim::makePlane(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0, 0, 1)));
-  Mapper mapper(sceneConfig());
+  Mapper mapper(planningSceneConfig());
   for (int i = 0; i < 6; ++i) {
     const Eigen::Vector3d eye(0.1 * i, 0.05 * i, 1.0);
     StereoFrame frame =

@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "QuickMode.h"
+#include "PlanningSceneSupport.h"
 #include "TestSupport.h"
 #include "stereo_fusion/Mapper.h"
 
@@ -16,12 +17,7 @@ namespace {
 using test::renderFrame;
 using test::vgaCamera;
 
-MapperConfig sceneConfig() {
-  MapperConfig c;
-  c.max_depth_m = 6.0;
-  c.mesh_enabled = false;
-  return c;
-}
+using test::planningSceneConfig;
 
 // A 4 cm thin wall (a box) at x = 2 m seen from x = 0: cells in front read their distance to
 // it within a cell diagonal, cells behind it stay unknown, and the wall itself is occupied.
@@ -30,7 +26,7 @@ TEST(PlanningScenes, ThinWallDistancesInFrontAndUnknownBehind) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.translation() = Eigen::Vector3d(2.02, 0.0, 1.0);
   scene.add(sim::makeBox(T, Eigen::Vector3d(0.02, 2.0, 1.0)));
-  Mapper mapper(sceneConfig());
+  Mapper mapper(planningSceneConfig());
   for (int i = 0; i < 3; ++i) {
     const Eigen::Vector3d eye(0.0, -0.2 + 0.2 * i, 1.0);
     StereoFrame frame =
@@ -66,7 +62,7 @@ TEST(PlanningScenes, CorridorHalfWidthOnTheAxis) {
   scene.add(sim::makePlane(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0, 0, 1)));
   scene.add(sim::makePlane(Eigen::Vector3d(0, 0, 2.0), Eigen::Vector3d(0, 0, -1)));
   scene.add(sim::makePlane(Eigen::Vector3d(5.0, 0, 0), Eigen::Vector3d(-1, 0, 0)));
-  Mapper mapper(sceneConfig());
+  Mapper mapper(planningSceneConfig());
   for (int i = 0; i < 6; ++i) {
     const Eigen::Vector3d eye(0.3 * i, 0.0, 1.0);
     const double yaw = (i % 2 ? 1 : -1) * 0.5;
@@ -95,7 +91,7 @@ TEST(PlanningScenes, EvictionMakesForgottenSpaceUnknown) {
   sim::AnalyticScene scene;
   scene.add(sim::makePlane(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0, 0, 1)));
   scene.add(sim::makePlane(Eigen::Vector3d(0, 1.5, 0), Eigen::Vector3d(0, -1, 0)));
-  MapperConfig config = sceneConfig();
+  MapperConfig config = planningSceneConfig();
   config.max_depth_m = 4.0;
   config.max_distance_from_camera_m = 6.0;
   config.occupancy_min_weight = 1.0;  // the wall ahead is seen by one or two views at a time
@@ -130,7 +126,7 @@ TEST(PlanningScenes, QueriesWhileFusingAreSafe) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.translation() = Eigen::Vector3d(0, 0, 1.5);
   scene.add(sim::makeRoom(T, Eigen::Vector3d(2.0, 2.0, 1.5)));
-  MapperConfig config = sceneConfig();
+  MapperConfig config = planningSceneConfig();
   config.num_threads = 2;
   Mapper mapper(config);
   const PlanningMap* planning = mapper.planning();
