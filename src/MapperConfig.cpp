@@ -284,7 +284,9 @@ const Table& table() {
                 "views that agree on it, less what carving's decay took). A cell is occupied "
                 "when the finest level with evidence over it has an evidence voxel on or behind "
                 "the surface, so one view of a mismatch is no obstacle, and one that later "
-                "views see through decays until it is free. At most max_weight.",
+                "views see through decays until it is free. At most max_weight. Sparse "
+                "outdoor views (a car's stereo at 10 cm voxels) rarely reach 2: use 1 there "
+                "(doc/performance.md).",
                 member(&MapperConfig::occupancy_min_weight));
     t.addDouble("grid_min_z_m", "m", -1e4, true, 1e4,
                 "Lower bound of the height band (world z) that the 2D occupancy grid "
