@@ -3,6 +3,7 @@
 #include <cstring>
 #include <fstream>
 #include <sstream>
+#include <utility>
 #include <vector>
 
 #include "stereo_fusion/io/WriteTarget.h"
@@ -12,14 +13,20 @@ namespace stereo_fusion {
 bool writeEsdfPly(const std::string& path, const PlanningMap& planning, std::string* error) {
   size_t cells = 0;  // counted first: a vector grown by doubling would hold up to twice the bytes
   planning.forEachKnownCell([&](const CellIndex&, CellState, double) { ++cells; });
-  std::vector<float> vertices;  // x y z distance centre_sdf
-  vertices.reserve(5 * cells);
+  std::vector<std::pair<CellIndex, float>> known;
+  known.reserve(cells);
   planning.forEachKnownCell([&](const CellIndex& cell, CellState, double distance_m) {
+    known.emplace_back(cell, static_cast<float>(distance_m));
+  });
+  // centreSdfM() takes the layer's lock: read after the visitor has let go of it.
+  std::vector<float> vertices;  // x y z distance centre_sdf
+  vertices.reserve(5 * known.size());
+  for (const auto& [cell, distance_m] : known) {
     const Eigen::Vector3d p = planning.grid().centre(cell);
     vertices.insert(vertices.end(), {static_cast<float>(p.x()), static_cast<float>(p.y()),
-                                     static_cast<float>(p.z()), static_cast<float>(distance_m),
+                                     static_cast<float>(p.z()), distance_m,
                                      static_cast<float>(planning.centreSdfM(cell))});
-  });
+  }
   return writeThroughTemporary(
       path, "ESDF point cloud",
       [&](const std::string& temporary, std::string* e) {
