@@ -470,7 +470,7 @@ bool writeMapFileBytes(const std::string& path, std::vector<uint8_t>* bytes, std
   // The temporary is unique per process and per call, so saves to one path from several threads
   // (or nodelets of one manager) never share one; the last rename wins, whole.
   const bool written = writeThroughTemporary(
-      path, "cannot write the map file",
+      path, "map file",
       [&](const std::string& temporary, std::string* why) {
         std::string reason;
         if (writeDurably(temporary, *bytes, &reason)) return true;
@@ -496,7 +496,8 @@ bool readMapFile(const std::string& path, const MapperConfig& config, BlockOctre
   }
   std::ifstream f(path, std::ios::binary);
   if (!f) {
-    *error = path + ": cannot open the map file";
+    // The stream keeps no cause; the OS's is in errno after the open it tried.
+    *error = path + ": cannot open the map file (" + std::strerror(errno) + ")";
     return false;
   }
   // The header first: a file whose header is wrong, or announces another size than the file

@@ -25,7 +25,7 @@ bool exportMesh(const std::string& path,
   const auto write_ply = [&](const std::string& temporary, std::string* why) {
     return writePly(temporary, mesh, why);
   };
-  if (!writeThroughTemporary(path, "cannot write the mesh", write_ply, message)) return false;
+  if (!writeThroughTemporary(path, "mesh", write_ply, message)) return false;
   *message = "wrote " + std::to_string(mesh.triangles.size()) + " triangles to " + path;
   return true;
 }

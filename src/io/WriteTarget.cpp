@@ -35,12 +35,25 @@ bool writeThroughTemporary(
     std::string* error) {
   if (!isWritableTarget(path, error)) return false;
   const std::string temporary = temporaryPathBeside(path);
+  // Created here first, so that a folder the user may not write to is refused with the OS's
+  // cause and the user's own path, not a writer's message about an internal temporary name.
+  std::FILE* probe = std::fopen(temporary.c_str(), "wb");
+  if (probe == nullptr) {
+    *error = path + ": cannot write the " + what + " (" + std::strerror(errno) +
+             "; nothing was written)";
+    return false;
+  }
+  std::fclose(probe);
   if (!write(temporary, error)) {
     std::remove(temporary.c_str());
+    // A writer names the file it wrote: the temporary. The user gave `path`.
+    for (size_t at = error->find(temporary); at != std::string::npos;
+         at = error->find(temporary, at + path.size()))
+      error->replace(at, temporary.size(), path);
     return false;
   }
   if (std::rename(temporary.c_str(), path.c_str()) != 0) {
-    *error = path + ": " + what + " (rename failed: " + std::strerror(errno) + ")";
+    *error = path + ": cannot write the " + what + " (rename failed: " + std::strerror(errno) + ")";
     std::remove(temporary.c_str());
     return false;
   }

@@ -212,15 +212,13 @@ MappingSession::LoadOutcome MappingSession::load(const std::string& path) {
   BlockOctree loaded(config_.blockSizeM());
   MapFileInfo info;
   std::string error;
-  const bool read = readMapFile(path, config_, &loaded, &info, &error);
+  if (!readMapFile(path, config_, &loaded, &info, &error)) {
+    out.message = error + " (the current map is unchanged)";  // blocks loaded: 0
+    return out;
+  }
   std::unique_lock<std::mutex> lock(mutex_, std::defer_lock);
   if (!lockWithin(&lock, requestWait())) {
     out.message = busyMessage() + " (the current map is unchanged)";
-    return out;
-  }
-  if (!read) {
-    out.blocks = mapper_->map().blockCount();
-    out.message = error + " (the current map is unchanged)";
     return out;
   }
   const std::lock_guard<std::mutex> pass(planning_pass_mutex_);

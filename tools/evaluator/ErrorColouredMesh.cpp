@@ -48,7 +48,7 @@ bool writeErrorColouredPly(const std::string& path, const TriangleMesh& reconstr
   const auto write = [&](const std::string& temporary, std::string* why) {
     return writePly(temporary, coloured, why);
   };
-  return writeThroughTemporary(path, "cannot write the error-coloured mesh", write, error);
+  return writeThroughTemporary(path, "error-coloured mesh", write, error);
 }
 
 bool errorColouredPoints(const std::vector<Eigen::Vector3d>& points_m,
@@ -80,7 +80,7 @@ bool writeMissingPly(const std::string& path, const std::vector<Eigen::Vector3d>
   const auto write = [&](const std::string& temporary, std::string* why) {
     return writePly(temporary, cloud, why);
   };
-  return writeThroughTemporary(path, "cannot write the ground-truth samples", write, error);
+  return writeThroughTemporary(path, "ground-truth samples", write, error);
 }
 
 }  // namespace stereo_fusion::eval

@@ -16,7 +16,10 @@ std::string temporaryPathBeside(const std::string& path);
 /// Writes `path` whole or not at all: refuses a target that isWritableTarget() refuses, has
 /// `write` fill a temporary beside it (false with `*error` set: the temporary is removed) and
 /// renames that into place, so a reader never sees half a file and a failure leaves the old one.
-/// A rename failure reads "<path>: <what> (rename failed: <reason>)".
+/// `what` names the kind of file ("mesh", "map file"). Where the OS will not let the temporary
+/// be created: "<path>: cannot write the <what> (<reason>; nothing was written)"; a rename
+/// failure: "<path>: cannot write the <what> (rename failed: <reason>)"; a message of `write`
+/// that names the temporary names <path> instead.
 bool writeThroughTemporary(
     const std::string& path, const std::string& what,
     const std::function<bool(const std::string& temporary_path, std::string* error)>& write,

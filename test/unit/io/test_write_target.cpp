@@ -89,6 +89,32 @@ TEST(WriteTarget, MapAndMeshExportsRefuseAFifoWithoutBlocking) {
   fs::remove_all(dir);
 }
 
+// A refusal names the file the user gave and the OS's cause, never the internal temporary: a
+// folder nobody may create files in (/proc refuses root too), and a writer failing half-way.
+TEST(WriteTarget, RefusalsNameTheUsersFileAndTheCause) {
+  const auto mapper = fusedMapper(2, MapperConfig{});
+  std::string error;
+  const std::string refused = "/proc/stereo_fusion_refused.ply";
+  EXPECT_FALSE(exportMesh(refused, mapper->mesh().submeshes(), {}, &error));
+  EXPECT_EQ(error.rfind(refused + ": cannot write the mesh (", 0), 0u) << error;
+  EXPECT_NE(error.find(" ("), std::string::npos) << "the OS's cause: " << error;
+  EXPECT_EQ(error.find(".tmp-"), std::string::npos) << error;
+
+  const fs::path dir = freshDir("failing_writer");
+  const std::string target = (dir / "out.bin").string();
+  EXPECT_FALSE(writeThroughTemporary(
+      target, "test file",
+      [](const std::string& temporary, std::string* e) {
+        *e = temporary + ": write failed (No space left on device)";
+        return false;
+      },
+      &error));
+  EXPECT_EQ(error, target + ": write failed (No space left on device)");
+  for (const auto& entry : fs::directory_iterator(dir))
+    ADD_FAILURE() << "left behind: " << entry.path();
+  fs::remove_all(dir);
+}
+
 // A huge file is refused from its first 80 bytes: a sparse 64 GiB file of zeros (bad magic), and
 // a real map file grown to 1 GiB (its header announces another size), without reading either.
 TEST(MapFile, HugeFilesAreRefusedFromTheirHeaderWithoutBeingRead) {

@@ -100,7 +100,10 @@ TEST(MappingSession, FramesFromBeforeAResetOrALoadAreSupersededAndCounted) {
   // A broken file leaves the map as it was.
   const MappingSession::LoadOutcome missing = session.load(path + ".missing");
   EXPECT_FALSE(missing.success);
+  EXPECT_EQ(missing.blocks, 0u) << "LoadMap.srv: blocks loaded";
   EXPECT_NE(missing.message.find("unchanged"), std::string::npos);
+  EXPECT_NE(missing.message.find("No such file or directory"), std::string::npos)
+      << missing.message;
   EXPECT_TRUE(mapOf(session) == saved);
   EXPECT_EQ(changes, (std::vector<MapChange>{MapChange::kReset, MapChange::kLoaded}));
   std::filesystem::remove(path);
