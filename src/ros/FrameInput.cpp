@@ -173,7 +173,12 @@ bool FrameInput::waitForPose(const std_msgs::Header& header, Eigen::Isometry3d* 
   const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(node_.tf_timeout_s);
   while (true) {
     error->clear();
-    if (tf_->canTransform(node_.world_frame, header.frame_id, header.stamp, error)) break;
+    try {
+      if (tf_->canTransform(node_.world_frame, header.frame_id, header.stamp, error)) break;
+    } catch (const std::exception& e) {  // tf's time arithmetic throws on absurd stamps
+      *error = std::string("tf cannot look up this stamp: ") + e.what();
+      return false;
+    }
     if (ros::WallTime::now() >= deadline) return false;
     {
       std::lock_guard<std::mutex> lock(queue_mutex_);
@@ -184,7 +189,7 @@ bool FrameInput::waitForPose(const std_msgs::Header& header, Eigen::Isometry3d* 
   try {
     *T_world_camera = tf2::transformToEigen(
         tf_->lookupTransform(node_.world_frame, header.frame_id, header.stamp));
-  } catch (const tf2::TransformException& e) {
+  } catch (const std::exception& e) {  // tf2::TransformException, or its time arithmetic
     *error = e.what();
     return false;
   }
@@ -200,8 +205,7 @@ void FrameInput::processFrame(const QueuedFrame& f, double* publish_ms) {
   const ros::Time now = ros::Time::now();
   if (header.stamp.isZero())
     return drop(RejectReason::kBadStamp, "stamped 0 (no time: its pose cannot be looked up)");
-  if (node_.max_stamp_ahead_s > 0.0 && !now.isZero() &&
-      (header.stamp - now).toSec() > node_.max_stamp_ahead_s)
+  if (stampAheadOfClock(header.stamp, now, node_.max_stamp_ahead_s))
     return drop(RejectReason::kBadStamp,
                 "stamped " + std::to_string(header.stamp.toSec()) +
                     " s, ahead of the clock by more than max_stamp_ahead_s");

@@ -22,6 +22,12 @@ bool toStereoFrame(const stereo_msgs::DisparityImage& disparity, const sensor_ms
     *error = "disparity encoding must be 32FC1, got '" + d.encoding + "'";
     return false;
   }
+  // Rows of floats: a step that is no multiple of 4 cannot be one (OpenCV would throw on it).
+  if (d.step % 4 != 0) {
+    *error = "disparity step " + std::to_string(d.step) +
+             " is not a multiple of 4 bytes (rows of 32-bit floats)";
+    return false;
+  }
   if (d.width == 0 || d.height == 0 || d.step < d.width * 4 ||
       d.data.size() < size_t{d.step} * d.height) {
     *error = "disparity image is empty or its data is shorter than step × height";
@@ -190,6 +196,10 @@ geometry_msgs::TransformStamped toTransform(const Eigen::Isometry3d& T_world_cam
   t.header.frame_id = world_frame;
   t.child_frame_id = camera_header.frame_id;
   return t;
+}
+
+bool stampAheadOfClock(const ros::Time& stamp, const ros::Time& now, double max_ahead_s) {
+  return max_ahead_s > 0.0 && !now.isZero() && stamp.toSec() - now.toSec() > max_ahead_s;
 }
 
 }  // namespace stereo_fusion

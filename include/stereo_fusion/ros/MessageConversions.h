@@ -45,4 +45,9 @@ geometry_msgs::TransformStamped toTransform(const Eigen::Isometry3d& T_world_cam
                                             const std::string& world_frame,
                                             const std_msgs::Header& camera_header);
 
+/// Whether a message stamped `stamp` is more than `max_ahead_s` ahead of the clock `now`
+/// (false when the check is off: max_ahead_s ≤ 0, or no clock yet: now = 0). In seconds as
+/// doubles: ros::Time's difference throws beyond ±2³¹ s, which a broken driver's stamp reaches.
+bool stampAheadOfClock(const ros::Time& stamp, const ros::Time& now, double max_ahead_s);
+
 }  // namespace stereo_fusion

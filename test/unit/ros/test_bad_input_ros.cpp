@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <stdexcept>
 
 #include "MeshTestSupport.h"
 #include "fuser/OfflineFuser.h"
@@ -36,6 +37,21 @@ Messages messagesOf(const StereoFrame& f) {
 }
 
 }  // namespace
+
+// A stamp far ahead of the clock is a bad timestamp, however far: 4e9 s against a clock at
+// 1.7e9 s is 2.3e9 s ahead, past ros::Duration's ±2³¹ s, where subtracting ros::Times threw
+// "Duration is out of dual 32-bit range" and the frame was counted as an error while fusing.
+TEST(BadInput, StampsFarAheadOfTheClockAreCaughtWithoutThrowing) {
+  const ros::Time now(1700000000u, 0), far(4000000000u, 0);
+  EXPECT_THROW((void)(far - now), std::runtime_error) << "why the check works in doubles";
+  bool ahead = false;
+  EXPECT_NO_THROW(ahead = stampAheadOfClock(far, now, 10.0));
+  EXPECT_TRUE(ahead);
+  EXPECT_TRUE(stampAheadOfClock(ros::Time(1700000011u, 0), now, 10.0));
+  EXPECT_FALSE(stampAheadOfClock(ros::Time(1700000009u, 0), now, 10.0));
+  EXPECT_FALSE(stampAheadOfClock(far, now, 0.0)) << "0: the check is off";
+  EXPECT_FALSE(stampAheadOfClock(far, ros::Time(), 10.0)) << "no clock yet";
+}
 
 TEST(BadInput, CameraInfoAndDisparityCalibrationAreChecked) {
   const Messages good = messagesOf(floorAndSphereFrame(0, 1.0));
@@ -91,6 +107,13 @@ TEST(BadInput, CameraInfoAndDisparityCalibrationAreChecked) {
        "unsupported image encoding"},
       {"disparity 16UC1", [](Messages* m) { m->disparity.image.encoding = "16UC1"; },
        "must be 32FC1"},
+      {"disparity step not a multiple of 4",
+       [](Messages* m) {
+         m->disparity.image.step += 2;
+         m->disparity.image.data.resize(size_t{m->disparity.image.step} *
+                                        m->disparity.image.height);
+       },
+       "disparity step 1282 is not a multiple of 4 bytes"},
       {"CameraInfo size differs", [](Messages* m) { m->info.width = 640; },
        "CameraInfo is 640x240"},
       {"CameraInfo fy = 1e-3",
