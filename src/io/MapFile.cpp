@@ -294,9 +294,16 @@ bool decodeFreeSpace(const uint8_t** r, const uint8_t* end, SeenFreeSpace* out,
     PlanningBlock::Bits bits;
     for (size_t w = 0; w < bits.size(); ++w) bits[w] = getU64(*r + 16 + 8 * w);
     const bool ordered = out->blocks.empty() || out->blocks.back().first < key;
-    if (getU32(*r + 12) != 0 || !BlockOctree::keyInRange(key) || !ordered) {
-      *error = "invalid map file: seen-free block " + std::to_string(n) +
-               " is out of range, out of order or padded";
+    if (!planningBlockKeyInRange(key)) {
+      *error = "invalid map file: seen-free block " + std::to_string(n) + " (" +
+               std::to_string(key.x) + ", " + std::to_string(key.y) + ", " + std::to_string(key.z) +
+               ") is beyond the planning grid's range (±" +
+               std::to_string(kPlanningCellLimit / PlanningBlock::kSide) + " blocks)";
+      return false;
+    }
+    if (getU32(*r + 12) != 0 || !ordered) {
+      *error =
+          "invalid map file: seen-free block " + std::to_string(n) + " is out of order or padded";
       return false;
     }
     out->blocks.emplace_back(key, bits);

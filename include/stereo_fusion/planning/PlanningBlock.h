@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdlib>
 #include <cstdint>
 
 #include <Eigen/Core>
@@ -126,13 +127,22 @@ inline CellIndex cellOf(const BlockKey& block, int cell) {
   return {block.x * s + cell % s, block.y * s + (cell / s) % s, block.z * s + cell / (s * s)};
 }
 
+/// The planning grid's range: cells within ±kPlanningCellLimit on each axis
+/// (PlanningGrid::cellFor), so planning block keys within ±kPlanningCellLimit / 8 — 8× fewer than
+/// the TSDF's keys reach.
+constexpr int32_t kPlanningCellLimit = int32_t{1} << 28;
+inline bool planningBlockKeyInRange(const BlockKey& key) {
+  constexpr int32_t limit = kPlanningCellLimit / PlanningBlock::kSide;
+  return std::abs(key.x) < limit && std::abs(key.y) < limit && std::abs(key.z) < limit;
+}
+
 /// Cell geometry: world point ↔ cell.
 struct PlanningGrid {
   double cell_m = 0.08;
   /// The cell holding `p_world`; false if it lies beyond the grid's range (±2²⁸ cells) or is
   /// not finite.
   bool cellFor(const Eigen::Vector3d& p_world, CellIndex* cell) const {
-    const double limit = static_cast<double>(1 << 28);
+    const double limit = static_cast<double>(kPlanningCellLimit);
     int32_t c[3];
     for (int a = 0; a < 3; ++a) {
       const double v = std::floor(p_world[a] / cell_m);

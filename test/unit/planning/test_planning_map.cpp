@@ -430,5 +430,50 @@ TEST(PlanningMapFile, SavedAndLoadedLayerIsTheSameAndOlderFilesLoadWithFreeSpace
   EXPECT_LT(cellMap(*older.planning()).size(), saved_cells.size());
 }
 
+// A crafted file: a seen-free record's key set beyond the planning grid (still in sort order,
+// checksums sealed again) is refused with the record named, not loaded as a block 2^26 blocks
+// out that the occupancy grid would then span. The last key in range loads.
+TEST(PlanningMapFile, SeenFreeKeysBeyondThePlanningGridAreRefused) {
+  sim::AnalyticScene scene;
+  scene.add(sim::makePlane(Eigen::Vector3d(3.0, 0, 0), Eigen::Vector3d(-1, 0, 0)));
+  MapperConfig config;
+  config.mesh_enabled = false;
+  Mapper original(config);
+  const Eigen::Isometry3d pose = sim::lookAt(Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(3, 0, 1));
+  ASSERT_TRUE(original.integrate(test::renderFrame(scene, test::vgaCamera(), pose)).accepted);
+  original.updatePlanning();
+  const size_t records = original.planning()->seenFree().size();
+  ASSERT_GT(records, 0u);
+  std::vector<uint8_t> bytes = original.encodeMap();
+  // The seen-free section ends the payload; its last record's key x is its first 4 bytes.
+  const size_t last_x = bytes.size() - kMapFileFreeSpaceRecordBytes;
+  auto withKeyX = [&](int32_t x) {
+    std::vector<uint8_t> crafted = bytes;
+    for (int b = 0; b < 4; ++b)
+      crafted[last_x + b] = static_cast<uint8_t>(static_cast<uint32_t>(x) >> (8 * b));
+    sealMapFile(&crafted);
+    return crafted;
+  };
+  const int32_t limit = kPlanningCellLimit / PlanningBlock::kSide;  // 2^25
+  for (const int32_t x : {int32_t{1} << 26, limit, limit - 1}) {
+    const std::vector<uint8_t> crafted = withKeyX(x);
+    BlockOctree octree(config.blockSizeM());
+    MapFileInfo info;
+    std::string error;
+    const bool decoded =
+        decodeMapFile(crafted.data(), crafted.size(), config, &octree, &info, &error);
+    if (x >= limit) {
+      EXPECT_FALSE(decoded) << x;
+      EXPECT_NE(
+          error.find("seen-free block " + std::to_string(records - 1) + " (" + std::to_string(x)),
+          std::string::npos)
+          << error;
+      EXPECT_NE(error.find("beyond the planning grid's range"), std::string::npos) << error;
+    } else {
+      EXPECT_TRUE(decoded) << error;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace stereo_fusion
