@@ -295,6 +295,13 @@ const Table& table() {
     t.addDouble("grid_max_z_m", "m", -1e4, true, 1e4,
                 "Upper bound of the occupancy grid's height band (world z).",
                 member(&MapperConfig::grid_max_z_m));
+    t.addInt("grid_max_cells", "cells", 10000, 1000000000,
+             "Largest 2D occupancy grid (~occupancy_grid, occupancy.pgm): a map whose known "
+             "columns span more is given as a square window of at most sqrt(grid_max_cells) "
+             "cells a side around the camera, kept inside the known extent (a WARN on "
+             "/diagnostics; 'occupancy grid windowed' in the offline log). 4194304 = 2048 x "
+             "2048: 164 m at 8 cm cells, 4 MB a message.",
+             member(&MapperConfig::grid_max_cells));
     return t;
   }();
   return parameters;

@@ -25,6 +25,7 @@
 #include "stereo_fusion/map/MapRegion.h"
 #include "stereo_fusion/mesh/MeshStore.h"
 #include "stereo_fusion/mesh/TextureStore.h"
+#include "stereo_fusion/planning/OccupancyGrid2D.h"
 #include "stereo_fusion/planning/PlanningMap.h"
 #include "stereo_fusion/util/ThreadPool.h"
 
@@ -173,6 +174,17 @@ class Mapper {
   const MapperConfig& config() const { return config_; }
   /// Frames accepted so far.
   uint64_t framesIntegrated() const { return frames_integrated_; }
+  /// Where the last fused frame's camera was (nullopt before the first, after a reset or load).
+  const std::optional<Eigen::Vector3d>& lastCameraPositionM() const {
+    return gate_.lastFusedPosition();
+  }
+  /// The occupancy grid's window (grid_max_cells) around the last camera, or the origin.
+  GridWindow occupancyGridWindow() const {
+    GridWindow w;
+    w.max_cells = config_.grid_max_cells;
+    if (lastCameraPositionM()) w.centre_m = lastCameraPositionM()->head<2>();
+    return w;
+  }
   /// The median of the last kNoiseFrames frames' measured disparity noise (px), NaN before
   /// any: what /diagnostics and the warnings report. (The contradiction filter uses each
   /// frame's own estimate, so a map continued after a load fuses as if never interrupted.)

@@ -109,8 +109,9 @@ struct MapperConfig {
       0.0;  ///< Rays without a measurement count as free up to this range. 0 = off.
   double occupancy_min_weight =
       2.0;  ///< A TSDF voxel is evidence for the planning layer from this weight on.
-  double grid_min_z_m = 0.1;  ///< Height band of the 2D occupancy grid (world z), lower bound.
-  double grid_max_z_m = 1.5;  ///< ... upper bound.
+  double grid_min_z_m = 0.1;     ///< Height band of the 2D occupancy grid (world z), lower bound.
+  double grid_max_z_m = 1.5;     ///< ... upper bound.
+  int grid_max_cells = 4194304;  ///< Largest occupancy grid; wider maps give a window of it.
 
   /// Block edge length in metres.
   double blockSizeM() const { return 8.0 * voxel_size_m; }

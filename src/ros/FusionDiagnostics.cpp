@@ -43,6 +43,9 @@ void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
                    "no frame fused yet; see the drop counters");
   else if (dropped > 0)
     status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "frames dropped; see the counters");
+  else if (stats_->grid_windowed.load())
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN,
+                   "the occupancy grid is a window around the camera (grid_max_cells)");
   else
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, "fusing");
   // disparities received = frames fused + every "dropped:" counter + frames in the queue / worker.
@@ -116,6 +119,7 @@ void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   status.add("planning memory: ESDF (MB)", map_status_.planning_esdf_bytes / 1048576.0);
   status.add("occupancy grid width (cells)", stats_->grid_width.load());
   status.add("occupancy grid height (cells)", stats_->grid_height.load());
+  status.add("occupancy grid windowed", stats_->grid_windowed.load() ? "yes" : "no");
 }
 
 }  // namespace stereo_fusion

@@ -116,13 +116,15 @@ void PlanningPublisher::tick() {
   OccupancyGrid2D grid;
   std::vector<std::array<float, 4>> slice;  // x y z distance
   std::vector<std::array<float, 3>> occupied;
+  GridWindow window;
+  if (want_grid) session_->withMapper([&](Mapper& m) { window = m.occupancyGridWindow(); });
   session_->updatePlanning([&](const PlanningMap& planning, const PlanningPass& pass) {
     have_layer = true;
     const PlanningUpdateStats& s = pass.stats;
     if (s.tsdf_blocks > 0 || s.blocks_allocated > 0 || s.blocks_erased > 0)
       stats_->recordPlanningUpdate(pass.esdf_ms);
     if (want_grid) {
-      grid = projectOccupancy(planning, grid_min_z_m_, grid_max_z_m_);
+      grid = projectOccupancy(planning, grid_min_z_m_, grid_max_z_m_, window);
       full = replaced_.exchange(false);
     }
     if (want_slice || want_occupied) {
@@ -147,6 +149,13 @@ void PlanningPublisher::tick() {
     const OccupancyGrid2D aligned = alignGrid(grid, kGridAlignCells);
     stats_->grid_width = static_cast<uint32_t>(aligned.width);
     stats_->grid_height = static_cast<uint32_t>(aligned.height);
+    stats_->grid_windowed = grid.windowed;
+    if (grid.windowed)
+      ROS_WARN_THROTTLE(10.0,
+                        "stereo_fusion: the occupancy grid is a %d x %d window around the camera: "
+                        "the known columns span %lld x %lld cells, more than grid_max_cells",
+                        grid.width, grid.height, static_cast<long long>(grid.known_width),
+                        static_cast<long long>(grid.known_height));
     publishGrid(aligned, full, stamp);
   }
   std_msgs::Header header;

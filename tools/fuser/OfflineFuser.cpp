@@ -207,8 +207,16 @@ bool writePlanningOutputs(const std::string& out_dir, Mapper* mapper, bool time_
   const fs::path dir(out_dir);
   if (!writeEsdfPly((dir / "esdf.ply").string(), *planning, error)) return false;
   const MapperConfig& config = mapper->config();
-  const OccupancyGrid2D grid =
-      projectOccupancy(*planning, config.grid_min_z_m, config.grid_max_z_m);
+  const OccupancyGrid2D grid = projectOccupancy(*planning, config.grid_min_z_m, config.grid_max_z_m,
+                                                mapper->occupancyGridWindow());
+  if (grid.windowed)
+    std::fprintf(stderr,
+                 "warning: occupancy grid windowed: the known columns span %lld x %lld cells, "
+                 "more than grid_max_cells (%d); occupancy.pgm holds %d x %d around the last "
+                 "camera\n",
+                 static_cast<long long>(grid.known_width),
+                 static_cast<long long>(grid.known_height), config.grid_max_cells, grid.width,
+                 grid.height);
   if (!writeOccupancyMap((dir / "occupancy.pgm").string(), (dir / "occupancy.yaml").string(), grid,
                          error))
     return false;

@@ -37,6 +37,8 @@ class FrameGate {
   void accepted(const StereoFrame& frame);
   /// Forgets the history (map reset or load).
   void reset();
+  /// The camera position of the last fused frame (none yet: nullopt).
+  const std::optional<Eigen::Vector3d>& lastFusedPosition() const { return last_fused_position_m_; }
 
  private:
   struct Seen {

@@ -2,6 +2,8 @@
 #include <cstdint>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "stereo_fusion/planning/PlanningMap.h"
 
 namespace stereo_fusion {
@@ -17,10 +19,22 @@ struct OccupancyGrid2D {
   int width = 0, height = 0;
   /// Row-major, row 0 at the smallest y (the OccupancyGrid convention).
   std::vector<int8_t> cells;
+  /// The known columns spanned more than the window allowed: this is a window of them.
+  bool windowed = false;
+  int64_t known_width = 0, known_height = 0;  ///< the known columns' extent, in cells
   int8_t at(int x, int y) const { return cells[static_cast<size_t>(y) * width + x]; }
 };
 
-/// The cells whose centre lies in [min_z_m, max_z_m], over the bounding box of the known ones.
-OccupancyGrid2D projectOccupancy(const PlanningMap& planning, double min_z_m, double max_z_m);
+/// How large a projected grid may be (grid_max_cells): over it, a window of at most
+/// floor(√max_cells) cells a side around `centre_m` (the camera), kept inside the known extent.
+struct GridWindow {
+  int64_t max_cells = 0;  ///< 0: no limit
+  Eigen::Vector2d centre_m = Eigen::Vector2d::Zero();
+};
+
+/// The cells whose centre lies in [min_z_m, max_z_m], over the bounding box of the known ones,
+/// or the window of it `window` allows.
+OccupancyGrid2D projectOccupancy(const PlanningMap& planning, double min_z_m, double max_z_m,
+                                 const GridWindow& window = {});
 
 }  // namespace stereo_fusion

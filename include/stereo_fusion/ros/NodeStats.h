@@ -96,6 +96,7 @@ class NodeStats {
       0};  // frames the gate accepted as a relocalisation / clock reset
   // The occupancy grid last built (PlanningPublisher; 0 × 0 until someone subscribed).
   std::atomic<uint32_t> grid_width{0}, grid_height{0};
+  std::atomic<bool> grid_windowed{false};  ///< the last grid was a window (grid_max_cells)
 
  private:
   using Row = std::array<double, 3>;
