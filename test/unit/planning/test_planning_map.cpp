@@ -387,16 +387,21 @@ std::map<std::tuple<int, int, int>, std::pair<CellState, double>> cellMap(
 
 // The map file keeps the seen-free space: a loaded map answers every cell as the saved one did.
 // A version-2 file (no seen-free section) loads with only the TSDF's cells known.
-TEST(PlanningMapFile, SavedAndLoadedLayerIsTheSameAndOlderFilesLoadWithFreeSpaceUnknown) {
+/// A wall 3 m ahead seen by one frame from (0, 0, 1), the planning layer brought up to date.
+void fuseOneViewOfAWall(Mapper* mapper) {
   sim::AnalyticScene scene;
   scene.add(sim::makePlane(Eigen::Vector3d(3.0, 0, 0), Eigen::Vector3d(-1, 0, 0)));
+  const Eigen::Isometry3d pose = sim::lookAt(Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(3, 0, 1));
+  ASSERT_TRUE(mapper->integrate(test::renderFrame(scene, test::vgaCamera(), pose)).accepted);
+  mapper->updatePlanning();
+}
+
+TEST(PlanningMapFile, SavedAndLoadedLayerIsTheSameAndOlderFilesLoadWithFreeSpaceUnknown) {
   MapperConfig config;
   config.mesh_enabled = false;
   config.occupancy_min_weight = 1.0;  // one view is evidence: the wall is an obstacle
   Mapper original(config);
-  const Eigen::Isometry3d pose = sim::lookAt(Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(3, 0, 1));
-  ASSERT_TRUE(original.integrate(test::renderFrame(scene, test::vgaCamera(), pose)).accepted);
-  original.updatePlanning();
+  ASSERT_NO_FATAL_FAILURE(fuseOneViewOfAWall(&original));
   const auto saved_cells = cellMap(*original.planning());
   ASSERT_EQ(original.planning()->state({1.0, 0.0, 1.0}),
             CellState::kFree);  // seen free, far from the band
@@ -434,14 +439,10 @@ TEST(PlanningMapFile, SavedAndLoadedLayerIsTheSameAndOlderFilesLoadWithFreeSpace
 // checksums sealed again) is refused with the record named, not loaded as a block 2^26 blocks
 // out that the occupancy grid would then span. The last key in range loads.
 TEST(PlanningMapFile, SeenFreeKeysBeyondThePlanningGridAreRefused) {
-  sim::AnalyticScene scene;
-  scene.add(sim::makePlane(Eigen::Vector3d(3.0, 0, 0), Eigen::Vector3d(-1, 0, 0)));
   MapperConfig config;
   config.mesh_enabled = false;
   Mapper original(config);
-  const Eigen::Isometry3d pose = sim::lookAt(Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(3, 0, 1));
-  ASSERT_TRUE(original.integrate(test::renderFrame(scene, test::vgaCamera(), pose)).accepted);
-  original.updatePlanning();
+  ASSERT_NO_FATAL_FAILURE(fuseOneViewOfAWall(&original));
   const size_t records = original.planning()->seenFree().size();
   ASSERT_GT(records, 0u);
   std::vector<uint8_t> bytes = original.encodeMap();
