@@ -45,8 +45,9 @@ OccupancyGrid2D projectOccupancy(const PlanningMap& planning, double min_z_m, do
     const auto side = std::max<int64_t>(
         1, static_cast<int64_t>(std::floor(std::sqrt(static_cast<double>(window.max_cells)))));
     const double limit = static_cast<double>(kPlanningCellLimit);
-    const auto centreCell = [&](double v_m) {
-      return static_cast<int64_t>(std::clamp(std::floor(v_m / g.cell_m), -limit, limit));
+    const auto centreCell = [&](double v_m) {  // a non-finite centre: the origin's cell
+      const double cell = std::floor(v_m / g.cell_m);
+      return std::isfinite(cell) ? static_cast<int64_t>(std::clamp(cell, -limit, limit)) : 0;
     };
     windowAxis(side, centreCell(window.centre_m.x()), &x0, &x1);
     windowAxis(side, centreCell(window.centre_m.y()), &y0, &y1);
