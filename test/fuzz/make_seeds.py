@@ -124,3 +124,24 @@ zero_q = bytes([0x01, 1, 128, 128, 128, 128]) + struct.pack("<4f", 0.0, 0.0, 0.0
 write("fuzz_ros_trajectory", "zero_quaternion", zero_q)
 long_q = bytes([0x01, 1, 128, 128, 128, 128]) + struct.pack("<4f", 0.0, 0.0, 0.0, 2.0)
 write("fuzz_ros_trajectory", "quaternion_of_norm_two", long_q)
+
+# Map file, version 3 (io/MapFile.h): one block stored at 2³ and a seen-free section of two
+# planning blocks at 8 cm. fuzz_map_file also replays every input with its checksums and
+# payload size recomputed (the crafted class), so mutated keys reach the range checks.
+def map_file_v3(blocks, free_cell_m, free_blocks):
+    payload = b""
+    for (x, y, z), sdfs in blocks:
+        payload += struct.pack("<iiiQBBBB", x, y, z, len(sdfs), 0b100, 0, 0, 0)
+        payload += b"".join(struct.pack("<ffBBBB", s, 1.0 + i, 100, 120, 140, 0) for i, s in enumerate(sdfs))
+    payload += struct.pack("<dQ", free_cell_m, len(free_blocks))
+    for (x, y, z), bits in free_blocks:
+        payload += struct.pack("<iiiI", x, y, z, 0) + struct.pack("<8Q", *bits)
+    head = struct.pack("<8sIIddddQQQ", b"SFUSEMAP", 3, 80, 0.02, 4.0, 2.0, 4.0, 9, len(blocks), len(payload))
+    head += struct.pack("<I", zlib.crc32(payload))
+    return head + struct.pack("<I", zlib.crc32(head)) + payload
+
+
+level2 = [-0.05, -0.03, -0.01, 0.01, 0.03, 0.05, 0.07, 0.09]
+write("fuzz_map_file", "one_block_seen_free_v3.sfmap",
+      map_file_v3([((3, -2, 7), level2)], 0.08,
+                  [((0, -1, 3), [0xFFFFFFFFFFFFFFFF] * 8), ((1, -1, 3), [0x0F0F0F0F0F0F0F0F] + [0] * 7)]))
