@@ -11,11 +11,12 @@ namespace stereo_fusion {
 
 PlanningScore scorePlanning(const EsdfCells& cells, double max_distance_m,
                             const std::function<double(const Eigen::Vector3d&)>& signed_truth,
-                            const PlanningScoreOptions& options) {
+                            const PlanningScoreOptions& options,
+                            const std::function<bool(const Eigen::Vector3d&)>& nearest_seen) {
   PlanningScore score;
   score.options = options;
   score.max_distance_m = max_distance_m;
-  std::vector<double> near_errors;
+  std::vector<double> near_errors, near_seen_errors;
   for (size_t i = 0; i < cells.free_centres.size(); ++i) {
     const double truth = signed_truth(cells.free_centres[i]);
     const double esdf = cells.free_distances_m[i];
@@ -27,12 +28,18 @@ PlanningScore scorePlanning(const EsdfCells& cells, double max_distance_m,
       continue;
     const double capped = std::min(esdf, max_distance_m);
     near_errors.push_back(std::abs(capped - truth));
+    if (nearest_seen && nearest_seen(cells.free_centres[i]))
+      near_seen_errors.push_back(near_errors.back());
     score.near_too_close += capped < truth - options.too_close_m;
   }
   score.near_cells = near_errors.size();
   std::sort(near_errors.begin(), near_errors.end());
   score.near_median_m = percentileOfSorted(near_errors, 0.5);
   score.near_p90_m = percentileOfSorted(near_errors, 0.9);
+  score.near_seen_cells = near_seen_errors.size();
+  std::sort(near_seen_errors.begin(), near_seen_errors.end());
+  score.near_seen_median_m = percentileOfSorted(near_seen_errors, 0.5);
+  score.near_seen_p90_m = percentileOfSorted(near_seen_errors, 0.9);
 
   std::vector<double> phantom_distances, phantom_z;
   for (const Eigen::Vector3d& centre : cells.occupied_centres) {
@@ -66,7 +73,17 @@ std::string PlanningScore::describe() const {
       100.0 * shareOf(phantom_cells, occupied_cells), phantom_median_distance_m, phantom_median_z_m,
       o.clear_min_m, clear_inside_solid, clear_cells,
       100.0 * shareOf(clear_inside_solid, clear_cells));
-  return text;
+  std::string out = text;
+  if (near_seen_cells > 0) {
+    std::snprintf(text, sizeof(text),
+                  "  free %.1f-%.1f m whose nearest true surface was seen: %zu cells (%.1f %%), "
+                  "median %.1f cm, p90 %.1f cm\n",
+                  o.near_lo_m, std::min(o.near_hi_m, max_distance_m), near_seen_cells,
+                  100.0 * shareOf(near_seen_cells, near_cells), 100.0 * near_seen_median_m,
+                  100.0 * near_seen_p90_m);
+    out += text;
+  }
+  return out;
 }
 
 }  // namespace stereo_fusion

@@ -34,6 +34,11 @@ struct PlanningScore {
   size_t near_cells = 0;
   double near_median_m = 0.0, near_p90_m = 0.0;
   size_t near_too_close = 0;  ///< ESDF more than too_close_m below the truth
+  /// The near cells whose nearest true surface point the map saw (scorePlanning's
+  /// `nearest_seen`): what the ESDF gets wrong where it could know; the others read the nearest
+  /// surface the map has, up to metres past an unseen one.
+  size_t near_seen_cells = 0;
+  double near_seen_median_m = 0.0, near_seen_p90_m = 0.0;
   // Occupied cells in free space.
   size_t occupied_cells = 0, phantom_cells = 0;
   double phantom_median_distance_m = 0.0, phantom_median_z_m = 0.0;
@@ -50,8 +55,11 @@ inline double shareOf(size_t a, size_t b) { return b == 0 ? 0.0 : double(a) / do
 /// Scores every cell of `cells` against `signed_truth(centre)` (metres, negative inside a solid,
 /// e.g. eval::SolidTruth). ESDF distances are capped at `max_distance_m`; near cells whose truth
 /// exceeds it are left out (the ESDF cannot tell them apart). Percentiles are nearest-rank.
+/// `nearest_seen(centre)`, if given, says whether a free cell's nearest true surface point was
+/// seen (near_seen_*); without it those stay 0.
 PlanningScore scorePlanning(const EsdfCells& cells, double max_distance_m,
                             const std::function<double(const Eigen::Vector3d&)>& signed_truth,
-                            const PlanningScoreOptions& options = {});
+                            const PlanningScoreOptions& options = {},
+                            const std::function<bool(const Eigen::Vector3d&)>& nearest_seen = {});
 
 }  // namespace stereo_fusion

@@ -120,6 +120,9 @@ nlohmann::ordered_json toJson(const PlanningScore& s) {
                             {"cells", s.near_cells},
                             {"median_m", s.near_median_m},
                             {"p90_m", s.near_p90_m},
+                            {"nearest_seen_cells", s.near_seen_cells},
+                            {"nearest_seen_median_m", s.near_seen_median_m},
+                            {"nearest_seen_p90_m", s.near_seen_p90_m},
                             {"too_close_m", o.too_close_m},
                             {"too_close_cells", s.near_too_close},
                             {"too_close_share", shareOf(s.near_too_close, s.near_cells)}};
@@ -282,22 +285,21 @@ int main(int argc, char** argv) {
     json["ground_truth"] = toJson(truth);
     // The same where the nearest true surface point lies in an occupied cell (within half a
     // cell diagonal of its centre): what the ESDF's grid costs where the map saw the surface.
+    // The distance to that point, or infinity where the map did not see it.
+    std::vector<int> index(1);
+    std::vector<float> squared(1);
+    const double reach = diagonal + 1e-6;
+    const auto seen_distance = [&](const Eigen::Vector3d& p) {
+      eval::NearestSurfacePoint nearest;
+      if (occupied->empty() || !bvh.nearest(p, &nearest)) return double(INFINITY);
+      const Eigen::Vector3d& q = nearest.point_m;
+      if (tree.nearestKSearch(pcl::PointXYZ(q.x(), q.y(), q.z()), 1, index, squared) < 1)
+        return double(INFINITY);
+      if ((cells.occupied_centres[index[0]] - q).norm() > reach) return double(INFINITY);
+      return nearest.distance_m;
+    };
     if (!occupied->empty()) {
-      std::vector<int> index(1);
-      std::vector<float> squared(1);
-      const double reach = diagonal + 1e-6;
-      const EsdfAccuracy seen = compareEsdf(
-          cells, max_distance_m, edges,
-          [&](const Eigen::Vector3d& p) {
-            eval::NearestSurfacePoint nearest;
-            if (!bvh.nearest(p, &nearest)) return double(INFINITY);
-            const Eigen::Vector3d& q = nearest.point_m;
-            if (tree.nearestKSearch(pcl::PointXYZ(q.x(), q.y(), q.z()), 1, index, squared) < 1)
-              return double(INFINITY);
-            if ((cells.occupied_centres[index[0]] - q).norm() > reach) return double(INFINITY);
-            return nearest.distance_m;
-          },
-          diagonal);
+      const EsdfAccuracy seen = compareEsdf(cells, max_distance_m, edges, seen_distance, diagonal);
       std::printf(
           "%s",
           seen.describe("against the true surface where its nearest point was seen (occupied):")
@@ -322,7 +324,9 @@ int main(int argc, char** argv) {
     // (3) The planning report.
     if (!bvh.empty()) {
       const PlanningScore planning = scorePlanning(
-          cells, max_distance_m, [&](const Eigen::Vector3d& p) { return solid.signedDistance(p); });
+          cells, max_distance_m, [&](const Eigen::Vector3d& p) { return solid.signedDistance(p); },
+          PlanningScoreOptions{},
+          [&](const Eigen::Vector3d& p) { return std::isfinite(seen_distance(p)); });
       std::printf("%s", planning.describe().c_str());
       json["planning"] = toJson(planning);
       const fs::path yaml = run_dir / "occupancy.yaml";

@@ -140,6 +140,27 @@ TEST(PlanningScoreEsdf, ScoresHandPlacedCells) {
       << s.describe();
 }
 
+TEST(PlanningScoreEsdf, SplitsOffTheNearCellsWhoseNearestSurfaceWasSeen) {
+  const SolidTruth truth(boxMesh());
+  const auto signed_truth = [&](const Vector3d& p) { return truth.signedDistance(p); };
+  // "Seen": the near cells of truth 0.2–0.7 (z ≤ 1.7), |errors| 0.01 … 0.06; nearest rank of
+  // six: median = #round(2.5) = #3 0.04, p90 = #round(4.5) = #5 0.06.
+  const auto seen = [](const Vector3d& p) { return p.z() <= 1.75; };
+  const PlanningScore s = scorePlanning(handPlacedCells(), 2.0, signed_truth, {}, seen);
+  EXPECT_EQ(s.near_cells, 11u);
+  EXPECT_EQ(s.near_seen_cells, 6u);
+  EXPECT_NEAR(s.near_seen_median_m, 0.04, 1e-6);
+  EXPECT_NEAR(s.near_seen_p90_m, 0.06, 1e-6);
+  EXPECT_NE(s.describe().find("whose nearest true surface was seen: 6 cells (54.5 %), median "
+                              "4.0 cm, p90 6.0 cm"),
+            std::string::npos)
+      << s.describe();
+  // Without the predicate nothing is split off, and the report says nothing of it.
+  const PlanningScore plain = scorePlanning(handPlacedCells(), 2.0, signed_truth);
+  EXPECT_EQ(plain.near_seen_cells, 0u);
+  EXPECT_EQ(plain.describe().find("was seen"), std::string::npos);
+}
+
 TEST(PlanningScoreEsdf, CapsTheEsdfAndSkipsTruthsBeyondTheMax) {
   const SolidTruth truth(boxMesh());
   EsdfCells cells;
