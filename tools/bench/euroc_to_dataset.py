@@ -144,23 +144,11 @@ def main():
 
 
 def quaternion(r):
-    """(qx, qy, qz, qw) of the rotation matrix r (camera → world)."""
-    q = np.empty(4)
-    t = np.trace(r)
-    if t > 0:
-        s = 0.5 / np.sqrt(t + 1.0)
-        q = [(r[2, 1] - r[1, 2]) * s, (r[0, 2] - r[2, 0]) * s, (r[1, 0] - r[0, 1]) * s, 0.25 / s]
-    else:
-        i = int(np.argmax(np.diag(r)))
-        j, k = (i + 1) % 3, (i + 2) % 3
-        s = 2.0 * np.sqrt(1.0 + r[i, i] - r[j, j] - r[k, k])
-        q = [0.0] * 4
-        q[i] = 0.25 * s
-        q[j] = (r[j, i] + r[i, j]) / s
-        q[k] = (r[k, i] + r[i, k]) / s
-        q[3] = (r[k, j] - r[j, k]) / s
-    return q
-
+    """(qx, qy, qz, qw) of the rotation matrix r (camera → world), via OpenCV's axis-angle."""
+    rvec = cv2.Rodrigues(np.asarray(r, dtype=np.float64))[0].ravel()
+    angle = np.linalg.norm(rvec)
+    axis = rvec / angle if angle > 0 else np.zeros(3)
+    return [*(axis * np.sin(angle / 2)), np.cos(angle / 2)]
 
 if __name__ == '__main__':
     main()
