@@ -320,39 +320,6 @@ double MapperConfig::planningCellSizeM() const {
   return best;
 }
 
-LookupConfig lookupConfig(const MapperConfig& config) {
-  LookupConfig c;
-  c.voxel_size_m = config.voxel_size_m;
-  c.truncation_vox = config.truncation_vox;
-  c.lookup_mode = config.lookup_mode;
-  c.lookup_region_px = config.lookup_region_px;
-  c.histogram_min_points = config.histogram_min_points;
-  c.max_lookup_blocks_per_frame = config.max_lookup_blocks_per_frame;
-  return c;
-}
-
-FusionConfig fusionConfig(const MapperConfig& config) {
-  FusionConfig c;
-  c.voxel_size_m = config.voxel_size_m;
-  c.truncation_vox = config.truncation_vox;
-  c.weight_mode = config.weight_mode;
-  c.weight_falloff_start_vox = config.weight_falloff_start_vox;
-  c.depth_weight_reference_m = config.depth_weight_reference_m;
-  c.max_weight = config.max_weight;
-  c.update_allocated_finer_level = config.update_allocated_finer_level;
-  c.free_space_carving = config.free_space_carving;
-  c.free_space_decay = config.free_space_decay;
-  c.use_color = config.use_color;
-  return c;
-}
-
-CarveConfig carveConfig(const MapperConfig& config) {
-  CarveConfig c;
-  c.fusion = fusionConfig(config);
-  c.free_space_window_px = config.free_space_window_px;
-  return c;
-}
-
 const std::vector<ParameterSpec>& mapperParameterSpecs() { return table().specs(); }
 
 bool setMapperParameter(MapperConfig* config, const std::string& name, const std::string& value,

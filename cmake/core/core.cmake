@@ -20,6 +20,9 @@ add_library(stereo_fusion_core STATIC
   ${STEREO_FUSION_ROOT}/src/ParameterTable.cpp
   ${STEREO_FUSION_ROOT}/src/MapperConfig.cpp
   ${STEREO_FUSION_ROOT}/src/Mapper.cpp
+  ${STEREO_FUSION_ROOT}/src/StageConfigs.cpp
+  ${STEREO_FUSION_ROOT}/src/layers/MeshLayer.cpp
+  ${STEREO_FUSION_ROOT}/src/layers/PlanningLayer.cpp
   ${STEREO_FUSION_ROOT}/src/camera/StereoCamera.cpp
   ${STEREO_FUSION_ROOT}/src/map/BlockOctree.cpp
   ${STEREO_FUSION_ROOT}/src/map/VoxelBlock.cpp
@@ -34,6 +37,7 @@ add_library(stereo_fusion_core STATIC
   ${STEREO_FUSION_ROOT}/src/session/TrajectoryOutcome.cpp
   ${STEREO_FUSION_ROOT}/src/integration/StereoFrame.cpp
   ${STEREO_FUSION_ROOT}/src/integration/FrameGate.cpp
+  ${STEREO_FUSION_ROOT}/src/integration/FramePipeline.cpp
   ${STEREO_FUSION_ROOT}/src/integration/RejectReason.cpp
   ${STEREO_FUSION_ROOT}/src/integration/BlockLookup.cpp
   ${STEREO_FUSION_ROOT}/src/integration/SurfaceFuser.cpp
@@ -91,7 +95,7 @@ target_link_libraries(stereo_fusion_sim PUBLIC stereo_fusion_core)
 
 # The core's unit tests: one gtest binary (one link, parallel compile); every test case is its own
 # ctest entry so the summary counts cases. The helpers (TestSupport.h, ...) are in test/unit/.
-set(STEREO_FUSION_CORE_TEST_FOLDERS camera map integration mesh io util mapper trajectory planning session)
+set(STEREO_FUSION_CORE_TEST_FOLDERS camera map integration mesh io util mapper trajectory planning session layers)
 if(STEREO_FUSION_CORE_TESTS)
   set(_core_test_globs)
   foreach(folder ${STEREO_FUSION_CORE_TEST_FOLDERS})

@@ -1,6 +1,4 @@
 #pragma once
-#include <deque>
-#include <limits>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -9,132 +7,44 @@
 #include <vector>
 
 #include "stereo_fusion/MapperConfig.h"
+#include "stereo_fusion/MapperResults.h"
 #include "stereo_fusion/MapperStage.h"
-#include "stereo_fusion/integration/BlockLookup.h"
-#include "stereo_fusion/integration/FrameGate.h"
-#include "stereo_fusion/integration/FreeSpaceCarver.h"
-#include "stereo_fusion/integration/OutlierRejection.h"
-#include "stereo_fusion/integration/ContradictionFilter.h"
-#include "stereo_fusion/integration/DisparityNoise.h"
-#include "stereo_fusion/integration/StereoFrame.h"
-#include "stereo_fusion/integration/SurfaceFuser.h"
+#include "stereo_fusion/StageConfigs.h"
+#include "stereo_fusion/integration/FramePipeline.h"
 #include "stereo_fusion/io/MapFile.h"
+#include "stereo_fusion/layers/MapLayer.h"
+#include "stereo_fusion/layers/MeshLayer.h"
+#include "stereo_fusion/layers/PlanningLayer.h"
 #include "stereo_fusion/map/BlockChangeLog.h"
 #include "stereo_fusion/map/BlockOctree.h"
 #include "stereo_fusion/map/EvictionPolicy.h"
 #include "stereo_fusion/map/MapRegion.h"
-#include "stereo_fusion/mesh/MeshStore.h"
-#include "stereo_fusion/mesh/TextureStore.h"
 #include "stereo_fusion/planning/OccupancyGrid2D.h"
-#include "stereo_fusion/planning/PlanningMap.h"
 #include "stereo_fusion/util/ThreadPool.h"
 
 namespace stereo_fusion {
 
-/// What one meshing pass (Mapper::updateMesh()) did.
-struct MeshPass {
-  /// Submeshes changed / removed by this pass.
-  MeshChanges mesh;
-  /// What the texture pass did (all zero unless texture = patches).
-  TextureStats texture;
-  /// Blocks fusion or eviction changed since the previous pass: what this pass meshed around.
-  size_t blocks_changed = 0;
-};
-
-/// What one planning update (Mapper::updatePlanning()) did.
-struct PlanningPass {
-  PlanningUpdateStats stats;
-  double esdf_ms = 0.0;  ///< re-reading the changed TSDF blocks' cells and updating the ESDF
-};
-
-/// Block changes the planning layer may leave waiting in the map log (or 4 per block of the
-/// map, if more) before integrate() updates it itself.
-constexpr size_t kMaxPendingPlanningChanges = 1 << 16;
-
-/// When integrate() brings the mesh up to date.
-enum class MeshTiming {
-  kNow,       ///< right after the frame (updateMesh()): the mesh always matches the map
-  kDeferred,  ///< later, by the caller's updateMesh(): the frame's changes wait in the change log
-};
-
-/// What integrate() did with one frame.
-struct IntegrationResult {
-  bool accepted = false;  ///< false: the frame was rejected and the map is unchanged
-  RejectReason reason = RejectReason::kNone;  ///< why it was rejected, for counters
-  std::string error;                          ///< why it was rejected, one sentence
-  /// Accepted only because the frames rejected before it agreed with it (FrameGate: a
-  /// relocalisation or a clock reset); `note` says why.
-  bool reanchored = false;
-  std::string note;
-  double lookup_ms =
-      0.0;  ///< the frame's depths and colours, its disparity noise (DisparityNoise), the lookup
-  double fusion_ms = 0.0;
-  double carve_ms = 0.0;  ///< free-space carving (FreeSpaceCarver), included in nothing else
-  double contradiction_ms = 0.0;  ///< ContradictionFilter, included in nothing else
-  double free_space_ms =
-      0.0;  ///< recording the space the frame saw empty (planning layer), included in nothing else
-  FreeSpaceStats free_space;
-  /// The planning layer was updated after this frame because its changes had piled up
-  /// (kMaxPendingPlanningChanges), taking planning_catch_up_ms.
-  bool planning_catch_up = false;
-  double planning_catch_up_ms = 0.0;
-  OutlierRejectionStats
-      rejected;  ///< usable pixels the outlier rejection dropped (counted, not fused)
-  /// Usable pixels dropped as isolated contradictions of confident surfaces (counted, not fused).
-  ContradictionStats contradiction;
-  /// The frame's disparity noise σ_d measured from its own disparities (DisparityNoise), px;
-  /// NaN when it had too few usable samples or the frame was rejected before.
-  double disparity_noise_px = std::numeric_limits<double>::quiet_NaN();
-  LookupStats lookup;
-  FusionStats fusion;
-  CarveStats carve;
-  /// Blocks whose voxels changed in this frame and were kept, sorted by key.
-  std::vector<BlockKey> updated_blocks;
-  /// Blocks evicted after this frame by the memory bound (max_blocks,
-  /// max_distance_from_camera_m), sorted by key.
-  std::vector<BlockKey> evicted_blocks;
-  /// With MeshTiming::kNow (and meshing enabled): what the meshing pass after this frame
-  /// changed (the submeshes of evicted blocks among the removed) and its texture pass.
-  /// Empty with MeshTiming::kDeferred.
-  MeshChanges mesh;
-  TextureStats texture;
-};
-
-/// What clearRegion() did.
-struct ClearResult {
-  bool accepted =
-      false;  ///< false: the region was invalid (`error` says why) and the map is unchanged
-  std::string error;
-  uint64_t blocks_visited = 0;  ///< blocks of the map the region reaches
-  uint64_t blocks_changed = 0;  ///< blocks that lost observed voxels and keep some
-  uint64_t blocks_erased = 0;   ///< blocks left without an observed voxel, erased
-  uint64_t voxels_cleared = 0;  ///< observed voxels made unobserved, all levels
-  double clear_ms = 0.0;
-  /// As IntegrationResult::mesh and ::texture: with MeshTiming::kNow, what the meshing pass
-  /// changed.
-  MeshChanges mesh;
-  TextureStats texture;
-};
-
-/// The ROS-free mapping pipeline. integrate(frame) = validate → lookup → fusion → eviction; every
-/// stage after fusion learns which blocks changed from a change log (BlockChangeLog) and
-/// catches up at its own rate: eviction after every frame, the mesher (and after it the texture
-/// pass) whenever updateMesh() runs — after every frame by default, or as the caller chooses.
+/// The ROS-free map host. A frame goes through the FramePipeline (validation to carving), which
+/// leaves its edit; the host applies it (the new blocks, the map's change log, eviction) and
+/// then tells its layers (MapLayer: the mesh, the planning layer, any registered one), each of
+/// which catches up with the log at its own cadence: the mesh whenever updateMesh() runs (after
+/// every frame by default), the planning layer whenever updatePlanning() runs. The host owns
+/// clear, reset, load and save; each layer clears, resets, saves and adopts its own part.
 class Mapper {
  public:
   /// Throws std::invalid_argument listing every invalid parameter.
   explicit Mapper(const MapperConfig& config);
 
-  /// Fuses one frame. A frame that fails validateFrame() is rejected with the reason and
-  /// leaves the map untouched. With MeshTiming::kNow the mesh is brought up to date too.
+  /// Fuses one frame. A frame a stage refuses is rejected with the reason and leaves the map
+  /// untouched. With MeshTiming::kNow the mesh is brought up to date too.
   IntegrationResult integrate(const StereoFrame& frame, MeshTiming mesh_timing = MeshTiming::kNow);
   /// Meshes around every block changed since the last pass (nothing when meshing is disabled)
   /// and, with texture = patches, textures the changed submeshes from the latest frame.
   MeshPass updateMesh();
   /// Brings the planning layer's occupancy and distance field up to date with every TSDF change
-  /// since the previous call (nothing without planning_enabled). Like updateMesh(), at the
-  /// caller's rate: between calls the free space is recorded every frame, the rest waits in the
-  /// map log (integrate() runs it when more than kMaxPendingPlanningChanges wait).
+  /// since the previous call (nothing without planning_enabled). Between calls the free space
+  /// is recorded every frame; the rest waits in the map log (integrate() runs it when more than
+  /// kMaxPendingLayerChanges wait).
   PlanningPass updatePlanning();
   /// updatePlanning() in two halves. The first, with the map as for any call, reads the
   /// changed TSDF blocks' cells (nullopt without planning_enabled). The second touches only
@@ -152,7 +62,20 @@ class Mapper {
   PlanningPass rebuildPlanning();
   /// The planning layer (free / occupied / unknown, the ESDF); nullptr without planning_enabled.
   /// Its readers are safe to call from any thread while this Mapper integrates.
-  const PlanningMap* planning() const { return planning_ ? &*planning_ : nullptr; }
+  const PlanningMap* planning() const { return planning_ ? &planning_->map() : nullptr; }
+
+  /// Registers a layer (one class, one call): from now on it is told of every frame, clear,
+  /// reset, save and load, and `updateLayer()` brings it up to date with the map's changes
+  /// since its previous update. The map so far reaches it through rebuild(). Returns it.
+  template <typename Layer>
+  Layer& addLayer(std::unique_ptr<Layer> layer) {
+    Layer& added = *layer;
+    registerLayer(std::move(layer));
+    return added;
+  }
+  /// Hands `layer` (registered) the map's block changes since its previous update.
+  void updateLayer(MapLayer& layer);
+
   /// Block changes (one per block and frame) recorded by fusion or eviction that the mesher has
   /// not caught up with yet. A caller that integrates with MeshTiming::kDeferred must call
   /// updateMesh() now and then: the changes wait in memory until it does.
@@ -164,32 +87,27 @@ class Mapper {
   const BlockOctree& map() const { return octree_; }
   /// The incrementally maintained mesh, one submesh per block (current as of the last
   /// updateMesh()).
-  const MeshStore& mesh() const { return mesh_store_; }
+  const MeshStore& mesh() const { return mesh_->store(); }
   /// The whole mesh, submeshes welded into one (for export).
-  TriangleMesh extractMesh() const { return weldSubmeshes(mesh_store_.submeshes()); }
+  TriangleMesh extractMesh() const { return weldSubmeshes(mesh_->store().submeshes()); }
   /// Re-meshes every block from scratch (also what a disabled incremental mesher catches up with).
   MeshChanges rebuildMesh();
   /// Texture patches of the submeshes (empty unless texture = patches).
-  const TextureStore& textures() const { return texture_store_; }
+  const TextureStore& textures() const { return mesh_->textures(); }
   const MapperConfig& config() const { return config_; }
   /// Frames accepted so far.
   uint64_t framesIntegrated() const { return frames_integrated_; }
   /// Where the last fused frame's camera was (nullopt before the first, after a reset or load).
   const std::optional<Eigen::Vector3d>& lastCameraPositionM() const {
-    return gate_.lastFusedPosition();
+    return pipeline_.lastFusedPosition();
   }
   /// The occupancy grid's window (grid_max_cells) around the last camera, or the origin.
-  GridWindow occupancyGridWindow() const {
-    GridWindow w;
-    w.max_cells = config_.grid_max_cells;
-    if (lastCameraPositionM()) w.centre_m = lastCameraPositionM()->head<2>();
-    return w;
-  }
+  GridWindow occupancyGridWindow() const;
   /// The median of the last kNoiseFrames frames' measured disparity noise (px), NaN before
   /// any: what /diagnostics and the warnings report. (The contradiction filter uses each
   /// frame's own estimate, so a map continued after a load fuses as if never interrupted.)
-  double measuredDisparityNoisePx() const;
-  static constexpr size_t kNoiseFrames = 31;
+  double measuredDisparityNoisePx() const { return pipeline_.measuredDisparityNoisePx(); }
+  static constexpr size_t kNoiseFrames = FramePipeline::kNoiseFrames;
   /// The warning that disparity_noise_px is set finer than the frames measure (the measured
   /// median above 1.5× the configured value), empty when it is not. The estimate sees only the
   /// noise that varies from pixel to pixel, so it can say "noisier", never "finer".
@@ -212,15 +130,15 @@ class Mapper {
   /// loads and resets), e.g. a publisher that sends them at its own rate. It must take them
   /// now and then: they wait in memory until it does.
   BlockChangeLog::Consumer subscribeToMeshChanges(const std::string& name) {
-    return mesh_changes_.subscribe(name);
+    return mesh_->subscribe(name);
   }
   /// The submeshes changed (updated) and removed (erased) since `consumer` last took them.
   BlockChangeLog::Changes takeMeshChanges(BlockChangeLog::Consumer consumer) {
-    return mesh_changes_.take(consumer);
+    return mesh_->take(consumer);
   }
   /// Mesh changes recorded for `consumer` and not taken yet.
   size_t pendingMeshChanges(BlockChangeLog::Consumer consumer) const {
-    return mesh_changes_.pending(consumer);
+    return mesh_->pending(consumer);
   }
 
   /// Writes the map to `path` (io/MapFile.h format, via a temporary file renamed into place).
@@ -244,44 +162,36 @@ class Mapper {
   void setStageMonitor(StageMonitor* monitor) { monitor_ = monitor; }
 
  private:
-  /// Records a meshing pass's (or rebuild's) changes for the mesh's consumers.
-  void recordMeshChanges(const MeshChanges& changes);
+  struct LayerSlot {
+    std::unique_ptr<MapLayer> layer;
+    BlockChangeLog::Consumer consumer;
+  };
+  void registerLayer(std::unique_ptr<MapLayer> layer);
+  BlockChangeLog::Consumer consumerOf(const MapLayer& layer) const;
+  /// The frame's new blocks join the map, its changes the log; then the memory bound.
+  void applyEdit(const StereoFrame& frame, IntegrationResult* result);
+  /// The layers' per-frame hooks, and the update of any layer whose changes piled up.
+  void tellLayers(const StereoFrame& frame, StageScope* stage, IntegrationResult* result);
 
-  MapperConfig config_;
+  const MapperConfig config_;
+  const StageConfigs stages_;
   ThreadPool pool_;
   BlockOctree octree_;
-  MeasurementImage measurements_;  // the frame's depths and colours, read by lookup and fusion
-  OutlierRejection outlier_rejection_;
-  ContradictionFilter contradiction_;
-  BlockLookup lookup_;
-  SurfaceFuser fuser_;
-  FreeSpaceCarver carver_;
-  MeshStore mesh_store_;
-  TextureStore texture_store_;
+  FramePipeline pipeline_;
+  FrameEdit edit_;  // the frame's edit, reused across frames
   EvictionPolicy eviction_;
-  std::optional<PlanningMap> planning_;  // with planning_enabled only
-  /// Blocks fusion updated and eviction erased, for the stages after fusion.
+  /// Blocks fusion updated and eviction erased, for eviction and the layers.
   BlockChangeLog map_changes_;
-  BlockChangeLog::Consumer mesh_consumer_, eviction_consumer_;
-  std::optional<BlockChangeLog::Consumer> planning_consumer_;  // with planning_enabled only
-  /// Submeshes the mesher changed, for the texture pass and outside consumers.
-  BlockChangeLog mesh_changes_;
-  std::optional<BlockChangeLog::Consumer> texture_consumer_;  // with texture = patches only
+  BlockChangeLog::Consumer eviction_consumer_;
+  std::vector<LayerSlot> layers_;  // in registration order
+  MeshLayer* mesh_ = nullptr;
+  PlanningLayer* planning_ = nullptr;  // with planning_enabled only
   /// Bytes of allocated voxel levels, kept up to date as fusion allocates and eviction frees
   /// them, so memoryBytes() costs no walk over the blocks.
   size_t voxel_bytes_ = 0;
-  /// The latest accepted frame: what a deferred meshing pass textures from.
-  StereoFrame last_frame_;
   uint64_t frames_integrated_ = 0;
-  std::deque<double> recent_noise_px_;  // the last kNoiseFrames frames' measured σ_d
   uint64_t blocks_evicted_ = 0;
   StageMonitor* monitor_ = nullptr;
-  FrameGate gate_;
-  std::vector<VoxelBlock*> queue_;                    // reused across frames
-  std::vector<BlockKey> missing_;                     // reused across frames
-  std::vector<VoxelBlock*> updated_;                  // reused across frames
-  std::vector<VoxelBlock*> carved_;                   // reused across frames
-  std::vector<std::unique_ptr<VoxelBlock>> created_;  // reused across frames
 };
 
 }  // namespace stereo_fusion

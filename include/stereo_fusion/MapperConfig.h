@@ -3,7 +3,6 @@
 #include <vector>
 
 #include "stereo_fusion/ParameterTable.h"
-#include "stereo_fusion/integration/LevelSelection.h"
 #include "stereo_fusion/map/ResolutionLevel.h"
 #include "stereo_fusion/map/TruncationBand.h"
 
@@ -121,54 +120,6 @@ struct MapperConfig {
   /// Φ by level, as every stage applies it.
   TruncationBand truncationBand() const { return TruncationBand(voxel_size_m, truncation_vox); }
 };
-
-/// What each stage of the pipeline reads: the parameters it uses, not a copy of MapperConfig.
-/// Built in one place from a (validated) MapperConfig by lookupConfig(), fusionConfig() and
-/// carveConfig(); the Mapper passes them to BlockLookup, SurfaceFuser and FreeSpaceCarver.
-/// A default-constructed one holds MapperConfig's defaults (the single source of them).
-
-/// BlockLookup (stage 1): the band of each pixel and Algorithm 1 / 2 with its histogram filter.
-struct LookupConfig {
-  double voxel_size_m = MapperConfig{}.voxel_size_m;
-  double truncation_vox = MapperConfig{}.truncation_vox;
-  LookupMode lookup_mode = MapperConfig{}.lookup_mode;
-  int lookup_region_px = MapperConfig{}.lookup_region_px;
-  int histogram_min_points = MapperConfig{}.histogram_min_points;
-  int max_lookup_blocks_per_frame = MapperConfig{}.max_lookup_blocks_per_frame;
-
-  /// Φ by level, as MapperConfig::truncationBand() gives it.
-  TruncationBand truncationBand() const { return TruncationBand(voxel_size_m, truncation_vox); }
-};
-
-/// SurfaceFuser (stage 2): what the voxel kernels apply (makeFusionFrame()): voxel geometry,
-/// bands, weights (eq. 3.8–3.10), the finer-level rule, contradiction decay and colour.
-struct FusionConfig {
-  double voxel_size_m = MapperConfig{}.voxel_size_m;
-  double truncation_vox = MapperConfig{}.truncation_vox;
-  WeightMode weight_mode = MapperConfig{}.weight_mode;
-  double weight_falloff_start_vox = MapperConfig{}.weight_falloff_start_vox;
-  double depth_weight_reference_m = MapperConfig{}.depth_weight_reference_m;
-  double max_weight = MapperConfig{}.max_weight;
-  bool update_allocated_finer_level = MapperConfig{}.update_allocated_finer_level;
-  /// With free_space_carving, a contradicted voxel keeps 1 − free_space_decay of its weight.
-  bool free_space_carving = MapperConfig{}.free_space_carving;
-  double free_space_decay = MapperConfig{}.free_space_decay;
-  bool use_color = MapperConfig{}.use_color;
-
-  /// Φ by level, as MapperConfig::truncationBand() gives it.
-  TruncationBand truncationBand() const { return TruncationBand(voxel_size_m, truncation_vox); }
-};
-
-/// FreeSpaceCarver (stage 2b): fusion's bands and weights (it builds the same FusionFrame; its
-/// decay per see-through frame is fusion.free_space_decay) and the free-depth window.
-struct CarveConfig {
-  FusionConfig fusion;
-  int free_space_window_px = MapperConfig{}.free_space_window_px;
-};
-
-LookupConfig lookupConfig(const MapperConfig& config);
-FusionConfig fusionConfig(const MapperConfig& config);
-CarveConfig carveConfig(const MapperConfig& config);
 
 /// All parameters of MapperConfig (ParameterSpec: ParameterTable.h), in the order of
 /// config/default.yaml.

@@ -56,7 +56,7 @@ float median(std::vector<float>* values) {
 
 ContradictionStats ContradictionFilter::apply(const StereoFrame& frame, const BlockOctree& octree,
                                               const std::vector<VoxelBlock*>& blocks,
-                                              const MapperConfig& config, double sigma_d_px,
+                                              const ContradictionConfig& config, double sigma_d_px,
                                               ThreadPool* pool, MeasurementImage* measurements) {
   ContradictionStats stats;
   const StereoCamera& camera = frame.camera;

@@ -3,15 +3,13 @@
 #include <algorithm>
 #include <cmath>
 
-#include "stereo_fusion/MapperConfig.h"
-
 namespace stereo_fusion {
 
-double disparityNoisePx(const MapperConfig& config, double disparity_step_px) {
+double disparityNoisePx(const LevelConfig& config, double disparity_step_px) {
   return std::max(config.disparity_noise_px, disparity_step_px / std::sqrt(12.0));
 }
 
-LevelThresholds levelThresholdsFor(const MapperConfig& config, double fb_px_m,
+LevelThresholds levelThresholdsFor(const LevelConfig& config, double fb_px_m,
                                    double disparity_step_px) {
   if (config.level_mode == LevelMode::kDepth) return config.levels;
   // σ_z(z) = v · 2^(l−1)  ⇔  z = sqrt(2^(l−1) · v · f · b / σ_d)

@@ -120,13 +120,14 @@ void MeasurementImage::build(const cv::Mat& disparity_px, const cv::Mat& color, 
   });
 }
 
-void MeasurementImage::build(const StereoFrame& frame, const MapperConfig& config,
+void MeasurementImage::build(const StereoFrame& frame, const MeasurementConfig& config,
                              ThreadPool* pool) {
   const StereoCamera& camera = frame.camera;
   build(frame.disparity_px, config.use_color ? frame.color : cv::Mat(),
         static_cast<float>(camera.fx() * camera.baseline()), static_cast<float>(config.min_depth_m),
         static_cast<float>(config.max_depth_m), pool);
-  levels_ = levelThresholdsFor(config, camera.fx() * camera.baseline(), frame.disparity_step_px);
+  levels_ =
+      levelThresholdsFor(config.levels, camera.fx() * camera.baseline(), frame.disparity_step_px);
 }
 
 uint64_t MeasurementImage::invalidate(const cv::Mat& reject, ThreadPool* pool) {

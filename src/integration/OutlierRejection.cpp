@@ -15,7 +15,7 @@ constexpr int16_t kNoDisparity16 = -16;
 }  // namespace
 
 OutlierRejectionStats OutlierRejection::apply(const cv::Mat& disparity_px,
-                                              const MapperConfig& config,
+                                              const OutlierConfig& config,
                                               MeasurementImage* measurements, ThreadPool* pool) {
   OutlierRejectionStats stats;
   CV_Assert(disparity_px.type() == CV_32FC1 && disparity_px.rows == measurements->height() &&

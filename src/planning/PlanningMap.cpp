@@ -11,17 +11,6 @@
 
 namespace stereo_fusion {
 
-PlanningConfig PlanningConfig::from(const MapperConfig& config) {
-  PlanningConfig p;
-  p.cell_m = config.planningCellSizeM();
-  p.voxels_per_cell = static_cast<int>(std::lround(p.cell_m / config.voxel_size_m));
-  p.max_distance_m = config.esdf_max_distance_m;
-  p.unmeasured_range_m = config.free_space_unmeasured_range_m;
-  p.min_weight = static_cast<float>(config.occupancy_min_weight);
-  p.band = config.truncationBand();
-  return p;
-}
-
 namespace {
 constexpr double kMinObstacleDepthM = 1e-3;
 /// The max distance in cells², rounded down: the ESDF's integer bound.

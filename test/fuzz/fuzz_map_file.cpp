@@ -13,7 +13,9 @@
 #include <string>
 #include <vector>
 
+#include "stereo_fusion/StageConfigs.h"
 #include "stereo_fusion/io/MapFile.h"
+#include "stereo_fusion/layers/PlanningLayer.h"
 #include "stereo_fusion/planning/OccupancyGrid2D.h"
 #include "stereo_fusion/planning/PlanningMap.h"
 #include "stereo_fusion/util/Crc32.h"
@@ -80,11 +82,11 @@ void checkDecode(const uint8_t* data, size_t size) {
     if (reread.blockCount() != map.blockCount()) std::abort();
   }
 
-  // Loaded as Mapper::adoptMap() loads it, then the grid ~occupancy_grid publishes.
-  PlanningMap planning(PlanningConfig::from(config), &pool);
-  if (info.free_space.cell_m == planning.grid().cell_m)
-    planning.addSeenFree(info.free_space.blocks);
-  planning.rebuild(map);
+  // Adopted by the planning layer as Mapper::adoptMap() has it adopt a loaded map, then the grid
+  // ~occupancy_grid publishes.
+  PlanningLayer layer(stageConfigs(config).planning, &pool);
+  layer.adopt(map, info);
+  const PlanningMap& planning = layer.map();
   GridWindow window;
   window.max_cells = 10000;  // grid_max_cells' lower bound
   const OccupancyGrid2D grid = projectOccupancy(planning, -1e9, 1e9, window);

@@ -9,6 +9,7 @@
 #include "RosTestSupport.h"
 
 #include "stereo_fusion/Mapper.h"
+#include "stereo_fusion/StageConfigs.h"
 #include "stereo_fusion/ros/BagSequence.h"
 #include "stereo_fusion/ros/MeshMessages.h"
 #include "stereo_fusion/ros/RosParameters.h"
@@ -513,7 +514,7 @@ TEST(PlanningReplay, DistancesMatchTheAnalyticRoomAndBadRequestsChangeNothing) {
   MapperConfig config;
   NodeConfig node;
   ASSERT_TRUE(loadParameters(ros::NodeHandle("/stereo_fusion"), &config, &node, &error)) << error;
-  const double cell_m = PlanningConfig::from(config).cell_m;
+  const double cell_m = stageConfigs(config).planning.planning.cell_m;
   const double max_m = config.esdf_max_distance_m;
   std::vector<double> errors_m;
   size_t free = 0, occupied = 0, unknown = 0, free_inside_solid = 0, gradients_checked = 0,

@@ -13,6 +13,20 @@
 namespace stereo_fusion {
 
 /// Counts of one lookup pass.
+/// What BlockLookup reads (from the parameter table: StageConfigs): the band of each pixel and
+/// Algorithm 1 / 2 with its histogram filter.
+struct LookupConfig {
+  double voxel_size_m = MapperConfig{}.voxel_size_m;
+  double truncation_vox = MapperConfig{}.truncation_vox;
+  LookupMode lookup_mode = MapperConfig{}.lookup_mode;
+  int lookup_region_px = MapperConfig{}.lookup_region_px;
+  int histogram_min_points = MapperConfig{}.histogram_min_points;
+  int max_lookup_blocks_per_frame = MapperConfig{}.max_lookup_blocks_per_frame;
+
+  /// Φ by level, as MapperConfig::truncationBand() gives it.
+  TruncationBand truncationBand() const { return TruncationBand(voxel_size_m, truncation_vox); }
+};
+
 struct LookupStats {
   uint64_t valid_points = 0;      ///< pixels with a usable disparity
   uint64_t octree_searches = 0;   ///< find/findOrAllocate calls made by the lookup

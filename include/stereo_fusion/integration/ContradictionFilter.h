@@ -12,6 +12,14 @@
 
 namespace stereo_fusion {
 
+/// What the contradiction filter reads (from the parameter table: StageConfigs).
+struct ContradictionConfig {
+  double voxel_size_m = MapperConfig{}.voxel_size_m;
+  double contradiction_min_weight = MapperConfig{}.contradiction_min_weight;
+  double contradiction_sigmas = MapperConfig{}.contradiction_sigmas;
+  double contradiction_max_share = MapperConfig{}.contradiction_max_share;
+};
+
 struct ContradictionStats {
   uint64_t tiles_with_surface = 0;  ///< 8×8-px tiles where a trusted confident surface lies
   uint64_t pixels_behind = 0;       ///< measurements beyond every confident surface of their tile
@@ -49,8 +57,9 @@ class ContradictionFilter {
   /// `sigma_d_px`: the source's disparity noise for σ_z (the Mapper passes the larger of
   /// disparity_noise_px and the frame's own DisparityNoise).
   ContradictionStats apply(const StereoFrame& frame, const BlockOctree& octree,
-                           const std::vector<VoxelBlock*>& blocks, const MapperConfig& config,
-                           double sigma_d_px, ThreadPool* pool, MeasurementImage* measurements);
+                           const std::vector<VoxelBlock*>& blocks,
+                           const ContradictionConfig& config, double sigma_d_px, ThreadPool* pool,
+                           MeasurementImage* measurements);
 
  private:
   std::vector<float> tile_far_m_, tile_median_m_;

@@ -3,12 +3,21 @@
 #include <vector>
 
 #include "stereo_fusion/MapperConfig.h"
+#include "stereo_fusion/integration/FusionKernels.h"
 #include "stereo_fusion/integration/MeasurementImage.h"
 #include "stereo_fusion/integration/StereoFrame.h"
 #include "stereo_fusion/map/BlockOctree.h"
 #include "stereo_fusion/util/ThreadPool.h"
 
 namespace stereo_fusion {
+
+/// What FreeSpaceCarver (stage 2b) reads (from the parameter table: StageConfigs): fusion's bands
+/// and weights (it builds the same FusionFrame; its decay per see-through frame is
+/// fusion.free_space_decay) and the free-depth window.
+struct CarveConfig {
+  FusionConfig fusion;
+  int free_space_window_px = MapperConfig{}.free_space_window_px;
+};
 
 struct CarveStats {
   uint64_t blocks_visited =

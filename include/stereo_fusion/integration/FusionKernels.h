@@ -22,6 +22,26 @@ namespace stereo_fusion {
 
 /// What the kernels need from one frame and the configuration, derived once per frame and
 /// shared read-only by all blocks (and threads).
+/// What SurfaceFuser (stage 2) reads (from the parameter table: StageConfigs): the voxel kernels
+/// apply (makeFusionFrame()): voxel geometry, bands, weights (eq. 3.8–3.10), the finer-level rule,
+/// contradiction decay and colour.
+struct FusionConfig {
+  double voxel_size_m = MapperConfig{}.voxel_size_m;
+  double truncation_vox = MapperConfig{}.truncation_vox;
+  WeightMode weight_mode = MapperConfig{}.weight_mode;
+  double weight_falloff_start_vox = MapperConfig{}.weight_falloff_start_vox;
+  double depth_weight_reference_m = MapperConfig{}.depth_weight_reference_m;
+  double max_weight = MapperConfig{}.max_weight;
+  bool update_allocated_finer_level = MapperConfig{}.update_allocated_finer_level;
+  /// With free_space_carving, a contradicted voxel keeps 1 − free_space_decay of its weight.
+  bool free_space_carving = MapperConfig{}.free_space_carving;
+  double free_space_decay = MapperConfig{}.free_space_decay;
+  bool use_color = MapperConfig{}.use_color;
+
+  /// Φ by level, as MapperConfig::truncationBand() gives it.
+  TruncationBand truncationBand() const { return TruncationBand(voxel_size_m, truncation_vox); }
+};
+
 struct FusionFrame {
   /// Per voxel level: the steps between neighbouring voxel centres in camera coordinates and
   /// the band half-width Φ for a measurement of each level (eq. 3.15, never below

@@ -6,10 +6,19 @@
 #include <opencv2/core/mat.hpp>
 
 #include "stereo_fusion/MapperConfig.h"
+#include "stereo_fusion/integration/LevelSelection.h"
 #include "stereo_fusion/integration/StereoFrame.h"
 #include "stereo_fusion/util/ThreadPool.h"
 
 namespace stereo_fusion {
+
+/// What the measurement image reads (from the parameter table: StageConfigs).
+struct MeasurementConfig {
+  double min_depth_m = MapperConfig{}.min_depth_m;
+  double max_depth_m = MapperConfig{}.max_depth_m;
+  bool use_color = MapperConfig{}.use_color;
+  LevelConfig levels;  ///< where the frame's measurements switch levels
+};
 
 /// What one pixel of a frame tells the fuser, converted once per frame so that the voxels of
 /// all blocks that project onto a pixel share the work:
@@ -31,7 +40,7 @@ class MeasurementImage {
   /// The frame's measurements as the pipeline uses them: f·b of its camera, the configured
   /// depth range, colours only if `config.use_color`. Built once per frame (the Mapper's first
   /// step), read by the lookup (depths) and by fusion (depths and colours).
-  void build(const StereoFrame& frame, const MapperConfig& config, ThreadPool* pool);
+  void build(const StereoFrame& frame, const MeasurementConfig& config, ThreadPool* pool);
 
   int width() const { return width_; }
   int height() const { return height_; }

@@ -8,6 +8,14 @@
 
 namespace stereo_fusion {
 
+/// What outlier rejection reads (from the parameter table: StageConfigs).
+struct OutlierConfig {
+  int speckle_max_area_px = MapperConfig{}.speckle_max_area_px;
+  double speckle_max_diff_px = MapperConfig{}.speckle_max_diff_px;
+  int edge_reject_radius_px = MapperConfig{}.edge_reject_radius_px;
+  double edge_reject_jump_px = MapperConfig{}.edge_reject_jump_px;
+};
+
 /// Pixels a frame's outlier rejection made unusable, by rule.
 struct OutlierRejectionStats {
   uint64_t speckle_pixels = 0;  ///< in blobs of at most speckle_max_area_px disparities
@@ -39,7 +47,7 @@ class OutlierRejection {
   /// Applies both rules (each off when its size parameter is 0) to the usable pixels of
   /// `measurements`, built from `disparity_px` (CV_32FC1, same size); the edge rule's per-pixel
   /// passes in rows on `pool` when given (the same result).
-  OutlierRejectionStats apply(const cv::Mat& disparity_px, const MapperConfig& config,
+  OutlierRejectionStats apply(const cv::Mat& disparity_px, const OutlierConfig& config,
                               MeasurementImage* measurements, ThreadPool* pool = nullptr);
 
  private:

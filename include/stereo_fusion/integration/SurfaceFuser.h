@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "stereo_fusion/MapperConfig.h"
+#include "stereo_fusion/integration/FusionKernels.h"
 #include "stereo_fusion/integration/DepthTiles.h"
 #include "stereo_fusion/integration/MeasurementImage.h"
 #include "stereo_fusion/integration/StereoFrame.h"

@@ -22,6 +22,13 @@ constexpr int levelVoxelCount(int level) {
 
 /// Depth thresholds of eq. 3.2. The thesis' s(z) = 2^⌊log2 z⌋ clamped to {1, 2, 4} switches to
 /// s = 2 at z = 2 m and to s = 4 at z = 4 m; both switch depths are parameters here.
+/// Where a frame's measurements switch to coarser levels (eq. 3.2; integration/LevelSelection.h).
+enum class LevelMode {
+  kDepth,  ///< the configured switch depths scale2_min_depth_m / scale4_min_depth_m (thesis: 2 m, 4
+           ///< m)
+  kNoise,  ///< from the camera: where σ_z = z² · σ_d / (f · b) exceeds the voxel edge of a level
+};
+
 struct LevelThresholds {
   double scale2_min_depth_m = 2.0;
   double scale4_min_depth_m = 4.0;

@@ -22,8 +22,8 @@
 
 namespace stereo_fusion {
 
-/// The planning layer's parameters, read from MapperConfig (the registry's planning_* / esdf_* /
-/// grid_* entries).
+/// The planning layer's parameters (from the parameter table's esdf_* / occupancy_* entries:
+/// StageConfigs).
 struct PlanningConfig {
   double cell_m = 0.08;             ///< MapperConfig::planningCellSizeM()
   int voxels_per_cell = 4;          ///< cell_m / voxel_size_m: 1, 2, 4 or 8
@@ -31,7 +31,6 @@ struct PlanningConfig {
   double unmeasured_range_m = 0.0;  ///< free_space_unmeasured_range_m
   float min_weight = 2.0f;          ///< occupancy_min_weight
   TruncationBand band{0.02, 4.0};
-  static PlanningConfig from(const MapperConfig& config);
 };
 
 /// One answer of the distance field at a point.

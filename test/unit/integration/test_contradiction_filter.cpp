@@ -8,6 +8,7 @@
 #include <opencv2/core.hpp>
 
 #include "TestSupport.h"
+#include "stereo_fusion/StageConfigs.h"
 #include "stereo_fusion/Mapper.h"
 #include "stereo_fusion/integration/ContradictionFilter.h"
 
@@ -77,11 +78,12 @@ Filtered filterFrame(const cv::Rect& rect, float delta_px, int threads = 2,
   const MapperConfig c = config(threads);
   ThreadPool pool(threads);
   MeasurementImage measurements;
-  measurements.build(frame, c, &pool);
+  measurements.build(frame, stageConfigs(c).pipeline.measurement, &pool);
   ContradictionFilter filter;
   Filtered out;
-  out.stats = filter.apply(frame, mapper.map(), mapper.map().blocksSortedByKey(), c,
-                           c.disparity_noise_px, &pool, &measurements);
+  out.stats = filter.apply(frame, mapper.map(), mapper.map().blocksSortedByKey(),
+                           stageConfigs(c).pipeline.contradiction, c.disparity_noise_px, &pool,
+                           &measurements);
   for (int i = 0; i < measurements.width() * measurements.height(); ++i)
     out.unusable += std::isnan(measurements.depths()[i]);
   return out;

@@ -7,6 +7,7 @@
 #include <opencv2/core.hpp>
 
 #include "../MeshTestSupport.h"
+#include "stereo_fusion/StageConfigs.h"
 #include "stereo_fusion/integration/DisparityCoherence.h"
 
 using namespace stereo_fusion;
@@ -115,7 +116,7 @@ TEST(DisparityCoherence, SeparatesANoisySurfaceFromRandomDisparities) {
   ThreadPool pool(2);
   MapperConfig config;
   MeasurementImage m;
-  m.build(surface, config, &pool);
+  m.build(surface, stageConfigs(config).pipeline.measurement, &pool);
   const double surface_share = measureDisparityCoherence(surface.disparity_px, m, &pool).share();
   EXPECT_GT(surface_share, 0.95);
 
@@ -124,7 +125,7 @@ TEST(DisparityCoherence, SeparatesANoisySurfaceFromRandomDisparities) {
   rng.fill(random, cv::RNG::UNIFORM, 1.0, 64.0);
   StereoFrame broken = surface;
   broken.disparity_px = random;
-  m.build(broken, config, &pool);
+  m.build(broken, stageConfigs(config).pipeline.measurement, &pool);
   const double random_share = measureDisparityCoherence(random, m, &pool).share();
   // Chance agreement with one of 8 neighbours within ±0.5 px over 63 px: 1 − (1 − 1/63)⁸ ≈ 12 %.
   EXPECT_NEAR(random_share, 1.0 - std::pow(1.0 - 1.0 / 63.0, 8), 0.02);

@@ -67,8 +67,8 @@ TEST(FreeSpaceCarver, SeenThroughVoxelsAtEveryLevelFadeTowardsMinusPhiHandWorked
 
   const StereoFrame frame = flatFrame(2.0);
   MeasurementImage measurements;
-  measurements.build(frame, config, &pool);
-  FreeSpaceCarver carver(carveConfig(config), &pool);
+  measurements.build(frame, stageConfigs(config).pipeline.measurement, &pool);
+  FreeSpaceCarver carver(stageConfigs(config).pipeline.carve, &pool);
   std::vector<VoxelBlock*> carved;
   const CarveStats stats = carver.carve(frame, measurements, map, {}, &carved);
   ASSERT_EQ(carved.size(), 1u);
@@ -106,8 +106,8 @@ TEST(FreeSpaceCarver, LeavesVoxelsInTheBandBehindTheSurfaceNearAGapAndInFusionsQ
   const int v = static_cast<int>(std::floor(525.0 * p.y() / p.z() + 239.5 + 0.5));
   frame.disparity_px.at<float>(v + 1, u - 1) = 0.0f;  // the matcher lost this pixel
   MeasurementImage measurements;
-  measurements.build(frame, config, &pool);
-  FreeSpaceCarver carver(carveConfig(config), &pool);
+  measurements.build(frame, stageConfigs(config).pipeline.measurement, &pool);
+  FreeSpaceCarver carver(stageConfigs(config).pipeline.carve, &pool);
   std::vector<VoxelBlock*> carved;
   carver.carve(frame, measurements, map, {queued}, &carved);
   EXPECT_TRUE(carved.empty());
@@ -120,7 +120,7 @@ TEST(FreeSpaceCarver, LeavesVoxelsInTheBandBehindTheSurfaceNearAGapAndInFusionsQ
   // Without the window the gap voxel is carved.
   MapperConfig no_window = config;
   no_window.free_space_window_px = 0;
-  FreeSpaceCarver plain(carveConfig(no_window), &pool);
+  FreeSpaceCarver plain(stageConfigs(no_window).pipeline.carve, &pool);
   plain.carve(frame, measurements, map, {queued}, &carved);
   ASSERT_EQ(carved.size(), 1u);
   EXPECT_EQ(carved[0], gap);

@@ -13,6 +13,7 @@
 #include <limits>
 #include <random>
 
+#include "stereo_fusion/StageConfigs.h"
 #include "stereo_fusion/integration/DepthTiles.h"
 #include "stereo_fusion/integration/FusionKernels.h"
 #include "stereo_fusion/integration/SurfaceFuser.h"
@@ -120,8 +121,8 @@ class KernelPair {
   explicit KernelPair(const MapperConfig& config)
       : config_(config),
         octree_(config.blockSizeM()),
-        scalar_(fusionConfig(config), &pool_),
-        avx2_(fusionConfig(config), &pool_) {
+        scalar_(stageConfigs(config).pipeline.fusion, &pool_),
+        avx2_(stageConfigs(config).pipeline.fusion, &pool_) {
     scalar_.setKernel(SurfaceFuser::Kernel::kScalar);
     if (avx2Supported()) avx2_.setKernel(SurfaceFuser::Kernel::kAvx2);
   }
@@ -141,7 +142,7 @@ class KernelPair {
       }
     std::vector<VoxelBlock*> updated;
     MeasurementImage measurements;
-    measurements.build(frame, config_, &pool_);
+    measurements.build(frame, stageConfigs(config_).pipeline.measurement, &pool_);
     const uint64_t want_updates =
         scalar_.fuse(frame, measurements, octree_, {&want}, &updated).voxels_updated;
     const uint64_t got_updates =

@@ -12,6 +12,7 @@
 #include <random>
 
 #include "TestSupport.h"
+#include "stereo_fusion/StageConfigs.h"
 #include "stereo_fusion/integration/BlockLookup.h"
 #include "stereo_fusion/integration/FusionKernels.h"
 #include "stereo_fusion/integration/FusionMath.h"
@@ -34,8 +35,8 @@ void referenceFuseBlock(const StereoFrame& frame, const BlockOctree& octree,
   const Eigen::Matrix3f R_cw = T_camera_world.linear().cast<float>();
   const float fx = static_cast<float>(cam.fx()), fy = static_cast<float>(cam.fy());
   const float cx = static_cast<float>(cam.cx()), cy = static_cast<float>(cam.cy());
-  const LevelThresholds thresholds =
-      levelThresholdsFor(config, cam.fx() * cam.baseline());  // the frame's
+  const LevelThresholds thresholds = levelThresholdsFor(
+      stageConfigs(config).pipeline.measurement.levels, cam.fx() * cam.baseline());  // the frame's
   const float fb = static_cast<float>(cam.fx() * cam.baseline());
   const float voxel = static_cast<float>(config.voxel_size_m);
   bool allocated_before[kNumLevels];
@@ -118,8 +119,8 @@ void expectFuserEqualsReferenceAcrossAllLevels(SurfaceFuser::Kernel kernel) {
   config.voxel_size_m = 0.02;
   ThreadPool pool(2);
   BlockOctree octree(config.blockSizeM());
-  BlockLookup lookup(lookupConfig(config), &pool);
-  SurfaceFuser fuser(fusionConfig(config), &pool);
+  BlockLookup lookup(stageConfigs(config).pipeline.lookup, &pool);
+  SurfaceFuser fuser(stageConfigs(config).pipeline.fusion, &pool);
   fuser.setKernel(kernel);
   Eigen::Isometry3d T_world_camera = Eigen::Isometry3d::Identity();
   size_t compared_blocks = 0, updated_voxels = 0;
@@ -128,7 +129,7 @@ void expectFuserEqualsReferenceAcrossAllLevels(SurfaceFuser::Kernel kernel) {
     const StereoFrame frame = renderFrame(scene, vgaCamera(), T_world_camera);
     std::vector<VoxelBlock*> queue, updated;
     MeasurementImage measurements;
-    measurements.build(frame, config, &pool);
+    measurements.build(frame, stageConfigs(config).pipeline.measurement, &pool);
     lookup.run(frame, measurements, &octree, &queue);
     ASSERT_GT(queue.size(), 500u);
     // The reference runs on copies of the blocks as they were before this frame.
@@ -278,7 +279,7 @@ TEST(FusionReference, KernelsEqualReferenceOnRandomFramesAndBlocks) {
     BlockOctree octree(config.blockSizeM());
     std::vector<SurfaceFuser> fusers;
     for (SurfaceFuser::Kernel kernel : kernelsToTest()) {
-      fusers.emplace_back(fusionConfig(config), &pool);
+      fusers.emplace_back(stageConfigs(config).pipeline.fusion, &pool);
       fusers.back().setKernel(kernel);
     }
     std::vector<std::vector<VoxelBlock>> blocks(fusers.size());
@@ -322,7 +323,7 @@ TEST(FusionReference, KernelsEqualReferenceOnRandomFramesAndBlocks) {
       for (VoxelBlock& b : expected) referenceFuseBlock(frame, octree, config, &b);
       std::vector<uint64_t> voxels_updated;
       MeasurementImage measurements;
-      measurements.build(frame, config, &pool);
+      measurements.build(frame, stageConfigs(config).pipeline.measurement, &pool);
       for (size_t n = 0; n < fusers.size(); ++n) {
         std::vector<VoxelBlock*> queue, updated;
         for (VoxelBlock& b : blocks[n]) queue.push_back(&b);

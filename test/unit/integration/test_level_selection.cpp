@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "MeshTestSupport.h"
+#include "stereo_fusion/StageConfigs.h"
 #include "stereo_fusion/integration/LevelSelection.h"
 #include "stereo_fusion/integration/MeasurementImage.h"
 
@@ -15,7 +16,8 @@ TEST(LevelSelection, NoiseModeSwitchesWhereTheDepthErrorReachesTheVoxelEdge) {
   config.voxel_size_m = 0.02;
   config.disparity_noise_px = 0.15;
   // f·b = 576 · 0.12 = 69.12: z1 = sqrt(0.02 · 69.12 / 0.15) = sqrt(9.216), z2 = sqrt(18.432)
-  const LevelThresholds t = levelThresholdsFor(config, 69.12);
+  const LevelThresholds t =
+      levelThresholdsFor(stageConfigs(config).pipeline.measurement.levels, 69.12);
   EXPECT_NEAR(t.scale2_min_depth_m, 3.035787, 1e-6);
   EXPECT_NEAR(t.scale4_min_depth_m, 4.293251, 1e-6);
   // At each switch the depth error equals that level's voxel edge: 2 cm and 4 cm.
@@ -24,10 +26,12 @@ TEST(LevelSelection, NoiseModeSwitchesWhereTheDepthErrorReachesTheVoxelEdge) {
   // A long-baseline camera (KITTI: f·b ≈ 386) at 10 cm stays fine to 16 m; a noisier source
   // (σ_d four times larger) goes coarse at half the depth.
   config.voxel_size_m = 0.10;
-  EXPECT_NEAR(levelThresholdsFor(config, 386.14).scale2_min_depth_m,
+  EXPECT_NEAR(levelThresholdsFor(stageConfigs(config).pipeline.measurement.levels, 386.14)
+                  .scale2_min_depth_m,
               std::sqrt(0.10 * 386.14 / 0.15), 1e-9);
   config.disparity_noise_px = 0.60;
-  EXPECT_NEAR(levelThresholdsFor(config, 386.14).scale2_min_depth_m,
+  EXPECT_NEAR(levelThresholdsFor(stageConfigs(config).pipeline.measurement.levels, 386.14)
+                  .scale2_min_depth_m,
               0.5 * std::sqrt(0.10 * 386.14 / 0.15), 1e-9);
 }
 
@@ -35,19 +39,26 @@ TEST(LevelSelection, CoarseDisparityStepsRaiseTheNoiseToTheirRoundingError) {
   MapperConfig config;  // level_mode noise, σ_d 0.15 px
   config.voxel_size_m = 0.02;
   // SGBM's 1/16 px steps round by 0.018 px (1σ): below σ_d, nothing changes.
-  EXPECT_DOUBLE_EQ(disparityNoisePx(config, 1.0 / 16.0), 0.15);
-  EXPECT_DOUBLE_EQ(disparityNoisePx(config, 0.0), 0.15) << "unknown step";
-  EXPECT_EQ(levelThresholdsFor(config, 69.12, 1.0 / 16.0).scale2_min_depth_m,
-            levelThresholdsFor(config, 69.12).scale2_min_depth_m);
+  EXPECT_DOUBLE_EQ(disparityNoisePx(stageConfigs(config).pipeline.measurement.levels, 1.0 / 16.0),
+                   0.15);
+  EXPECT_DOUBLE_EQ(disparityNoisePx(stageConfigs(config).pipeline.measurement.levels, 0.0), 0.15)
+      << "unknown step";
+  EXPECT_EQ(levelThresholdsFor(stageConfigs(config).pipeline.measurement.levels, 69.12, 1.0 / 16.0)
+                .scale2_min_depth_m,
+            levelThresholdsFor(stageConfigs(config).pipeline.measurement.levels, 69.12)
+                .scale2_min_depth_m);
   // Whole-pixel disparities: σ_d = 1/√12 = 0.288675 px, so z1 = sqrt(0.02 · 69.12 / 0.288675)
   // = sqrt(4.788774) = 2.188327 m and z2 = sqrt(9.577548) = 3.094761 m.
-  EXPECT_NEAR(disparityNoisePx(config, 1.0), 0.2886751, 1e-7);
-  const LevelThresholds whole = levelThresholdsFor(config, 69.12, 1.0);
+  EXPECT_NEAR(disparityNoisePx(stageConfigs(config).pipeline.measurement.levels, 1.0), 0.2886751,
+              1e-7);
+  const LevelThresholds whole =
+      levelThresholdsFor(stageConfigs(config).pipeline.measurement.levels, 69.12, 1.0);
   EXPECT_NEAR(whole.scale2_min_depth_m, 2.188327, 1e-6);
   EXPECT_NEAR(whole.scale4_min_depth_m, 3.094761, 1e-6);
   // The configured depths ignore it.
   config.level_mode = LevelMode::kDepth;
-  EXPECT_EQ(levelThresholdsFor(config, 69.12, 1.0).scale2_min_depth_m,
+  EXPECT_EQ(levelThresholdsFor(stageConfigs(config).pipeline.measurement.levels, 69.12, 1.0)
+                .scale2_min_depth_m,
             config.levels.scale2_min_depth_m);
 }
 
@@ -57,7 +68,8 @@ TEST(LevelSelection, DepthModeKeepsTheConfiguredDepths) {
   config.levels.scale2_min_depth_m = 1.5;
   config.levels.scale4_min_depth_m = 3.5;
   for (double fb : {10.0, 69.12, 400.0}) {
-    const LevelThresholds t = levelThresholdsFor(config, fb);
+    const LevelThresholds t =
+        levelThresholdsFor(stageConfigs(config).pipeline.measurement.levels, fb);
     EXPECT_EQ(t.scale2_min_depth_m, 1.5);
     EXPECT_EQ(t.scale4_min_depth_m, 3.5);
   }

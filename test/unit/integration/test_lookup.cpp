@@ -6,6 +6,7 @@
 #include <tuple>
 
 #include "TestSupport.h"
+#include "stereo_fusion/StageConfigs.h"
 #include "stereo_fusion/integration/BlockLookup.h"
 #include "stereo_fusion/integration/SurfaceFuser.h"
 
@@ -34,10 +35,10 @@ struct LookupRun {
 
 LookupRun runLookup(const MapperConfig& config, const StereoFrame& frame, BlockOctree* tree) {
   ThreadPool pool(config.num_threads);
-  BlockLookup lookup(lookupConfig(config), &pool);
+  BlockLookup lookup(stageConfigs(config).pipeline.lookup, &pool);
   LookupRun run;
   MeasurementImage measurements;
-  measurements.build(frame, config, &pool);
+  measurements.build(frame, stageConfigs(config).pipeline.measurement, &pool);
   run.stats = lookup.run(frame, measurements, tree, &run.queue);
   return run;
 }
@@ -68,7 +69,7 @@ StereoFrame constantDepthFrame(const StereoCamera& camera, float disparity) {
 bool lookupUsesSimd() {
   MapperConfig config;
   ThreadPool pool(1);
-  return BlockLookup(lookupConfig(config), &pool).usesSimd();
+  return BlockLookup(stageConfigs(config).pipeline.lookup, &pool).usesSimd();
 }
 
 /// The scalar and the AVX2 lookup on the same frame, each into its own octree.
@@ -80,13 +81,13 @@ struct ScalarAndVector {
 ScalarAndVector runScalarAndVector(const MapperConfig& config, const StereoFrame& frame,
                                    ThreadPool* pool) {
   BlockOctree scalar_tree(config.blockSizeM()), vector_tree(config.blockSizeM());
-  BlockLookup scalar(lookupConfig(config), pool, /*allow_simd=*/false),
-      vector(lookupConfig(config), pool);
+  BlockLookup scalar(stageConfigs(config).pipeline.lookup, pool, /*allow_simd=*/false),
+      vector(stageConfigs(config).pipeline.lookup, pool);
   EXPECT_FALSE(scalar.usesSimd());
   std::vector<VoxelBlock*> scalar_queue, vector_queue;
   ScalarAndVector r;
   MeasurementImage measurements;
-  measurements.build(frame, config, pool);
+  measurements.build(frame, stageConfigs(config).pipeline.measurement, pool);
   r.scalar = scalar.run(frame, measurements, &scalar_tree, &scalar_queue);
   r.vector = vector.run(frame, measurements, &vector_tree, &vector_queue);
   r.scalar_keys = keysOf(scalar_queue);
@@ -319,15 +320,16 @@ void expectEveryBlockFusionCanUpdateIsQueued(const Eigen::Vector3d& world_offset
   }
   BlockOctree all(config.blockSizeM());
   const LevelThresholds thresholds =
-      levelThresholdsFor(config, frame.camera.fx() * frame.camera.baseline());
+      levelThresholdsFor(stageConfigs(config).pipeline.measurement.levels,
+                         frame.camera.fx() * frame.camera.baseline());
   std::vector<VoxelBlock*> every;
   for (int32_t z = lo.z - 2; z <= hi.z + 2; ++z)
     for (int32_t y = lo.y - 2; y <= hi.y + 2; ++y)
       for (int32_t x = lo.x - 2; x <= hi.x + 2; ++x) every.push_back(all.findOrAllocate({x, y, z}));
-  SurfaceFuser fuser(fusionConfig(config), &pool);
+  SurfaceFuser fuser(stageConfigs(config).pipeline.fusion, &pool);
   std::vector<VoxelBlock*> updated;
   MeasurementImage measurements;
-  measurements.build(frame, config, &pool);
+  measurements.build(frame, stageConfigs(config).pipeline.measurement, &pool);
   const FusionStats stats = fuser.fuse(frame, measurements, all, every, &updated);
   ASSERT_GT(stats.blocks_updated, 100u);
   const TruncationBand band = config.truncationBand();

@@ -8,6 +8,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "stereo_fusion/StageConfigs.h"
 #include "stereo_fusion/integration/OutlierRejection.h"
 
 using namespace stereo_fusion;
@@ -40,7 +41,7 @@ Rejected reject(const cv::Mat& disparity, const MapperConfig& config) {
               static_cast<float>(config.max_depth_m), &pool);
   OutlierRejection rejection;
   Rejected r;
-  r.stats = rejection.apply(disparity, config, &image);
+  r.stats = rejection.apply(disparity, stageConfigs(config).pipeline.outliers, &image);
   r.usable = cv::Mat::zeros(disparity.size(), CV_8U);
   for (int v = 0; v < disparity.rows; ++v)
     for (int u = 0; u < disparity.cols; ++u) {
@@ -166,8 +167,10 @@ TEST(OutlierRejection, ThePoolsRowBandsGiveTheSameResultAsOneThread) {
   serial.build(disparity, cv::Mat(), kFb, 0.1f, 100.0f, &one);
   banded.build(disparity, cv::Mat(), kFb, 0.1f, 100.0f, &one);
   OutlierRejection a, b;
-  const OutlierRejectionStats s = a.apply(disparity, config, &serial);
-  const OutlierRejectionStats p = b.apply(disparity, config, &banded, &two);
+  const OutlierRejectionStats s =
+      a.apply(disparity, stageConfigs(config).pipeline.outliers, &serial);
+  const OutlierRejectionStats p =
+      b.apply(disparity, stageConfigs(config).pipeline.outliers, &banded, &two);
   EXPECT_GT(s.edge_pixels, 1000u);
   EXPECT_EQ(p.edge_pixels, s.edge_pixels);
   EXPECT_EQ(p.speckle_pixels, s.speckle_pixels);

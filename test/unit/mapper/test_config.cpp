@@ -3,6 +3,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "stereo_fusion/MapperConfig.h"
+#include "stereo_fusion/StageConfigs.h"
 #include "stereo_fusion/io/ConfigFile.h"
 
 using namespace stereo_fusion;
@@ -130,8 +131,8 @@ TEST(Config, YamlFileErrorsNameFileLineAndParameter) {
   EXPECT_EQ(c.weight_mode, WeightMode::kConstant);
 }
 
-// Each stage gets the parameters it uses (LookupConfig, FusionConfig, CarveConfig), built from
-// MapperConfig in one place: every field must come from its MapperConfig parameter, and a
+// Each stage gets the parameters it uses (its own config), built from MapperConfig in one place
+// (stageConfigs()): every field must come from its MapperConfig parameter, and a
 // default-constructed one must hold MapperConfig's defaults.
 TEST(Config, StageConfigsCarryTheirParameters) {
   MapperConfig c;  // every value differs from its default
@@ -150,7 +151,8 @@ TEST(Config, StageConfigsCarryTheirParameters) {
   c.free_space_decay = 0.35;
   c.use_color = false;
   c.free_space_window_px = 3;
-  const LookupConfig lookup = lookupConfig(c);
+  const StageConfigs stages = stageConfigs(c);
+  const LookupConfig& lookup = stages.pipeline.lookup;
   EXPECT_EQ(lookup.voxel_size_m, 0.013);
   EXPECT_EQ(lookup.truncation_vox, 5.5);
   EXPECT_EQ(lookup.lookup_mode, LookupMode::kNaive);
@@ -158,7 +160,7 @@ TEST(Config, StageConfigsCarryTheirParameters) {
   EXPECT_EQ(lookup.histogram_min_points, 7);
   EXPECT_EQ(lookup.max_lookup_blocks_per_frame, 1234);
   EXPECT_EQ(lookup.truncationBand().maxM(), c.truncationBand().maxM());
-  const FusionConfig fusion = fusionConfig(c);
+  const FusionConfig& fusion = stages.pipeline.fusion;
   EXPECT_EQ(fusion.voxel_size_m, 0.013);
   EXPECT_EQ(fusion.truncation_vox, 5.5);
   EXPECT_EQ(fusion.weight_mode, WeightMode::kDepthAware);
@@ -169,13 +171,17 @@ TEST(Config, StageConfigsCarryTheirParameters) {
   EXPECT_FALSE(fusion.free_space_carving);
   EXPECT_EQ(fusion.free_space_decay, 0.35);
   EXPECT_FALSE(fusion.use_color);
-  const CarveConfig carve = carveConfig(c);
+  const CarveConfig& carve = stages.pipeline.carve;
   EXPECT_EQ(carve.free_space_window_px, 3);
   EXPECT_EQ(carve.fusion.free_space_decay, 0.35);
   EXPECT_EQ(carve.fusion.weight_mode, WeightMode::kDepthAware);
   EXPECT_EQ(carve.fusion.max_weight, 37.0);
 
   const MapperConfig defaults;
+  const MeasurementConfig default_measurement;
+  EXPECT_EQ(default_measurement.max_depth_m, defaults.max_depth_m);
+  EXPECT_EQ(default_measurement.levels.disparity_noise_px, defaults.disparity_noise_px);
+  EXPECT_EQ(default_measurement.levels.level_mode, defaults.level_mode);
   const LookupConfig default_lookup;
   EXPECT_EQ(default_lookup.voxel_size_m, defaults.voxel_size_m);
   EXPECT_EQ(default_lookup.lookup_mode, defaults.lookup_mode);
@@ -184,6 +190,87 @@ TEST(Config, StageConfigsCarryTheirParameters) {
   EXPECT_EQ(default_carve.free_space_window_px, defaults.free_space_window_px);
   EXPECT_EQ(default_carve.fusion.free_space_decay, defaults.free_space_decay);
   EXPECT_EQ(default_carve.fusion.weight_mode, defaults.weight_mode);
+}
+
+// The stages added to stageConfigs() with the frame pipeline and the layers: measurement,
+// level selection, outlier rejection, the contradiction filter, the gate, the pipeline's own
+// refusals, eviction, the mesh and the planning layer.
+TEST(Config, StageConfigsReachEveryStage) {
+  MapperConfig c;  // every value differs from its default
+  c.voxel_size_m = 0.03;
+  c.min_depth_m = 0.3;
+  c.max_depth_m = 6.5;
+  c.use_color = false;
+  c.level_mode = LevelMode::kDepth;
+  c.disparity_noise_px = 0.4;
+  c.levels.scale2_min_depth_m = 1.5;
+  c.speckle_max_area_px = 40;
+  c.speckle_max_diff_px = 2.5;
+  c.edge_reject_radius_px = 3;
+  c.edge_reject_jump_px = 1.5;
+  c.contradiction_filter = false;
+  c.contradiction_min_weight = 3.5;
+  c.contradiction_sigmas = 2.5;
+  c.contradiction_max_share = 0.4;
+  c.max_pose_jump_m = 7.0;
+  c.max_timestamp_gap_s = 9.0;
+  c.require_increasing_timestamps = false;
+  c.min_coherent_pixel_share = 0.3;
+  c.max_new_blocks_per_frame = 77;
+  c.max_blocks = 500;
+  c.max_distance_from_camera_m = 12.0;
+  c.mesh_enabled = false;
+  c.texture = TextureMode::kPatches;
+  c.mesh_level_min_coverage = 0.6;
+  c.mesh_fill_seams = false;
+  c.texture_border_px = 11;
+  c.texture_max_patch_px = 48;
+  c.planning_enabled = false;
+  c.esdf_max_distance_m = 3.0;
+  c.occupancy_min_weight = 1.5;
+  c.free_space_unmeasured_range_m = 2.0;
+  const StageConfigs s = stageConfigs(c);
+  EXPECT_EQ(s.pipeline.block_size_m, 8 * 0.03);
+  EXPECT_EQ(s.pipeline.measurement.min_depth_m, 0.3);
+  EXPECT_EQ(s.pipeline.measurement.max_depth_m, 6.5);
+  EXPECT_FALSE(s.pipeline.measurement.use_color);
+  EXPECT_EQ(s.pipeline.measurement.levels.level_mode, LevelMode::kDepth);
+  EXPECT_EQ(s.pipeline.measurement.levels.voxel_size_m, 0.03);
+  EXPECT_EQ(s.pipeline.measurement.levels.disparity_noise_px, 0.4);
+  EXPECT_EQ(s.pipeline.measurement.levels.levels.scale2_min_depth_m, 1.5);
+  EXPECT_EQ(s.pipeline.outliers.speckle_max_area_px, 40);
+  EXPECT_EQ(s.pipeline.outliers.speckle_max_diff_px, 2.5);
+  EXPECT_EQ(s.pipeline.outliers.edge_reject_radius_px, 3);
+  EXPECT_EQ(s.pipeline.outliers.edge_reject_jump_px, 1.5);
+  EXPECT_FALSE(s.pipeline.contradiction_filter);
+  EXPECT_EQ(s.pipeline.contradiction.voxel_size_m, 0.03);
+  EXPECT_EQ(s.pipeline.contradiction.contradiction_min_weight, 3.5);
+  EXPECT_EQ(s.pipeline.contradiction.contradiction_sigmas, 2.5);
+  EXPECT_EQ(s.pipeline.contradiction.contradiction_max_share, 0.4);
+  EXPECT_EQ(s.pipeline.disparity_noise_px, 0.4);
+  EXPECT_EQ(s.pipeline.gate.max_pose_jump_m, 7.0);
+  EXPECT_EQ(s.pipeline.gate.max_timestamp_gap_s, 9.0);
+  EXPECT_FALSE(s.pipeline.gate.require_increasing_timestamps);
+  EXPECT_EQ(s.pipeline.min_coherent_pixel_share, 0.3);
+  EXPECT_EQ(s.pipeline.max_new_blocks_per_frame, 77);
+  EXPECT_EQ(s.eviction.max_blocks, 500u);
+  EXPECT_EQ(s.eviction.max_distance_from_camera_m, 12.0);
+  EXPECT_FALSE(s.mesh.enabled);
+  EXPECT_TRUE(s.mesh.textured);
+  EXPECT_EQ(s.mesh.meshing.voxel_size_m, 0.03);
+  EXPECT_EQ(s.mesh.meshing.level_min_coverage, 0.6);
+  EXPECT_FALSE(s.mesh.meshing.fill_faces_from_coarser_levels);
+  EXPECT_EQ(s.mesh.texture.border_px, 11);
+  EXPECT_EQ(s.mesh.texture.max_patch_px, 48);
+  EXPECT_EQ(s.mesh.texture.voxel_size_m, 0.03);
+  EXPECT_FALSE(s.planning_enabled);
+  // 0.03 · 2 = 6 cm and 0.03 · 4 = 12 cm: 6 cm is nearer 8 cm in ratio (planningCellSizeM()).
+  EXPECT_EQ(s.planning.planning.cell_m, c.planningCellSizeM());
+  EXPECT_EQ(s.planning.planning.voxels_per_cell, 2);
+  EXPECT_EQ(s.planning.planning.max_distance_m, 3.0);
+  EXPECT_EQ(s.planning.planning.min_weight, 1.5f);
+  EXPECT_EQ(s.planning.planning.unmeasured_range_m, 2.0);
+  EXPECT_EQ(s.planning.max_distance_from_camera_m, 12.0);
 }
 
 // The table behind both registries (mapping and node parameters): every type, the messages

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include "TestSupport.h"
+#include "stereo_fusion/StageConfigs.h"
 #include "stereo_fusion/planning/FreeSpaceRecorder.h"
 
 namespace stereo_fusion {
@@ -30,7 +31,7 @@ Recorded record(const StereoFrame& frame, double unmeasured_range_m = 0.0) {
   MapperConfig config;  // 2 cm voxels, Φ = 4 voxels of the measurement's level, σ_d 0.15 px
   ThreadPool pool(2);
   MeasurementImage measurements;
-  measurements.build(frame, config, &pool);
+  measurements.build(frame, stageConfigs(config).pipeline.measurement, &pool);
   FreeSpaceRecorder recorder({0.08, unmeasured_range_m, config.truncationBand()}, &pool);
   Recorded r;
   r.stats = recorder.record(frame, measurements, &r.blocks);
@@ -84,7 +85,7 @@ TEST(FreeSpaceRecorder, ThreadCountIndependent) {
   for (int threads : {1, 2}) {
     ThreadPool pool(threads);
     MeasurementImage measurements;
-    measurements.build(frame, config, &pool);
+    measurements.build(frame, stageConfigs(config).pipeline.measurement, &pool);
     FreeSpaceRecorder recorder({0.08, 0.0, config.truncationBand()}, &pool);
     recorder.record(frame, measurements, &results[threads - 1]);
   }
@@ -110,7 +111,7 @@ TEST(FreeSpaceRecorder, SkippingPastTheTilesSmallestFreeDepthsKeepsEveryCell) {
   MapperConfig config;
   ThreadPool pool(2);
   MeasurementImage measurements;
-  measurements.build(frame, config, &pool);
+  measurements.build(frame, stageConfigs(config).pipeline.measurement, &pool);
   std::vector<std::pair<BlockKey, PlanningBlock::Bits>> cells[2];
   FreeSpaceStats stats[2];
   for (int skip : {0, 1}) {
