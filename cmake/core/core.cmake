@@ -40,6 +40,7 @@ add_library(stereo_fusion_core STATIC
   ${STEREO_FUSION_ROOT}/src/integration/FramePipeline.cpp
   ${STEREO_FUSION_ROOT}/src/integration/RejectReason.cpp
   ${STEREO_FUSION_ROOT}/src/integration/BlockLookup.cpp
+  ${STEREO_FUSION_ROOT}/src/integration/BlockLookupRun.cpp
   ${STEREO_FUSION_ROOT}/src/integration/SurfaceFuser.cpp
   ${STEREO_FUSION_ROOT}/src/integration/FreeSpaceCarver.cpp
   ${STEREO_FUSION_ROOT}/src/integration/MeasurementImage.cpp
@@ -50,6 +51,7 @@ add_library(stereo_fusion_core STATIC
   ${STEREO_FUSION_ROOT}/src/integration/LevelSelection.cpp
   ${STEREO_FUSION_ROOT}/src/integration/DepthTiles.cpp
   ${STEREO_FUSION_ROOT}/src/integration/FusionKernels.cpp
+  ${STEREO_FUSION_ROOT}/src/integration/FusionKernelsAvx2.cpp
   ${STEREO_FUSION_ROOT}/src/mesh/CellPolygonizer.cpp
   ${STEREO_FUSION_ROOT}/src/mesh/BlockMesher.cpp
   ${STEREO_FUSION_ROOT}/src/mesh/MesherContext.cpp
@@ -68,6 +70,7 @@ add_library(stereo_fusion_core STATIC
   ${STEREO_FUSION_ROOT}/src/planning/EsdfPropagator.cpp
   ${STEREO_FUSION_ROOT}/src/planning/EsdfTransit.cpp
   ${STEREO_FUSION_ROOT}/src/planning/PlanningMap.cpp
+  ${STEREO_FUSION_ROOT}/src/planning/PlanningMapQueries.cpp
   ${STEREO_FUSION_ROOT}/src/planning/OccupancyGrid2D.cpp
   ${STEREO_FUSION_ROOT}/src/io/PlanningExport.cpp
   ${STEREO_FUSION_ROOT}/src/io/TextureAtlas.cpp
@@ -76,6 +79,7 @@ add_library(stereo_fusion_core STATIC
   ${STEREO_FUSION_ROOT}/src/io/ConfigFile.cpp
   ${STEREO_FUSION_ROOT}/src/io/PlyWriter.cpp
   ${STEREO_FUSION_ROOT}/src/io/MapFile.cpp
+  ${STEREO_FUSION_ROOT}/src/io/MapFileWrite.cpp
   ${STEREO_FUSION_ROOT}/src/io/WriteTarget.cpp
   ${STEREO_FUSION_ROOT}/src/util/ThreadPool.cpp
   ${STEREO_FUSION_ROOT}/src/util/Crc32.cpp
