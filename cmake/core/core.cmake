@@ -30,7 +30,9 @@ add_library(stereo_fusion_core STATIC
   ${STEREO_FUSION_ROOT}/src/trajectory/PoseCorrection.cpp
   ${STEREO_FUSION_ROOT}/src/trajectory/UnitQuaternion.cpp
   ${STEREO_FUSION_ROOT}/src/session/EditTimeline.cpp
+  ${STEREO_FUSION_ROOT}/src/session/FrameStats.cpp
   ${STEREO_FUSION_ROOT}/src/session/MappingSession.cpp
+  ${STEREO_FUSION_ROOT}/src/session/OutputCadence.cpp
   ${STEREO_FUSION_ROOT}/src/session/TrajectoryOutcome.cpp
   ${STEREO_FUSION_ROOT}/src/integration/StereoFrame.cpp
   ${STEREO_FUSION_ROOT}/src/integration/FrameGate.cpp
