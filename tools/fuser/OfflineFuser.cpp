@@ -18,6 +18,7 @@
 #include "stereo_fusion/io/PlyWriter.h"
 #include "stereo_fusion/ros/BagSequence.h"
 #include "stereo_fusion/session/MappingSession.h"
+#include "stereo_fusion/session/OutputCadence.h"
 #include "stereo_fusion/trajectory/PoseCorrection.h"
 #include "stereo_fusion/util/ProcessMemory.h"
 #include "stereo_fusion/util/Timer.h"
@@ -65,9 +66,9 @@ bool readTrajectory(const std::string& path, std::vector<StampedPose>* poses, st
 
 namespace {
 /// esdf.ply, occupancy.pgm + .yaml and octomap.bt of the planning layer, and its figures.
-bool writePlanningOutputs(const std::string& out_dir, Mapper* mapper, bool time_queries,
+bool writePlanningOutputs(const std::string& out_dir, MapAccess& access, bool time_queries,
                           FuseReport::Planning* report, std::string* error) {
-  const PlanningMap* planning = mapper->planning();
+  const PlanningMap* planning = access.map().planning();
   if (!planning) return true;
   report->enabled = true;
   report->cell_m = planning->grid().cell_m;
@@ -93,9 +94,9 @@ bool writePlanningOutputs(const std::string& out_dir, Mapper* mapper, bool time_
   }
   const fs::path dir(out_dir);
   if (!writeEsdfPly((dir / "esdf.ply").string(), *planning, error)) return false;
-  const MapperConfig& config = mapper->config();
+  const MapperConfig& config = access.map().config();
   const OccupancyGrid2D grid = projectOccupancy(*planning, config.grid_min_z_m, config.grid_max_z_m,
-                                                mapper->occupancyGridWindow());
+                                                access.map().occupancyGridWindow());
   if (grid.windowed)
     std::fprintf(stderr,
                  "warning: occupancy grid windowed: the known columns span %lld x %lld cells, "
@@ -113,68 +114,46 @@ bool writePlanningOutputs(const std::string& out_dir, Mapper* mapper, bool time_
   if (time_queries) {  // what a batch rebuild costs (it recomputes the same layer: incremental ==
                        // batch)
     Timer rebuild;
-    mapper->rebuildPlanning();
+    access.rebuildPlanning();
     report->rebuild_ms = rebuild.elapsedMs();
   }
   return true;
 }
-}  // namespace
 
-bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::string* error) {
-  *report = FuseReport{};
-  std::unique_ptr<FrameSource> reader;
-  if (options.input.empty()) {
-    // No frames: only the loaded map is meshed.
-  } else if (fs::path(options.input).extension() == ".bag") {
-    reader = BagSequence::open(options.input, options.bag_topics, error);
-    if (!reader) return false;
-  } else if (auto folder = DatasetReader::open(options.input, error)) {
-    reader = std::make_unique<DatasetReader>(std::move(*folder));
-  } else {
-    return false;
+/// The frames of `options.input` (none with only --load-map), or false with a message.
+bool openInput(const FuseOptions& options, std::unique_ptr<FrameSource>* reader,
+               std::string* error) {
+  if (options.input.empty()) return true;  // no frames: only the loaded map is meshed
+  if (fs::path(options.input).extension() == ".bag") {
+    *reader = BagSequence::open(options.input, options.bag_topics, error);
+    return *reader != nullptr;
   }
-  std::vector<StampedPose> trajectory;
-  if (!options.trajectory.empty() && !readTrajectory(options.trajectory, &trajectory, error))
-    return false;
-  // The session keeps every frame's stamp and pose for --trajectory (the images are read again
-  // from the input), and its one re-fusion routine applies the trajectory after the last frame.
-  SessionConfig session_config;
-  session_config.loop_closure_max_frames =
-      trajectory.empty() ? 0 : std::numeric_limits<size_t>::max();
-  session_config.background_corrections = false;
-  MappingSession session(options.config, session_config);
-  // Offline, one thread: the mapper is used directly between session calls (a correction
-  // swaps it: take it again after).
-  Mapper* mapper = session.withMapper([](Mapper& m) { return &m; });
-  if (!options.load_map.empty()) {
-    const MappingSession::LoadOutcome loaded = session.load(options.load_map);
-    if (!loaded.success) {
-      *error = loaded.message;
-      return false;
-    }
-    report->blocks_loaded = loaded.blocks;
-  }
-  std::error_code ec;
-  fs::create_directories(options.out_dir, ec);
-  if (ec || !fs::is_directory(options.out_dir)) {
-    *error = options.out_dir + ": cannot create the output directory";
-    return false;
-  }
+  auto folder = DatasetReader::open(options.input, error);
+  if (folder) *reader = std::make_unique<DatasetReader>(std::move(*folder));
+  return folder.has_value();
+}
 
+/// Fuses the input's frames through `session`, meshing and updating the planning layer on the
+/// cadence, and records each fused frame's stats in `report`. False (with a message) only when
+/// fusing threw: out of memory mid-frame.
+bool fuseFrames(const FuseOptions& options, FrameSource* reader, bool keep_for_trajectory,
+                const OutputCadence& cadence, MappingSession* session, FuseReport* report,
+                std::string* error) {
   const size_t available = reader ? reader->size() : 0;
   const size_t total = options.max_frames ? std::min(options.max_frames, available) : available;
   report->frames_total = total;
   const bool terminal = isatty(STDERR_FILENO);
+  const char* line_break = terminal && options.progress ? "\n" : "";
+  const bool planning = session->read([](const Mapper& m) { return m.planning() != nullptr; });
   size_t last_decile = 0;
   Timer wall;
-  auto skip = [&](RejectReason reason, const std::string& message) {
-    ++report->skipped[rejectReasonName(reason)];
+  auto skipped = [&](const std::string& message) {
     if (report->skipped_examples.size() < 5) report->skipped_examples.push_back(message);
-    std::fprintf(stderr, "%sskipping frame: %s\n", terminal && options.progress ? "\n" : "",
-                 message.c_str());
+    std::fprintf(stderr, "%sskipping frame: %s\n", line_break, message.c_str());
   };
-  report->start_rss_bytes = readProcessMemory().resident_mb * 1048576.0;
   for (size_t i = 0; i < total; ++i) {
+    if (options.progress && i > 0)
+      showProgress(i, total, wall.elapsedMs() / 1000.0, terminal, &last_decile);
     StereoFrame frame;
     std::string why;
     bool loaded = false;
@@ -184,150 +163,108 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
       why = "frame " + std::to_string(i) + ": " + e.what();
     }
     if (!loaded) {
-      skip(RejectReason::kUnreadable, why);
-    } else {
-      Timer frame_timer;
-      // Mesh after every mesh_every-th fused frame; the last frame's pass comes after the loop.
-      const bool mesh_now = (report->frames_used + 1) % options.mesh_every == 0;
-      FrameLoader reload;
-      if (!trajectory.empty()) {
-        FrameSource* source = reader.get();
-        reload = [source, i](StereoFrame* again, std::string* why) {
-          return source->load(i, again, why);
-        };
-      }
-      const MappingSession::FrameOutcome out = session.fuse(
-          frame, session.arrive(), mesh_now ? MeshTiming::kNow : MeshTiming::kDeferred, reload);
-      const IntegrationResult& r = out.result;
-      if (out.reason == RejectReason::kError) {
-        // Out of memory mid-frame: stop cleanly with what we have rather than crash. Set
-        // max_blocks to stay within memory.
-        *error = "frame " + std::to_string(i) + ": " + out.error + " with " +
-                 std::to_string(mapper->map().blockCount()) + " blocks; set max_blocks";
-        return false;
-      }
-      if (out.reason != RejectReason::kNone) {
-        skip(out.reason, "frame " + std::to_string(i) + ": " + out.error);
-      } else {
-        ++report->frames_used;
-        report->pixels_rejected.speckle_pixels += r.rejected.speckle_pixels;
-        report->pixels_rejected.edge_pixels += r.rejected.edge_pixels;
-        report->pixels_contradicting += r.contradiction.pixels_rejected;
-        if (std::isfinite(r.disparity_noise_px))
-          report->disparity_noise_px.push_back(r.disparity_noise_px);
-        if (r.reanchored) {
-          ++report->frames_reanchored;
-          std::fprintf(stderr, "%sframe %zu: %s\n", terminal && options.progress ? "\n" : "", i,
-                       r.note.c_str());
-        }
-        StageTimings timings{r.lookup_ms,          r.fusion_ms, r.carve_ms, r.mesh.meshing_ms,
-                             r.texture.texture_ms, 0.0,         mesh_now};
-        timings.free_space_ms = r.free_space_ms;
-        timings.contradiction_ms = r.contradiction_ms;
-        timings.free_space_nodes = static_cast<double>(r.free_space.nodes_visited);
-        if (mapper->planning() && report->frames_used % options.esdf_every == 0) {
-          const PlanningPass pass = mapper->updatePlanning();
-          timings.esdf_ms = pass.esdf_ms;
-          timings.esdf_updated = true;
-          timings.esdf_read_ms = pass.stats.read_ms;
-          timings.esdf_propagate_ms = pass.stats.propagate_ms;
-          timings.esdf_transit_ms = pass.stats.transit_ms;
-          timings.esdf_transit_blocks = static_cast<double>(pass.stats.transit_allocated);
-          timings.esdf_tsdf_blocks = static_cast<double>(pass.stats.tsdf_blocks);
-          timings.esdf_flipped = static_cast<double>(pass.stats.esdf.cells_flipped);
-          timings.esdf_raised = static_cast<double>(pass.stats.esdf.cells_raised);
-          timings.esdf_lowered = static_cast<double>(pass.stats.esdf.cells_lowered);
-        }
-        timings.total_ms = frame_timer.elapsedMs();
-        report->timings.push_back(timings);
-        report->work.push_back(
-            {static_cast<double>(r.lookup.valid_points),
-             static_cast<double>(r.lookup.octree_searches),
-             static_cast<double>(r.lookup.blocks_queued),
-             static_cast<double>(r.fusion.blocks_updated),
-             static_cast<double>(r.fusion.voxels_updated),
-             static_cast<double>(r.mesh.blocks_meshed), static_cast<double>(r.mesh.changed.size()),
-             static_cast<double>(r.fusion.blocks_created),
-             static_cast<double>(r.fusion.blocks_not_created),
-             static_cast<double>(r.carve.blocks_carved), static_cast<double>(r.carve.voxels_carved),
-             static_cast<double>(r.lookup.box_blocks)});
-      }
+      session->countDrop(RejectReason::kUnreadable);
+      skipped(why);
+      continue;
     }
-    if (options.progress)
-      showProgress(i + 1, total, wall.elapsedMs() / 1000.0, terminal, &last_decile);
-  }
-  if (mapper->blocksAwaitingMesh() > 0) {  // the frames since the last meshing pass
-    Timer mesh_timer;
-    const MeshPass pass = mapper->updateMesh();
-    if (!report->timings.empty() && !report->timings.back().meshed) {
-      StageTimings& last = report->timings.back();
-      last.meshing_ms = pass.mesh.meshing_ms;
-      last.texture_ms = pass.texture.texture_ms;
-      last.total_ms += mesh_timer.elapsedMs();
-      last.meshed = true;
-    }
-  }
-  if (mapper->planning() && !report->timings.empty() && !report->timings.back().esdf_updated) {
-    StageTimings& last = report->timings.back();  // the frames since the last planning update
-    last.esdf_ms = mapper->updatePlanning().esdf_ms;
-    last.total_ms += last.esdf_ms;
-    last.esdf_updated = true;
-  }
-  // Once, at the end: what the data say against what was configured.
-  if (const std::string warning = mapper->disparityNoiseWarning(); !warning.empty())
-    std::fprintf(stderr, "warning: %s\n", warning.c_str());
-  if (!trajectory.empty() && report->frames_used > 0) {
-    if (options.progress)
-      std::fprintf(stderr, "applying %s: fusing %zu frames again at their corrected poses\n",
-                   options.trajectory.c_str(), report->frames_used);
-    // Offline the trajectory comes after every frame: all of them share the drift it removes.
-    const std::optional<CorrectionReport> c =
-        session.submitTrajectory(trajectory, std::numeric_limits<double>::infinity());
-    TrajectoryReport& t = report->correction;
-    t.trajectory_poses = trajectory.size();
-    if (c) {
-      t.matched_poses = c->matched_poses;
-      t.max_shift_m = c->max_shift_m;
-      t.max_rotation_deg = c->max_rotation_deg;
-      t.frames_refused = c->frames_refused;
-      t.frames_rejected = c->frames_rejected;
-      t.ms = c->ms;
-      t.applied = c->outcome == TrajectoryOutcome::kApplied ||
-                  c->outcome == TrajectoryOutcome::kAppliedWithoutRefusion;
-    }
-    if (!t.applied) {
-      *error =
-          options.trajectory + ": " + (c ? c->message : std::string("not applied")) +
-          (c && c->outcome == TrajectoryOutcome::kRejectedNoMatch ? " (poses.txt's / the bag's)"
-                                                                  : "");
+    Timer frame_timer;
+    const uint64_t n = session->framesFused() + 1;  // this frame's number, if it is fused
+    const MeshTiming timing = cadence.meshTiming(n);
+    FrameLoader reload;
+    if (keep_for_trajectory)
+      reload = [reader, i](StereoFrame* again, std::string* why) {
+        return reader->load(i, again, why);
+      };
+    const MappingSession::FrameOutcome out =
+        session->fuse(frame, session->arrive(), timing, reload);
+    const IntegrationResult& r = out.result;
+    if (out.reason == RejectReason::kError) {
+      // Out of memory mid-frame: stop cleanly with what we have rather than crash. Set
+      // max_blocks to stay within memory.
+      const size_t blocks = session->read([](const Mapper& m) { return m.map().blockCount(); });
+      *error = "frame " + std::to_string(i) + ": " + out.error + " with " + std::to_string(blocks) +
+               " blocks; set max_blocks";
       return false;
     }
-    mapper = session.withMapper([](Mapper& m) { return &m; });
-    mapper->updatePlanning();
+    if (out.reason != RejectReason::kNone) {
+      skipped("frame " + std::to_string(i) + ": " + out.error);
+      continue;
+    }
+    if (std::isfinite(r.disparity_noise_px))
+      report->disparity_noise_px.push_back(r.disparity_noise_px);
+    if (r.reanchored) std::fprintf(stderr, "%sframe %zu: %s\n", line_break, i, r.note.c_str());
+    FrameStats stats = frameStats(r, timing == MeshTiming::kNow);
+    if (planning && cadence.planningAfterFrame(n))
+      stats.timings.addPlanningPass(
+          session->withMap([](MapAccess& m) { return m.updatePlanning(); }));
+    stats.timings.total_ms = frame_timer.elapsedMs();
+    report->timings.push_back(stats.timings);
+    report->work.push_back(stats.work);
   }
-  report->wall_time_s = wall.elapsedMs() / 1000.0;
+  if (options.progress && total > 0)
+    showProgress(total, total, wall.elapsedMs() / 1000.0, terminal, &last_decile);
+  // The frames since the last meshing pass and planning update, on the last frame's account.
+  session->withMap([&](MapAccess& m) {
+    StageTimings* last = report->timings.empty() ? nullptr : &report->timings.back();
+    if (m.map().blocksAwaitingMesh() > 0) {
+      Timer mesh_timer;
+      const MeshPass pass = m.updateMesh();
+      if (last && !last->meshed) {
+        last->addMeshPass(pass);
+        last->total_ms += mesh_timer.elapsedMs();
+      }
+    }
+    if (m.map().planning() && last && !last->esdf_updated) {
+      last->esdf_ms = m.updatePlanning().esdf_ms;
+      last->total_ms += last->esdf_ms;
+      last->esdf_updated = true;
+    }
+  });
+  return true;
+}
 
-  if (!options.save_map.empty() && !mapper->saveMap(options.save_map, error)) return false;
-  {
-    // Welded, written and let go: the copy is not kept beside the outputs that follow.
-    const TriangleMesh mesh = mapper->extractMesh();
-    report->mesh_vertices = mesh.positions.size();
-    report->mesh_triangles = mesh.triangles.size();
-    report->mesh_output_bytes = mesh.positions.size() * sizeof(mesh.positions[0]) +
-                                mesh.normals.size() * sizeof(mesh.normals[0]) +
-                                mesh.colors.size() * sizeof(mesh.colors[0]) +
-                                mesh.triangles.size() * sizeof(mesh.triangles[0]);
-    if (!writePly((fs::path(options.out_dir) / "mesh.ply").string(), mesh, error)) return false;
+/// Applies the --trajectory file's poses after the last frame: the frames fused again.
+bool applyTrajectory(const FuseOptions& options, const std::vector<StampedPose>& trajectory,
+                     MappingSession* session, FuseReport* report, std::string* error) {
+  if (options.progress)
+    std::fprintf(stderr, "applying %s: fusing %zu frames again at their corrected poses\n",
+                 options.trajectory.c_str(), report->frames_used);
+  // Offline the trajectory comes after every frame: all of them share the drift it removes.
+  const std::optional<CorrectionReport> c =
+      session->submitTrajectory(trajectory, std::numeric_limits<double>::infinity());
+  TrajectoryReport& t = report->correction;
+  t.trajectory_poses = trajectory.size();
+  if (c) {
+    t.matched_poses = c->matched_poses;
+    t.max_shift_m = c->max_shift_m;
+    t.max_rotation_deg = c->max_rotation_deg;
+    t.frames_refused = c->frames_refused;
+    t.frames_rejected = c->frames_rejected;
+    t.ms = c->ms;
+    t.applied = c->outcome == TrajectoryOutcome::kApplied ||
+                c->outcome == TrajectoryOutcome::kAppliedWithoutRefusion;
   }
-  report->blocks = mapper->map().blockCount();
-  report->blocks_evicted = mapper->blocksEvicted();
-  report->memory_bytes = mapper->map().memoryBytes();
-  report->bytes_per_block = mapper->map().bytesPerBlock();
-  report->memory = mapper->map().memoryUse();
-  report->mesh_store_bytes = mapper->mesh().memoryBytes();
-  if (!mapper->map().blocks().empty()) {
-    BlockKey lo = mapper->map().blocks().front()->key, hi = lo;
-    for (const VoxelBlock* b : mapper->map().blocks()) {
+  if (!t.applied) {
+    *error = options.trajectory + ": " + (c ? c->message : std::string("not applied")) +
+             (c && c->outcome == TrajectoryOutcome::kRejectedNoMatch ? " (poses.txt's / the bag's)"
+                                                                     : "");
+    return false;
+  }
+  session->withMap([](MapAccess& m) { m.updatePlanning(); });
+  return true;
+}
+
+/// The figures of the map at the end: blocks, memory, the dense grid it saves, mesh levels.
+void mapFigures(const Mapper& mapper, FuseReport* report) {
+  report->blocks = mapper.map().blockCount();
+  report->blocks_evicted = mapper.blocksEvicted();
+  report->memory_bytes = mapper.map().memoryBytes();
+  report->bytes_per_block = mapper.map().bytesPerBlock();
+  report->memory = mapper.map().memoryUse();
+  report->mesh_store_bytes = mapper.mesh().memoryBytes();
+  if (!mapper.map().blocks().empty()) {
+    BlockKey lo = mapper.map().blocks().front()->key, hi = lo;
+    for (const VoxelBlock* b : mapper.map().blocks()) {
       lo = componentMin(lo, b->key);
       hi = componentMax(hi, b->key);
     }
@@ -336,25 +273,43 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
                                voxels_per_block * sizeof(Voxel);
   }
   const MeshStates& mesh_states =
-      mapper->mesh().states();  // current: the mesh was brought up to date above
-  for (const VoxelBlock* b : mapper->map().blocks()) {
+      mapper.mesh().states();  // current: the mesh was brought up to date before
+  for (const VoxelBlock* b : mapper.map().blocks()) {
     if (b->row >= mesh_states.size()) continue;
     const MeshBlockState& state = mesh_states[*b];
     ++report->blocks_per_level[state.level];
     report->seam_filled_blocks += state.seam_filled;
   }
+  report->textured_blocks = mapper.textures().patches().size();
+  report->texture_bytes = mapper.textures().memoryBytes();
+}
 
-  report->textured_blocks = mapper->textures().patches().size();
-  report->texture_bytes = mapper->textures().memoryBytes();
+/// map file, mesh.ply (+ mesh.obj), the planning outputs and stats.json.
+bool writeOutputs(const FuseOptions& options, MapAccess& access, FuseReport* report,
+                  std::string* error) {
+  const Mapper& mapper = access.map();
+  if (!options.save_map.empty() && !mapper.saveMap(options.save_map, error)) return false;
+  {
+    // Welded, written and let go: the copy is not kept beside the outputs that follow.
+    const TriangleMesh mesh = mapper.extractMesh();
+    report->mesh_vertices = mesh.positions.size();
+    report->mesh_triangles = mesh.triangles.size();
+    report->mesh_output_bytes = mesh.positions.size() * sizeof(mesh.positions[0]) +
+                                mesh.normals.size() * sizeof(mesh.normals[0]) +
+                                mesh.colors.size() * sizeof(mesh.colors[0]) +
+                                mesh.triangles.size() * sizeof(mesh.triangles[0]);
+    if (!writePly((fs::path(options.out_dir) / "mesh.ply").string(), mesh, error)) return false;
+  }
+  mapFigures(mapper, report);
   if (options.config.texture == TextureMode::kPatches) {
     ObjExportInfo info;
     if (!writeTexturedObj((fs::path(options.out_dir) / "mesh.obj").string(),
-                          mapper->mesh().submeshes(), mapper->textures().patches(),
+                          mapper.mesh().submeshes(), mapper.textures().patches(),
                           ObjExportOptions{}, &info, error))
       return false;
     report->atlas_count = info.files.size() - 2;  // besides the .obj and the .mtl
   }
-  if (!writePlanningOutputs(options.out_dir, mapper, options.time_planning, &report->planning,
+  if (!writePlanningOutputs(options.out_dir, access, options.time_planning, &report->planning,
                             error))
     return false;
   // After every output: the peak of the whole run.
@@ -369,6 +324,62 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
     return false;
   }
   return true;
+}
+}  // namespace
+
+bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::string* error) {
+  *report = FuseReport{};
+  std::unique_ptr<FrameSource> reader;
+  if (!openInput(options, &reader, error)) return false;
+  std::vector<StampedPose> trajectory;
+  if (!options.trajectory.empty() && !readTrajectory(options.trajectory, &trajectory, error))
+    return false;
+  // The session keeps every frame's stamp and pose for --trajectory (the images are read again
+  // from the input), and its one re-fusion routine applies the trajectory after the last frame.
+  SessionConfig session_config;
+  session_config.loop_closure_max_frames =
+      trajectory.empty() ? 0 : std::numeric_limits<size_t>::max();
+  session_config.background_corrections = false;
+  MappingSession session(options.config, session_config);
+  if (!options.load_map.empty()) {
+    const MappingSession::LoadOutcome loaded = session.load(options.load_map);
+    if (!loaded.success) {
+      *error = loaded.message;
+      return false;
+    }
+    report->blocks_loaded = loaded.blocks;
+  }
+  std::error_code ec;
+  fs::create_directories(options.out_dir, ec);
+  if (ec || !fs::is_directory(options.out_dir)) {
+    *error = options.out_dir + ": cannot create the output directory";
+    return false;
+  }
+  const OutputCadence cadence = OutputCadence::everyFrames(
+      options.mesh_every, options.esdf_every, options.config.texture == TextureMode::kPatches);
+  Timer wall;
+  report->start_rss_bytes = readProcessMemory().resident_mb * 1048576.0;
+  if (!fuseFrames(options, reader.get(), !trajectory.empty(), cadence, &session, report, error))
+    return false;
+  // What the session counted: the frames fused, the pixels they lost, every frame skipped.
+  const FusedFrameTotals& totals = session.fusedTotals();
+  report->frames_used = session.framesFused();
+  report->frames_reanchored = totals.reanchored;
+  report->pixels_rejected.speckle_pixels = totals.speckle_pixels;
+  report->pixels_rejected.edge_pixels = totals.edge_pixels;
+  report->pixels_contradicting = totals.contradicting_pixels;
+  session.drops().forEach([&](const RejectReasonInfo& info, uint64_t n) {
+    if (n > 0) report->skipped[info.key] = n;
+  });
+  // Once, at the end: what the data say against what was configured.
+  const std::string warning =
+      session.read([](const Mapper& m) { return m.disparityNoiseWarning(); });
+  if (!warning.empty()) std::fprintf(stderr, "warning: %s\n", warning.c_str());
+  if (!trajectory.empty() && report->frames_used > 0 &&
+      !applyTrajectory(options, trajectory, &session, report, error))
+    return false;
+  report->wall_time_s = wall.elapsedMs() / 1000.0;
+  return session.withMap([&](MapAccess& m) { return writeOutputs(options, m, report, error); });
 }
 
 }  // namespace stereo_fusion

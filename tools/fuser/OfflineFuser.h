@@ -63,7 +63,7 @@ struct FuseReport {
   OutlierRejectionStats pixels_rejected;      ///< summed over the used frames (OutlierRejection)
   uint64_t pixels_contradicting = 0;          ///< summed over the used frames (ContradictionFilter)
   std::vector<double> disparity_noise_px;     ///< per used frame, where measured (DisparityNoise)
-  std::map<std::string, size_t> skipped;      ///< reason → count
+  std::map<std::string, size_t> skipped;      ///< reason → count (the session's RejectCounters)
   std::vector<std::string> skipped_examples;  ///< the first few messages, verbatim
   std::vector<StageTimings> timings;          ///< one per used frame
   std::vector<StageWork> work;                ///< one per used frame
