@@ -32,8 +32,11 @@ add_library(stereo_fusion_core STATIC
   ${STEREO_FUSION_ROOT}/src/map/RegionClearing.cpp
   ${STEREO_FUSION_ROOT}/src/trajectory/PoseCorrection.cpp
   ${STEREO_FUSION_ROOT}/src/trajectory/UnitQuaternion.cpp
+  ${STEREO_FUSION_ROOT}/src/session/CorrectionWorker.cpp
   ${STEREO_FUSION_ROOT}/src/session/EditTimeline.cpp
+  ${STEREO_FUSION_ROOT}/src/session/FrameStats.cpp
   ${STEREO_FUSION_ROOT}/src/session/MappingSession.cpp
+  ${STEREO_FUSION_ROOT}/src/session/OutputCadence.cpp
   ${STEREO_FUSION_ROOT}/src/session/TrajectoryOutcome.cpp
   ${STEREO_FUSION_ROOT}/src/integration/StereoFrame.cpp
   ${STEREO_FUSION_ROOT}/src/integration/FrameGate.cpp

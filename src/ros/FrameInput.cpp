@@ -10,8 +10,14 @@
 namespace stereo_fusion {
 
 FrameInput::FrameInput(ros::NodeHandle& nh, const NodeConfig& node, MappingSession* session,
-                       const tf2_ros::Buffer* tf, MeshPublisher* publisher, NodeStats* stats)
-    : node_(node), session_(session), tf_(tf), publisher_(publisher), stats_(stats) {
+                       const tf2_ros::Buffer* tf, const OutputCadence* cadence,
+                       MeshPublisher* publisher, NodeStats* stats)
+    : node_(node),
+      session_(session),
+      tf_(tf),
+      cadence_(cadence),
+      publisher_(publisher),
+      stats_(stats) {
   worker_ = std::thread([this] { workerLoop(); });
   // The synchroniser is fed by hand so that the first message of a stamp on each topic wins: it
   // would let a second one replace the first while the set is incomplete (see RecentStamps).
@@ -224,13 +230,10 @@ void FrameInput::processFrame(const QueuedFrame& f, double* publish_ms) {
   StereoFrame frame;
   if (!toStereoFrame(*f.disparity, *f.image, *f.info, T_world_camera, &frame, &error))
     return drop(RejectReason::kInvalidFrame, "bad input: " + error);
-  // The mesh is brought up to date when it is published (MeshPublisher::publishPending()), at
-  // most mesh_publish_rate_hz; with rate 0, after every frame. Texture patches are cut from the
-  // frame that changed a submesh, so with textures the mesh follows every frame.
-  const bool deferred =
-      node_.mesh_publish_rate_hz > 0 && session_->config().texture != TextureMode::kPatches;
+  // Deferred, the mesh is brought up to date when it is published (MeshPublisher::
+  // publishPending()), at most mesh_publish_rate_hz (OutputCadence).
   const MappingSession::FrameOutcome out =
-      session_->fuse(frame, f.ticket, deferred ? MeshTiming::kDeferred : MeshTiming::kNow);
+      session_->fuse(frame, f.ticket, cadence_->meshTiming(session_->framesFused() + 1));
   if (out.reason != RejectReason::kNone) {
     ROS_ERROR_THROTTLE(
         5.0, "stereo_fusion: frame rejected (%s, %llu so far): %s", rejectReasonName(out.reason),
@@ -238,15 +241,11 @@ void FrameInput::processFrame(const QueuedFrame& f, double* publish_ms) {
     return;
   }
   const IntegrationResult& r = out.result;
-  stats_->pixels_rejected_speckle += r.rejected.speckle_pixels;
-  stats_->pixels_rejected_edge += r.rejected.edge_pixels;
-  stats_->pixels_contradicting += r.contradiction.pixels_rejected;
+  const FrameStats frame_stats = frameStats(r, true);
+  const StageTimings& t = frame_stats.timings;
   // Free-space carving counts as fusion: it is the frame's update of the map.
-  stats_->recordFrame(
-      r.lookup_ms, r.fusion_ms + r.carve_ms,
-      r.lookup_ms + r.fusion_ms + r.carve_ms + r.mesh.meshing_ms + r.texture.texture_ms);
-  if (!r.mesh.changed.empty() || !r.mesh.removed.empty() || r.mesh.blocks_meshed > 0)
-    stats_->recordMeshPass(r.mesh.meshing_ms, r.texture.texture_ms);
+  stats_->recordFrame(t.lookup_ms, t.fusion_ms + t.carve_ms, t.stagesMs());
+  if (frame_stats.mesh_pass_ran) stats_->recordMeshPass(t.meshing_ms, t.texture_ms);
   {
     std::lock_guard<std::mutex> lock(camera_frame_mutex_);
     camera_frame_ = header.frame_id;
@@ -255,7 +254,7 @@ void FrameInput::processFrame(const QueuedFrame& f, double* publish_ms) {
   double measured_noise_px = 0.0;
   uint64_t frames_fused = 0;
   std::string noise_warning;
-  session_->withMapper([&](Mapper& mapper) {
+  session_->read([&](const Mapper& mapper) {
     publisher_->frameFusedLocked(frame, header);
     measured_noise_px = mapper.measuredDisparityNoisePx();
     frames_fused = mapper.framesIntegrated();
@@ -266,8 +265,7 @@ void FrameInput::processFrame(const QueuedFrame& f, double* publish_ms) {
   if (!noise_warning.empty() && frames_fused >= Mapper::kNoiseFrames &&
       !stats_->disparity_noise_warned.exchange(true))
     ROS_WARN("stereo_fusion: %s", noise_warning.c_str());
-  if (r.reanchored) {
-    ++stats_->reanchored;
+  if (r.reanchored) {  // counted by the session
     ROS_WARN("stereo_fusion: %s", r.note.c_str());
   }
   bool frames_waiting;

@@ -60,12 +60,13 @@ void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   status.add("input rate (Hz)", matched / elapsed);
   drops.forEach([&](const RejectReasonInfo& info, uint64_t n) { status.add(info.label, n); });
   status.add("ignored: image / camera_info repeating a stamp", frames_->ignoredDuplicateParts());
-  status.add("pixels rejected: speckles", stats_->pixels_rejected_speckle.load());
-  status.add("pixels rejected: near side of depth edges", stats_->pixels_rejected_edge.load());
-  status.add("pixels rejected: behind a confident surface", stats_->pixels_contradicting.load());
+  const FusedFrameTotals& totals = session_->fusedTotals();
+  status.add("pixels rejected: speckles", totals.speckle_pixels.load());
+  status.add("pixels rejected: near side of depth edges", totals.edge_pixels.load());
+  status.add("pixels rejected: behind a confident surface", totals.contradicting_pixels.load());
   status.add("disparity noise measured (px, median of the last frames)",
              stats_->disparity_noise_measured_px.load());
-  status.add("re-anchored (relocalisation or clock reset)", stats_->reanchored.load());
+  status.add("re-anchored (relocalisation or clock reset)", totals.reanchored.load());
   status.add("regions cleared (~clear_box, ~clear_sphere)", session_->regionsCleared());
   // Frames from before a clear whose fusion refilled the region, which was then cleared again.
   status.add("frames fused from before a clear (region cleared again)",

@@ -32,9 +32,13 @@ void FusionNodelet::onInit() {
   tf_buffer_ = std::make_unique<tf2_ros::Buffer>(ros::Duration(30.0));
   tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh);
 
-  publisher_ = std::make_unique<MeshPublisher>(pnh, node_config_, session_.get(), &stats_);
-  planning_ = std::make_unique<PlanningPublisher>(getMTPrivateNodeHandle(), node_config_,
-                                                  mapper_config_, session_.get(), &stats_);
+  cadence_ = OutputCadence::atRates(
+      node_config_.mesh_publish_rate_hz, node_config_.markers_publish_rate_hz,
+      node_config_.planning_publish_rate_hz, mapper_config_.texture == TextureMode::kPatches);
+  publisher_ =
+      std::make_unique<MeshPublisher>(pnh, node_config_, session_.get(), &*cadence_, &stats_);
+  planning_ = std::make_unique<PlanningPublisher>(
+      getMTPrivateNodeHandle(), node_config_, mapper_config_, *cadence_, session_.get(), &stats_);
   session_->setMapReplacedListener([this](const MapReplaced& replaced) {
     publisher_->onMapReplaced(replaced);
     planning_->onMapReplaced(replaced);
@@ -46,7 +50,7 @@ void FusionNodelet::onInit() {
   planning_services_ =
       std::make_unique<PlanningServices>(getMTPrivateNodeHandle(), node_config_, session_.get());
   frame_input_ = std::make_unique<FrameInput>(nh, node_config_, session_.get(), tf_buffer_.get(),
-                                              publisher_.get(), &stats_);
+                                              &*cadence_, publisher_.get(), &stats_);
   trajectory_input_ =
       std::make_unique<TrajectoryInput>(nh, node_config_, session_.get(), tf_buffer_.get(),
                                         [this] { return frame_input_->cameraFrame(); });

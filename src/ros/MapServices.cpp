@@ -20,10 +20,10 @@ bool MapServices::saveMesh(SaveMesh::Request& req, SaveMesh::Response& res) {
   // disk, or a target that blocks, must not stop fusion).
   std::unordered_map<BlockKey, SubMesh, BlockKeyHash> submeshes;
   std::unordered_map<BlockKey, TexturePatch, BlockKeyHash> patches;
-  const bool got = session_->tryWithMapper([&](Mapper& map) {
+  const bool got = session_->tryWithMap([&](MapAccess& map) {
     publisher_->catchUpLocked(map);  // the mesh of every frame fused so far
-    submeshes = map.mesh().submeshes();
-    patches = map.textures().patches();
+    submeshes = map.map().mesh().submeshes();
+    patches = map.map().textures().patches();
   });
   if (!got) {
     res.success = false;
@@ -64,8 +64,9 @@ bool MapServices::saveMap(SaveMap::Request& req, SaveMap::Response& res) {
   double locked_ms = 0.0;
   // Only the copy of the blocks holds the map (at memory speed, 0.3–7 KB per block); the
   // checksums, the write and the fsync run while frames are fused.
-  const bool got = session_->tryWithMapper([&](Mapper& map) {
+  const bool got = session_->tryWithMap([&](MapAccess& access) {
     const ros::WallTime locked = ros::WallTime::now();
+    const Mapper& map = access.map();
     bytes = map.encodeMap();
     res.blocks = map.map().blockCount();
     locked_ms = (ros::WallTime::now() - locked).toSec() * 1e3;

@@ -30,24 +30,20 @@ std::vector<BlockKey> withoutKeysOf(const std::vector<BlockKey>& keys,
 }  // namespace
 
 MeshPublisher::MeshPublisher(ros::NodeHandle& pnh, const NodeConfig& node, MappingSession* session,
-                             NodeStats* stats)
+                             OutputCadence* cadence, NodeStats* stats)
     : node_(node),
       session_(session),
+      cadence_(cadence),
       stats_(stats),
-      markers_schedule_(node.markers_publish_rate_hz),
-      mesh_schedule_(node.mesh_publish_rate_hz),
       update_sender_("~mesh_update") {
   session_id_ = ros::WallTime::now().toNSec();
   markers_header_.frame_id = node_.world_frame;
-  session_->withMapper([&](Mapper& map) {
-    consumer_ = map.subscribeToMeshChanges("mesh_update publisher");
-    subscribed_to_ = &map;
-  });
+  subscription_ = session_->subscribeToMeshChanges("mesh_update publisher");
   mesh_update_pub_ = pnh.advertise<MeshUpdate>("mesh_update", 10);
   // A new rviz gets the whole mesh, not only the blocks that change after it connects.
   markers_pub_ = pnh.advertise<visualization_msgs::MarkerArray>(
       "mesh_markers", 10, [this](const ros::SingleSubscriberPublisher&) {
-        session_->withMapper([&](Mapper&) { markers_full_pending_ = true; });
+        session_->read([&](const Mapper&) { markers_full_pending_ = true; });
       });
   marker_sender_ = std::make_unique<MarkerSender>(
       [publisher = markers_pub_](const visualization_msgs::MarkerArray& markers) {
@@ -88,36 +84,37 @@ void MeshPublisher::frameFusedLocked(const StereoFrame& frame, const std_msgs::H
   }
 }
 
-void MeshPublisher::catchUpLocked(Mapper& map) {
-  if (map.blocksAwaitingMesh() == 0) return;
+void MeshPublisher::catchUpLocked(MapAccess& map) {
+  if (map.map().blocksAwaitingMesh() == 0) return;
   const MeshPass pass = map.updateMesh();
   stats_->recordMeshPass(pass.mesh.meshing_ms, pass.texture.texture_ms);
   // The planning layer follows at its own rate (PlanningPublisher, planning_publish_rate_hz).
 }
 
 void MeshPublisher::publishPending(const ros::Time& stamp, bool force, bool frames_waiting) {
-  session_->withMapper(
-      [&](Mapper& map) { publishPendingLocked(map, stamp, force, frames_waiting); });
+  session_->withMap(
+      [&](MapAccess& map) { publishPendingLocked(map, stamp, force, frames_waiting); });
 }
 
-void MeshPublisher::publishPendingLocked(Mapper& map, const ros::Time& stamp, bool force,
+void MeshPublisher::publishPendingLocked(MapAccess& access, const ros::Time& stamp, bool force,
                                          bool frames_waiting) {
+  const Mapper& map = access.map();
   {
-    if (map.blocksAwaitingMesh() == 0 && map.pendingMeshChanges(consumer_) == 0)
+    if (map.blocksAwaitingMesh() == 0 && access.pendingMeshChanges(subscription_) == 0)
       return publishMarkersLocked(map, force);  // the backlog may still wait for its turn
     if (!force) {
       const double now_s = ros::WallTime::now().toSec();
       // A frame waiting in the queue is fused first: this pass then carries it too, where
       // meshing now would make it wait a whole period more (and the queue behind the pass).
-      if (!mesh_schedule_.due(now_s, frames_waiting)) return publishMarkersLocked(map, force);
-      mesh_schedule_.sent(now_s);
+      if (!cadence_->meshDue(now_s, frames_waiting)) return publishMarkersLocked(map, force);
+      cadence_->meshSent(now_s);
     }
-    catchUpLocked(map);
+    catchUpLocked(access);
     std_msgs::Header header;
     header.frame_id = node_.world_frame;
     header.stamp =
         stamp.isZero() && !unpublished_stamps_.empty() ? unpublished_stamps_.back() : stamp;
-    const BlockChangeLog::Changes pending = map.takeMeshChanges(consumer_);
+    const BlockChangeLog::Changes pending = access.takeMeshChanges(subscription_);
     const std::vector<BlockKey>& changed = pending.updated;
     const std::vector<BlockKey>& removed = pending.erased;
     const double voxel_size_m = map.config().voxel_size_m;
@@ -153,10 +150,11 @@ void MeshPublisher::publishPendingLocked(Mapper& map, const ros::Time& stamp, bo
 
 std::optional<MeshUpdate> MeshPublisher::tryFullMesh() {
   std::optional<MeshUpdate> mesh;
-  session_->tryWithMapper([&](Mapper& map) {
+  session_->tryWithMap([&](MapAccess& access) {
     // Frames already fused are in the answer even if their meshing waits for the publish rate:
     // their changes go out as an update first, so the full mesh's sequence covers them.
-    publishPendingLocked(map, ros::Time(0), true, false);
+    publishPendingLocked(access, ros::Time(0), true, false);
+    const Mapper& map = access.map();
     std_msgs::Header header;
     header.frame_id = node_.world_frame;
     header.stamp = ros::Time::now();
@@ -170,17 +168,14 @@ std::optional<MeshUpdate> MeshPublisher::tryFullMesh() {
 }
 
 void MeshPublisher::onMapReplaced(const MapReplaced& replaced) {
-  Mapper& map = replaced.map;
-  if (&map != subscribed_to_) {  // a correction swapped in a new mapper
-    consumer_ = map.subscribeToMeshChanges("mesh_update publisher");
-    subscribed_to_ = &map;
-  }
+  MapAccess& access = replaced.map;  // a correction swapped in a new map: subscription_ follows
+  const Mapper& map = access.map();
   correction_ = replaced.correction;
   switch (replaced.change) {
     case MapChange::kReset: {
       path_.poses.clear();
       stats_->clearTimings();
-      map.takeMeshChanges(consumer_);  // the empty full update below says it all
+      access.takeMeshChanges(subscription_);  // the empty full update below says it all
       unpublished_stamps_.clear();
       std_msgs::Header header;
       header.frame_id = node_.world_frame;
@@ -197,19 +192,19 @@ void MeshPublisher::onMapReplaced(const MapReplaced& replaced) {
     case MapChange::kLoaded:
       path_.poses.clear();
       stats_->clearTimings();
-      publishFullLocked(map, replaced.removed);
+      publishFullLocked(access, replaced.removed);
       return;
     case MapChange::kCorrected:
       // One full update: cheaper to build than a diff of every submesh, and a correction moves
       // most.
-      publishFullLocked(map, replaced.removed);
+      publishFullLocked(access, replaced.removed);
       if (node_.publish_path) path_pub_.publish(correctedPathLocked());
       return;
-    case MapChange::kRecovered: publishFullLocked(map, replaced.removed); return;
+    case MapChange::kRecovered: publishFullLocked(access, replaced.removed); return;
   }
 }
 
-void MeshPublisher::publishMarkersLocked(Mapper& map, bool force) {
+void MeshPublisher::publishMarkersLocked(const Mapper& map, bool force) {
   if (!node_.publish_markers || markers_pub_.getNumSubscribers() == 0) {
     marker_backlog_.clear();  // a subscriber that connects later gets every block
     return;
@@ -217,10 +212,10 @@ void MeshPublisher::publishMarkersLocked(Mapper& map, bool force) {
   if (marker_backlog_.empty() && !markers_full_pending_) return;
   if (!force && !markers_full_pending_) {
     const double now_s = ros::WallTime::now().toSec();
-    if (!markers_schedule_.due(now_s)) return;
+    if (!cadence_->markersDue(now_s)) return;
     // The previous arrays not out yet: the backlog goes on merging (what must go, queues).
     if (!marker_sender_->idle()) return;
-    markers_schedule_.sent(now_s);
+    cadence_->markersSent(now_s);
   }
   std::vector<BlockKey> changed, removed;
   marker_backlog_.take(&changed, &removed);
@@ -234,8 +229,9 @@ void MeshPublisher::publishMarkersLocked(Mapper& map, bool force) {
   marker_sender_->send(map.mesh().submeshes(), changed, removed, header);
 }
 
-void MeshPublisher::publishFullLocked(Mapper& map, const std::vector<BlockKey>& removed) {
-  map.takeMeshChanges(consumer_);  // a full update replaces whatever was pending
+void MeshPublisher::publishFullLocked(MapAccess& access, const std::vector<BlockKey>& removed) {
+  access.takeMeshChanges(subscription_);  // a full update replaces whatever was pending
+  const Mapper& map = access.map();
   unpublished_stamps_.clear();
   std_msgs::Header header;
   header.frame_id = node_.world_frame;

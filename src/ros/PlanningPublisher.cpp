@@ -63,8 +63,8 @@ OccupancyGrid2D alignGrid(const OccupancyGrid2D& grid, int align) {
 }
 
 PlanningPublisher::PlanningPublisher(ros::NodeHandle& pnh, const NodeConfig& node,
-                                     const MapperConfig& mapper, MappingSession* session,
-                                     NodeStats* stats)
+                                     const MapperConfig& mapper, const OutputCadence& cadence,
+                                     MappingSession* session, NodeStats* stats)
     : node_(node),
       grid_min_z_m_(mapper.grid_min_z_m),
       grid_max_z_m_(mapper.grid_max_z_m),
@@ -84,7 +84,7 @@ PlanningPublisher::PlanningPublisher(ros::NodeHandle& pnh, const NodeConfig& nod
         "~occupied_voxels stay silent");
     return;
   }
-  timer_ = pnh.createWallTimer(ros::WallDuration(1.0 / node_.planning_publish_rate_hz),
+  timer_ = pnh.createWallTimer(ros::WallDuration(cadence.planningPeriodS()),
                                [this](const ros::WallTimerEvent&) { tick(); });
 }
 
@@ -117,7 +117,7 @@ void PlanningPublisher::tick() {
   std::vector<std::array<float, 4>> slice;  // x y z distance
   std::vector<std::array<float, 3>> occupied;
   GridWindow window;
-  if (want_grid) session_->withMapper([&](Mapper& m) { window = m.occupancyGridWindow(); });
+  if (want_grid) session_->read([&](const Mapper& m) { window = m.occupancyGridWindow(); });
   session_->updatePlanning([&](const PlanningMap& planning, const PlanningPass& pass) {
     have_layer = true;
     const PlanningUpdateStats& s = pass.stats;

@@ -44,8 +44,8 @@ bool PlanningServices::sample(const std::vector<Eigen::Vector3d>& points,
     const size_t end = std::min(points.size(), begin + kPointsPerLock);
     chunk.assign(points.begin() + begin, points.begin() + end);
     bool enabled = true;
-    const bool got = session_->tryWithMapper([&](Mapper& map) {
-      const PlanningMap* planning = map.planning();
+    const bool got = session_->tryWithMap([&](MapAccess& map) {
+      const PlanningMap* planning = map.map().planning();
       if (!planning) {
         enabled = false;
         return;

@@ -91,7 +91,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }
   // Not a structured binding: lambdas may capture those only from C++20 (clang refuses).
   size_t blocks_before = 0, triangles_before = 0;
-  session.withMapper([&](Mapper& m) {
+  session.read([&](const Mapper& m) {
     blocks_before = m.map().blockCount();
     triangles_before = m.mesh().triangleCount();
   });
@@ -100,13 +100,14 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   fuzz::require(report.has_value());
   fuzz::require(report->outcome < TrajectoryOutcome::kCount);
   const TrajectoryOutcomeInfo& info = trajectoryOutcomeInfo(report->outcome);
-  session.withMapper([&](Mapper& m) {
+  session.withMap([&](MapAccess& access) {
+    const Mapper& m = access.map();
     if (info.rejected || report->outcome == TrajectoryOutcome::kFailed) {
       fuzz::require(!report->message.empty());
       fuzz::require(m.map().blockCount() == blocks_before);
       fuzz::require(m.mesh().triangleCount() == triangles_before);
     }
-    m.updateMesh();
+    access.updateMesh();
     fuzz::checkMesh(m.extractMesh());
   });
   return 0;

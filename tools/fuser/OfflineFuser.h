@@ -10,6 +10,7 @@
 #include "stereo_fusion/integration/OutlierRejection.h"
 #include "stereo_fusion/map/BlockOctree.h"
 #include "stereo_fusion/ros/BagSequence.h"
+#include "stereo_fusion/session/FrameStats.h"
 
 namespace stereo_fusion {
 
@@ -53,28 +54,6 @@ struct TrajectoryReport {
   double ms = 0.0;  ///< re-fusing and re-meshing
 };
 
-/// Per-frame stage timings in milliseconds: lookup and fusion of the frame, and the meshing
-/// pass (with its texture pass) that followed it, if one did (`meshed`); total is all of it.
-struct StageTimings {
-  double lookup_ms = 0, fusion_ms = 0, carve_ms = 0, meshing_ms = 0, texture_ms = 0, total_ms = 0;
-  bool meshed = false;
-  double free_space_ms = 0;     ///< recording the space the frame saw empty (planning layer)
-  double contradiction_ms = 0;  ///< dropping isolated contradictions (ContradictionFilter)
-  double esdf_ms = 0;           ///< the planning update after this frame (with `esdf_updated`)
-  bool esdf_updated = false;
-  /// That update's work: TSDF blocks re-read, cells flipped (occupied ↔ not), raised, lowered.
-  double esdf_read_ms = 0, esdf_propagate_ms = 0, esdf_transit_ms = 0, esdf_tsdf_blocks = 0,
-         esdf_flipped = 0, esdf_raised = 0, esdf_lowered = 0, esdf_transit_blocks = 0;
-  double free_space_nodes = 0;  ///< octree nodes the free-space recording tested
-};
-
-/// How much work one frame made each stage do (what the timings above are spent on).
-struct StageWork {
-  double valid_points = 0, octree_searches = 0, blocks_queued = 0, blocks_updated = 0,
-         voxels_updated = 0, blocks_meshed = 0, submeshes_changed = 0, blocks_created = 0,
-         blocks_not_created = 0, blocks_carved = 0, voxels_carved = 0, lookup_box_blocks = 0;
-};
-
 /// What a run did; stats.json is this, plus the configuration.
 struct FuseReport {
   size_t frames_total = 0;
@@ -84,7 +63,7 @@ struct FuseReport {
   OutlierRejectionStats pixels_rejected;      ///< summed over the used frames (OutlierRejection)
   uint64_t pixels_contradicting = 0;          ///< summed over the used frames (ContradictionFilter)
   std::vector<double> disparity_noise_px;     ///< per used frame, where measured (DisparityNoise)
-  std::map<std::string, size_t> skipped;      ///< reason → count
+  std::map<std::string, size_t> skipped;      ///< reason → count (the session's RejectCounters)
   std::vector<std::string> skipped_examples;  ///< the first few messages, verbatim
   std::vector<StageTimings> timings;          ///< one per used frame
   std::vector<StageWork> work;                ///< one per used frame

@@ -29,13 +29,15 @@
 #include "stereo_fusion/ros/RosParameters.h"
 #include "stereo_fusion/ros/SequenceGaps.h"
 #include "stereo_fusion/session/MappingSession.h"
+#include "stereo_fusion/session/OutputCadence.h"
 
 namespace stereo_fusion {
 
 class FrameInput {
  public:
   FrameInput(ros::NodeHandle& nh, const NodeConfig& node, MappingSession* session,
-             const tf2_ros::Buffer* tf, MeshPublisher* publisher, NodeStats* stats);
+             const tf2_ros::Buffer* tf, const OutputCadence* cadence, MeshPublisher* publisher,
+             NodeStats* stats);
   /// Stops the worker (the frame in hand is finished or dropped first).
   ~FrameInput();
 
@@ -89,6 +91,7 @@ class FrameInput {
   const NodeConfig& node_;
   MappingSession* session_;
   const tf2_ros::Buffer* tf_;
+  const OutputCadence* cadence_;
   MeshPublisher* publisher_;
   NodeStats* stats_;
 

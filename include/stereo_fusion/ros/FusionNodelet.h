@@ -10,6 +10,7 @@
 #include <tf2_ros/transform_listener.h>
 
 #include <memory>
+#include <optional>
 
 #include "stereo_fusion/ros/CallbackQueueHold.h"
 #include "stereo_fusion/ros/FrameInput.h"
@@ -22,6 +23,7 @@
 #include "stereo_fusion/ros/RosParameters.h"
 #include "stereo_fusion/ros/TrajectoryInput.h"
 #include "stereo_fusion/session/MappingSession.h"
+#include "stereo_fusion/session/OutputCadence.h"
 
 namespace stereo_fusion {
 
@@ -39,6 +41,7 @@ class FusionNodelet : public nodelet::Nodelet {
   MapperConfig mapper_config_;
   std::unique_ptr<MappingSession> session_;
   NodeStats stats_;
+  std::optional<OutputCadence> cadence_;  // when to mesh, publish and plan
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   std::unique_ptr<MeshPublisher> publisher_;

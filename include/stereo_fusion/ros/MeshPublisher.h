@@ -16,17 +16,18 @@
 #include "stereo_fusion/ros/RosParameters.h"
 #include "stereo_fusion/ros/SendThread.h"
 #include "stereo_fusion/session/MappingSession.h"
-#include "stereo_fusion/util/RateSchedule.h"
+#include "stereo_fusion/session/OutputCadence.h"
 
 namespace stereo_fusion {
 
-/// Every member is touched only with the session's map lock held (inside withMapper() or the
-/// session's MapReplaced listener): the publisher's place in the mesh's change log moves with
-/// the map it reads. The markers are built and sent on a thread of their own (MarkerSender).
+/// Every member is touched only with the session's map lock held (inside read(), withMap() or
+/// the session's MapReplaced listener). Its place in the mesh's change log is the session's
+/// MeshSubscription: it follows the map across a correction's swap. When to mesh and send is
+/// the OutputCadence's. The markers are built and sent on a thread of their own (MarkerSender).
 class MeshPublisher {
  public:
   MeshPublisher(ros::NodeHandle& private_nh, const NodeConfig& node, MappingSession* session,
-                NodeStats* stats);
+                OutputCadence* cadence, NodeStats* stats);
 
   /// A frame was fused (path, frustum, latency): call with the map lock held.
   void frameFusedLocked(const StereoFrame& frame, const std_msgs::Header& header);
@@ -35,41 +36,39 @@ class MeshPublisher {
   /// for them, up to a period. `stamp` 0: the newest fused frame's.
   void publishPending(const ros::Time& stamp, bool force, bool frames_waiting = false);
   /// Meshes what fusion changed since the last pass (map lock held; save_mesh).
-  void catchUpLocked(Mapper& map);
+  void catchUpLocked(MapAccess& map);
   /// The whole mesh as one full MeshUpdate whose sequence the published updates continue;
-  /// nullopt if the map stayed busy (MappingSession::tryWithMapper()).
+  /// nullopt if the map stayed busy (MappingSession::tryWithMap()).
   std::optional<MeshUpdate> tryFullMesh();
   /// The session's listener: the map was replaced wholesale; sends it whole.
   void onMapReplaced(const MapReplaced& replaced);
 
  private:
-  void publishPendingLocked(Mapper& map, const ros::Time& stamp, bool force, bool frames_waiting);
-  void publishFullLocked(Mapper& map, const std::vector<BlockKey>& removed);
+  void publishPendingLocked(MapAccess& map, const ros::Time& stamp, bool force,
+                            bool frames_waiting);
+  void publishFullLocked(MapAccess& map, const std::vector<BlockKey>& removed);
   /// Hands the marker backlog (or every block, for a new subscriber) to the sender at
   /// markers_publish_rate_hz, once it is idle, unless `force`.
-  void publishMarkersLocked(Mapper& map, bool force);
+  void publishMarkersLocked(const Mapper& map, bool force);
   nav_msgs::Path correctedPathLocked() const;
   /// Publishes `update` on the send thread, after the updates handed over before it.
   void sendUpdate(MeshUpdate&& update);
 
   const NodeConfig& node_;
   MappingSession* session_;
+  OutputCadence* cadence_;  // meshing, ~mesh_update and markers (map lock)
   NodeStats* stats_;
   ros::Publisher mesh_update_pub_, markers_pub_, path_pub_, frustum_pub_, block_bounds_pub_;
-  /// Its place in the mapper's log of mesh changes: what it has not sent yet.
-  BlockChangeLog::Consumer consumer_ = 0;
-  const Mapper* subscribed_to_ =
-      nullptr;  // the mapper consumer_ belongs to (a correction swaps it)
+  /// Its place in the map's log of mesh changes: what it has not sent yet.
+  MeshSubscription subscription_{};
   std::unique_ptr<MarkerSender> marker_sender_;
   bool markers_full_pending_ = false;
   MarkerBacklog marker_backlog_;     // the mesh's changes ~mesh_markers has not sent yet
   std_msgs::Header markers_header_;  // of the newest mesh flush: the markers' stamp
-  RateSchedule markers_schedule_;    // markers_publish_rate_hz
   uint64_t sequence_ = 0;
   /// MeshUpdate::session of this run (wall clock at start, ns): tells subscribers that a
   /// restarted nodelet's sequence numbers begin again.
   uint64_t session_id_ = 0;
-  RateSchedule mesh_schedule_;                   // mesh_publish_rate_hz: meshing and ~mesh_update
   static constexpr size_t kMaxPathPoses = 4000;  // ~/camera_path length bound
   nav_msgs::Path path_;
   PoseCorrection correction_;  // the latest applied, for the path

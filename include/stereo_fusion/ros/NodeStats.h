@@ -86,14 +86,9 @@ class NodeStats {
     return v;
   }
 
-  std::atomic<uint64_t> pixels_rejected_speckle{0},
-      pixels_rejected_edge{0};                    // OutlierRejection, fused frames
-  std::atomic<uint64_t> pixels_contradicting{0};  // ContradictionFilter, fused frames
   // Mapper::measuredDisparityNoisePx() after the last fused frame (NaN before any).
   std::atomic<double> disparity_noise_measured_px{std::numeric_limits<double>::quiet_NaN()};
   std::atomic<bool> disparity_noise_warned{false};
-  std::atomic<uint64_t> reanchored{
-      0};  // frames the gate accepted as a relocalisation / clock reset
   // The occupancy grid last built (PlanningPublisher; 0 × 0 until someone subscribed).
   std::atomic<uint32_t> grid_width{0}, grid_height{0};
   std::atomic<bool> grid_windowed{false};  ///< the last grid was a window (grid_max_cells)

@@ -16,6 +16,7 @@
 #include "stereo_fusion/ros/NodeStats.h"
 #include "stereo_fusion/ros/RosParameters.h"
 #include "stereo_fusion/session/MappingSession.h"
+#include "stereo_fusion/session/OutputCadence.h"
 
 namespace stereo_fusion {
 
@@ -32,8 +33,9 @@ namespace stereo_fusion {
 class PlanningPublisher {
  public:
   /// `private_nh`: the namespace of the topics; its callback queue runs the timer.
+  /// The layer's update and its topics run every cadence.planningPeriodS().
   PlanningPublisher(ros::NodeHandle& private_nh, const NodeConfig& node, const MapperConfig& mapper,
-                    MappingSession* session, NodeStats* stats);
+                    const OutputCadence& cadence, MappingSession* session, NodeStats* stats);
   ~PlanningPublisher() { stop(); }
   /// Stops the timer, waiting for a tick in progress (before the session goes).
   void stop() { timer_.stop(); }

@@ -1,21 +1,18 @@
 #pragma once
 #include <chrono>
-#include <condition_variable>
 #include <cstdint>
 #include <functional>
-#include <limits>
 #include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "stereo_fusion/Mapper.h"
-#include "stereo_fusion/integration/RejectReason.h"
+#include "stereo_fusion/session/CorrectionWorker.h"
 #include "stereo_fusion/session/EditTimeline.h"
-#include "stereo_fusion/session/TrajectoryOutcome.h"
-#include "stereo_fusion/trajectory/PoseCorrection.h"
+#include "stereo_fusion/session/FrameAdmission.h"
+#include "stereo_fusion/session/MapAccess.h"
 
 namespace stereo_fusion {
 
@@ -27,15 +24,9 @@ struct SessionConfig {
   /// Corrections run on a thread of the session's while frames are fused (the node); false:
   /// submitTrajectory() runs one before it returns (the offline fuser).
   bool background_corrections = true;
-  /// How long a request (clear, reset, load, tryWithMapper) waits for the map lock before it
-  /// answers "busy" instead (a frame or a meshing pass holds it; frames themselves always wait).
+  /// How long a request (clear, reset, load, tryRead, tryWithMap) waits for the map lock before
+  /// it answers "busy" instead (a frame or a meshing pass holds it; frames themselves always wait).
   double max_request_wait_s = 2.0;
-};
-
-/// Handed out when a frame arrives (MappingSession::arrive()); fuse() needs it.
-struct FrameTicket {
-  uint64_t epoch = 0;   ///< the map epoch: reset and load_map start a new one
-  uint64_t ticket = 0;  ///< arrival order, on the same counter as clears (predates())
 };
 
 /// Why the session replaced the map (or its mesh) wholesale.
@@ -44,34 +35,22 @@ enum class MapChange { kReset, kLoaded, kCorrected, kRecovered };
 /// Told to the listener, with the map lock held, whenever the map is replaced wholesale.
 struct MapReplaced {
   MapChange change;
-  Mapper& map;                           ///< the map now (a correction swaps in a new Mapper)
+  MapAccess& map;                        ///< the map now (a correction swaps in a new Mapper)
   const std::vector<BlockKey>& removed;  ///< submeshes of the old map that are gone
   const PoseCorrection& correction;      ///< the latest correction applied (path display)
 };
 
-/// What became of one trajectory and its re-fusion.
-struct CorrectionReport {
-  TrajectoryOutcome outcome = TrajectoryOutcome::kApplied;
-  std::string message;
-  size_t trajectory_poses = 0;
-  size_t matched_poses = 0;  ///< trajectory poses within 0.5 s of a kept frame
-  double max_shift_m = 0.0, max_rotation_deg = 0.0;
-  size_t frames_refused = 0;  ///< frames fused again (catch-up included)
-  size_t frames_rejected =
-      0;  ///< of those, refused by the new map's FrameGate at the corrected pose
-  double ms = 0.0;
-};
-
-/// The ROS-free mapping session: the one owner of the Mapper, the kept frames and the single
-/// timeline of edits (EditTimeline), frame admission by epoch and ticket with one counter set
-/// (RejectCounters), clears with the rule for frames from before them (EditReplay), loop
-/// closures with the one re-fusion routine (replayEdits()), reset and load. The node and the
-/// offline fuser are adapters over it. Every public method is thread-safe; the map lock is
-/// held only inside them (and in withMapper()).
+/// The ROS-free mapping session: the one owner of the Mapper, composed of its jobs — frame
+/// admission by epoch and ticket with one set of counters (FrameAdmission), the single timeline
+/// of edits with the rule for frames from before a clear (EditTimeline, EditReplay), and loop
+/// closures with the one re-fusion routine (CorrectionWorker) — plus reset and load. The node
+/// and the offline fuser are adapters over it. Every public method is thread-safe; the map lock
+/// is held only inside them, and the map is lent only for the length of a call (read(),
+/// withMap()): no caller keeps a reference a correction's swap could leave dangling.
 ///
-/// Lock order: the map lock, then the planning pass's (updatePlanning()), then the trajectory
-/// queue's lock; a re-fusion holds none of them while it fuses, and only the last few catch-up
-/// frames run under the map lock.
+/// Lock order: the map lock, then the planning pass's (updatePlanning()), then the correction
+/// worker's queue lock; a re-fusion holds none of them while it fuses, and only the last few
+/// catch-up frames run under the map lock.
 class MappingSession {
  public:
   /// Throws std::invalid_argument for an invalid `config` (as Mapper).
@@ -83,18 +62,20 @@ class MappingSession {
   /// Called (map lock held) after every wholesale change of the map: publish it whole.
   void setMapReplacedListener(std::function<void(const MapReplaced&)> listener);
   /// Called (no lock held) with the report of every trajectory the background thread finished.
-  void setCorrectionListener(std::function<void(const CorrectionReport&)> listener);
+  void setCorrectionListener(std::function<void(const CorrectionReport&)> listener) {
+    corrections_.setListener(std::move(listener));
+  }
 
   // --- frames ---
   /// A frame arrived: its ticket. Take it when the frame arrives, not when it is fused, so
   /// that a clear applied while the frame waited (queue, tf) is applied again after it.
   FrameTicket arrive();
   /// False once a reset or load_map came after the ticket's arrival.
-  bool isCurrent(const FrameTicket& ticket) const;
+  bool isCurrent(const FrameTicket& ticket) const { return admission_.isCurrent(ticket); }
   /// The map epoch now (reset and load_map start a new one).
-  uint64_t epoch() const { return epoch_seen_.load(); }
+  uint64_t epoch() const { return admission_.epoch(); }
   /// Counts a frame an input dropped before it reached fuse().
-  void countDrop(RejectReason reason) { drops_.count(reason); }
+  void countDrop(RejectReason reason) { admission_.countDrop(reason); }
 
   struct FrameOutcome {
     RejectReason reason = RejectReason::kNone;  ///< kNone: fused
@@ -136,53 +117,53 @@ class MappingSession {
   /// returned; otherwise it is applied now and its report returned. `fused_until_s`: the
   /// frames the SLAM had seen (default: the newest kept frame now; offline: +infinity).
   std::optional<CorrectionReport> submitTrajectory(
-      std::vector<StampedPose> poses, std::optional<double> fused_until_s = std::nullopt);
+      std::vector<StampedPose> poses, std::optional<double> fused_until_s = std::nullopt) {
+    return corrections_.submit(std::move(poses), fused_until_s);
+  }
   /// Counts a trajectory an input refused before submitTrajectory().
-  void countTrajectory(TrajectoryOutcome outcome) { trajectories_.count(outcome); }
+  void countTrajectory(TrajectoryOutcome outcome) { corrections_.count(outcome); }
   /// The latest applied correction's report.
   CorrectionReport lastCorrection() const;
   /// The latest correction applied (the identity before any).
   PoseCorrection correction() const;
   /// True while a correction re-fuses (tests, diagnostics).
-  bool correcting() const { return correcting_.load(); }
+  bool correcting() const { return corrections_.correcting(); }
 
-  // --- access ---
-  /// Runs f(Mapper&) with the map lock held: read the map, mesh it, take its changes.
+  // --- the map, lent for one call ---
+  /// Runs f(const Mapper&) with the map lock held; its result.
   template <typename F>
-  auto withMapper(F&& f) {
+  auto read(F&& f) const {
     std::lock_guard<std::mutex> lock(mutex_);
-    return f(*mapper_);
+    return f(static_cast<const Mapper&>(*mapper_));
+  }
+  /// Runs f(MapAccess&) with the map lock held: read the map, mesh it, take its changes.
+  template <typename F>
+  auto withMap(F&& f) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    MapAccess access = accessLocked();
+    return f(access);
   }
   /// The same for a request: false, f not run, if the map stayed busy for max_request_wait_s.
   template <typename F>
-  bool tryWithMapper(F&& f) {
+  bool tryWithMap(F&& f) {
     std::unique_lock<std::mutex> lock(mutex_, std::defer_lock);
     if (!lockWithin(&lock, requestWait())) return false;
-    f(*mapper_);
+    MapAccess access = accessLocked();
+    f(access);
     return true;
   }
+  /// A new subscriber of the mesh's changes (take them in withMap()); it follows the map
+  /// across reset, load and corrections.
+  MeshSubscription subscribeToMeshChanges(const std::string& name);
   /// Brings the planning layer up to date holding the map lock only while it reads the TSDF
   /// blocks changed since the last update; the distance field's update, then
-  /// `then(const PlanningMap&, const PlanningPass&)`, run after the lock is released, while
-  /// frames go on being fused (the node's planning timer). `then` reads the layer as this
-  /// update left it (frames' free space waits for its end) and must not call the session:
-  /// the map is not replaced (reset, load, a correction) until it returns, and those hold the
-  /// map lock while they wait. Nothing runs without the planning layer.
-  template <typename F>
-  void updatePlanning(F&& then) {
-    std::unique_lock<std::mutex> pass_lock(planning_pass_mutex_, std::defer_lock);
-    Mapper* mapper = nullptr;
-    std::optional<PlanningMap::PendingUpdate> pending;
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      mapper = mapper_.get();
-      pending = mapper->beginPlanningUpdate();
-      if (!pending) return;
-      pass_lock.lock();  // before the map lock is released: replacements wait for it
-    }
-    mapper->finishPlanningUpdate(
-        std::move(*pending), [&](const PlanningPass& pass) { then(*mapper->planning(), pass); });
-  }
+  /// `then(layer, pass)`, run after the lock is released, while frames go on being fused (the
+  /// node's planning timer). `then` reads the layer as this update left it (frames' free space
+  /// waits for its end) and must not call the session: the map is not replaced (reset, load, a
+  /// correction) until it returns, and those hold the map lock while they wait. Nothing runs
+  /// without the planning layer.
+  void updatePlanning(const std::function<void(const PlanningMap&, const PlanningPass&)>& then);
+
   /// The answer of a request that found the map busy.
   std::string busyMessage() const;
   /// Seconds the live map's current operation has run (0 while idle) and its stage: read
@@ -190,13 +171,15 @@ class MappingSession {
   double busySeconds() const { return monitor_.busySeconds(); }
   MapperStage stage() const { return monitor_.stage.load(); }
   const MapperConfig& config() const { return config_; }
-  const RejectCounters& drops() const { return drops_; }
-  const TrajectoryCounters& trajectories() const { return trajectories_; }
-  uint64_t framesFused() const { return frames_fused_.load(); }
-  uint64_t framesRecleared() const { return frames_recleared_.load(); }
+  const RejectCounters& drops() const { return admission_.drops(); }
+  /// Pixel counts and re-anchored frames summed over the fused frames.
+  const FusedFrameTotals& fusedTotals() const { return admission_.fusedTotals(); }
+  const TrajectoryCounters& trajectories() const { return corrections_.outcomes(); }
+  uint64_t framesFused() const { return admission_.framesFused(); }
+  uint64_t framesRecleared() const { return admission_.framesRecleared(); }
   uint64_t regionsCleared() const { return regions_cleared_.load(); }
   uint64_t clearsRefused() const { return clears_refused_.load(); }
-  uint64_t blocksEvicted() const { return blocks_evicted_.load(); }
+  uint64_t blocksEvicted() const { return admission_.blocksEvicted(); }
 
   struct KeptStatus {
     size_t frames = 0, clears = 0, bytes = 0, pending_clears = 0;
@@ -214,18 +197,10 @@ class MappingSession {
   std::optional<MapStatus> tryStatus(double wait_s) const;
 
  private:
-  struct PendingTrajectory {
-    std::vector<StampedPose> poses;
-    double fused_until_s = 0.0;
-    uint64_t epoch = 0;
-  };
-  /// The correction thread: one queued trajectory at a time.
-  void correctionLoop();
-  /// Re-fuses the kept edits at `trajectory`'s poses, catches up, swaps; its report.
-  CorrectionReport runCorrection(const PendingTrajectory& trajectory);
-  /// Replaces the live map by `rebuilt` (map lock held) and tells the listener.
-  void adoptCorrectedLocked(std::unique_ptr<Mapper> rebuilt, EditReplay replay,
-                            const PoseCorrection& correction);
+  MapAccess accessLocked() { return MapAccess(mapper_.get(), &mesh_consumers_); }
+  /// Takes a correction (map lock held): with `rebuilt`, swaps it in and tells the listener.
+  void adoptCorrectionLocked(const PoseCorrection& correction, std::unique_ptr<Mapper> rebuilt,
+                             EditReplay* replay);
   /// A new epoch (reset, load): drops the kept edits and any correction (map lock held).
   void startEpochLocked(const std::vector<uint8_t>& base_bytes);
   void notifyLocked(MapChange change, const std::vector<BlockKey>& removed);
@@ -242,34 +217,21 @@ class MappingSession {
   const MapperConfig config_;
   const SessionConfig session_config_;
 
-  mutable std::mutex mutex_;  // the map lock: guards everything up to the trajectory queue
+  mutable std::mutex mutex_;  // the map lock: guards everything below but the counters
   // Held by updatePlanning() from its reading to its end; taken after the map lock by whatever
   // replaces the map, which then waits for it (the update runs without the map lock).
   std::mutex planning_pass_mutex_;
   StageMonitor monitor_;  // the live mapper's (a correction's rebuilt one gets it at the swap)
   std::unique_ptr<Mapper> mapper_;
+  std::vector<std::string> mesh_subscribers_;             // by MeshSubscription
+  std::vector<BlockChangeLog::Consumer> mesh_consumers_;  // theirs in mapper_'s mesh log
   EditReplay live_replay_;
   EditTimeline timeline_;
   PoseCorrection correction_;
-  CorrectionReport last_correction_;
-  uint64_t epoch_ = 0;
-  uint64_t next_ticket_ = 1;
   std::function<void(const MapReplaced&)> listener_;
-  std::function<void(const CorrectionReport&)> correction_listener_;  // set before the thread runs
-
-  std::mutex trajectory_mutex_;
-  std::condition_variable trajectory_cv_;
-  std::optional<PendingTrajectory> pending_trajectory_;  // guarded by trajectory_mutex_
-  bool stopping_ = false;                                // guarded by trajectory_mutex_
-  std::atomic<uint64_t> epoch_seen_{0};  // epoch_, readable without the map lock (cancellation)
-  std::atomic<bool> correcting_{false};
-  std::thread correction_thread_;
-
-  RejectCounters drops_;
-  TrajectoryCounters trajectories_;
-  std::atomic<uint64_t> frames_fused_{0}, frames_recleared_{0}, regions_cleared_{0},
-      clears_refused_{0};
-  std::atomic<uint64_t> blocks_evicted_{0};
+  FrameAdmission admission_;
+  std::atomic<uint64_t> regions_cleared_{0}, clears_refused_{0};
+  CorrectionWorker corrections_;  // last: its thread stops before the members above go
 };
 
 }  // namespace stereo_fusion

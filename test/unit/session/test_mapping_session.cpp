@@ -33,7 +33,7 @@ bool waitFor(const std::function<bool()>& done, double seconds) {
 }
 
 MapSnapshot mapOf(MappingSession& session) {
-  return session.withMapper([](Mapper& m) { return snapshot(m.map()); });
+  return session.read([](const Mapper& m) { return snapshot(m.map()); });
 }
 
 }  // namespace
@@ -77,7 +77,7 @@ TEST(MappingSession, FramesFromBeforeAResetOrALoadAreSupersededAndCounted) {
   const std::string path =
       (std::filesystem::temp_directory_path() / "session_epoch_test.sfmap").string();
   std::string error;
-  ASSERT_TRUE(session.withMapper([&](Mapper& m) { return m.saveMap(path, &error); })) << error;
+  ASSERT_TRUE(session.read([&](const Mapper& m) { return m.saveMap(path, &error); })) << error;
   const MapSnapshot saved = mapOf(session);
 
   const FrameTicket before_reset = session.arrive();
@@ -87,7 +87,7 @@ TEST(MappingSession, FramesFromBeforeAResetOrALoadAreSupersededAndCounted) {
   EXPECT_EQ(session.fuse(driftingFrame(1), before_reset, MeshTiming::kNow).reason,
             RejectReason::kSuperseded);
   EXPECT_EQ(session.drops()[RejectReason::kSuperseded], 1u);
-  EXPECT_EQ(session.withMapper([](Mapper& m) { return m.map().blockCount(); }), 0u);
+  EXPECT_EQ(session.read([](const Mapper& m) { return m.map().blockCount(); }), 0u);
   EXPECT_EQ(session.kept().frames, 0u);
 
   const FrameTicket before_load = session.arrive();
@@ -141,8 +141,9 @@ TEST(MappingSession, ACorrectionSwapsInTheMapOfTheKeptFramesAtTheirCorrectedPose
     ASSERT_TRUE(reference.integrate(f).accepted);
   }
   EXPECT_TRUE(mapOf(session) == snapshot(reference.map()));
-  session.withMapper(
-      [&](Mapper& m) { EXPECT_TRUE(triangleSets(m.mesh()) == triangleSets(reference.mesh())); });
+  session.read([&](const Mapper& m) {
+    EXPECT_TRUE(triangleSets(m.mesh()) == triangleSets(reference.mesh()));
+  });
   EXPECT_EQ(session.trajectories()[TrajectoryOutcome::kApplied], 1u);
   // The same trajectory again moves nothing: taken without re-fusion, counted as such.
   const std::optional<CorrectionReport> again = session.submitTrajectory(keyframes());
@@ -201,7 +202,7 @@ TEST(MappingSession, AResetDropsAWaitingTrajectoryAndCountsIt) {
   // Whatever it reached, the map after the reset holds nothing from before it.
   ASSERT_TRUE(waitFor([&] { return !session.correcting(); }, 60.0));
   if (t[TrajectoryOutcome::kApplied] == 0)
-    EXPECT_EQ(session.withMapper([](Mapper& m) { return m.map().blockCount(); }), 0u);
+    EXPECT_EQ(session.read([](const Mapper& m) { return m.map().blockCount(); }), 0u);
 }
 
 TEST(MappingSession, ACatchUpReplaysAClearAndTheFramesAfterItInTheirOrder) {
@@ -336,7 +337,7 @@ TEST(MappingSession, ARequestFindingTheMapBusyAnswersBusyInBoundedTimeAndChanges
   const MapSnapshot before = mapOf(session);
   std::atomic<bool> holding{false}, release{false};
   std::thread holder([&] {
-    session.withMapper([&](Mapper&) {  // a long frame or meshing pass
+    session.read([&](const Mapper&) {  // a long frame or meshing pass
       holding = true;
       while (!release) std::this_thread::sleep_for(std::chrono::milliseconds(1));
     });
@@ -348,7 +349,7 @@ TEST(MappingSession, ARequestFindingTheMapBusyAnswersBusyInBoundedTimeAndChanges
   EXPECT_NE(clear.message.find("busy"), std::string::npos) << clear.message;
   EXPECT_FALSE(session.reset());
   EXPECT_FALSE(session.load("/nonexistent.sfmap").success);
-  EXPECT_FALSE(session.tryWithMapper([](Mapper&) {}));
+  EXPECT_FALSE(session.tryWithMap([](MapAccess&) {}));
   EXPECT_FALSE(session.tryStatus(0.05).has_value());
   const double waited_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -379,7 +380,7 @@ TEST(MappingSession, ThePlanningUpdateLetsFramesInAndHoldsOffAReplacement) {
     ran = true;
     EXPECT_GT(pass.stats.tsdf_blocks, 0u);
     std::thread frames([&] {
-      EXPECT_TRUE(session.tryWithMapper([](Mapper&) {})) << "the map lock is free";
+      EXPECT_TRUE(session.tryWithMap([](MapAccess&) {})) << "the map lock is free";
       EXPECT_EQ(session.fuse(driftingFrame(1), session.arrive(), MeshTiming::kNow).reason,
                 RejectReason::kNone);
     });
@@ -390,7 +391,7 @@ TEST(MappingSession, ThePlanningUpdateLetsFramesInAndHoldsOffAReplacement) {
     });
     // Once the reset holds the map lock it waits for this update; then it must not be done.
     std::thread probe([&] {
-      EXPECT_TRUE(waitFor([&] { return !session.tryWithMapper([](Mapper&) {}); }, 60.0));
+      EXPECT_TRUE(waitFor([&] { return !session.tryWithMap([](MapAccess&) {}); }, 60.0));
     });
     probe.join();
     EXPECT_FALSE(reset_done.load()) << "a reset waits for the update's end";
@@ -399,6 +400,47 @@ TEST(MappingSession, ThePlanningUpdateLetsFramesInAndHoldsOffAReplacement) {
   EXPECT_TRUE(ran);
   if (resetter.joinable()) resetter.join();
   EXPECT_TRUE(reset_done.load());
-  session.withMapper([](Mapper& m) { EXPECT_EQ(m.planning()->blockCount(), 0u); });
+  session.read([](const Mapper& m) { EXPECT_EQ(m.planning()->blockCount(), 0u); });
   EXPECT_EQ(session.framesFused(), 2u);
+}
+
+// The map is lent only for a call: a subscriber of the mesh's changes and every read reach the
+// map a correction swapped in, not the one it replaced.
+TEST(MappingSession, AfterACorrectionSwapSubscribersAndReadersReachTheLiveMap) {
+  MappingSession session(sessionTestConfig(), keepAll(false));
+  const MeshSubscription publisher = session.subscribeToMeshChanges("test publisher");
+  size_t taken_on_swap = 0;
+  session.setMapReplacedListener([&](const MapReplaced& r) {
+    if (r.change != MapChange::kCorrected) return;
+    // A full update replaces what was pending: the subscriber starts afresh on the new map.
+    taken_on_swap = r.map.takeMeshChanges(publisher).updated.size();
+    EXPECT_GT(r.map.map().mesh().submeshes().size(), 0u);
+  });
+  for (int i = 0; i < kFrames - 1; ++i)
+    ASSERT_EQ(session.fuse(driftingFrame(i), session.arrive(), MeshTiming::kNow).reason,
+              RejectReason::kNone);
+  EXPECT_GT(session.withMap([&](MapAccess& m) { return m.pendingMeshChanges(publisher); }), 0u);
+  const Mapper* before = session.read([](const Mapper& m) { return &m; });
+  const std::optional<CorrectionReport> report = session.submitTrajectory(keyframes());
+  ASSERT_TRUE(report);
+  ASSERT_EQ(report->outcome, TrajectoryOutcome::kApplied) << report->message;
+  EXPECT_NE(session.read([](const Mapper& m) { return &m; }), before) << "a new Mapper";
+  EXPECT_EQ(taken_on_swap, 0u) << "subscribed on the new map at the swap, nothing old pending";
+  EXPECT_EQ(session.withMap([&](MapAccess& m) { return m.pendingMeshChanges(publisher); }), 0u);
+
+  // A frame after the swap: its changes reach the same subscriber, and they are the live map's.
+  ASSERT_EQ(
+      session.fuse(driftingFrame(kFrames - 1), session.arrive(), MeshTiming::kDeferred).reason,
+      RejectReason::kNone);
+  session.withMap([&](MapAccess& m) {
+    EXPECT_GT(m.map().blocksAwaitingMesh(), 0u);
+    const MeshPass pass = m.updateMesh();
+    EXPECT_GT(pass.mesh.blocks_meshed, 0u);
+    EXPECT_EQ(m.map().blocksAwaitingMesh(), 0u);
+    const BlockChangeLog::Changes changes = m.takeMeshChanges(publisher);
+    ASSERT_FALSE(changes.updated.empty());
+    for (const BlockKey& key : changes.updated)
+      EXPECT_TRUE(m.map().mesh().submeshes().count(key)) << "a submesh of the live map";
+    EXPECT_EQ(m.pendingMeshChanges(publisher), 0u);
+  });
 }
