@@ -33,6 +33,7 @@ add_library(stereo_fusion_core STATIC
   ${STEREO_FUSION_ROOT}/src/trajectory/PoseCorrection.cpp
   ${STEREO_FUSION_ROOT}/src/trajectory/UnitQuaternion.cpp
   ${STEREO_FUSION_ROOT}/src/session/CorrectionWorker.cpp
+  ${STEREO_FUSION_ROOT}/src/session/EditReplay.cpp
   ${STEREO_FUSION_ROOT}/src/session/EditTimeline.cpp
   ${STEREO_FUSION_ROOT}/src/session/FrameStats.cpp
   ${STEREO_FUSION_ROOT}/src/session/MappingSession.cpp

@@ -84,7 +84,8 @@ class Mapper {
   /// to report every frame under a lock.
   size_t memoryBytes() const;
 
-  const BlockOctree& map() const { return octree_; }
+  /// The TSDF and colour layer: the blocks, their voxels at every level, their topology.
+  const BlockOctree& tsdf() const { return octree_; }
   /// The incrementally maintained mesh, one submesh per block (current as of the last
   /// updateMesh()).
   const MeshStore& mesh() const { return mesh_->store(); }

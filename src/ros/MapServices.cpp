@@ -68,7 +68,7 @@ bool MapServices::saveMap(SaveMap::Request& req, SaveMap::Response& res) {
     const ros::WallTime locked = ros::WallTime::now();
     const Mapper& map = access.map();
     bytes = map.encodeMap();
-    res.blocks = map.map().blockCount();
+    res.blocks = map.tsdf().blockCount();
     locked_ms = (ros::WallTime::now() - locked).toSec() * 1e3;
   });
   if (!got) {

@@ -13,67 +13,6 @@ size_t imageBytes(const StereoFrame& frame) {
 }
 }  // namespace
 
-bool Edit::loadFrame(StereoFrame* out, std::string* error) const {
-  if (!reload) {
-    *out = frame;
-    return true;
-  }
-  if (!reload(out, error)) return false;
-  // Fused at the pose the live map used, whatever the source says now.
-  out->timestamp_s = frame.timestamp_s;
-  out->T_world_camera = frame.T_world_camera;
-  return true;
-}
-
-EditReplay::FrameApplied EditReplay::frame(Mapper* map, const StereoFrame& posed, const Edit& edit,
-                                           MeshTiming timing) {
-  FrameApplied applied;
-  applied.result = map->integrate(posed, timing);
-  if (!applied.result.accepted) return applied;  // the map is unchanged: nothing to clear again
-  for (const Edit& clear : pending_) {
-    if (!predates(edit, clear)) continue;
-    applied.recleared =
-        map->clearRegion(clear.region, timing).voxels_cleared > 0 || applied.recleared;
-  }
-  while (!pending_.empty() && !predates(edit, pending_.front())) pending_.pop_front();
-  return applied;
-}
-
-ClearResult EditReplay::clear(Mapper* map, const Edit& clear, MeshTiming timing) {
-  ClearResult result = map->clearRegion(clear.region, timing);
-  if (result.accepted) pending_.push_back(clear);
-  return result;
-}
-
-const char* refusionStatusName(RefusionStatus status) {
-  switch (status) {
-    case RefusionStatus::kDone: return "done";
-    case RefusionStatus::kCancelled: return "cancelled";
-    case RefusionStatus::kUnreadableBase: return "unreadable base";
-    case RefusionStatus::kUnreadableFrame: return "unreadable frame";
-  }
-  return "unknown";
-}
-
-RefusionStatus replayEdits(const std::vector<Edit>& edits, const PoseCorrection& correction,
-                           Mapper* map, EditReplay* replay, const std::function<bool()>& cancelled,
-                           RefusionProgress* progress, std::string* error) {
-  for (const Edit& edit : edits) {
-    if (!edit.isFrame()) {
-      replay->clear(map, edit, MeshTiming::kDeferred);
-      continue;
-    }
-    if (cancelled && cancelled()) return RefusionStatus::kCancelled;
-    StereoFrame original;
-    if (!edit.loadFrame(&original, error)) return RefusionStatus::kUnreadableFrame;
-    ++progress->frames;
-    if (!replay->frame(map, correction.corrected(original), edit, MeshTiming::kDeferred)
-             .result.accepted)
-      ++progress->rejected;
-  }
-  return RefusionStatus::kDone;
-}
-
 std::unique_ptr<Mapper> mapperFromBase(const MapperConfig& config,
                                        const std::vector<uint8_t>& base_bytes, std::string* error) {
   auto mapper = std::make_unique<Mapper>(config);

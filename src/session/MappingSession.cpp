@@ -221,7 +221,7 @@ MappingSession::LoadOutcome MappingSession::load(const std::string& path) {
   }
   startEpochLocked(base);
   out.success = true;
-  out.blocks = mapper_->map().blockCount();
+  out.blocks = mapper_->tsdf().blockCount();
   out.message = "loaded " + std::to_string(out.blocks) + " blocks from " + path;
   notifyLocked(MapChange::kLoaded, changes.removed);
   return out;
@@ -275,7 +275,7 @@ std::optional<MappingSession::MapStatus> MappingSession::tryStatus(double wait_s
   MapStatus s;
   s.kept = keptLocked();
   s.last_correction = corrections_.lastAppliedLocked();
-  s.blocks = mapper_->map().blockCount();
+  s.blocks = mapper_->tsdf().blockCount();
   s.memory_bytes = mapper_->memoryBytes();
   s.awaiting_mesh = mapper_->blocksAwaitingMesh();
   if (const PlanningMap* planning = mapper_->planning()) {

@@ -137,12 +137,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
 
   for (const Eigen::Isometry3d& pose : poses) {
     frame.T_world_camera = pose;
-    const size_t blocks_before = mapper.map().blockCount();
+    const size_t blocks_before = mapper.tsdf().blockCount();
     const size_t triangles_before = mapper.mesh().triangleCount();
     const IntegrationResult result = mapper.integrate(frame);
     if (!result.accepted) {
       fuzz::require(!result.error.empty());
-      fuzz::require(mapper.map().blockCount() == blocks_before);
+      fuzz::require(mapper.tsdf().blockCount() == blocks_before);
       fuzz::require(mapper.mesh().triangleCount() == triangles_before);
     }
     for (const BlockKey& key : result.mesh.changed) {

@@ -136,7 +136,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const IntegrationResult result = map.integrate(frame);
   if (!result.accepted) {
     fuzz::require(!result.error.empty());
-    fuzz::require(map.map().blockCount() == 0);
+    fuzz::require(map.tsdf().blockCount() == 0);
   }
   fuzz::checkMesh(map.extractMesh());
   return 0;

@@ -92,7 +92,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   // Not a structured binding: lambdas may capture those only from C++20 (clang refuses).
   size_t blocks_before = 0, triangles_before = 0;
   session.read([&](const Mapper& m) {
-    blocks_before = m.map().blockCount();
+    blocks_before = m.tsdf().blockCount();
     triangles_before = m.mesh().triangleCount();
   });
 
@@ -104,7 +104,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const Mapper& m = access.map();
     if (info.rejected || report->outcome == TrajectoryOutcome::kFailed) {
       fuzz::require(!report->message.empty());
-      fuzz::require(m.map().blockCount() == blocks_before);
+      fuzz::require(m.tsdf().blockCount() == blocks_before);
       fuzz::require(m.mesh().triangleCount() == triangles_before);
     }
     access.updateMesh();

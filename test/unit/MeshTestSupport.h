@@ -208,7 +208,7 @@ inline void expectMeshEqualsRebuild(const Mapper& mapper) {
   MeshStore batch(
       MeshingParams{config.voxel_size_m, config.truncation_vox, config.mesh_level_min_coverage});
   ThreadPool pool(2);
-  batch.rebuild(mapper.map(), &pool);
+  batch.rebuild(mapper.tsdf(), &pool);
   EXPECT_TRUE(triangleSets(mapper.mesh()) == triangleSets(batch))
       << "incremental mesh differs from a rebuild";
 }

@@ -181,7 +181,7 @@ bool fuseFrames(const FuseOptions& options, FrameSource* reader, bool keep_for_t
     if (out.reason == RejectReason::kError) {
       // Out of memory mid-frame: stop cleanly with what we have rather than crash. Set
       // max_blocks to stay within memory.
-      const size_t blocks = session->read([](const Mapper& m) { return m.map().blockCount(); });
+      const size_t blocks = session->read([](const Mapper& m) { return m.tsdf().blockCount(); });
       *error = "frame " + std::to_string(i) + ": " + out.error + " with " + std::to_string(blocks) +
                " blocks; set max_blocks";
       return false;
@@ -256,15 +256,15 @@ bool applyTrajectory(const FuseOptions& options, const std::vector<StampedPose>&
 
 /// The figures of the map at the end: blocks, memory, the dense grid it saves, mesh levels.
 void mapFigures(const Mapper& mapper, FuseReport* report) {
-  report->blocks = mapper.map().blockCount();
+  report->blocks = mapper.tsdf().blockCount();
   report->blocks_evicted = mapper.blocksEvicted();
-  report->memory_bytes = mapper.map().memoryBytes();
-  report->bytes_per_block = mapper.map().bytesPerBlock();
-  report->memory = mapper.map().memoryUse();
+  report->memory_bytes = mapper.tsdf().memoryBytes();
+  report->bytes_per_block = mapper.tsdf().bytesPerBlock();
+  report->memory = mapper.tsdf().memoryUse();
   report->mesh_store_bytes = mapper.mesh().memoryBytes();
-  if (!mapper.map().blocks().empty()) {
-    BlockKey lo = mapper.map().blocks().front()->key, hi = lo;
-    for (const VoxelBlock* b : mapper.map().blocks()) {
+  if (!mapper.tsdf().blocks().empty()) {
+    BlockKey lo = mapper.tsdf().blocks().front()->key, hi = lo;
+    for (const VoxelBlock* b : mapper.tsdf().blocks()) {
       lo = componentMin(lo, b->key);
       hi = componentMax(hi, b->key);
     }
@@ -274,7 +274,7 @@ void mapFigures(const Mapper& mapper, FuseReport* report) {
   }
   const MeshStates& mesh_states =
       mapper.mesh().states();  // current: the mesh was brought up to date before
-  for (const VoxelBlock* b : mapper.map().blocks()) {
+  for (const VoxelBlock* b : mapper.tsdf().blocks()) {
     if (b->row >= mesh_states.size()) continue;
     const MeshBlockState& state = mesh_states[*b];
     ++report->blocks_per_level[state.level];

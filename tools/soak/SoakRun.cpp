@@ -58,9 +58,9 @@ bool runSoak(const SoakOptions& options, std::vector<SoakSample>* samples, std::
     SoakSample s;
     s.frame = frame;
     s.rss_mb = readProcessMemory().resident_mb;
-    s.blocks = mapper.map().blockCount();
+    s.blocks = mapper.tsdf().blockCount();
     s.evicted = mapper.blocksEvicted();
-    s.map_mb = mapper.map().memoryBytes() / 1048576.0;
+    s.map_mb = mapper.tsdf().memoryBytes() / 1048576.0;
     s.mean_frame_ms = window_frames ? window_ms / window_frames : 0.0;
     window_ms = 0;
     window_frames = 0;

@@ -81,7 +81,7 @@ Filtered filterFrame(const cv::Rect& rect, float delta_px, int threads = 2,
   measurements.build(frame, stageConfigs(c).pipeline.measurement, &pool);
   ContradictionFilter filter;
   Filtered out;
-  out.stats = filter.apply(frame, mapper.map(), mapper.map().blocksSortedByKey(),
+  out.stats = filter.apply(frame, mapper.tsdf(), mapper.tsdf().blocksSortedByKey(),
                            stageConfigs(c).pipeline.contradiction, c.disparity_noise_px, &pool,
                            &measurements);
   for (int i = 0; i < measurements.width() * measurements.height(); ++i)

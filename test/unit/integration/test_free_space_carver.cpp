@@ -154,7 +154,7 @@ TEST(FreeSpaceCarver, AGhostThatLaterFramesSeeThroughDisappears) {
       frame.timestamp_s = stamp++;
       ASSERT_TRUE(mapper.integrate(frame).accepted);
     }
-    const size_t before = crossingsNear(mapper.map(), sphere_centre, 0.3);
+    const size_t before = crossingsNear(mapper.tsdf(), sphere_centre, 0.3);
     ASSERT_GT(before, 300u);
     for (int i = 0; i < 30; ++i) {  // and then has gone
       StereoFrame frame =
@@ -162,7 +162,7 @@ TEST(FreeSpaceCarver, AGhostThatLaterFramesSeeThroughDisappears) {
       frame.timestamp_s = stamp++;
       ASSERT_TRUE(mapper.integrate(frame).accepted);
     }
-    const size_t after = crossingsNear(mapper.map(), sphere_centre, 0.3);
+    const size_t after = crossingsNear(mapper.tsdf(), sphere_centre, 0.3);
     std::printf(
         "[ carving %s ] ghost surface crossings: %zu after the first sweep, %zu after the second\n",
         carving ? "on " : "off", before, after);
@@ -200,7 +200,7 @@ TEST(FreeSpaceCarver, AThinPoleTheMatcherLosesInHalfTheFramesSurvives) {
     }
     size_t n = 0;
     for (int axis = 0; axis < 3; ++axis)
-      for (const Eigen::Vector3d& p : zeroCrossings(mapper.map(), 0, axis))
+      for (const Eigen::Vector3d& p : zeroCrossings(mapper.tsdf(), 0, axis))
         n += std::hypot(p.x() - 0.05, p.z() - 1.4) < 0.04 && std::abs(p.y()) < 0.4;
     return n;
   };
@@ -225,7 +225,7 @@ TEST(FreeSpaceCarver, AFloorSeenAtGrazingAnglesIsNotEaten) {
       ASSERT_TRUE(mapper.integrate(frame).accepted);
     }
     size_t n = 0;
-    for (const Eigen::Vector3d& p : zeroCrossings(mapper.map(), 0, 1))
+    for (const Eigen::Vector3d& p : zeroCrossings(mapper.tsdf(), 0, 1))
       n += std::abs(p.y() - 0.3) < 0.05;
     crossings[carving] = n;
   }
@@ -247,7 +247,7 @@ TEST(FreeSpaceCarver, ResultDoesNotDependOnTheThreadCount) {
       frame.timestamp_s = 1.0 + i;
       ASSERT_TRUE(mapper.integrate(frame).accepted);
     }
-    snapshots[threads - 1] = snapshot(mapper.map());
+    snapshots[threads - 1] = snapshot(mapper.tsdf());
   }
   EXPECT_TRUE(snapshots[0] == snapshots[1]);
 }

@@ -63,7 +63,7 @@ TEST(FusionSurface, PlaneZeroCrossingWithinTenthOfAVoxel) {
   ASSERT_TRUE(r.accepted) << r.error;
   for (int level = 0; level < kNumLevels; ++level) {
     const std::vector<double> errors =
-        crossingErrorsVox(mapper.map(), plane, level, pose.translation(), false);
+        crossingErrorsVox(mapper.tsdf(), plane, level, pose.translation(), false);
     ASSERT_GT(errors.size(), 1000u / (1 << (2 * level))) << "level " << level;
     const double worst = *std::max_element(errors.begin(), errors.end());
     EXPECT_LE(worst, 0.1) << "level " << level << ": " << errors.size() << " crossings";
@@ -84,7 +84,7 @@ TEST(FusionSurface, SphereZeroCrossingWithinTenthOfAVoxel) {
   // Crossings along all three axes over the cap facing the camera (< 60° from the view ray).
   for (int axis = 0; axis < 3; ++axis) {
     std::vector<double> errors;
-    for (const Eigen::Vector3d& p : zeroCrossings(mapper.map(), 0, axis))
+    for (const Eigen::Vector3d& p : zeroCrossings(mapper.tsdf(), 0, axis))
       if (sphere.wellObserved(p, eye)) errors.push_back(sphere.distance(p) / kVoxel);
     ASSERT_GT(errors.size(), 150u) << "axis " << axis;
     const double worst = *std::max_element(errors.begin(), errors.end());
@@ -108,7 +108,7 @@ TEST(FusionSurface, SphereFromThreeViews) {
             .integrate(renderFrame(sphere.scene, vgaCamera(),
                                    sim::lookAt(eye, sphere.centre, -Eigen::Vector3d::UnitY())))
             .accepted);
-  const std::vector<double> errors = crossingErrorsVox(mapper.map(), sphere, 0, eyes[0], true);
+  const std::vector<double> errors = crossingErrorsVox(mapper.tsdf(), sphere, 0, eyes[0], true);
   ASSERT_GT(errors.size(), 300u);
   const double worst = *std::max_element(errors.begin(), errors.end());
   std::printf("[ sphere, 3 views ] %zu crossings, median %.4f, max %.4f voxel\n", errors.size(),
@@ -129,7 +129,7 @@ TEST(FusionSurface, NoisyPlaneFusesToQuarterVoxelAfter30Frames) {
         mapper.integrate(renderFrame(plane.scene, vgaCamera(), pose, 0.3, 100 + f)).accepted);
   }
   const std::vector<double> errors =
-      crossingErrorsVox(mapper.map(), plane, 0, Eigen::Vector3d::Zero(), false);
+      crossingErrorsVox(mapper.tsdf(), plane, 0, Eigen::Vector3d::Zero(), false);
   ASSERT_GT(errors.size(), 1000u);
   const double med = median(errors);
   std::printf("[ noisy plane ] σ = 0.3 px, 30 frames: %zu crossings, median %.4f voxel\n",
@@ -151,7 +151,7 @@ TEST(FusionSurface, NoisySphereFusesToQuarterVoxelAfter30Frames) {
                     .accepted);
   }
   const std::vector<double> errors =
-      crossingErrorsVox(mapper.map(), sphere, 0, Eigen::Vector3d::Zero(), true);
+      crossingErrorsVox(mapper.tsdf(), sphere, 0, Eigen::Vector3d::Zero(), true);
   ASSERT_GT(errors.size(), 300u);
   const double med = median(errors);
   std::printf("[ noisy sphere ] σ = 0.3 px, 30 frames: %zu crossings, median %.4f voxel\n",
@@ -168,13 +168,13 @@ TEST(FusionSurface, SignConventionNegativeInFront) {
   ASSERT_TRUE(
       mapper.integrate(renderFrame(scene, vgaCamera(), Eigen::Isometry3d::Identity())).accepted);
   int front = 0, behind = 0;
-  for (const VoxelBlock* b : mapper.map().blocks()) {
+  for (const VoxelBlock* b : mapper.tsdf().blocks()) {
     for (int k = 0; k < 8; ++k)
       for (int j = 0; j < 8; ++j)
         for (int i = 0; i < 8; ++i) {
           const Voxel& v = b->at(0, i, j, k);
           if (v.weight <= 0) continue;
-          const double z = voxelCentre(mapper.map(), b->key, 0, i, j, k).z();
+          const double z = voxelCentre(mapper.tsdf(), b->key, 0, i, j, k).z();
           if (z < 1.5 - 0.5 * kVoxel) {
             EXPECT_LT(v.sdf_m, 0.0f);
             ++front;
@@ -201,11 +201,11 @@ TEST(FusionSurface, CoarseLevelsGetABandOfTheirOwnVoxels) {
   Mapper mapper(config);
   ASSERT_TRUE(mapper.integrate(renderFrame(plane.scene, vgaCamera(), Eigen::Isometry3d::Identity()))
                   .accepted);
-  const double fine = static_cast<double>(zeroCrossings(mapper.map(), 0, 2).size());
+  const double fine = static_cast<double>(zeroCrossings(mapper.tsdf(), 0, 2).size());
   ASSERT_GT(fine, 3000);
   for (int level = 1; level < kNumLevels; ++level) {
     const double scaled =
-        static_cast<double>(zeroCrossings(mapper.map(), level, 2).size()) * (1 << (2 * level));
+        static_cast<double>(zeroCrossings(mapper.tsdf(), level, 2).size()) * (1 << (2 * level));
     std::printf("[ coarse band ] level %d: %.0f crossings per level-0 area vs %.0f at level 0\n",
                 level, scaled, fine);
     EXPECT_GT(scaled, 0.8 * fine) << "level " << level;
@@ -220,7 +220,7 @@ TEST(FusionSurface, FarMeasurementsOnlyReachCoarseLevels) {
   ASSERT_TRUE(
       mapper.integrate(renderFrame(scene, vgaCamera(), Eigen::Isometry3d::Identity())).accepted);
   size_t observed[kNumLevels] = {0, 0, 0};
-  for (const VoxelBlock* b : mapper.map().blocks())
+  for (const VoxelBlock* b : mapper.tsdf().blocks())
     for (int level = 0; level < kNumLevels; ++level)
       for (int n = 0; n < levelVoxelCount(level); ++n)
         observed[level] += b->level(level)[n].weight > 0;
@@ -228,7 +228,7 @@ TEST(FusionSurface, FarMeasurementsOnlyReachCoarseLevels) {
   EXPECT_EQ(observed[1], 0u);
   EXPECT_GT(observed[2], 100u);
   // Far measurements allocate only the level they update: 96 bytes of voxels per block.
-  for (const VoxelBlock* b : mapper.map().blocks()) {
+  for (const VoxelBlock* b : mapper.tsdf().blocks()) {
     EXPECT_FALSE(b->hasLevel(0) || b->hasLevel(1)) << b->key;
     EXPECT_EQ(b->voxelBytes(), 8 * sizeof(Voxel)) << b->key;
   }
@@ -236,7 +236,7 @@ TEST(FusionSurface, FarMeasurementsOnlyReachCoarseLevels) {
   PlaneScene far_plane;
   far_plane.point = {0, 0, 5.0};
   far_plane.normal = {0, 0, -1};
-  const auto errors = crossingErrorsVox(mapper.map(), far_plane, 2, {0, 0, 0}, false);
+  const auto errors = crossingErrorsVox(mapper.tsdf(), far_plane, 2, {0, 0, 0}, false);
   ASSERT_GT(errors.size(), 100u);
   EXPECT_LE(*std::max_element(errors.begin(), errors.end()), 0.1);
 }
@@ -263,17 +263,17 @@ TEST(FusionSurface, AFartherViewRefinesTheFineLevelANearViewAllocated) {
     far_pose.translation() = Eigen::Vector3d(0, 0, -0.5);
     ASSERT_TRUE(mapper.integrate(renderFrame(scene, vgaCamera(), near_pose)).accepted);
     std::vector<BlockKey> level0_blocks;
-    for (const VoxelBlock* b : mapper.map().blocks())
+    for (const VoxelBlock* b : mapper.tsdf().blocks())
       if (b->hasLevel(0)) level0_blocks.push_back(b->key);
     ASSERT_GT(level0_blocks.size(), 100u);
     ASSERT_TRUE(mapper.integrate(renderFrame(scene, vgaCamera(), far_pose)).accepted);
     size_t refined = 0, near_only = 0, level0_after = 0;
-    for (const VoxelBlock* b : mapper.map().blocks()) {
+    for (const VoxelBlock* b : mapper.tsdf().blocks()) {
       if (!b->hasLevel(0)) continue;
       ++level0_after;
       EXPECT_NE(std::find(level0_blocks.begin(), level0_blocks.end(), b->key), level0_blocks.end())
           << b->key;
-      const Eigen::Vector3d origin = mapper.map().blockOrigin(b->key);
+      const Eigen::Vector3d origin = mapper.tsdf().blockOrigin(b->key);
       for (int k = 0; k < 8; ++k)
         for (int j = 0; j < 8; ++j)
           for (int i = 0; i < 8; ++i) {

@@ -88,7 +88,7 @@ TEST(LevelSelection, TheMapperFusesAtTheLevelTheFramesCameraSelects) {
     Mapper mapper(config);
     EXPECT_TRUE(mapper.integrate(frame).accepted);
     int mask = 0;
-    for (const VoxelBlock* b : mapper.map().blocksSortedByKey())
+    for (const VoxelBlock* b : mapper.tsdf().blocksSortedByKey())
       for (int level = 0; level < kNumLevels; ++level)
         if (b->hasLevel(level)) mask |= 1 << level;
     return mask;
@@ -114,6 +114,6 @@ TEST(LevelSelection, TheMapperFusesAtTheLevelTheFramesCameraSelects) {
     EXPECT_EQ(r.reason, RejectReason::kInvalidFrame) << step;
     EXPECT_NE(r.error.find("disparity step (DisparityImage.delta_d)"), std::string::npos)
         << r.error;
-    EXPECT_EQ(mapper.map().blockCount(), 0u);
+    EXPECT_EQ(mapper.tsdf().blockCount(), 0u);
   }
 }

@@ -155,7 +155,7 @@ TEST(MapFile, VersionOneFilesStillLoadWithOnlyTheirObservedLevels) {
   // The old lookup allocated every block a band reached, updated or not: a version-1 file holds
   // such blocks, all voxels unobserved. Two of them here, beside the fused blocks.
   BlockOctree with_empty(config.blockSizeM());
-  for (const VoxelBlock* b : original->map().blocks()) {
+  for (const VoxelBlock* b : original->tsdf().blocks()) {
     VoxelBlock* copy = with_empty.findOrAllocate(b->key);
     for (int level = 0; level < kNumLevels; ++level)
       if (b->hasLevel(level)) copy->adoptLevel(level, b->level(level));
@@ -170,10 +170,10 @@ TEST(MapFile, VersionOneFilesStillLoadWithOnlyTheirObservedLevels) {
   ASSERT_TRUE(decodeMapFile(old_file.data(), old_file.size(), config, &loaded, &info, &error))
       << error;
   EXPECT_EQ(info.version, 1u);
-  EXPECT_EQ(info.block_count, original->map().blockCount() + 2);
+  EXPECT_EQ(info.block_count, original->tsdf().blockCount() + 2);
   // The fused blocks and voxels, without the empty ones, and a level is allocated exactly
   // where it holds observations (which is where fusion allocated it).
-  EXPECT_TRUE(snapshot(loaded) == snapshot(original->map()));
+  EXPECT_TRUE(snapshot(loaded) == snapshot(original->tsdf()));
   EXPECT_EQ(info.last_update_frames.size(), loaded.blockCount());
   size_t blocks_without_level0 = 0;
   for (const VoxelBlock* b : loaded.blocks()) blocks_without_level0 += !b->hasLevel(0);
@@ -184,44 +184,44 @@ TEST(MapFile, VersionOneFilesStillLoadWithOnlyTheirObservedLevels) {
   ASSERT_TRUE(decodeMapFile(new_file.data(), new_file.size(), config, &again, &info, &error))
       << error;
   EXPECT_EQ(info.version, kMapFileVersion);
-  EXPECT_TRUE(snapshot(again) == snapshot(original->map()));
+  EXPECT_TRUE(snapshot(again) == snapshot(original->tsdf()));
   EXPECT_LT(new_file.size(), old_file.size());
 }
 
 TEST(MapFile, SaveLoadGivesTheIdenticalMapAndByteIdenticalMesh) {
   MapperConfig config;
   const auto original = fusedMapper(4, config);
-  ASSERT_GT(original->map().blockCount(), 50u);
+  ASSERT_GT(original->tsdf().blockCount(), 50u);
   const std::string map_path = tempPath("roundtrip.sfmap");
   std::string error;
   ASSERT_TRUE(original->saveMap(map_path, &error)) << error;
   size_t voxel_bytes = 0;
-  for (const VoxelBlock* b : original->map().blocks()) voxel_bytes += b->voxelBytes();
+  for (const VoxelBlock* b : original->tsdf().blocks()) voxel_bytes += b->voxelBytes();
   const size_t free_space_bytes =
       16 + original->planning()->seenFree().size() * kMapFileFreeSpaceRecordBytes;
   EXPECT_EQ(fs::file_size(map_path), kMapFileHeaderBytes +
-                                         original->map().blockCount() * kMapFileRecordHeadBytes +
+                                         original->tsdf().blockCount() * kMapFileRecordHeadBytes +
                                          voxel_bytes + free_space_bytes);
 
   Mapper loaded(config);
   MeshChanges changes;
   ASSERT_TRUE(loaded.loadMap(map_path, &changes, &error)) << error;
-  EXPECT_TRUE(snapshot(loaded.map()) == snapshot(original->map()));
+  EXPECT_TRUE(snapshot(loaded.tsdf()) == snapshot(original->tsdf()));
   EXPECT_EQ(loaded.framesIntegrated(), original->framesIntegrated());
   // The eviction order goes with the map.
-  for (const VoxelBlock* b : original->map().blocks())
-    EXPECT_EQ(loaded.lastUpdateFrame(*loaded.map().find(b->key)), original->lastUpdateFrame(*b))
+  for (const VoxelBlock* b : original->tsdf().blocks())
+    EXPECT_EQ(loaded.lastUpdateFrame(*loaded.tsdf().find(b->key)), original->lastUpdateFrame(*b))
         << b->key;
   EXPECT_EQ(changes.changed.size(), loaded.mesh().submeshes().size());
   EXPECT_TRUE(changes.removed.empty());
   // Loading allocates block by block and swaps the octree in: the neighbour links the mesher
   // reads must come out equal to searches, and as many as the original map has.
-  const LinkCheck links = checkNeighbourLinks(loaded.map()),
-                  original_links = checkNeighbourLinks(original->map());
+  const LinkCheck links = checkNeighbourLinks(loaded.tsdf()),
+                  original_links = checkNeighbourLinks(original->tsdf());
   EXPECT_EQ(links.mismatched, 0u);
-  EXPECT_EQ(links.checked, 27 * loaded.map().blockCount());
+  EXPECT_EQ(links.checked, 27 * loaded.tsdf().blockCount());
   EXPECT_EQ(links.linked, original_links.linked);
-  EXPECT_GT(links.linked, 4 * loaded.map().blockCount());
+  EXPECT_GT(links.linked, 4 * loaded.tsdf().blockCount());
 
   const std::string ply_a = tempPath("a.ply"), ply_b = tempPath("b.ply");
   ASSERT_TRUE(writePly(ply_a, original->extractMesh(), &error)) << error;
@@ -249,7 +249,7 @@ TEST(MapFile, EncodeThenWriteAndReadThenAdoptEqualSaveAndLoad) {
   const SeenFreeSpace free_space{original->planning()->grid().cell_m,
                                  original->planning()->seenFree()};
   const std::vector<uint8_t> sealed = encodeMapFile(
-      original->map(), config, original->framesIntegrated(),
+      original->tsdf(), config, original->framesIntegrated(),
       [&](const VoxelBlock& block) { return original->lastUpdateFrame(block); }, free_space);
   ASSERT_EQ(bytes.size(), sealed.size());
   EXPECT_TRUE(std::equal(bytes.begin(), bytes.begin() + 72,
@@ -272,7 +272,7 @@ TEST(MapFile, EncodeThenWriteAndReadThenAdoptEqualSaveAndLoad) {
   const MeshChanges adopt_changes = by_adopt.adoptMap(&read, info);
   EXPECT_EQ(read.blockCount(), 0u)
       << "adoptMap leaves the mapper's old (empty) map in its argument";
-  EXPECT_TRUE(snapshot(by_adopt.map()) == snapshot(by_load.map()));
+  EXPECT_TRUE(snapshot(by_adopt.tsdf()) == snapshot(by_load.tsdf()));
   EXPECT_EQ(by_adopt.framesIntegrated(), by_load.framesIntegrated());
   EXPECT_EQ(adopt_changes.changed.size(), load_changes.changed.size());
   EXPECT_EQ(by_adopt.mesh().submeshes().size(), by_load.mesh().submeshes().size());
@@ -318,7 +318,7 @@ TEST(MapFile, FusingOnAfterLoadContinuesTheSameMap) {
     f.timestamp_s = 1.0 + i;
     ASSERT_TRUE(resumed.integrate(f).accepted);
   }
-  EXPECT_TRUE(snapshot(resumed.map()) == snapshot(whole->map()));
+  EXPECT_TRUE(snapshot(resumed.tsdf()) == snapshot(whole->tsdf()));
   EXPECT_TRUE(triangleSets(resumed.mesh()) == triangleSets(whole->mesh()));
   fs::remove(path);
 }
@@ -437,7 +437,7 @@ TEST(MapFile, AFailedLoadLeavesTheMapAndMeshUntouched) {
   MapperConfig config;
   config.voxel_size_m = 0.04;  // fewer blocks: the map is compared after every case
   const auto mapper = fusedMapper(3, config);
-  const MapSnapshot before = snapshot(mapper->map());
+  const MapSnapshot before = snapshot(mapper->tsdf());
   const auto mesh_before = triangleSets(mapper->mesh());
   const std::string path = tempPath("bad.sfmap");
   std::string error;
@@ -459,7 +459,7 @@ TEST(MapFile, AFailedLoadLeavesTheMapAndMeshUntouched) {
     EXPECT_FALSE(mapper->loadMap(path, nullptr, &error));
     EXPECT_NE(error.find(c.message), std::string::npos) << error;
     EXPECT_NE(error.find(path), std::string::npos) << "the message names the file: " << error;
-    EXPECT_TRUE(snapshot(mapper->map()) == before);
+    EXPECT_TRUE(snapshot(mapper->tsdf()) == before);
     EXPECT_TRUE(triangleSets(mapper->mesh()) == mesh_before);
   }
   fs::remove(path);
@@ -474,7 +474,7 @@ TEST(MapFile, AFailedLoadLeavesTheMapAndMeshUntouched) {
     EXPECT_FALSE(mapper->loadMap(not_a_file, nullptr, &error));
     EXPECT_NE(error.find("not a regular file"), std::string::npos) << error;
   }
-  EXPECT_TRUE(snapshot(mapper->map()) == before);
+  EXPECT_TRUE(snapshot(mapper->tsdf()) == before);
   EXPECT_TRUE(triangleSets(mapper->mesh()) == mesh_before);
 }
 

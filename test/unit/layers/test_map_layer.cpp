@@ -86,7 +86,7 @@ TEST(MapLayer, AToyHitCountLayerHearsEveryFrameAndEveryBlockChangeOnce) {
   EXPECT_EQ(layer.rebuilds, 0) << "registered on an empty map";
   ASSERT_GT(expected.size(), 20u);
   EXPECT_EQ(layer.hits, expected);
-  EXPECT_EQ(keysOf(layer.hits), keysOf(mapper.map()));
+  EXPECT_EQ(keysOf(layer.hits), keysOf(mapper.tsdf()));
   EXPECT_GT(std::max_element(expected.begin(), expected.end(),
                              [](const auto& a, const auto& b) { return a.second < b.second; })
                 ->second,
@@ -103,7 +103,7 @@ TEST(MapLayer, AToyHitCountLayerHearsEveryFrameAndEveryBlockChangeOnce) {
   ASSERT_TRUE(mapper.integrate(noisyFrame(5)).accepted);
   mapper.updateLayer(layer);
   EXPECT_EQ(layer.updates, 5);
-  EXPECT_EQ(keysOf(layer.hits), keysOf(mapper.map()));
+  EXPECT_EQ(keysOf(layer.hits), keysOf(mapper.tsdf()));
 
   // A clear tells the layer first; the blocks it empties reach it as erased.
   const ClearResult cleared = mapper.clearRegion(MapRegion::sphere({0.05, 0.1, 1.2}, 0.35));
@@ -111,7 +111,7 @@ TEST(MapLayer, AToyHitCountLayerHearsEveryFrameAndEveryBlockChangeOnce) {
   ASSERT_GT(cleared.blocks_erased, 0u);
   EXPECT_EQ(layer.clears, 1);
   mapper.updateLayer(layer);
-  EXPECT_EQ(keysOf(layer.hits), keysOf(mapper.map()));
+  EXPECT_EQ(keysOf(layer.hits), keysOf(mapper.tsdf()));
 
   mapper.reset();
   EXPECT_EQ(layer.resets, 1);
@@ -124,7 +124,7 @@ TEST(MapLayer, ALayerAddedLaterIsRederivedFromTheMapAndAfterALoad) {
   const std::unique_ptr<Mapper> mapper = fusedMapper(3);
   HitCountLayer& layer = mapper->addLayer(std::make_unique<HitCountLayer>());
   EXPECT_EQ(layer.rebuilds, 1);
-  EXPECT_EQ(keysOf(layer.hits), keysOf(mapper->map())) << "the map so far";
+  EXPECT_EQ(keysOf(layer.hits), keysOf(mapper->tsdf())) << "the map so far";
 
   // A layer that saves nothing leaves the map file as it was.
   const std::unique_ptr<Mapper> plain = fusedMapper(3);
@@ -139,9 +139,9 @@ TEST(MapLayer, ALayerAddedLaterIsRederivedFromTheMapAndAfterALoad) {
   ASSERT_TRUE(mapper->loadMap(path, nullptr, &error)) << error;
   std::remove(path.c_str());
   EXPECT_EQ(layer.rebuilds, 2);
-  EXPECT_EQ(keysOf(layer.hits), keysOf(larger->map()));
+  EXPECT_EQ(keysOf(layer.hits), keysOf(larger->tsdf()));
   mapper->updateLayer(layer);
-  EXPECT_EQ(keysOf(layer.hits), keysOf(mapper->map())) << "a load leaves no change pending";
+  EXPECT_EQ(keysOf(layer.hits), keysOf(mapper->tsdf())) << "a load leaves no change pending";
 }
 
 TEST(MapLayer, UpdatingALayerThatIsNotRegisteredIsRefused) {

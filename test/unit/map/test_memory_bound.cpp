@@ -128,16 +128,16 @@ TEST(MemoryBound, BudgetHoldsAfterEveryFrameAndEvictsTheLeastRecent) {
   uint64_t evicted_total = 0;
   for (int f = 0; f < 40; ++f) {
     std::map<BlockKey, uint64_t> before;
-    for (const VoxelBlock* b : mapper.map().blocks()) before[b->key] = mapper.lastUpdateFrame(*b);
+    for (const VoxelBlock* b : mapper.tsdf().blocks()) before[b->key] = mapper.lastUpdateFrame(*b);
     const IntegrationResult r = mapper.integrate(corridorFrame(scene, 0.15 * f));
     ASSERT_TRUE(r.accepted) << r.error;
-    EXPECT_LE(mapper.map().blockCount(), 250u) << "frame " << f;
+    EXPECT_LE(mapper.tsdf().blockCount(), 250u) << "frame " << f;
     evicted_total += r.evicted_blocks.size();
     uint64_t oldest_kept = UINT64_MAX;
-    for (const VoxelBlock* b : mapper.map().blocks())
+    for (const VoxelBlock* b : mapper.tsdf().blocks())
       oldest_kept = std::min(oldest_kept, mapper.lastUpdateFrame(*b));
     for (const BlockKey& k : r.evicted_blocks) {
-      EXPECT_EQ(mapper.map().find(k), nullptr) << k;
+      EXPECT_EQ(mapper.tsdf().find(k), nullptr) << k;
       EXPECT_FALSE(std::binary_search(r.updated_blocks.begin(), r.updated_blocks.end(), k)) << k;
       auto it = before.find(k);
       // A block that existed before the frame is only evicted if every kept block is at least as
@@ -151,7 +151,7 @@ TEST(MemoryBound, BudgetHoldsAfterEveryFrameAndEvictsTheLeastRecent) {
   EXPECT_EQ(mapper.blocksEvicted(), evicted_total);
   // The kept map is the recent end of the corridor: every block last updated in the first
   // quarter of the run is gone.
-  for (const VoxelBlock* b : mapper.map().blocks())
+  for (const VoxelBlock* b : mapper.tsdf().blocks())
     EXPECT_GT(mapper.lastUpdateFrame(*b), 10u) << b->key;
 }
 
@@ -167,18 +167,18 @@ TEST(MemoryBound, DistanceLimitKeepsOnlyNearbyBlocks) {
     ASSERT_TRUE(mapper.integrate(frame).accepted);
     ASSERT_TRUE(unbounded.integrate(frame).accepted);
     const Eigen::Vector3d camera = frame.T_world_camera.translation();
-    const Eigen::Vector3d half = Eigen::Vector3d::Constant(mapper.map().blockSize() / 2);
+    const Eigen::Vector3d half = Eigen::Vector3d::Constant(mapper.tsdf().blockSize() / 2);
     size_t near_in_unbounded = 0;
-    for (const VoxelBlock* b : unbounded.map().blocks())
-      near_in_unbounded += (unbounded.map().blockOrigin(b->key) + half - camera).norm() <= 3.0;
-    for (const VoxelBlock* b : mapper.map().blocks())
-      ASSERT_LE((mapper.map().blockOrigin(b->key) + half - camera).norm(), 3.0)
+    for (const VoxelBlock* b : unbounded.tsdf().blocks())
+      near_in_unbounded += (unbounded.tsdf().blockOrigin(b->key) + half - camera).norm() <= 3.0;
+    for (const VoxelBlock* b : mapper.tsdf().blocks())
+      ASSERT_LE((mapper.tsdf().blockOrigin(b->key) + half - camera).norm(), 3.0)
           << b->key << " frame " << f;
     // Nothing near was evicted: the near part of the unbounded map is all there.
-    EXPECT_EQ(mapper.map().blockCount(), near_in_unbounded) << "frame " << f;
+    EXPECT_EQ(mapper.tsdf().blockCount(), near_in_unbounded) << "frame " << f;
   }
   EXPECT_GT(mapper.blocksEvicted(), 100u);
-  EXPECT_LT(mapper.map().blockCount(), unbounded.map().blockCount() / 2);
+  EXPECT_LT(mapper.tsdf().blockCount(), unbounded.tsdf().blockCount() / 2);
 }
 
 TEST(MemoryBound, MeshAfterEvictionEqualsARebuildAndTheStreamedCopy) {
@@ -207,7 +207,7 @@ TEST(MemoryBound, MeshAfterEvictionEqualsARebuildAndTheStreamedCopy) {
   ThreadPool pool(2);
   MeshStore batch(MeshingParams{config.voxel_size_m, config.truncation_vox,
                                 config.mesh_level_min_coverage, config.mesh_fill_seams});
-  batch.rebuild(mapper.map(), &pool);
+  batch.rebuild(mapper.tsdf(), &pool);
   ASSERT_GT(batch.triangleCount(), 1000u);
   EXPECT_TRUE(triangleSets(mapper.mesh()) == triangleSets(batch))
       << "incremental mesh differs from a rebuild";
@@ -258,11 +258,11 @@ TEST(MemoryBound, DeferredMeshingWithEvictionEqualsMeshingEveryFrame) {
     ASSERT_TRUE(r.accepted);
     evicted += r.evicted_blocks.size();
     if (f % 3 == 2) deferred.updateMesh();
-    EXPECT_EQ(deferred.memoryBytes(), deferred.map().memoryBytes()) << "frame " << f;
+    EXPECT_EQ(deferred.memoryBytes(), deferred.tsdf().memoryBytes()) << "frame " << f;
   }
   deferred.updateMesh();
   EXPECT_GT(evicted, 100u);
-  EXPECT_TRUE(snapshot(deferred.map()) == snapshot(every_frame.map()));
+  EXPECT_TRUE(snapshot(deferred.tsdf()) == snapshot(every_frame.tsdf()));
   EXPECT_TRUE(triangleSets(deferred.mesh()) == triangleSets(every_frame.mesh()));
   expectMeshEqualsRebuild(deferred);
 }

@@ -20,7 +20,7 @@ struct MapState {
   std::map<BlockKey, std::multiset<std::array<float, 9>>> mesh;
   bool operator==(const MapState& o) const { return map == o.map && mesh == o.mesh; }
 };
-MapState state(const Mapper& m) { return {snapshot(m.map()), triangleSets(m.mesh())}; }
+MapState state(const Mapper& m) { return {snapshot(m.tsdf()), triangleSets(m.mesh())}; }
 
 /// Frame 1 of floorAndSphereFrame() with disparities drawn uniformly over 1–64 px (a broken
 /// matcher): a point anywhere along every ray.

@@ -25,7 +25,7 @@ size_t verticesNear(const Mapper& mapper, const Eigen::Vector3d& centre, double 
 
 TEST(ClearRegion, TheBallGoesFromMapAndMeshAndEverythingOutsideStaysBitIdentical) {
   std::unique_ptr<Mapper> mapper = fusedMapper(6);
-  const MapSnapshot before = snapshot(mapper->map());
+  const MapSnapshot before = snapshot(mapper->tsdf());
   const size_t submeshes_before = mapper->mesh().submeshes().size();
   ASSERT_GT(verticesNear(*mapper, kBallCentre, 0.25), 500u);
   const BlockChangeLog::Consumer listener = mapper->subscribeToMeshChanges("test");
@@ -38,11 +38,11 @@ TEST(ClearRegion, TheBallGoesFromMapAndMeshAndEverythingOutsideStaysBitIdentical
   EXPECT_GT(result.blocks_changed, 0u);
 
   // Voxel by voxel: inside the region unobserved, outside exactly as before.
-  const MapSnapshot after = snapshot(mapper->map());
+  const MapSnapshot after = snapshot(mapper->tsdf());
   size_t compared = 0;
   for (size_t b = 0; b < before.keys.size(); ++b) {
     const BlockKey key = before.keys[b];
-    const VoxelBlock* block = mapper->map().find(key);
+    const VoxelBlock* block = mapper->tsdf().find(key);
     for (int level = 0; level < kNumLevels; ++level) {
       const int side = levelSide(level);
       for (int k = 0; k < side; ++k)
@@ -50,7 +50,7 @@ TEST(ClearRegion, TheBallGoesFromMapAndMeshAndEverythingOutsideStaysBitIdentical
           for (int i = 0; i < side; ++i) {
             const Voxel& old =
                 before.voxels[b * VoxelBlock::kVoxelCount + VoxelBlock::index(level, i, j, k)];
-            if (region.contains(voxelCentre(mapper->map(), key, level, i, j, k))) {
+            if (region.contains(voxelCentre(mapper->tsdf(), key, level, i, j, k))) {
               if (block) {
                 EXPECT_EQ(block->at(level, i, j, k).weight, 0.0f);
               }
@@ -69,7 +69,7 @@ TEST(ClearRegion, TheBallGoesFromMapAndMeshAndEverythingOutsideStaysBitIdentical
   EXPECT_GT(compared, 10000u);
   EXPECT_LT(after.keys.size(), before.keys.size());
   // Mapper::memoryBytes() keeps track of the freed levels without a walk.
-  EXPECT_EQ(mapper->memoryBytes(), mapper->map().memoryBytes());
+  EXPECT_EQ(mapper->memoryBytes(), mapper->tsdf().memoryBytes());
 
   // A mesh vertex lies between two observed voxels: none is left inside the region (the segment
   // between two 8 cm voxel centres outside a 0.35 m sphere dips into it by < 3 mm).
@@ -116,12 +116,12 @@ TEST(ClearRegion, DeferredMeshingWaitsForUpdateMeshLikeAFrame) {
 
 TEST(ClearRegion, AnInvalidRegionIsRefusedAndLeavesTheMapUntouched) {
   std::unique_ptr<Mapper> mapper = fusedMapper(3);
-  const MapSnapshot before = snapshot(mapper->map());
+  const MapSnapshot before = snapshot(mapper->tsdf());
   const auto mesh_before = triangleSets(mapper->mesh());
   const ClearResult result = mapper->clearRegion(MapRegion::box({1, 0, 0}, {0, 1, 1}));
   EXPECT_FALSE(result.accepted);
   EXPECT_NE(result.error.find("min must not exceed its max"), std::string::npos) << result.error;
-  EXPECT_TRUE(snapshot(mapper->map()) == before);
+  EXPECT_TRUE(snapshot(mapper->tsdf()) == before);
   EXPECT_TRUE(triangleSets(mapper->mesh()) == mesh_before);
   EXPECT_EQ(mapper->blocksAwaitingMesh(), 0u);
 }

@@ -51,11 +51,11 @@ FusedTwice fuseOneFrameTwice(const MapperConfig& config) {
   const StereoFrame frame = orbitFrames(1, 0.3)[0];
   FusedTwice result;
   EXPECT_TRUE(mapper.integrate(frame).accepted);
-  result.once = snapshot(mapper.map());
-  result.crossings_once = zeroCrossings(mapper.map(), 0, 2);
+  result.once = snapshot(mapper.tsdf());
+  result.crossings_once = zeroCrossings(mapper.tsdf(), 0, 2);
   EXPECT_TRUE(mapper.integrate(frame).accepted);
-  result.twice = snapshot(mapper.map());
-  result.crossings_twice = zeroCrossings(mapper.map(), 0, 2);
+  result.twice = snapshot(mapper.tsdf());
+  result.crossings_twice = zeroCrossings(mapper.tsdf(), 0, 2);
   return result;
 }
 
@@ -124,7 +124,7 @@ TEST(MapperProperties, ThreadCountDoesNotChangeTheMap) {
       config.lookup_mode = mode;
       Mapper mapper(config);
       for (const StereoFrame& f : frames) ASSERT_TRUE(mapper.integrate(f).accepted);
-      const MapSnapshot s = snapshot(mapper.map());
+      const MapSnapshot s = snapshot(mapper.tsdf());
       if (!reference) {
         reference = s;
         EXPECT_GT(s.keys.size(), 500u) << "blocks";
@@ -146,11 +146,11 @@ TEST(MapperProperties, IntegrationReportsTimingsAndCounts) {
   // all of them, and the rest of what the bands reached is never allocated.
   EXPECT_EQ(r.lookup.blocks_allocated, 0u);
   EXPECT_EQ(r.lookup.blocks_missing, r.lookup.blocks_queued);
-  EXPECT_EQ(r.fusion.blocks_created, mapper.map().blockCount());
+  EXPECT_EQ(r.fusion.blocks_created, mapper.tsdf().blockCount());
   EXPECT_EQ(r.fusion.blocks_created + r.fusion.blocks_not_created, r.lookup.blocks_missing);
   EXPECT_GT(r.fusion.blocks_not_created, 0u);
   size_t voxel_bytes = 0;
-  for (const VoxelBlock* b : mapper.map().blocks()) voxel_bytes += b->voxelBytes();
+  for (const VoxelBlock* b : mapper.tsdf().blocks()) voxel_bytes += b->voxelBytes();
   EXPECT_EQ(r.fusion.level_bytes_allocated, voxel_bytes);
   EXPECT_GT(r.fusion.voxels_updated, r.lookup.blocks_queued);
   EXPECT_EQ(r.updated_blocks.size(), r.fusion.blocks_updated);
@@ -159,7 +159,7 @@ TEST(MapperProperties, IntegrationReportsTimingsAndCounts) {
   EXPECT_GE(r.fusion_ms, 0.0);
   EXPECT_EQ(mapper.framesIntegrated(), 1u);
   mapper.reset();
-  EXPECT_EQ(mapper.map().blockCount(), 0u);
+  EXPECT_EQ(mapper.tsdf().blockCount(), 0u);
 }
 
 TEST(MapperProperties, NonFiniteDisparityPixelsAreSkippedLikeInvalidOnes) {
@@ -182,14 +182,14 @@ TEST(MapperProperties, NonFiniteDisparityPixelsAreSkippedLikeInvalidOnes) {
   const IntegrationResult rb = b.integrate(dirty);
   ASSERT_TRUE(ra.accepted && rb.accepted);
   EXPECT_EQ(ra.lookup.valid_points, rb.lookup.valid_points);
-  EXPECT_TRUE(snapshot(a.map()) == snapshot(b.map()));
+  EXPECT_TRUE(snapshot(a.tsdf()) == snapshot(b.tsdf()));
 }
 
 TEST(MapperProperties, RejectedFramesLeaveTheMapUnchanged) {
   const std::vector<StereoFrame> frames = orbitFrames(2);
   Mapper mapper(MapperConfig{});
   ASSERT_TRUE(mapper.integrate(frames[0]).accepted);
-  const MapSnapshot before = snapshot(mapper.map());
+  const MapSnapshot before = snapshot(mapper.tsdf());
 
   struct Case {
     const char* name;
@@ -227,7 +227,7 @@ TEST(MapperProperties, RejectedFramesLeaveTheMapUnchanged) {
     const IntegrationResult r = mapper.integrate(bad);
     EXPECT_FALSE(r.accepted) << c.name;
     EXPECT_NE(r.error.find(c.message), std::string::npos) << c.name << ": " << r.error;
-    EXPECT_TRUE(snapshot(mapper.map()) == before) << c.name << " changed the map";
+    EXPECT_TRUE(snapshot(mapper.tsdf()) == before) << c.name << " changed the map";
   }
   EXPECT_EQ(mapper.framesIntegrated(), 1u);
   // A good frame is still accepted afterwards.
@@ -240,7 +240,7 @@ TEST(MapperProperties, GreyImagesAndMissingColourAreAccepted) {
   frame.color = grey;
   Mapper mapper(MapperConfig{});
   ASSERT_TRUE(mapper.integrate(frame).accepted);
-  for (const VoxelBlock* b : mapper.map().blocks())
+  for (const VoxelBlock* b : mapper.tsdf().blocks())
     for (int n = 0; n < VoxelBlock::kVoxelCount; ++n)
       if (const Voxel& v = b->voxel(n); v.weight > 0) {
         ASSERT_TRUE(v.r == 77 && v.g == 77 && v.b == 77);
@@ -285,7 +285,7 @@ TEST(MapperProperties, DeferredMeshingEqualsMeshingEveryFrameAndABatchRebuild) {
   EXPECT_GT(pass.blocks_changed, 100u);
   EXPECT_EQ(pass.mesh.changed.size(), deferred.mesh().submeshes().size());
   EXPECT_EQ(deferred.blocksAwaitingMesh(), 0u);
-  EXPECT_TRUE(snapshot(deferred.map()) == snapshot(every_frame.map()));
+  EXPECT_TRUE(snapshot(deferred.tsdf()) == snapshot(every_frame.tsdf()));
   EXPECT_TRUE(triangleSets(deferred.mesh()) == triangleSets(every_frame.mesh()));
   expectMeshEqualsRebuild(deferred);
   const MeshPass idle = deferred.updateMesh();

@@ -43,7 +43,7 @@ sim::AnalyticScene torusScene() {
 /// those blocks had only been seen from far away.
 void forgetFineLevels(const Mapper& mapper,
                       const std::function<int(const BlockKey&)>& coarse_level) {
-  for (VoxelBlock* b : mapper.map().blocks()) {
+  for (VoxelBlock* b : mapper.tsdf().blocks()) {
     const int keep_from = coarse_level(b->key);
     for (int level = 0; level < keep_from; ++level) b->releaseLevel(level);
   }
@@ -66,7 +66,7 @@ Topology fusedTopology(const char* name, const sim::AnalyticScene& scene,
   MeshingParams params{kVoxel, truncation_vox, 1e-6};
   params.fill_faces_from_coarser_levels = fill_seams;
   MeshStore store(params);
-  store.rebuild(mapper->map(), &pool);
+  store.rebuild(mapper->tsdf(), &pool);
   std::set<int> levels;
   for (const auto& [key, sub] : store.submeshes()) levels.insert(sub.level);
   EXPECT_EQ(levels, expected_levels) << name;
@@ -164,7 +164,7 @@ TEST(BlockMesher, SphereVerticesAndNormalsAreAccurate) {
   auto mapper = fuseViews(sphereScene(), viewsAround(kCentre, 1.0, 40));
   ThreadPool pool(2);
   MeshStore store(meshingParams());
-  store.rebuild(mapper->map(), &pool);
+  store.rebuild(mapper->tsdf(), &pool);
   const TriangleMesh mesh = weldSubmeshes(store.submeshes());
   ASSERT_GT(mesh.positions.size(), 1000u);
   std::vector<double> distance_vox, angle_deg;
@@ -199,7 +199,7 @@ TEST(BlockMesher, SkipsUnobservedCellsAndEmptySpace) {
   const Topology t = topology(mesh);
   EXPECT_GT(t.boundary_edges, 0u);  // an open sheet: its rim is a boundary
   EXPECT_EQ(t.overused_edges, 0u);
-  EXPECT_LT(mapper.mesh().submeshes().size(), mapper.map().blockCount());
+  EXPECT_LT(mapper.mesh().submeshes().size(), mapper.tsdf().blockCount());
 }
 
 TEST(BlockMesher, IncrementalEqualsBatchAfterRandomPartialViews) {
@@ -225,7 +225,7 @@ TEST(BlockMesher, IncrementalEqualsBatchAfterRandomPartialViews) {
   ThreadPool pool(2);
   MeshStore batch(MeshingParams{config.voxel_size_m, config.truncation_vox,
                                 config.mesh_level_min_coverage, config.mesh_fill_seams});
-  batch.rebuild(mapper.map(), &pool);
+  batch.rebuild(mapper.tsdf(), &pool);
   ASSERT_GT(batch.triangleCount(), 1000u);
   EXPECT_EQ(mapper.mesh().triangleCount(), batch.triangleCount());
   EXPECT_TRUE(triangleSets(mapper.mesh()) == triangleSets(batch))
@@ -250,11 +250,11 @@ TEST(BlockMesher, RemeshingTouchesExactlyTheOwnersOfTheUpdatedBlocks) {
     for (int dz = 0; dz <= 1; ++dz)
       for (int dy = 0; dy <= 1; ++dy)
         for (int dx = 0; dx <= 1; ++dx)
-          if (mapper.map().find(k.offset(-dx, -dy, -dz)))
+          if (mapper.tsdf().find(k.offset(-dx, -dy, -dz)))
             expected.insert({k.x - dx, k.y - dy, k.z - dz});
   EXPECT_EQ(r.mesh.blocks_meshed, expected.size());
   EXPECT_GT(expected.size(), r.updated_blocks.size());
-  EXPECT_LT(r.mesh.blocks_meshed, mapper.map().blockCount() + 1);
+  EXPECT_LT(r.mesh.blocks_meshed, mapper.tsdf().blockCount() + 1);
   for (const BlockKey& k : r.mesh.changed) EXPECT_TRUE(expected.count({k.x, k.y, k.z}));
   for (const BlockKey& k : r.mesh.removed) EXPECT_TRUE(expected.count({k.x, k.y, k.z}));
   // Each owner once, in key order (the parallel claims must not take one twice).

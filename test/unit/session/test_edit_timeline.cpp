@@ -47,8 +47,8 @@ TEST(EditTimeline, RefusingTheKeptFramesEqualsFusingThemAtTheirCorrectedPoses) {
     f.T_world_camera = correction.corrected(f.timestamp_s, f.T_world_camera);
     ASSERT_TRUE(reference.integrate(f).accepted);
   }
-  EXPECT_TRUE(snapshot(refused->map()) == snapshot(reference.map()));
-  EXPECT_FALSE(snapshot(refused->map()) == snapshot(live.map()))
+  EXPECT_TRUE(snapshot(refused->tsdf()) == snapshot(reference.tsdf()));
+  EXPECT_FALSE(snapshot(refused->tsdf()) == snapshot(live.tsdf()))
       << "the correction must move the map";
   EXPECT_TRUE(triangleSets(refused->mesh()) == triangleSets(reference.mesh()));
   expectMeshEqualsRebuild(*refused);
@@ -92,7 +92,7 @@ TEST(EditTimeline, FramesThatLeftStayWhereTheBaseFusedThem) {
     if (i >= kFrames - 3) f.T_world_camera = correction.corrected(f.timestamp_s, f.T_world_camera);
     ASSERT_TRUE(reference.integrate(f).accepted);
   }
-  EXPECT_TRUE(snapshot(refused->map()) == snapshot(reference.map()));
+  EXPECT_TRUE(snapshot(refused->tsdf()) == snapshot(reference.tsdf()));
 }
 
 TEST(EditTimeline, ACorrectionKnownWhenAFrameLeavesIsAppliedToIt) {
@@ -114,7 +114,7 @@ TEST(EditTimeline, ACorrectionKnownWhenAFrameLeavesIsAppliedToIt) {
   const std::unique_ptr<Mapper> base =
       mapperFromBase(config, timeline.snapshot().base_bytes, &error);
   ASSERT_TRUE(base) << error;
-  EXPECT_TRUE(snapshot(base->map()) == snapshot(reference.map()));
+  EXPECT_TRUE(snapshot(base->tsdf()) == snapshot(reference.tsdf()));
 }
 
 TEST(EditTimeline, NothingIsKeptWithZeroFramesAndACancelledReplayStopsAtOnce) {
@@ -135,7 +135,7 @@ TEST(EditTimeline, NothingIsKeptWithZeroFramesAndACancelledReplayStopsAtOnce) {
                 [] { return true; }, &progress, &error),
             RefusionStatus::kCancelled);
   EXPECT_EQ(progress.frames, 0u);
-  EXPECT_EQ(map.map().blockCount(), 0u);
+  EXPECT_EQ(map.tsdf().blockCount(), 0u);
 }
 
 TEST(EditReplay, AFrameFromBeforeAClearIsClearedAgainAndTheClearSettlesOnANewerFrame) {
@@ -147,7 +147,7 @@ TEST(EditReplay, AFrameFromBeforeAClearIsClearedAgainAndTheClearSettlesOnANewerF
                   .result.accepted);
   ASSERT_GT(replay.clear(&map, clearEdit(ball, 3, 10.0), MeshTiming::kNow).voxels_cleared, 0u);
   EXPECT_EQ(replay.pending().size(), 1u);
-  const MapSnapshot cleared = snapshot(map.map());
+  const MapSnapshot cleared = snapshot(map.tsdf());
   // Ticket 2 arrived before the clear (ticket 3): it saw the ball as it was, and is cleared again.
   const StereoFrame late = driftingFrame(1);  // stamped 2 s, before the clear's 10 s
   EXPECT_TRUE(replay.frame(&map, late, frameEdit(late, 2), MeshTiming::kNow).recleared);
@@ -165,7 +165,7 @@ TEST(EditReplay, AFrameFromBeforeAClearIsClearedAgainAndTheClearSettlesOnANewerF
   EXPECT_TRUE(refill.result.accepted);
   EXPECT_FALSE(refill.recleared);
   EXPECT_TRUE(replay.pending().empty());
-  EXPECT_FALSE(snapshot(map.map()) == cleared);
+  EXPECT_FALSE(snapshot(map.tsdf()) == cleared);
   // An invalid region is refused by the map and not kept.
   EXPECT_FALSE(
       replay.clear(&map, clearEdit(MapRegion::sphere({0, 0, 0}, -1.0), 6, 12.0), MeshTiming::kNow)
@@ -194,8 +194,8 @@ TEST(EditTimeline, AClearComesBackInTheOrderTheLiveMapSawIt) {
   }
   ASSERT_EQ(timeline.clears(), 1u);
   // Re-fused at the original poses, the replay is the live map, bit for bit.
-  EXPECT_TRUE(snapshot(refuseSnapshot(config, timeline, PoseCorrection())->map()) ==
-              snapshot(live.map()));
+  EXPECT_TRUE(snapshot(refuseSnapshot(config, timeline, PoseCorrection())->tsdf()) ==
+              snapshot(live.tsdf()));
   const PoseCorrection correction(timeline.originalPoses(), keyframes(), frames.back().timestamp_s);
   const std::unique_ptr<Mapper> refused = refuseSnapshot(config, timeline, correction);
   Mapper reference(config);
@@ -207,14 +207,14 @@ TEST(EditTimeline, AClearComesBackInTheOrderTheLiveMapSawIt) {
     f.T_world_camera = correction.corrected(f.timestamp_s, f.T_world_camera);
     ASSERT_TRUE(reference.integrate(f).accepted);
   }
-  EXPECT_TRUE(snapshot(refused->map()) == snapshot(reference.map()));
+  EXPECT_TRUE(snapshot(refused->tsdf()) == snapshot(reference.tsdf()));
   Mapper forgetful(
       config);  // without the clear the maps differ: the test sees a replay that drops it
   for (StereoFrame f : frames) {
     f.T_world_camera = correction.corrected(f.timestamp_s, f.T_world_camera);
     ASSERT_TRUE(forgetful.integrate(f).accepted);
   }
-  EXPECT_FALSE(snapshot(forgetful.map()) == snapshot(reference.map()));
+  EXPECT_FALSE(snapshot(forgetful.tsdf()) == snapshot(reference.tsdf()));
   // Once every frame before the clear has left, the clear has gone into the base too.
   for (int i = 0; i < 100; ++i) {
     StereoFrame f = driftingFrame(i % kFrames);
@@ -275,7 +275,7 @@ TEST(EditTimeline, ALoadedMapBecomesTheBaseTheNewFramesAreRefusedOver) {
     f.T_world_camera = correction.corrected(f.timestamp_s, f.T_world_camera);
     ASSERT_TRUE(reference.integrate(f).accepted);
   }
-  EXPECT_TRUE(snapshot(refused->map()) == snapshot(reference.map()));
+  EXPECT_TRUE(snapshot(refused->tsdf()) == snapshot(reference.tsdf()));
   // A broken base is reported, and the timeline starts empty.
   bytes.resize(bytes.size() / 2);
   EXPECT_FALSE(timeline.clear(bytes, &error));

@@ -33,7 +33,7 @@ bool waitFor(const std::function<bool()>& done, double seconds) {
 }
 
 MapSnapshot mapOf(MappingSession& session) {
-  return session.read([](const Mapper& m) { return snapshot(m.map()); });
+  return session.read([](const Mapper& m) { return snapshot(m.tsdf()); });
 }
 
 }  // namespace
@@ -87,7 +87,7 @@ TEST(MappingSession, FramesFromBeforeAResetOrALoadAreSupersededAndCounted) {
   EXPECT_EQ(session.fuse(driftingFrame(1), before_reset, MeshTiming::kNow).reason,
             RejectReason::kSuperseded);
   EXPECT_EQ(session.drops()[RejectReason::kSuperseded], 1u);
-  EXPECT_EQ(session.read([](const Mapper& m) { return m.map().blockCount(); }), 0u);
+  EXPECT_EQ(session.read([](const Mapper& m) { return m.tsdf().blockCount(); }), 0u);
   EXPECT_EQ(session.kept().frames, 0u);
 
   const FrameTicket before_load = session.arrive();
@@ -140,7 +140,7 @@ TEST(MappingSession, ACorrectionSwapsInTheMapOfTheKeptFramesAtTheirCorrectedPose
     f.T_world_camera = correction.corrected(f.timestamp_s, f.T_world_camera);
     ASSERT_TRUE(reference.integrate(f).accepted);
   }
-  EXPECT_TRUE(mapOf(session) == snapshot(reference.map()));
+  EXPECT_TRUE(mapOf(session) == snapshot(reference.tsdf()));
   session.read([&](const Mapper& m) {
     EXPECT_TRUE(triangleSets(m.mesh()) == triangleSets(reference.mesh()));
   });
@@ -202,7 +202,7 @@ TEST(MappingSession, AResetDropsAWaitingTrajectoryAndCountsIt) {
   // Whatever it reached, the map after the reset holds nothing from before it.
   ASSERT_TRUE(waitFor([&] { return !session.correcting(); }, 60.0));
   if (t[TrajectoryOutcome::kApplied] == 0)
-    EXPECT_EQ(session.read([](const Mapper& m) { return m.map().blockCount(); }), 0u);
+    EXPECT_EQ(session.read([](const Mapper& m) { return m.tsdf().blockCount(); }), 0u);
 }
 
 TEST(MappingSession, ACatchUpReplaysAClearAndTheFramesAfterItInTheirOrder) {
@@ -235,12 +235,12 @@ TEST(MappingSession, ACatchUpReplaysAClearAndTheFramesAfterItInTheirOrder) {
     if (i == 4) ASSERT_TRUE(live.clearRegion(kBall, MeshTiming::kDeferred).accepted);
     ASSERT_TRUE(live.integrate(frames[i], MeshTiming::kDeferred).accepted);
   }
-  EXPECT_TRUE(snapshot(rebuilt->map()) == snapshot(live.map()));
+  EXPECT_TRUE(snapshot(rebuilt->tsdf()) == snapshot(live.tsdf()));
   Mapper clears_last(config);  // what the catch-up did before: the frames, then the clears
   for (int i = 0; i < kFrames; ++i)
     ASSERT_TRUE(clears_last.integrate(frames[i], MeshTiming::kDeferred).accepted);
   ASSERT_TRUE(clears_last.clearRegion(kBall, MeshTiming::kDeferred).accepted);
-  EXPECT_FALSE(snapshot(clears_last.map()) == snapshot(live.map()));
+  EXPECT_FALSE(snapshot(clears_last.tsdf()) == snapshot(live.tsdf()));
 }
 
 TEST(MappingSession, NoClearIsLostToABoundAndTooManyPendingClearsAreRefusedNotDropped) {
@@ -277,7 +277,7 @@ TEST(MappingSession, NoClearIsLostToABoundAndTooManyPendingClearsAreRefusedNotDr
     f.T_world_camera = correction.corrected(f.timestamp_s, f.T_world_camera);
     ASSERT_TRUE(reference.integrate(f, MeshTiming::kDeferred).accepted);
   }
-  EXPECT_TRUE(mapOf(session) == snapshot(reference.map()));
+  EXPECT_TRUE(mapOf(session) == snapshot(reference.tsdf()));
 
   // Clears a later frame may predate wait in the session: past kMaxPendingClears the next one
   // is refused (counted), never silently forgotten.
