@@ -89,7 +89,7 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
 void Mapper::applyEdit(const StereoFrame& frame, IntegrationResult* result) {
   Timer insert_timer;
   voxel_bytes_ += edit_.level_bytes_allocated;
-  result->updated_blocks = edit_.updated;
+  result->updated_blocks.swap(edit_.updated);
   map_changes_.recordUpdated(result->updated_blocks);
   // The blocks the frame created join the map now, in key order (allocation kept apart from the
   // update: only blocks that hold an update are ever allocated), each reported as it is placed,

@@ -54,7 +54,7 @@ class PlanningLayer final : public MapLayer {
   void adopt(const BlockOctree& map, const MapFileInfo& info) override;
 
   const PlanningMap& map() const { return map_; }
-  /// The last frame's free space and the time recording it took.
+  /// What recording the last frame's free space did.
   const FreeSpaceStats& frameFreeSpace() const { return frame_free_space_; }
 
  private:
