@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "stereo_fusion/map/RegionClearing.h"
+#include "stereo_fusion/paging/BlockPage.h"
 #include "stereo_fusion/util/Timer.h"
 
 namespace stereo_fusion {
@@ -31,6 +32,7 @@ Mapper::Mapper(const MapperConfig& config)
       octree_(config_.blockSizeM()),
       pipeline_(stages_.pipeline, &pool_),
       eviction_consumer_(map_changes_.subscribe("eviction")) {
+  if (stages_.paging.enabled()) openStore();
   mesh_ = &addLayer(std::make_unique<MeshLayer>(stages_.mesh, &pool_));
   if (stages_.planning_enabled)
     planning_ = &addLayer(std::make_unique<PlanningLayer>(stages_.planning, &pool_));
@@ -38,6 +40,7 @@ Mapper::Mapper(const MapperConfig& config)
 
 void Mapper::registerLayer(std::unique_ptr<MapLayer> layer) {
   const BlockChangeLog::Consumer consumer = map_changes_.subscribe(layer->name());
+  pageInAll();
   if (octree_.blockCount() > 0) layer->rebuild(octree_);  // the map so far
   layers_.push_back(LayerSlot{std::move(layer), consumer});
 }
@@ -48,9 +51,7 @@ BlockChangeLog::Consumer Mapper::consumerOf(const MapLayer& layer) const {
   throw std::logic_error(std::string("layer '") + layer.name() + "' is not registered");
 }
 
-void Mapper::updateLayer(MapLayer& layer) {
-  layer.update(octree_, map_changes_.take(consumerOf(layer)));
-}
+void Mapper::updateLayer(MapLayer& layer) { layer.update(octree_, takeChanges(consumerOf(layer))); }
 
 const char* mapperStageName(MapperStage stage) {
   switch (stage) {
@@ -73,15 +74,29 @@ const char* mapperStageName(MapperStage stage) {
 IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_timing) {
   StageScope stage(monitor_, MapperStage::kValidate);
   IntegrationResult result;
+  if (store_) {
+    const Timer timer;
+    const uint64_t before = paging_stats_.blocks_paged_in;
+    pageInReach(frame);
+    result.blocks_paged_in = paging_stats_.blocks_paged_in - before;
+    result.paging_ms = result.page_in_ms = timer.elapsedMs();
+  }
   if (!pipeline_.run(frame, &octree_, &stage, &result, &edit_)) return result;
   ++frames_integrated_;
   stage.enter(MapperStage::kFusion);
   applyEdit(frame, &result);
   tellLayers(frame, &stage, &result);
   if (mesh_timing == MeshTiming::kNow) {
-    MeshPass pass = updateMesh();
+    MeshPass pass = meshPass();
     result.mesh = std::move(pass.mesh);
     result.texture = pass.texture;
+  }
+  if (store_) {
+    const Timer timer;
+    const uint64_t before = paging_stats_.blocks_paged_out;
+    pageOutOverCap();
+    result.blocks_paged_out = paging_stats_.blocks_paged_out - before;
+    result.paging_ms += timer.elapsedMs();
   }
   return result;
 }
@@ -112,9 +127,11 @@ void Mapper::applyEdit(const StereoFrame& frame, IntegrationResult* result) {
   StageScope stage(monitor_, MapperStage::kEviction);
   eviction_.recordUpdates(octree_, map_changes_.take(eviction_consumer_).updated,
                           frames_integrated_);
-  result->evicted_blocks =
-      eviction_.select(octree_, frame.T_world_camera.translation(), stages_.eviction);
+  result->evicted_blocks = eviction_.select(octree_, frame.T_world_camera.translation(),
+                                            stages_.eviction, store_ ? &paged_ : nullptr);
   if (result->evicted_blocks.empty()) return;
+  // Evicted blocks leave as from memory, and the mesh re-meshes around them.
+  pageInAround(result->evicted_blocks);
   for (const BlockKey& key : result->evicted_blocks)
     if (const VoxelBlock* block = octree_.find(key)) voxel_bytes_ -= block->voxelBytes();
   blocks_evicted_ += octree_.erase(result->evicted_blocks);
@@ -140,7 +157,7 @@ void Mapper::tellLayers(const StereoFrame& frame, StageScope* stage, Integration
     if (!slot.layer->catchesUpItself() || map_changes_.pending(slot.consumer) <= bound) continue;
     StageScope layer_stage(monitor_, MapperStage::kPlanning);
     Timer timer;
-    slot.layer->update(octree_, map_changes_.take(slot.consumer));
+    slot.layer->update(octree_, takeChanges(slot.consumer));
     result->planning_catch_up = true;
     result->planning_catch_up_ms += timer.elapsedMs();
   }
@@ -149,13 +166,16 @@ void Mapper::tellLayers(const StereoFrame& frame, StageScope* stage, Integration
 PlanningPass Mapper::updatePlanning() {
   StageScope stage(monitor_, MapperStage::kPlanning);
   std::optional<PlanningMap::PendingUpdate> pending = beginPlanningUpdate();
-  return pending ? finishPlanningUpdate(std::move(*pending)) : PlanningPass{};
+  if (!pending) return PlanningPass{};
+  PlanningPass pass = finishPlanningUpdate(std::move(*pending));
+  pageOutOverCap();  // what waited for the planning layer may go now
+  return pass;
 }
 
 std::optional<PlanningMap::PendingUpdate> Mapper::beginPlanningUpdate() {
   if (!planning_) return std::nullopt;
   StageScope stage(monitor_, MapperStage::kPlanning);
-  return planning_->begin(octree_, map_changes_.take(consumerOf(*planning_)));
+  return planning_->begin(octree_, takeChanges(consumerOf(*planning_)));
 }
 
 PlanningPass Mapper::finishPlanningUpdate(
@@ -168,13 +188,20 @@ PlanningPass Mapper::finishPlanningUpdate(
 PlanningPass Mapper::rebuildPlanning() {
   if (!planning_) return PlanningPass{};
   StageScope stage(monitor_, MapperStage::kPlanning);
+  pageInAll();
   map_changes_.take(consumerOf(*planning_));  // the rebuild covers them
   return planning_->rebuildTimed(octree_);
 }
 
 MeshPass Mapper::updateMesh() {
+  MeshPass pass = meshPass();
+  pageOutOverCap();
+  return pass;
+}
+
+MeshPass Mapper::meshPass() {
   StageScope stage(monitor_, MapperStage::kMeshing);
-  return mesh_->updateMesh(octree_, map_changes_.take(consumerOf(*mesh_)), &stage);
+  return mesh_->updateMesh(octree_, takeChanges(consumerOf(*mesh_)), &stage);
 }
 
 size_t Mapper::blocksAwaitingMesh() const { return map_changes_.pending(consumerOf(*mesh_)); }
@@ -193,6 +220,7 @@ GridWindow Mapper::occupancyGridWindow() const {
 
 MeshChanges Mapper::rebuildMesh() {
   StageScope stage(monitor_, MapperStage::kMeshing);
+  pageInAll();
   map_changes_.take(consumerOf(*mesh_));  // the rebuild covers them
   return mesh_->rebuildMesh(octree_);
 }
@@ -205,9 +233,31 @@ bool Mapper::saveMap(const std::string& path, std::string* error) const {
 std::vector<uint8_t> Mapper::encodeMap() const {
   MapFileInfo sections;
   for (const LayerSlot& slot : layers_) slot.layer->encode(&sections);
+  // Paged-out blocks are read back for the file, beside those in memory, in key order.
+  std::vector<std::unique_ptr<VoxelBlock>> paged_blocks;
+  std::unordered_map<BlockKey, uint64_t, BlockKeyHash> paged_frames;
+  std::vector<uint8_t> page;
+  for (const BlockKey& key : paged_.sortedKeys()) {
+    std::string error;
+    uint64_t frame = 0;
+    if (!readPage(key, &page)) continue;
+    ByteReader reader(page.data(), page.size());
+    std::unique_ptr<VoxelBlock> block = readPageHead(&reader, key, &frame, &error);
+    if (!block) continue;
+    paged_frames[key] = frame;
+    paged_blocks.push_back(std::move(block));
+  }
+  const std::vector<VoxelBlock*> resident = octree_.blocksSortedByKey();
+  std::vector<const VoxelBlock*> blocks(resident.begin(), resident.end());
+  for (const auto& block : paged_blocks) blocks.push_back(block.get());
+  std::inplace_merge(blocks.begin(), blocks.begin() + resident.size(), blocks.end(),
+                     [](const VoxelBlock* a, const VoxelBlock* b) { return a->key < b->key; });
   return encodeMapFileUnsealed(
-      octree_, config_, frames_integrated_,
-      [this](const VoxelBlock& block) { return eviction_.lastUpdateFrame(block); },
+      blocks, config_, frames_integrated_,
+      [&](const VoxelBlock& block) {
+        return block.row == VoxelBlock::kNoRow ? paged_frames.at(block.key)
+                                               : eviction_.lastUpdateFrame(block);
+      },
       sections.free_space);
 }
 
@@ -223,6 +273,7 @@ bool Mapper::loadMap(const std::string& path, MeshChanges* changes, std::string*
 
 MeshChanges Mapper::adoptMap(BlockOctree* loaded, const MapFileInfo& info) {
   StageScope stage(monitor_, MapperStage::kLoad);
+  forgetPages();
   octree_.swap(*loaded);
   map_changes_.clear();
   // Later frames must count on from the saved ones, so the eviction order is kept.
@@ -237,6 +288,7 @@ MeshChanges Mapper::adoptMap(BlockOctree* loaded, const MapFileInfo& info) {
   pipeline_.forget();
   voxel_bytes_ = octree_.memoryUse().voxelBytes();
   for (LayerSlot& slot : layers_) slot.layer->adopt(octree_, info);
+  pageOutOverCap();
   return mesh_->adopted();
 }
 
@@ -247,6 +299,18 @@ ClearResult Mapper::clearRegion(const MapRegion& region, MeshTiming mesh_timing)
   if (!result.error.empty()) return result;
   result.accepted = true;
   Timer timer;
+  // The paged-out blocks the clear changes or re-meshes around (within one block) come back.
+  if (!paged_.empty()) {
+    const double b = octree_.blockSize();
+    std::vector<BlockKey> keys;
+    paged_.collect(
+        [&](const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+          return region.intersects(Eigen::AlignedBox3d((lo - Eigen::Vector3d::Ones()) * b,
+                                                       (hi + Eigen::Vector3d::Ones()) * b));
+        },
+        &keys);
+    pageIn(keys);
+  }
   // What the layers keep of the region beside the TSDF goes now (the planning layer's
   // seen-free cells); their TSDF-derived part follows through the map log.
   for (LayerSlot& slot : layers_) slot.layer->clearRegion(region);
@@ -270,6 +334,7 @@ ClearResult Mapper::clearRegion(const MapRegion& region, MeshTiming mesh_timing)
 }
 
 void Mapper::reset() {
+  forgetPages();
   octree_.clear();
   voxel_bytes_ = 0;
   eviction_.clear();

@@ -231,6 +231,20 @@ const Table& table() {
                 "camera are evicted and their submeshes removed. 0 = unlimited; "
                 "otherwise at least max_depth_m.",
                 member(&MapperConfig::max_distance_from_camera_m));
+    t.addDouble("max_map_memory_mb", "MB", 0.0, true, 1e9,
+                "Memory cap of the map (all layers: TSDF, mesh, textures, planning). Beyond it "
+                "the blocks least likely to be needed (not updated for longest, then farthest "
+                "from the camera) are paged out to the block store with their submeshes and "
+                "texture patches, and paged back in before a frame, a mesh pass or a clear "
+                "reaches them: every output is byte-identical to an uncapped run. The planning "
+                "layer stays in memory (it counts towards the cap). Keep it above a frame's "
+                "working set (the blocks within max_depth_m in view). 0 = unlimited, no store.",
+                member(&MapperConfig::max_map_memory_mb));
+    t.addString("map_store_path", true, "a folder; empty: the temporary folder",
+                "Where max_map_memory_mb pages blocks to: a folder that gets one SQLite file per "
+                "map (pages-<pid>-<n>.sqlite, removed when the map is). Put it on a disk with "
+                "room for the whole map (~2-7 KB a block).",
+                member(&MapperConfig::map_store_path));
     // The frame gate's rule, stated where it is documented (FrameGate::kFramesToReanchor).
     const std::string reanchor_frames = std::to_string(FrameGate::kFramesToReanchor);
     t.addDouble("max_pose_jump_m", "m", 0.0, true, 1e6,

@@ -90,6 +90,16 @@ PlanningLayerConfig planningConfig(const MapperConfig& config) {
   c.max_distance_from_camera_m = config.max_distance_from_camera_m;
   return c;
 }
+
+PagingConfig pagingConfig(const MapperConfig& config) {
+  PagingConfig c;
+  c.max_map_memory_bytes = static_cast<size_t>(config.max_map_memory_mb * 1024.0 * 1024.0);
+  c.store_path = config.map_store_path;
+  c.voxel_size_m = config.voxel_size_m;
+  c.truncation_vox = config.truncation_vox;
+  c.frame_reach_m = config.max_depth_m + config.truncationBand().maxM();
+  return c;
+}
 }  // namespace
 
 StageConfigs stageConfigs(const MapperConfig& config) {
@@ -100,6 +110,7 @@ StageConfigs stageConfigs(const MapperConfig& config) {
   c.mesh = meshConfig(config);
   c.planning_enabled = config.planning_enabled;
   c.planning = planningConfig(config);
+  c.paging = pagingConfig(config);
   return c;
 }
 

@@ -5,7 +5,7 @@
 # a tool without that build failing.
 #
 # The includer sets STEREO_FUSION_ROOT (the repository) and STEREO_FUSION_CORE_TESTS, and has found
-# Eigen3, OpenCV (core imgproc imgcodecs calib3d), yaml-cpp, Threads and ZLIB; with the tests also GTest
+# Eigen3, OpenCV (core imgproc imgcodecs calib3d), yaml-cpp, Threads, ZLIB and SQLite3; with the tests also GTest
 # and include(GoogleTest).
 #
 #   stereo_fusion_core         the library
@@ -20,6 +20,11 @@ add_library(stereo_fusion_core STATIC
   ${STEREO_FUSION_ROOT}/src/ParameterTable.cpp
   ${STEREO_FUSION_ROOT}/src/MapperConfig.cpp
   ${STEREO_FUSION_ROOT}/src/Mapper.cpp
+  ${STEREO_FUSION_ROOT}/src/MapperPaging.cpp
+  ${STEREO_FUSION_ROOT}/src/paging/BlockPage.cpp
+  ${STEREO_FUSION_ROOT}/src/paging/BlockStore.cpp
+  ${STEREO_FUSION_ROOT}/src/paging/FrameReach.cpp
+  ${STEREO_FUSION_ROOT}/src/paging/PagedBlocks.cpp
   ${STEREO_FUSION_ROOT}/src/StageConfigs.cpp
   ${STEREO_FUSION_ROOT}/src/layers/MeshLayer.cpp
   ${STEREO_FUSION_ROOT}/src/layers/PlanningLayer.cpp
@@ -94,7 +99,7 @@ target_include_directories(stereo_fusion_core PUBLIC ${STEREO_FUSION_ROOT}/inclu
                                                      ${OpenCV_INCLUDE_DIRS})
 # The OpenCV modules the core uses (the includer may have found more for the tools).
 target_link_libraries(stereo_fusion_core PUBLIC opencv_core opencv_imgproc opencv_imgcodecs opencv_calib3d yaml-cpp
-                                                Threads::Threads ZLIB::ZLIB)
+                                                Threads::Threads ZLIB::ZLIB SQLite::SQLite3)
 
 # Analytic scenes and ray casting: ground truth for tests, the simulator and the evaluator.
 add_library(stereo_fusion_sim STATIC ${STEREO_FUSION_ROOT}/tools/simulator/AnalyticScene.cpp)
@@ -103,7 +108,7 @@ target_link_libraries(stereo_fusion_sim PUBLIC stereo_fusion_core)
 
 # The core's unit tests: one gtest binary (one link, parallel compile); every test case is its own
 # ctest entry so the summary counts cases. The helpers (TestSupport.h, ...) are in test/unit/.
-set(STEREO_FUSION_CORE_TEST_FOLDERS camera map integration mesh io util mapper trajectory planning session layers)
+set(STEREO_FUSION_CORE_TEST_FOLDERS camera map integration mesh io util mapper trajectory planning session layers paging)
 if(STEREO_FUSION_CORE_TESTS)
   set(_core_test_globs)
   foreach(folder ${STEREO_FUSION_CORE_TEST_FOLDERS})

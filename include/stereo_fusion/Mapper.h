@@ -19,6 +19,9 @@
 #include "stereo_fusion/map/BlockOctree.h"
 #include "stereo_fusion/map/EvictionPolicy.h"
 #include "stereo_fusion/map/MapRegion.h"
+#include "stereo_fusion/paging/BlockStore.h"
+#include "stereo_fusion/paging/PagedBlocks.h"
+#include "stereo_fusion/paging/PagingConfig.h"
 #include "stereo_fusion/planning/OccupancyGrid2D.h"
 #include "stereo_fusion/util/ThreadPool.h"
 
@@ -89,8 +92,15 @@ class Mapper {
   /// The incrementally maintained mesh, one submesh per block (current as of the last
   /// updateMesh()).
   const MeshStore& mesh() const { return mesh_->store(); }
-  /// The whole mesh, submeshes welded into one (for export).
-  TriangleMesh extractMesh() const { return weldSubmeshes(mesh_->store().submeshes()); }
+  /// The whole mesh, submeshes welded into one (for export), paged-out blocks' included.
+  TriangleMesh extractMesh() const;
+  /// The submeshes and texture patches of the paged-out blocks, read back from the block store
+  /// (empty without paging): with mesh().submeshes() and textures().patches(), the whole mesh.
+  struct PagedMeshParts {
+    std::unordered_map<BlockKey, SubMesh, BlockKeyHash> submeshes;
+    std::unordered_map<BlockKey, TexturePatch, BlockKeyHash> patches;
+  };
+  PagedMeshParts pagedMeshParts() const;
   /// Re-meshes every block from scratch (also what a disabled incremental mesher catches up with).
   MeshChanges rebuildMesh();
   /// Texture patches of the submeshes (empty unless texture = patches).
@@ -158,6 +168,13 @@ class Mapper {
   /// for this mapper's config() (`loaded` then holds the old map), and re-meshes it. A caller
   /// holding a lock around the map can so read the file before taking it.
   MeshChanges adoptMap(BlockOctree* loaded, const MapFileInfo& info);
+  /// Paging (max_map_memory_mb): what it did since the map was made, reset or loaded.
+  const PagingStats& pagingStats() const { return paging_stats_; }
+  /// Blocks paged out now (in the block store, not in memory): tsdf() holds the others.
+  size_t pagedOutBlocks() const { return paged_.size(); }
+  /// Bytes every layer holds in memory (the TSDF, the mesh and its textures, the planning
+  /// layer): what max_map_memory_mb caps. O(1) but for the textures.
+  size_t mapMemoryBytes() const;
   /// Reports every operation's stage into `monitor` (nullptr: none) for a watchdog on another
   /// thread; the caller keeps it alive while this Mapper works.
   void setStageMonitor(StageMonitor* monitor) { monitor_ = monitor; }
@@ -171,8 +188,41 @@ class Mapper {
   BlockChangeLog::Consumer consumerOf(const MapLayer& layer) const;
   /// The frame's new blocks join the map, its changes the log; then the memory bound.
   void applyEdit(const StereoFrame& frame, IntegrationResult* result);
+  /// updateMesh() without the page-out that follows it.
+  MeshPass meshPass();
   /// The layers' per-frame hooks, and the update of any layer whose changes piled up.
   void tellLayers(const StereoFrame& frame, StageScope* stage, IntegrationResult* result);
+
+  // Paging (MapperPaging.cpp): every block within one block of a change a layer has not taken
+  // is in memory when the layer takes it (the mesh's and the mesh consumers' stay in memory;
+  // a lagging layer's may be paged out and come back before its update), so a layer's update
+  // never meets a paged-out block; a frame, an eviction or a clear first brings back the
+  // blocks it can reach.
+  /// Opens the block store (with max_map_memory_mb).
+  void openStore();
+  /// The paged-out blocks `frame` can change or mesh around (FrameReach) come back.
+  void pageInReach(const StereoFrame& frame);
+  /// The paged-out blocks within one block of `keys` come back.
+  void pageInAround(const std::vector<BlockKey>& keys);
+  void pageInAll();
+  /// Brings back the paged-out blocks of `keys` (sorted; keys not paged out are skipped).
+  void pageIn(const std::vector<BlockKey>& keys);
+  /// Over max_map_memory_mb, pages out the blocks that leave first (leavesFirst()) that no
+  /// layer's pending change reaches, down to kHysteresis below the cap.
+  void pageOutOverCap();
+  /// The blocks a page-out of `to_free` bytes takes, in leavesFirst() order, with their last
+  /// update frames; returns the bytes they free (less than asked when too many must stay).
+  /// `keep_lagging`: also keep what a layer that catches up itself has not taken.
+  size_t selectPageOut(size_t to_free, bool keep_lagging, std::vector<BlockKey>* keys,
+                       std::vector<uint64_t>* frames) const;
+  /// The changes `consumer` has not taken, once every block within one block of them is back.
+  BlockChangeLog::Changes takeChanges(BlockChangeLog::Consumer consumer);
+  /// The page of a paged-out block, read without bringing it back; false when unreadable.
+  bool readPage(const BlockKey& key, std::vector<uint8_t>* page) const;
+  /// Counts a page that cannot be read back (its block is lost).
+  void pageLost(const BlockKey& key, const std::string& why);
+  /// Drops every page (reset, load).
+  void forgetPages();
 
   const MapperConfig config_;
   const StageConfigs stages_;
@@ -193,6 +243,9 @@ class Mapper {
   uint64_t frames_integrated_ = 0;
   uint64_t blocks_evicted_ = 0;
   StageMonitor* monitor_ = nullptr;
+  std::unique_ptr<BlockStore> store_;  // with max_map_memory_mb only
+  PagedBlocks paged_;
+  PagingStats paging_stats_;
 };
 
 }  // namespace stereo_fusion

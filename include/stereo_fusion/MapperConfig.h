@@ -92,6 +92,9 @@ struct MapperConfig {
                                          ///< map is rejected before fusion. 0 = no limit.
   double max_distance_from_camera_m =
       0.0;  ///< Blocks whose centre is farther from the current camera are evicted. 0 = unlimited.
+  double max_map_memory_mb = 0.0;  ///< Beyond it blocks are paged out to map_store_path, not
+                                   ///< lost. 0 = unlimited (no paging).
+  std::string map_store_path;      ///< Folder of the block store; empty: the temporary folder.
   double max_pose_jump_m = 100.0;  ///< A camera more than this from the last fused frame's camera
                                    ///< is rejected. 0 = no check.
   double max_timestamp_gap_s = 3600.0;  ///< A timestamp more than this after the last fused frame's

@@ -22,6 +22,12 @@ struct IntegrationResult : FrameStageStats {
   /// included in nothing else.
   double free_space_ms = 0.0;
   FreeSpaceStats free_space;
+  /// Paging (max_map_memory_mb): bringing back the blocks the frame reaches before it, and
+  /// paging out what exceeds the cap after it; included in nothing else.
+  double paging_ms = 0.0;
+  double page_in_ms = 0.0;  ///< the part of paging_ms before the frame
+  uint64_t blocks_paged_in = 0;
+  uint64_t blocks_paged_out = 0;
   /// A layer (the planning layer) was updated after this frame because its changes had piled
   /// up (kMaxPendingLayerChanges), taking planning_catch_up_ms.
   bool planning_catch_up = false;

@@ -4,6 +4,7 @@
 #include "stereo_fusion/layers/MeshLayer.h"
 #include "stereo_fusion/layers/PlanningLayer.h"
 #include "stereo_fusion/map/EvictionPolicy.h"
+#include "stereo_fusion/paging/PagingConfig.h"
 
 namespace stereo_fusion {
 
@@ -16,6 +17,7 @@ struct StageConfigs {
   MeshLayerConfig mesh;
   bool planning_enabled = MapperConfig{}.planning_enabled;
   PlanningLayerConfig planning;
+  PagingConfig paging;  ///< the map host's pages beyond max_map_memory_mb
 };
 
 /// Every stage's config from a (validated) MapperConfig.

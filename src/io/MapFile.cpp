@@ -135,10 +135,18 @@ std::vector<uint8_t> encodeMapFileUnsealed(const BlockOctree& map, const MapperC
                                            uint64_t frames_integrated,
                                            const LastUpdateFrameOf& last_update_frame,
                                            const SeenFreeSpace& free_space) {
+  const std::vector<VoxelBlock*> sorted = map.blocksSortedByKey();
+  return encodeMapFileUnsealed(std::vector<const VoxelBlock*>(sorted.begin(), sorted.end()), config,
+                               frames_integrated, last_update_frame, free_space);
+}
+
+std::vector<uint8_t> encodeMapFileUnsealed(const std::vector<const VoxelBlock*>& blocks,
+                                           const MapperConfig& config, uint64_t frames_integrated,
+                                           const LastUpdateFrameOf& last_update_frame,
+                                           const SeenFreeSpace& free_space) {
   static_assert(kMapFileV1RecordBytes ==
                     kMapFileRecordHeadBytes + VoxelBlock::kVoxelCount * kVoxelRecordBytes,
                 "record layout");
-  const std::vector<VoxelBlock*> blocks = map.blocksSortedByKey();
   size_t payload_bytes = 0;
   for (const VoxelBlock* b : blocks)
     payload_bytes += kMapFileRecordHeadBytes + levelBytes(levelMask(*b));

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "stereo_fusion/paging/BlockPage.h"
+
 namespace stereo_fusion {
 
 MeshLayer::MeshLayer(const MeshLayerConfig& config, ThreadPool* pool)
@@ -74,6 +76,47 @@ void MeshLayer::adopt(const BlockOctree& map, const MapFileInfo& info) {
     store_.clear();
   }
   skipTextures();
+}
+
+void MeshLayer::pageOut(const BlockKey& key, ByteWriter* page) {
+  const std::optional<SubMesh> mesh = store_.detach(key);
+  const std::optional<TexturePatch> patch = textures_.detach(key);
+  page->put<uint8_t>(mesh.has_value());
+  if (mesh) writeSubMesh(*mesh, page);
+  page->put<uint8_t>(patch.has_value());
+  if (patch) writeTexturePatch(*patch, page);
+}
+
+bool MeshLayer::pageIn(const BlockOctree& map, const VoxelBlock& block, ByteReader* page) {
+  std::optional<SubMesh> mesh;
+  if (page->get<uint8_t>()) {
+    mesh.emplace();
+    if (!readSubMesh(page, &*mesh) || mesh->key != block.key) return false;
+  }
+  std::optional<TexturePatch> patch;
+  if (page->get<uint8_t>()) {
+    patch.emplace();
+    if (!readTexturePatch(page, &*patch)) return false;
+  }
+  if (!page->ok()) return false;
+  store_.attach(map, block, std::move(mesh));
+  if (patch) textures_.attach(block.key, std::move(*patch));
+  return true;
+}
+
+bool MeshLayer::pagedParts(ByteReader* part, SubMesh* mesh, TexturePatch* patch) {
+  if (part->get<uint8_t>() && !readSubMesh(part, mesh)) return false;
+  if (part->get<uint8_t>() && !readTexturePatch(part, patch)) return false;
+  return part->ok();
+}
+
+size_t MeshLayer::blockBytes(const BlockKey& key) const {
+  size_t bytes = 0;
+  const auto mesh = store_.submeshes().find(key);
+  if (mesh != store_.submeshes().end()) bytes += MeshStore::submeshBytes(mesh->second);
+  if (const TexturePatch* patch = textures_.find(key))
+    bytes += patch->memoryBytes() + sizeof(TexturePatch);
+  return bytes;
 }
 
 void MeshLayer::record(const MeshChanges& changes) {

@@ -28,6 +28,15 @@ BlockChangeLog::Changes BlockChangeLog::take(Consumer consumer) {
   return changes;
 }
 
+void BlockChangeLog::appendPending(std::vector<BlockKey>* out) const {
+  for (const ConsumerLog& consumer : consumers_)
+    for (const Event& event : consumer.events) out->push_back(event.key);
+}
+
+void BlockChangeLog::appendPending(Consumer consumer, std::vector<BlockKey>* out) const {
+  for (const Event& event : consumers_[consumer].events) out->push_back(event.key);
+}
+
 void BlockChangeLog::clear() {
   for (ConsumerLog& consumer : consumers_) consumer.events.clear();
 }

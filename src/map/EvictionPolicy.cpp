@@ -21,36 +21,31 @@ void EvictionPolicy::setLastUpdateFrame(const BlockOctree& map, const VoxelBlock
 
 std::vector<BlockKey> EvictionPolicy::select(const BlockOctree& map,
                                              const Eigen::Vector3d& camera_position_m,
-                                             const EvictionLimits& limits) const {
+                                             const EvictionLimits& limits,
+                                             const PagedBlocks* paged) const {
   std::vector<BlockKey> evict;
+  const size_t paged_count = paged ? paged->size() : 0;
+  const size_t total = map.blockCount() + paged_count;
   const bool by_distance = limits.max_distance_from_camera_m > 0.0;
-  const bool by_budget = limits.max_blocks > 0 && map.blockCount() > limits.max_blocks;
+  const bool by_budget = limits.max_blocks > 0 && total > limits.max_blocks;
   if (!by_distance && !by_budget) return evict;
 
-  struct Candidate {
-    uint64_t last_update_frame;
-    double distance_m;
-    BlockKey key;
-  };
-  std::vector<Candidate> keep;
-  keep.reserve(map.blockCount());
+  std::vector<LeaveCandidate> keep;
+  keep.reserve(total);
   const Eigen::Vector3d half_block = Eigen::Vector3d::Constant(0.5 * map.blockSize());
-  for (const VoxelBlock* block : map.blocks()) {
-    const double distance_m = (map.blockOrigin(block->key) + half_block - camera_position_m).norm();
+  auto consider = [&](const BlockKey& key, uint64_t last_update_frame) {
+    const double distance_m = (map.blockOrigin(key) + half_block - camera_position_m).norm();
     if (by_distance && distance_m > limits.max_distance_from_camera_m)
-      evict.push_back(block->key);
+      evict.push_back(key);
     else
-      keep.push_back({lastUpdateFrame(*block), distance_m, block->key});
-  }
+      keep.push_back({last_update_frame, distance_m, key});
+  };
+  for (const VoxelBlock* block : map.blocks()) consider(block->key, lastUpdateFrame(*block));
+  if (paged)
+    for (const auto& [key, last_update_frame] : paged->entries()) consider(key, last_update_frame);
   if (limits.max_blocks > 0 && keep.size() > limits.max_blocks) {
     const size_t excess = keep.size() - limits.max_blocks;
-    auto older = [](const Candidate& a, const Candidate& b) {
-      if (a.last_update_frame != b.last_update_frame)
-        return a.last_update_frame < b.last_update_frame;
-      if (a.distance_m != b.distance_m) return a.distance_m > b.distance_m;
-      return a.key < b.key;
-    };
-    std::nth_element(keep.begin(), keep.begin() + (excess - 1), keep.end(), older);
+    std::nth_element(keep.begin(), keep.begin() + (excess - 1), keep.end(), leavesFirst);
     for (size_t i = 0; i < excess; ++i) evict.push_back(keep[i].key);
   }
   std::sort(evict.begin(), evict.end());

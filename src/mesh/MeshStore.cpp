@@ -134,12 +134,16 @@ MeshChanges MeshStore::remesh(const BlockOctree& map, const std::vector<Owner>& 
   // pool's threads made the pass slower (malloc's arenas contend).
   enum : uint8_t { kWasKept = 1, kMeshed = 2 };
   std::vector<uint8_t> outcome(owners.size(), 0);
+  std::vector<int64_t> bytes_delta(owners.size(), 0);
   pool->parallelFor(owners.size(), 64, [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i) {
       outcome[i] = remeshed[i].empty() ? 0 : kMeshed;
+      const int64_t meshed_bytes = remeshed[i].empty() ? 0 : submeshBytes(remeshed[i]);
+      bytes_delta[i] = meshed_bytes;
       const auto it = meshes_.find(owners[i].key);
       if (it == meshes_.end()) continue;
       outcome[i] |= kWasKept;
+      bytes_delta[i] -= static_cast<int64_t>(submeshBytes(it->second));
       if (outcome[i] & kMeshed) std::swap(it->second, remeshed[i]);
     }
   });
@@ -147,6 +151,7 @@ MeshChanges MeshStore::remesh(const BlockOctree& map, const std::vector<Owner>& 
   update.blocks_meshed = owners.size();
   for (size_t i = 0; i < owners.size(); ++i) {
     const BlockKey& key = owners[i].key;
+    submesh_bytes_ += bytes_delta[i];
     if (outcome[i] & kMeshed) {
       if (!(outcome[i] & kWasKept)) meshes_.emplace(key, std::move(remeshed[i]));
       update.changed.push_back(key);
@@ -203,7 +208,7 @@ MeshChanges MeshStore::remeshAround(const BlockOctree& map, std::vector<const Vo
   MeshChanges changes = remesh(map, ownersOf(map, present, absent, &owner_claims_, pool), pool);
   if (erased.empty()) return changes;
   for (const BlockKey& key : erased_absent)
-    if (meshes_.erase(key) > 0) changes.removed.push_back(key);
+    if (detach(key)) changes.removed.push_back(key);
   std::sort(changes.removed.begin(), changes.removed.end());
   return changes;
 }
@@ -222,7 +227,7 @@ MeshChanges MeshStore::rebuild(const BlockOctree& map, ThreadPool* pool) {
     if (map.find(key) == nullptr) stale.push_back(key);
   MeshChanges update = remesh(map, all, pool);
   for (const BlockKey& key : stale) {
-    meshes_.erase(key);
+    detach(key);
     update.removed.push_back(key);
   }
   std::sort(update.removed.begin(), update.removed.end());
@@ -235,20 +240,43 @@ size_t MeshStore::triangleCount() const {
   return n;
 }
 
-size_t MeshStore::memoryBytes() const {
-  size_t n = 0;
-  for (const auto& [key, mesh] : meshes_)
-    n += sizeof(std::pair<const BlockKey, SubMesh>) + 2 * sizeof(void*) +  // table entry
+size_t MeshStore::submeshBytes(const SubMesh& mesh) {
+  return sizeof(std::pair<const BlockKey, SubMesh>) + 2 * sizeof(void*) +  // table entry
          mesh.positions.capacity() * sizeof(mesh.positions[0]) +
          mesh.normals.capacity() * sizeof(mesh.normals[0]) +
          mesh.colors.capacity() * sizeof(mesh.colors[0]) +
          mesh.triangles.capacity() * sizeof(mesh.triangles[0]);
-  return n + meshes_.bucket_count() * sizeof(void*);
+}
+
+size_t MeshStore::memoryBytes() const {
+  return static_cast<size_t>(submesh_bytes_) + meshes_.bucket_count() * sizeof(void*);
+}
+
+std::optional<SubMesh> MeshStore::detach(const BlockKey& key) {
+  const auto it = meshes_.find(key);
+  if (it == meshes_.end()) return std::nullopt;
+  submesh_bytes_ -= static_cast<int64_t>(submeshBytes(it->second));
+  std::optional<SubMesh> mesh(std::move(it->second));
+  meshes_.erase(it);
+  return mesh;
+}
+
+void MeshStore::attach(const BlockOctree& map, const VoxelBlock& block,
+                       std::optional<SubMesh> mesh) {
+  states_.fit(map);
+  refreshMeshLevel(block, params_, &states_[block]);
+  if (!mesh) return;
+  submesh_bytes_ += static_cast<int64_t>(submeshBytes(*mesh));
+  meshes_[block.key] = std::move(*mesh);
 }
 
 TriangleMesh weldSubmeshes(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes) {
   std::vector<const SubMesh*> ordered;
   for (const auto& [key, mesh] : submeshes) ordered.push_back(&mesh);
+  return weldSubmeshes(std::move(ordered));
+}
+
+TriangleMesh weldSubmeshes(std::vector<const SubMesh*> ordered) {
   std::sort(ordered.begin(), ordered.end(),
             [](const SubMesh* a, const SubMesh* b) { return a->key < b->key; });
   // Every vertex of every submesh in that order, by its position's bits: sorted, equal bits

@@ -264,6 +264,14 @@ const TexturePatch* TextureStore::find(const BlockKey& key) const {
   return it == patches_.end() ? nullptr : &it->second;
 }
 
+std::optional<TexturePatch> TextureStore::detach(const BlockKey& key) {
+  const auto it = patches_.find(key);
+  if (it == patches_.end()) return std::nullopt;
+  std::optional<TexturePatch> patch(std::move(it->second));
+  patches_.erase(it);
+  return patch;
+}
+
 size_t TextureStore::memoryBytes() const {
   size_t bytes = 0;
   for (const auto& [key, patch] : patches_) bytes += patch.memoryBytes() + sizeof(TexturePatch);

@@ -35,6 +35,8 @@ FrameStats frameStats(const IntegrationResult& r, bool meshed) {
   t.free_space_ms = r.free_space_ms;
   t.contradiction_ms = r.contradiction_ms;
   t.free_space_nodes = static_cast<double>(r.free_space.nodes_visited);
+  t.paging_ms = r.paging_ms;
+  t.page_in_ms = r.page_in_ms;
   s.work = {static_cast<double>(r.lookup.valid_points),
             static_cast<double>(r.lookup.octree_searches),
             static_cast<double>(r.lookup.blocks_queued),

@@ -257,6 +257,9 @@ bool applyTrajectory(const FuseOptions& options, const std::vector<StampedPose>&
 /// The figures of the map at the end: blocks, memory, the dense grid it saves, mesh levels.
 void mapFigures(const Mapper& mapper, FuseReport* report) {
   report->blocks = mapper.tsdf().blockCount();
+  report->paged_out_blocks = mapper.pagedOutBlocks();
+  report->map_memory_bytes = mapper.mapMemoryBytes();
+  report->paging = mapper.pagingStats();
   report->blocks_evicted = mapper.blocksEvicted();
   report->memory_bytes = mapper.tsdf().memoryBytes();
   report->bytes_per_block = mapper.tsdf().bytesPerBlock();
@@ -303,9 +306,12 @@ bool writeOutputs(const FuseOptions& options, MapAccess& access, FuseReport* rep
   mapFigures(mapper, report);
   if (options.config.texture == TextureMode::kPatches) {
     ObjExportInfo info;
-    if (!writeTexturedObj((fs::path(options.out_dir) / "mesh.obj").string(),
-                          mapper.mesh().submeshes(), mapper.textures().patches(),
-                          ObjExportOptions{}, &info, error))
+    // A paged map's submeshes and patches are read back beside those in memory.
+    Mapper::PagedMeshParts all = mapper.pagedMeshParts();
+    all.submeshes.insert(mapper.mesh().submeshes().begin(), mapper.mesh().submeshes().end());
+    all.patches.insert(mapper.textures().patches().begin(), mapper.textures().patches().end());
+    if (!writeTexturedObj((fs::path(options.out_dir) / "mesh.obj").string(), all.submeshes,
+                          all.patches, ObjExportOptions{}, &info, error))
       return false;
     report->atlas_count = info.files.size() - 2;  // besides the .obj and the .mtl
   }

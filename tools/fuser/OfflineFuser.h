@@ -10,6 +10,7 @@
 #include "stereo_fusion/integration/OutlierRejection.h"
 #include "stereo_fusion/map/BlockOctree.h"
 #include "stereo_fusion/ros/BagSequence.h"
+#include "stereo_fusion/paging/PagingConfig.h"
 #include "stereo_fusion/session/FrameStats.h"
 
 namespace stereo_fusion {
@@ -67,7 +68,10 @@ struct FuseReport {
   std::vector<std::string> skipped_examples;  ///< the first few messages, verbatim
   std::vector<StageTimings> timings;          ///< one per used frame
   std::vector<StageWork> work;                ///< one per used frame
-  size_t blocks = 0;
+  size_t blocks = 0;            ///< in memory at the end (paged-out ones in `paged_out_blocks`)
+  size_t paged_out_blocks = 0;  ///< in the block store at the end (max_map_memory_mb)
+  size_t map_memory_bytes = 0;  ///< every layer in memory at the end (Mapper::mapMemoryBytes())
+  PagingStats paging;
   size_t blocks_loaded = 0;     ///< blocks of the --load-map file
   uint64_t blocks_evicted = 0;  ///< by the memory bound (max_blocks, max_distance_from_camera_m)
   size_t blocks_per_level[3] = {0, 0, 0};  ///< by the level each block is meshed at

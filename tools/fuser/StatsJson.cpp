@@ -97,6 +97,30 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   j["timings_ms"]["meshing"] = stage(&StageTimings::meshing_ms, true);
   j["timings_ms"]["texture"] = stage(&StageTimings::texture_ms, true);
   j["timings_ms"]["free_space"] = stage(&StageTimings::free_space_ms, false);
+  j["timings_ms"]["paging"] = stage(&StageTimings::paging_ms, false);
+  {
+    std::vector<double> page_ins;  // the frames that brought blocks back
+    for (const StageTimings& t : report.timings)
+      if (t.page_in_ms > 0.0) page_ins.push_back(t.page_in_ms);
+    const Summary s = summarize(page_ins);
+    j["timings_ms"]["page_in"] = {
+        {"mean", s.mean}, {"p50", s.p50}, {"p99", s.p99}, {"per", "frame that paged in"}};
+  }
+  const PagingStats& paging = report.paging;
+  j["paging"]["max_map_memory_mb"] = config.max_map_memory_mb;
+  j["paging"]["map_memory_megabytes"] = report.map_memory_bytes / 1048576.0;
+  j["paging"]["blocks_paged_out_now"] = report.paged_out_blocks;
+  j["paging"]["blocks_paged_out"] = paging.blocks_paged_out;
+  j["paging"]["blocks_paged_in"] = paging.blocks_paged_in;
+  j["paging"]["page_out_passes"] = paging.page_out_passes;
+  j["paging"]["megabytes_written"] = paging.bytes_written / 1048576.0;
+  j["paging"]["megabytes_read"] = paging.bytes_read / 1048576.0;
+  j["paging"]["page_out_ms"] = paging.page_out_ms;
+  j["paging"]["page_in_ms"] = paging.page_in_ms;
+  j["paging"]["page_in_max_ms"] = paging.page_in_max_ms;
+  j["paging"]["pages_unreadable"] = paging.pages_unreadable;
+  j["paging"]["stopped"] = paging.stopped;
+  j["paging"]["error"] = paging.error;
   {
     // Over the frames after which the planning layer was updated.
     auto overUpdates = [&](double StageTimings::*field) {

@@ -83,6 +83,11 @@ std::vector<uint8_t> encodeMapFileUnsealed(const BlockOctree& map, const MapperC
                                            uint64_t frames_integrated,
                                            const LastUpdateFrameOf& last_update_frame = {},
                                            const SeenFreeSpace& free_space = {});
+/// The same for `blocks`, sorted by key (a paged map's: some in an octree, some read back).
+std::vector<uint8_t> encodeMapFileUnsealed(const std::vector<const VoxelBlock*>& blocks,
+                                           const MapperConfig& config, uint64_t frames_integrated,
+                                           const LastUpdateFrameOf& last_update_frame = {},
+                                           const SeenFreeSpace& free_space = {});
 /// Fills in both checksums of bytes from encodeMapFileUnsealed() (again, on sealed bytes: the
 /// same values).
 void sealMapFile(std::vector<uint8_t>* file);

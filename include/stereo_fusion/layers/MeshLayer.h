@@ -50,6 +50,19 @@ class MeshLayer final : public MapLayer {
   void reset() override;
   /// The loaded map's mesh (the file holds no patches: it starts with vertex colours).
   void adopt(const BlockOctree& map, const MapFileInfo& info) override;
+  /// The block's submesh and texture patch go with its page; its mesher state is refreshed
+  /// from its voxels when it comes back.
+  void pageOut(const BlockKey& key, ByteWriter* page) override;
+  bool pageIn(const BlockOctree& map, const VoxelBlock& block, ByteReader* page) override;
+  /// The submesh and patch a page's mesh part holds (left empty where it has none); false when
+  /// it is unreadable.
+  static bool pagedParts(ByteReader* part, SubMesh* mesh, TexturePatch* patch);
+  /// Bytes the layer holds for `key` (its submesh and patch): what paging it out frees.
+  size_t blockBytes(const BlockKey& key) const;
+  /// Bytes of the submeshes and patches.
+  size_t memoryBytes() const {
+    return store_.memoryBytes() + (texture_consumer_ ? textures_.memoryBytes() : 0);
+  }
   /// The caller meshes at its own cadence (Mapper::blocksAwaitingMesh()).
   bool catchesUpItself() const override { return false; }
 
@@ -64,6 +77,8 @@ class MeshLayer final : public MapLayer {
     return changes_.take(consumer);
   }
   size_t pending(BlockChangeLog::Consumer consumer) const { return changes_.pending(consumer); }
+  /// The submeshes some consumer has not taken the change of yet (they must stay readable).
+  void appendPendingMeshChanges(std::vector<BlockKey>* out) const { changes_.appendPending(out); }
 
  private:
   void record(const MeshChanges& changes);

@@ -40,6 +40,10 @@ class BlockChangeLog {
   Changes take(Consumer consumer);
   /// Changes recorded for `consumer` and not taken yet (a key recorded twice counts twice).
   size_t pending(Consumer consumer) const { return consumers_[consumer].events.size(); }
+  /// Appends the keys every consumer has not taken yet (unsorted, repeated as recorded).
+  void appendPending(std::vector<BlockKey>* out) const;
+  /// The same for one consumer.
+  void appendPending(Consumer consumer, std::vector<BlockKey>* out) const;
   /// Forgets every pending change of every consumer (after a reset or a loaded map, which
   /// consumers rebuild from scratch).
   void clear();

@@ -1,4 +1,5 @@
 #pragma once
+#include <optional>
 #include <unordered_map>
 #include <vector>
 
@@ -44,9 +45,19 @@ class MeshStore {
   size_t memoryBytes() const;
   void clear() {
     meshes_.clear();
+    submesh_bytes_ = 0;
     states_.clear();
     seam_fills_.clear();
   }
+
+  /// Paging: takes the submesh of `key` out of the store (nullopt when it has none), as if the
+  /// block had never been meshed; nothing is reported (the mesh did not change).
+  std::optional<SubMesh> detach(const BlockKey& key);
+  /// Paging: `block`, back in `map`, gets its mesher state again (refreshed from its voxels, as
+  /// it was when it left) and its submesh `mesh` (nullopt: it had none).
+  void attach(const BlockOctree& map, const VoxelBlock& block, std::optional<SubMesh> mesh);
+  /// The bytes memoryBytes() counts for one kept submesh (its arrays and its table entry).
+  static size_t submeshBytes(const SubMesh& mesh);
 
   /// The owners a change of `updated` must re-mesh (existing blocks only), sorted by key.
   /// The searches for `updated` run on `pool` when given; their owners are then reached through
@@ -95,13 +106,16 @@ class MeshStore {
       states_;  // the mesher's per-block cache, refreshed for every block before it is meshed
   SeamFills seam_fills_;  // during a pass: the face-filled copies its owners read, then freed
   std::unordered_map<BlockKey, SubMesh, BlockKeyHash> meshes_;
-  PassClaims owner_claims_;  // ownersOf()'s de-duplication, reused pass after pass
-  PassClaims fill_claims_;   // remesh(): each seam-filled neighbour filled once per pass
+  int64_t submesh_bytes_ = 0;  // submeshBytes() of every kept submesh: memoryBytes() in O(1)
+  PassClaims owner_claims_;    // ownersOf()'s de-duplication, reused pass after pass
+  PassClaims fill_claims_;     // remesh(): each seam-filled neighbour filled once per pass
 };
 
 /// All submeshes as one mesh, vertices shared between submeshes welded (they are computed
 /// bit-identically on both sides of a seam); welded normals are averaged. Deterministic:
 /// blocks are taken in key order.
 TriangleMesh weldSubmeshes(const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>& submeshes);
+/// The same over submeshes held elsewhere (a paged map's: some in memory, some read back).
+TriangleMesh weldSubmeshes(std::vector<const SubMesh*> submeshes);
 
 }  // namespace stereo_fusion

@@ -1,4 +1,5 @@
 #pragma once
+#include <optional>
 // Texture patches of the submeshes (thesis §3.6 method B), kept beside MeshStore and updated
 // after each meshing pass from the frame that was just fused.
 
@@ -73,6 +74,9 @@ class TextureStore {
   /// Bytes held by all patches.
   size_t memoryBytes() const;
   void clear() { patches_.clear(); }
+  /// Paging: takes the patch of `key` out (nullopt: it has none); attach() puts one back.
+  std::optional<TexturePatch> detach(const BlockKey& key);
+  void attach(const BlockKey& key, TexturePatch patch) { patches_[key] = std::move(patch); }
 
  private:
   TextureParams params_;

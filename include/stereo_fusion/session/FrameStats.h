@@ -24,6 +24,9 @@ struct StageTimings {
   double esdf_read_ms = 0, esdf_propagate_ms = 0, esdf_transit_ms = 0, esdf_tsdf_blocks = 0,
          esdf_flipped = 0, esdf_raised = 0, esdf_lowered = 0, esdf_transit_blocks = 0;
   double free_space_nodes = 0;  ///< octree nodes the free-space recording tested
+  /// Paging (max_map_memory_mb): before the frame (page-in) and after it (page-out), and the
+  /// page-in alone.
+  double paging_ms = 0, page_in_ms = 0;
 
   /// Lookup, fusion and carving (fusion with carving: the frame's update of the map).
   double mapUpdateMs() const { return lookup_ms + fusion_ms + carve_ms; }

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <yaml-cpp/yaml.h>
 
 #include "stereo_fusion/MapperConfig.h"
@@ -229,6 +231,8 @@ TEST(Config, StageConfigsReachEveryStage) {
   c.esdf_max_distance_m = 3.0;
   c.occupancy_min_weight = 1.5;
   c.free_space_unmeasured_range_m = 2.0;
+  c.max_map_memory_mb = 1.5;
+  c.map_store_path = "/var/tmp/pages";
   const StageConfigs s = stageConfigs(c);
   EXPECT_EQ(s.pipeline.block_size_m, 8 * 0.03);
   EXPECT_EQ(s.pipeline.measurement.min_depth_m, 0.3);
@@ -271,6 +275,11 @@ TEST(Config, StageConfigsReachEveryStage) {
   EXPECT_EQ(s.planning.planning.min_weight, 1.5f);
   EXPECT_EQ(s.planning.planning.unmeasured_range_m, 2.0);
   EXPECT_EQ(s.planning.max_distance_from_camera_m, 12.0);
+  EXPECT_EQ(s.paging.max_map_memory_bytes, 1572864u);  // 1.5 · 2^20
+  EXPECT_EQ(s.paging.store_path, "/var/tmp/pages");
+  EXPECT_EQ(s.paging.voxel_size_m, 0.03);
+  // max_depth_m + the widest band: max(truncation_vox, 2) · 4 · voxel.
+  EXPECT_DOUBLE_EQ(s.paging.frame_reach_m, 6.5 + std::max(c.truncation_vox, 2.0) * 4 * 0.03);
 }
 
 // The table behind both registries (mapping and node parameters): every type, the messages

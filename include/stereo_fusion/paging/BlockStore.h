@@ -1,0 +1,72 @@
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "stereo_fusion/map/BlockKey.h"
+
+struct sqlite3;
+struct sqlite3_stmt;
+
+namespace stereo_fusion {
+
+/// What a store was made for: a store of another voxel grid is refused at open.
+struct BlockStoreIdentity {
+  double voxel_size_m = 0.0;
+  double truncation_vox = 0.0;
+};
+
+/// The embedded store paged-out blocks live in: one SQLite database file (WAL journal), a page
+/// (paging/BlockPage) per block key. SQLite was chosen by measurement (doc/design.md, "Paging"):
+/// its reads go through a bounded page cache, so the process's RSS does not grow with the
+/// store as it does with a memory-mapped store, a transaction is all or nothing after a kill,
+/// and it starts no thread of its own.
+///
+/// Each write() is one transaction. Not thread-safe: the Mapper calls it under its map lock.
+class BlockStore {
+ public:
+  /// Opens the database `file` (created, with its folder, if missing). A file that is not a
+  /// stereo_fusion block store, or one made for another voxel grid, is refused with a sentence
+  /// in `error` (nullptr returned); so is a folder that cannot be created or written.
+  static std::unique_ptr<BlockStore> open(const std::string& file,
+                                          const BlockStoreIdentity& identity, std::string* error);
+  /// A store of its own for one map in `folder` (empty: the temporary folder), named
+  /// pages-<pid>-<n>.sqlite, removed (with its journal) when the store is destroyed.
+  static std::unique_ptr<BlockStore> openPrivate(const std::string& folder,
+                                                 const BlockStoreIdentity& identity,
+                                                 std::string* error);
+  ~BlockStore();
+  BlockStore(const BlockStore&) = delete;
+  BlockStore& operator=(const BlockStore&) = delete;
+
+  const std::string& file() const { return file_; }
+  /// Writes (or replaces) the pages of `keys` in one transaction: all of them or, on an error
+  /// (a full disk), none.
+  bool write(const std::vector<BlockKey>& keys, const std::vector<std::vector<uint8_t>>& pages,
+             std::string* error);
+  /// The page of `key` into `page`. False with `error` empty when the store has none, with a
+  /// sentence when it cannot be read.
+  bool read(const BlockKey& key, std::vector<uint8_t>* page, std::string* error);
+  /// Removes the pages of `keys` (missing ones are ignored), in one transaction.
+  bool erase(const std::vector<BlockKey>& keys, std::string* error);
+  /// Removes every page.
+  bool clear(std::string* error);
+  /// Every key with a page, sorted.
+  bool keys(std::vector<BlockKey>* out, std::string* error);
+
+ private:
+  BlockStore() = default;
+  bool execute(const char* sql, std::string* error);
+  bool prepare(const char* sql, sqlite3_stmt** statement, std::string* error);
+  std::string failure(const std::string& what) const;
+
+  std::string file_;
+  bool remove_on_close_ = false;
+  sqlite3* db_ = nullptr;
+  sqlite3_stmt* insert_ = nullptr;
+  sqlite3_stmt* select_ = nullptr;
+  sqlite3_stmt* delete_ = nullptr;
+};
+
+}  // namespace stereo_fusion

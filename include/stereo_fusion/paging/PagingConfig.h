@@ -1,0 +1,38 @@
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+namespace stereo_fusion {
+
+/// What the map host's paging reads (from the parameter table: StageConfigs).
+struct PagingConfig {
+  size_t max_map_memory_bytes = 0;  ///< max_map_memory_mb; 0: no paging, no store
+  std::string store_path;           ///< map_store_path; empty: the temporary folder
+  double voxel_size_m = 0.0;        ///< the store's identity
+  double truncation_vox = 0.0;
+  double frame_reach_m = 0.0;  ///< max_depth_m + the widest band: how far a frame changes the map
+  bool enabled() const { return max_map_memory_bytes > 0; }
+  /// A page-out pass frees this share of the cap beyond the excess, so passes are not one a frame.
+  static constexpr double kHysteresis = 0.1;
+};
+
+/// What paging did since the map was made (or reset, or loaded).
+struct PagingStats {
+  uint64_t blocks_paged_out = 0;
+  uint64_t blocks_paged_in = 0;
+  uint64_t page_out_passes = 0;
+  uint64_t bytes_written = 0;
+  uint64_t bytes_read = 0;
+  /// Pages that could not be read back (a corrupted store): those blocks are lost, each counted.
+  uint64_t pages_unreadable = 0;
+  double page_out_ms = 0.0;
+  double page_in_ms = 0.0;
+  /// The longest single page-in pass (all the blocks one frame or operation brought back).
+  double page_in_max_ms = 0.0;
+  /// The store refused a write (a full disk): paging stopped, the map stays in memory whole.
+  bool stopped = false;
+  std::string error;  ///< why paging stopped or a page was lost; empty when neither happened
+};
+
+}  // namespace stereo_fusion

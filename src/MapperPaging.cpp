@@ -1,0 +1,270 @@
+// The map host's paging (max_map_memory_mb): blocks beyond the cap go to the BlockStore with
+// their layers' parts and come back before anything reaches them. See Mapper.h for the invariant.
+#include <algorithm>
+#include <stdexcept>
+#include <unordered_set>
+
+#include "stereo_fusion/Mapper.h"
+#include "stereo_fusion/paging/BlockPage.h"
+#include "stereo_fusion/paging/FrameReach.h"
+#include "stereo_fusion/util/Timer.h"
+
+namespace stereo_fusion {
+
+void Mapper::openStore() {
+  const PagingConfig& paging = stages_.paging;
+  std::string error;
+  store_ = BlockStore::openPrivate(
+      paging.store_path, BlockStoreIdentity{paging.voxel_size_m, paging.truncation_vox}, &error);
+  if (!store_) throw std::runtime_error("max_map_memory_mb needs a block store: " + error);
+}
+
+size_t Mapper::mapMemoryBytes() const {
+  size_t bytes = memoryBytes() + mesh_->memoryBytes();
+  if (planning_) bytes += planning_->map().freeSpaceBytes() + planning_->map().esdfBytes();
+  return bytes;
+}
+
+void Mapper::pageInReach(const StereoFrame& frame) {
+  if (paged_.empty() || !validateFrame(frame, octree_.blockSize()).empty()) return;
+  const FrameReach reach(frame, stages_.paging.frame_reach_m, octree_.blockSize());
+  std::vector<BlockKey> keys;
+  paged_.collect(
+      [&](const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) { return reach.mayReach(lo, hi); },
+      &keys);
+  pageIn(keys);
+}
+
+void Mapper::pageInAround(const std::vector<BlockKey>& keys) {
+  std::vector<BlockKey> near;
+  paged_.collectAround(keys, &near);
+  pageIn(near);
+}
+
+void Mapper::pageInAll() { pageIn(paged_.sortedKeys()); }
+
+void Mapper::pageLost(const BlockKey& key, const std::string& why) {
+  ++paging_stats_.pages_unreadable;
+  paging_stats_.error = "block (" + std::to_string(key.x) + ", " + std::to_string(key.y) + ", " +
+                        std::to_string(key.z) + ") lost: " + why;
+}
+
+void Mapper::pageIn(const std::vector<BlockKey>& keys) {
+  if (keys.empty() || paged_.empty()) return;
+  Timer timer;
+  std::vector<uint8_t> page;
+  std::vector<BlockKey> lost_in_map;
+  size_t brought = 0;
+  for (const BlockKey& key : keys) {
+    if (!paged_.remove(key)) continue;
+    std::string error;
+    if (!store_->read(key, &page, &error)) {
+      pageLost(key, error.empty() ? "its page is missing from " + store_->file() : error);
+      continue;
+    }
+    paging_stats_.bytes_read += page.size();
+    ByteReader reader(page.data(), page.size());
+    uint64_t last_update_frame = 0;
+    std::unique_ptr<VoxelBlock> block = readPageHead(&reader, key, &last_update_frame, &error);
+    if (!block) {
+      pageLost(key, error);
+      continue;
+    }
+    const size_t block_voxel_bytes = block->voxelBytes();
+    VoxelBlock* placed = octree_.insert(std::move(block));
+    if (placed == nullptr) {  // cannot happen: a paged-out key has no block in memory
+      pageLost(key, "a block of the same key is in memory");
+      continue;
+    }
+    voxel_bytes_ += block_voxel_bytes;
+    eviction_.setLastUpdateFrame(octree_, *placed, last_update_frame);
+    bool layers_read = reader.get<uint32_t>() == layers_.size();
+    for (LayerSlot& slot : layers_) {
+      const uint64_t part_bytes = reader.get<uint64_t>();
+      if (!layers_read || !reader.ok() || part_bytes > reader.remaining()) {
+        layers_read = false;
+        break;
+      }
+      ByteReader part(reader.position(), part_bytes);
+      reader.skip(part_bytes);
+      layers_read = slot.layer->pageIn(octree_, *placed, &part);
+      if (!layers_read) break;
+    }
+    if (!layers_read) {
+      // The voxels came back but not the layers' parts: the block is treated as changed, so
+      // the layers rebuild their part from it.
+      pageLost(key, "its layers' part of the page is unreadable; re-derived from its voxels");
+      map_changes_.recordUpdated({key});
+    }
+    ++brought;
+  }
+  paging_stats_.blocks_paged_in += brought;
+  const double ms = timer.elapsedMs();
+  paging_stats_.page_in_ms += ms;
+  paging_stats_.page_in_max_ms = std::max(paging_stats_.page_in_max_ms, ms);
+}
+
+void Mapper::pageOutOverCap() {
+  if (!store_ || paging_stats_.stopped) return;
+  const size_t cap = stages_.paging.max_map_memory_bytes;
+  const size_t bytes = mapMemoryBytes();
+  if (bytes <= cap) return;
+  Timer timer;
+  const size_t to_free =
+      bytes - cap + static_cast<size_t>(PagingConfig::kHysteresis * static_cast<double>(cap));
+  std::vector<BlockKey> keys;
+  std::vector<uint64_t> frames;
+  // Blocks a lagging layer (the planning layer between its updates) has not caught up with
+  // stay if they can; if not, they go too and come back before its update (takeChanges()).
+  if (selectPageOut(to_free, /*keep_lagging=*/true, &keys, &frames) < to_free)
+    selectPageOut(to_free, /*keep_lagging=*/false, &keys, &frames);
+  // The pages, in key order (neighbours lie together in the store).
+  std::vector<size_t> order(keys.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return keys[a] < keys[b]; });
+  std::vector<BlockKey> sorted_keys;
+  std::vector<std::vector<uint8_t>> pages(keys.size());
+  size_t written = 0;
+  for (size_t n = 0; n < order.size(); ++n) {
+    const size_t i = order[n];
+    sorted_keys.push_back(keys[i]);
+    ByteWriter page(&pages[n]);
+    writePageHead(*octree_.find(keys[i]), frames[i], &page);
+    page.put<uint32_t>(static_cast<uint32_t>(layers_.size()));
+    for (LayerSlot& slot : layers_) {
+      const size_t at = page.size();
+      page.put<uint64_t>(0);
+      slot.layer->pageOut(keys[i], &page);
+      const uint64_t part_bytes = page.size() - at - sizeof(uint64_t);
+      std::memcpy(page.buffer().data() + at, &part_bytes, sizeof(part_bytes));
+    }
+    written += pages[n].size();
+  }
+  std::string error;
+  if (!store_->write(sorted_keys, pages, &error)) {
+    // A full disk: paging stops and the map stays whole in memory (the layers take back what
+    // they gave to the pages).
+    for (size_t n = 0; n < sorted_keys.size(); ++n) {
+      ByteReader reader(pages[n].data(), pages[n].size());
+      skipPageHead(&reader);
+      reader.get<uint32_t>();
+      for (LayerSlot& slot : layers_) {
+        const uint64_t part_bytes = reader.get<uint64_t>();
+        ByteReader part(reader.position(), part_bytes);
+        reader.skip(part_bytes);
+        slot.layer->pageIn(octree_, *octree_.find(sorted_keys[n]), &part);
+      }
+    }
+    paging_stats_.stopped = true;
+    paging_stats_.error = "paging stopped, the map stays in memory: " + error;
+    return;
+  }
+  for (size_t n = 0; n < sorted_keys.size(); ++n) {
+    voxel_bytes_ -= octree_.find(sorted_keys[n])->voxelBytes();
+    paged_.add(sorted_keys[n], frames[order[n]]);
+  }
+  octree_.erase(sorted_keys);
+  paging_stats_.blocks_paged_out += sorted_keys.size();
+  paging_stats_.bytes_written += written;
+  ++paging_stats_.page_out_passes;
+  paging_stats_.page_out_ms += timer.elapsedMs();
+}
+
+size_t Mapper::selectPageOut(size_t to_free, bool keep_lagging, std::vector<BlockKey>* keys,
+                             std::vector<uint64_t>* frames) const {
+  keys->clear();
+  frames->clear();
+  // What must stay: every block within one block of a change the mesh has not taken (a caller
+  // meshes when it likes and the mesh pass reads them; with `keep_lagging`, of any layer's
+  // change) and every submesh a consumer of the mesh's changes has not taken.
+  std::vector<BlockKey> pending;
+  for (const LayerSlot& slot : layers_)
+    if (keep_lagging || !slot.layer->catchesUpItself())
+      map_changes_.appendPending(slot.consumer, &pending);
+  std::unordered_set<BlockKey, BlockKeyHash> stay;
+  for (const BlockKey& key : pending)
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) stay.insert(key.offset(dx, dy, dz));
+  pending.clear();
+  mesh_->appendPendingMeshChanges(&pending);
+  stay.insert(pending.begin(), pending.end());
+
+  const Eigen::Vector3d camera = lastCameraPositionM().value_or(Eigen::Vector3d::Zero());
+  const Eigen::Vector3d half_block = Eigen::Vector3d::Constant(0.5 * octree_.blockSize());
+  std::vector<LeaveCandidate> candidates;
+  candidates.reserve(octree_.blockCount());
+  for (const VoxelBlock* block : octree_.blocks())
+    if (!stay.count(block->key))
+      candidates.push_back({eviction_.lastUpdateFrame(*block),
+                            (octree_.blockOrigin(block->key) + half_block - camera).norm(),
+                            block->key});
+  std::sort(candidates.begin(), candidates.end(), leavesFirst);
+  size_t freed = 0;
+  for (const LeaveCandidate& c : candidates) {
+    if (freed >= to_free) break;
+    const VoxelBlock* block = octree_.find(c.key);
+    freed += sizeof(VoxelBlock) + block->voxelBytes() + mesh_->blockBytes(c.key);
+    keys->push_back(c.key);
+    frames->push_back(c.last_update_frame);
+  }
+  return freed;
+}
+
+BlockChangeLog::Changes Mapper::takeChanges(BlockChangeLog::Consumer consumer) {
+  if (!paged_.empty()) {
+    std::vector<BlockKey> pending;
+    map_changes_.appendPending(consumer, &pending);
+    std::sort(pending.begin(), pending.end());
+    pending.erase(std::unique(pending.begin(), pending.end()), pending.end());
+    pageInAround(pending);
+  }
+  return map_changes_.take(consumer);
+}
+
+bool Mapper::readPage(const BlockKey& key, std::vector<uint8_t>* page) const {
+  std::string error;
+  return store_->read(key, page, &error);
+}
+
+void Mapper::forgetPages() {
+  paging_stats_ = PagingStats();
+  if (!store_) return;
+  paged_.clear();
+  std::string error;
+  if (!store_->clear(&error)) paging_stats_.error = error;
+}
+
+Mapper::PagedMeshParts Mapper::pagedMeshParts() const {
+  PagedMeshParts parts;
+  if (paged_.empty()) return parts;
+  size_t mesh_slot = 0;
+  while (layers_[mesh_slot].layer.get() != mesh_) ++mesh_slot;
+  std::vector<uint8_t> page;
+  for (const BlockKey& key : paged_.sortedKeys()) {
+    if (!readPage(key, &page)) continue;
+    ByteReader reader(page.data(), page.size());
+    skipPageHead(&reader);
+    reader.get<uint32_t>();
+    for (size_t slot = 0; slot < mesh_slot; ++slot) reader.skip(reader.get<uint64_t>());
+    const uint64_t part_bytes = reader.get<uint64_t>();
+    if (!reader.ok() || part_bytes > reader.remaining()) continue;
+    ByteReader part(reader.position(), part_bytes);
+    SubMesh mesh;
+    TexturePatch patch;
+    if (!MeshLayer::pagedParts(&part, &mesh, &patch)) continue;
+    if (!mesh.empty()) parts.submeshes.emplace(key, std::move(mesh));
+    if (!patch.image_rgb.empty()) parts.patches.emplace(key, std::move(patch));
+  }
+  return parts;
+}
+
+TriangleMesh Mapper::extractMesh() const {
+  std::vector<const SubMesh*> submeshes;
+  for (const auto& [key, mesh] : mesh_->store().submeshes()) submeshes.push_back(&mesh);
+  const PagedMeshParts paged = pagedMeshParts();
+  for (const auto& [key, mesh] : paged.submeshes) submeshes.push_back(&mesh);
+  return weldSubmeshes(std::move(submeshes));
+}
+
+}  // namespace stereo_fusion

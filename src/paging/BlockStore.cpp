@@ -1,0 +1,230 @@
+#include "stereo_fusion/paging/BlockStore.h"
+
+#include <sqlite3.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cstring>
+#include <filesystem>
+#include <system_error>
+
+namespace stereo_fusion {
+
+namespace {
+constexpr const char* kFormat = "stereo_fusion block store 1";
+
+/// Runs `statement` to its end after binding `key` to its first three parameters.
+void bindKey(sqlite3_stmt* statement, const BlockKey& key) {
+  sqlite3_bind_int(statement, 1, key.x);
+  sqlite3_bind_int(statement, 2, key.y);
+  sqlite3_bind_int(statement, 3, key.z);
+}
+
+/// Ends a transaction that failed half-way: nothing of it stays.
+void rollback(sqlite3* db) { sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, nullptr); }
+}  // namespace
+
+std::unique_ptr<BlockStore> BlockStore::open(const std::string& file,
+                                             const BlockStoreIdentity& identity,
+                                             std::string* error) {
+  std::unique_ptr<BlockStore> store(new BlockStore());
+  store->file_ = file;
+  const std::filesystem::path parent = std::filesystem::path(file).parent_path();
+  std::error_code ec;
+  if (!parent.empty()) std::filesystem::create_directories(parent, ec);
+  if (ec) {
+    *error = file + ": cannot create the store's folder (" + ec.message() + ")";
+    return nullptr;
+  }
+  if (sqlite3_open_v2(file.c_str(), &store->db_,
+                      SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_NOMUTEX,
+                      nullptr) != SQLITE_OK) {
+    *error = store->failure("cannot open the block store");
+    return nullptr;
+  }
+  sqlite3_busy_timeout(store->db_, 2000);
+  // WAL: a commit appends to the log, readers see the last commit, and a killed process leaves
+  // the database at its last commit. NORMAL syncs at checkpoints, not at every commit: paged
+  // blocks are a cache of the map in memory until the store is made durable (save).
+  // A file that is not a database fails on its first read: here.
+  if (!store->execute("PRAGMA journal_mode=WAL", error) ||
+      !store->execute("PRAGMA synchronous=NORMAL", error) ||
+      !store->execute("PRAGMA cache_size=-8192", error) ||  // 8 MiB, whatever the store's size
+      !store->execute("CREATE TABLE IF NOT EXISTS meta(name TEXT PRIMARY KEY, value) ", error) ||
+      !store->execute("CREATE TABLE IF NOT EXISTS pages(x INTEGER NOT NULL, y INTEGER NOT NULL, "
+                      "z INTEGER NOT NULL, page BLOB NOT NULL, PRIMARY KEY(x, y, z))",
+                      error)) {
+    *error = file + ": not a stereo_fusion block store, or unreadable (" + *error + ")";
+    return nullptr;
+  }
+  sqlite3_stmt* meta = nullptr;
+  if (!store->prepare("SELECT name, value FROM meta", &meta, error)) return nullptr;
+  std::string format;
+  double voxel = 0.0, truncation = 0.0;
+  int rows = 0;
+  while (sqlite3_step(meta) == SQLITE_ROW) {
+    ++rows;
+    const std::string name = reinterpret_cast<const char*>(sqlite3_column_text(meta, 0));
+    if (name == "format" && sqlite3_column_type(meta, 1) == SQLITE_TEXT)
+      format = reinterpret_cast<const char*>(sqlite3_column_text(meta, 1));
+    if (name == "voxel_size_m") voxel = sqlite3_column_double(meta, 1);
+    if (name == "truncation_vox") truncation = sqlite3_column_double(meta, 1);
+  }
+  sqlite3_finalize(meta);
+  if (rows == 0) {
+    sqlite3_stmt* put = nullptr;
+    if (!store->prepare("INSERT INTO meta(name, value) VALUES ('format', ?1), "
+                        "('voxel_size_m', ?2), ('truncation_vox', ?3)",
+                        &put, error))
+      return nullptr;
+    sqlite3_bind_text(put, 1, kFormat, -1, SQLITE_STATIC);
+    sqlite3_bind_double(put, 2, identity.voxel_size_m);
+    sqlite3_bind_double(put, 3, identity.truncation_vox);
+    const int rc = sqlite3_step(put);
+    sqlite3_finalize(put);
+    if (rc != SQLITE_DONE) {
+      *error = store->failure("cannot write the block store");
+      return nullptr;
+    }
+  } else if (format != kFormat) {
+    *error = file + ": not a stereo_fusion block store (format '" + format + "')";
+    return nullptr;
+  } else if (voxel != identity.voxel_size_m || truncation != identity.truncation_vox) {
+    *error = file + ": the store holds a map of voxel_size_m " + std::to_string(voxel) +
+             ", truncation_vox " + std::to_string(truncation) + ", this mapper uses " +
+             std::to_string(identity.voxel_size_m) + ", " + std::to_string(identity.truncation_vox);
+    return nullptr;
+  }
+  if (!store->prepare("INSERT OR REPLACE INTO pages(x, y, z, page) VALUES (?1, ?2, ?3, ?4)",
+                      &store->insert_, error) ||
+      !store->prepare("SELECT page FROM pages WHERE x = ?1 AND y = ?2 AND z = ?3", &store->select_,
+                      error) ||
+      !store->prepare("DELETE FROM pages WHERE x = ?1 AND y = ?2 AND z = ?3", &store->delete_,
+                      error))
+    return nullptr;
+  return store;
+}
+
+std::unique_ptr<BlockStore> BlockStore::openPrivate(const std::string& folder,
+                                                    const BlockStoreIdentity& identity,
+                                                    std::string* error) {
+  static std::atomic<uint64_t> counter{0};
+  std::error_code ec;
+  const std::filesystem::path dir =
+      folder.empty() ? std::filesystem::temp_directory_path(ec) : std::filesystem::path(folder);
+  const std::string name = "pages-" + std::to_string(::getpid()) + "-" +
+                           std::to_string(counter.fetch_add(1)) + ".sqlite";
+  const std::string file = (dir / name).string();
+  // A file left by an earlier process of the same pid (killed) is not this map's.
+  for (const char* suffix : {"", "-wal", "-shm"}) std::filesystem::remove(file + suffix, ec);
+  std::unique_ptr<BlockStore> store = open(file, identity, error);
+  if (store) store->remove_on_close_ = true;
+  return store;
+}
+
+BlockStore::~BlockStore() {
+  sqlite3_finalize(insert_);
+  sqlite3_finalize(select_);
+  sqlite3_finalize(delete_);
+  if (db_) sqlite3_close_v2(db_);
+  if (!remove_on_close_) return;
+  std::error_code ec;
+  for (const char* suffix : {"", "-wal", "-shm"}) std::filesystem::remove(file_ + suffix, ec);
+}
+
+std::string BlockStore::failure(const std::string& what) const {
+  return file_ + ": " + what + " (" + (db_ ? sqlite3_errmsg(db_) : "out of memory") + ")";
+}
+
+bool BlockStore::execute(const char* sql, std::string* error) {
+  char* message = nullptr;
+  if (sqlite3_exec(db_, sql, nullptr, nullptr, &message) == SQLITE_OK) return true;
+  *error = file_ + ": " + (message ? message : "unknown error");
+  sqlite3_free(message);
+  return false;
+}
+
+bool BlockStore::prepare(const char* sql, sqlite3_stmt** statement, std::string* error) {
+  if (sqlite3_prepare_v2(db_, sql, -1, statement, nullptr) == SQLITE_OK) return true;
+  *error = failure("cannot read the block store");
+  return false;
+}
+
+bool BlockStore::write(const std::vector<BlockKey>& keys,
+                       const std::vector<std::vector<uint8_t>>& pages, std::string* error) {
+  if (!execute("BEGIN", error)) return false;
+  for (size_t i = 0; i < keys.size(); ++i) {
+    bindKey(insert_, keys[i]);
+    // An empty vector's data() may be null, which SQLite would store as NULL: bind "" instead.
+    static const uint8_t kNothing = 0;
+    sqlite3_bind_blob64(insert_, 4, pages[i].empty() ? &kNothing : pages[i].data(), pages[i].size(),
+                        SQLITE_STATIC);
+    const int rc = sqlite3_step(insert_);
+    sqlite3_reset(insert_);
+    if (rc != SQLITE_DONE) {
+      *error = failure("cannot write pages");
+      rollback(db_);
+      return false;
+    }
+  }
+  if (execute("COMMIT", error)) return true;
+  rollback(db_);
+  return false;
+}
+
+bool BlockStore::read(const BlockKey& key, std::vector<uint8_t>* page, std::string* error) {
+  error->clear();
+  bindKey(select_, key);
+  const int rc = sqlite3_step(select_);
+  bool found = false;
+  if (rc == SQLITE_ROW) {
+    const auto* data = static_cast<const uint8_t*>(sqlite3_column_blob(select_, 0));
+    const int bytes = sqlite3_column_bytes(select_, 0);
+    page->assign(data, data + bytes);
+    found = true;
+  } else if (rc != SQLITE_DONE) {
+    *error = failure("cannot read a page");
+  }
+  sqlite3_reset(select_);
+  return found;
+}
+
+bool BlockStore::erase(const std::vector<BlockKey>& keys, std::string* error) {
+  if (keys.empty()) return true;
+  if (!execute("BEGIN", error)) return false;
+  for (const BlockKey& key : keys) {
+    bindKey(delete_, key);
+    const int rc = sqlite3_step(delete_);
+    sqlite3_reset(delete_);
+    if (rc != SQLITE_DONE) {
+      *error = failure("cannot erase pages");
+      rollback(db_);
+      return false;
+    }
+  }
+  if (execute("COMMIT", error)) return true;
+  rollback(db_);
+  return false;
+}
+
+bool BlockStore::clear(std::string* error) { return execute("DELETE FROM pages", error); }
+
+bool BlockStore::keys(std::vector<BlockKey>* out, std::string* error) {
+  sqlite3_stmt* all = nullptr;
+  if (!prepare("SELECT x, y, z FROM pages ORDER BY z, y, x", &all, error)) return false;
+  out->clear();
+  int rc;
+  while ((rc = sqlite3_step(all)) == SQLITE_ROW)
+    out->push_back(
+        {sqlite3_column_int(all, 0), sqlite3_column_int(all, 1), sqlite3_column_int(all, 2)});
+  sqlite3_finalize(all);
+  if (rc != SQLITE_DONE) {
+    *error = failure("cannot list the pages");
+    return false;
+  }
+  return true;
+}
+
+}  // namespace stereo_fusion

@@ -1,0 +1,221 @@
+// Paging (max_map_memory_mb): a map capped below its size pages blocks out to the block store
+// and back, and every output — the mesh, the map file, the ESDF and the occupancy grid — is
+// byte-identical to the uncapped map's, over random caps, trajectories and operations.
+#include <gtest/gtest.h>
+#include <sys/resource.h>
+
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <random>
+
+#include "MeshTestSupport.h"
+#include "QuickMode.h"
+#include "stereo_fusion/io/PlanningExport.h"
+#include "stereo_fusion/planning/OccupancyGrid2D.h"
+
+using namespace stereo_fusion;
+using namespace stereo_fusion::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+/// A hall along +x (world z up): a floor, a far wall and a row of pillars and balls, long
+/// enough that a camera walking along it and back leaves space behind and comes back to it.
+sim::AnalyticScene hall() {
+  sim::AnalyticScene scene;
+  scene.add(sim::makePlane({0, 0, 0}, {0, 0, 1}), {170, 160, 140});
+  scene.add(sim::makePlane({0, 3.0, 0}, {0, -1, 0}), {120, 140, 190});
+  for (int k = 0; k < 8; ++k) {
+    scene.add(sim::makeSphere({0.9 * k, 1.8, 0.5}, 0.3), {200, 80 + 15 * k, 60});
+    Eigen::Isometry3d T_world_box = Eigen::Isometry3d::Identity();
+    T_world_box.translation() = Eigen::Vector3d(0.9 * k + 0.45, 2.4, 0.4);
+    scene.add(sim::makeBox(T_world_box, {0.2, 0.2, 0.8}), {60, 160, 90});
+  }
+  return scene;
+}
+
+/// Camera positions along the hall and back, with random steps and a random look direction.
+std::vector<Eigen::Isometry3d> walk(std::mt19937* rng, int frames) {
+  std::uniform_real_distribution<double> step(0.12, 0.3), look(-0.6, 0.6), height(0.8, 1.2);
+  std::vector<Eigen::Isometry3d> poses;
+  double x = 0.0;
+  for (int f = 0; f < frames; ++f) {
+    x += (f < frames / 2 ? 1.0 : -1.0) * step(*rng);
+    const Eigen::Vector3d eye(x, 0.0, height(*rng));
+    poses.push_back(
+        sim::lookAt(eye, eye + Eigen::Vector3d(look(*rng), 1.0, -0.35), Eigen::Vector3d::UnitZ()));
+  }
+  return poses;
+}
+
+MapperConfig hallConfig() {
+  MapperConfig config;
+  config.voxel_size_m = 0.04;
+  config.max_depth_m = 4.0;
+  config.num_threads = 2;
+  return config;
+}
+
+std::string fileBytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+/// Everything the map puts out, as bytes: equal outputs ⇔ equal strings.
+struct Outputs {
+  TriangleMesh mesh;
+  std::vector<uint8_t> map_file;
+  std::string esdf_ply;
+  std::vector<int8_t> grid;
+};
+
+Outputs outputsOf(Mapper* mapper, const fs::path& scratch) {
+  mapper->updateMesh();
+  mapper->updatePlanning();
+  Outputs out;
+  out.mesh = mapper->extractMesh();
+  out.map_file = mapper->encodeMap();
+  std::string error;
+  const fs::path esdf = scratch / "esdf.ply";
+  EXPECT_TRUE(writeEsdfPly(esdf.string(), *mapper->planning(), &error)) << error;
+  out.esdf_ply = fileBytes(esdf);
+  out.grid = projectOccupancy(*mapper->planning(), 0.1, 1.5).cells;
+  return out;
+}
+
+void expectSameOutputs(const Outputs& a, const Outputs& b, const std::string& what) {
+  EXPECT_EQ(a.mesh.positions, b.mesh.positions) << what;
+  EXPECT_EQ(a.mesh.normals, b.mesh.normals) << what;
+  EXPECT_EQ(a.mesh.colors, b.mesh.colors) << what;
+  EXPECT_EQ(a.mesh.triangles, b.mesh.triangles) << what;
+  EXPECT_TRUE(a.map_file == b.map_file) << what << ": map files differ";
+  EXPECT_TRUE(a.esdf_ply == b.esdf_ply) << what << ": esdf.ply differs";
+  EXPECT_EQ(a.grid, b.grid) << what;
+}
+
+struct Scratch {
+  fs::path path;
+  Scratch() {
+    path = fs::temp_directory_path() /
+           ("sf_paging_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~Scratch() { fs::remove_all(path); }
+};
+
+}  // namespace
+
+TEST(MapperPaging, AnyCapGivesTheUncappedOutputsByteForByte) {
+  const sim::AnalyticScene scene = hall();
+  const int runs = quickMode() ? 2 : 5;
+  Scratch scratch;
+  for (int run = 0; run < runs; ++run) {
+    std::mt19937 rng(100 + run);
+    const int frames = quickMode() ? 24 : 40;
+    const std::vector<Eigen::Isometry3d> poses = walk(&rng, frames);
+    // The operations a long session has: meshing at a cadence, eviction by distance, a clear.
+    const int mesh_every = std::uniform_int_distribution<int>(1, 4)(rng);
+    const int plan_every = std::uniform_int_distribution<int>(1, 6)(rng);
+    MapperConfig config = hallConfig();
+    if (run % 2 == 1) config.max_distance_from_camera_m = 5.0;
+    const int clear_at = std::uniform_int_distribution<int>(frames / 2, frames - 2)(rng);
+    const MapRegion clear = MapRegion::box({0.0, 1.5, 0.0}, {1.2, 3.2, 1.0});
+
+    auto fuse = [&](Mapper* mapper, size_t* peak_bytes) {
+      for (int f = 0; f < frames; ++f) {
+        StereoFrame frame = renderFrame(scene, qvgaCamera(), poses[f], 0.2, 7 * run + f);
+        frame.timestamp_s = 1.0 + f;
+        const bool mesh_now = (f + 1) % mesh_every == 0;
+        const IntegrationResult r =
+            mapper->integrate(frame, mesh_now ? MeshTiming::kNow : MeshTiming::kDeferred);
+        ASSERT_TRUE(r.accepted) << r.error;
+        if ((f + 1) % plan_every == 0) mapper->updatePlanning();
+        if (f == clear_at) ASSERT_TRUE(mapper->clearRegion(clear, MeshTiming::kDeferred).accepted);
+        *peak_bytes = std::max(*peak_bytes, mapper->mapMemoryBytes());
+      }
+    };
+    Mapper uncapped(config);
+    size_t uncapped_peak = 0;
+    fuse(&uncapped, &uncapped_peak);
+    const Outputs expected = outputsOf(&uncapped, scratch.path);
+    ASSERT_GT(expected.mesh.triangles.size(), 1000u);
+
+    const double share = std::uniform_real_distribution<double>(0.25, 0.6)(rng);
+    config.max_map_memory_mb = share * uncapped_peak / (1024.0 * 1024.0);
+    config.map_store_path = scratch.path.string();
+    Mapper capped(config);
+    size_t capped_peak = 0;
+    fuse(&capped, &capped_peak);
+    const std::string what =
+        "run " + std::to_string(run) + ", cap " + std::to_string(share) + " of the uncapped peak";
+    EXPECT_GT(capped.pagingStats().blocks_paged_out, 0u) << what;
+    EXPECT_GT(capped.pagingStats().blocks_paged_in, 0u) << what << ": the walk back pages in";
+    EXPECT_EQ(capped.pagingStats().pages_unreadable, 0u) << capped.pagingStats().error;
+    EXPECT_LT(capped_peak, uncapped_peak) << what;
+    expectSameOutputs(outputsOf(&capped, scratch.path), expected, what);
+    // Nothing pending: the map fits its cap.
+    EXPECT_LE(capped.mapMemoryBytes(), config.max_map_memory_mb * 1024 * 1024) << what;
+    EXPECT_GT(capped.pagedOutBlocks(), 0u) << what;
+  }
+}
+
+TEST(MapperPaging, AResetOrALoadedMapStartsAfreshAndRebuildsSeeEveryBlock) {
+  const sim::AnalyticScene scene = hall();
+  Scratch scratch;
+  std::mt19937 rng(7);
+  const std::vector<Eigen::Isometry3d> poses = walk(&rng, 30);
+  MapperConfig config = hallConfig();
+  Mapper uncapped(config);
+  for (int f = 0; f < 30; ++f) uncapped.integrate(renderFrame(scene, qvgaCamera(), poses[f]));
+  config.max_map_memory_mb = 0.4 * uncapped.mapMemoryBytes() / (1024.0 * 1024.0);
+  config.map_store_path = scratch.path.string();
+  Mapper capped(config);
+  for (int f = 0; f < 30; ++f) capped.integrate(renderFrame(scene, qvgaCamera(), poses[f]));
+  ASSERT_GT(capped.pagedOutBlocks(), 0u);
+  // A rebuild covers the paged-out blocks too.
+  EXPECT_EQ(capped.rebuildMesh().changed, uncapped.rebuildMesh().changed);
+  // Saved capped, loaded uncapped: the same map; loaded capped: the same file again.
+  const fs::path file = scratch.path / "map.sfmap";
+  std::string error;
+  ASSERT_TRUE(capped.saveMap(file.string(), &error)) << error;
+  Mapper reloaded(config);
+  ASSERT_TRUE(reloaded.loadMap(file.string(), nullptr, &error)) << error;
+  EXPECT_TRUE(reloaded.encodeMap() == uncapped.encodeMap());
+  capped.reset();
+  EXPECT_EQ(capped.pagedOutBlocks(), 0u);
+  EXPECT_EQ(capped.tsdf().blockCount(), 0u);
+  EXPECT_TRUE(capped.extractMesh().triangles.empty());
+}
+
+TEST(MapperPaging, AFullDiskStopsPagingAndKeepsTheMapWhole) {
+  const sim::AnalyticScene scene = hall();
+  Scratch scratch;
+  std::mt19937 rng(11);
+  const std::vector<Eigen::Isometry3d> poses = walk(&rng, 30);
+  MapperConfig config = hallConfig();
+  Mapper uncapped(config);
+  for (int f = 0; f < 30; ++f) uncapped.integrate(renderFrame(scene, qvgaCamera(), poses[f]));
+  config.max_map_memory_mb = 0.3 * uncapped.mapMemoryBytes() / (1024.0 * 1024.0);
+  config.map_store_path = scratch.path.string();
+  Mapper capped(config);
+  // The store's files may not grow beyond 64 KiB: its first page-out fails as on a full disk.
+  struct rlimit old_limit {};
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &old_limit), 0);
+  const auto old_handler = std::signal(SIGXFSZ, SIG_IGN);
+  struct rlimit small = old_limit;
+  small.rlim_cur = 64 * 1024;
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
+  for (int f = 0; f < 30; ++f) capped.integrate(renderFrame(scene, qvgaCamera(), poses[f]));
+  setrlimit(RLIMIT_FSIZE, &old_limit);
+  std::signal(SIGXFSZ, old_handler);
+  EXPECT_TRUE(capped.pagingStats().stopped);
+  EXPECT_NE(capped.pagingStats().error.find("paging stopped"), std::string::npos)
+      << capped.pagingStats().error;
+  EXPECT_EQ(capped.pagedOutBlocks(), 0u) << "the store kept nothing";
+  Outputs a = outputsOf(&capped, scratch.path), b = outputsOf(&uncapped, scratch.path);
+  expectSameOutputs(a, b, "after a failed page-out");
+}

@@ -1,0 +1,100 @@
+// The block store: pages written, read, erased and listed; a foreign or mismatched file refused
+// with a sentence; a private store gone with its map.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "stereo_fusion/paging/BlockStore.h"
+
+using namespace stereo_fusion;
+namespace fs = std::filesystem;
+
+namespace {
+struct TempFolder {
+  fs::path path;
+  TempFolder() {
+    path = fs::temp_directory_path() /
+           ("sf_store_test_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~TempFolder() { fs::remove_all(path); }
+};
+const BlockStoreIdentity kIdentity{0.02, 4.0};
+}  // namespace
+
+TEST(BlockStore, WritesReadsErasesAndListsPagesAcrossAReopen) {
+  TempFolder dir;
+  const std::string file = (dir.path / "map.sqlite").string();
+  std::string error;
+  {
+    auto store = BlockStore::open(file, kIdentity, &error);
+    ASSERT_TRUE(store) << error;
+    const std::vector<BlockKey> keys = {{1, 2, 3}, {-5, 0, 7}, {0, 0, -1}};
+    const std::vector<std::vector<uint8_t>> pages = {{1, 2, 3}, {}, std::vector<uint8_t>(9000, 7)};
+    ASSERT_TRUE(store->write(keys, pages, &error)) << error;
+    std::vector<uint8_t> page;
+    ASSERT_TRUE(store->read({-5, 0, 7}, &page, &error));
+    EXPECT_TRUE(page.empty());
+    ASSERT_TRUE(store->read({0, 0, -1}, &page, &error));
+    EXPECT_EQ(page, pages[2]);
+    EXPECT_FALSE(store->read({9, 9, 9}, &page, &error));
+    EXPECT_TRUE(error.empty()) << "a missing page is no error: " << error;
+    // A second write of a key replaces its page.
+    ASSERT_TRUE(store->write({{1, 2, 3}}, {{9}}, &error)) << error;
+    ASSERT_TRUE(store->read({1, 2, 3}, &page, &error));
+    EXPECT_EQ(page, std::vector<uint8_t>{9});
+    ASSERT_TRUE(store->erase({{-5, 0, 7}, {4, 4, 4}}, &error)) << error;
+  }
+  auto reopened = BlockStore::open(file, kIdentity, &error);
+  ASSERT_TRUE(reopened) << error;
+  std::vector<BlockKey> listed;
+  ASSERT_TRUE(reopened->keys(&listed, &error)) << error;
+  // Sorted as BlockKey sorts (z, then y, then x).
+  EXPECT_EQ(listed, (std::vector<BlockKey>{{0, 0, -1}, {1, 2, 3}}));
+  ASSERT_TRUE(reopened->clear(&error)) << error;
+  ASSERT_TRUE(reopened->keys(&listed, &error));
+  EXPECT_TRUE(listed.empty());
+}
+
+TEST(BlockStore, RefusesAForeignFileAndAnotherVoxelGrid) {
+  TempFolder dir;
+  const std::string text = (dir.path / "notes.sqlite").string();
+  std::ofstream(text) << "these are not pages, but they are longer than a header would be. "
+                         "SQLite reads the first hundred bytes as its header and refuses them."
+                      << std::string(200, 'x');
+  std::string error;
+  EXPECT_FALSE(BlockStore::open(text, kIdentity, &error));
+  EXPECT_NE(error.find("not a stereo_fusion block store"), std::string::npos) << error;
+
+  const std::string file = (dir.path / "map.sqlite").string();
+  ASSERT_TRUE(BlockStore::open(file, kIdentity, &error)) << error;
+  error.clear();
+  EXPECT_FALSE(BlockStore::open(file, BlockStoreIdentity{0.05, 4.0}, &error));
+  EXPECT_NE(error.find("voxel_size_m"), std::string::npos) << error;
+  // A folder where a file should be made cannot hold a store either.
+  error.clear();
+  EXPECT_FALSE(
+      BlockStore::open((dir.path / "map.sqlite" / "inner.sqlite").string(), kIdentity, &error));
+  EXPECT_FALSE(error.empty());
+}
+
+TEST(BlockStore, APrivateStoreIsRemovedWithItsMap) {
+  TempFolder dir;
+  std::string error;
+  std::string file;
+  {
+    auto a = BlockStore::openPrivate(dir.path.string(), kIdentity, &error);
+    auto b = BlockStore::openPrivate(dir.path.string(), kIdentity, &error);
+    ASSERT_TRUE(a && b) << error;
+    EXPECT_NE(a->file(), b->file()) << "each map its own store";
+    ASSERT_TRUE(a->write({{1, 1, 1}}, {{1}}, &error)) << error;
+    file = a->file();
+    EXPECT_TRUE(fs::exists(file));
+  }
+  EXPECT_FALSE(fs::exists(file));
+  EXPECT_FALSE(fs::exists(file + "-wal"));
+  EXPECT_TRUE(fs::is_empty(dir.path));
+}
