@@ -80,7 +80,7 @@ double threadCpuUs() {
 double percentile(std::vector<double> v, double p) {
   if (v.empty()) return 0;
   std::sort(v.begin(), v.end());
-  size_t i = static_cast<size_t>(std::ceil(p * static_cast<double>(v.size()))) ;
+  size_t i = static_cast<size_t>(std::ceil(p * static_cast<double>(v.size())));
   if (i > 0) --i;
   return v[std::min(i, v.size() - 1)];
 }
@@ -190,7 +190,10 @@ std::string encodeKey(int32_t x, int32_t y, int32_t z) {
   return k;
 }
 // The batch counter: a 7-byte key, so it never collides with a 12-byte block key.
-const std::string kCounterKey("\xff\xff\xff\xff" "cnt", 7);
+const std::string kCounterKey(
+    "\xff\xff\xff\xff"
+    "cnt",
+    7);
 std::string encodeCounter(uint64_t c) {
   std::string v(8, '\0');
   for (int i = 0; i < 8; ++i) v[i] = static_cast<char>(c >> (56 - 8 * i));
@@ -248,8 +251,8 @@ std::string makeBlock(int32_t x, int32_t y, int32_t z, uint64_t seed) {
       for (int j = 0; j < side; ++j)
         for (int i = 0; i < side; ++i) {
           const int c[3] = {i, j, k};
-          const float d = (offset * static_cast<float>(side) - static_cast<float>(c[axis])) * vs +
-                          0.3f * trunc;
+          const float d =
+              (offset * static_cast<float>(side) - static_cast<float>(c[axis])) * vs + 0.3f * trunc;
           float sdf = 0, w = 0;
           uint8_t rgb[3] = {0, 0, 0};
           if (d >= -trunc) {
@@ -325,7 +328,8 @@ struct Store {
   // A spatial cluster of sorted keys in one read transaction / call; returns how many found.
   virtual size_t getMany(const std::vector<std::string>& keys, const Sink& sink) = 0;
   // Every key in order; fn(key, keylen, value, valuelen).
-  virtual uint64_t scan(const std::function<void(const char*, size_t, const uint8_t*, size_t)>&) = 0;
+  virtual uint64_t scan(
+      const std::function<void(const char*, size_t, const uint8_t*, size_t)>&) = 0;
   // The store's own integrity check after reopening ("" when fine).
   virtual std::string check() = 0;
   uint64_t counter() {
@@ -352,7 +356,8 @@ class SqliteStore : public Store {
     exec("PRAGMA journal_mode=WAL");
     exec(full_ ? "PRAGMA synchronous=FULL" : "PRAGMA synchronous=NORMAL");
     exec(rowid_ ? "CREATE TABLE IF NOT EXISTS blocks(k BLOB PRIMARY KEY, v BLOB NOT NULL)"
-                : "CREATE TABLE IF NOT EXISTS blocks(k BLOB PRIMARY KEY, v BLOB NOT NULL) WITHOUT ROWID");
+                : "CREATE TABLE IF NOT EXISTS blocks(k BLOB PRIMARY KEY, v BLOB NOT NULL) WITHOUT "
+                  "ROWID");
     ins_ = prep("INSERT OR REPLACE INTO blocks(k, v) VALUES(?1, ?2)");
     sel_ = prep("SELECT v FROM blocks WHERE k = ?1");
     del_ = prep("DELETE FROM blocks WHERE k = ?1");
@@ -372,8 +377,7 @@ class SqliteStore : public Store {
     step(begin_);
     for (auto& e : kv) {
       sqlite3_bind_blob(ins_, 1, e.first.data(), static_cast<int>(e.first.size()), SQLITE_STATIC);
-      sqlite3_bind_blob(ins_, 2, e.second.data(), static_cast<int>(e.second.size()),
-                        SQLITE_STATIC);
+      sqlite3_bind_blob(ins_, 2, e.second.data(), static_cast<int>(e.second.size()), SQLITE_STATIC);
       step(ins_);
     }
     step(commit_);
@@ -937,7 +941,8 @@ int runOne(const std::string& kind, int zlevel, const std::string& dir, int bloc
   std::vector<double> erase_ms;
   for (int i = 0; i < 20 && i < grid.chunks(); ++i) {
     std::vector<std::string> keys;
-    for (auto& k : grid.chunk(order[static_cast<size_t>(i)])) keys.push_back(encodeKey(k[0], k[1], k[2]));
+    for (auto& k : grid.chunk(order[static_cast<size_t>(i)]))
+      keys.push_back(encodeKey(k[0], k[1], k[2]));
     auto t0 = Clock::now();
     store->eraseBatch(keys);
     erase_ms.push_back(usSince(t0) / 1000.0);
@@ -1120,27 +1125,29 @@ void printTables(const std::string& path) {
   auto col = [](std::map<std::string, std::string>& m, const char* k) {
     return m.count(k) ? m[k] : std::string("-");
   };
-  std::printf("\n| store | zstd | ratio | blocks/s | raw MB/s | batch p50 ms | batch p99 ms | "
-              "get p50/p99 us | cube64 p50/p99 us | cold get p50/p99 us | cold cube64 p50/p99 "
-              "us | scan s | erase500 p50/p99 ms | disk MB | reopen ms |\n");
+  std::printf(
+      "\n| store | zstd | ratio | blocks/s | raw MB/s | batch p50 ms | batch p99 ms | "
+      "get p50/p99 us | cube64 p50/p99 us | cold get p50/p99 us | cold cube64 p50/p99 "
+      "us | scan s | erase500 p50/p99 ms | disk MB | reopen ms |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (auto& m : rows) {
     if (!m.count("store")) continue;
-    std::printf("| %s | %s | %s | %s | %s | %s | %s | %s / %s | %s / %s | %s / %s | %s / %s | %s "
-                "| %s / %s | %s | %s |\n",
-                col(m, "store").c_str(), col(m, "zstd").c_str(), col(m, "ratio").c_str(),
-                col(m, "write_blocks_s").c_str(), col(m, "write_raw_mb_s").c_str(),
-                col(m, "batch_p50_ms").c_str(), col(m, "batch_p99_ms").c_str(),
-                col(m, "get_p50_us").c_str(), col(m, "get_p99_us").c_str(),
-                col(m, "cube_p50_us").c_str(), col(m, "cube_p99_us").c_str(),
-                col(m, "cold_get_p50_us").c_str(), col(m, "cold_get_p99_us").c_str(),
-                col(m, "cold_cube_p50_us").c_str(), col(m, "cold_cube_p99_us").c_str(),
-                col(m, "scan_s").c_str(), col(m, "erase_p50_ms").c_str(),
-                col(m, "erase_p99_ms").c_str(), col(m, "disk_mb").c_str(),
-                col(m, "reopen_ms").c_str());
+    std::printf(
+        "| %s | %s | %s | %s | %s | %s | %s | %s / %s | %s / %s | %s / %s | %s / %s | %s "
+        "| %s / %s | %s | %s |\n",
+        col(m, "store").c_str(), col(m, "zstd").c_str(), col(m, "ratio").c_str(),
+        col(m, "write_blocks_s").c_str(), col(m, "write_raw_mb_s").c_str(),
+        col(m, "batch_p50_ms").c_str(), col(m, "batch_p99_ms").c_str(),
+        col(m, "get_p50_us").c_str(), col(m, "get_p99_us").c_str(), col(m, "cube_p50_us").c_str(),
+        col(m, "cube_p99_us").c_str(), col(m, "cold_get_p50_us").c_str(),
+        col(m, "cold_get_p99_us").c_str(), col(m, "cold_cube_p50_us").c_str(),
+        col(m, "cold_cube_p99_us").c_str(), col(m, "scan_s").c_str(),
+        col(m, "erase_p50_ms").c_str(), col(m, "erase_p99_ms").c_str(), col(m, "disk_mb").c_str(),
+        col(m, "reopen_ms").c_str());
   }
-  std::printf("\n| store | zstd | load1 | batch CPU p50/p99 ms | cube64 CPU p50/p99 us | read-all s "
-              "| minor faults per get (read-all) |\n");
+  std::printf(
+      "\n| store | zstd | load1 | batch CPU p50/p99 ms | cube64 CPU p50/p99 us | read-all s "
+      "| minor faults per get (read-all) |\n");
   std::printf("|---|---|---|---|---|---|---|\n");
   for (auto& m : rows) {
     if (!m.count("store")) continue;
@@ -1150,9 +1157,10 @@ void printTables(const std::string& path) {
                 col(m, "cube_cpu_p99_us").c_str(), col(m, "readall_s").c_str(),
                 col(m, "readall_minflt_per_get").c_str());
   }
-  std::printf("\n| store | zstd | RSS base MB | HWM after write MB | RSS = anon + file after "
-              "write MB | HWM after read-all MB | RSS = anon + file after read-all MB | threads "
-              "open/write/read |\n");
+  std::printf(
+      "\n| store | zstd | RSS base MB | HWM after write MB | RSS = anon + file after "
+      "write MB | HWM after read-all MB | RSS = anon + file after read-all MB | threads "
+      "open/write/read |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
   for (auto& m : rows) {
     if (!m.count("store")) continue;
@@ -1165,8 +1173,9 @@ void printTables(const std::string& path) {
                 col(m, "threads_open").c_str(), col(m, "threads_write").c_str(),
                 col(m, "threads_read").c_str());
   }
-  std::printf("\n| store | zstd | kills | failed runs | integrity bad | acked lost | partial batch "
-              "| content bad | batches committed | max reopen+check ms |\n");
+  std::printf(
+      "\n| store | zstd | kills | failed runs | integrity bad | acked lost | partial batch "
+      "| content bad | batches committed | max reopen+check ms |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
   for (auto& m : rows) {
     if (!m.count("crash_store")) continue;
@@ -1220,16 +1229,24 @@ int main(int argc, char** argv) {
   std::string crash_configs = "sqlite-normal:1,sqlite-full:1,lmdb:1,rocksdb:1";
   std::string dir;
   for (size_t i = 0; i < a.size(); ++i) {
-    if (a[i] == "--blocks" && i + 1 < a.size()) blocks = std::atoi(a[++i].c_str());
-    else if (a[i] == "--crash-runs" && i + 1 < a.size()) crash_runs = std::atoi(a[++i].c_str());
-    else if (a[i] == "--configs" && i + 1 < a.size()) configs = a[++i];
-    else if (a[i] == "--crash-configs" && i + 1 < a.size()) crash_configs = a[++i];
-    else if (a[i] == "--no-crash") crash = false;
-    else if (a[i][0] == '-') die("unknown option " + a[i]);
-    else dir = a[i];
+    if (a[i] == "--blocks" && i + 1 < a.size())
+      blocks = std::atoi(a[++i].c_str());
+    else if (a[i] == "--crash-runs" && i + 1 < a.size())
+      crash_runs = std::atoi(a[++i].c_str());
+    else if (a[i] == "--configs" && i + 1 < a.size())
+      configs = a[++i];
+    else if (a[i] == "--crash-configs" && i + 1 < a.size())
+      crash_configs = a[++i];
+    else if (a[i] == "--no-crash")
+      crash = false;
+    else if (a[i][0] == '-')
+      die("unknown option " + a[i]);
+    else
+      dir = a[i];
   }
-  if (dir.empty()) die("usage: store_compare [--blocks N] [--crash-runs R] [--configs s:z,...] "
-                       "[--crash-configs s:z,...] [--no-crash] DIR");
+  if (dir.empty())
+    die("usage: store_compare [--blocks N] [--crash-runs R] [--configs s:z,...] "
+        "[--crash-configs s:z,...] [--no-crash] DIR");
   Grid check_grid(blocks);
   makeDir(dir);
   const std::string results = dir + "/results.txt";
@@ -1241,10 +1258,10 @@ int main(int argc, char** argv) {
     const std::string kind = c.substr(0, colon);
     const std::string z = colon == std::string::npos ? "0" : c.substr(colon + 1);
     auto tc = Clock::now();
-    rc |= spawnSelf({"--one", kind, z, dir + "/db-" + kind + "-z" + z, std::to_string(blocks),
-                     results});
-    std::fprintf(stderr, "[%6.1f s] %s zstd %s done in %.1f s\n", secondsSince(t0),
-                 kind.c_str(), z.c_str(), secondsSince(tc));
+    rc |= spawnSelf(
+        {"--one", kind, z, dir + "/db-" + kind + "-z" + z, std::to_string(blocks), results});
+    std::fprintf(stderr, "[%6.1f s] %s zstd %s done in %.1f s\n", secondsSince(t0), kind.c_str(),
+                 z.c_str(), secondsSince(tc));
   }
   if (crash)
     for (auto& c : split(crash_configs)) {
@@ -1252,8 +1269,8 @@ int main(int argc, char** argv) {
       const std::string kind = c.substr(0, colon);
       const std::string z = colon == std::string::npos ? "0" : c.substr(colon + 1);
       auto tc = Clock::now();
-      rc |= spawnSelf({"--crash", kind, z, dir + "/crash-" + kind, std::to_string(crash_runs),
-                       results});
+      rc |= spawnSelf(
+          {"--crash", kind, z, dir + "/crash-" + kind, std::to_string(crash_runs), results});
       std::fprintf(stderr, "[%6.1f s] crash %s done in %.1f s\n", secondsSince(t0), kind.c_str(),
                    secondsSince(tc));
     }
