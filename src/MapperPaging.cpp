@@ -124,11 +124,13 @@ void Mapper::pageOutOverCap() {
   std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return keys[a] < keys[b]; });
   std::vector<BlockKey> sorted_keys;
   std::vector<std::vector<uint8_t>> pages(keys.size());
+  std::vector<uint8_t> had_submesh(keys.size(), 0);
   size_t written = 0;
   for (size_t n = 0; n < order.size(); ++n) {
     const size_t i = order[n];
     sorted_keys.push_back(keys[i]);
     ByteWriter page(&pages[n]);
+    had_submesh[n] = mesh_->store().submeshes().count(keys[i]) > 0;
     writePageHead(*octree_.find(keys[i]), frames[i], &page);
     page.put<uint32_t>(static_cast<uint32_t>(layers_.size()));
     for (LayerSlot& slot : layers_) {
@@ -161,7 +163,7 @@ void Mapper::pageOutOverCap() {
   }
   for (size_t n = 0; n < sorted_keys.size(); ++n) {
     voxel_bytes_ -= octree_.find(sorted_keys[n])->voxelBytes();
-    paged_.add(sorted_keys[n], frames[order[n]]);
+    paged_.add(sorted_keys[n], PagedBlocks::Entry{frames[order[n]], had_submesh[n] != 0});
   }
   octree_.erase(sorted_keys);
   paging_stats_.blocks_paged_out += sorted_keys.size();
@@ -235,13 +237,20 @@ void Mapper::forgetPages() {
   if (!store_->clear(&error)) paging_stats_.error = error;
 }
 
-Mapper::PagedMeshParts Mapper::pagedMeshParts() const {
+Mapper::PagedMeshParts Mapper::pagedMeshParts(const std::vector<BlockKey>* only) const {
   PagedMeshParts parts;
   if (paged_.empty()) return parts;
   size_t mesh_slot = 0;
   while (layers_[mesh_slot].layer.get() != mesh_) ++mesh_slot;
+  std::vector<BlockKey> keys;
+  if (only == nullptr) {
+    keys = paged_.sortedKeys();
+  } else {
+    for (const BlockKey& key : *only)
+      if (paged_.contains(key)) keys.push_back(key);
+  }
   std::vector<uint8_t> page;
-  for (const BlockKey& key : paged_.sortedKeys()) {
+  for (const BlockKey& key : keys) {
     if (!readPage(key, &page)) continue;
     ByteReader reader(page.data(), page.size());
     skipPageHead(&reader);
@@ -257,6 +266,23 @@ Mapper::PagedMeshParts Mapper::pagedMeshParts() const {
     if (!patch.image_rgb.empty()) parts.patches.emplace(key, std::move(patch));
   }
   return parts;
+}
+
+std::vector<BlockKey> Mapper::submeshKeys() const {
+  std::vector<BlockKey> keys;
+  keys.reserve(mesh_->store().submeshes().size());
+  for (const auto& [key, mesh] : mesh_->store().submeshes()) keys.push_back(key);
+  for (const auto& [key, entry] : paged_.entries())
+    if (entry.has_submesh) keys.push_back(key);
+  std::sort(keys.begin(), keys.end());
+  return keys;
+}
+
+Mapper::PagedMeshParts Mapper::wholeMesh() const {
+  PagedMeshParts all = pagedMeshParts();
+  all.submeshes.insert(mesh_->store().submeshes().begin(), mesh_->store().submeshes().end());
+  all.patches.insert(textures().patches().begin(), textures().patches().end());
+  return all;
 }
 
 TriangleMesh Mapper::extractMesh() const {

@@ -94,13 +94,18 @@ class Mapper {
   const MeshStore& mesh() const { return mesh_->store(); }
   /// The whole mesh, submeshes welded into one (for export), paged-out blocks' included.
   TriangleMesh extractMesh() const;
-  /// The submeshes and texture patches of the paged-out blocks, read back from the block store
-  /// (empty without paging): with mesh().submeshes() and textures().patches(), the whole mesh.
+  /// The submeshes and texture patches of the paged-out blocks (those among `only`, if given),
+  /// read back from the block store (empty without paging): with mesh().submeshes() and
+  /// textures().patches(), the whole mesh.
   struct PagedMeshParts {
     std::unordered_map<BlockKey, SubMesh, BlockKeyHash> submeshes;
     std::unordered_map<BlockKey, TexturePatch, BlockKeyHash> patches;
   };
-  PagedMeshParts pagedMeshParts() const;
+  PagedMeshParts pagedMeshParts(const std::vector<BlockKey>* only = nullptr) const;
+  /// A copy of every submesh and patch, paged-out ones included (for a full export or resend).
+  PagedMeshParts wholeMesh() const;
+  /// The keys of every submesh, paged-out ones included, sorted (reads no page).
+  std::vector<BlockKey> submeshKeys() const;
   /// Re-meshes every block from scratch (also what a disabled incremental mesher catches up with).
   MeshChanges rebuildMesh();
   /// Texture patches of the submeshes (empty unless texture = patches).

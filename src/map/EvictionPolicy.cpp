@@ -42,7 +42,7 @@ std::vector<BlockKey> EvictionPolicy::select(const BlockOctree& map,
   };
   for (const VoxelBlock* block : map.blocks()) consider(block->key, lastUpdateFrame(*block));
   if (paged)
-    for (const auto& [key, last_update_frame] : paged->entries()) consider(key, last_update_frame);
+    for (const auto& [key, entry] : paged->entries()) consider(key, entry.last_update_frame);
   if (limits.max_blocks > 0 && keep.size() > limits.max_blocks) {
     const size_t excess = keep.size() - limits.max_blocks;
     std::nth_element(keep.begin(), keep.begin() + (excess - 1), keep.end(), leavesFirst);

@@ -4,21 +4,20 @@
 
 namespace stereo_fusion {
 
-void PagedBlocks::add(const BlockKey& key, uint64_t last_update_frame) {
-  if (entries_.insert_or_assign(key, last_update_frame).second)
-    regions_[regionOf(key)].push_back(key);
+void PagedBlocks::add(const BlockKey& key, const Entry& entry) {
+  if (entries_.insert_or_assign(key, entry).second) regions_[regionOf(key)].push_back(key);
 }
 
-std::optional<uint64_t> PagedBlocks::remove(const BlockKey& key) {
+std::optional<PagedBlocks::Entry> PagedBlocks::remove(const BlockKey& key) {
   const auto it = entries_.find(key);
   if (it == entries_.end()) return std::nullopt;
-  const uint64_t frame = it->second;
+  const Entry entry = it->second;
   entries_.erase(it);
   const auto region = regions_.find(regionOf(key));
   std::vector<BlockKey>& keys = region->second;
   keys.erase(std::find(keys.begin(), keys.end(), key));
   if (keys.empty()) regions_.erase(region);
-  return frame;
+  return entry;
 }
 
 void PagedBlocks::clear() {

@@ -76,6 +76,9 @@ void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   // frame stalls (then the last values it read stand).
   if (const std::optional<MappingSession::MapStatus> now = session_->tryStatus(0.2))
     map_status_ = *now;
+  const PagingStats& paging = map_status_.paging;
+  if (paging.stopped || paging.pages_unreadable > 0)  // a full disk, a corrupted store
+    status.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "paging: " + paging.error);
   const MappingSession::KeptStatus& kept = map_status_.kept;
   status.add("clears waiting for frames from before them", kept.pending_clears);
   status.add("loop closure: frames kept", kept.frames);
@@ -112,6 +115,13 @@ void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   status.add("blocks", map_status_.blocks);
   status.add("blocks evicted", session_->blocksEvicted());
   status.add("memory (MB)", map_status_.memory_bytes / 1048576.0);
+  status.add("map memory, all layers (MB)", map_status_.map_memory_bytes / 1048576.0);
+  status.add("paging: blocks in the store", map_status_.paged_out_blocks);
+  status.add("paging: blocks paged out", paging.blocks_paged_out);
+  status.add("paging: blocks paged in", paging.blocks_paged_in);
+  status.add("paging: longest page-in (ms)", paging.page_in_max_ms);
+  status.add("paging: pages unreadable (blocks lost)", paging.pages_unreadable);
+  status.add("paging: stopped (store full or unwritable)", paging.stopped ? "yes" : "no");
   // The planning layer: updated at planning_publish_rate_hz (timings of the updates that had work).
   status.add("planning updates", v.planning_updates);
   status.add("planning update p50 (ms)", percentile(v.planning_ms, 0.5));

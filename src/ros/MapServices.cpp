@@ -21,9 +21,10 @@ bool MapServices::saveMesh(SaveMesh::Request& req, SaveMesh::Response& res) {
   std::unordered_map<BlockKey, SubMesh, BlockKeyHash> submeshes;
   std::unordered_map<BlockKey, TexturePatch, BlockKeyHash> patches;
   const bool got = session_->tryWithMap([&](MapAccess& map) {
-    publisher_->catchUpLocked(map);  // the mesh of every frame fused so far
-    submeshes = map.map().mesh().submeshes();
-    patches = map.map().textures().patches();
+    publisher_->catchUpLocked(map);                        // the mesh of every frame fused so far
+    Mapper::PagedMeshParts whole = map.map().wholeMesh();  // paged-out blocks' too
+    submeshes = std::move(whole.submeshes);
+    patches = std::move(whole.patches);
   });
   if (!got) {
     res.success = false;

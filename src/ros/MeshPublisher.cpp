@@ -12,12 +12,33 @@
 namespace stereo_fusion {
 
 namespace {
-std::vector<BlockKey> allBlocks(const Mapper& map) {
-  std::vector<BlockKey> all;
-  for (const auto& [key, sub] : map.mesh().submeshes()) all.push_back(key);
-  std::sort(all.begin(), all.end());
-  return all;
-}
+/// What a full update sends: the map's own submeshes and patches, or with paged-out blocks a
+/// copy of every one (max_map_memory_mb).
+struct EveryBlock {
+  Mapper::PagedMeshParts copy;
+  const std::unordered_map<BlockKey, SubMesh, BlockKeyHash>* submeshes;
+  const std::unordered_map<BlockKey, TexturePatch, BlockKeyHash>* patches;
+  /// `keys`: only these are sent (nullptr: all).
+  explicit EveryBlock(const Mapper& map, const std::vector<BlockKey>* keys = nullptr) {
+    submeshes = &map.mesh().submeshes();
+    patches = &map.textures().patches();
+    if (map.pagedOutBlocks() == 0) return;
+    if (keys == nullptr) {
+      copy = map.wholeMesh();
+    } else {
+      copy = map.pagedMeshParts(keys);
+      if (copy.submeshes.empty()) return;  // none of them paged out
+      for (const BlockKey& key : *keys) {
+        const auto mesh = submeshes->find(key);
+        if (mesh != submeshes->end()) copy.submeshes.insert(*mesh);
+        const auto patch = patches->find(key);
+        if (patch != patches->end()) copy.patches.insert(*patch);
+      }
+    }
+    submeshes = &copy.submeshes;
+    patches = &copy.patches;
+  }
+};
 
 /// `keys` (sorted) without those in `present` (sorted).
 std::vector<BlockKey> withoutKeysOf(const std::vector<BlockKey>& keys,
@@ -159,9 +180,9 @@ std::optional<MeshUpdate> MeshPublisher::tryFullMesh() {
     header.frame_id = node_.world_frame;
     header.stamp = ros::Time::now();
     // The sequence of the last published update: apply updates with a larger sequence on top.
-    mesh =
-        toMeshUpdate(map.mesh().submeshes(), allBlocks(map), {}, header, map.config().voxel_size_m,
-                     sequence_, true, node_.mesh_encoding, &map.textures());
+    const EveryBlock every(map);
+    mesh = toMeshUpdate(*every.submeshes, map.submeshKeys(), {}, header, map.config().voxel_size_m,
+                        sequence_, true, node_.mesh_encoding, every.patches);
     mesh->session = session_id_;
   });
   return mesh;
@@ -220,13 +241,15 @@ void MeshPublisher::publishMarkersLocked(const Mapper& map, bool force) {
   std::vector<BlockKey> changed, removed;
   marker_backlog_.take(&changed, &removed);
   if (markers_full_pending_) {
-    changed = allBlocks(map);
+    changed = map.submeshKeys();
     removed = withoutKeysOf(removed, changed);  // removed, then meshed again since
   }
   markers_full_pending_ = false;
   std_msgs::Header header = markers_header_;
   if (header.stamp.isZero()) header.stamp = ros::Time::now();  // no frame fused since a reset
-  marker_sender_->send(map.mesh().submeshes(), changed, removed, header);
+  // A backlog key paged out since its change was taken is read back with the rest.
+  const EveryBlock every(map, &changed);
+  marker_sender_->send(*every.submeshes, changed, removed, header);
 }
 
 void MeshPublisher::publishFullLocked(MapAccess& access, const std::vector<BlockKey>& removed) {
@@ -236,11 +259,11 @@ void MeshPublisher::publishFullLocked(MapAccess& access, const std::vector<Block
   std_msgs::Header header;
   header.frame_id = node_.world_frame;
   header.stamp = ros::Time::now();
-  const std::vector<BlockKey> all = allBlocks(map);
+  const std::vector<BlockKey> all = map.submeshKeys();
+  const EveryBlock every(map);
   // A full update replaces whatever a subscriber held; markers: drop the gone blocks, draw all.
-  MeshUpdate update =
-      toMeshUpdate(map.mesh().submeshes(), all, {}, header, map.config().voxel_size_m, ++sequence_,
-                   true, node_.mesh_encoding, &map.textures());
+  MeshUpdate update = toMeshUpdate(*every.submeshes, all, {}, header, map.config().voxel_size_m,
+                                   ++sequence_, true, node_.mesh_encoding, every.patches);
   update.session = session_id_;
   sendUpdate(std::move(update));
   // The full set supersedes the backlog, but not its removals: blocks gone from the mesh
@@ -252,7 +275,7 @@ void MeshPublisher::publishFullLocked(MapAccess& access, const std::vector<Block
   gone.erase(std::unique(gone.begin(), gone.end()), gone.end());
   markers_header_ = header;
   if (node_.publish_markers) {
-    marker_sender_->send(map.mesh().submeshes(), all, withoutKeysOf(gone, all), header);
+    marker_sender_->send(*every.submeshes, all, withoutKeysOf(gone, all), header);
     markers_full_pending_ = false;
   }
 }

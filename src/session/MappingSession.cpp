@@ -184,9 +184,7 @@ void MappingSession::startEpochLocked(const std::vector<uint8_t>& base_bytes) {
 bool MappingSession::reset() {
   std::unique_lock<std::mutex> lock(mutex_, std::defer_lock);
   if (!lockWithin(&lock, requestWait())) return false;
-  std::vector<BlockKey> removed;
-  for (const auto& [key, sub] : mapper_->mesh().submeshes()) removed.push_back(key);
-  std::sort(removed.begin(), removed.end());
+  const std::vector<BlockKey> removed = mapper_->submeshKeys();
   const std::lock_guard<std::mutex> pass(planning_pass_mutex_);
   mapper_->reset();
   startEpochLocked({});
@@ -234,12 +232,12 @@ void MappingSession::adoptCorrectionLocked(const PoseCorrection& correction,
     correction_ = correction;
     return;
   }
-  std::set<BlockKey> kept;
-  for (const auto& [key, sub] : rebuilt->mesh().submeshes()) kept.insert(key);
+  // Both maps' submeshes, paged-out ones included: those the rebuilt map lacks are removed.
+  const std::vector<BlockKey> kept = rebuilt->submeshKeys();
   std::vector<BlockKey> removed;
-  for (const auto& [key, sub] : mapper_->mesh().submeshes())
-    if (!kept.count(key)) removed.push_back(key);
-  std::sort(removed.begin(), removed.end());
+  const std::vector<BlockKey> before = mapper_->submeshKeys();
+  std::set_difference(before.begin(), before.end(), kept.begin(), kept.end(),
+                      std::back_inserter(removed));
   const std::lock_guard<std::mutex> pass(planning_pass_mutex_);
   mapper_->setStageMonitor(nullptr);
   rebuilt->setStageMonitor(&monitor_);
@@ -278,6 +276,9 @@ std::optional<MappingSession::MapStatus> MappingSession::tryStatus(double wait_s
   s.blocks = mapper_->tsdf().blockCount();
   s.memory_bytes = mapper_->memoryBytes();
   s.awaiting_mesh = mapper_->blocksAwaitingMesh();
+  s.map_memory_bytes = mapper_->mapMemoryBytes();
+  s.paged_out_blocks = mapper_->pagedOutBlocks();
+  s.paging = mapper_->pagingStats();
   if (const PlanningMap* planning = mapper_->planning()) {
     s.planning_free_space_bytes = planning->freeSpaceBytes();
     s.planning_esdf_bytes = planning->esdfBytes();

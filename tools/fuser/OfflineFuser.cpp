@@ -307,9 +307,7 @@ bool writeOutputs(const FuseOptions& options, MapAccess& access, FuseReport* rep
   if (options.config.texture == TextureMode::kPatches) {
     ObjExportInfo info;
     // A paged map's submeshes and patches are read back beside those in memory.
-    Mapper::PagedMeshParts all = mapper.pagedMeshParts();
-    all.submeshes.insert(mapper.mesh().submeshes().begin(), mapper.mesh().submeshes().end());
-    all.patches.insert(mapper.textures().patches().begin(), mapper.textures().patches().end());
+    const Mapper::PagedMeshParts all = mapper.wholeMesh();
     if (!writeTexturedObj((fs::path(options.out_dir) / "mesh.obj").string(), all.submeshes,
                           all.patches, ObjExportOptions{}, &info, error))
       return false;

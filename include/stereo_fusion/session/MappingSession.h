@@ -193,6 +193,9 @@ class MappingSession {
     size_t blocks = 0, memory_bytes = 0, awaiting_mesh = 0;
     /// The planning layer's bytes (PlanningMap::freeSpaceBytes(), esdfBytes()); 0 without it.
     size_t planning_free_space_bytes = 0, planning_esdf_bytes = 0;
+    /// Paging (max_map_memory_mb): every layer's bytes in memory, the blocks in the store.
+    size_t map_memory_bytes = 0, paged_out_blocks = 0;
+    PagingStats paging;
   };
   std::optional<MapStatus> tryStatus(double wait_s) const;
 
