@@ -237,6 +237,8 @@ std::vector<uint8_t> Mapper::encodeMap() const {
   std::vector<std::unique_ptr<VoxelBlock>> paged_blocks;
   std::unordered_map<BlockKey, uint64_t, BlockKeyHash> paged_frames;
   std::vector<uint8_t> page;
+  const std::optional<BlockStore::ReadBatch> batch =
+      store_ ? std::optional<BlockStore::ReadBatch>(std::in_place, store_.get()) : std::nullopt;
   for (const BlockKey& key : paged_.sortedKeys()) {
     std::string error;
     uint64_t frame = 0;

@@ -53,8 +53,8 @@ void Mapper::pageIn(const std::vector<BlockKey>& keys) {
   if (keys.empty() || paged_.empty()) return;
   Timer timer;
   std::vector<uint8_t> page;
-  std::vector<BlockKey> lost_in_map;
   size_t brought = 0;
+  const BlockStore::ReadBatch batch(store_.get());
   for (const BlockKey& key : keys) {
     if (!paged_.remove(key)) continue;
     std::string error;
@@ -250,6 +250,7 @@ Mapper::PagedMeshParts Mapper::pagedMeshParts(const std::vector<BlockKey>* only)
       if (paged_.contains(key)) keys.push_back(key);
   }
   std::vector<uint8_t> page;
+  const BlockStore::ReadBatch batch(store_.get());
   for (const BlockKey& key : keys) {
     if (!readPage(key, &page)) continue;
     ByteReader reader(page.data(), page.size());

@@ -191,6 +191,16 @@ bool BlockStore::read(const BlockKey& key, std::vector<uint8_t>* page, std::stri
   return found;
 }
 
+BlockStore::ReadBatch::ReadBatch(BlockStore* store) : store_(store) {
+  // Inside a transaction already (autocommit off): that one is the batch.
+  if (sqlite3_get_autocommit(store_->db_) == 0) return;
+  began_ = sqlite3_exec(store_->db_, "BEGIN", nullptr, nullptr, nullptr) == SQLITE_OK;
+}
+
+BlockStore::ReadBatch::~ReadBatch() {
+  if (began_) sqlite3_exec(store_->db_, "COMMIT", nullptr, nullptr, nullptr);
+}
+
 bool BlockStore::erase(const std::vector<BlockKey>& keys, std::string* error) {
   if (keys.empty()) return true;
   if (!execute("BEGIN", error)) return false;

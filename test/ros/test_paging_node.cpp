@@ -24,12 +24,12 @@ TEST(PagingNode, AWalkThereAndBackPagesOutAndInAndTheStreamedMeshIsWhole) {
   std::unordered_map<BlockKey, SubMesh, BlockKeyHash> streamed;
   bool applied_ok = true;
   uint64_t last_sequence = 0;
-  ros::Subscriber sub = nh.subscribe<MeshUpdate>(
-      "/stereo_fusion/mesh_update", 100, [&](const MeshUpdate::ConstPtr& u) {
-        std::lock_guard<std::mutex> lock(mutex);
-        last_sequence = u->sequence;
-        applied_ok &= applyMeshUpdate(*u, &streamed);
-      });
+  ros::Subscriber sub = nh.subscribe<MeshUpdate>("/stereo_fusion/mesh_update", 100,
+                                                 [&](const MeshUpdate::ConstPtr& u) {
+                                                   std::lock_guard<std::mutex> lock(mutex);
+                                                   last_sequence = u->sequence;
+                                                   applied_ok &= applyMeshUpdate(*u, &streamed);
+                                                 });
   uint8_t last_level = 255;
   ros::Subscriber levels = nh.subscribe<diagnostic_msgs::DiagnosticArray>(
       "/diagnostics", 10, [&](const diagnostic_msgs::DiagnosticArray::ConstPtr& a) {
@@ -90,4 +90,6 @@ TEST(PagingNode, AWalkThereAndBackPagesOutAndInAndTheStreamedMeshIsWhole) {
   EXPECT_EQ(last_level, diagnostic_msgs::DiagnosticStatus::OK) << "no paging error";
 }
 
-int main(int argc, char** argv) { return test::runRosTests(argc, argv, "stereo_fusion_paging_test"); }
+int main(int argc, char** argv) {
+  return test::runRosTests(argc, argv, "stereo_fusion_paging_test");
+}

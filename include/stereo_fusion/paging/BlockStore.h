@@ -48,6 +48,19 @@ class BlockStore {
   /// The page of `key` into `page`. False with `error` empty when the store has none, with a
   /// sentence when it cannot be read.
   bool read(const BlockKey& key, std::vector<uint8_t>* page, std::string* error);
+  /// Reads of many pages in one read transaction (one snapshot, one lock: a batch of reads
+  /// costs about half as much as the same reads one by one). Nests: only the outer one counts.
+  class ReadBatch {
+   public:
+    explicit ReadBatch(BlockStore* store);
+    ~ReadBatch();
+    ReadBatch(const ReadBatch&) = delete;
+    ReadBatch& operator=(const ReadBatch&) = delete;
+
+   private:
+    BlockStore* store_;
+    bool began_ = false;
+  };
   /// Removes the pages of `keys` (missing ones are ignored), in one transaction.
   bool erase(const std::vector<BlockKey>& keys, std::string* error);
   /// Removes every page.
