@@ -152,6 +152,7 @@ if [ "$mode" != --asan ]; then
     threaded+=':MappingSession.ARequestFindingTheMapBusy*'
     threaded+=':ContradictionFilter.DoesNotDependOnTheThreadCount:BlockOctree.CollectBlocksInParallelEqualsTheSerialWalk'
     threaded+=':PlanningMap.FramesFusedWhileAnUpdateFinishes*:MappingSession.ThePlanningUpdateLetsFramesIn*'
+    threaded+=':MapperPaging.*:PageWriter.*'
     run_gtest tsan_thread_tests "$bin" "$threaded" || failed=1
     run_rostests tsan_ros "$dir" "$ROS_TESTS" || failed=1
   else

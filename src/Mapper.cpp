@@ -237,12 +237,15 @@ std::vector<uint8_t> Mapper::encodeMap() const {
   std::vector<std::unique_ptr<VoxelBlock>> paged_blocks;
   std::unordered_map<BlockKey, uint64_t, BlockKeyHash> paged_frames;
   std::vector<uint8_t> page;
-  const std::optional<BlockStore::ReadBatch> batch =
-      store_ ? std::optional<BlockStore::ReadBatch>(std::in_place, store_.get()) : std::nullopt;
+  std::optional<BlockStore::ReadBatch> batch;
+  if (store_) {
+    writer_->releaseWritten();
+    batch.emplace(store_.get());
+  }
   for (const BlockKey& key : paged_.sortedKeys()) {
     std::string error;
     uint64_t frame = 0;
-    if (!readPage(key, &page)) continue;
+    if (!readPage(key, &page, &*batch, &error)) continue;
     ByteReader reader(page.data(), page.size());
     std::unique_ptr<VoxelBlock> block = readPageHead(&reader, key, &frame, &error);
     if (!block) continue;

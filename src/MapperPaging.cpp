@@ -17,6 +17,10 @@ void Mapper::openStore() {
   store_ = BlockStore::openPrivate(
       paging.store_path, BlockStoreIdentity{paging.voxel_size_m, paging.truncation_vox}, &error);
   if (!store_) throw std::runtime_error("max_map_memory_mb needs a block store: " + error);
+  std::unique_ptr<BlockStore> writing = BlockStore::open(
+      store_->file(), BlockStoreIdentity{paging.voxel_size_m, paging.truncation_vox}, &error);
+  if (!writing) throw std::runtime_error("max_map_memory_mb needs a block store: " + error);
+  writer_ = std::make_unique<PageWriter>(std::move(writing));
 }
 
 size_t Mapper::mapMemoryBytes() const {
@@ -54,11 +58,12 @@ void Mapper::pageIn(const std::vector<BlockKey>& keys) {
   Timer timer;
   std::vector<uint8_t> page;
   size_t brought = 0;
-  const BlockStore::ReadBatch batch(store_.get());
+  writer_->releaseWritten();
+  BlockStore::ReadBatch batch(store_.get());
   for (const BlockKey& key : keys) {
     if (!paged_.remove(key)) continue;
     std::string error;
-    if (!store_->read(key, &page, &error)) {
+    if (!readPage(key, &page, &batch, &error)) {
       pageLost(key, error.empty() ? "its page is missing from " + store_->file() : error);
       continue;
     }
@@ -105,6 +110,7 @@ void Mapper::pageIn(const std::vector<BlockKey>& keys) {
 }
 
 void Mapper::pageOutOverCap() {
+  recoverRefusedPages();
   if (!store_ || paging_stats_.stopped) return;
   const size_t cap = stages_.paging.max_map_memory_bytes;
   const size_t bytes = mapMemoryBytes();
@@ -123,15 +129,16 @@ void Mapper::pageOutOverCap() {
   for (size_t i = 0; i < order.size(); ++i) order[i] = i;
   std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return keys[a] < keys[b]; });
   std::vector<BlockKey> sorted_keys;
-  std::vector<std::vector<uint8_t>> pages(keys.size());
-  std::vector<uint8_t> had_submesh(keys.size(), 0);
+  std::vector<PageWriter::Page> pages(keys.size());
   size_t written = 0;
   for (size_t n = 0; n < order.size(); ++n) {
     const size_t i = order[n];
     sorted_keys.push_back(keys[i]);
-    ByteWriter page(&pages[n]);
-    had_submesh[n] = mesh_->store().submeshes().count(keys[i]) > 0;
-    writePageHead(*octree_.find(keys[i]), frames[i], &page);
+    auto bytes = std::make_shared<std::vector<uint8_t>>();
+    ByteWriter page(bytes.get());
+    const bool has_submesh = mesh_->store().submeshes().count(keys[i]) > 0;
+    const VoxelBlock& block = *octree_.find(keys[i]);
+    writePageHead(block, frames[i], &page);
     page.put<uint32_t>(static_cast<uint32_t>(layers_.size()));
     for (LayerSlot& slot : layers_) {
       const size_t at = page.size();
@@ -140,36 +147,37 @@ void Mapper::pageOutOverCap() {
       const uint64_t part_bytes = page.size() - at - sizeof(uint64_t);
       std::memcpy(page.buffer().data() + at, &part_bytes, sizeof(part_bytes));
     }
-    written += pages[n].size();
-  }
-  std::string error;
-  if (!store_->write(sorted_keys, pages, &error)) {
-    // A full disk: paging stops and the map stays whole in memory (the layers take back what
-    // they gave to the pages).
-    for (size_t n = 0; n < sorted_keys.size(); ++n) {
-      ByteReader reader(pages[n].data(), pages[n].size());
-      skipPageHead(&reader);
-      reader.get<uint32_t>();
-      for (LayerSlot& slot : layers_) {
-        const uint64_t part_bytes = reader.get<uint64_t>();
-        ByteReader part(reader.position(), part_bytes);
-        reader.skip(part_bytes);
-        slot.layer->pageIn(octree_, *octree_.find(sorted_keys[n]), &part);
-      }
-    }
-    paging_stats_.stopped = true;
-    paging_stats_.error = "paging stopped, the map stays in memory: " + error;
-    return;
-  }
-  for (size_t n = 0; n < sorted_keys.size(); ++n) {
-    voxel_bytes_ -= octree_.find(sorted_keys[n])->voxelBytes();
-    paged_.add(sorted_keys[n], PagedBlocks::Entry{frames[order[n]], had_submesh[n] != 0});
+    written += bytes->size();
+    pages[n] = std::move(bytes);
+    voxel_bytes_ -= block.voxelBytes();
+    paged_.add(keys[i], PagedBlocks::Entry{frames[i], has_submesh});
   }
   octree_.erase(sorted_keys);
-  paging_stats_.blocks_paged_out += sorted_keys.size();
+  // The store writes them on the writer's thread; until then they are read from it.
+  writer_->write(std::move(sorted_keys), std::move(pages));
+  paging_stats_.blocks_paged_out += keys.size();
   paging_stats_.bytes_written += written;
   ++paging_stats_.page_out_passes;
   paging_stats_.page_out_ms += timer.elapsedMs();
+}
+
+void Mapper::recoverRefusedPages() {
+  std::vector<BlockKey> keys;
+  std::string error;
+  if (!writer_ || !writer_->failedKeys(&keys, &error)) return;
+  // A full disk: paging stops and the map comes back whole into memory, from the pages the
+  // store refused.
+  std::sort(keys.begin(), keys.end());
+  pageIn(keys);
+  writer_->forgetFailed();
+  paging_stats_.stopped = true;
+  paging_stats_.error = "paging stopped, the map stays in memory: " + error;
+}
+
+void Mapper::flushPaging() {
+  if (!writer_) return;
+  writer_->flush();
+  recoverRefusedPages();
 }
 
 size_t Mapper::selectPageOut(size_t to_free, bool keep_lagging, std::vector<BlockKey>* keys,
@@ -224,14 +232,22 @@ BlockChangeLog::Changes Mapper::takeChanges(BlockChangeLog::Consumer consumer) {
   return map_changes_.take(consumer);
 }
 
-bool Mapper::readPage(const BlockKey& key, std::vector<uint8_t>* page) const {
-  std::string error;
-  return store_->read(key, page, &error);
+bool Mapper::readPage(const BlockKey& key, std::vector<uint8_t>* page, BlockStore::ReadBatch* batch,
+                      std::string* error) const {
+  // The writer keeps every page the store holds beyond `batch`'s snapshot (it was released
+  // before the snapshot began): one of the two has the newest page.
+  if (const PageWriter::Page pending = writer_->find(key)) {
+    *page = *pending;
+    return true;
+  }
+  return store_->read(key, page, error);
 }
 
 void Mapper::forgetPages() {
   paging_stats_ = PagingStats();
   if (!store_) return;
+  writer_->flush();
+  writer_->forgetFailed();
   paged_.clear();
   std::string error;
   if (!store_->clear(&error)) paging_stats_.error = error;
@@ -250,9 +266,11 @@ Mapper::PagedMeshParts Mapper::pagedMeshParts(const std::vector<BlockKey>* only)
       if (paged_.contains(key)) keys.push_back(key);
   }
   std::vector<uint8_t> page;
-  const BlockStore::ReadBatch batch(store_.get());
+  writer_->releaseWritten();
+  BlockStore::ReadBatch batch(store_.get());
   for (const BlockKey& key : keys) {
-    if (!readPage(key, &page)) continue;
+    std::string error;
+    if (!readPage(key, &page, &batch, &error)) continue;
     ByteReader reader(page.data(), page.size());
     skipPageHead(&reader);
     reader.get<uint32_t>();

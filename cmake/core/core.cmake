@@ -25,6 +25,7 @@ add_library(stereo_fusion_core STATIC
   ${STEREO_FUSION_ROOT}/src/paging/BlockStore.cpp
   ${STEREO_FUSION_ROOT}/src/paging/FrameReach.cpp
   ${STEREO_FUSION_ROOT}/src/paging/PagedBlocks.cpp
+  ${STEREO_FUSION_ROOT}/src/paging/PageWriter.cpp
   ${STEREO_FUSION_ROOT}/src/StageConfigs.cpp
   ${STEREO_FUSION_ROOT}/src/layers/MeshLayer.cpp
   ${STEREO_FUSION_ROOT}/src/layers/PlanningLayer.cpp

@@ -20,6 +20,7 @@
 #include "stereo_fusion/map/EvictionPolicy.h"
 #include "stereo_fusion/map/MapRegion.h"
 #include "stereo_fusion/paging/BlockStore.h"
+#include "stereo_fusion/paging/PageWriter.h"
 #include "stereo_fusion/paging/PagedBlocks.h"
 #include "stereo_fusion/paging/PagingConfig.h"
 #include "stereo_fusion/planning/OccupancyGrid2D.h"
@@ -173,6 +174,10 @@ class Mapper {
   /// for this mapper's config() (`loaded` then holds the old map), and re-meshes it. A caller
   /// holding a lock around the map can so read the file before taking it.
   MeshChanges adoptMap(BlockOctree* loaded, const MapFileInfo& info);
+  /// Waits until every page handed to the store's writer is written (or refused: then its
+  /// blocks are back in memory and paging has stopped). Paging works without it; a caller that
+  /// reports pagingStats() or measures the store calls it first.
+  void flushPaging();
   /// Paging (max_map_memory_mb): what it did since the map was made, reset or loaded.
   const PagingStats& pagingStats() const { return paging_stats_; }
   /// Blocks paged out now (in the block store, not in memory): tsdf() holds the others.
@@ -223,11 +228,15 @@ class Mapper {
   /// The changes `consumer` has not taken, once every block within one block of them is back.
   BlockChangeLog::Changes takeChanges(BlockChangeLog::Consumer consumer);
   /// The page of a paged-out block, read without bringing it back; false when unreadable.
-  bool readPage(const BlockKey& key, std::vector<uint8_t>* page) const;
+  /// `batch`: the read snapshot, begun after the writer released its written pages.
+  bool readPage(const BlockKey& key, std::vector<uint8_t>* page, BlockStore::ReadBatch* batch,
+                std::string* error) const;
   /// Counts a page that cannot be read back (its block is lost).
   void pageLost(const BlockKey& key, const std::string& why);
   /// Drops every page (reset, load).
   void forgetPages();
+  /// After the writer's store refused a batch (a full disk): its blocks come back, paging stops.
+  void recoverRefusedPages();
 
   const MapperConfig config_;
   const StageConfigs stages_;
@@ -248,7 +257,8 @@ class Mapper {
   uint64_t frames_integrated_ = 0;
   uint64_t blocks_evicted_ = 0;
   StageMonitor* monitor_ = nullptr;
-  std::unique_ptr<BlockStore> store_;  // with max_map_memory_mb only
+  std::unique_ptr<BlockStore> store_;   // with max_map_memory_mb only: the map's reads
+  std::unique_ptr<PageWriter> writer_;  // its writes, on a thread (destroyed before store_)
   PagedBlocks paged_;
   PagingStats paging_stats_;
 };

@@ -154,13 +154,20 @@ bool BlockStore::prepare(const char* sql, sqlite3_stmt** statement, std::string*
 
 bool BlockStore::write(const std::vector<BlockKey>& keys,
                        const std::vector<std::vector<uint8_t>>& pages, std::string* error) {
+  std::vector<const std::vector<uint8_t>*> pointers;
+  for (const std::vector<uint8_t>& page : pages) pointers.push_back(&page);
+  return write(keys, pointers, error);
+}
+
+bool BlockStore::write(const std::vector<BlockKey>& keys,
+                       const std::vector<const std::vector<uint8_t>*>& pages, std::string* error) {
   if (!execute("BEGIN", error)) return false;
   for (size_t i = 0; i < keys.size(); ++i) {
     bindKey(insert_, keys[i]);
     // An empty vector's data() may be null, which SQLite would store as NULL: bind "" instead.
     static const uint8_t kNothing = 0;
-    sqlite3_bind_blob64(insert_, 4, pages[i].empty() ? &kNothing : pages[i].data(), pages[i].size(),
-                        SQLITE_STATIC);
+    sqlite3_bind_blob64(insert_, 4, pages[i]->empty() ? &kNothing : pages[i]->data(),
+                        pages[i]->size(), SQLITE_STATIC);
     const int rc = sqlite3_step(insert_);
     sqlite3_reset(insert_);
     if (rc != SQLITE_DONE) {

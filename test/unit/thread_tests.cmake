@@ -13,6 +13,8 @@ if(CATKIN_ENABLE_TESTING)
     ${PROJECT_SOURCE_DIR}/test/unit/mesh/test_block_mesher.cpp
     ${PROJECT_SOURCE_DIR}/test/unit/planning/test_planning_scenes.cpp
     ${PROJECT_SOURCE_DIR}/test/unit/session/test_mapping_session.cpp
+    ${PROJECT_SOURCE_DIR}/test/unit/mapper/test_mapper_paging.cpp  # the page writer's thread
+    ${PROJECT_SOURCE_DIR}/test/unit/paging/test_page_writer.cpp
     ${PROJECT_SOURCE_DIR}/test/tsan/OpenCvSerial.cpp  # TSan cannot see TBB's synchronisation
   )
   target_include_directories(stereo_fusion_thread_tests PRIVATE ${PROJECT_SOURCE_DIR}/test/unit)

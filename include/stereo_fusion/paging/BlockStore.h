@@ -45,6 +45,8 @@ class BlockStore {
   /// (a full disk), none.
   bool write(const std::vector<BlockKey>& keys, const std::vector<std::vector<uint8_t>>& pages,
              std::string* error);
+  bool write(const std::vector<BlockKey>& keys,
+             const std::vector<const std::vector<uint8_t>*>& pages, std::string* error);
   /// The page of `key` into `page`. False with `error` empty when the store has none, with a
   /// sentence when it cannot be read.
   bool read(const BlockKey& key, std::vector<uint8_t>* page, std::string* error);
@@ -54,6 +56,7 @@ class BlockStore {
    public:
     explicit ReadBatch(BlockStore* store);
     ~ReadBatch();
+
     ReadBatch(const ReadBatch&) = delete;
     ReadBatch& operator=(const ReadBatch&) = delete;
 

@@ -210,6 +210,7 @@ TEST(MapperPaging, AFullDiskStopsPagingAndKeepsTheMapWhole) {
   small.rlim_cur = 64 * 1024;
   ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
   for (int f = 0; f < 30; ++f) capped.integrate(renderFrame(scene, qvgaCamera(), poses[f]));
+  capped.flushPaging();  // the writer's last batch, refused too
   setrlimit(RLIMIT_FSIZE, &old_limit);
   std::signal(SIGXFSZ, old_handler);
   EXPECT_TRUE(capped.pagingStats().stopped);

@@ -43,7 +43,7 @@ TEST(BlockStore, WritesReadsErasesAndListsPagesAcrossAReopen) {
     EXPECT_FALSE(store->read({9, 9, 9}, &page, &error));
     EXPECT_TRUE(error.empty()) << "a missing page is no error: " << error;
     // A second write of a key replaces its page.
-    ASSERT_TRUE(store->write({{1, 2, 3}}, {{9}}, &error)) << error;
+    ASSERT_TRUE(store->write({{1, 2, 3}}, std::vector<std::vector<uint8_t>>{{9}}, &error)) << error;
     ASSERT_TRUE(store->read({1, 2, 3}, &page, &error));
     EXPECT_EQ(page, std::vector<uint8_t>{9});
     ASSERT_TRUE(store->erase({{-5, 0, 7}, {4, 4, 4}}, &error)) << error;
@@ -90,7 +90,7 @@ TEST(BlockStore, APrivateStoreIsRemovedWithItsMap) {
     auto b = BlockStore::openPrivate(dir.path.string(), kIdentity, &error);
     ASSERT_TRUE(a && b) << error;
     EXPECT_NE(a->file(), b->file()) << "each map its own store";
-    ASSERT_TRUE(a->write({{1, 1, 1}}, {{1}}, &error)) << error;
+    ASSERT_TRUE(a->write({{1, 1, 1}}, std::vector<std::vector<uint8_t>>{{1}}, &error)) << error;
     file = a->file();
     EXPECT_TRUE(fs::exists(file));
   }
