@@ -1,13 +1,6 @@
 #pragma once
-#include <sensor_msgs/CameraInfo.h>
-#include <sensor_msgs/Image.h>
-#include <stereo_msgs/DisparityImage.h>
-#include <tf2/buffer_core.h>
-
 #include <memory>
-#include <optional>
 #include <string>
-#include <vector>
 
 #include "stereo_fusion/io/FrameSource.h"
 
@@ -29,20 +22,27 @@ struct BagTopics {
 /// pose from /tf and /tf_static (T_world_camera at the disparity stamp, camera frame = the
 /// disparity's frame_id). A frame without a matching image, camera info or transform fails to
 /// load with the reason; the others load normally.
+///
+/// The bag is read as a stream: open() reads every message of the five topics once to index the
+/// frames — where each frame's three messages lie in the bag and their header stamps, not their
+/// images — and keeps the transforms (tf2's buffer: every /tf and /tf_static message of the
+/// recording); load(i) reads frame i's three messages from the still open bag. Memory does not grow
+/// with the bag's images: a few hundred bytes per frame, plus the transforms (small for a camera's
+/// pose per frame; a recording with many frames on /tf at a high rate keeps them all). load() may
+/// be called from several threads (the bag is read under a lock).
 class BagSequence : public FrameSource {
  public:
   static std::unique_ptr<BagSequence> open(const std::string& path, const BagTopics& topics,
                                            std::string* error);
+  ~BagSequence() override;
 
-  size_t size() const override { return disparities_.size(); }
+  size_t size() const override;
   bool load(size_t i, StereoFrame* frame, std::string* error) const override;
 
  private:
-  BagTopics topics_;
-  std::unique_ptr<tf2::BufferCore> tf_;
-  std::vector<stereo_msgs::DisparityImage::ConstPtr> disparities_;
-  std::vector<sensor_msgs::Image::ConstPtr> images_;
-  std::vector<sensor_msgs::CameraInfo::ConstPtr> infos_;
+  BagSequence();
+  struct Index;
+  std::unique_ptr<Index> index_;
 };
 
 }  // namespace stereo_fusion
