@@ -65,12 +65,13 @@ void addTable(AnalyticScene* scene, const Eigen::Vector2d& centre_xy, double yaw
 
 }  // namespace
 
-std::vector<std::string> presetNames() { return {"room", "tabletop", "hall"}; }
+std::vector<std::string> presetNames() { return {"room", "tabletop", "hall", "building"}; }
 
 std::optional<ScenePreset> makePreset(const std::string& name, uint32_t seed) {
   if (name == "room") return makeRoomPreset(seed);
   if (name == "tabletop") return makeTabletopPreset(seed);
   if (name == "hall") return makeHallPreset(seed);
+  if (name == "building") return makeBuildingPreset(seed);
   return std::nullopt;
 }
 
@@ -257,6 +258,174 @@ ScenePreset makeHallPreset(uint32_t seed) {
   preset.focus_m = Eigen::Vector3d(0, 0, 1.3);
   preset.orbit_radius_m = 0.6;
   preset.orbit_height_m = 0.1;
+  return preset;
+}
+
+ScenePreset makeBuildingPreset(uint32_t seed) {
+  Draw draw(seed);
+  ScenePreset preset;
+  preset.name = "building";
+  AnalyticScene& scene = preset.scene;
+  // Plan (floor at z = 0): the corridor runs along x over [0, length] × [-kCorridorHalf,
+  // kCorridorHalf]; four columns of rooms cross it, a room on each side (north: +y, south: -y);
+  // every wall is a solid box kWall thick, so rooms, doorways and corridor are one free space.
+  constexpr double kWall = 0.1, kHeight = 2.4, kCorridorHalf = 1.0;
+  constexpr double kDoorHalf = 0.6, kDoorHeight = 2.1;
+  constexpr int kColumns = 4;
+  double widths[kColumns];
+  for (double& w : widths) w = draw.uniform(3.8, 4.4);
+  const double depth_north = draw.uniform(3.6, 4.4), depth_south = draw.uniform(3.6, 4.4);
+  double column_x[kColumns];  // west edge of each column's rooms
+  double length = 0;
+  for (int j = 0; j < kColumns; ++j) {
+    column_x[j] = length;
+    length += widths[j] + (j + 1 < kColumns ? kWall : 0.0);
+  }
+  const double north_back = kCorridorHalf + kWall + depth_north;
+  const double south_back = -kCorridorHalf - kWall - depth_south;
+  auto box = [&](const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, const Eigen::Vector3d& rgb) {
+    scene.add(makeBox(at((lo + hi) / 2), (hi - lo) / 2), rgb);
+  };
+
+  // Floor and ceiling slabs over the whole plan; the two end walls.
+  box({-kWall, south_back - kWall, -kWall}, {length + kWall, north_back + kWall, 0.0},
+      draw.color({170, 150, 125}, 20));
+  box({-kWall, south_back - kWall, kHeight}, {length + kWall, north_back + kWall, kHeight + kWall},
+      draw.color({225, 225, 220}, 10));
+  box({-kWall, south_back, 0}, {0, north_back, kHeight}, draw.color({200, 190, 170}, 25));
+  box({length, south_back, 0}, {length + kWall, north_back, kHeight},
+      draw.color({200, 190, 170}, 25));
+  // The corridor's walls and the walls between columns, a colour per room.
+  const std::vector<Eigen::Vector3d> wall_palette = {
+      {215, 200, 170}, {175, 200, 215}, {200, 215, 180}, {220, 185, 185},
+      {205, 195, 220}, {225, 210, 160}, {180, 215, 205}, {215, 190, 210}};
+
+  struct Room {
+    Eigen::Isometry3d T_world_room;  // origin at the floor's centre, +y away from the corridor
+    double half_w, half_d, door_u;   // door_u: the doorway's centre along the room's x
+  };
+  std::vector<Room> rooms;  // the route's order: north west to east, then south east to west
+  for (int side = 0; side < 2; ++side) {
+    const double s = side == 0 ? 1.0 : -1.0;
+    const double depth = side == 0 ? depth_north : depth_south;
+    for (int k = 0; k < kColumns; ++k) {
+      const int j = side == 0 ? k : kColumns - 1 - k;
+      const double x0 = column_x[j], x1 = column_x[j] + widths[j];
+      const double front = s * (kCorridorHalf + kWall), back = s * (kCorridorHalf + kWall + depth);
+      const Eigen::Vector3d rgb = draw.color(wall_palette[rooms.size() % wall_palette.size()], 15);
+      const double door_x = (x0 + x1) / 2 + draw.uniform(-0.3, 0.3);
+      // Back wall; the wall to the next column east (the end walls close the last ones).
+      const double y_lo = std::min(back, back + s * kWall), y_hi = std::max(back, back + s * kWall);
+      box({x0 - kWall, y_lo, 0}, {x1 + kWall, y_hi, kHeight}, rgb);
+      if (j + 1 < kColumns)
+        box({x1, std::min(s * kCorridorHalf, back), 0},
+            {x1 + kWall, std::max(s * kCorridorHalf, back), kHeight}, rgb);
+      // The corridor wall with the doorway: two jambs and a lintel.
+      const double c_lo = std::min(s * kCorridorHalf, front),
+                   c_hi = std::max(s * kCorridorHalf, front);
+      box({x0, c_lo, 0}, {door_x - kDoorHalf, c_hi, kHeight}, rgb);
+      box({door_x + kDoorHalf, c_lo, 0}, {x1, c_hi, kHeight}, rgb);
+      box({door_x - kDoorHalf, c_lo, kDoorHeight}, {door_x + kDoorHalf, c_hi, kHeight}, rgb);
+      // The room's frame: turned by 180° on the south side, so "forward" (+y) leads away from
+      // the corridor and the furniture rule below is the same for every room.
+      const Eigen::Vector3d centre((x0 + x1) / 2, (front + back) / 2, 0.0);
+      const double yaw = side == 0 ? 0.0 : M_PI;
+      rooms.push_back({at(centre, yaw), widths[j] / 2, depth / 2, s * (door_x - centre.x())});
+      preset.rooms_m.emplace_back(Eigen::Vector3d(x0, std::min(front, back), 0),
+                                  Eigen::Vector3d(x1, std::max(front, back), kHeight));
+    }
+  }
+
+  // Furniture against the side and back walls, in the room's frame (u = x, v = y; the doorway
+  // is in the wall v = -half_d), leaving |u| < hw - 0.65 and v < hd - 1.0 free for the tour.
+  // Every draw is its own statement: the order of a call's arguments is unspecified, and the
+  // scene must not depend on the compiler.
+  for (const Room& room : rooms) {
+    const double hw = room.half_w, hd = room.half_d;
+    auto place = [&](double u, double v, double z, double yaw_rad = 0.0) {
+      return room.T_world_room * at({u, v, z}, yaw_rad);
+    };
+    // A bed (or sofa) with a headboard against the back wall.
+    const double bed_hu = draw.uniform(0.6, 0.9), bed_hv = draw.uniform(0.35, 0.5),
+                 bed_hz = draw.uniform(0.2, 0.3);
+    const double bed_u = draw.uniform(-hw + 0.7 + bed_hu, hw - 0.7 - bed_hu);
+    const double head_hz = draw.uniform(0.4, 0.55);
+    const Eigen::Vector3d bed_rgb = draw.color({100, 120, 160}, 40);
+    scene.add(makeBox(place(bed_u, hd - bed_hv, bed_hz), {bed_hu, bed_hv, bed_hz}), bed_rgb);
+    scene.add(makeBox(place(bed_u, hd - 0.05, head_hz), {bed_hu, 0.05, head_hz}), bed_rgb * 0.8);
+    // A cabinet against one side wall, a table with a ball on it against the other.
+    const double side = draw.uniform(0, 1) < 0.5 ? -1.0 : 1.0;
+    const double cab_hu = draw.uniform(0.2, 0.25), cab_hv = draw.uniform(0.3, 0.6),
+                 cab_hz = draw.uniform(0.4, 0.9), cab_v = draw.uniform(-0.3, 0.6);
+    const Eigen::Vector3d cab_rgb = draw.color({130, 100, 75}, 35);
+    scene.add(makeBox(place(side * (hw - cab_hu), cab_v, cab_hz), {cab_hu, cab_hv, cab_hz}),
+              cab_rgb);
+    const double table_v = draw.uniform(-0.3, 0.4), table_top = draw.uniform(0.72, 0.78);
+    const Eigen::Vector3d top_rgb = draw.color({165, 115, 75}), leg_rgb = draw.color({80, 60, 45});
+    const Eigen::Isometry3d T_table = place(-side * (hw - 0.4), table_v, 0.0, M_PI / 2);
+    addTable(&scene, T_table.translation().head<2>(), std::atan2(T_table(1, 0), T_table(0, 0)),
+             {0.45, 0.25}, table_top, 0.025, top_rgb, leg_rgb);
+    const double ball_r = draw.uniform(0.08, 0.14), ball_v = table_v + draw.uniform(-0.2, 0.2);
+    const Eigen::Vector3d ball_rgb = draw.color({200, 80, 70}, 50);
+    scene.add(
+        makeSphere(place(-side * (hw - 0.4), ball_v, table_top + ball_r).translation(), ball_r),
+        ball_rgb);
+    // A crate in a front corner, beside the doorway.
+    const double crate = draw.uniform(0.18, 0.28), crate_yaw = draw.uniform(-0.4, 0.4);
+    const Eigen::Vector3d crate_rgb = draw.color({180, 150, 60}, 30);
+    scene.add(
+        makeBox(place(side * (hw - 0.35), -hd + 0.35, crate, crate_yaw), {crate, crate, crate}),
+        crate_rgb);
+    // A wardrobe in the back corner on the cabinet's side.
+    const double wardrobe_hz = draw.uniform(0.85, 1.0);
+    const Eigen::Vector3d wardrobe_rgb = draw.color({150, 130, 110}, 35);
+    scene.add(makeBox(place(side * (hw - 0.32), hd - 0.32, wardrobe_hz), {0.3, 0.3, wardrobe_hz}),
+              wardrobe_rgb);
+  }
+
+  // The tour: in each room a loop from the doorway round the free middle and back (a teardrop:
+  // doorway, left, back, right, doorway); along the corridor in lanes 0.45 m either side of its
+  // axis, east on the north side, west on the south side. It starts at the back of the first
+  // room, so the loop closes there after entering it again.
+  constexpr double kLane = 0.45, kApproach = 0.8;
+  auto eye = [&] { return draw.uniform(1.4, 1.6); };
+  auto in_room = [&](const Room& r, double u, double v) {
+    return r.T_world_room * Eigen::Vector3d(u, v, eye());
+  };
+  auto doorway = [&](const Room& r) { return in_room(r, r.door_u, -r.half_d - kWall / 2); };
+  // Corridor points before and after a doorway, on the side's lane, in the direction of travel.
+  auto lane_point = [&](const Room& r, double along) {
+    return in_room(r, r.door_u + along, -r.half_d - kWall - kCorridorHalf + kLane);
+  };
+  std::vector<Eigen::Vector3d>& route = preset.route_m;
+  const Room& first = rooms.front();
+  route.push_back(in_room(first, 0.0, 0.75));
+  route.push_back(in_room(first, 0.65, 0.0));
+  route.push_back(doorway(first));
+  route.push_back(lane_point(first, kApproach));
+  for (size_t i = 1; i < rooms.size(); ++i) {
+    const Room& r = rooms[i];
+    if (i == static_cast<size_t>(kColumns))  // the east end: across the corridor
+      route.emplace_back(length - 0.5, 0.0, eye());
+    route.push_back(lane_point(r, -kApproach));
+    route.push_back(doorway(r));
+    route.push_back(in_room(r, -0.65, 0.0));
+    route.push_back(in_room(r, 0.0, 0.75));
+    route.push_back(in_room(r, 0.65, 0.0));
+    route.push_back(doorway(r));
+    route.push_back(lane_point(r, kApproach));
+  }
+  route.emplace_back(0.5, 0.0, eye());  // the west end: across, back to the first room
+  route.push_back(lane_point(first, -kApproach));
+  route.push_back(doorway(first));
+  route.push_back(in_room(first, -0.65, 0.0));
+
+  preset.room_interior = Eigen::AlignedBox3d(Eigen::Vector3d(0, south_back, 0),
+                                             Eigen::Vector3d(length, north_back, kHeight));
+  // Orbits circle the first room's free middle.
+  preset.focus_m = first.T_world_room * Eigen::Vector3d(0, 0.1, 0.9);
+  preset.orbit_radius_m = 0.55;
+  preset.orbit_height_m = 0.6;
   return preset;
 }
 

@@ -45,6 +45,36 @@ DenseCurve densify(const std::vector<Eigen::Vector3d>& waypoints, int per_segmen
   return c;
 }
 
+/// Dense samples of the closed centripetal Catmull–Rom spline through `p` (Barry–Goldman form,
+/// knot spacing |p_{i+1} − p_i|^½), `per_segment` samples per span.
+DenseCurve densifyCentripetal(const std::vector<Eigen::Vector3d>& p, int per_segment) {
+  const int n = static_cast<int>(p.size());
+  DenseCurve c;
+  auto point = [&](int i) -> const Eigen::Vector3d& { return p[((i % n) + n) % n]; };
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d &p0 = point(i - 1), &p1 = point(i), &p2 = point(i + 1),
+                          &p3 = point(i + 2);
+    const double t0 = 0.0, t1 = t0 + std::sqrt(std::max((p1 - p0).norm(), 1e-9)),
+                 t2 = t1 + std::sqrt(std::max((p2 - p1).norm(), 1e-9)),
+                 t3 = t2 + std::sqrt(std::max((p3 - p2).norm(), 1e-9));
+    for (int k = 0; k < per_segment; ++k) {
+      const double t = t1 + (t2 - t1) * k / per_segment;
+      const Eigen::Vector3d a1 = ((t1 - t) * p0 + (t - t0) * p1) / (t1 - t0);
+      const Eigen::Vector3d a2 = ((t2 - t) * p1 + (t - t1) * p2) / (t2 - t1);
+      const Eigen::Vector3d a3 = ((t3 - t) * p2 + (t - t2) * p3) / (t3 - t2);
+      const Eigen::Vector3d b1 = ((t2 - t) * a1 + (t - t0) * a2) / (t2 - t0);
+      const Eigen::Vector3d b2 = ((t3 - t) * a2 + (t - t1) * a3) / (t3 - t1);
+      c.points.push_back(((t2 - t) * b1 + (t - t1) * b2) / (t2 - t1));
+    }
+  }
+  c.points.push_back(p.front());  // closed: the last sample is the first point again
+  for (size_t i = 0; i < c.points.size(); ++i)
+    c.arc_m.push_back(i == 0 ? 0.0 : c.arc_m.back() + (c.points[i] - c.points[i - 1]).norm());
+  return c;
+}
+
+constexpr int kTourSamplesPerSegment = 64;
+
 /// Position at arc length `s_m` along the closed curve (wrapped; linear between samples).
 Eigen::Vector3d positionAt(const DenseCurve& c, double s_m) {
   const double length = c.arc_m.back();
@@ -144,6 +174,57 @@ std::optional<std::vector<TimedPose>> makeWalkthrough(const AnalyticScene& scene
   return std::nullopt;
 }
 
+std::optional<std::vector<TimedPose>> makeTour(const AnalyticScene& scene, const TourParams& params,
+                                               int frames, double rate_hz, uint32_t seed,
+                                               std::string* error) {
+  if (params.route_m.size() < 3) {
+    *error = "tour: the route needs at least 3 points";
+    return std::nullopt;
+  }
+  const DenseCurve curve = densifyCentripetal(params.route_m, kTourSamplesPerSegment);
+  for (const Eigen::Vector3d& p : curve.points) {
+    if (scene.clearance(p) < params.clearance_m) {
+      *error = "tour: the route passes within " + std::to_string(scene.clearance(p)) +
+               " m of a solid at (" + std::to_string(p.x()) + ", " + std::to_string(p.y()) + ", " +
+               std::to_string(p.z()) + ")";
+      return std::nullopt;
+    }
+  }
+  std::mt19937 rng(seed);
+  const double sweep_phase = uniform(&rng, 0, 2 * M_PI);
+  const double nod_phase = uniform(&rng, 0, 2 * M_PI);
+  std::vector<TimedPose> poses;
+  poses.reserve(std::max(frames, 0));
+  for (int k = 0; k < frames; ++k) {
+    const double t_s = k / rate_hz;
+    const double s_m = params.speed_mps * t_s;
+    const Eigen::Vector3d eye = positionAt(curve, s_m);
+    const Eigen::Vector3d ahead = positionAt(curve, s_m + params.heading_window_m) -
+                                  positionAt(curve, s_m - params.heading_window_m);
+    const double yaw =
+        std::atan2(ahead.y(), ahead.x()) +
+        params.sweep_amplitude_rad * std::sin(2 * M_PI * t_s / params.sweep_period_s + sweep_phase);
+    const double pitch =
+        params.pitch_down_rad +
+        params.nod_amplitude_rad * std::sin(2 * M_PI * t_s / params.nod_period_s + nod_phase);
+    const Eigen::Vector3d forward(std::cos(yaw) * std::cos(pitch), std::sin(yaw) * std::cos(pitch),
+                                  -std::sin(pitch));
+    poses.push_back({t_s, lookAt(eye, eye + forward)});
+  }
+  return poses;
+}
+
+double tourLengthM(const std::vector<Eigen::Vector3d>& route_m) {
+  if (route_m.size() < 3) return 0.0;
+  return densifyCentripetal(route_m, kTourSamplesPerSegment).arc_m.back();
+}
+
+int fullTourFrames(const ScenePreset& preset, double rate_hz) {
+  if (preset.route_m.size() < 3) return 0;
+  const double step_m = TourParams{}.speed_mps / rate_hz;
+  return static_cast<int>(std::ceil(tourLengthM(preset.route_m) / step_m));
+}
+
 std::vector<std::string> trajectoryNames() { return {"orbit", "walkthrough"}; }
 
 std::optional<std::vector<TimedPose>> makeTrajectory(const std::string& name,
@@ -157,6 +238,11 @@ std::optional<std::vector<TimedPose>> makeTrajectory(const std::string& name,
     orbit.radius_m = preset.orbit_radius_m;
     orbit.height_m = preset.orbit_height_m;
     return makeOrbit(orbit, frames, rate_hz, seed);
+  }
+  if (name == "walkthrough" && !preset.route_m.empty()) {
+    TourParams tour;
+    tour.route_m = preset.route_m;
+    return makeTour(preset.scene, tour, frames, rate_hz, seed, error);
   }
   if (name == "walkthrough") {
     WalkthroughParams walk;

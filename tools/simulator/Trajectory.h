@@ -48,6 +48,25 @@ struct WalkthroughParams {
   int max_attempts = 500;  ///< waypoint sets tried before giving up
 };
 
+/// A walk along a preset's route (ScenePreset::route_m: a closed loop of camera positions through
+/// rooms and doorways) at constant speed, on a smooth curve through the route's points (centripetal
+/// Catmull–Rom: no cusps or overshoot where points are unevenly spaced), looping again when the
+/// sequence is longer than the loop. The camera looks ahead along the path, swept side to side
+/// (into the rooms along a corridor) and nodding slowly up and down (the floor and the ceiling).
+struct TourParams {
+  std::vector<Eigen::Vector3d> route_m;
+  double clearance_m = 0.35;          ///< minimum distance to every solid along the curve
+  double speed_mps = 1.0;             ///< walking speed along the path
+  double sweep_amplitude_rad = 0.45;  ///< side-to-side look amplitude
+  double sweep_period_s = 6.0;        ///< duration of one side-to-side look
+  double heading_window_m = 1.0;      ///< "ahead" is the path direction averaged over ±this
+                                      ///< (wide: the U-turns at a corridor's ends stay gentle)
+  double pitch_down_rad = 0.2;        ///< mean downward tilt
+  double nod_amplitude_rad = 0.35;    ///< up-and-down look amplitude: the floor and the ceiling
+                                      ///< come within ~1.6 m of the camera
+  double nod_period_s = 7.0;
+};
+
 /// `frames` poses of an orbit, timestamps k / rate_hz.
 std::vector<TimedPose> makeOrbit(const OrbitParams& params, int frames, double rate_hz,
                                  uint32_t seed);
@@ -59,11 +78,27 @@ std::optional<std::vector<TimedPose>> makeWalkthrough(const AnalyticScene& scene
                                                       double rate_hz, uint32_t seed,
                                                       std::string* error);
 
+/// `frames` poses of a tour of `scene` along `params.route_m`, timestamps k / rate_hz. The seed
+/// picks the phases of the sweep and the nod. std::nullopt with a reason when the route has fewer
+/// than 3 points or its curve comes nearer than the clearance to a solid.
+std::optional<std::vector<TimedPose>> makeTour(const AnalyticScene& scene, const TourParams& params,
+                                               int frames, double rate_hz, uint32_t seed,
+                                               std::string* error);
+
+/// Length in metres of the closed curve a tour follows through `route_m` (0 for fewer than 3
+/// points).
+double tourLengthM(const std::vector<Eigen::Vector3d>& route_m);
+
+/// Frames of one whole lap of `preset`'s route at the walkthrough's default speed and `rate_hz`:
+/// the last frame is less than one step before the first. 0 when the preset has no route.
+int fullTourFrames(const ScenePreset& preset, double rate_hz);
+
 /// Names accepted by makeTrajectory().
 std::vector<std::string> trajectoryNames();
 
 /// Trajectory `name` ("orbit" or "walkthrough") with the preset's defaults (orbit around its
-/// focus, `revolutions` times; walkthrough of its room). std::nullopt with a reason on failure.
+/// focus, `revolutions` times; walkthrough of its room, or a tour along its route when it has one:
+/// the building). std::nullopt with a reason on failure.
 std::optional<std::vector<TimedPose>> makeTrajectory(const std::string& name,
                                                      const ScenePreset& preset, int frames,
                                                      double rate_hz, uint32_t seed,

@@ -33,6 +33,7 @@ struct Options {
   std::string preset = "room";
   std::string trajectory = "walkthrough";
   int frames = 100;
+  bool frames_given = false;  ///< --frames was passed (else the building's walkthrough: one tour)
   int width_px = 640;
   int height_px = 480;
   double fx_px = 525.0;
@@ -65,9 +66,14 @@ const char* const kUsage = R"(Usage: stereo_fusion_simulate --out DIR [options]
 Renders a rectified stereo sequence of an analytic scene and writes it as a dataset folder:
 calibration.yaml, poses.txt, disparity/ color/ right/ NNNNNN.png, gt_mesh.ply.
 
-  --preset room|tabletop|hall     scene (default room; hall: far-range, walls 3–4.5 m away)
-  --trajectory orbit|walkthrough  camera path (default walkthrough)
-  --frames N                      number of frames (default 100)
+  --preset room|tabletop|hall|building
+                                  scene (default room; hall: far-range, walls 3–4.5 m away;
+                                  building: six furnished rooms along a corridor, a map larger
+                                  than memory caps for benches of paging)
+  --trajectory orbit|walkthrough  camera path (default walkthrough; building: the walkthrough is
+                                  a tour through every room, ending back in the first)
+  --frames N                      number of frames (default 100; building's walkthrough: one
+                                  whole tour, ~1000 frames; fewer: its start only)
   --width W --height H            image size in pixels (default 640 x 480)
   --fx F                          focal length in pixels (default 525)
   --fy F                          vertical focal length (default: fx); cx, cy = image centre
@@ -176,7 +182,10 @@ bool parseArguments(int argc, char** argv, Options* o) {
       {"--trajectory",
        [&](auto& f, auto& v) { o->trajectory = parseChoice(f, v, trajectoryNames()); }},
       {"--frames",
-       [&](auto& f, auto& v) { o->frames = static_cast<int>(parseInteger(f, v, 1, 1000000)); }},
+       [&](auto& f, auto& v) {
+         o->frames = static_cast<int>(parseInteger(f, v, 1, 1000000));
+         o->frames_given = true;
+       }},
       {"--width",
        [&](auto& f, auto& v) { o->width_px = static_cast<int>(parseInteger(f, v, 16, 8192)); }},
       {"--height",
@@ -347,6 +356,8 @@ int main(int argc, char** argv) {
     return 2;
   }
   auto preset = makePreset(o.preset, o.seed);
+  if (!o.frames_given && o.trajectory == "walkthrough" && !preset->route_m.empty())
+    o.frames = fullTourFrames(*preset, o.rate_hz);  // one whole tour of the building
   const auto poses =
       makeTrajectory(o.trajectory, *preset, o.frames, o.rate_hz, o.seed, &error, o.revolutions);
   if (!poses) {
