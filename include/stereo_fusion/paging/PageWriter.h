@@ -76,7 +76,7 @@ class PageWriter {
   size_t pending_bytes_ = 0;
   uint64_t next_batch_ = 0;
   uint64_t written_batches_ = 0;  // batches [0, this) are in the store
-  bool writing_ = false;  // the thread holds a batch
+  bool writing_ = false;          // the thread holds a batch
   bool failed_ = false;
   std::string error_;
   bool stop_ = false;
