@@ -8,6 +8,7 @@
 #include <atomic>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <system_error>
 
 namespace stereo_fusion {
@@ -161,17 +162,26 @@ bool BlockStore::write(const std::vector<BlockKey>& keys,
 
 bool BlockStore::write(const std::vector<BlockKey>& keys,
                        const std::vector<const std::vector<uint8_t>*>& pages, std::string* error) {
-  if (!execute("BEGIN", error)) return false;
-  for (size_t i = 0; i < keys.size(); ++i) {
-    bindKey(insert_, keys[i]);
+  return eachKeyInTransaction(keys, insert_, "cannot write pages", error, [&](size_t i) {
     // An empty vector's data() may be null, which SQLite would store as NULL: bind "" instead.
     static const uint8_t kNothing = 0;
     sqlite3_bind_blob64(insert_, 4, pages[i]->empty() ? &kNothing : pages[i]->data(),
                         pages[i]->size(), SQLITE_STATIC);
-    const int rc = sqlite3_step(insert_);
-    sqlite3_reset(insert_);
+  });
+}
+
+bool BlockStore::eachKeyInTransaction(const std::vector<BlockKey>& keys, sqlite3_stmt* statement,
+                                      const char* what, std::string* error,
+                                      const std::function<void(size_t)>& bind_rest) {
+  if (keys.empty()) return true;
+  if (!execute("BEGIN", error)) return false;
+  for (size_t i = 0; i < keys.size(); ++i) {
+    bindKey(statement, keys[i]);
+    if (bind_rest) bind_rest(i);
+    const int rc = sqlite3_step(statement);
+    sqlite3_reset(statement);
     if (rc != SQLITE_DONE) {
-      *error = failure("cannot write pages");
+      *error = failure(what);
       rollback(db_);
       return false;
     }
@@ -209,21 +219,7 @@ BlockStore::ReadBatch::~ReadBatch() {
 }
 
 bool BlockStore::erase(const std::vector<BlockKey>& keys, std::string* error) {
-  if (keys.empty()) return true;
-  if (!execute("BEGIN", error)) return false;
-  for (const BlockKey& key : keys) {
-    bindKey(delete_, key);
-    const int rc = sqlite3_step(delete_);
-    sqlite3_reset(delete_);
-    if (rc != SQLITE_DONE) {
-      *error = failure("cannot erase pages");
-      rollback(db_);
-      return false;
-    }
-  }
-  if (execute("COMMIT", error)) return true;
-  rollback(db_);
-  return false;
+  return eachKeyInTransaction(keys, delete_, "cannot erase pages", error, {});
 }
 
 bool BlockStore::clear(std::string* error) { return execute("DELETE FROM pages", error); }

@@ -1,5 +1,6 @@
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -76,6 +77,11 @@ class BlockStore {
   bool execute(const char* sql, std::string* error);
   bool prepare(const char* sql, sqlite3_stmt** statement, std::string* error);
   std::string failure(const std::string& what) const;
+  /// Runs `statement` once per key (bound to parameters 1-3; `bind_rest(i)` binds the others)
+  /// in one transaction: all of them or, on an error, none.
+  bool eachKeyInTransaction(const std::vector<BlockKey>& keys, sqlite3_stmt* statement,
+                            const char* what, std::string* error,
+                            const std::function<void(size_t)>& bind_rest);
 
   std::string file_;
   bool remove_on_close_ = false;
