@@ -33,7 +33,10 @@ run() {  # name, input, fuser arguments...
   rm -rf "$out"
   mkdir -p "$out"
   echo "[identity] $name" >&2
-  "$FUSE" "$input" "$out" --quiet --save-map "$out/map.sfmap" "$@" >&2
+  # IDENTITY_EXTRA_ARGS: appended to every run (e.g. "--set max_map_memory_mb=4": paging must
+  # leave every output as it is).
+  # shellcheck disable=SC2086
+  "$FUSE" "$input" "$out" --quiet --save-map "$out/map.sfmap" "$@" ${IDENTITY_EXTRA_ARGS:-} >&2
   # stats.json holds timings and the machine's figures: everything else is compared.
   (cd "$out" && find . -type f ! -name stats.json | LC_ALL=C sort | xargs sha256sum |
      sed "s|  \./|  $name/|")
