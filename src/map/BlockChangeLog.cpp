@@ -17,6 +17,20 @@ void BlockChangeLog::record(const std::vector<BlockKey>& keys, bool erased) {
 BlockChangeLog::Changes BlockChangeLog::take(Consumer consumer) {
   std::vector<Event> events;
   events.swap(consumers_[consumer].events);
+  return compact(std::move(events));
+}
+
+BlockChangeLog::Changes BlockChangeLog::peek(Consumer consumer) const {
+  return compact(consumers_[consumer].events);
+}
+
+void BlockChangeLog::restore(Consumer consumer, const Changes& changes) {
+  std::vector<Event>& events = consumers_[consumer].events;
+  for (const BlockKey& key : changes.updated) events.push_back({key, false});
+  for (const BlockKey& key : changes.erased) events.push_back({key, true});
+}
+
+BlockChangeLog::Changes BlockChangeLog::compact(std::vector<Event> events) {
   // Stable: among a key's events the last recorded stays last, and it decides.
   std::stable_sort(events.begin(), events.end(),
                    [](const Event& a, const Event& b) { return a.key < b.key; });

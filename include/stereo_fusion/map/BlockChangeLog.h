@@ -38,6 +38,11 @@ class BlockChangeLog {
 
   /// The changes `consumer` has not taken yet; it starts afresh.
   Changes take(Consumer consumer);
+  /// What take() would return, leaving the changes where they are (a checkpoint keeps them).
+  Changes peek(Consumer consumer) const;
+  /// Records `changes` for `consumer` alone (a resumed map: what it had not taken).
+  void restore(Consumer consumer, const Changes& changes);
+  size_t consumerCount() const { return consumers_.size(); }
   /// Changes recorded for `consumer` and not taken yet (a key recorded twice counts twice).
   size_t pending(Consumer consumer) const { return consumers_[consumer].events.size(); }
   /// Appends the keys every consumer has not taken yet (unsorted, repeated as recorded).
@@ -58,6 +63,8 @@ class BlockChangeLog {
     std::vector<Event> events;  // in recording order
   };
   void record(const std::vector<BlockKey>& keys, bool erased);
+  /// A consumer's events as take() reports them: each key once, where it ended.
+  static Changes compact(std::vector<Event> events);
 
   std::vector<ConsumerLog> consumers_;
 };

@@ -53,3 +53,24 @@ TEST(BlockChangeLog, ClearForgetsPendingChangesButKeepsConsumers) {
   EXPECT_EQ(log.take(b).erased, (std::vector<BlockKey>{kC}));
   EXPECT_EQ(log.take(a).erased, (std::vector<BlockKey>{kC}));
 }
+
+TEST(BlockChangeLog, PeekLeavesTheChangesAndRestoreGivesThemBackToOneConsumer) {
+  BlockChangeLog log;
+  const BlockChangeLog::Consumer a = log.subscribe("a"), b = log.subscribe("b");
+  log.recordUpdated({kB, kA});
+  log.recordErased({kB, kD});
+  const BlockChangeLog::Changes peeked = log.peek(a);
+  EXPECT_EQ(peeked.updated, (std::vector<BlockKey>{kA}));
+  EXPECT_EQ(peeked.erased, (std::vector<BlockKey>{kB, kD}));
+  EXPECT_EQ(log.pending(a), 4u);  // still there
+  // A resumed map: the changes come back to `a` alone, and take() reports them as before.
+  BlockChangeLog resumed;
+  const BlockChangeLog::Consumer ra = resumed.subscribe("a"), rb = resumed.subscribe("b");
+  EXPECT_EQ(resumed.consumerCount(), 2u);
+  resumed.restore(ra, peeked);
+  const BlockChangeLog::Changes taken = resumed.take(ra);
+  EXPECT_EQ(taken.updated, log.take(a).updated);
+  EXPECT_EQ(taken.erased, peeked.erased);
+  EXPECT_TRUE(resumed.take(rb).empty());
+  EXPECT_EQ(log.take(b).erased, peeked.erased);
+}
