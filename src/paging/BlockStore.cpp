@@ -28,8 +28,8 @@ void rollback(sqlite3* db) { sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, null
 }  // namespace
 
 std::unique_ptr<BlockStore> BlockStore::open(const std::string& file,
-                                             const BlockStoreIdentity& identity,
-                                             std::string* error) {
+                                             const BlockStoreIdentity& identity, std::string* error,
+                                             bool durable) {
   std::unique_ptr<BlockStore> store(new BlockStore());
   store->file_ = file;
   const std::filesystem::path parent = std::filesystem::path(file).parent_path();
@@ -51,7 +51,7 @@ std::unique_ptr<BlockStore> BlockStore::open(const std::string& file,
   // blocks are a cache of the map in memory until the store is made durable (save).
   // A file that is not a database fails on its first read: here.
   if (!store->execute("PRAGMA journal_mode=WAL", error) ||
-      !store->execute("PRAGMA synchronous=NORMAL", error) ||
+      !store->execute(durable ? "PRAGMA synchronous=FULL" : "PRAGMA synchronous=NORMAL", error) ||
       !store->execute("PRAGMA cache_size=-8192", error) ||  // 8 MiB, whatever the store's size
       !store->execute("CREATE TABLE IF NOT EXISTS meta(name TEXT PRIMARY KEY, value) ", error) ||
       !store->execute("CREATE TABLE IF NOT EXISTS pages(x INTEGER NOT NULL, y INTEGER NOT NULL, "
@@ -220,6 +220,90 @@ BlockStore::ReadBatch::~ReadBatch() {
 
 bool BlockStore::erase(const std::vector<BlockKey>& keys, std::string* error) {
   return eachKeyInTransaction(keys, delete_, "cannot erase pages", error, {});
+}
+
+bool BlockStore::stepKey(sqlite3_stmt* statement, const BlockKey& key,
+                         const std::vector<uint8_t>* page) {
+  bindKey(statement, key);
+  if (page) {
+    // An empty vector's data() may be null, which SQLite would store as NULL: bind "" instead.
+    static const uint8_t kNothing = 0;
+    sqlite3_bind_blob64(statement, 4, page->empty() ? &kNothing : page->data(), page->size(),
+                        SQLITE_STATIC);
+  }
+  const int rc = sqlite3_step(statement);
+  sqlite3_reset(statement);
+  return rc == SQLITE_DONE;
+}
+
+bool BlockStore::commit(const StoreCommit& commit, std::string* error) {
+  if (!execute("BEGIN", error)) return false;
+  bool ok = !commit.clear_first || execute("DELETE FROM pages", error);
+  for (size_t i = 0; ok && i < commit.erase.size(); ++i)
+    ok = stepKey(delete_, commit.erase[i], nullptr);
+  for (size_t i = 0; ok && i < commit.keys.size(); ++i)
+    ok = stepKey(insert_, commit.keys[i], commit.pages[i].get());
+  if (ok) {
+    sqlite3_stmt* put = nullptr;
+    ok = prepare("INSERT OR REPLACE INTO meta(name, value) VALUES ('checkpoint', ?1)", &put, error);
+    if (ok) {
+      sqlite3_bind_blob64(put, 1, commit.state.data(), commit.state.size(), SQLITE_STATIC);
+      ok = sqlite3_step(put) == SQLITE_DONE;
+      sqlite3_finalize(put);
+    }
+  }
+  if (!ok) {
+    if (error->empty()) *error = failure("cannot write the checkpoint");
+    rollback(db_);
+    return false;
+  }
+  if (execute("COMMIT", error)) return true;
+  rollback(db_);
+  return false;
+}
+
+bool BlockStore::readState(std::vector<uint8_t>* state, std::string* error) {
+  error->clear();
+  sqlite3_stmt* get = nullptr;
+  if (!prepare("SELECT value FROM meta WHERE name = 'checkpoint'", &get, error)) return false;
+  const int rc = sqlite3_step(get);
+  bool found = false;
+  if (rc == SQLITE_ROW && sqlite3_column_type(get, 0) == SQLITE_BLOB) {
+    const auto* data = static_cast<const uint8_t*>(sqlite3_column_blob(get, 0));
+    state->assign(data, data + sqlite3_column_bytes(get, 0));
+    found = true;
+  } else if (rc == SQLITE_ROW) {
+    *error = file_ + ": its checkpoint record is not a blob";
+  } else if (rc != SQLITE_DONE) {
+    *error = failure("cannot read the checkpoint record");
+  }
+  sqlite3_finalize(get);
+  return found;
+}
+
+bool BlockStore::eachPage(const std::function<bool(const BlockKey&, const uint8_t*, size_t)>& visit,
+                          std::string* error) {
+  error->clear();
+  sqlite3_stmt* all = nullptr;
+  if (!prepare("SELECT x, y, z, page FROM pages ORDER BY z, y, x", &all, error)) return false;
+  ReadBatch batch(this);
+  int rc;
+  bool visited_all = true;
+  while ((rc = sqlite3_step(all)) == SQLITE_ROW) {
+    const BlockKey key{sqlite3_column_int(all, 0), sqlite3_column_int(all, 1),
+                       sqlite3_column_int(all, 2)};
+    const auto* data = static_cast<const uint8_t*>(sqlite3_column_blob(all, 3));
+    if (!visit(key, data, static_cast<size_t>(sqlite3_column_bytes(all, 3)))) {
+      visited_all = false;
+      break;
+    }
+  }
+  sqlite3_finalize(all);
+  if (visited_all && rc != SQLITE_DONE) {
+    *error = failure("cannot read the pages");
+    return false;
+  }
+  return visited_all;
 }
 
 bool BlockStore::clear(std::string* error) { return execute("DELETE FROM pages", error); }

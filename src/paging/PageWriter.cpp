@@ -14,19 +14,42 @@ PageWriter::~PageWriter() {
   thread_.join();
 }
 
+uint64_t PageWriter::queueLocked(Batch batch) {
+  batch.id = next_batch_++;
+  const std::vector<BlockKey>& keys = batch.commit ? batch.commit->keys : batch.keys;
+  const std::vector<Page>& pages = batch.commit ? batch.commit->pages : batch.pages;
+  for (size_t i = 0; i < keys.size(); ++i) {
+    Pending& entry = pending_[keys[i]];
+    if (entry.page) pending_bytes_ -= entry.page->size();  // an older page of the key
+    entry = Pending{batch.id, pages[i]};
+    pending_bytes_ += pages[i]->size();
+  }
+  const uint64_t id = batch.id;
+  batches_.push_back(std::move(batch));
+  return id;
+}
+
 void PageWriter::write(std::vector<BlockKey> keys, std::vector<Page> pages) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    const uint64_t id = next_batch_++;
-    for (size_t i = 0; i < keys.size(); ++i) {
-      Pending& entry = pending_[keys[i]];
-      if (entry.page) pending_bytes_ -= entry.page->size();  // an older page of the key
-      entry = Pending{id, pages[i]};
-      pending_bytes_ += pages[i]->size();
-    }
-    batches_.push_back(Batch{id, std::move(keys), std::move(pages)});
+    queueLocked(Batch{0, std::move(keys), std::move(pages), nullptr});
   }
   work_.notify_one();
+}
+
+uint64_t PageWriter::commit(StoreCommit commit) {
+  uint64_t id = 0;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    id = queueLocked(Batch{0, {}, {}, std::make_unique<StoreCommit>(std::move(commit))});
+  }
+  work_.notify_one();
+  return id;
+}
+
+uint64_t PageWriter::writtenBatches() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return written_batches_;
 }
 
 PageWriter::Page PageWriter::find(const BlockKey& key) const {
@@ -95,11 +118,16 @@ void PageWriter::run() {
     writing_ = true;
     const Batch& batch = batches_.front();  // only this thread pops; the host only appends
     lock.unlock();
-    std::vector<const std::vector<uint8_t>*> pages;
-    pages.reserve(batch.pages.size());
-    for (const Page& page : batch.pages) pages.push_back(page.get());
     std::string error;
-    const bool written = store_->write(batch.keys, pages, &error);
+    bool written = false;
+    if (batch.commit) {
+      written = store_->commit(*batch.commit, &error);
+    } else {
+      std::vector<const std::vector<uint8_t>*> pages;
+      pages.reserve(batch.pages.size());
+      for (const Page& page : batch.pages) pages.push_back(page.get());
+      written = store_->write(batch.keys, pages, &error);
+    }
     lock.lock();
     writing_ = false;
     if (!written) {

@@ -12,6 +12,16 @@ struct sqlite3_stmt;
 
 namespace stereo_fusion {
 
+/// One transaction of a map store (Mapper::checkpoint()): all of it or, after a kill or an
+/// error, none.
+struct StoreCommit {
+  bool clear_first = false;     ///< drop every page first (a reset or a replaced map)
+  std::vector<BlockKey> erase;  ///< blocks gone from the map
+  std::vector<BlockKey> keys;   ///< pages written (or replaced)
+  std::vector<std::shared_ptr<const std::vector<uint8_t>>> pages;
+  std::vector<uint8_t> state;  ///< the checkpoint record (paging/CheckpointState.h)
+};
+
 /// What a store was made for: a store of another voxel grid is refused at open.
 struct BlockStoreIdentity {
   double voxel_size_m = 0.0;
@@ -30,8 +40,11 @@ class BlockStore {
   /// Opens the database `file` (created, with its folder, if missing). A file that is not a
   /// stereo_fusion block store, or one made for another voxel grid, is refused with a sentence
   /// in `error` (nullptr returned); so is a folder that cannot be created or written.
+  /// `durable`: every commit reaches the disk before it returns (synchronous=FULL), for the
+  /// map store; a paging store only needs to survive its own process (NORMAL).
   static std::unique_ptr<BlockStore> open(const std::string& file,
-                                          const BlockStoreIdentity& identity, std::string* error);
+                                          const BlockStoreIdentity& identity, std::string* error,
+                                          bool durable = false);
   /// A store of its own for one map in `folder` (empty: the temporary folder), named
   /// pages-<pid>-<n>.sqlite, removed (with its journal) when the store is destroyed.
   static std::unique_ptr<BlockStore> openPrivate(const std::string& folder,
@@ -69,12 +82,23 @@ class BlockStore {
   bool erase(const std::vector<BlockKey>& keys, std::string* error);
   /// Removes every page.
   bool clear(std::string* error);
+  /// Writes `commit` in one transaction (the pages, the erasures and the checkpoint record).
+  bool commit(const StoreCommit& commit, std::string* error);
+  /// The checkpoint record of the last commit into `state`. False with `error` empty when the
+  /// store has none (it was never checkpointed), with a sentence when it cannot be read.
+  bool readState(std::vector<uint8_t>* state, std::string* error);
+  /// Calls `visit` with every page in key order (one read transaction); stops and returns false
+  /// when `visit` does, or with a sentence in `error` when the store cannot be read.
+  bool eachPage(const std::function<bool(const BlockKey&, const uint8_t*, size_t)>& visit,
+                std::string* error);
   /// Every key with a page, sorted.
   bool keys(std::vector<BlockKey>* out, std::string* error);
 
  private:
   BlockStore() = default;
   bool execute(const char* sql, std::string* error);
+  /// Binds `key` (and `page`, when given) to `statement` and runs it once.
+  bool stepKey(sqlite3_stmt* statement, const BlockKey& key, const std::vector<uint8_t>* page);
   bool prepare(const char* sql, sqlite3_stmt** statement, std::string* error);
   std::string failure(const std::string& what) const;
   /// Runs `statement` once per key (bound to parameters 1-3; `bind_rest(i)` binds the others)

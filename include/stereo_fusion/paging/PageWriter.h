@@ -38,6 +38,11 @@ class PageWriter {
 
   /// Hands a batch over (one transaction in the store).
   void write(std::vector<BlockKey> keys, std::vector<Page> pages);
+  /// Hands a checkpoint over (BlockStore::commit(), one transaction, after every batch before
+  /// it); returns its batch number (written once writtenBatches() exceeds it).
+  uint64_t commit(StoreCommit commit);
+  /// Batches [0, this) are in the store.
+  uint64_t writtenBatches() const;
   /// The page of `key` handed over and not released; nullptr when the store has it (or never
   /// had it).
   Page find(const BlockKey& key) const;
@@ -60,12 +65,15 @@ class PageWriter {
     uint64_t id;
     std::vector<BlockKey> keys;
     std::vector<Page> pages;
+    std::unique_ptr<StoreCommit> commit;  // a checkpoint: written by BlockStore::commit()
   };
   struct Pending {
     uint64_t batch;
     Page page;
   };
   void run();
+  /// Queues `batch` with its pages readable through find() (mutex_ held).
+  uint64_t queueLocked(Batch batch);
 
   std::unique_ptr<BlockStore> store_;
   mutable std::mutex mutex_;

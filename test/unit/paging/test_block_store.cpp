@@ -98,3 +98,61 @@ TEST(BlockStore, APrivateStoreIsRemovedWithItsMap) {
   EXPECT_FALSE(fs::exists(file + "-wal"));
   EXPECT_TRUE(fs::is_empty(dir.path));
 }
+
+TEST(BlockStore, ACommitWritesErasesAndRecordsItsStateInOneTransaction) {
+  TempFolder dir;
+  const std::string file = (dir.path / "map.sqlite").string();
+  std::string error;
+  auto page = [](std::initializer_list<uint8_t> bytes) {
+    return std::make_shared<const std::vector<uint8_t>>(bytes);
+  };
+  {
+    auto store = BlockStore::open(file, kIdentity, &error, /*durable=*/true);
+    ASSERT_TRUE(store) << error;
+    std::vector<uint8_t> state;
+    EXPECT_FALSE(store->readState(&state, &error));
+    EXPECT_TRUE(error.empty()) << "no checkpoint yet is no error: " << error;
+    StoreCommit first;
+    first.keys = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}};
+    first.pages = {page({1}), page({2}), page({3})};
+    first.state = {10, 11};
+    ASSERT_TRUE(store->commit(first, &error)) << error;
+    StoreCommit second;
+    second.erase = {{1, 0, 0}, {7, 7, 7}};  // a missing key is no error
+    second.keys = {{2, 0, 0}, {3, 0, 0}};
+    second.pages = {page({30}), page({4})};
+    second.state = {20};
+    ASSERT_TRUE(store->commit(second, &error)) << error;
+  }
+  auto store = BlockStore::open(file, kIdentity, &error, true);
+  ASSERT_TRUE(store) << error;
+  std::vector<uint8_t> state;
+  ASSERT_TRUE(store->readState(&state, &error)) << error;
+  EXPECT_EQ(state, std::vector<uint8_t>{20});
+  std::vector<std::pair<BlockKey, std::vector<uint8_t>>> pages;
+  ASSERT_TRUE(store->eachPage(
+      [&](const BlockKey& key, const uint8_t* data, size_t size) {
+        pages.emplace_back(key, std::vector<uint8_t>(data, data + size));
+        return true;
+      },
+      &error))
+      << error;
+  const std::vector<std::pair<BlockKey, std::vector<uint8_t>>> expected = {
+      {{0, 0, 0}, {1}}, {{2, 0, 0}, {30}}, {{3, 0, 0}, {4}}};
+  EXPECT_EQ(pages, expected);
+  // clear_first: the commit's pages are all the store holds after it.
+  StoreCommit whole;
+  whole.clear_first = true;
+  whole.keys = {{5, 5, 5}};
+  whole.pages = {page({5})};
+  ASSERT_TRUE(store->commit(whole, &error)) << error;
+  std::vector<BlockKey> keys;
+  ASSERT_TRUE(store->keys(&keys, &error)) << error;
+  EXPECT_EQ(keys, (std::vector<BlockKey>{{5, 5, 5}}));
+  // A visitor that stops the walk.
+  size_t visited = 0;
+  EXPECT_FALSE(store->eachPage(
+      [&](const BlockKey&, const uint8_t*, size_t) { return ++visited < 1; }, &error));
+  EXPECT_EQ(visited, 1u);
+  EXPECT_TRUE(error.empty());
+}
