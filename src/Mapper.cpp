@@ -98,6 +98,8 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
     result.blocks_paged_out = paging_stats_.blocks_paged_out - before;
     result.paging_ms += timer.elapsedMs();
   }
+  noteCheckpointChanges();
+  if (!checkpoints_in_flight_.empty()) foldCommittedCheckpoints();
   return result;
 }
 
@@ -293,6 +295,7 @@ MeshChanges Mapper::adoptMap(BlockOctree* loaded, const MapFileInfo& info) {
   pipeline_.forget();
   voxel_bytes_ = octree_.memoryUse().voxelBytes();
   for (LayerSlot& slot : layers_) slot.layer->adopt(octree_, info);
+  checkpoint_full_ = true;  // the store's map is not this one any more
   pageOutOverCap();
   return mesh_->adopted();
 }
@@ -348,6 +351,7 @@ void Mapper::reset() {
   frames_integrated_ = 0;
   blocks_evicted_ = 0;
   pipeline_.forget();
+  checkpoint_full_ = true;  // the store's map is not this one any more
 }
 
 std::string Mapper::disparityNoiseWarning() const {

@@ -242,9 +242,25 @@ const Table& table() {
                 member(&MapperConfig::max_map_memory_mb));
     t.addString("map_store_path", true, "a folder; empty: the temporary folder",
                 "Where max_map_memory_mb pages blocks to: a folder that gets one SQLite file per "
-                "map (pages-<pid>-<n>.sqlite, removed when the map is). Put it on a disk with "
-                "room for the whole map (~2-7 KB a block).",
+                "map (pages-<pid>-<n>.sqlite, removed when the map is); with checkpoint_period_s "
+                "or resume also the map store map.sqlite, the map kept across runs. Put it on a "
+                "disk with room for the whole map (~2-7 KB a block, twice with both).",
                 member(&MapperConfig::map_store_path));
+    t.addDouble("checkpoint_period_s", "s", 0.0, true, 1e6,
+                "> 0: the map store map_store_path/map.sqlite keeps the map: every this many "
+                "seconds (and at ~save_map with an empty path, and when the offline fuser ends) "
+                "the blocks changed since the last checkpoint are written to it in one "
+                "transaction, on a thread of their own. A kill (SIGKILL, power cut) loses at most "
+                "the frames since the last checkpoint; resume continues from it. 0 = no "
+                "checkpoints (without resume, the store is not kept).",
+                member(&MapperConfig::checkpoint_period_s));
+    t.addBool("resume",
+              "Continue the map kept in map_store_path/map.sqlite, as it was at its last "
+              "checkpoint, mesh and texture patches included (the planning layer is derived "
+              "again). No store there: a new map. A store that cannot be read, or was made for "
+              "another voxel grid, is left untouched: the error is reported and the node maps "
+              "without it.",
+              member(&MapperConfig::resume));
     // The frame gate's rule, stated where it is documented (FrameGate::kFramesToReanchor).
     const std::string reanchor_frames = std::to_string(FrameGate::kFramesToReanchor);
     t.addDouble("max_pose_jump_m", "m", 0.0, true, 1e6,
@@ -377,6 +393,9 @@ std::vector<std::string> validateMapperConfig(const MapperConfig& config) {
     errors.push_back("esdf_max_distance_m must be at most 100 planning cells (esdf_voxel_size_m)");
   if (config.grid_min_z_m >= config.grid_max_z_m)
     errors.push_back("grid_min_z_m must be < grid_max_z_m");
+  if (config.keepsMapStore() && config.map_store_path.empty())
+    errors.push_back(
+        "checkpoint_period_s and resume need map_store_path: the folder of the map store");
   return errors;
 }
 

@@ -1,6 +1,7 @@
 // The map host's paging (max_map_memory_mb): blocks beyond the cap go to the BlockStore with
 // their layers' parts and come back before anything reaches them. See Mapper.h for the invariant.
 #include <algorithm>
+#include <cstring>
 #include <stdexcept>
 #include <unordered_set>
 
@@ -53,6 +54,51 @@ void Mapper::pageLost(const BlockKey& key, const std::string& why) {
                         std::to_string(key.z) + ") lost: " + why;
 }
 
+Mapper::Placed Mapper::placePage(const BlockKey& key, const uint8_t* data, size_t size,
+                                 std::string* error) {
+  ByteReader reader(data, size);
+  uint64_t last_update_frame = 0;
+  std::unique_ptr<VoxelBlock> block = readPageHead(&reader, key, &last_update_frame, error);
+  if (!block) return Placed::kLost;
+  const size_t block_voxel_bytes = block->voxelBytes();
+  VoxelBlock* placed = octree_.insert(std::move(block));
+  if (placed == nullptr) {  // cannot happen: a paged-out key has no block in memory
+    *error = "a block of the same key is in memory";
+    return Placed::kLost;
+  }
+  voxel_bytes_ += block_voxel_bytes;
+  eviction_.setLastUpdateFrame(octree_, *placed, last_update_frame);
+  bool layers_read = reader.get<uint32_t>() == layers_.size();
+  for (LayerSlot& slot : layers_) {
+    const uint64_t part_bytes = reader.get<uint64_t>();
+    if (!layers_read || !reader.ok() || part_bytes > reader.remaining()) {
+      layers_read = false;
+      break;
+    }
+    ByteReader part(reader.position(), part_bytes);
+    reader.skip(part_bytes);
+    layers_read = slot.layer->pageIn(octree_, *placed, &part);
+    if (!layers_read) break;
+  }
+  if (layers_read) return Placed::kWhole;
+  *error = "its layers' part of the page is unreadable; re-derived from its voxels";
+  return Placed::kVoxelsOnly;
+}
+
+void Mapper::encodePage(const VoxelBlock& block, uint64_t last_update_frame,
+                        std::vector<uint8_t>* bytes) const {
+  ByteWriter page(bytes);
+  writePageHead(block, last_update_frame, &page);
+  page.put<uint32_t>(static_cast<uint32_t>(layers_.size()));
+  for (const LayerSlot& slot : layers_) {
+    const size_t at = page.size();
+    page.put<uint64_t>(0);
+    slot.layer->savePart(block.key, &page);
+    const uint64_t part_bytes = page.size() - at - sizeof(uint64_t);
+    std::memcpy(page.buffer().data() + at, &part_bytes, sizeof(part_bytes));
+  }
+}
+
 void Mapper::pageIn(const std::vector<BlockKey>& keys) {
   if (keys.empty() || paged_.empty()) return;
   Timer timer;
@@ -68,37 +114,15 @@ void Mapper::pageIn(const std::vector<BlockKey>& keys) {
       continue;
     }
     paging_stats_.bytes_read += page.size();
-    ByteReader reader(page.data(), page.size());
-    uint64_t last_update_frame = 0;
-    std::unique_ptr<VoxelBlock> block = readPageHead(&reader, key, &last_update_frame, &error);
-    if (!block) {
+    const Placed placed = placePage(key, page.data(), page.size(), &error);
+    if (placed == Placed::kLost) {
       pageLost(key, error);
       continue;
     }
-    const size_t block_voxel_bytes = block->voxelBytes();
-    VoxelBlock* placed = octree_.insert(std::move(block));
-    if (placed == nullptr) {  // cannot happen: a paged-out key has no block in memory
-      pageLost(key, "a block of the same key is in memory");
-      continue;
-    }
-    voxel_bytes_ += block_voxel_bytes;
-    eviction_.setLastUpdateFrame(octree_, *placed, last_update_frame);
-    bool layers_read = reader.get<uint32_t>() == layers_.size();
-    for (LayerSlot& slot : layers_) {
-      const uint64_t part_bytes = reader.get<uint64_t>();
-      if (!layers_read || !reader.ok() || part_bytes > reader.remaining()) {
-        layers_read = false;
-        break;
-      }
-      ByteReader part(reader.position(), part_bytes);
-      reader.skip(part_bytes);
-      layers_read = slot.layer->pageIn(octree_, *placed, &part);
-      if (!layers_read) break;
-    }
-    if (!layers_read) {
+    if (placed == Placed::kVoxelsOnly) {
       // The voxels came back but not the layers' parts: the block is treated as changed, so
       // the layers rebuild their part from it.
-      pageLost(key, "its layers' part of the page is unreadable; re-derived from its voxels");
+      pageLost(key, error);
       map_changes_.recordUpdated({key});
     }
     ++brought;
@@ -110,6 +134,7 @@ void Mapper::pageIn(const std::vector<BlockKey>& keys) {
 }
 
 void Mapper::pageOutOverCap() {
+  noteCheckpointChanges();  // before the mesh's checkpoint consumer could keep blocks in
   recoverRefusedPages();
   if (!store_ || paging_stats_.stopped) return;
   const size_t cap = stages_.paging.max_map_memory_bytes;
@@ -135,18 +160,10 @@ void Mapper::pageOutOverCap() {
     const size_t i = order[n];
     sorted_keys.push_back(keys[i]);
     auto bytes = std::make_shared<std::vector<uint8_t>>();
-    ByteWriter page(bytes.get());
     const bool has_submesh = mesh_->store().submeshes().count(keys[i]) > 0;
     const VoxelBlock& block = *octree_.find(keys[i]);
-    writePageHead(block, frames[i], &page);
-    page.put<uint32_t>(static_cast<uint32_t>(layers_.size()));
-    for (LayerSlot& slot : layers_) {
-      const size_t at = page.size();
-      page.put<uint64_t>(0);
-      slot.layer->pageOut(keys[i], &page);
-      const uint64_t part_bytes = page.size() - at - sizeof(uint64_t);
-      std::memcpy(page.buffer().data() + at, &part_bytes, sizeof(part_bytes));
-    }
+    encodePage(block, frames[i], bytes.get());
+    for (LayerSlot& slot : layers_) slot.layer->pageOut(keys[i]);
     written += bytes->size();
     pages[n] = std::move(bytes);
     voxel_bytes_ -= block.voxelBytes();

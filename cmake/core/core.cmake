@@ -20,9 +20,11 @@ add_library(stereo_fusion_core STATIC
   ${STEREO_FUSION_ROOT}/src/ParameterTable.cpp
   ${STEREO_FUSION_ROOT}/src/MapperConfig.cpp
   ${STEREO_FUSION_ROOT}/src/Mapper.cpp
+  ${STEREO_FUSION_ROOT}/src/MapperCheckpoint.cpp
   ${STEREO_FUSION_ROOT}/src/MapperPaging.cpp
   ${STEREO_FUSION_ROOT}/src/paging/BlockPage.cpp
   ${STEREO_FUSION_ROOT}/src/paging/BlockStore.cpp
+  ${STEREO_FUSION_ROOT}/src/paging/CheckpointState.cpp
   ${STEREO_FUSION_ROOT}/src/paging/FrameReach.cpp
   ${STEREO_FUSION_ROOT}/src/paging/PagedBlocks.cpp
   ${STEREO_FUSION_ROOT}/src/paging/PageWriter.cpp

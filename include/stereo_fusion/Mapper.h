@@ -1,9 +1,11 @@
 #pragma once
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <memory>
 #include <optional>
 #include <string>
+#include <unordered_set>
 #include <vector>
 
 #include "stereo_fusion/MapperConfig.h"
@@ -20,6 +22,7 @@
 #include "stereo_fusion/map/EvictionPolicy.h"
 #include "stereo_fusion/map/MapRegion.h"
 #include "stereo_fusion/paging/BlockStore.h"
+#include "stereo_fusion/paging/CheckpointState.h"
 #include "stereo_fusion/paging/PageWriter.h"
 #include "stereo_fusion/paging/PagedBlocks.h"
 #include "stereo_fusion/paging/PagingConfig.h"
@@ -185,6 +188,36 @@ class Mapper {
   /// Bytes every layer holds in memory (the TSDF, the mesh and its textures, the planning
   /// layer): what max_map_memory_mb caps. O(1) but for the textures.
   size_t mapMemoryBytes() const;
+  /// The map store (checkpoint_period_s, resume; MapperCheckpoint.cpp): map_store_path/
+  /// map.sqlite, the map's durable copy. Separate from the paging store (a cache of this
+  /// process), it changes only by whole checkpoints, one transaction each, so after a kill it
+  /// holds the map of its last committed checkpoint.
+  struct StoreOpening {
+    bool ok = false;       ///< false: `message` says why; the map is unchanged and has no map store
+    bool resumed = false;  ///< the map is the store's
+    std::string message;   ///< one sentence for the log
+    std::string owner_note;  ///< the owner's note of the resumed checkpoint
+    MeshChanges changes;     ///< resumed: every submesh of the map, and the old ones removed
+  };
+  /// Opens the map store; `resume`: the map becomes the one it holds (as at its last
+  /// checkpoint: voxels, mesh and patches, the planning layer derived again) and later frames
+  /// continue it as if never interrupted. Without `resume` a map it held is replaced at the
+  /// first checkpoint. A store that cannot be read, or of another voxel grid, is refused and
+  /// left untouched.
+  StoreOpening openMapStore(bool resume);
+  /// Hands the map store every block changed since the previous checkpoint (their pages, the
+  /// blocks gone, the map's counters and seen-free space, `owner_note`): its thread writes
+  /// them in one transaction. False (with `error`) without a map store or after the store
+  /// refused an earlier checkpoint (reported once; the next one rewrites the store whole).
+  bool checkpoint(const std::string& owner_note, std::string* error);
+  /// Waits until every checkpoint handed over is committed (or refused).
+  void flushCheckpoints();
+  bool hasMapStore() const { return map_store_ != nullptr; }
+  /// The checkpoints committed so far, as of the last frame (flushCheckpoints(): the latest).
+  const CheckpointStats& checkpointStats() const { return checkpoint_stats_; }
+  /// Gives the map store to `to`, a map that replaces this one (a loop closure's rebuild): its
+  /// next checkpoint rewrites the store whole.
+  void handOverMapStore(Mapper* to);
   /// Reports every operation's stage into `monitor` (nullptr: none) for a watchdog on another
   /// thread; the caller keeps it alive while this Mapper works.
   void setStageMonitor(StageMonitor* monitor) { monitor_ = monitor; }
@@ -231,6 +264,22 @@ class Mapper {
   /// `batch`: the read snapshot, begun after the writer released its written pages.
   bool readPage(const BlockKey& key, std::vector<uint8_t>* page, BlockStore::ReadBatch* batch,
                 std::string* error) const;
+  /// How much of a page placePage() brought back.
+  enum class Placed { kWhole, kVoxelsOnly, kLost };
+  /// Puts the block of a page (`data`, `size`) into the octree and its parts into the layers;
+  /// `error` says what could not be read.
+  Placed placePage(const BlockKey& key, const uint8_t* data, size_t size, std::string* error);
+  /// A resident block's page: its voxels and every layer's part (MapLayer::savePart()).
+  void encodePage(const VoxelBlock& block, uint64_t last_update_frame,
+                  std::vector<uint8_t>* bytes) const;
+  /// Takes the map's and the mesh's changes since the last call into the checkpoint's set.
+  void noteCheckpointChanges();
+  /// The keys of every block of the map, resident or paged out, sorted.
+  std::vector<BlockKey> allBlockKeys() const;
+  /// Reads the map store's blocks and checkpoint record into this (emptied) map.
+  bool resumeFrom(BlockStore* store, StoreOpening* out);
+  /// Counts what the map store committed; reports a refused checkpoint.
+  void foldCommittedCheckpoints();
   /// Counts a page that cannot be read back (its block is lost).
   void pageLost(const BlockKey& key, const std::string& why);
   /// Drops every page (reset, load).
@@ -261,6 +310,21 @@ class Mapper {
   std::unique_ptr<PageWriter> writer_;  // its writes, on a thread (destroyed before store_)
   PagedBlocks paged_;
   PagingStats paging_stats_;
+  // The map store (MapperCheckpoint.cpp).
+  std::unique_ptr<PageWriter> map_store_;  // its connection, writing checkpoints on its thread
+  std::optional<BlockChangeLog::Consumer> checkpoint_map_consumer_;
+  std::optional<BlockChangeLog::Consumer> checkpoint_mesh_consumer_;
+  /// Blocks whose page changed since the last checkpoint (their TSDF, submesh or patch).
+  std::unordered_set<BlockKey, BlockKeyHash> checkpoint_dirty_;
+  /// The next checkpoint rewrites the store whole (a new map over it, a reset, a load).
+  bool checkpoint_full_ = false;
+  struct CheckpointInFlight {
+    uint64_t batch;
+    uint64_t frames_integrated;
+    size_t blocks_written, blocks_erased, bytes_written;
+  };
+  std::deque<CheckpointInFlight> checkpoints_in_flight_;
+  CheckpointStats checkpoint_stats_;
 };
 
 }  // namespace stereo_fusion

@@ -92,9 +92,14 @@ struct MapperConfig {
                                          ///< map is rejected before fusion. 0 = no limit.
   double max_distance_from_camera_m =
       0.0;  ///< Blocks whose centre is farther from the current camera are evicted. 0 = unlimited.
-  double max_map_memory_mb = 0.0;  ///< Beyond it blocks are paged out to map_store_path, not
-                                   ///< lost. 0 = unlimited (no paging).
-  std::string map_store_path;      ///< Folder of the block store; empty: the temporary folder.
+  double max_map_memory_mb = 0.0;    ///< Beyond it blocks are paged out to map_store_path, not
+                                     ///< lost. 0 = unlimited (no paging).
+  std::string map_store_path;        ///< Folder of the block store; empty: the temporary folder.
+  double checkpoint_period_s = 0.0;  ///< > 0: map_store_path/map.sqlite keeps the map, written
+                                     ///< every period (what a kill loses). 0: no checkpoints.
+  bool resume = false;               ///< Continue the map kept in map_store_path/map.sqlite.
+  /// Whether map_store_path/map.sqlite keeps the map (checkpoints or resume).
+  bool keepsMapStore() const { return resume || checkpoint_period_s > 0.0; }
   double max_pose_jump_m = 100.0;  ///< A camera more than this from the last fused frame's camera
                                    ///< is rejected. 0 = no check.
   double max_timestamp_gap_s = 3600.0;  ///< A timestamp more than this after the last fused frame's

@@ -78,13 +78,28 @@ void MeshLayer::adopt(const BlockOctree& map, const MapFileInfo& info) {
   skipTextures();
 }
 
-void MeshLayer::pageOut(const BlockKey& key, ByteWriter* page) {
-  const std::optional<SubMesh> mesh = store_.detach(key);
-  const std::optional<TexturePatch> patch = textures_.detach(key);
-  page->put<uint8_t>(mesh.has_value());
-  if (mesh) writeSubMesh(*mesh, page);
-  page->put<uint8_t>(patch.has_value());
+void MeshLayer::savePart(const BlockKey& key, ByteWriter* page) const {
+  const auto mesh = store_.submeshes().find(key);
+  const TexturePatch* patch = textures_.find(key);
+  page->put<uint8_t>(mesh != store_.submeshes().end());
+  if (mesh != store_.submeshes().end()) writeSubMesh(mesh->second, page);
+  page->put<uint8_t>(patch != nullptr);
   if (patch) writeTexturePatch(*patch, page);
+}
+
+void MeshLayer::pageOut(const BlockKey& key) {
+  store_.detach(key);
+  textures_.detach(key);
+}
+
+void MeshLayer::resumed(const BlockOctree& /*map*/, const MapFileInfo& info) {
+  last_frame_ = StereoFrame();
+  frames_integrated_ = info.frames_integrated;
+  adopted_ = MeshChanges();
+  for (const auto& [key, submesh] : store_.submeshes()) adopted_.changed.push_back(key);
+  std::sort(adopted_.changed.begin(), adopted_.changed.end());
+  record(adopted_);
+  skipTextures();
 }
 
 bool MeshLayer::pageIn(const BlockOctree& map, const VoxelBlock& block, ByteReader* page) {

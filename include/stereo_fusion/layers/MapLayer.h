@@ -45,17 +45,23 @@ class MapLayer {
   virtual void encode(MapFileInfo* /*info*/) const {}
   /// The map became `map`, read from a file described by `info`: by default rebuilt from it.
   virtual void adopt(const BlockOctree& map, const MapFileInfo& /*info*/) { rebuild(map); }
-  /// Paging (max_map_memory_mb): the TSDF block `key` leaves memory for the block store; the
-  /// layer appends to `page` what it keeps for that block alone and drops it from memory, as
-  /// if the block had never been there — nothing is reported (the map did not change). A layer
-  /// that keeps nothing per block writes nothing and stays whole in memory (the default).
-  virtual void pageOut(const BlockKey& /*key*/, ByteWriter* /*page*/) {}
-  /// The block is back in `map` (at a row of its own): the layer takes back what pageOut()
+  /// Paging and checkpoints: appends to `page` what the layer keeps for the TSDF block `key`
+  /// alone (the block's part of its page). A layer that keeps nothing per block writes nothing
+  /// and stays whole in memory (the default).
+  virtual void savePart(const BlockKey& /*key*/, ByteWriter* /*page*/) const {}
+  /// Paging (max_map_memory_mb): the block `key` left memory for the block store, its part
+  /// saved (savePart()): the layer drops that part as if the block had never been there —
+  /// nothing is reported (the map did not change).
+  virtual void pageOut(const BlockKey& /*key*/) {}
+  /// The block is back in `map` (at a row of its own): the layer takes back what savePart()
   /// wrote, from `page`; false if it cannot be read (a corrupted store).
   virtual bool pageIn(const BlockOctree& /*map*/, const VoxelBlock& /*block*/,
                       ByteReader* /*page*/) {
     return true;
   }
+  /// The map was resumed from its store: `map` holds its blocks, each layer's part came back
+  /// through pageIn(); by default the layer is derived again as after a load (adopt()).
+  virtual void resumed(const BlockOctree& map, const MapFileInfo& info) { adopt(map, info); }
   /// Whether the host updates the layer itself, inside a frame, when more than
   /// max(kMaxPendingLayerChanges, 4 per block of the map) changes wait for it: true for a
   /// layer whose caller may never update it (its log must not grow without bound); false for

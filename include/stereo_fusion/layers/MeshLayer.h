@@ -52,7 +52,11 @@ class MeshLayer final : public MapLayer {
   void adopt(const BlockOctree& map, const MapFileInfo& info) override;
   /// The block's submesh and texture patch go with its page; its mesher state is refreshed
   /// from its voxels when it comes back.
-  void pageOut(const BlockKey& key, ByteWriter* page) override;
+  void savePart(const BlockKey& key, ByteWriter* page) const override;
+  void pageOut(const BlockKey& key) override;
+  /// The resumed map's mesh is the saved one (pageIn() brought each submesh and patch back):
+  /// nothing is re-meshed; consumers hear of every submesh as changed.
+  void resumed(const BlockOctree& map, const MapFileInfo& info) override;
   bool pageIn(const BlockOctree& map, const VoxelBlock& block, ByteReader* page) override;
   /// The submesh and patch a page's mesh part holds (left empty where it has none); false when
   /// it is unreadable.
