@@ -14,8 +14,7 @@ constexpr const char* kMapStoreFile = "map.sqlite";
 
 Mapper::StoreOpening Mapper::openMapStore(bool resume) {
   StoreOpening out;
-  const std::string file =
-      (std::filesystem::path(config_.map_store_path) / kMapStoreFile).string();
+  const std::string file = (std::filesystem::path(config_.map_store_path) / kMapStoreFile).string();
   if (map_store_) {
     out.message = file + ": the map store is open already";
     return out;
@@ -39,8 +38,9 @@ Mapper::StoreOpening Mapper::openMapStore(bool resume) {
   } else if (resume) {
     out.message = file + " holds no map yet: a new map starts in it";
   } else {
-    out.message = has_state ? file + ": resume is false, so a new map replaces the one it holds "
-                                     "at the first checkpoint"
+    out.message = has_state ? file +
+                                  ": resume is false, so a new map replaces the one it holds "
+                                  "at the first checkpoint"
                             : file + ": a new map starts in it";
   }
   checkpoint_full_ = !out.resumed;
@@ -192,8 +192,8 @@ bool Mapper::checkpoint(const std::string& owner_note, std::string* error) {
   }
   state.owner_note = owner_note;
   commit.state = encodeCheckpointState(state);
-  const CheckpointInFlight in_flight{0, frames_integrated_, commit.keys.size(),
-                                     commit.erase.size(), bytes};
+  const CheckpointInFlight in_flight{0, frames_integrated_, commit.keys.size(), commit.erase.size(),
+                                     bytes};
   checkpoints_in_flight_.push_back(in_flight);
   checkpoints_in_flight_.back().batch = map_store_->commit(std::move(commit));
   checkpoint_dirty_.clear();

@@ -79,6 +79,9 @@ void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   const PagingStats& paging = map_status_.paging;
   if (paging.stopped || paging.pages_unreadable > 0)  // a full disk, a corrupted store
     status.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "paging: " + paging.error);
+  if (!map_status_.checkpoint.error.empty())  // a full disk: the store keeps the checkpoint before
+    status.summary(diagnostic_msgs::DiagnosticStatus::ERROR,
+                   "map store: " + map_status_.checkpoint.error);
   const MappingSession::KeptStatus& kept = map_status_.kept;
   status.add("clears waiting for frames from before them", kept.pending_clears);
   status.add("loop closure: frames kept", kept.frames);
@@ -122,6 +125,13 @@ void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   status.add("paging: longest page-in (ms)", paging.page_in_max_ms);
   status.add("paging: pages unreadable (blocks lost)", paging.pages_unreadable);
   status.add("paging: stopped (store full or unwritable)", paging.stopped ? "yes" : "no");
+  const CheckpointStats& checkpoint = map_status_.checkpoint;
+  if (!checkpoint.file.empty()) {
+    status.add("map store", checkpoint.file);
+    status.add("map store: checkpoints", checkpoint.checkpoints);
+    status.add("map store: frames at the last checkpoint", checkpoint.last_frames_integrated);
+    status.add("map store: longest checkpoint (ms)", checkpoint.max_ms);
+  }
   // The planning layer: updated at planning_publish_rate_hz (timings of the updates that had work).
   status.add("planning updates", v.planning_updates);
   status.add("planning update p50 (ms)", percentile(v.planning_ms, 0.5));

@@ -56,6 +56,14 @@ void FusionNodelet::onInit() {
                                         [this] { return frame_input_->cameraFrame(); });
   diagnostics_ = std::make_unique<FusionDiagnostics>(
       nh, pnh, node_config_, session_.get(), frame_input_.get(), trajectory_input_.get(), &stats_);
+  if (mapper_config_.keepsMapStore()) {
+    // After the publishers: a resumed map goes out whole, as a loaded one.
+    const Mapper::StoreOpening opened = session_->openMapStore();
+    if (opened.ok)
+      NODELET_INFO("stereo_fusion: map store: %s", opened.message.c_str());
+    else
+      NODELET_ERROR("stereo_fusion: map store: %s", opened.message.c_str());
+  }
   NODELET_INFO("stereo_fusion: fusing %s into frame '%s' (voxel %.3f m, %d threads)",
                frame_input_->topics().c_str(), node_config_.world_frame.c_str(),
                mapper_config_.voxel_size_m, mapper_config_.num_threads);

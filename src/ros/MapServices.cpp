@@ -61,6 +61,16 @@ bool MapServices::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
 
 bool MapServices::saveMap(SaveMap::Request& req, SaveMap::Response& res) {
   const ros::WallTime start = ros::WallTime::now();
+  if (req.path.empty()) {
+    // The map store: only what changed since its last checkpoint.
+    res.success = session_->checkpoint(&res.message);
+    res.blocks = session_->read([](const Mapper& m) { return m.tsdf().blockCount(); });
+    if (res.success)
+      ROS_INFO("stereo_fusion: save_map: %s", res.message.c_str());
+    else
+      ROS_ERROR("stereo_fusion: save_map: %s", res.message.c_str());
+    return true;
+  }
   std::vector<uint8_t> bytes;
   double locked_ms = 0.0;
   // Only the copy of the blocks holds the map (at memory speed, 0.3–7 KB per block); the

@@ -106,6 +106,7 @@ MappingSession::FrameOutcome MappingSession::fuse(const StereoFrame& frame,
   }
   out.recleared = applied.recleared;
   admission_.countFused(out.result, applied.recleared);
+  checkpointIfDueLocked();
   if (timeline_.maxFrames() > 0) {
     edit.frame = frame;  // shares the images
     if (reload) {
@@ -225,6 +226,65 @@ MappingSession::LoadOutcome MappingSession::load(const std::string& path) {
   return out;
 }
 
+Mapper::StoreOpening MappingSession::openMapStore() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const std::lock_guard<std::mutex> pass(planning_pass_mutex_);
+  Mapper::StoreOpening opened = mapper_->openMapStore(config_.resume);
+  last_checkpoint_ = std::chrono::steady_clock::now();
+  if (!opened.ok) store_error_ = opened.message;
+  if (!opened.resumed) return opened;
+  std::vector<uint8_t> base;
+  if (timeline_.maxFrames() > 0) {
+    // As after a load: the resumed map holds voxels, not frames; a later correction re-fuses
+    // the new frames over it.
+    base = mapper_->encodeMap();
+    sealMapFile(&base);
+  }
+  startEpochLocked(base);
+  notifyLocked(MapChange::kLoaded, opened.changes.removed);
+  return opened;
+}
+
+bool MappingSession::checkpoint(std::string* message) {
+  std::unique_lock<std::mutex> lock(mutex_, std::defer_lock);
+  if (!lockWithin(&lock, requestWait())) {
+    *message = busyMessage();
+    return false;
+  }
+  std::string error;
+  if (!mapper_->checkpoint(checkpoint_note_, &error)) {
+    *message = error;
+    return false;
+  }
+  last_checkpoint_ = std::chrono::steady_clock::now();
+  // The caller is told once it is on disk (frames wait for the commit: only the blocks changed
+  // since the last checkpoint).
+  mapper_->flushCheckpoints();
+  const CheckpointStats& stats = mapper_->checkpointStats();
+  if (!stats.error.empty()) {
+    *message = stats.error;
+    return false;
+  }
+  *message = "checkpoint " + std::to_string(stats.checkpoints) + " of " + stats.file + ": " +
+             std::to_string(stats.last_frames_integrated) + " frames";
+  return true;
+}
+
+void MappingSession::setCheckpointNote(std::string note) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  checkpoint_note_ = std::move(note);
+}
+
+void MappingSession::checkpointIfDueLocked() {
+  if (config_.checkpoint_period_s <= 0.0 || !mapper_->hasMapStore()) return;
+  const auto now = std::chrono::steady_clock::now();
+  if (std::chrono::duration<double>(now - last_checkpoint_).count() < config_.checkpoint_period_s)
+    return;
+  last_checkpoint_ = now;
+  std::string error;
+  mapper_->checkpoint(checkpoint_note_, &error);  // a refusal shows in checkpointStats()
+}
+
 void MappingSession::adoptCorrectionLocked(const PoseCorrection& correction,
                                            std::unique_ptr<Mapper> rebuilt, EditReplay* replay) {
   if (!rebuilt) {  // nothing kept moved visibly: the frames still to leave take it
@@ -240,6 +300,7 @@ void MappingSession::adoptCorrectionLocked(const PoseCorrection& correction,
                       std::back_inserter(removed));
   const std::lock_guard<std::mutex> pass(planning_pass_mutex_);
   mapper_->setStageMonitor(nullptr);
+  mapper_->handOverMapStore(rebuilt.get());
   rebuilt->setStageMonitor(&monitor_);
   mapper_ = std::move(rebuilt);
   for (size_t i = 0; i < mesh_subscribers_.size(); ++i)  // the subscribers follow the swap
@@ -279,6 +340,8 @@ std::optional<MappingSession::MapStatus> MappingSession::tryStatus(double wait_s
   s.map_memory_bytes = mapper_->mapMemoryBytes();
   s.paged_out_blocks = mapper_->pagedOutBlocks();
   s.paging = mapper_->pagingStats();
+  s.checkpoint = mapper_->checkpointStats();
+  if (!store_error_.empty()) s.checkpoint.error = store_error_;
   if (const PlanningMap* planning = mapper_->planning()) {
     s.planning_free_space_bytes = planning->freeSpaceBytes();
     s.planning_esdf_bytes = planning->esdfBytes();

@@ -50,12 +50,14 @@ bool parseFuseArguments(const std::vector<std::string>& args, FuseOptions* optio
        : a == "--image-topic"       ? options->bag_topics.image
        : a == "--camera-info-topic" ? options->bag_topics.camera_info
                                     : options->bag_topics.world_frame) = *v;
-    } else if (a == "--load-map" || a == "--save-map" || a == "--trajectory") {
+    } else if (a == "--load-map" || a == "--save-map" || a == "--trajectory" ||
+               a == "--frame-log") {
       const std::string* v = value(a.c_str());
       if (!v) return false;
-      (a == "--load-map"   ? options->load_map
-       : a == "--save-map" ? options->save_map
-                           : options->trajectory) = *v;
+      (a == "--load-map"    ? options->load_map
+       : a == "--save-map"  ? options->save_map
+       : a == "--frame-log" ? options->frame_log
+                            : options->trajectory) = *v;
     } else if (a == "--quiet") {
       options->progress = false;
     } else if (a == "--time-planning") {

@@ -4,10 +4,13 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <memory>
 #include <random>
 
 #include "fuser/OctomapExport.h"
@@ -136,9 +139,29 @@ bool openInput(const FuseOptions& options, std::unique_ptr<FrameSource>* reader,
 /// Fuses the input's frames through `session`, meshing and updating the planning layer on the
 /// cadence, and records each fused frame's stats in `report`. False (with a message) only when
 /// fusing threw: out of memory mid-frame.
+/// The map store's note of where the fuser was: the next input frame.
+std::string inputNote(const FuseOptions& options, size_t next_frame) {
+  return "input=" + options.input + "\nnext_frame=" + std::to_string(next_frame);
+}
+
+/// The input frame a resumed map continues from (0: from the start, with a warning, when the
+/// store was written from another input).
+size_t resumedInputFrame(const FuseOptions& options, const std::string& note) {
+  const std::string input = "input=" + options.input + "\n";
+  const std::string next = "next_frame=";
+  const size_t at = note.find(next);
+  if (note.rfind(input, 0) != 0 || at == std::string::npos) {
+    std::fprintf(stderr,
+                 "the resumed map was made from another input: fusing %s from its first frame\n",
+                 options.input.c_str());
+    return 0;
+  }
+  return static_cast<size_t>(std::strtoull(note.c_str() + at + next.size(), nullptr, 10));
+}
+
 bool fuseFrames(const FuseOptions& options, FrameSource* reader, bool keep_for_trajectory,
-                const OutputCadence& cadence, MappingSession* session, FuseReport* report,
-                std::string* error) {
+                const OutputCadence& cadence, size_t first_frame, MappingSession* session,
+                FuseReport* report, std::string* error) {
   const size_t available = reader ? reader->size() : 0;
   const size_t total = options.max_frames ? std::min(options.max_frames, available) : available;
   report->frames_total = total;
@@ -151,7 +174,20 @@ bool fuseFrames(const FuseOptions& options, FrameSource* reader, bool keep_for_t
     if (report->skipped_examples.size() < 5) report->skipped_examples.push_back(message);
     std::fprintf(stderr, "%sskipping frame: %s\n", line_break, message.c_str());
   };
-  for (size_t i = 0; i < total; ++i) {
+  const bool keeps_store = options.config.keepsMapStore();
+  // A resumed map counts its frames on from the stored ones: the cadences too.
+  const uint64_t cadence_offset =
+      first_frame > 0 ? session->read([](const Mapper& m) { return m.framesIntegrated(); }) : 0;
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> frame_log(nullptr, &std::fclose);
+  if (!options.frame_log.empty()) {
+    frame_log.reset(std::fopen(options.frame_log.c_str(), "a"));
+    if (!frame_log) {
+      *error = options.frame_log + ": cannot write the frame log";
+      return false;
+    }
+  }
+  for (size_t i = first_frame; i < total; ++i) {
+    if (keeps_store) session->setCheckpointNote(inputNote(options, i + 1));
     if (options.progress && i > 0)
       showProgress(i, total, wall.elapsedMs() / 1000.0, terminal, &last_decile);
     StereoFrame frame;
@@ -168,7 +204,8 @@ bool fuseFrames(const FuseOptions& options, FrameSource* reader, bool keep_for_t
       continue;
     }
     Timer frame_timer;
-    const uint64_t n = session->framesFused() + 1;  // this frame's number, if it is fused
+    // This frame's number, if it is fused.
+    const uint64_t n = cadence_offset + session->framesFused() + 1;
     const MeshTiming timing = cadence.meshTiming(n);
     FrameLoader reload;
     if (keep_for_trajectory)
@@ -200,6 +237,13 @@ bool fuseFrames(const FuseOptions& options, FrameSource* reader, bool keep_for_t
     stats.timings.total_ms = frame_timer.elapsedMs();
     report->timings.push_back(stats.timings);
     report->work.push_back(stats.work);
+    if (frame_log) {
+      const double unix_s =
+          std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
+              .count();
+      std::fprintf(frame_log.get(), "%zu %.6f\n", i, unix_s);
+      std::fflush(frame_log.get());
+    }
   }
   if (options.progress && total > 0)
     showProgress(total, total, wall.elapsedMs() / 1000.0, terminal, &last_decile);
@@ -260,6 +304,7 @@ void mapFigures(const Mapper& mapper, FuseReport* report) {
   report->paged_out_blocks = mapper.pagedOutBlocks();
   report->map_memory_bytes = mapper.mapMemoryBytes();
   report->paging = mapper.pagingStats();
+  report->checkpoint = mapper.checkpointStats();
   report->blocks_evicted = mapper.blocksEvicted();
   report->memory_bytes = mapper.tsdf().memoryBytes();
   report->bytes_per_block = mapper.tsdf().bytesPerBlock();
@@ -353,6 +398,24 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
     }
     report->blocks_loaded = loaded.blocks;
   }
+  size_t first_frame = 0;
+  if (options.config.keepsMapStore()) {
+    if (!options.load_map.empty()) {
+      *error = "--load-map and a map store (resume, checkpoint_period_s) exclude each other";
+      return false;
+    }
+    const Mapper::StoreOpening opened = session.openMapStore();
+    if (!opened.ok) {
+      *error = opened.message;
+      return false;
+    }
+    std::fprintf(stderr, "%s\n", opened.message.c_str());
+    if (opened.resumed) {
+      first_frame = resumedInputFrame(options, opened.owner_note);
+      report->resumed_from_frame = first_frame;
+      std::fprintf(stderr, "continuing %s at frame %zu\n", options.input.c_str(), first_frame);
+    }
+  }
   std::error_code ec;
   fs::create_directories(options.out_dir, ec);
   if (ec || !fs::is_directory(options.out_dir)) {
@@ -363,8 +426,20 @@ bool runOfflineFusion(const FuseOptions& options, FuseReport* report, std::strin
       options.mesh_every, options.esdf_every, options.config.texture == TextureMode::kPatches);
   Timer wall;
   report->start_rss_bytes = readProcessMemory().resident_mb * 1048576.0;
-  if (!fuseFrames(options, reader.get(), !trajectory.empty(), cadence, &session, report, error))
+  if (!fuseFrames(options, reader.get(), !trajectory.empty(), cadence, first_frame, &session,
+                  report, error))
     return false;
+  if (options.config.keepsMapStore()) {
+    // The store holds the whole run: a later --set resume=true continues after its last frame.
+    session.setCheckpointNote(
+        inputNote(options, std::max(report->frames_total, report->resumed_from_frame)));
+    std::string message;
+    if (!session.checkpoint(&message)) {
+      *error = "the last checkpoint: " + message;
+      return false;
+    }
+    std::fprintf(stderr, "%s\n", message.c_str());
+  }
   // What the session counted: the frames fused, the pixels they lost, every frame skipped.
   const FusedFrameTotals& totals = session.fusedTotals();
   report->frames_used = session.framesFused();

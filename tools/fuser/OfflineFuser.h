@@ -10,6 +10,7 @@
 #include "stereo_fusion/integration/OutlierRejection.h"
 #include "stereo_fusion/map/BlockOctree.h"
 #include "stereo_fusion/ros/BagSequence.h"
+#include "stereo_fusion/paging/CheckpointState.h"
 #include "stereo_fusion/paging/PagingConfig.h"
 #include "stereo_fusion/session/FrameStats.h"
 
@@ -34,6 +35,9 @@ struct FuseOptions {
       load_map;  ///< map file to start from (empty = an empty map); `input` may then be empty
   std::string save_map;  ///< where to save the map after the last frame (empty = not saved)
   bool progress = true;  ///< progress bar on stderr (a line per 10 % when not a terminal)
+  /// --frame-log: a line "<input frame> <unix time s>" appended (and flushed) after every fused
+  /// frame, for a harness that kills the fuser and asks what it had fused (the kill loop).
+  std::string frame_log;
   /// --time-planning: after the outputs, time a 100 000-point batch query and a batch rebuild of
   /// the planning layer (stats.json planning.query_100k_ms, rebuild_ms; scripts/bench_planning.sh).
   bool time_planning = false;
@@ -72,8 +76,10 @@ struct FuseReport {
   size_t paged_out_blocks = 0;  ///< in the block store at the end (max_map_memory_mb)
   size_t map_memory_bytes = 0;  ///< every layer in memory at the end (Mapper::mapMemoryBytes())
   PagingStats paging;
-  size_t blocks_loaded = 0;     ///< blocks of the --load-map file
-  uint64_t blocks_evicted = 0;  ///< by the memory bound (max_blocks, max_distance_from_camera_m)
+  CheckpointStats checkpoint;     ///< the map store's (file empty: none)
+  size_t blocks_loaded = 0;       ///< blocks of the --load-map file
+  size_t resumed_from_frame = 0;  ///< resume: the input frame the stored map continued at
+  uint64_t blocks_evicted = 0;    ///< by the memory bound (max_blocks, max_distance_from_camera_m)
   size_t blocks_per_level[3] = {0, 0, 0};  ///< by the level each block is meshed at
   size_t seam_filled_blocks =
       0;  ///< blocks meshed with faces filled from coarser levels (mesh_fill_seams)
@@ -112,8 +118,8 @@ struct FuseReport {
 /// N]
 /// [--esdf-every N] [--time-planning] [--quiet]
 /// [--disparity-topic T] [--image-topic T] [--camera-info-topic T] [--world-frame F]
-/// [--load-map FILE] [--save-map FILE] [--trajectory FILE]`; with --load-map the input may be left
-/// out
+/// [--load-map FILE] [--save-map FILE] [--trajectory FILE] [--frame-log FILE]`; with --load-map the
+/// input may be left out
 /// (`fuse <out-dir> --load-map FILE` meshes a saved map).
 /// --config is applied before every --set, whatever their order. False with a message (which
 /// names the parameter or flag) on any error: unknown flags, unknown keys, out-of-range values.

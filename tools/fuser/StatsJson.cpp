@@ -121,6 +121,17 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   j["paging"]["pages_unreadable"] = paging.pages_unreadable;
   j["paging"]["stopped"] = paging.stopped;
   j["paging"]["error"] = paging.error;
+  const CheckpointStats& checkpoint = report.checkpoint;
+  j["map_store"]["file"] = checkpoint.file;
+  j["map_store"]["resumed"] = checkpoint.resumed;
+  j["map_store"]["resumed_from_frame"] = report.resumed_from_frame;
+  j["map_store"]["checkpoints"] = checkpoint.checkpoints;
+  j["map_store"]["last_checkpoint_frames_integrated"] = checkpoint.last_frames_integrated;
+  j["map_store"]["blocks_written"] = checkpoint.blocks_written;
+  j["map_store"]["blocks_erased"] = checkpoint.blocks_erased;
+  j["map_store"]["megabytes_written"] = checkpoint.bytes_written / 1048576.0;
+  j["map_store"]["checkpoint_max_ms"] = checkpoint.max_ms;
+  j["map_store"]["error"] = checkpoint.error;
   {
     // Over the frames after which the planning layer was updated.
     auto overUpdates = [&](double StageTimings::*field) {

@@ -11,6 +11,7 @@ const char* kUsage =
     "                          [--frames N] [--mesh-every N] [--esdf-every N] [--quiet] "
     "[--load-map FILE]\n"
     "                          [--save-map FILE] [--trajectory FILE] [--time-planning]\n"
+    "                          [--frame-log FILE]\n"
     "       stereo_fusion_fuse <out-dir> --load-map FILE [...]   (mesh a saved map)\n"
     "Fuses a dataset folder (see doc/dataset_format.md) or a rosbag (DisparityImage, Image, "
     "CameraInfo, /tf)\n"
@@ -21,6 +22,7 @@ const char* kUsage =
     "  --config FILE     parameters in config/default.yaml's format (applied before --set)\n"
     "  --set key=value   override one parameter; every key of config/default.yaml is accepted\n"
     "  --frames N        fuse only the first N frames\n"
+    "  --frame-log FILE  append '<frame> <unix time s>' after every fused frame (flushed)\n"
     "  --mesh-every N    bring the mesh up to date after every N-th frame (default 1) and the "
     "last\n"
     "                    (texture patches are then cut from the frames that end a meshing pass)\n"
@@ -91,7 +93,8 @@ int main(int argc, char** argv) {
         report.correction.frames_rejected, report.correction.ms / 1000.0,
         report.correction.max_shift_m, report.correction.max_rotation_deg);
   if (!options.save_map.empty())
-    std::printf("saved the map (%zu blocks) to %s\n", report.blocks, options.save_map.c_str());
+    std::printf("saved the map (%zu blocks) to %s\n", report.blocks + report.paged_out_blocks,
+                options.save_map.c_str());
   // Meshing a loaded map alone is a success without frames.
   return report.frames_used > 0 || (!options.load_map.empty() && report.frames_total == 0) ? 0 : 1;
 }

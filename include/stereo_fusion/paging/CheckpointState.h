@@ -37,16 +37,16 @@ bool decodeCheckpointState(const std::vector<uint8_t>& bytes, CheckpointState* s
 
 /// What the map store's checkpoints did since the store was opened.
 struct CheckpointStats {
-  std::string file;                  ///< the store; empty: no map store
-  bool resumed = false;              ///< the map came from the store
-  uint64_t checkpoints = 0;          ///< committed
+  std::string file;                     ///< the store; empty: no map store
+  bool resumed = false;                 ///< the map came from the store
+  uint64_t checkpoints = 0;             ///< committed
   uint64_t last_frames_integrated = 0;  ///< the map's frames at the last committed checkpoint
-  uint64_t blocks_written = 0;       ///< pages written by checkpoints
-  uint64_t blocks_erased = 0;        ///< pages removed by checkpoints (blocks gone from the map)
+  uint64_t blocks_written = 0;          ///< pages written by checkpoints
+  uint64_t blocks_erased = 0;           ///< pages removed by checkpoints (blocks gone from the map)
   uint64_t bytes_written = 0;
-  double last_ms = 0.0;              ///< the last checkpoint's time on the caller's thread
+  double last_ms = 0.0;  ///< the last checkpoint's time on the caller's thread
   double max_ms = 0.0;
-  std::string error;                 ///< why the last checkpoint failed; empty when none did
+  std::string error;  ///< why the last checkpoint failed; empty when none did
 };
 
 }  // namespace stereo_fusion

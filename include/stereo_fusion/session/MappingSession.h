@@ -111,6 +111,19 @@ class MappingSession {
   /// on failure the map is unchanged.
   LoadOutcome load(const std::string& path);
 
+  // --- the map store (checkpoint_period_s, resume) ---
+  /// Opens map_store_path/map.sqlite as the map's durable copy (with resume, the map becomes
+  /// the one it holds: the listener hears kLoaded and publishes it whole). Call once, after
+  /// the listener is set. A store that cannot be opened leaves the map without one (`ok`
+  /// false, `message` says why).
+  Mapper::StoreOpening openMapStore();
+  /// Writes a checkpoint now (~save_map with an empty path, the fuser's end); false with
+  /// `message` without a map store or when the map stayed busy. `message` says what it wrote.
+  bool checkpoint(std::string* message);
+  /// What the map store's periodic checkpoints note for their owner (the offline fuser: where
+  /// in its input the next frame is), stored with the next checkpoint.
+  void setCheckpointNote(std::string note);
+
   // --- loop closures ---
   /// A corrected trajectory (camera poses in the map's frame, any order). With
   /// background_corrections it is queued (a newer one supersedes it, counted) and nullopt is
@@ -196,6 +209,7 @@ class MappingSession {
     /// Paging (max_map_memory_mb): every layer's bytes in memory, the blocks in the store.
     size_t map_memory_bytes = 0, paged_out_blocks = 0;
     PagingStats paging;
+    CheckpointStats checkpoint;  ///< the map store's (file empty: none)
   };
   std::optional<MapStatus> tryStatus(double wait_s) const;
 
@@ -207,6 +221,8 @@ class MappingSession {
   /// A new epoch (reset, load): drops the kept edits and any correction (map lock held).
   void startEpochLocked(const std::vector<uint8_t>& base_bytes);
   void notifyLocked(MapChange change, const std::vector<BlockKey>& removed);
+  /// After a fused frame: a checkpoint when checkpoint_period_s has passed since the last.
+  void checkpointIfDueLocked();
   KeptStatus keptLocked() const;
   /// Takes `lock`'s mutex within `wait`, polling every millisecond (libstdc++'s timed mutex
   /// locks through pthread_mutex_clocklock, which ThreadSanitizer does not see).
@@ -234,6 +250,9 @@ class MappingSession {
   std::function<void(const MapReplaced&)> listener_;
   FrameAdmission admission_;
   std::atomic<uint64_t> regions_cleared_{0}, clears_refused_{0};
+  std::chrono::steady_clock::time_point last_checkpoint_ = std::chrono::steady_clock::now();
+  std::string checkpoint_note_;
+  std::string store_error_;       // why the map store could not be opened
   CorrectionWorker corrections_;  // last: its thread stops before the members above go
 };
 

@@ -39,9 +39,10 @@ struct Session {
     ASSERT_TRUE(r.accepted) << r.error;
     if ((f + 1) % plan_every == 0) mapper->updatePlanning();
     if (f == clear_at)
-      ASSERT_TRUE(mapper->clearRegion(MapRegion::box({0.0, 1.5, 0.0}, {1.2, 3.2, 1.0}),
-                                      MeshTiming::kDeferred)
-                      .accepted);
+      ASSERT_TRUE(
+          mapper
+              ->clearRegion(MapRegion::box({0.0, 1.5, 0.0}, {1.2, 3.2, 1.0}), MeshTiming::kDeferred)
+              .accepted);
     if (f == reset_at) mapper->reset();
   }
 };
@@ -71,8 +72,7 @@ TEST(MapperCheckpoint, AResumedMapContinuesAsTheUninterruptedRun) {
     config.map_store_path = (scratch.path / "store").string();
     config.checkpoint_period_s = 1.0;  // what the owner reads; the test checkpoints itself
     if (run % 2 == 1) config.max_map_memory_mb = 0.8;  // paged: some blocks are on disk only
-    const std::string what = "run " + std::to_string(run) +
-                             (run % 2 == 1 ? " (paged)" : "") +
+    const std::string what = "run " + std::to_string(run) + (run % 2 == 1 ? " (paged)" : "") +
                              (session.reset_at >= 0 ? " (reset)" : "");
 
     // The run never interrupted, without any store.
@@ -101,9 +101,8 @@ TEST(MapperCheckpoint, AResumedMapContinuesAsTheUninterruptedRun) {
     const Mapper::StoreOpening opened = open(&resumed, /*resume=*/true);
     ASSERT_TRUE(opened.resumed) << what << ": " << opened.message;
     EXPECT_EQ(opened.owner_note, "frame " + std::to_string(last_checkpoint)) << what;
-    const int reset_before = session.reset_at >= 0 && session.reset_at <= last_checkpoint
-                                 ? session.reset_at + 1
-                                 : 0;
+    const int reset_before =
+        session.reset_at >= 0 && session.reset_at <= last_checkpoint ? session.reset_at + 1 : 0;
     EXPECT_EQ(resumed.framesIntegrated(), static_cast<uint64_t>(last_checkpoint + 1 - reset_before))
         << what;
     for (int f = last_checkpoint + 1; f < frames; ++f) session.frame(&resumed, f);

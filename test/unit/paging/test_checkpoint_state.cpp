@@ -19,9 +19,8 @@ TEST(CheckpointState, RoundTripsAndRefusesEveryCutOrForeignRecord) {
   const std::vector<uint8_t> bytes = encodeCheckpointState(state);
   // 8 head + 8 frames + 8 cell + 8 count + 2 × (12 + 64) + 8 count + (8 + 6 + 8 + 2 × 12 + 8 +
   // 12) + (8 + 8 + 8 + 8) + 8 + note.
-  EXPECT_EQ(bytes.size(),
-            8u + 8 + 8 + 8 + 2 * 76 + 8 + (8 + 6 + 8 + 24 + 8 + 12) + 32 + 8 +
-                state.owner_note.size());
+  EXPECT_EQ(bytes.size(), 8u + 8 + 8 + 8 + 2 * 76 + 8 + (8 + 6 + 8 + 24 + 8 + 12) + 32 + 8 +
+                              state.owner_note.size());
   CheckpointState back;
   std::string error;
   ASSERT_TRUE(decodeCheckpointState(bytes, &back, &error)) << error;
