@@ -32,7 +32,9 @@ size_t Mapper::mapMemoryBytes() const {
 
 void Mapper::pageInReach(const StereoFrame& frame) {
   if (paged_.empty() || !validateFrame(frame, octree_.blockSize()).empty()) return;
-  const FrameReach reach(frame, stages_.paging.frame_reach_m, octree_.blockSize());
+  const PagingConfig& paging = stages_.paging;
+  const FrameReach reach(frame, paging.max_depth_m, paging.band_m, paging.unmeasured_m,
+                         octree_.blockSize());
   std::vector<BlockKey> keys;
   paged_.collect(
       [&](const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) { return reach.mayReach(lo, hi); },
@@ -170,8 +172,16 @@ void Mapper::pageOutOverCap() {
     paged_.add(keys[i], PagedBlocks::Entry{frames[i], has_submesh});
   }
   octree_.erase(sorted_keys);
-  // The store writes them on the writer's thread; until then they are read from it.
+  // The store writes them on the writer's thread; until then they are read from it. What it
+  // wrote since leaves memory now (no read snapshot is open here), and a writer that falls
+  // behind makes the frame wait: the pages it holds are memory beyond the cap.
   writer_->write(std::move(sorted_keys), std::move(pages));
+  writer_->releaseWritten();
+  if (writer_->pendingBytes() > PagingConfig::maxWriterBacklogBytes(cap)) {
+    writer_->flush();
+    writer_->releaseWritten();
+    ++paging_stats_.writer_waits;
+  }
   paging_stats_.blocks_paged_out += keys.size();
   paging_stats_.bytes_written += written;
   ++paging_stats_.page_out_passes;

@@ -97,7 +97,9 @@ PagingConfig pagingConfig(const MapperConfig& config) {
   c.store_path = config.map_store_path;
   c.voxel_size_m = config.voxel_size_m;
   c.truncation_vox = config.truncation_vox;
-  c.frame_reach_m = config.max_depth_m + config.truncationBand().maxM();
+  c.max_depth_m = config.max_depth_m;
+  c.band_m = config.truncationBand().maxM();
+  c.unmeasured_m = config.free_space_unmeasured_range_m;
   return c;
 }
 }  // namespace

@@ -156,15 +156,13 @@ TEST(MapStoreNode, AResumedNodeComesUpWithTheCheckpointedMapAndGoesOn) {
     ASSERT_TRUE(test::waitForTfSubscriber(30.0));
     for (int k = 0; k < frames; ++k) {
       topics.send(corridor.frame(k));
-      ASSERT_TRUE(
-          test::waitFor([&] { return diagnostics.value("frames fused") >= k + 1; }, 30.0))
+      ASSERT_TRUE(test::waitFor([&] { return diagnostics.value("frames fused") >= k + 1; }, 30.0))
           << "frame " << k;
     }
     SaveMap save;  // an empty path: a checkpoint of the map store
     ASSERT_TRUE(ros::service::call("/stereo_fusion/save_map", save));
     EXPECT_TRUE(save.response.success) << save.response.message;
-    EXPECT_NE(save.response.message.find("checkpoint"), std::string::npos)
-        << save.response.message;
+    EXPECT_NE(save.response.message.find("checkpoint"), std::string::npos) << save.response.message;
     EXPECT_TRUE(fs::exists(store / "map.sqlite"));
     saved_mesh = fullMesh();
     EXPECT_FALSE(saved_mesh.empty());
@@ -212,8 +210,7 @@ TEST(MapStoreNode, AResumedNodeComesUpWithTheCheckpointedMapAndGoesOn) {
     SaveMap save;
     ASSERT_TRUE(ros::service::call("/stereo_fusion/save_map", save));
     EXPECT_TRUE(save.response.success) << save.response.message;
-    EXPECT_NE(save.response.message.find(std::to_string(frames + 3) + " frames"),
-              std::string::npos)
+    EXPECT_NE(save.response.message.find(std::to_string(frames + 3) + " frames"), std::string::npos)
         << save.response.message;
   }
 

@@ -11,10 +11,19 @@ struct PagingConfig {
   std::string store_path;           ///< map_store_path; empty: the temporary folder
   double voxel_size_m = 0.0;        ///< the store's identity
   double truncation_vox = 0.0;
-  double frame_reach_m = 0.0;  ///< max_depth_m + the widest band: how far a frame changes the map
+  // How far a frame can change the map (FrameReach): its measured depths up to max_depth_m,
+  // plus the widest truncation band; free_space_unmeasured_range_m for unmatched pixels.
+  double max_depth_m = 0.0;
+  double band_m = 0.0;
+  double unmeasured_m = 0.0;
   bool enabled() const { return max_map_memory_bytes > 0; }
   /// A page-out pass frees this share of the cap beyond the excess, so passes are not one a frame.
   static constexpr double kHysteresis = 0.1;
+  /// Pages handed to the store's writer and not written yet that a page-out lets pile up before
+  /// it waits for the writer: a quarter of the cap, at least 4 MiB.
+  static size_t maxWriterBacklogBytes(size_t cap_bytes) {
+    return cap_bytes / 4 > (size_t{4} << 20) ? cap_bytes / 4 : size_t{4} << 20;
+  }
 };
 
 /// What paging did since the map was made (or reset, or loaded).
@@ -22,6 +31,8 @@ struct PagingStats {
   uint64_t blocks_paged_out = 0;
   uint64_t blocks_paged_in = 0;
   uint64_t page_out_passes = 0;
+  /// Page-outs that waited for the store's writer (its backlog over maxWriterBacklogBytes()).
+  uint64_t writer_waits = 0;
   uint64_t bytes_written = 0;
   uint64_t bytes_read = 0;
   /// Pages that could not be read back (a corrupted store): those blocks are lost, each counted.

@@ -279,7 +279,9 @@ TEST(Config, StageConfigsReachEveryStage) {
   EXPECT_EQ(s.paging.store_path, "/var/tmp/pages");
   EXPECT_EQ(s.paging.voxel_size_m, 0.03);
   // max_depth_m + the widest band: max(truncation_vox, 2) · 4 · voxel.
-  EXPECT_DOUBLE_EQ(s.paging.frame_reach_m, 6.5 + std::max(c.truncation_vox, 2.0) * 4 * 0.03);
+  EXPECT_EQ(s.paging.max_depth_m, 6.5);
+  EXPECT_DOUBLE_EQ(s.paging.band_m, std::max(c.truncation_vox, 2.0) * 4 * 0.03);
+  EXPECT_EQ(s.paging.unmeasured_m, 2.0);
 }
 
 // The table behind both registries (mapping and node parameters): every type, the messages
