@@ -23,6 +23,8 @@ STORE_DIR="$(realpath -m "${STORE_DIR:-$WORK/store}")"
 FUSE="$BUILD_DIR/devel/lib/stereo_fusion/stereo_fusion_fuse"
 PY=/usr/bin/python3  # Debian's, with python3-matplotlib for the plot
 [ -f "$SEQ/poses.txt" ] || { echo "building_bench: $SEQ is not a sequence folder" >&2; exit 2; }
+"$PY" -c "import matplotlib" 2>/dev/null ||
+  { echo "building_bench: the plot needs Debian's python3-matplotlib (apt-get install -y python3-matplotlib)" >&2; exit 2; }
 
 "$ROOT/scripts/setup.sh" --no-build >&2
 if [ ! -f "$BUILD_DIR/CMakeCache.txt" ]; then
