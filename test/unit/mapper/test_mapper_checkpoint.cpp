@@ -169,30 +169,56 @@ TEST(MapperCheckpoint, KilledAtAnyInstantTheStoreReopensAtOneOfItsCheckpoints) {
     MapperConfig config = hallConfig();
     config.map_store_path = (scratch.path / "store").string();
     config.checkpoint_period_s = 1.0;
+    // The child says after every frame how far it is, so the kill lands at a frame of the
+    // parent's choosing however busy the machine is, then a random instant after it: within a
+    // frame, a checkpoint's encoding or its commit.
+    int progress[2];
+    ASSERT_EQ(::pipe(progress), 0);
+    // The first kill comes once the child has flushed its last checkpoint (its store must hold
+    // every frame); the others after a random frame.
+    const int kill_after_frame =
+        kill == 0 ? frames : std::uniform_int_distribution<int>(0, frames - 1)(rng);
+    const int delay_us = std::uniform_int_distribution<int>(0, 60000)(rng);
     const pid_t child = fork();
     ASSERT_GE(child, 0);
     if (child == 0) {
       // Checkpoints after every other frame, until killed (or done).
+      ::close(progress[0]);
       Mapper mapper(config);
       if (!mapper.openMapStore(false).ok) _exit(2);
       std::string error;
       for (int f = 0; f < frames; ++f) {
         session.frame(&mapper, f);
         if (f % 2 == 1) mapper.checkpoint("", &error);
+        const char done = 1;
+        if (::write(progress[1], &done, 1) != 1) _exit(3);
       }
       mapper.flushCheckpoints();
+      const char flushed = 1;
+      if (::write(progress[1], &flushed, 1) != 1) _exit(3);
+      ::pause();  // until killed
       _exit(0);
     }
-    std::this_thread::sleep_for(
-        std::chrono::milliseconds(std::uniform_int_distribution<int>(50, 1500)(rng)));
+    ::close(progress[1]);
+    char done = 0;
+    for (int f = 0; f <= kill_after_frame; ++f)
+      if (::read(progress[0], &done, 1) != 1) break;  // the child ended
+    std::this_thread::sleep_for(std::chrono::microseconds(delay_us));
     ::kill(child, SIGKILL);
     int status = 0;
     ::waitpid(child, &status, 0);
+    ::close(progress[0]);
     Mapper reopened(config);
     const Mapper::StoreOpening opened = reopened.openMapStore(true);
     ASSERT_TRUE(opened.ok) << "kill " << kill << ": " << opened.message;
-    if (!opened.resumed) continue;  // killed before its first checkpoint committed
+    // Commits land in order but when the child's writer gets to them: a kill may come before
+    // the first one, and loses any still in flight.
+    if (!opened.resumed) {
+      EXPECT_NE(kill, 0) << "the flushed store holds no map";
+      continue;
+    }
     ++reopened_with_map;
+    if (kill == 0) EXPECT_EQ(reopened.framesIntegrated(), static_cast<uint64_t>(frames));
     const uint64_t n = reopened.framesIntegrated();
     ASSERT_LE(n, static_cast<uint64_t>(frames));
     EXPECT_EQ(n % 2, 0u) << "kill " << kill << ": a checkpoint falls after every other frame";
