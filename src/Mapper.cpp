@@ -228,8 +228,41 @@ MeshChanges Mapper::rebuildMesh() {
 }
 
 bool Mapper::saveMap(const std::string& path, std::string* error) const {
-  std::vector<uint8_t> bytes = encodeMap();
-  return writeMapFileBytes(path, &bytes, error);
+  MapFileInfo sections;
+  for (const LayerSlot& slot : layers_) slot.layer->encode(&sections);
+  // Streamed in key order, resident and paged-out blocks merged, one page read at a time: the
+  // file never sits whole in memory.
+  const std::vector<VoxelBlock*> resident = octree_.blocksSortedByKey();
+  const std::vector<BlockKey> paged = paged_.sortedKeys();
+  const MapFileBlocks blocks = [&](const std::function<void(const VoxelBlock&, uint64_t)>& sink,
+                                   std::string* read_error) {
+    std::optional<BlockStore::ReadBatch> batch;
+    if (store_) {
+      writer_->releaseWritten();
+      batch.emplace(store_.get());
+    }
+    std::vector<uint8_t> page;
+    size_t r = 0;
+    for (size_t p = 0; p <= paged.size(); ++p) {
+      for (; r < resident.size() && (p == paged.size() || resident[r]->key < paged[p]); ++r)
+        sink(*resident[r], eviction_.lastUpdateFrame(*resident[r]));
+      if (p == paged.size()) break;
+      uint64_t frame = 0;
+      std::unique_ptr<VoxelBlock> block;
+      if (readPage(paged[p], &page, &*batch, read_error)) {
+        ByteReader reader(page.data(), page.size());
+        block = readPageHead(&reader, paged[p], &frame, read_error);
+      }
+      if (!block) {
+        if (read_error->empty()) *read_error = "a paged-out block's page is missing";
+        return false;
+      }
+      sink(*block, frame);
+    }
+    return true;
+  };
+  return writeMapFile(path, config_, frames_integrated_, resident.size() + paged.size(), blocks,
+                      sections.free_space, error);
 }
 
 std::vector<uint8_t> Mapper::encodeMap() const {

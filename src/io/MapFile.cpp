@@ -140,34 +140,30 @@ std::vector<uint8_t> encodeMapFileUnsealed(const BlockOctree& map, const MapperC
                                frames_integrated, last_update_frame, free_space);
 }
 
-std::vector<uint8_t> encodeMapFileUnsealed(const std::vector<const VoxelBlock*>& blocks,
-                                           const MapperConfig& config, uint64_t frames_integrated,
-                                           const LastUpdateFrameOf& last_update_frame,
-                                           const SeenFreeSpace& free_space) {
-  static_assert(kMapFileV1RecordBytes ==
-                    kMapFileRecordHeadBytes + VoxelBlock::kVoxelCount * kVoxelRecordBytes,
-                "record layout");
-  size_t payload_bytes = 0;
-  for (const VoxelBlock* b : blocks)
-    payload_bytes += kMapFileRecordHeadBytes + levelBytes(levelMask(*b));
-  const size_t free_space_bytes = 16 + free_space.blocks.size() * kMapFileFreeSpaceRecordBytes;
-  payload_bytes += free_space_bytes;
-  std::vector<uint8_t> file(kMapFileHeaderBytes + payload_bytes);
-  uint8_t* record = file.data() + kMapFileHeaderBytes;
-  for (const VoxelBlock* b : blocks) {
-    storeU32(record, static_cast<uint32_t>(b->key.x));
-    storeU32(record + 4, static_cast<uint32_t>(b->key.y));
-    storeU32(record + 8, static_cast<uint32_t>(b->key.z));
-    storeU64(record + 12, last_update_frame ? last_update_frame(*b) : 0);
-    record[20] = levelMask(*b);
-    record[21] = record[22] = record[23] = 0;
-    record += kMapFileRecordHeadBytes;
-    for (int l = 0; l < kNumLevels; ++l) {
-      if (!b->hasLevel(l)) continue;
-      storeVoxels(b->level(l), levelVoxelCount(l), record);
-      record += levelVoxelCount(l) * kVoxelRecordBytes;
-    }
+size_t mapFileRecordBytes(const VoxelBlock& block) {
+  return kMapFileRecordHeadBytes + levelBytes(levelMask(block));
+}
+
+size_t mapFileFreeSpaceBytes(const SeenFreeSpace& free_space) {
+  return 16 + free_space.blocks.size() * kMapFileFreeSpaceRecordBytes;
+}
+
+void encodeMapFileRecord(const VoxelBlock& block, uint64_t last_update_frame, uint8_t* record) {
+  storeU32(record, static_cast<uint32_t>(block.key.x));
+  storeU32(record + 4, static_cast<uint32_t>(block.key.y));
+  storeU32(record + 8, static_cast<uint32_t>(block.key.z));
+  storeU64(record + 12, last_update_frame);
+  record[20] = levelMask(block);
+  record[21] = record[22] = record[23] = 0;
+  record += kMapFileRecordHeadBytes;
+  for (int l = 0; l < kNumLevels; ++l) {
+    if (!block.hasLevel(l)) continue;
+    storeVoxels(block.level(l), levelVoxelCount(l), record);
+    record += levelVoxelCount(l) * kVoxelRecordBytes;
   }
+}
+
+void encodeMapFileFreeSpace(const SeenFreeSpace& free_space, uint8_t* record) {
   storeF64(record, free_space.cell_m);
   storeU64(record + 8, free_space.blocks.size());
   record += 16;
@@ -179,7 +175,10 @@ std::vector<uint8_t> encodeMapFileUnsealed(const std::vector<const VoxelBlock*>&
     for (size_t w = 0; w < bits.size(); ++w) storeU64(record + 16 + 8 * w, bits[w]);
     record += kMapFileFreeSpaceRecordBytes;
   }
-  uint8_t* header = file.data();
+}
+
+void encodeMapFileHeader(const MapperConfig& config, uint64_t frames_integrated,
+                         uint64_t block_count, uint64_t payload_bytes, uint8_t* header) {
   std::memcpy(header, kMagic, 8);
   storeU32(header + 8, kMapFileVersion);
   storeU32(header + 12, static_cast<uint32_t>(kMapFileHeaderBytes));
@@ -188,17 +187,42 @@ std::vector<uint8_t> encodeMapFileUnsealed(const std::vector<const VoxelBlock*>&
   storeF64(header + 32, config.levels.scale2_min_depth_m);
   storeF64(header + 40, config.levels.scale4_min_depth_m);
   storeU64(header + 48, frames_integrated);
-  storeU64(header + 56, blocks.size());
+  storeU64(header + 56, block_count);
   storeU64(header + 64, payload_bytes);
+  storeU32(header + 72, 0);
+  storeU32(header + 76, 0);
+}
+
+void sealMapFileHeader(uint8_t* header, uint32_t payload_crc) {
+  storeU32(header + 72, payload_crc);
+  storeU32(header + 76, crc32(header, 76));
+}
+
+std::vector<uint8_t> encodeMapFileUnsealed(const std::vector<const VoxelBlock*>& blocks,
+                                           const MapperConfig& config, uint64_t frames_integrated,
+                                           const LastUpdateFrameOf& last_update_frame,
+                                           const SeenFreeSpace& free_space) {
+  static_assert(kMapFileV1RecordBytes ==
+                    kMapFileRecordHeadBytes + VoxelBlock::kVoxelCount * kVoxelRecordBytes,
+                "record layout");
+  size_t payload_bytes = mapFileFreeSpaceBytes(free_space);
+  for (const VoxelBlock* b : blocks) payload_bytes += mapFileRecordBytes(*b);
+  std::vector<uint8_t> file(kMapFileHeaderBytes + payload_bytes);
+  uint8_t* record = file.data() + kMapFileHeaderBytes;
+  for (const VoxelBlock* b : blocks) {
+    encodeMapFileRecord(*b, last_update_frame ? last_update_frame(*b) : 0, record);
+    record += mapFileRecordBytes(*b);
+  }
+  encodeMapFileFreeSpace(free_space, record);
+  encodeMapFileHeader(config, frames_integrated, blocks.size(), payload_bytes, file.data());
   return file;  // checksums at 72 and 76 still zero
 }
 
 void sealMapFile(std::vector<uint8_t>* file) {
   if (file->size() < kMapFileHeaderBytes)
     return;  // not from encodeMapFileUnsealed(): nothing to seal
-  uint8_t* header = file->data();
-  storeU32(header + 72, crc32(header + kMapFileHeaderBytes, file->size() - kMapFileHeaderBytes));
-  storeU32(header + 76, crc32(header, 76));
+  sealMapFileHeader(file->data(),
+                    crc32(file->data() + kMapFileHeaderBytes, file->size() - kMapFileHeaderBytes));
 }
 
 namespace {

@@ -88,6 +88,28 @@ std::vector<uint8_t> encodeMapFileUnsealed(const std::vector<const VoxelBlock*>&
                                            const MapperConfig& config, uint64_t frames_integrated,
                                            const LastUpdateFrameOf& last_update_frame = {},
                                            const SeenFreeSpace& free_space = {});
+/// The parts of the format one at a time, for a writer that streams the file (writeMapFile()):
+/// a block's record (mapFileRecordBytes() bytes), the seen-free section, the header (checksums
+/// zero) and its checksums once the payload's CRC-32 is known.
+size_t mapFileRecordBytes(const VoxelBlock& block);
+void encodeMapFileRecord(const VoxelBlock& block, uint64_t last_update_frame, uint8_t* record);
+size_t mapFileFreeSpaceBytes(const SeenFreeSpace& free_space);
+void encodeMapFileFreeSpace(const SeenFreeSpace& free_space, uint8_t* out);
+void encodeMapFileHeader(const MapperConfig& config, uint64_t frames_integrated,
+                         uint64_t block_count, uint64_t payload_bytes, uint8_t* header);
+void sealMapFileHeader(uint8_t* header, uint32_t payload_crc);
+
+/// Calls `sink(block, last_update_frame)` for every block of a map in key order; false when a
+/// block cannot be read (then `error` says which).
+using MapFileBlocks = std::function<bool(
+    const std::function<void(const VoxelBlock&, uint64_t)>& sink, std::string* error)>;
+/// Writes the map file of `block_count` blocks, streamed from `blocks`, to `path` as
+/// writeMapFileBytes() does (a temporary flushed to the disk, renamed into place): the bytes
+/// encodeMapFile() would give, without ever holding more than one block's record.
+bool writeMapFile(const std::string& path, const MapperConfig& config, uint64_t frames_integrated,
+                  uint64_t block_count, const MapFileBlocks& blocks,
+                  const SeenFreeSpace& free_space, std::string* error);
+
 /// Fills in both checksums of bytes from encodeMapFileUnsealed() (again, on sealed bytes: the
 /// same values).
 void sealMapFile(std::vector<uint8_t>* file);

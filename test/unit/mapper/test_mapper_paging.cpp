@@ -93,6 +93,11 @@ TEST(MapperPaging, AResetOrALoadedMapStartsAfreshAndRebuildsSeeEveryBlock) {
   const fs::path file = scratch.path / "map.sfmap";
   std::string error;
   ASSERT_TRUE(capped.saveMap(file.string(), &error)) << error;
+  // Streamed block by block, the file is the one the uncapped map's bytes make.
+  std::vector<uint8_t> expected = uncapped.encodeMap();
+  sealMapFile(&expected);
+  const std::string saved = fileBytes(file);
+  EXPECT_TRUE(saved == std::string(expected.begin(), expected.end()));
   Mapper reloaded(config);
   ASSERT_TRUE(reloaded.loadMap(file.string(), nullptr, &error)) << error;
   EXPECT_TRUE(reloaded.encodeMap() == uncapped.encodeMap());
