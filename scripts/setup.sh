@@ -15,7 +15,7 @@ PACKAGES=(
   # toolchain
   g++ make cmake pkg-config
   # core library
-  libeigen3-dev libopencv-dev libyaml-cpp-dev nlohmann-json3-dev zlib1g-dev libsqlite3-dev
+  libeigen3-dev libopencv-dev libyaml-cpp-dev nlohmann-json3-dev zlib1g-dev libsqlite3-dev libzstd-dev
   # the offline fuser's octomap.bt
   liboctomap-dev
   # the tools' OBJ reader (tools/readers/ObjReader.cpp)

@@ -5,7 +5,7 @@
 # a tool without that build failing.
 #
 # The includer sets STEREO_FUSION_ROOT (the repository) and STEREO_FUSION_CORE_TESTS, and has found
-# Eigen3, OpenCV (core imgproc imgcodecs calib3d), yaml-cpp, Threads, ZLIB and SQLite3; with the tests also GTest
+# Eigen3, OpenCV (core imgproc imgcodecs calib3d), yaml-cpp, Threads, ZLIB, SQLite3 and zstd; with the tests also GTest
 # and include(GoogleTest).
 #
 #   stereo_fusion_core         the library
@@ -102,7 +102,7 @@ target_include_directories(stereo_fusion_core PUBLIC ${STEREO_FUSION_ROOT}/inclu
                                                      ${OpenCV_INCLUDE_DIRS})
 # The OpenCV modules the core uses (the includer may have found more for the tools).
 target_link_libraries(stereo_fusion_core PUBLIC opencv_core opencv_imgproc opencv_imgcodecs opencv_calib3d yaml-cpp
-                                                Threads::Threads ZLIB::ZLIB SQLite::SQLite3)
+                                                Threads::Threads ZLIB::ZLIB SQLite::SQLite3 zstd::libzstd_shared)
 
 # Analytic scenes and ray casting: ground truth for tests, the simulator and the evaluator.
 add_library(stereo_fusion_sim STATIC ${STEREO_FUSION_ROOT}/tools/simulator/AnalyticScene.cpp)

@@ -1,6 +1,7 @@
 #include "stereo_fusion/paging/BlockStore.h"
 
 #include <sqlite3.h>
+#include <zstd.h>
 
 #include <unistd.h>
 
@@ -14,7 +15,11 @@
 namespace stereo_fusion {
 
 namespace {
-constexpr const char* kFormat = "stereo_fusion block store 1";
+// 2: pages zstd-compressed (1 held them raw).
+constexpr const char* kFormat = "stereo_fusion block store 2";
+// Fast: the writer thread compresses ~0.4 GB/s, and a voxel block's page shrinks ~2.3×, a
+// submesh's ~1.6× (the building at 1 cm), so the disk the store shares writes half as much.
+constexpr int kCompressionLevel = 1;
 
 /// Runs `statement` to its end after binding `key` to its first three parameters.
 void bindKey(sqlite3_stmt* statement, const BlockKey& key) {
@@ -126,6 +131,8 @@ std::unique_ptr<BlockStore> BlockStore::openPrivate(const std::string& folder,
 }
 
 BlockStore::~BlockStore() {
+  ZSTD_freeCCtx(compressor_);
+  ZSTD_freeDCtx(decompressor_);
   sqlite3_finalize(insert_);
   sqlite3_finalize(select_);
   sqlite3_finalize(delete_);
@@ -162,12 +169,8 @@ bool BlockStore::write(const std::vector<BlockKey>& keys,
 
 bool BlockStore::write(const std::vector<BlockKey>& keys,
                        const std::vector<const std::vector<uint8_t>*>& pages, std::string* error) {
-  return eachKeyInTransaction(keys, insert_, "cannot write pages", error, [&](size_t i) {
-    // An empty vector's data() may be null, which SQLite would store as NULL: bind "" instead.
-    static const uint8_t kNothing = 0;
-    sqlite3_bind_blob64(insert_, 4, pages[i]->empty() ? &kNothing : pages[i]->data(),
-                        pages[i]->size(), SQLITE_STATIC);
-  });
+  return eachKeyInTransaction(keys, insert_, "cannot write pages", error,
+                              [&](size_t i) { bindPage(insert_, *pages[i]); });
 }
 
 bool BlockStore::eachKeyInTransaction(const std::vector<BlockKey>& keys, sqlite3_stmt* statement,
@@ -199,8 +202,7 @@ bool BlockStore::read(const BlockKey& key, std::vector<uint8_t>* page, std::stri
   if (rc == SQLITE_ROW) {
     const auto* data = static_cast<const uint8_t*>(sqlite3_column_blob(select_, 0));
     const int bytes = sqlite3_column_bytes(select_, 0);
-    page->assign(data, data + bytes);
-    found = true;
+    found = unpack(data, static_cast<size_t>(bytes), page, error);
   } else if (rc != SQLITE_DONE) {
     *error = failure("cannot read a page");
   }
@@ -222,15 +224,44 @@ bool BlockStore::erase(const std::vector<BlockKey>& keys, std::string* error) {
   return eachKeyInTransaction(keys, delete_, "cannot erase pages", error, {});
 }
 
+void BlockStore::bindPage(sqlite3_stmt* statement, const std::vector<uint8_t>& page) {
+  if (!compressor_) compressor_ = ZSTD_createCCtx();
+  packed_.resize(ZSTD_compressBound(page.size()));
+  const size_t packed = ZSTD_compressCCtx(compressor_, packed_.data(), packed_.size(), page.data(),
+                                          page.size(), kCompressionLevel);
+  // Cannot fail with a buffer of compressBound() bytes but for lack of memory: then raw, which
+  // the reader refuses as it refuses any corrupted page.
+  packed_.resize(ZSTD_isError(packed) ? 0 : packed);
+  static const uint8_t kNothing = 0;  // a null data() would be stored as NULL
+  sqlite3_bind_blob64(statement, 4, packed_.empty() ? &kNothing : packed_.data(), packed_.size(),
+                      SQLITE_STATIC);  // stepped before packed_ changes
+}
+
+bool BlockStore::unpack(const uint8_t* data, size_t size, std::vector<uint8_t>* page,
+                        std::string* error) {
+  const unsigned long long bytes = ZSTD_getFrameContentSize(data, size);
+  if (bytes == ZSTD_CONTENTSIZE_ERROR || bytes == ZSTD_CONTENTSIZE_UNKNOWN ||
+      bytes > (uint64_t{1} << 31)) {
+    *error = file_ + ": a page is not a compressed page (corrupted store)";
+    return false;
+  }
+  if (!decompressor_) decompressor_ = ZSTD_createDCtx();
+  page->resize(bytes);
+  const size_t unpacked =
+      ZSTD_decompressDCtx(decompressor_, page->data(), page->size(), data, size);
+  if (ZSTD_isError(unpacked) || unpacked != bytes) {
+    *error = file_ + ": a page does not decompress (" +
+             (ZSTD_isError(unpacked) ? ZSTD_getErrorName(unpacked) : "short") +
+             "; corrupted store)";
+    return false;
+  }
+  return true;
+}
+
 bool BlockStore::stepKey(sqlite3_stmt* statement, const BlockKey& key,
                          const std::vector<uint8_t>* page) {
   bindKey(statement, key);
-  if (page) {
-    // An empty vector's data() may be null, which SQLite would store as NULL: bind "" instead.
-    static const uint8_t kNothing = 0;
-    sqlite3_bind_blob64(statement, 4, page->empty() ? &kNothing : page->data(), page->size(),
-                        SQLITE_STATIC);
-  }
+  if (page) bindPage(statement, *page);
   const int rc = sqlite3_step(statement);
   sqlite3_reset(statement);
   return rc == SQLITE_DONE;
@@ -289,11 +320,13 @@ bool BlockStore::eachPage(const std::function<bool(const BlockKey&, const uint8_
   ReadBatch batch(this);
   int rc;
   bool visited_all = true;
+  std::vector<uint8_t> page;
   while ((rc = sqlite3_step(all)) == SQLITE_ROW) {
     const BlockKey key{sqlite3_column_int(all, 0), sqlite3_column_int(all, 1),
                        sqlite3_column_int(all, 2)};
     const auto* data = static_cast<const uint8_t*>(sqlite3_column_blob(all, 3));
-    if (!visit(key, data, static_cast<size_t>(sqlite3_column_bytes(all, 3)))) {
+    if (!unpack(data, static_cast<size_t>(sqlite3_column_bytes(all, 3)), &page, error) ||
+        !visit(key, page.data(), page.size())) {
       visited_all = false;
       break;
     }

@@ -9,6 +9,8 @@
 
 struct sqlite3;
 struct sqlite3_stmt;
+struct ZSTD_CCtx_s;
+struct ZSTD_DCtx_s;
 
 namespace stereo_fusion {
 
@@ -29,10 +31,10 @@ struct BlockStoreIdentity {
 };
 
 /// The embedded store paged-out blocks live in: one SQLite database file (WAL journal), a page
-/// (paging/BlockPage) per block key. SQLite was chosen by measurement (doc/design.md, "Paging"):
-/// its reads go through a bounded page cache, so the process's RSS does not grow with the
-/// store as it does with a memory-mapped store, a transaction is all or nothing after a kill,
-/// and it starts no thread of its own.
+/// (paging/BlockPage) per block key, zstd-compressed. SQLite was chosen by measurement
+/// (doc/design.md, "Paging"): its reads go through a bounded page cache, so the process's RSS does
+/// not grow with the store as it does with a memory-mapped store, a transaction is all or nothing
+/// after a kill, and it starts no thread of its own.
 ///
 /// Each write() is one transaction. Not thread-safe: the Mapper calls it under its map lock.
 class BlockStore {
@@ -97,6 +99,10 @@ class BlockStore {
  private:
   BlockStore() = default;
   bool execute(const char* sql, std::string* error);
+  /// Binds `page`, compressed, as `statement`'s 4th parameter.
+  void bindPage(sqlite3_stmt* statement, const std::vector<uint8_t>& page);
+  /// A stored page back to its bytes; false with a sentence when it does not decompress.
+  bool unpack(const uint8_t* data, size_t size, std::vector<uint8_t>* page, std::string* error);
   /// Binds `key` (and `page`, when given) to `statement` and runs it once.
   bool stepKey(sqlite3_stmt* statement, const BlockKey& key, const std::vector<uint8_t>* page);
   bool prepare(const char* sql, sqlite3_stmt** statement, std::string* error);
@@ -113,6 +119,9 @@ class BlockStore {
   sqlite3_stmt* insert_ = nullptr;
   sqlite3_stmt* select_ = nullptr;
   sqlite3_stmt* delete_ = nullptr;
+  ZSTD_CCtx_s* compressor_ = nullptr;  // made on the first write
+  ZSTD_DCtx_s* decompressor_ = nullptr;
+  std::vector<uint8_t> packed_;  // the page being written, compressed
 };
 
 }  // namespace stereo_fusion

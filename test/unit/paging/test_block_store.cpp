@@ -5,6 +5,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include <sqlite3.h>
+
 #include "stereo_fusion/paging/BlockStore.h"
 
 using namespace stereo_fusion;
@@ -155,4 +157,37 @@ TEST(BlockStore, ACommitWritesErasesAndRecordsItsStateInOneTransaction) {
       [&](const BlockKey&, const uint8_t*, size_t) { return ++visited < 1; }, &error));
   EXPECT_EQ(visited, 1u);
   EXPECT_TRUE(error.empty());
+}
+
+TEST(BlockStore, PagesAreStoredCompressedAndACorruptedOneIsAnError) {
+  TempFolder dir;
+  const std::string file = (dir.path / "map.sqlite").string();
+  std::string error;
+  const std::vector<uint8_t> page(64 * 1024, 7);
+  {
+    auto store = BlockStore::open(file, kIdentity, &error);
+    ASSERT_TRUE(store) << error;
+    ASSERT_TRUE(store->write({{1, 1, 1}, {2, 2, 2}}, {page, page}, &error)) << error;
+  }
+  // The blob on disk is a zstd frame far smaller than the page; one is then garbled.
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(file.c_str(), &db), SQLITE_OK);
+  sqlite3_stmt* length = nullptr;
+  ASSERT_EQ(
+      sqlite3_prepare_v2(db, "SELECT length(page) FROM pages WHERE x = 1", -1, &length, nullptr),
+      SQLITE_OK);
+  ASSERT_EQ(sqlite3_step(length), SQLITE_ROW);
+  EXPECT_LT(sqlite3_column_int(length, 0), 1024);
+  sqlite3_finalize(length);
+  ASSERT_EQ(sqlite3_exec(db, "UPDATE pages SET page = x'0102030405060708' WHERE x = 2", nullptr,
+                         nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(db);
+  auto store = BlockStore::open(file, kIdentity, &error);
+  ASSERT_TRUE(store) << error;
+  std::vector<uint8_t> back;
+  ASSERT_TRUE(store->read({1, 1, 1}, &back, &error)) << error;
+  EXPECT_EQ(back, page);
+  EXPECT_FALSE(store->read({2, 2, 2}, &back, &error));
+  EXPECT_NE(error.find("corrupted store"), std::string::npos) << error;
 }

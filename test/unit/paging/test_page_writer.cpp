@@ -1,6 +1,8 @@
 // The page writer: a page is readable from the hand-over until the store holds it, batches
 // reach the store in order, and a refused write keeps every later page readable for the host.
 #include <gtest/gtest.h>
+
+#include <random>
 #include <sys/resource.h>
 
 #include <csignal>
@@ -16,6 +18,14 @@ const BlockStoreIdentity kIdentity{0.02, 4.0};
 
 PageWriter::Page page(size_t bytes, uint8_t value) {
   return std::make_shared<const std::vector<uint8_t>>(bytes, value);
+}
+
+/// A page the store cannot compress (its pages are zstd frames): random bytes.
+PageWriter::Page noisePage(size_t bytes, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::vector<uint8_t> noise(bytes);
+  for (uint8_t& b : noise) b = static_cast<uint8_t>(rng());
+  return std::make_shared<const std::vector<uint8_t>>(std::move(noise));
 }
 
 struct Store {
@@ -94,7 +104,7 @@ TEST(PageWriter, ARefusedWriteKeepsItsPagesAndEveryLaterOneForTheHost) {
   std::vector<PageWriter::Page> big_pages;
   for (int k = 0; k < 100; ++k) {
     big_keys.push_back({k, 1, 0});
-    big_pages.push_back(page(8000, 2));
+    big_pages.push_back(noisePage(8000, k));
   }
   s.writer->write(big_keys, big_pages);  // 800 KB: beyond the limit
   s.writer->write({{0, 2, 0}}, {page(10, 3)});
