@@ -38,11 +38,12 @@ struct Session {
         mapper->integrate(frame, mesh_now ? MeshTiming::kNow : MeshTiming::kDeferred);
     ASSERT_TRUE(r.accepted) << r.error;
     if ((f + 1) % plan_every == 0) mapper->updatePlanning();
-    if (f == clear_at)
+    if (f == clear_at) {
       ASSERT_TRUE(
           mapper
               ->clearRegion(MapRegion::box({0.0, 1.5, 0.0}, {1.2, 3.2, 1.0}), MeshTiming::kDeferred)
               .accepted);
+    }
     if (f == reset_at) mapper->reset();
   }
 };
@@ -90,8 +91,11 @@ TEST(MapperCheckpoint, AResumedMapContinuesAsTheUninterruptedRun) {
       std::string error;
       for (int f = 0; f <= last_checkpoint + 2; ++f) {
         session.frame(&interrupted, f);
-        if (f == last_checkpoint || std::bernoulli_distribution(0.3)(rng) && f < last_checkpoint)
+        const bool now =
+            f == last_checkpoint || (f < last_checkpoint && std::bernoulli_distribution(0.3)(rng));
+        if (now) {
           ASSERT_TRUE(interrupted.checkpoint("frame " + std::to_string(f), &error)) << error;
+        }
       }
       interrupted.flushCheckpoints();
       EXPECT_EQ(interrupted.checkpointStats().error, "") << what;
@@ -218,7 +222,9 @@ TEST(MapperCheckpoint, KilledAtAnyInstantTheStoreReopensAtOneOfItsCheckpoints) {
       continue;
     }
     ++reopened_with_map;
-    if (kill == 0) EXPECT_EQ(reopened.framesIntegrated(), static_cast<uint64_t>(frames));
+    if (kill == 0) {
+      EXPECT_EQ(reopened.framesIntegrated(), static_cast<uint64_t>(frames));
+    }
     const uint64_t n = reopened.framesIntegrated();
     ASSERT_LE(n, static_cast<uint64_t>(frames));
     EXPECT_EQ(n % 2, 0u) << "kill " << kill << ": a checkpoint falls after every other frame";
