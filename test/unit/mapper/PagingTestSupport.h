@@ -25,7 +25,7 @@ inline sim::AnalyticScene hall() {
   scene.add(sim::makePlane({0, 0, 0}, {0, 0, 1}), {170, 160, 140});
   scene.add(sim::makePlane({0, 3.0, 0}, {0, -1, 0}), {120, 140, 190});
   for (int k = 0; k < 8; ++k) {
-    scene.add(sim::makeSphere({0.9 * k, 1.8, 0.5}, 0.3), {200, 80 + 15 * k, 60});
+    scene.add(sim::makeSphere({0.9 * k, 1.8, 0.5}, 0.3), {200.0, 80.0 + 15 * k, 60.0});
     Eigen::Isometry3d T_world_box = Eigen::Isometry3d::Identity();
     T_world_box.translation() = Eigen::Vector3d(0.9 * k + 0.45, 2.4, 0.4);
     scene.add(sim::makeBox(T_world_box, {0.2, 0.2, 0.8}), {60, 160, 90});
@@ -107,6 +107,36 @@ struct Scratch {
     fs::create_directories(path);
   }
   ~Scratch() { fs::remove_all(path); }
+};
+
+/// A long session's operations on the hall: meshing and planning at cadences, a clear, and
+/// (optionally) a reset, frame by frame, so that page-outs and checkpoints fall between them.
+struct HallSession {
+  sim::AnalyticScene scene = hall();
+  std::vector<Eigen::Isometry3d> poses;
+  int seed = 0;
+  int mesh_every = 1;
+  int plan_every = 1;
+  int clear_at = -1;
+  int reset_at = -1;
+
+  /// Fuses frame f (stamped 1 + f, noise seed 7·seed + f) and runs what falls after it.
+  void frame(Mapper* mapper, int f) const {
+    StereoFrame frame = renderFrame(scene, qvgaCamera(), poses[f], 0.2, 7 * seed + f);
+    frame.timestamp_s = 1.0 + f;
+    const bool mesh_now = (f + 1) % mesh_every == 0;
+    const IntegrationResult r =
+        mapper->integrate(frame, mesh_now ? MeshTiming::kNow : MeshTiming::kDeferred);
+    ASSERT_TRUE(r.accepted) << r.error;
+    if ((f + 1) % plan_every == 0) mapper->updatePlanning();
+    if (f == clear_at) {
+      ASSERT_TRUE(
+          mapper
+              ->clearRegion(MapRegion::box({0.0, 1.5, 0.0}, {1.2, 3.2, 1.0}), MeshTiming::kDeferred)
+              .accepted);
+    }
+    if (f == reset_at) mapper->reset();
+  }
 };
 
 }  // namespace stereo_fusion::test

@@ -19,35 +19,6 @@ using namespace stereo_fusion::test;
 
 namespace {
 
-/// One session's operations on the hall: meshing and planning at cadences, a clear, and
-/// (optionally) a reset, so that checkpoints fall between them at random.
-struct Session {
-  sim::AnalyticScene scene = hall();
-  std::vector<Eigen::Isometry3d> poses;
-  int seed = 0;
-  int mesh_every = 1;
-  int plan_every = 1;
-  int clear_at = -1;
-  int reset_at = -1;
-
-  void frame(Mapper* mapper, int f) const {
-    StereoFrame frame = renderFrame(scene, qvgaCamera(), poses[f], 0.2, 7 * seed + f);
-    frame.timestamp_s = 1.0 + f;
-    const bool mesh_now = (f + 1) % mesh_every == 0;
-    const IntegrationResult r =
-        mapper->integrate(frame, mesh_now ? MeshTiming::kNow : MeshTiming::kDeferred);
-    ASSERT_TRUE(r.accepted) << r.error;
-    if ((f + 1) % plan_every == 0) mapper->updatePlanning();
-    if (f == clear_at) {
-      ASSERT_TRUE(
-          mapper
-              ->clearRegion(MapRegion::box({0.0, 1.5, 0.0}, {1.2, 3.2, 1.0}), MeshTiming::kDeferred)
-              .accepted);
-    }
-    if (f == reset_at) mapper->reset();
-  }
-};
-
 Mapper::StoreOpening open(Mapper* mapper, bool resume) {
   Mapper::StoreOpening opened = mapper->openMapStore(resume);
   EXPECT_TRUE(opened.ok) << opened.message;
@@ -62,7 +33,7 @@ TEST(MapperCheckpoint, AResumedMapContinuesAsTheUninterruptedRun) {
     Scratch scratch;
     std::mt19937 rng(300 + run);
     const int frames = quickMode() ? 20 : 32;
-    Session session;
+    HallSession session;
     session.seed = run;
     session.poses = walk(&rng, frames);
     session.mesh_every = std::uniform_int_distribution<int>(1, 3)(rng);
@@ -117,7 +88,7 @@ TEST(MapperCheckpoint, AResumedMapContinuesAsTheUninterruptedRun) {
 TEST(MapperCheckpoint, ACheckpointWritesOnlyTheBlocksThatChanged) {
   Scratch scratch;
   std::mt19937 rng(11);
-  Session session;
+  HallSession session;
   session.poses = walk(&rng, 16);
   MapperConfig config = hallConfig();
   config.map_store_path = (scratch.path / "store").string();
@@ -153,7 +124,7 @@ TEST(MapperCheckpoint, KilledAtAnyInstantTheStoreReopensAtOneOfItsCheckpoints) {
   const int kills = quickMode() ? 3 : 8;
   const int frames = 24;
   std::mt19937 rng(77);
-  Session session;
+  HallSession session;
   session.poses = walk(&rng, frames);
   session.mesh_every = 2;
   session.plan_every = 3;
@@ -260,7 +231,7 @@ TEST(MapperCheckpoint, AStoreThatCannotBeReadIsRefusedAndLeftAsItIs) {
 
   // A store of another voxel grid.
   std::mt19937 rng(5);
-  Session session;
+  HallSession session;
   session.poses = walk(&rng, 4);
   {
     Mapper mapper(config);

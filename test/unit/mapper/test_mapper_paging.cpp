@@ -21,7 +21,6 @@ using namespace stereo_fusion::test;
 namespace fs = std::filesystem;
 
 TEST(MapperPaging, AnyCapGivesTheUncappedOutputsByteForByte) {
-  const sim::AnalyticScene scene = hall();
   const int runs = quickMode() ? 2 : 5;
   Scratch scratch;
   for (int run = 0; run < runs; ++run) {
@@ -34,18 +33,16 @@ TEST(MapperPaging, AnyCapGivesTheUncappedOutputsByteForByte) {
     MapperConfig config = hallConfig();
     if (run % 2 == 1) config.max_distance_from_camera_m = 5.0;
     const int clear_at = std::uniform_int_distribution<int>(frames / 2, frames - 2)(rng);
-    const MapRegion clear = MapRegion::box({0.0, 1.5, 0.0}, {1.2, 3.2, 1.0});
+    HallSession session;
+    session.poses = poses;
+    session.seed = run;
+    session.mesh_every = mesh_every;
+    session.plan_every = plan_every;
+    session.clear_at = clear_at;
 
     auto fuse = [&](Mapper* mapper, size_t* peak_bytes) {
       for (int f = 0; f < frames; ++f) {
-        StereoFrame frame = renderFrame(scene, qvgaCamera(), poses[f], 0.2, 7 * run + f);
-        frame.timestamp_s = 1.0 + f;
-        const bool mesh_now = (f + 1) % mesh_every == 0;
-        const IntegrationResult r =
-            mapper->integrate(frame, mesh_now ? MeshTiming::kNow : MeshTiming::kDeferred);
-        ASSERT_TRUE(r.accepted) << r.error;
-        if ((f + 1) % plan_every == 0) mapper->updatePlanning();
-        if (f == clear_at) ASSERT_TRUE(mapper->clearRegion(clear, MeshTiming::kDeferred).accepted);
+        session.frame(mapper, f);
         *peak_bytes = std::max(*peak_bytes, mapper->mapMemoryBytes());
       }
     };
