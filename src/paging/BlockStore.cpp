@@ -169,21 +169,16 @@ bool BlockStore::write(const std::vector<BlockKey>& keys,
 
 bool BlockStore::write(const std::vector<BlockKey>& keys,
                        const std::vector<const std::vector<uint8_t>*>& pages, std::string* error) {
-  return eachKeyInTransaction(keys, insert_, "cannot write pages", error,
-                              [&](size_t i) { bindPage(insert_, *pages[i]); });
+  return eachKeyInTransaction(keys, insert_, "cannot write pages", error, &pages);
 }
 
 bool BlockStore::eachKeyInTransaction(const std::vector<BlockKey>& keys, sqlite3_stmt* statement,
                                       const char* what, std::string* error,
-                                      const std::function<void(size_t)>& bind_rest) {
+                                      const std::vector<const std::vector<uint8_t>*>* pages) {
   if (keys.empty()) return true;
   if (!execute("BEGIN", error)) return false;
   for (size_t i = 0; i < keys.size(); ++i) {
-    bindKey(statement, keys[i]);
-    if (bind_rest) bind_rest(i);
-    const int rc = sqlite3_step(statement);
-    sqlite3_reset(statement);
-    if (rc != SQLITE_DONE) {
+    if (!stepKey(statement, keys[i], pages ? (*pages)[i] : nullptr)) {
       *error = failure(what);
       rollback(db_);
       return false;
@@ -221,7 +216,7 @@ BlockStore::ReadBatch::~ReadBatch() {
 }
 
 bool BlockStore::erase(const std::vector<BlockKey>& keys, std::string* error) {
-  return eachKeyInTransaction(keys, delete_, "cannot erase pages", error, {});
+  return eachKeyInTransaction(keys, delete_, "cannot erase pages", error, nullptr);
 }
 
 void BlockStore::bindPage(sqlite3_stmt* statement, const std::vector<uint8_t>& page) {

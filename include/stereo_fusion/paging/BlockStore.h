@@ -107,11 +107,11 @@ class BlockStore {
   bool stepKey(sqlite3_stmt* statement, const BlockKey& key, const std::vector<uint8_t>* page);
   bool prepare(const char* sql, sqlite3_stmt** statement, std::string* error);
   std::string failure(const std::string& what) const;
-  /// Runs `statement` once per key (bound to parameters 1-3; `bind_rest(i)` binds the others)
-  /// in one transaction: all of them or, on an error, none.
+  /// Runs `statement` once per key (stepKey(), with `pages[i]` when given) in one transaction:
+  /// all of them or, on an error, none.
   bool eachKeyInTransaction(const std::vector<BlockKey>& keys, sqlite3_stmt* statement,
                             const char* what, std::string* error,
-                            const std::function<void(size_t)>& bind_rest);
+                            const std::vector<const std::vector<uint8_t>*>* pages);
 
   std::string file_;
   bool remove_on_close_ = false;
