@@ -36,6 +36,7 @@ Mapper::Mapper(const MapperConfig& config)
   mesh_ = &addLayer(std::make_unique<MeshLayer>(stages_.mesh, &pool_));
   if (stages_.planning_enabled)
     planning_ = &addLayer(std::make_unique<PlanningLayer>(stages_.planning, &pool_));
+  if (store_) subscribeStoreConsumers();
 }
 
 void Mapper::registerLayer(std::unique_ptr<MapLayer> layer) {
@@ -98,7 +99,7 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
     result.blocks_paged_out = paging_stats_.blocks_paged_out - before;
     result.paging_ms += timer.elapsedMs();
   }
-  noteCheckpointChanges();
+  noteStoreChanges();
   if (!checkpoints_in_flight_.empty()) foldCommittedCheckpoints();
   return result;
 }

@@ -43,15 +43,11 @@ Mapper::StoreOpening Mapper::openMapStore(bool resume) {
                                   "at the first checkpoint"
                             : file + ": a new map starts in it";
   }
+  subscribeStoreConsumers();
+  // The resumed mesh's changes (every submesh) are no checkpoint's business.
+  noteStoreChanges();
   checkpoint_full_ = !out.resumed;
   checkpoint_dirty_.clear();
-  if (!checkpoint_map_consumer_) {
-    checkpoint_map_consumer_ = map_changes_.subscribe("checkpoint");
-    checkpoint_mesh_consumer_ = mesh_->subscribe("checkpoint");
-  }
-  // The resumed mesh's changes (every submesh) are no checkpoint's business.
-  map_changes_.take(*checkpoint_map_consumer_);
-  mesh_->take(*checkpoint_mesh_consumer_);
   checkpoint_stats_ = CheckpointStats();
   checkpoint_stats_.file = file;
   checkpoint_stats_.resumed = out.resumed;
@@ -118,13 +114,26 @@ bool Mapper::resumeFrom(BlockStore* store, StoreOpening* out) {
   return true;
 }
 
-void Mapper::noteCheckpointChanges() {
-  if (!checkpoint_map_consumer_) return;
-  const BlockChangeLog::Changes map = map_changes_.take(*checkpoint_map_consumer_);
-  const BlockChangeLog::Changes mesh = mesh_->take(*checkpoint_mesh_consumer_);
+void Mapper::subscribeStoreConsumers() {
+  if (store_map_consumer_) return;
+  store_map_consumer_ = map_changes_.subscribe("stores");
+  store_mesh_consumer_ = mesh_->subscribe("stores");
+}
+
+void Mapper::noteStoreChanges() {
+  if (!store_map_consumer_) return;
+  const BlockChangeLog::Changes map = map_changes_.take(*store_map_consumer_);
+  const BlockChangeLog::Changes mesh = mesh_->take(*store_mesh_consumer_);
   for (const BlockChangeLog::Changes* changes : {&map, &mesh}) {
-    checkpoint_dirty_.insert(changes->updated.begin(), changes->updated.end());
-    checkpoint_dirty_.insert(changes->erased.begin(), changes->erased.end());
+    if (map_store_) {
+      checkpoint_dirty_.insert(changes->updated.begin(), changes->updated.end());
+      checkpoint_dirty_.insert(changes->erased.begin(), changes->erased.end());
+    }
+    // (A mesh change "erased" is a submesh gone from a block that stays.)
+    if (store_)
+      for (const std::vector<BlockKey>* keys : {&changes->updated, &changes->erased})
+        for (const BlockKey& key : *keys)
+          if (const VoxelBlock* block = octree_.find(key)) pageState(*block).page_current = false;
   }
 }
 
@@ -144,7 +153,7 @@ bool Mapper::checkpoint(const std::string& owner_note, std::string* error) {
   }
   foldCommittedCheckpoints();  // a refused one makes this one rewrite the store whole
   const Timer timer;
-  noteCheckpointChanges();
+  noteStoreChanges();
   StoreCommit commit;
   commit.clear_first = checkpoint_full_;
   std::vector<BlockKey> keys;
@@ -184,7 +193,7 @@ bool Mapper::checkpoint(const std::string& owner_note, std::string* error) {
   for (const LayerSlot& slot : layers_) slot.layer->encode(&sections);
   state.free_space = std::move(sections.free_space);
   for (BlockChangeLog::Consumer c = 0; c < map_changes_.consumerCount(); ++c) {
-    if (c == *checkpoint_map_consumer_) continue;
+    if (c == *store_map_consumer_) continue;
     BlockChangeLog::Changes pending = map_changes_.peek(c);
     if (pending.empty()) continue;
     state.pending.push_back(
@@ -244,12 +253,10 @@ void Mapper::handOverMapStore(Mapper* to) {
   to->map_store_ = std::move(map_store_);
   to->checkpoint_stats_ = checkpoint_stats_;
   to->checkpoint_stats_.resumed = false;
+  to->subscribeStoreConsumers();
+  to->noteStoreChanges();  // the rebuild's changes: the next checkpoint writes the store whole
   to->checkpoint_full_ = true;
   to->checkpoint_dirty_.clear();
-  if (!to->checkpoint_map_consumer_) {
-    to->checkpoint_map_consumer_ = to->map_changes_.subscribe("checkpoint");
-    to->checkpoint_mesh_consumer_ = to->mesh_->subscribe("checkpoint");
-  }
 }
 
 }  // namespace stereo_fusion

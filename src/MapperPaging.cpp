@@ -4,6 +4,9 @@
 #include <cstring>
 #include <stdexcept>
 #include <unordered_set>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 #include "stereo_fusion/Mapper.h"
 #include "stereo_fusion/paging/BlockPage.h"
@@ -11,6 +14,17 @@
 #include "stereo_fusion/util/Timer.h"
 
 namespace stereo_fusion {
+
+namespace {
+/// Gives the pages of the heap a page-out freed back to the system: the blocks' small
+/// allocations leave holes glibc keeps otherwise, and the process would stay as large as its
+/// largest map (the cap bounds what is resident, not only what is allocated).
+void returnFreedMemory() {
+#if defined(__GLIBC__)
+  malloc_trim(0);
+#endif
+}
+}  // namespace
 
 void Mapper::openStore() {
   const PagingConfig& paging = stages_.paging;
@@ -30,15 +44,27 @@ size_t Mapper::mapMemoryBytes() const {
   return bytes;
 }
 
+Mapper::PageState& Mapper::pageState(const VoxelBlock& block) {
+  page_state_.fit(octree_);
+  return page_state_[block];
+}
+
+uint64_t Mapper::lastUseFrame(const VoxelBlock& block) const {
+  const uint64_t updated = eviction_.lastUpdateFrame(block);
+  const uint64_t paged_in = block.row < page_state_.size() ? page_state_[block].paged_in_frame : 0;
+  return std::max(updated, paged_in);
+}
+
 void Mapper::pageInReach(const StereoFrame& frame) {
-  if (paged_.empty() || !validateFrame(frame, octree_.blockSize()).empty()) return;
+  if (!validateFrame(frame, octree_.blockSize()).empty()) return;
   const PagingConfig& paging = stages_.paging;
-  const FrameReach reach(frame, paging.max_depth_m, paging.band_m, paging.unmeasured_m,
-                         octree_.blockSize());
+  last_reach_.emplace(frame, paging.max_depth_m, paging.band_m, paging.unmeasured_m,
+                      octree_.blockSize());
+  if (paged_.empty()) return;
   std::vector<BlockKey> keys;
-  paged_.collect(
-      [&](const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) { return reach.mayReach(lo, hi); },
-      &keys);
+  paged_.collect([&](const Eigen::Vector3d& lo,
+                     const Eigen::Vector3d& hi) { return last_reach_->mayReach(lo, hi); },
+                 &keys);
   pageIn(keys);
 }
 
@@ -48,7 +74,7 @@ void Mapper::pageInAround(const std::vector<BlockKey>& keys) {
   pageIn(near);
 }
 
-void Mapper::pageInAll() { pageIn(paged_.sortedKeys()); }
+void Mapper::pageInAll() { pageIn(paged_.sortedKeys(), /*in_use=*/false); }
 
 void Mapper::pageLost(const BlockKey& key, const std::string& why) {
   ++paging_stats_.pages_unreadable;
@@ -101,7 +127,7 @@ void Mapper::encodePage(const VoxelBlock& block, uint64_t last_update_frame,
   }
 }
 
-void Mapper::pageIn(const std::vector<BlockKey>& keys) {
+void Mapper::pageIn(const std::vector<BlockKey>& keys, bool in_use) {
   if (keys.empty() || paged_.empty()) return;
   Timer timer;
   std::vector<uint8_t> page;
@@ -121,6 +147,9 @@ void Mapper::pageIn(const std::vector<BlockKey>& keys) {
       pageLost(key, error);
       continue;
     }
+    PageState& state = pageState(*octree_.find(key));
+    state.paged_in_frame = in_use ? frames_integrated_ : 0;
+    state.page_current = placed == Placed::kWhole;
     if (placed == Placed::kVoxelsOnly) {
       // The voxels came back but not the layers' parts: the block is treated as changed, so
       // the layers rebuild their part from it.
@@ -136,7 +165,7 @@ void Mapper::pageIn(const std::vector<BlockKey>& keys) {
 }
 
 void Mapper::pageOutOverCap() {
-  noteCheckpointChanges();  // before the mesh's checkpoint consumer could keep blocks in
+  noteStoreChanges();  // before the stores' mesh consumer could keep blocks in
   recoverRefusedPages();
   if (!store_ || paging_stats_.stopped) return;
   const size_t cap = stages_.paging.max_map_memory_bytes;
@@ -151,37 +180,54 @@ void Mapper::pageOutOverCap() {
   // stay if they can; if not, they go too and come back before its update (takeChanges()).
   if (selectPageOut(to_free, /*keep_lagging=*/true, &keys, &frames) < to_free)
     selectPageOut(to_free, /*keep_lagging=*/false, &keys, &frames);
-  // The pages, in key order (neighbours lie together in the store).
+  // The pages, in key order (neighbours lie together in the store), handed to the writer in
+  // slices so a pass holds no more than a slice of encoded pages beyond the writer's backlog.
   std::vector<size_t> order(keys.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = i;
   std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return keys[a] < keys[b]; });
-  std::vector<BlockKey> sorted_keys;
-  std::vector<PageWriter::Page> pages(keys.size());
-  size_t written = 0;
-  for (size_t n = 0; n < order.size(); ++n) {
-    const size_t i = order[n];
-    sorted_keys.push_back(keys[i]);
-    auto bytes = std::make_shared<std::vector<uint8_t>>();
-    const bool has_submesh = mesh_->store().submeshes().count(keys[i]) > 0;
-    const VoxelBlock& block = *octree_.find(keys[i]);
-    encodePage(block, frames[i], bytes.get());
-    for (LayerSlot& slot : layers_) slot.layer->pageOut(keys[i]);
-    written += bytes->size();
-    pages[n] = std::move(bytes);
-    voxel_bytes_ -= block.voxelBytes();
-    paged_.add(keys[i], PagedBlocks::Entry{frames[i], has_submesh});
-  }
-  octree_.erase(sorted_keys);
-  // The store writes them on the writer's thread; until then they are read from it. What it
-  // wrote since leaves memory now (no read snapshot is open here), and a writer that falls
-  // behind makes the frame wait: the pages it holds are memory beyond the cap.
-  writer_->write(std::move(sorted_keys), std::move(pages));
-  writer_->releaseWritten();
-  if (writer_->pendingBytes() > PagingConfig::maxWriterBacklogBytes(cap)) {
-    writer_->flush();
+  const size_t slice_bytes = PagingConfig::maxWriterBacklogBytes(cap) / 4;
+  std::vector<BlockKey> leaving, written_keys;
+  std::vector<PageWriter::Page> pages;
+  size_t written = 0, slice = 0;
+  const auto handOver = [&] {
+    octree_.erase(leaving);
+    leaving.clear();
+    if (!written_keys.empty()) writer_->write(std::move(written_keys), std::move(pages));
+    written_keys.clear();
+    pages.clear();
+    slice = 0;
+    // What the store wrote since leaves memory now (no read snapshot is open here), and a
+    // writer that falls behind makes the frame wait: the pages it holds are memory beyond
+    // the cap.
     writer_->releaseWritten();
-    ++paging_stats_.writer_waits;
+    if (writer_->pendingBytes() > PagingConfig::maxWriterBacklogBytes(cap)) {
+      writer_->flush();
+      writer_->releaseWritten();
+      ++paging_stats_.writer_waits;
+    }
+  };
+  for (const size_t i : order) {
+    const BlockKey& key = keys[i];
+    const VoxelBlock& block = *octree_.find(key);
+    const bool has_submesh = mesh_->store().submeshes().count(key) > 0;
+    if (pageState(block).page_current) {
+      ++paging_stats_.pages_kept;  // the store holds this very page: nothing to write
+    } else {
+      auto bytes = std::make_shared<std::vector<uint8_t>>();
+      encodePage(block, frames[i], bytes.get());
+      written += bytes->size();
+      slice += bytes->size();
+      written_keys.push_back(key);
+      pages.push_back(std::move(bytes));
+    }
+    for (LayerSlot& slot : layers_) slot.layer->pageOut(key);
+    voxel_bytes_ -= block.voxelBytes();
+    paged_.add(key, PagedBlocks::Entry{frames[i], has_submesh});
+    leaving.push_back(key);
+    if (slice >= slice_bytes) handOver();
   }
+  handOver();
+  returnFreedMemory();
   paging_stats_.blocks_paged_out += keys.size();
   paging_stats_.bytes_written += written;
   ++paging_stats_.page_out_passes;
@@ -196,6 +242,10 @@ void Mapper::recoverRefusedPages() {
   // store refused.
   std::sort(keys.begin(), keys.end());
   pageIn(keys);
+  // Blocks that came back from one of those pages before (page_current) have none in the
+  // store either.
+  for (const BlockKey& key : keys)
+    if (const VoxelBlock* block = octree_.find(key)) pageState(*block).page_current = false;
   writer_->forgetFailed();
   paging_stats_.stopped = true;
   paging_stats_.error = "paging stopped, the map stays in memory: " + error;
@@ -233,18 +283,38 @@ size_t Mapper::selectPageOut(size_t to_free, bool keep_lagging, std::vector<Bloc
   candidates.reserve(octree_.blockCount());
   for (const VoxelBlock* block : octree_.blocks())
     if (!stay.count(block->key))
-      candidates.push_back({eviction_.lastUpdateFrame(*block),
+      candidates.push_back({lastUseFrame(*block),
                             (octree_.blockOrigin(block->key) + half_block - camera).norm(),
                             block->key});
-  std::sort(candidates.begin(), candidates.end(), leavesFirst);
+  // Only the first few leave: order those (twice the blocks of an average size that free
+  // `to_free`), and the rest only if they do not suffice.
+  const size_t average_bytes = mapMemoryBytes() / std::max<size_t>(1, octree_.blockCount());
+  size_t ordered =
+      std::min(candidates.size(), 2 * to_free / std::max<size_t>(1, average_bytes) + 64);
+  std::partial_sort(candidates.begin(), candidates.begin() + static_cast<std::ptrdiff_t>(ordered),
+                    candidates.end(), leavesFirst);
   size_t freed = 0;
-  for (const LeaveCandidate& c : candidates) {
-    if (freed >= to_free) break;
-    const VoxelBlock* block = octree_.find(c.key);
-    freed += sizeof(VoxelBlock) + block->voxelBytes() + mesh_->blockBytes(c.key);
-    keys->push_back(c.key);
-    frames->push_back(c.last_update_frame);
+  const auto take = [&](const BlockKey& key) {
+    const VoxelBlock* block = octree_.find(key);
+    freed += sizeof(VoxelBlock) + block->voxelBytes() + mesh_->blockBytes(key);
+    keys->push_back(key);
+    frames->push_back(eviction_.lastUpdateFrame(*block));
+  };
+  // Blocks in the last frame's reach go last: the next frame would bring them back.
+  std::vector<BlockKey> in_reach;
+  for (size_t n = 0; n < candidates.size() && freed < to_free; ++n) {
+    if (n == ordered) {
+      std::sort(candidates.begin() + static_cast<std::ptrdiff_t>(n), candidates.end(), leavesFirst);
+      ordered = candidates.size();
+    }
+    const BlockKey& key = candidates[n].key;
+    const Eigen::Vector3d lo(key.x, key.y, key.z);
+    if (last_reach_ && last_reach_->mayReach(lo, lo + Eigen::Vector3d::Ones()))
+      in_reach.push_back(key);
+    else
+      take(key);
   }
+  for (size_t n = 0; n < in_reach.size() && freed < to_free; ++n) take(in_reach[n]);
   return freed;
 }
 
@@ -259,8 +329,8 @@ BlockChangeLog::Changes Mapper::takeChanges(BlockChangeLog::Consumer consumer) {
   return map_changes_.take(consumer);
 }
 
-bool Mapper::readPage(const BlockKey& key, std::vector<uint8_t>* page, BlockStore::ReadBatch* batch,
-                      std::string* error) const {
+bool Mapper::readPage(const BlockKey& key, std::vector<uint8_t>* page,
+                      BlockStore::ReadBatch* /*batch*/, std::string* error) const {
   // The writer keeps every page the store holds beyond `batch`'s snapshot (it was released
   // before the snapshot began): one of the two has the newest page.
   if (const PageWriter::Page pending = writer_->find(key)) {
@@ -276,6 +346,8 @@ void Mapper::forgetPages() {
   writer_->flush();
   writer_->forgetFailed();
   paged_.clear();
+  page_state_.clear();
+  last_reach_.reset();
   std::string error;
   if (!store_->clear(&error)) paging_stats_.error = error;
 }

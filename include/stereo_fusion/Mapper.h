@@ -18,11 +18,13 @@
 #include "stereo_fusion/layers/MeshLayer.h"
 #include "stereo_fusion/layers/PlanningLayer.h"
 #include "stereo_fusion/map/BlockChangeLog.h"
+#include "stereo_fusion/map/BlockColumn.h"
 #include "stereo_fusion/map/BlockOctree.h"
 #include "stereo_fusion/map/EvictionPolicy.h"
 #include "stereo_fusion/map/MapRegion.h"
 #include "stereo_fusion/paging/BlockStore.h"
 #include "stereo_fusion/paging/CheckpointState.h"
+#include "stereo_fusion/paging/FrameReach.h"
 #include "stereo_fusion/paging/PageWriter.h"
 #include "stereo_fusion/paging/PagedBlocks.h"
 #include "stereo_fusion/paging/PagingConfig.h"
@@ -249,7 +251,10 @@ class Mapper {
   void pageInAround(const std::vector<BlockKey>& keys);
   void pageInAll();
   /// Brings back the paged-out blocks of `keys` (sorted; keys not paged out are skipped).
-  void pageIn(const std::vector<BlockKey>& keys);
+  /// `in_use`: something needs these very blocks (a frame reaches them, a mesh pass meshes
+  /// around them), so they leave after the blocks nothing used since; a whole-map pass brings
+  /// blocks back without that.
+  void pageIn(const std::vector<BlockKey>& keys, bool in_use = true);
   /// Over max_map_memory_mb, pages out the blocks that leave first (leavesFirst()) that no
   /// layer's pending change reaches, down to kHysteresis below the cap.
   void pageOutOverCap();
@@ -266,14 +271,31 @@ class Mapper {
                 std::string* error) const;
   /// How much of a page placePage() brought back.
   enum class Placed { kWhole, kVoxelsOnly, kLost };
+  /// What paging keeps of a resident block.
+  struct PageState {
+    /// The frame count when it last came back from the store: a block a frame reached is as
+    /// recently used as one it updated, so it does not leave before blocks nothing used.
+    uint64_t paged_in_frame = 0;
+    /// The store's page of it is its page (nothing changed it since it came back): a page-out
+    /// drops it without writing.
+    bool page_current = false;
+  };
+  /// A block's rank in the paging order (leavesFirst()'s first key): its last use, updated or
+  /// brought back.
+  uint64_t lastUseFrame(const VoxelBlock& block) const;
   /// Puts the block of a page (`data`, `size`) into the octree and its parts into the layers;
   /// `error` says what could not be read.
   Placed placePage(const BlockKey& key, const uint8_t* data, size_t size, std::string* error);
   /// A resident block's page: its voxels and every layer's part (MapLayer::savePart()).
   void encodePage(const VoxelBlock& block, uint64_t last_update_frame,
                   std::vector<uint8_t>* bytes) const;
-  /// Takes the map's and the mesh's changes since the last call into the checkpoint's set.
-  void noteCheckpointChanges();
+  /// Subscribes the stores' consumers of the map's and the mesh's changes (once).
+  void subscribeStoreConsumers();
+  /// Takes the map's and the mesh's changes since the last call: into the checkpoint's set,
+  /// and out of the blocks whose paging-store page is current.
+  void noteStoreChanges();
+  /// A resident block's paging state (page_state_, fitted to the map).
+  PageState& pageState(const VoxelBlock& block);
   /// The keys of every block of the map, resident or paged out, sorted.
   std::vector<BlockKey> allBlockKeys() const;
   /// Reads the map store's blocks and checkpoint record into this (emptied) map.
@@ -310,10 +332,15 @@ class Mapper {
   std::unique_ptr<PageWriter> writer_;  // its writes, on a thread (destroyed before store_)
   PagedBlocks paged_;
   PagingStats paging_stats_;
+  BlockColumn<PageState> page_state_;
+  /// Where the last frame could reach: the next frames look about there, so a block in it stays
+  /// while others can leave (selectPageOut()).
+  std::optional<FrameReach> last_reach_;
   // The map store (MapperCheckpoint.cpp).
   std::unique_ptr<PageWriter> map_store_;  // its connection, writing checkpoints on its thread
-  std::optional<BlockChangeLog::Consumer> checkpoint_map_consumer_;
-  std::optional<BlockChangeLog::Consumer> checkpoint_mesh_consumer_;
+  // Both stores' consumers of the map's and the mesh's changes (noteStoreChanges()).
+  std::optional<BlockChangeLog::Consumer> store_map_consumer_;
+  std::optional<BlockChangeLog::Consumer> store_mesh_consumer_;
   /// Blocks whose page changed since the last checkpoint (their TSDF, submesh or patch).
   std::unordered_set<BlockKey, BlockKeyHash> checkpoint_dirty_;
   /// The next checkpoint rewrites the store whole (a new map over it, a reset, a load).

@@ -121,6 +121,7 @@ void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   status.add("map memory, all layers (MB)", map_status_.map_memory_bytes / 1048576.0);
   status.add("paging: blocks in the store", map_status_.paged_out_blocks);
   status.add("paging: blocks paged out", paging.blocks_paged_out);
+  status.add("paging: of them unchanged, not written again", paging.pages_kept);
   status.add("paging: blocks paged in", paging.blocks_paged_in);
   status.add("paging: longest page-in (ms)", paging.page_in_max_ms);
   status.add("paging: pages unreadable (blocks lost)", paging.pages_unreadable);

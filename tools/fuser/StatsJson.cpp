@@ -114,6 +114,7 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   j["paging"]["blocks_paged_in"] = paging.blocks_paged_in;
   j["paging"]["page_out_passes"] = paging.page_out_passes;
   j["paging"]["writer_waits"] = paging.writer_waits;
+  j["paging"]["pages_kept"] = paging.pages_kept;
   j["paging"]["megabytes_written"] = paging.bytes_written / 1048576.0;
   j["paging"]["megabytes_read"] = paging.bytes_read / 1048576.0;
   j["paging"]["page_out_ms"] = paging.page_out_ms;

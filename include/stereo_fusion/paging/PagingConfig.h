@@ -33,6 +33,8 @@ struct PagingStats {
   uint64_t page_out_passes = 0;
   /// Page-outs that waited for the store's writer (its backlog over maxWriterBacklogBytes()).
   uint64_t writer_waits = 0;
+  /// Blocks paged out unchanged since they came back: the store held their page already.
+  uint64_t pages_kept = 0;
   uint64_t bytes_written = 0;
   uint64_t bytes_read = 0;
   /// Pages that could not be read back (a corrupted store): those blocks are lost, each counted.

@@ -133,3 +133,85 @@ TEST(MapperPaging, AFullDiskStopsPagingAndKeepsTheMapWhole) {
   Outputs a = outputsOf(&capped, scratch.path), b = outputsOf(&uncapped, scratch.path);
   expectSameOutputs(a, b, "after a failed page-out");
 }
+
+TEST(MapperPaging, ABlockBackUnchangedLeavesWithoutAWriteAndAChangedOneIsWritten) {
+  const sim::AnalyticScene scene = hall();
+  Scratch scratch;
+  std::mt19937 rng(13);
+  const std::vector<Eigen::Isometry3d> poses = walk(&rng, 30);
+  MapperConfig config = hallConfig();
+  Mapper uncapped(config);
+  for (int f = 0; f < 30; ++f) uncapped.integrate(renderFrame(scene, qvgaCamera(), poses[f]));
+  config.max_map_memory_mb = 0.4 * uncapped.mapMemoryBytes() / (1024.0 * 1024.0);
+  config.map_store_path = scratch.path.string();
+  Mapper capped(config);
+  for (int f = 0; f < 30; ++f) capped.integrate(renderFrame(scene, qvgaCamera(), poses[f]));
+  const size_t paged = capped.pagedOutBlocks();
+  ASSERT_GT(paged, 0u);
+
+  // A planning rebuild brings every block back and changes none: the next page-out, which
+  // takes the blocks that had left first (they are the least recently used still), keeps
+  // their pages in the store instead of writing them again.
+  capped.updateMesh();
+  capped.rebuildPlanning();
+  ASSERT_EQ(capped.pagedOutBlocks(), 0u);
+  const PagingStats before = capped.pagingStats();
+  capped.updateMesh();
+  const PagingStats after = capped.pagingStats();
+  const uint64_t left = after.blocks_paged_out - before.blocks_paged_out;
+  const uint64_t kept = after.pages_kept - before.pages_kept;
+  ASSERT_GT(left, paged / 2);
+  EXPECT_GT(kept, left / 2);
+  EXPECT_LE(kept, left);
+
+  // A clear changes the blocks it reaches: those come back, change, and are written when they
+  // leave again (a kept stale page would bring the cleared voxels back below).
+  const MapRegion region = MapRegion::box({0.0, 1.5, 0.0}, {2.5, 3.2, 1.0});
+  ASSERT_TRUE(capped.clearRegion(region, MeshTiming::kDeferred).accepted);
+  ASSERT_TRUE(uncapped.clearRegion(region, MeshTiming::kDeferred).accepted);
+  capped.rebuildPlanning();
+  capped.updateMesh();
+  EXPECT_GT(capped.pagingStats().bytes_written, after.bytes_written);
+  for (int f = 0; f < 6; ++f) {
+    capped.integrate(renderFrame(scene, qvgaCamera(), poses[f]));
+    uncapped.integrate(renderFrame(scene, qvgaCamera(), poses[f]));
+  }
+  EXPECT_GT(capped.pagedOutBlocks(), 0u);
+  expectSameOutputs(outputsOf(&capped, scratch.path), outputsOf(&uncapped, scratch.path),
+                    "after blocks came back unchanged and changed");
+}
+
+TEST(MapperPaging, WhatAFrameReachedStaysForTheNextFrame) {
+  // A camera that holds still brings back what its view reaches once: the page-out after the
+  // frame takes other blocks, not those the frame reached and left unchanged. A corridor 12 m
+  // long seen from 1.5 m, so one view reaches a small part of the map and fits the cap.
+  sim::AnalyticScene scene;
+  scene.add(sim::makePlane({0, 0, 0}, {0, 0, 1}), {170, 160, 140});
+  scene.add(sim::makePlane({0, 1.5, 0}, {0, -1, 0}), {120, 140, 190});
+  for (int k = 0; k < 13; ++k)
+    scene.add(sim::makeSphere({1.0 * k, 1.2, 0.4}, 0.25), {200.0, 80.0 + 10 * k, 60.0});
+  std::vector<Eigen::Isometry3d> poses;
+  for (int f = 0; f < 40; ++f) {
+    const Eigen::Vector3d eye(0.3 * f, 0.0, 1.0);
+    poses.push_back(
+        sim::lookAt(eye, eye + Eigen::Vector3d(0.0, 1.5, -0.4), Eigen::Vector3d::UnitZ()));
+  }
+  Scratch scratch;
+  MapperConfig config = hallConfig();
+  Mapper uncapped(config);
+  for (const Eigen::Isometry3d& pose : poses)
+    uncapped.integrate(renderFrame(scene, qvgaCamera(), pose));
+  config.max_map_memory_mb = 0.4 * uncapped.mapMemoryBytes() / (1024.0 * 1024.0);
+  config.map_store_path = scratch.path.string();
+  Mapper capped(config);
+  for (const Eigen::Isometry3d& pose : poses)
+    capped.integrate(renderFrame(scene, qvgaCamera(), pose));
+  for (const int f : {3, 20, 8}) {  // back along the corridor, where the map was paged out
+    const StereoFrame frame = renderFrame(scene, qvgaCamera(), poses[f]);
+    const IntegrationResult first = capped.integrate(frame);
+    const IntegrationResult again = capped.integrate(frame);
+    EXPECT_GT(first.blocks_paged_in, 0u) << "frame " << f;
+    EXPECT_GT(first.blocks_paged_out, 0u) << "frame " << f;
+    EXPECT_EQ(again.blocks_paged_in, 0u) << "frame " << f << " seen again";
+  }
+}
