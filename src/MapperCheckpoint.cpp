@@ -153,6 +153,7 @@ bool Mapper::checkpoint(const std::string& owner_note, std::string* error) {
   }
   foldCommittedCheckpoints();  // a refused one makes this one rewrite the store whole
   const Timer timer;
+  const auto started = std::chrono::steady_clock::now();
   noteStoreChanges();
   StoreCommit commit;
   commit.clear_first = checkpoint_full_;
@@ -201,8 +202,8 @@ bool Mapper::checkpoint(const std::string& owner_note, std::string* error) {
   }
   state.owner_note = owner_note;
   commit.state = encodeCheckpointState(state);
-  const CheckpointInFlight in_flight{0, frames_integrated_, commit.keys.size(), commit.erase.size(),
-                                     bytes};
+  const CheckpointInFlight in_flight{
+      0, frames_integrated_, commit.keys.size(), commit.erase.size(), bytes, started};
   checkpoints_in_flight_.push_back(in_flight);
   checkpoints_in_flight_.back().batch = map_store_->commit(std::move(commit));
   checkpoint_dirty_.clear();
@@ -234,6 +235,8 @@ void Mapper::foldCommittedCheckpoints() {
     checkpoint_stats_.blocks_written += done.blocks_written;
     checkpoint_stats_.blocks_erased += done.blocks_erased;
     checkpoint_stats_.bytes_written += done.bytes_written;
+    checkpoint_stats_.last_commit_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - done.started).count();
     checkpoints_in_flight_.pop_front();
     checkpoint_stats_.error.clear();
     any = true;

@@ -1,4 +1,5 @@
 #pragma once
+#include <chrono>
 #include <cstdint>
 #include <deque>
 #include <functional>
@@ -349,6 +350,7 @@ class Mapper {
     uint64_t batch;
     uint64_t frames_integrated;
     size_t blocks_written, blocks_erased, bytes_written;
+    std::chrono::steady_clock::time_point started;
   };
   std::deque<CheckpointInFlight> checkpoints_in_flight_;
   CheckpointStats checkpoint_stats_;

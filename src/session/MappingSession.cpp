@@ -278,7 +278,14 @@ void MappingSession::setCheckpointNote(std::string note) {
 void MappingSession::checkpointIfDueLocked() {
   if (config_.checkpoint_period_s <= 0.0 || !mapper_->hasMapStore()) return;
   const auto now = std::chrono::steady_clock::now();
-  if (std::chrono::duration<double>(now - last_checkpoint_).count() < config_.checkpoint_period_s)
+  // A kill loses what came after the last committed checkpoint began: the next one begins
+  // early enough that it commits, as the last one did, before the period ends — one frame and
+  // the last one's commit time before it.
+  const double frame_s = std::chrono::duration<double>(now - last_fused_).count();
+  last_fused_ = now;
+  const double margin_s = frame_s + mapper_->checkpointStats().last_commit_s;
+  if (std::chrono::duration<double>(now - last_checkpoint_).count() <
+      config_.checkpoint_period_s - margin_s)
     return;
   last_checkpoint_ = now;
   std::string error;

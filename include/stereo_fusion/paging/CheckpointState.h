@@ -46,6 +46,9 @@ struct CheckpointStats {
   uint64_t bytes_written = 0;
   double last_ms = 0.0;  ///< the last checkpoint's time on the caller's thread
   double max_ms = 0.0;
+  /// The last committed checkpoint's time from its start to the first frame after its commit:
+  /// a checkpoint starts this much before its period ends, so a kill loses at most the period.
+  double last_commit_s = 0.0;
   std::string error;  ///< why the last checkpoint failed; empty when none did
 };
 

@@ -251,6 +251,7 @@ class MappingSession {
   FrameAdmission admission_;
   std::atomic<uint64_t> regions_cleared_{0}, clears_refused_{0};
   std::chrono::steady_clock::time_point last_checkpoint_ = std::chrono::steady_clock::now();
+  std::chrono::steady_clock::time_point last_fused_ = std::chrono::steady_clock::now();
   std::string checkpoint_note_;
   std::string store_error_;       // why the map store could not be opened
   CorrectionWorker corrections_;  // last: its thread stops before the members above go
