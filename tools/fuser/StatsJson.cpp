@@ -133,6 +133,7 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   j["map_store"]["blocks_erased"] = checkpoint.blocks_erased;
   j["map_store"]["megabytes_written"] = checkpoint.bytes_written / 1048576.0;
   j["map_store"]["checkpoint_max_ms"] = checkpoint.max_ms;
+  j["map_store"]["last_commit_s"] = checkpoint.last_commit_s;
   j["map_store"]["error"] = checkpoint.error;
   {
     // Over the frames after which the planning layer was updated.
