@@ -127,7 +127,6 @@ class BlockLookup {
     BlockKey boxes_lo, boxes_hi;                       // the boxes' union, if there are boxes
     std::vector<std::pair<BlockKey, int>> key_counts;  // naive: histogram, points per block
     std::vector<std::pair<BlockKey, int>> sparse_counts;  // points per block off the dense grid
-    std::vector<int> dense_counts;                        // points per block over the boxes' union
     std::vector<BlockKey> passing;   // accelerated: blocks that pass the histogram filter
     std::vector<VoxelBlock*> found;  // naive: blocks found, in search order (with repeats)
     std::vector<BlockKey>
