@@ -97,7 +97,8 @@ bool Mapper::resumeFrom(BlockStore* store, StoreOpening* out) {
   // What each consumer of the map log (eviction, the mesh) had not taken at the checkpoint
   // waits for it again.
   for (const CheckpointState::Pending& pending : state.pending)
-    for (BlockChangeLog::Consumer c = 0; c < map_changes_.consumerCount(); ++c)
+    for (BlockChangeLog::Consumer c = 0;
+         c < static_cast<BlockChangeLog::Consumer>(map_changes_.consumerCount()); ++c)
       if (map_changes_.name(c) == pending.consumer)
         map_changes_.restore(c, BlockChangeLog::Changes{pending.updated, pending.erased});
   out->resumed = true;
@@ -193,7 +194,8 @@ bool Mapper::checkpoint(const std::string& owner_note, std::string* error) {
   MapFileInfo sections;
   for (const LayerSlot& slot : layers_) slot.layer->encode(&sections);
   state.free_space = std::move(sections.free_space);
-  for (BlockChangeLog::Consumer c = 0; c < map_changes_.consumerCount(); ++c) {
+  for (BlockChangeLog::Consumer c = 0;
+       c < static_cast<BlockChangeLog::Consumer>(map_changes_.consumerCount()); ++c) {
     if (c == *store_map_consumer_) continue;
     BlockChangeLog::Changes pending = map_changes_.peek(c);
     if (pending.empty()) continue;
