@@ -80,7 +80,11 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
     const uint64_t before = paging_stats_.blocks_paged_in;
     pageInReach(frame);
     result.blocks_paged_in = paging_stats_.blocks_paged_in - before;
-    result.paging_ms = result.page_in_ms = timer.elapsedMs();
+    result.page_in_ms = timer.elapsedMs();
+    const uint64_t out_before = paging_stats_.blocks_paged_out;
+    pageOutOverCap(PageOutWhen::kBeforeFrame);
+    result.blocks_paged_out = paging_stats_.blocks_paged_out - out_before;
+    result.paging_ms = timer.elapsedMs();
   }
   if (!pipeline_.run(frame, &octree_, &stage, &result, &edit_)) return result;
   ++frames_integrated_;
@@ -93,10 +97,13 @@ IntegrationResult Mapper::integrate(const StereoFrame& frame, MeshTiming mesh_ti
     result.texture = pass.texture;
   }
   if (store_) {
+    result.map_memory_bytes = mapMemoryBytes();
+    paging_stats_.map_memory_peak_bytes =
+        std::max(paging_stats_.map_memory_peak_bytes, result.map_memory_bytes);
     const Timer timer;
     const uint64_t before = paging_stats_.blocks_paged_out;
     pageOutOverCap();
-    result.blocks_paged_out = paging_stats_.blocks_paged_out - before;
+    result.blocks_paged_out += paging_stats_.blocks_paged_out - before;
     result.paging_ms += timer.elapsedMs();
   }
   noteStoreChanges();

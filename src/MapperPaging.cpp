@@ -164,7 +164,7 @@ void Mapper::pageIn(const std::vector<BlockKey>& keys, bool in_use) {
   paging_stats_.page_in_max_ms = std::max(paging_stats_.page_in_max_ms, ms);
 }
 
-void Mapper::pageOutOverCap() {
+void Mapper::pageOutOverCap(PageOutWhen when) {
   noteStoreChanges();  // before the stores' mesh consumer could keep blocks in
   recoverRefusedPages();
   if (!store_ || paging_stats_.stopped) return;
@@ -178,8 +178,9 @@ void Mapper::pageOutOverCap() {
   std::vector<uint64_t> frames;
   // Blocks a lagging layer (the planning layer between its updates) has not caught up with
   // stay if they can; if not, they go too and come back before its update (takeChanges()).
-  if (selectPageOut(to_free, /*keep_lagging=*/true, &keys, &frames) < to_free)
-    selectPageOut(to_free, /*keep_lagging=*/false, &keys, &frames);
+  if (selectPageOut(to_free, /*keep_lagging=*/true, when, &keys, &frames) < to_free)
+    selectPageOut(to_free, /*keep_lagging=*/false, when, &keys, &frames);
+  if (keys.empty()) return;
   // The pages, in key order (neighbours lie together in the store), handed to the writer in
   // slices so a pass holds no more than a slice of encoded pages beyond the writer's backlog.
   std::vector<size_t> order(keys.size());
@@ -227,7 +228,8 @@ void Mapper::pageOutOverCap() {
     if (slice >= slice_bytes) handOver();
   }
   handOver();
-  returnFreedMemory();
+  // Before a frame, what was freed is soon taken again by the frame's new blocks.
+  if (when == PageOutWhen::kAfter) returnFreedMemory();
   paging_stats_.blocks_paged_out += keys.size();
   paging_stats_.bytes_written += written;
   ++paging_stats_.page_out_passes;
@@ -257,8 +259,8 @@ void Mapper::flushPaging() {
   recoverRefusedPages();
 }
 
-size_t Mapper::selectPageOut(size_t to_free, bool keep_lagging, std::vector<BlockKey>* keys,
-                             std::vector<uint64_t>* frames) const {
+size_t Mapper::selectPageOut(size_t to_free, bool keep_lagging, PageOutWhen when,
+                             std::vector<BlockKey>* keys, std::vector<uint64_t>* frames) const {
   keys->clear();
   frames->clear();
   // What must stay: every block within one block of a change the mesh has not taken (a caller
@@ -314,7 +316,8 @@ size_t Mapper::selectPageOut(size_t to_free, bool keep_lagging, std::vector<Bloc
     else
       take(key);
   }
-  for (size_t n = 0; n < in_reach.size() && freed < to_free; ++n) take(in_reach[n]);
+  if (when == PageOutWhen::kAfter)
+    for (size_t n = 0; n < in_reach.size() && freed < to_free; ++n) take(in_reach[n]);
   return freed;
 }
 

@@ -256,14 +256,18 @@ class Mapper {
   /// around them), so they leave after the blocks nothing used since; a whole-map pass brings
   /// blocks back without that.
   void pageIn(const std::vector<BlockKey>& keys, bool in_use = true);
+  /// When a page-out pass runs: after a frame (or another operation) any block may leave, the
+  /// last frame's reach last; before a frame fuses, none it reaches (the frame is about to
+  /// read and write them) — what the frame brought back makes room for itself first.
+  enum class PageOutWhen { kAfter, kBeforeFrame };
   /// Over max_map_memory_mb, pages out the blocks that leave first (leavesFirst()) that no
   /// layer's pending change reaches, down to kHysteresis below the cap.
-  void pageOutOverCap();
+  void pageOutOverCap(PageOutWhen when = PageOutWhen::kAfter);
   /// The blocks a page-out of `to_free` bytes takes, in leavesFirst() order, with their last
   /// update frames; returns the bytes they free (less than asked when too many must stay).
   /// `keep_lagging`: also keep what a layer that catches up itself has not taken.
-  size_t selectPageOut(size_t to_free, bool keep_lagging, std::vector<BlockKey>* keys,
-                       std::vector<uint64_t>* frames) const;
+  size_t selectPageOut(size_t to_free, bool keep_lagging, PageOutWhen when,
+                       std::vector<BlockKey>* keys, std::vector<uint64_t>* frames) const;
   /// The changes `consumer` has not taken, once every block within one block of them is back.
   BlockChangeLog::Changes takeChanges(BlockChangeLog::Consumer consumer);
   /// The page of a paged-out block, read without bringing it back; false when unreadable.

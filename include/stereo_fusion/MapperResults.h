@@ -28,6 +28,8 @@ struct IntegrationResult : FrameStageStats {
   double page_in_ms = 0.0;  ///< the part of paging_ms before the frame
   uint64_t blocks_paged_in = 0;
   uint64_t blocks_paged_out = 0;
+  /// With a cap: the map's memory once the frame fused and meshed, before the page-out after it.
+  size_t map_memory_bytes = 0;
   /// A layer (the planning layer) was updated after this frame because its changes had piled
   /// up (kMaxPendingLayerChanges), taking planning_catch_up_ms.
   bool planning_catch_up = false;

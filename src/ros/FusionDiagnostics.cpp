@@ -119,6 +119,8 @@ void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   status.add("blocks evicted", session_->blocksEvicted());
   status.add("memory (MB)", map_status_.memory_bytes / 1048576.0);
   status.add("map memory, all layers (MB)", map_status_.map_memory_bytes / 1048576.0);
+  status.add("paging: map memory at its highest, after a frame (MB)",
+             paging.map_memory_peak_bytes / 1048576.0);
   status.add("paging: blocks in the store", map_status_.paged_out_blocks);
   status.add("paging: blocks paged out", paging.blocks_paged_out);
   status.add("paging: of them unchanged, not written again", paging.pages_kept);

@@ -109,6 +109,7 @@ std::string statsJson(const FuseReport& report, const MapperConfig& config) {
   const PagingStats& paging = report.paging;
   j["paging"]["max_map_memory_mb"] = config.max_map_memory_mb;
   j["paging"]["map_memory_megabytes"] = report.map_memory_bytes / 1048576.0;
+  j["paging"]["map_memory_peak_megabytes"] = paging.map_memory_peak_bytes / 1048576.0;
   j["paging"]["blocks_paged_out_now"] = report.paged_out_blocks;
   j["paging"]["blocks_paged_out"] = paging.blocks_paged_out;
   j["paging"]["blocks_paged_in"] = paging.blocks_paged_in;

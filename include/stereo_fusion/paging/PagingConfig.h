@@ -35,6 +35,9 @@ struct PagingStats {
   uint64_t writer_waits = 0;
   /// Blocks paged out unchanged since they came back: the store held their page already.
   uint64_t pages_kept = 0;
+  /// The map's memory at its highest (mapMemoryBytes()): right after a frame's fusion and mesh
+  /// pass, before the page-out after it — where a frame's blocks put it over the cap.
+  size_t map_memory_peak_bytes = 0;
   uint64_t bytes_written = 0;
   uint64_t bytes_read = 0;
   /// Pages that could not be read back (a corrupted store): those blocks are lost, each counted.

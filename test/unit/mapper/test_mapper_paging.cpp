@@ -215,3 +215,41 @@ TEST(MapperPaging, WhatAFrameReachedStaysForTheNextFrame) {
     EXPECT_EQ(again.blocks_paged_in, 0u) << "frame " << f << " seen again";
   }
 }
+
+TEST(MapperPaging, AFrameThatBringsBlocksBackMakesRoomBeforeItFuses) {
+  // Back at the start of a corridor, a view brings back most of a cap's worth of blocks: the
+  // blocks it does not reach leave before it fuses, so the map stays within the cap through
+  // the frame, not only after it. Paging out after the frame alone held the cap's resident
+  // blocks and the view's together.
+  sim::AnalyticScene scene;
+  scene.add(sim::makePlane({0, 0, 0}, {0, 0, 1}), {170, 160, 140});
+  scene.add(sim::makePlane({0, 1.5, 0}, {0, -1, 0}), {120, 140, 190});
+  for (int k = 0; k < 13; ++k)
+    scene.add(sim::makeSphere({1.0 * k, 1.2, 0.4}, 0.25), {200.0, 80.0 + 10 * k, 60.0});
+  std::vector<Eigen::Isometry3d> poses;
+  for (int f = 0; f < 40; ++f) {
+    const Eigen::Vector3d eye(0.3 * f, 0.0, 1.0);
+    poses.push_back(
+        sim::lookAt(eye, eye + Eigen::Vector3d(0.0, 1.5, -0.4), Eigen::Vector3d::UnitZ()));
+  }
+  Scratch scratch;
+  MapperConfig config = hallConfig();
+  Mapper uncapped(config);
+  for (const Eigen::Isometry3d& pose : poses)
+    uncapped.integrate(renderFrame(scene, qvgaCamera(), pose));
+  config.max_map_memory_mb = 0.3 * uncapped.mapMemoryBytes() / (1024.0 * 1024.0);
+  config.map_store_path = scratch.path.string();
+  const size_t cap = static_cast<size_t>(config.max_map_memory_mb * 1024.0 * 1024.0);
+  Mapper capped(config);
+  for (const Eigen::Isometry3d& pose : poses)
+    capped.integrate(renderFrame(scene, qvgaCamera(), pose));
+  // The corridor's start, paged out since.
+  const IntegrationResult back = capped.integrate(renderFrame(scene, qvgaCamera(), poses[2]));
+  ASSERT_GT(back.blocks_paged_in * (capped.mapMemoryBytes() / capped.tsdf().blockCount()), cap / 4)
+      << "the view brings back a quarter of the cap at least";
+  EXPECT_LE(back.map_memory_bytes, cap);
+  EXPECT_LE(capped.pagingStats().map_memory_peak_bytes,
+            uncapped.mapMemoryBytes())  // recorded, and a peak, not the map now
+      << "peak";
+  EXPECT_GE(capped.pagingStats().map_memory_peak_bytes, capped.mapMemoryBytes());
+}
