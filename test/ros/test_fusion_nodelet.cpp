@@ -375,7 +375,7 @@ TEST_F(NodeletFixture, OutOfOrderDuplicateJumpingAndFutureTfFramesAreDroppedByRe
   std_msgs::Header later;
   later.stamp = t0 + ros::Duration(30.0);
   later.frame_id = "future_only_optical";
-  tf_.sendTransform(toTransform(frame.T_world_camera, "world", later));
+  tf_.sendTransform(toTransform(frame.T_world_camera, "map", later));
   publish(frame, "future_only_optical", false, {}, t0 + ros::Duration(0.2));
   ASSERT_TRUE(waitFor([&] { return diag("dropped: tf timeout") >= tf_before + 1; }, 30.0));
 
@@ -416,10 +416,10 @@ TEST_F(NodeletFixture, OutOfOrderDuplicateJumpingAndFutureTfFramesAreDroppedByRe
   late.frame_id = "late_optical";
   publish(frame, "late_optical", false, {}, t1);
   ros::WallDuration(0.1).sleep();  // late, yet well inside tf_timeout_s = 0.5 s
-  tf_.sendTransform(toTransform(frame.T_world_camera, "world", late));
+  tf_.sendTransform(toTransform(frame.T_world_camera, "map", late));
   late.stamp =
       t1 + ros::Duration(0.5);  // a later transform, so t1 is interpolated, not extrapolated
-  tf_.sendTransform(toTransform(frame.T_world_camera, "world", late));
+  tf_.sendTransform(toTransform(frame.T_world_camera, "map", late));
   EXPECT_TRUE(waitFor([&] { return diag("frames fused") >= fused_mid + 2; }, 30.0));
   EXPECT_EQ(diag("dropped: pose jump"), 1);
   EXPECT_EQ(diag("dropped: tf timeout"), tf_before + 1)
@@ -445,10 +445,10 @@ TEST_F(NodeletFixture, APathWhosePosesCarryNoRotationIsRefusedWholeAndTheMapStay
   const long applied_before = std::max(0L, diag("corrections applied"));
   auto path = [&](double qx, double qy, double qz, double qw) {
     nav_msgs::Path p;
-    p.header.frame_id = "world";
+    p.header.frame_id = "map";
     p.header.stamp = ros::Time::now();
     geometry_msgs::PoseStamped pose;
-    pose.header.frame_id = "world";
+    pose.header.frame_id = "map";
     pose.header.stamp = before.response.mesh.header.stamp;
     pose.pose.orientation.w = 1.0;
     p.poses.push_back(pose);  // a good first pose: the second one names the path's fault
@@ -617,9 +617,9 @@ class NodeletEpoch : public NodeletFixture {
     std_msgs::Header header;
     header.frame_id = frame_id;
     header.stamp = stamp;
-    tf_.sendTransform(toTransform(frame.T_world_camera, "world", header));
+    tf_.sendTransform(toTransform(frame.T_world_camera, "map", header));
     header.stamp = stamp + ros::Duration(0.5);
-    tf_.sendTransform(toTransform(frame.T_world_camera, "world", header));
+    tf_.sendTransform(toTransform(frame.T_world_camera, "map", header));
   }
 };
 }  // namespace

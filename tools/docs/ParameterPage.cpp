@@ -66,10 +66,14 @@ std::string parameterPageMarkdown() {
           "of range or of the wrong type stops the nodelet at start with a message naming the "
           "parameter, its\n"
           "range and unit. Defaults are those of `NodeConfig` "
-          "(`include/stereo_fusion/ros/RosParameters.h`);\n"
-          "`fusion.launch` sets `world_frame` from its argument of the same name and default. The "
-          "offline fuser\n"
-          "does not read them.\n\n";
+          "(`include/stereo_fusion/ros/RosParameters.h`).\n"
+          "Every launch file takes a `world_frame` argument; given, it sets `world_frame`; left "
+          "empty (its\n"
+          "default), a `world_frame` in the `config:=` YAML holds, else the default below. That "
+          "default is\n"
+          "`map` (REP 105), `world` before issue 50: a tf tree rooted at `world` needs "
+          "`world_frame: world`\n"
+          "now. The offline fuser does not read them.\n\n";
   const NodeConfig node_defaults;
   page << table(nodeParameterSpecs(),
                 [&](const std::string& name) { return getNodeParameter(node_defaults, name); });

@@ -33,7 +33,7 @@ const char* kUsage =
     "                    planning layer (stats.json planning.query_100k_ms, planning.rebuild_ms)\n"
     "  --disparity-topic, --image-topic, --camera-info-topic, --world-frame\n"
     "                    what to read from a bag (defaults: /stereo/disparity,\n"
-    "                    /stereo/left/image_rect_color, /stereo/left/camera_info, world)\n"
+    "                    /stereo/left/image_rect_color, /stereo/left/camera_info, map)\n"
     "  --load-map FILE   start from a map saved with --save-map (same voxel_size_m, "
     "truncation_vox)\n"
     "  --save-map FILE   save the map after the last frame (versioned binary, checksummed)\n"

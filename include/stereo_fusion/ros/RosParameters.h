@@ -15,12 +15,12 @@ namespace stereo_fusion {
 /// src/ros/RosParameters.cpp); the defaults here are the single source of truth, printed into
 /// doc/parameters.md's node table.
 struct NodeConfig {
-  std::string world_frame = "world";  ///< fixed frame of the map and the mesh
-  int queue_size = 5;                 ///< frames waiting for the worker (≥ 1)
-  bool drop_oldest = true;            ///< queue full: drop the oldest (true) or the newest frame
-  bool approximate_sync = false;      ///< ApproximateTime instead of ExactTime synchronisation
-  int sync_queue_size = 10;           ///< message_filters synchroniser queue
-  double tf_timeout_s = 0.2;          ///< how long the worker waits for T_world_camera
+  std::string world_frame = "map";  ///< fixed frame of the map and the mesh (REP 105's map)
+  int queue_size = 5;               ///< frames waiting for the worker (≥ 1)
+  bool drop_oldest = true;          ///< queue full: drop the oldest (true) or the newest frame
+  bool approximate_sync = false;    ///< ApproximateTime instead of ExactTime synchronisation
+  int sync_queue_size = 10;         ///< message_filters synchroniser queue
+  double tf_timeout_s = 0.2;        ///< how long the worker waits for T_world_camera
   /// A frame stamped more than this ahead of the node's clock is dropped (0 = no check).
   double max_stamp_ahead_s = 10.0;
   double mesh_publish_rate_hz = 2.0;  ///< 0 = publish after every frame

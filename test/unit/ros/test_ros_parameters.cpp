@@ -31,7 +31,7 @@ std::string readFile(const std::string& path) {
 TEST(NodeParameterRegistry, DefaultsAreNodeConfigsAndValid) {
   const NodeConfig defaults;
   EXPECT_TRUE(validateNodeConfig(defaults).empty());
-  EXPECT_EQ(getNodeParameter(defaults, "world_frame"), "world");
+  EXPECT_EQ(getNodeParameter(defaults, "world_frame"), "map");
   EXPECT_EQ(getNodeParameter(defaults, "queue_size"), "5");
   EXPECT_EQ(getNodeParameter(defaults, "queue_policy"), "drop_oldest");
   EXPECT_EQ(getNodeParameter(defaults, "tf_timeout_s"), "0.2");
@@ -176,27 +176,34 @@ TEST(NodeParameterRegistry, NamesAreDistinctFromTheMappingParameters) {
     EXPECT_EQ(mapping.count(spec.name), 0u) << spec.name;
 }
 
-// A launch file's <arg> named after a node parameter (world_frame in fusion.launch and
-// stereo_pipeline.launch) sets it, so its default must be the registry's; config/default.yaml
-// holds the mapping parameters only (the offline fuser refuses any other key).
-TEST(NodeParameterRegistry, LaunchArgumentsDefaultToTheRegistryDefaults) {
+// Every launch file takes world_frame, empty by default: empty leaves the config's world_frame
+// (or the node's default) alone, so fusion.launch sets the parameter only when the argument is
+// given. Any other <arg> named after a node parameter would set it, so its default must be the
+// registry's. config/default.yaml holds the mapping parameters only (the node's keep the
+// registry's defaults; the offline fuser refuses any other key). Whether a world_frame in a YAML
+// survives fusion.launch: rostest replay_odom_yaml.test.
+TEST(NodeParameterRegistry, LaunchFilesTakeWorldFrameAndKeepTheConfigs) {
   const NodeConfig defaults;
   const std::regex arg_default(R"re(<arg\s+name="([A-Za-z0-9_]+)"\s+default="([^"]*)")re");
-  size_t checked = 0;
-  for (const char* launch : {"fusion.launch", "stereo_pipeline.launch", "replay.launch"}) {
+  for (const char* launch : {"fusion.launch", "stereo_pipeline.launch", "replay.launch",
+                             "rviz.launch", "base_station.launch"}) {
     const std::string text = readFile(kSourceDir + "/launch/" + launch);
     ASSERT_FALSE(text.empty()) << launch;
+    EXPECT_NE(text.find("<arg name=\"world_frame\" default=\"\"/>"), std::string::npos)
+        << launch << ": <arg name=\"world_frame\" default=\"\"/>";
     for (std::sregex_iterator it(text.begin(), text.end(), arg_default), end; it != end; ++it) {
       const std::string name = (*it)[1];
-      for (const ParameterSpec& spec : nodeParameterSpecs()) {
-        if (spec.name != name) continue;
-        EXPECT_EQ((*it)[2].str(), getNodeParameter(defaults, name))
-            << launch << ": <arg name=\"" << name << "\">";
-        ++checked;
-      }
+      if (name == "world_frame") continue;
+      for (const ParameterSpec& spec : nodeParameterSpecs())
+        if (spec.name == name)
+          EXPECT_EQ((*it)[2].str(), getNodeParameter(defaults, name))
+              << launch << ": <arg name=\"" << name << "\">";
     }
   }
-  EXPECT_GE(checked, 2u) << "world_frame in fusion.launch and stereo_pipeline.launch";
+  const std::string fusion = readFile(kSourceDir + "/launch/fusion.launch");
+  EXPECT_NE(fusion.find("<param unless=\"$(eval arg('world_frame') == '')\" name=\"world_frame\""),
+            std::string::npos)
+      << "fusion.launch must not overwrite a config's world_frame with an empty argument";
   const std::string yaml = readFile(kSourceDir + "/config/default.yaml");
   ASSERT_FALSE(yaml.empty());
   for (const ParameterSpec& spec : nodeParameterSpecs())
