@@ -32,7 +32,7 @@ source "$ROOT/scripts/lib/ros_session.sh"
 ros_env
 DEMO="$ROOT/.demo"
 NAME="far_room_30hz_$FRAMES"
-BAG="$DEMO/$NAME.bag"
+BAG="$DEMO/${NAME}_map.bag"  # tf in map (the default world_frame): older caches in world are not reused
 mkdir -p "$DEMO" "$ROOT/demo_output"
 if [ ! -f "$BAG" ]; then
   echo "[live] generating the far-range room ($FRAMES frames at 30 Hz, 640x480, SGBM) -> $BAG"

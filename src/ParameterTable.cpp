@@ -1,5 +1,6 @@
 #include "stereo_fusion/ParameterTable.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cstdlib>
 #include <limits>
@@ -40,6 +41,41 @@ bool parseInt(const std::string& text, int* out) {
   } catch (...) {
     return false;
   }
+}
+
+size_t editDistance(const std::string& a, const std::string& b) {
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diagonal = row[0];  // row i-1, column j-1
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t above = row[j];
+      row[j] = std::min({above + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = above;
+    }
+  }
+  return row[b.size()];
+}
+
+std::string nearestName(const std::string& name, const std::vector<std::string>& known) {
+  std::string best;
+  size_t best_distance = std::numeric_limits<size_t>::max();
+  for (const std::string& k : known) {
+    const size_t d = editDistance(name, k);
+    if (d < best_distance) {
+      best_distance = d;
+      best = k;
+    }
+  }
+  return best;
+}
+
+std::string unknownParameterMessage(const std::string& shown, const std::string& name,
+                                    const std::vector<std::string>& known) {
+  const std::string nearest = nearestName(name, known);
+  return "unknown parameter '" + shown + "'" +
+         (nearest.empty() ? std::string() : " (did you mean '" + nearest + "'?)");
 }
 
 }  // namespace parameter_text

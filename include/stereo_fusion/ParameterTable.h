@@ -32,6 +32,15 @@ std::string formatDouble(double v);
 bool parseDouble(const std::string& text, double* out);
 /// The whole text is one integer within int's range.
 bool parseInt(const std::string& text, int* out);
+/// Levenshtein distance: the fewest insertions, deletions and substitutions from a to b.
+size_t editDistance(const std::string& a, const std::string& b);
+/// The name of `known` nearest to `name` by editDistance (the first of equally near ones);
+/// empty when `known` is.
+std::string nearestName(const std::string& name, const std::vector<std::string>& known);
+/// "unknown parameter 'shown' (did you mean 'nearest'?)", the nearest of `known` to `name`
+/// (`shown` is the name as the user wrote it, e.g. with its ROS namespace).
+std::string unknownParameterMessage(const std::string& shown, const std::string& name,
+                                    const std::vector<std::string>& known);
 }  // namespace parameter_text
 
 template <typename Config>
@@ -162,13 +171,15 @@ class ParameterTable {
   const std::vector<ParameterSpec>& specs() const { return specs_; }
 
   /// Sets parameter `name` from its textual value. False with a message naming the parameter
-  /// (and its range and unit) when the name is unknown, the value does not parse or is out of
-  /// range; *config is then unchanged.
+  /// (and its range and unit; an unknown name with the nearest known one) when the name is unknown,
+  /// the value does not parse or is out of range; *config is then unchanged.
   bool set(Config* config, const std::string& name, const std::string& value,
            std::string* error) const {
     const Entry* e = find(name);
     if (e == nullptr) {
-      *error = "unknown parameter '" + name + "'";
+      std::vector<std::string> known;
+      for (const ParameterSpec& spec : specs_) known.push_back(spec.name);
+      *error = parameter_text::unknownParameterMessage(name, name, known);
       return false;
     }
     return e->set(config, value, error);

@@ -11,11 +11,13 @@ ros_env() {
 }
 
 # ensure_demo_bag FRAMES TAG: sets DEMO and BAG, simulating the room sequence (640×480, SGBM,
-# walkthrough, seed 1) as a rosbag on first use.
+# walkthrough, seed 1) as a rosbag on first use. The name carries the bag's tf frame (map, the
+# nodelet's default world_frame): a bag cached before that default changed from world has
+# another name and is not replayed into a node that would find no transform for any frame.
 ensure_demo_bag() {
   local frames="$1" tag="$2"
   DEMO="$ROOT/.demo"
-  BAG="$DEMO/room_${frames}.bag"
+  BAG="$DEMO/room_${frames}_map.bag"
   mkdir -p "$DEMO"
   if [ ! -f "$BAG" ]; then
     echo "[$tag] generating the simulated room ($frames frames, 640x480, SGBM) -> $BAG"

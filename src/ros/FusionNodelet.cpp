@@ -21,12 +21,16 @@ void FusionNodelet::onInit() {
   ros::NodeHandle& nh = getNodeHandle();
   ros::NodeHandle& pnh = getPrivateNodeHandle();
   std::string error;
-  if (!loadParameters(pnh, &mapper_config_, &node_config_, &error)) {
+  std::vector<std::string> warnings;
+  if (!loadParameters(pnh, &mapper_config_, &node_config_, &error, &warnings)) {
     NODELET_FATAL("stereo_fusion: %s", error.c_str());
     throw std::invalid_argument(error);
   }
+  for (const std::string& w : warnings)
+    NODELET_WARN("stereo_fusion: %s (ignored: allow_unknown_parameters is true)", w.c_str());
   SessionConfig session;
   session.loop_closure_max_frames = static_cast<size_t>(node_config_.loop_closure_max_frames);
+  session.max_request_wait_s = node_config_.max_request_wait_s;
   session.background_corrections = true;
   session_ = std::make_unique<MappingSession>(mapper_config_, session);
   tf_buffer_ = std::make_unique<tf2_ros::Buffer>(ros::Duration(30.0));

@@ -2,6 +2,7 @@
 
 #include <XmlRpcValue.h>
 
+#include <algorithm>
 #include <functional>
 #include <sstream>
 
@@ -111,6 +112,19 @@ const Table& table() {
     t.addInt("planning_max_query_points", "points", 1, 100000000,
              "Most points one `~get_distance` request may ask; more get `success: false`.",
              member(&NodeConfig::planning_max_query_points));
+    t.addDouble(
+        "max_request_wait_s", "s", 0.0, false, 60.0,
+        "How long a service request (`~clear_box`, `~clear_sphere`, `~reset`, `~load_map`, "
+        "`~save_map`, `~save_mesh`, `~get_full_mesh`, the planning queries) waits for the map "
+        "while a frame, a meshing or a planning pass holds it, before it answers busy "
+        "(`success: false`, nothing done).",
+        member(&NodeConfig::max_request_wait_s));
+    t.addBool(
+        "allow_unknown_parameters",
+        "A name in the node's namespace that is no parameter here (a misspelt key) is an error "
+        "naming it and the nearest known name, and the nodelet does not start; true: a warning "
+        "per name, and it starts.",
+        member(&NodeConfig::allow_unknown_parameters));
     return t;
   }();
   return parameters;
@@ -141,6 +155,37 @@ std::string withResolvedName(const ros::NodeHandle& nh, const std::string& name,
   return message;
 }
 
+/// The first component of every parameter name under `nh`'s namespace, each once, sorted.
+std::vector<std::string> namesInNamespace(const ros::NodeHandle& nh) {
+  std::vector<std::string> all, names;
+  if (!nh.getParamNames(all)) return names;
+  const std::string prefix = nh.getNamespace() == "/" ? "/" : nh.getNamespace() + "/";
+  for (const std::string& full : all) {
+    if (full.compare(0, prefix.size(), prefix) != 0 || full.size() == prefix.size()) continue;
+    const std::string rest = full.substr(prefix.size());
+    names.push_back(rest.substr(0, rest.find('/')));
+  }
+  std::sort(names.begin(), names.end());
+  names.erase(std::unique(names.begin(), names.end()), names.end());
+  return names;
+}
+
+/// One message per name under `nh` that no registry knows, each with the nearest known name.
+std::vector<std::string> unknownNames(const ros::NodeHandle& nh) {
+  std::vector<std::string> known;
+  for (const ParameterSpec& spec : mapperParameterSpecs()) known.push_back(spec.name);
+  for (const ParameterSpec& spec : nodeParameterSpecs()) known.push_back(spec.name);
+  const std::vector<std::string>& foreign = foreignNodeParameterNames();
+  std::vector<std::string> messages;
+  for (const std::string& name : namesInNamespace(nh)) {
+    if (std::find(known.begin(), known.end(), name) != known.end() ||
+        std::find(foreign.begin(), foreign.end(), name) != foreign.end())
+      continue;
+    messages.push_back(parameter_text::unknownParameterMessage(nh.resolveName(name), name, known));
+  }
+  return messages;
+}
+
 /// Reads every parameter of one registry that `nh` holds through `set`.
 bool readRegistry(
     const ros::NodeHandle& nh, const std::vector<ParameterSpec>& specs,
@@ -166,6 +211,11 @@ bool readRegistry(
 
 const std::vector<ParameterSpec>& nodeParameterSpecs() { return table().specs(); }
 
+const std::vector<std::string>& foreignNodeParameterNames() {
+  static const std::vector<std::string> names{"diagnostic_period"};
+  return names;
+}
+
 bool setNodeParameter(NodeConfig* config, const std::string& name, const std::string& value,
                       std::string* error) {
   return table().set(config, name, value, error);
@@ -180,7 +230,7 @@ std::vector<std::string> validateNodeConfig(const NodeConfig& config) {
 }
 
 bool loadParameters(const ros::NodeHandle& nh, MapperConfig* mapper, NodeConfig* node,
-                    std::string* error) {
+                    std::string* error, std::vector<std::string>* warnings) {
   MapperConfig mapper_read = *mapper;
   NodeConfig node_read = *node;
   const bool read = readRegistry(
@@ -210,6 +260,14 @@ bool loadParameters(const ros::NodeHandle& nh, MapperConfig* mapper, NodeConfig*
     }
     return false;
   }
+  const std::vector<std::string> unknown = unknownNames(nh);
+  if (!unknown.empty() && !node_read.allow_unknown_parameters) {
+    *error = unknown.front();
+    for (size_t i = 1; i < unknown.size(); ++i) *error += "; " + unknown[i];
+    *error += " (allow_unknown_parameters: true only warns)";
+    return false;
+  }
+  if (warnings) warnings->insert(warnings->end(), unknown.begin(), unknown.end());
   *mapper = mapper_read;
   *node = node_read;
   return true;

@@ -29,14 +29,15 @@ struct FrameMessages {
 };
 
 /// `frame` as messages stamped `stamp` (now when zero) in `frame_id`; with `tf`, its pose
-/// world → frame_id is broadcast first. Publishing (and any delay before it) is the caller's.
+/// map (the nodelet's default world_frame) → frame_id is broadcast first. Publishing (and any delay
+/// before it) is the caller's.
 inline FrameMessages frameMessages(const StereoFrame& frame, tf2_ros::TransformBroadcaster* tf,
                                    const std::string& frame_id = "left_optical",
                                    ros::Time stamp = ros::Time()) {
   FrameMessages m;
   m.header.stamp = stamp.isZero() ? ros::Time::now() : stamp;
   m.header.frame_id = frame_id;
-  if (tf) tf->sendTransform(toTransform(frame.T_world_camera, "world", m.header));
+  if (tf) tf->sendTransform(toTransform(frame.T_world_camera, "map", m.header));
   toMessages(frame, m.header, 128.0f, &m.disparity, &m.image, &m.info);
   return m;
 }

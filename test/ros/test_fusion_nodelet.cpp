@@ -375,7 +375,7 @@ TEST_F(NodeletFixture, OutOfOrderDuplicateJumpingAndFutureTfFramesAreDroppedByRe
   std_msgs::Header later;
   later.stamp = t0 + ros::Duration(30.0);
   later.frame_id = "future_only_optical";
-  tf_.sendTransform(toTransform(frame.T_world_camera, "world", later));
+  tf_.sendTransform(toTransform(frame.T_world_camera, "map", later));
   publish(frame, "future_only_optical", false, {}, t0 + ros::Duration(0.2));
   ASSERT_TRUE(waitFor([&] { return diag("dropped: tf timeout") >= tf_before + 1; }, 30.0));
 
@@ -416,10 +416,10 @@ TEST_F(NodeletFixture, OutOfOrderDuplicateJumpingAndFutureTfFramesAreDroppedByRe
   late.frame_id = "late_optical";
   publish(frame, "late_optical", false, {}, t1);
   ros::WallDuration(0.1).sleep();  // late, yet well inside tf_timeout_s = 0.5 s
-  tf_.sendTransform(toTransform(frame.T_world_camera, "world", late));
+  tf_.sendTransform(toTransform(frame.T_world_camera, "map", late));
   late.stamp =
       t1 + ros::Duration(0.5);  // a later transform, so t1 is interpolated, not extrapolated
-  tf_.sendTransform(toTransform(frame.T_world_camera, "world", late));
+  tf_.sendTransform(toTransform(frame.T_world_camera, "map", late));
   EXPECT_TRUE(waitFor([&] { return diag("frames fused") >= fused_mid + 2; }, 30.0));
   EXPECT_EQ(diag("dropped: pose jump"), 1);
   EXPECT_EQ(diag("dropped: tf timeout"), tf_before + 1)
@@ -445,10 +445,10 @@ TEST_F(NodeletFixture, APathWhosePosesCarryNoRotationIsRefusedWholeAndTheMapStay
   const long applied_before = std::max(0L, diag("corrections applied"));
   auto path = [&](double qx, double qy, double qz, double qw) {
     nav_msgs::Path p;
-    p.header.frame_id = "world";
+    p.header.frame_id = "map";
     p.header.stamp = ros::Time::now();
     geometry_msgs::PoseStamped pose;
-    pose.header.frame_id = "world";
+    pose.header.frame_id = "map";
     pose.header.stamp = before.response.mesh.header.stamp;
     pose.pose.orientation.w = 1.0;
     p.poses.push_back(pose);  // a good first pose: the second one names the path's fault
@@ -617,9 +617,9 @@ class NodeletEpoch : public NodeletFixture {
     std_msgs::Header header;
     header.frame_id = frame_id;
     header.stamp = stamp;
-    tf_.sendTransform(toTransform(frame.T_world_camera, "world", header));
+    tf_.sendTransform(toTransform(frame.T_world_camera, "map", header));
     header.stamp = stamp + ros::Duration(0.5);
-    tf_.sendTransform(toTransform(frame.T_world_camera, "world", header));
+    tf_.sendTransform(toTransform(frame.T_world_camera, "map", header));
   }
 };
 }  // namespace
@@ -846,6 +846,9 @@ TEST(NodeParameters, OutOfRangeValuesAtStartUpNameTheParameter) {
       {"loop_closure_max_frames",
        [](const std::string& ns) { ros::param::set(ns + "/loop_closure_max_frames", -1); },
        "loop_closure_max_frames' = -1 is out of range [0, 100000] frames"},
+      {"max_request_wait_s",
+       [](const std::string& ns) { ros::param::set(ns + "/max_request_wait_s", 0.0); },
+       "parameter '/bad_max_request_wait_s/max_request_wait_s' = 0 is out of range (0, 60] s"},
       {"list",
        [](const std::string& ns) {
          ros::param::set(ns + "/max_weight", std::vector<double>{1, 2});
@@ -896,6 +899,8 @@ TEST(NodeParameters, EveryNodeParameterIsReadThroughTheRegistry) {
   ros::param::set(ns + "/mesh_encoding", std::string("compact"));
   ros::param::set(ns + "/loop_closure_max_frames", 0);
   ros::param::set(ns + "/trajectory_frame", std::string("base_link"));
+  ros::param::set(ns + "/max_request_wait_s", 0.5);
+  ros::param::set(ns + "/allow_unknown_parameters", true);
   ros::param::set(ns + "/voxel_size_m", 0.04);
   MapperConfig mapper;
   NodeConfig node;
@@ -918,6 +923,59 @@ TEST(NodeParameters, EveryNodeParameterIsReadThroughTheRegistry) {
   EXPECT_EQ(node.mesh_encoding, MeshEncoding::kCompact);
   EXPECT_EQ(node.loop_closure_max_frames, 0);
   EXPECT_EQ(node.trajectory_frame, "base_link");
+  EXPECT_EQ(node.max_request_wait_s, 0.5);
+  EXPECT_TRUE(node.allow_unknown_parameters);
+}
+
+// A name in the node's namespace that no parameter has (a misspelt key, a nested namespace) is
+// refused: loadParameters() names it with the nearest known name, and the nodelet does not start.
+// allow_unknown_parameters: true turns each into a warning, and the nodelet starts.
+TEST(NodeParameters, AMisspeltNameStopsTheStartAndNamesTheNearestName) {
+  const std::string ns = "/misspelt/stereo_fusion";
+  ros::param::set(ns + "/voxel_size_m", 0.04);
+  ros::param::set(ns + "/tf_timout_s", 1.0);
+  ros::param::set(ns + "/meshing/rate_hz", 2.0);
+  ros::param::set(ns + "/diagnostic_period", 1.0);  // diagnostic_updater's, allowed
+  const std::string misspelt =
+      "unknown parameter '/misspelt/stereo_fusion/tf_timout_s' (did you mean 'tf_timeout_s'?)";
+  MapperConfig mapper;
+  NodeConfig node;
+  std::string error;
+  EXPECT_FALSE(loadParameters(ros::NodeHandle(ns), &mapper, &node, &error));
+  EXPECT_NE(error.find(misspelt), std::string::npos) << error;
+  EXPECT_NE(error.find("unknown parameter '/misspelt/stereo_fusion/meshing'"), std::string::npos)
+      << error;
+  EXPECT_EQ(error.find("diagnostic_period"), std::string::npos) << error;
+  EXPECT_NE(error.find("allow_unknown_parameters"), std::string::npos) << error;
+  EXPECT_EQ(mapper.voxel_size_m, MapperConfig{}.voxel_size_m) << "a refused load changes nothing";
+
+  // The nodelet itself, as a manager loads it (onInit() refuses by throwing).
+  auto load = [&](std::string* why) {
+    // boost::function, not the lambda: a captureless lambda converts to bool, Loader's other
+    // constructor's argument.
+    const boost::function<boost::shared_ptr<nodelet::Nodelet>(const std::string&)> create =
+        [](const std::string&) { return boost::make_shared<FusionNodelet>(); };
+    nodelet::Loader loader(create);
+    bool loaded = false;
+    try {
+      loaded = loader.load(ns, "stereo_fusion/FusionNodelet", {}, {});
+    } catch (const std::exception& e) {
+      *why = e.what();
+    }
+    if (loaded) loader.unload(ns);
+    return loaded;
+  };
+  std::string why;
+  EXPECT_FALSE(load(&why)) << "the nodelet started with a misspelt parameter";
+
+  ros::param::set(ns + "/allow_unknown_parameters", true);
+  std::vector<std::string> warnings;
+  ASSERT_TRUE(loadParameters(ros::NodeHandle(ns), &mapper, &node, &error, &warnings)) << error;
+  ASSERT_EQ(warnings.size(), 2u);
+  EXPECT_EQ(warnings[1], misspelt);
+  EXPECT_EQ(mapper.voxel_size_m, 0.04);
+  EXPECT_TRUE(load(&why)) << why;
+  ros::param::del("/misspelt");
 }
 
 // The registry's mesh_encoding labels are the ones the messages' parseMeshEncoding() takes.

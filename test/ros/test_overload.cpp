@@ -47,7 +47,7 @@ TEST(Overload, QueueStaysBoundedAndEveryFrameIsCounted) {
     ros::WallDuration(0.01).sleep();
   }
   for (const std_msgs::Header& header : headers)
-    tf.sendTransform(toTransform(frame.T_world_camera, "world", header));
+    tf.sendTransform(toTransform(frame.T_world_camera, "map", header));
   // Every disparity that reached the node is fused or in exactly one "dropped:" counter.
   auto accounted = [&] { return diag("frames fused") + diagnostics.droppedTotal(); };
   test::waitFor(

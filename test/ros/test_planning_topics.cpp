@@ -235,7 +235,7 @@ TEST_F(PlanningTopics, GridPatchedWithItsUpdatesIsTheCurrentGridAndAClearReaches
   }
   ASSERT_GT(grid.info.width, 10u);
   ASSERT_GT(grid.info.height, 10u);
-  EXPECT_EQ(grid.header.frame_id, "world");
+  EXPECT_EQ(grid.header.frame_id, "map");
   EXPECT_FLOAT_EQ(grid.info.resolution, kCell);
   // The wall and the ball's front are occupied, the space before the ball free, the space beside
   // the camera (outside every view) unknown. Cells are probed a quarter cell inside the solids.
@@ -336,7 +336,7 @@ TEST_F(PlanningTopics, EsdfSliceMatchesTheSceneAndOccupiedVoxelsLieOnItsSurfaces
   std::vector<CloudPoint> slice, occupied;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    EXPECT_EQ(slice_.header.frame_id, "world");
+    EXPECT_EQ(slice_.header.frame_id, "map");
     slice = readCloud(slice_, true);
     occupied = readCloud(occupied_, false);
   }

@@ -99,6 +99,58 @@ TEST(Replay, BagThroughTheNodeletEqualsTheOfflinePipeline) {
   test::expectSameSubmeshes(live, expected);
 }
 
+// replay_odom.test and replay_odom_yaml.test: a bag whose /tf holds only odom -> camera (no
+// map), replayed with world_frame odom — replay.launch's argument in the one, the config YAML's
+// key with no argument in the other (fusion.launch must not overwrite it with its own) — is
+// fused whole: not one frame dropped as "tf timeout", the outputs in odom.
+TEST(ReplayWorldFrame, ABagInTheConfiguredFrameLosesNoFrameToTf) {
+  ros::NodeHandle pnh("~");
+  std::string bag_path, world_frame, error;
+  ASSERT_TRUE(pnh.getParam("bag", bag_path));
+  ASSERT_TRUE(pnh.getParam("world_frame", world_frame));
+  ASSERT_NE(world_frame, NodeConfig{}.world_frame)
+      << "the test needs a frame other than the default";
+  BagTopics topics;
+  topics.world_frame = world_frame;
+  auto bag = BagSequence::open(bag_path, topics, &error);
+  ASSERT_TRUE(bag) << error;
+  const long frames = static_cast<long>(bag->size());
+  ASSERT_GT(frames, 5);
+  {  // In the default frame the bag has no pose at all: a node left at it would fuse nothing.
+    auto in_default = BagSequence::open(bag_path, BagTopics{}, &error);
+    ASSERT_TRUE(in_default) << error;
+    StereoFrame f;
+    EXPECT_FALSE(in_default->load(0, &f, &error));
+    EXPECT_NE(error.find("no transform " + NodeConfig{}.world_frame + " <- "), std::string::npos)
+        << error;
+  }
+  std::string node_frame;
+  ASSERT_TRUE(ros::param::get("/stereo_fusion/world_frame", node_frame));
+  EXPECT_EQ(node_frame, world_frame);
+
+  std::mutex mutex;
+  std::string path_frame;
+  ros::NodeHandle nh;
+  ros::Subscriber path_sub = nh.subscribe<nav_msgs::Path>(
+      "/stereo_fusion/camera_path", 1, [&](const nav_msgs::Path::ConstPtr& path) {
+        std::lock_guard<std::mutex> lock(mutex);
+        path_frame = path->header.frame_id;
+      });
+  test::DiagnosticsWatcher diagnostics;
+  ASSERT_TRUE(test::startPausedPlayer(diagnostics));
+  ASSERT_NO_FATAL_FAILURE(expectEveryFrameFused(diagnostics, frames, 120.0));
+  EXPECT_EQ(diagnostics.value("dropped: tf timeout"), 0);
+  EXPECT_EQ(diagnostics.droppedTotal(), 0);
+  test::waitFor(
+      [&] {
+        std::lock_guard<std::mutex> lock(mutex);
+        return !path_frame.empty();
+      },
+      10.0);
+  std::lock_guard<std::mutex> lock(mutex);
+  EXPECT_EQ(path_frame, world_frame) << "~camera_path";
+}
+
 // At 50x the bag's rate (replay_fast.test) most frames are dropped somewhere: in rosbag's or the
 // nodelet's subscriber queues (seen as gaps in header.seq), in the synchroniser or in the worker's
 // queue. Frames in the bag = received + missed upstream; received = fused + every "dropped:".

@@ -54,7 +54,14 @@ std::string parameterPageMarkdown() {
           "- in C++: the fields of `MapperConfig` (`include/stereo_fusion/MapperConfig.h`).\n\n"
           "A value out of range, of the wrong type or an unknown name is refused with a message "
           "naming\n"
-          "the parameter. Units are in the names (`_m`, `_px`, `_vox`).\n\n";
+          "the parameter (an unknown name with the nearest known one: `unknown parameter "
+          "'tf_timout_s'\n"
+          "(did you mean 'tf_timeout_s'?)`). One YAML file can hold the mapping and the node "
+          "parameters:\n"
+          "the nodelet reads both, the offline fuser the mapping ones, and of the node's it takes\n"
+          "`world_frame` as a bag's frame (unless `--world-frame`) and ignores the others with a "
+          "note\n"
+          "(after checking their values). Units are in the names (`_m`, `_px`, `_vox`).\n\n";
   const MapperConfig mapper_defaults;
   page << table(mapperParameterSpecs(),
                 [&](const std::string& name) { return getMapperParameter(mapper_defaults, name); });
@@ -65,11 +72,16 @@ std::string parameterPageMarkdown() {
           "value out\n"
           "of range or of the wrong type stops the nodelet at start with a message naming the "
           "parameter, its\n"
-          "range and unit. Defaults are those of `NodeConfig` "
-          "(`include/stereo_fusion/ros/RosParameters.h`);\n"
-          "`fusion.launch` sets `world_frame` from its argument of the same name and default. The "
-          "offline fuser\n"
-          "does not read them.\n\n";
+          "range and unit; so does a name in the namespace that no table here has (a misspelt "
+          "key), unless\n"
+          "`allow_unknown_parameters` (then a warning). Defaults are those of `NodeConfig`\n"
+          "(`include/stereo_fusion/ros/RosParameters.h`). Every launch file takes a "
+          "`world_frame` argument;\n"
+          "given, it sets `world_frame`; left empty (its default), a `world_frame` in the "
+          "`config:=` YAML\n"
+          "holds, else the default below. That default is `map` (REP 105), `world` before issue "
+          "50: a tf\n"
+          "tree rooted at `world` needs `world_frame: world` now.\n\n";
   const NodeConfig node_defaults;
   page << table(nodeParameterSpecs(),
                 [&](const std::string& name) { return getNodeParameter(node_defaults, name); });

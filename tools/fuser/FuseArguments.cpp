@@ -1,15 +1,53 @@
 // The fuser's command line (parseFuseArguments()): flags, --config, --set.
+#include <algorithm>
 #include <stdexcept>
 
 #include "fuser/OfflineFuser.h"
 #include "stereo_fusion/io/ConfigFile.h"
+#include "stereo_fusion/ros/RosParameters.h"
 
 namespace stereo_fusion {
+namespace {
+
+std::vector<std::string> nodeParameterNames() {
+  std::vector<std::string> names;
+  for (const ParameterSpec& spec : nodeParameterSpecs()) names.push_back(spec.name);
+  return names;
+}
+
+/// The nodelet's own parameters given to the fuser (one YAML serves both): each value is checked
+/// as the node would check it; world_frame is the frame of a bag's poses unless --world-frame
+/// named one; the others mean nothing offline and are listed in a note.
+bool applyNodeParameters(const std::vector<std::pair<std::string, std::string>>& found,
+                         const std::string& source, bool world_frame_given, FuseOptions* options,
+                         std::string* error) {
+  NodeConfig checked;
+  std::vector<std::string> ignored;
+  for (const auto& [name, value] : found) {
+    if (!setNodeParameter(&checked, name, value, error)) {
+      *error = source + ": " + *error;
+      return false;
+    }
+    if (name == "world_frame") {
+      if (!world_frame_given) options->bag_topics.world_frame = value;
+    } else if (std::find(ignored.begin(), ignored.end(), name) == ignored.end()) {
+      ignored.push_back(name);
+    }
+  }
+  if (ignored.empty()) return true;
+  std::string list;
+  for (const std::string& name : ignored) list += (list.empty() ? "" : ", ") + name;
+  options->notes.push_back(source + ": node parameters, ignored offline: " + list);
+  return true;
+}
+
+}  // namespace
 
 bool parseFuseArguments(const std::vector<std::string>& args, FuseOptions* options,
                         std::string* error) {
   std::vector<std::string> positional, sets;
   std::string config_file;
+  bool world_frame_given = false;
   for (size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
     auto value = [&](const char* flag) -> const std::string* {
@@ -46,6 +84,7 @@ bool parseFuseArguments(const std::vector<std::string>& args, FuseOptions* optio
                a == "--world-frame") {
       const std::string* v = value(a.c_str());
       if (!v) return false;
+      world_frame_given = world_frame_given || a == "--world-frame";
       (a == "--disparity-topic"     ? options->bag_topics.disparity
        : a == "--image-topic"       ? options->bag_topics.image
        : a == "--camera-info-topic" ? options->bag_topics.camera_info
@@ -83,17 +122,36 @@ bool parseFuseArguments(const std::vector<std::string>& args, FuseOptions* optio
     *error = "--trajectory needs the frames it corrects (an input folder or bag)";
     return false;
   }
-  if (!config_file.empty() && !loadMapperConfigFile(config_file, &options->config, error))
-    return false;
+  // The nodelet's own keys are accepted beside the mapping parameters (one YAML for both).
+  const std::vector<std::string> node_names = nodeParameterNames();
+  if (!config_file.empty()) {
+    OtherParameters node_keys{node_names, {}};
+    if (!loadMapperConfigFile(config_file, &options->config, error, &node_keys) ||
+        !applyNodeParameters(node_keys.found, config_file, world_frame_given, options, error))
+      return false;
+  }
+  std::vector<std::pair<std::string, std::string>> node_sets;
   for (const std::string& s : sets) {
     const size_t eq = s.find('=');
     if (eq == std::string::npos) {
       *error = "--set expects key=value, got '" + s + "'";
       return false;
     }
-    if (!setMapperParameter(&options->config, s.substr(0, eq), s.substr(eq + 1), error))
+    const std::string key = s.substr(0, eq);
+    std::vector<std::string> known;
+    for (const ParameterSpec& spec : mapperParameterSpecs()) known.push_back(spec.name);
+    if (std::find(node_names.begin(), node_names.end(), key) != node_names.end()) {
+      node_sets.emplace_back(key, s.substr(eq + 1));
+      continue;
+    }
+    if (std::find(known.begin(), known.end(), key) == known.end()) {
+      known.insert(known.end(), node_names.begin(), node_names.end());
+      *error = parameter_text::unknownParameterMessage(key, key, known);
       return false;
+    }
+    if (!setMapperParameter(&options->config, key, s.substr(eq + 1), error)) return false;
   }
+  if (!applyNodeParameters(node_sets, "--set", world_frame_given, options, error)) return false;
   const auto problems = validateMapperConfig(options->config);
   if (!problems.empty()) {
     *error = problems.front();

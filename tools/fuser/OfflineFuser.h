@@ -44,6 +44,9 @@ struct FuseOptions {
   /// A SLAM's corrected camera poses (TUM lines, stamps matching the frames'), applied after the
   /// last frame: the frames are fused again at their corrected poses (empty = none).
   std::string trajectory;
+  /// What parseFuseArguments() tells the user without failing (node parameters of --config or
+  /// --set that the fuser ignores); fuse_main prints them unless --quiet.
+  std::vector<std::string> notes;
 };
 
 /// What --trajectory did.

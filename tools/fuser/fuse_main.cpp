@@ -19,7 +19,9 @@ const char* kUsage =
     "<out-dir>/mesh.obj + mesh.mtl + mesh_atlas_K.png, textured from the camera images; with\n"
     "planning_enabled, the default, also esdf.ply, occupancy.pgm + occupancy.yaml and "
     "octomap.bt).\n"
-    "  --config FILE     parameters in config/default.yaml's format (applied before --set)\n"
+    "  --config FILE     parameters in config/default.yaml's format (applied before --set); the\n"
+    "                    nodelet's own keys are accepted too (one file for both): world_frame is\n"
+    "                    a bag's frame (unless --world-frame), the others are checked and ignored\n"
     "  --set key=value   override one parameter; every key of config/default.yaml is accepted\n"
     "  --frames N        fuse only the first N frames\n"
     "  --frame-log FILE  append '<frame> <unix time s>' after every fused frame (flushed)\n"
@@ -33,7 +35,7 @@ const char* kUsage =
     "                    planning layer (stats.json planning.query_100k_ms, planning.rebuild_ms)\n"
     "  --disparity-topic, --image-topic, --camera-info-topic, --world-frame\n"
     "                    what to read from a bag (defaults: /stereo/disparity,\n"
-    "                    /stereo/left/image_rect_color, /stereo/left/camera_info, world)\n"
+    "                    /stereo/left/image_rect_color, /stereo/left/camera_info, map)\n"
     "  --load-map FILE   start from a map saved with --save-map (same voxel_size_m, "
     "truncation_vox)\n"
     "  --save-map FILE   save the map after the last frame (versioned binary, checksummed)\n"
@@ -60,6 +62,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "stereo_fusion_fuse: %s\n%s", error.c_str(), kUsage);
     return 2;
   }
+  if (options.progress)
+    for (const std::string& note : options.notes)
+      std::fprintf(stderr, "stereo_fusion_fuse: note: %s\n", note.c_str());
   stereo_fusion::FuseReport report;
   if (!stereo_fusion::runOfflineFusion(options, &report, &error)) {
     std::fprintf(stderr, "stereo_fusion_fuse: %s\n", error.c_str());

@@ -51,6 +51,8 @@ struct Options {
   /// disparity (matched) | pair (left/right raw images only) | rectified-pair (rectified images
   /// only)
   std::string bag_content = "disparity";
+  /// The bag's /tf parent frame (the nodelet's world_frame; default BagTopics', REP 105's map).
+  std::string bag_world_frame = BagTopics{}.world_frame;
   double gt_max_edge_m = 0.03;
   double revolutions = 1.0;
   std::string dynamic = "none";
@@ -112,8 +114,10 @@ calibration.yaml, poses.txt, disparity/ color/ right/ NNNNNN.png, gt_mesh.ply.
   --gt-max-edge M                 ground-truth mesh grid step in metres (default 0.03)
   --out DIR                       output folder (created; an old dataset there is replaced)
   --bag FILE                      also write a rosbag: DisparityImage, Image, CameraInfo on
-                                  the nodelet's default topics and /tf (world -> left_optical);
+                                  the nodelet's default topics and /tf (map -> left_optical);
                                   stamps = timestamps + 1 s (ROS time 0 means "latest" to tf)
+  --bag-world-frame F             the bag's tf parent frame and the trajectory's frame (default
+                                  map, the nodelet's default world_frame; e.g. odom)
   --bag-content disparity|pair|rectified-pair
                                   disparity (default): what the nodelet subscribes to;
                                   pair: what a stereo camera driver publishes, for
@@ -248,6 +252,11 @@ bool parseArguments(int argc, char** argv, Options* o) {
          if (v.empty()) throw UsageError{f + ": expected a file name"};
          o->bag = v;
        }},
+      {"--bag-world-frame",
+       [&](auto& f, auto& v) {
+         if (v.empty()) throw UsageError{f + ": expected a tf frame"};
+         o->bag_world_frame = v;
+       }},
       {"--bag-content",
        [&](auto& f, auto& v) {
          o->bag_content = parseChoice(f, v, {"disparity", "pair", "rectified-pair"});
@@ -372,7 +381,9 @@ int main(int argc, char** argv) {
 
   std::unique_ptr<StereoBagWriter> bag;
   if (!o.bag.empty()) {
-    bag = StereoBagWriter::open(o.bag, BagTopics{}, "left_optical", 1.0, &error);
+    BagTopics topics;
+    topics.world_frame = o.bag_world_frame;
+    bag = StereoBagWriter::open(o.bag, topics, "left_optical", 1.0, &error);
     if (!bag) {
       std::cerr << "stereo_fusion_simulate: " << error << "\n";
       return 1;

@@ -12,7 +12,7 @@ struct BagTopics {
   std::string disparity = "/stereo/disparity";
   std::string image = "/stereo/left/image_rect_color";
   std::string camera_info = "/stereo/left/camera_info";
-  std::string world_frame = "world";
+  std::string world_frame = "map";  ///< the nodelet's default world_frame (REP 105)
   /// A SLAM's corrected trajectory (nav_msgs/Path in world_frame), written by the simulator with
   /// --drift; the nodelet's `trajectory` input.
   std::string trajectory = "/trajectory";

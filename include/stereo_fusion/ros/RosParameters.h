@@ -15,12 +15,12 @@ namespace stereo_fusion {
 /// src/ros/RosParameters.cpp); the defaults here are the single source of truth, printed into
 /// doc/parameters.md's node table.
 struct NodeConfig {
-  std::string world_frame = "world";  ///< fixed frame of the map and the mesh
-  int queue_size = 5;                 ///< frames waiting for the worker (≥ 1)
-  bool drop_oldest = true;            ///< queue full: drop the oldest (true) or the newest frame
-  bool approximate_sync = false;      ///< ApproximateTime instead of ExactTime synchronisation
-  int sync_queue_size = 10;           ///< message_filters synchroniser queue
-  double tf_timeout_s = 0.2;          ///< how long the worker waits for T_world_camera
+  std::string world_frame = "map";  ///< fixed frame of the map and the mesh (REP 105's map)
+  int queue_size = 5;               ///< frames waiting for the worker (≥ 1)
+  bool drop_oldest = true;          ///< queue full: drop the oldest (true) or the newest frame
+  bool approximate_sync = false;    ///< ApproximateTime instead of ExactTime synchronisation
+  int sync_queue_size = 10;         ///< message_filters synchroniser queue
+  double tf_timeout_s = 0.2;        ///< how long the worker waits for T_world_camera
   /// A frame stamped more than this ahead of the node's clock is dropped (0 = no check).
   double max_stamp_ahead_s = 10.0;
   double mesh_publish_rate_hz = 2.0;  ///< 0 = publish after every frame
@@ -46,6 +46,12 @@ struct NodeConfig {
   /// Largest ~get_esdf_box grid (samples) and ~get_distance request (points).
   int planning_max_box_cells = 1000000;
   int planning_max_query_points = 1000000;
+  /// How long a service request waits for the map held by a frame or a meshing pass before it
+  /// answers busy (SessionConfig::max_request_wait_s).
+  double max_request_wait_s = 2.0;
+  /// A name in the node's namespace that no registry knows: false = an error, the node does not
+  /// start; true = a warning per name, and the node starts.
+  bool allow_unknown_parameters = false;
 };
 
 /// All parameters of NodeConfig, in the order of the node table of doc/parameters.md.
@@ -61,12 +67,19 @@ std::string getNodeParameter(const NodeConfig& config, const std::string& name);
 /// Checks every node parameter's range. One message per violation (empty = valid).
 std::vector<std::string> validateNodeConfig(const NodeConfig& config);
 
+/// Names the node's private namespace may hold beside both registries' (diagnostic_updater's
+/// `diagnostic_period`).
+const std::vector<std::string>& foreignNodeParameterNames();
+
 /// Reads every parameter of both registries (mapperParameterSpecs(), nodeParameterSpecs()) from
 /// the private namespace of `nh` (missing keys keep their values in *mapper and *node) and
 /// validates both. False with a message naming the parameter as ROS knows it (with its
 /// namespace) and its range and unit when a value has the wrong type or is out of range; then
-/// *mapper and *node are unchanged.
+/// *mapper and *node are unchanged. A name in the namespace that neither registry (nor
+/// foreignNodeParameterNames()) knows — a misspelt key — is refused the same way, the message
+/// naming it and the nearest known name; with allow_unknown_parameters: true each such name
+/// is one line of *warnings instead (when given) and the load goes on.
 bool loadParameters(const ros::NodeHandle& private_nh, MapperConfig* mapper, NodeConfig* node,
-                    std::string* error);
+                    std::string* error, std::vector<std::string>* warnings = nullptr);
 
 }  // namespace stereo_fusion

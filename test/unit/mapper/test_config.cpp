@@ -55,7 +55,7 @@ TEST(Config, RejectsUnknownMalformedAndOutOfRange) {
   MapperConfig c;
   std::string error;
   EXPECT_FALSE(setMapperParameter(&c, "voxel_size", "0.01", &error));
-  EXPECT_NE(error.find("unknown parameter 'voxel_size'"), std::string::npos) << error;
+  EXPECT_EQ(error, "unknown parameter 'voxel_size' (did you mean 'voxel_size_m'?)");
   EXPECT_FALSE(setMapperParameter(&c, "voxel_size_m", "abc", &error));
   EXPECT_NE(error.find("voxel_size_m"), std::string::npos) << error;
   EXPECT_FALSE(setMapperParameter(&c, "voxel_size_m", "0.01m", &error));
@@ -122,6 +122,10 @@ TEST(Config, YamlFileErrorsNameFileLineAndParameter) {
   EXPECT_FALSE(loadMapperConfigText("voxel_size_m: [1, 2]\n", "list.yaml", &c, &error));
   EXPECT_FALSE(loadMapperConfigText("bogus_key: 3\n", "x.yaml", &c, &error));
   EXPECT_NE(error.find("unknown parameter 'bogus_key'"), std::string::npos) << error;
+  EXPECT_FALSE(
+      loadMapperConfigText("voxel_size_m: 0.03\ntruncaton_vox: 3\n", "x.yaml", &c, &error));
+  EXPECT_EQ(error, "x.yaml:2: unknown parameter 'truncaton_vox' (did you mean 'truncation_vox'?)");
+  EXPECT_EQ(c.voxel_size_m, MapperConfig{}.voxel_size_m) << "nothing applied";
   EXPECT_FALSE(loadMapperConfigText("min_depth_m: 9\n", "x.yaml", &c, &error));
   EXPECT_NE(error.find("min_depth_m must be < max_depth_m"), std::string::npos) << error;
   EXPECT_FALSE(loadMapperConfigFile("/nonexistent/file.yaml", &c, &error));
@@ -328,7 +332,9 @@ TEST(ParameterTable, ParsesChecksAndNamesEveryType) {
   EXPECT_FALSE(table.set(&s, "policy", "drop_all", &error));
   EXPECT_EQ(error, "parameter 'policy': 'drop_all' is not one of drop_oldest | drop_newest");
   EXPECT_FALSE(table.set(&s, "nonsense", "1", &error));
-  EXPECT_EQ(error, "unknown parameter 'nonsense'");
+  EXPECT_EQ(error, "unknown parameter 'nonsense' (did you mean 'queue'?)");
+  EXPECT_FALSE(table.set(&s, "rate_h", "1", &error));
+  EXPECT_EQ(error, "unknown parameter 'rate_h' (did you mean 'rate_hz'?)");
   EXPECT_EQ(s.queue, 5);
   EXPECT_EQ(s.frame, "world");
   EXPECT_TRUE(s.keep_oldest);
@@ -360,4 +366,25 @@ TEST(ParameterTable, ParsesChecksAndNamesEveryType) {
   EXPECT_THROW(
       table.addInt("queue", "", 0, 1, "again", ParameterTable<Settings>::member(&Settings::queue)),
       std::logic_error);
+}
+
+// An unknown name is answered with the nearest known one: Levenshtein distance (insertions,
+// deletions, substitutions), the first of equally near names.
+TEST(ParameterTable, UnknownNamesNameTheNearestKnownName) {
+  using namespace parameter_text;
+  EXPECT_EQ(editDistance("", ""), 0u);
+  EXPECT_EQ(editDistance("abc", ""), 3u);
+  EXPECT_EQ(editDistance("", "ab"), 2u);
+  EXPECT_EQ(editDistance("kitten", "sitting"), 3u);
+  EXPECT_EQ(editDistance("tf_timout_s", "tf_timeout_s"), 1u);
+  EXPECT_EQ(editDistance("flaw", "lawn"), 2u);
+  const std::vector<std::string> known{"tf_timeout_s", "queue_size", "world_frame", "queue_policy"};
+  EXPECT_EQ(nearestName("tf_timout_s", known), "tf_timeout_s");
+  EXPECT_EQ(nearestName("queue_sizes", known), "queue_size");
+  EXPECT_EQ(nearestName("worldframe", known), "world_frame");
+  EXPECT_EQ(nearestName("x", {}), "");
+  EXPECT_EQ(nearestName("ab", {"xb", "ay"}), "xb") << "the first of equally near names";
+  EXPECT_EQ(unknownParameterMessage("/stereo_fusion/queue_lenght", "queue_lenght", known),
+            "unknown parameter '/stereo_fusion/queue_lenght' (did you mean 'queue_size'?)");
+  EXPECT_EQ(unknownParameterMessage("x", "x", {}), "unknown parameter 'x'");
 }

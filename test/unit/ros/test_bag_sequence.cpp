@@ -67,7 +67,7 @@ struct SmallBag {
         camera.stamp = stamp;
         camera.frame_id = "left_optical";
         tf2_msgs::TFMessage tf;
-        tf.transforms.push_back(toTransform(T, "world", camera));
+        tf.transforms.push_back(toTransform(T, "map", camera));
         bag.write("/tf", stamp, tf);
       }
       const BagMessages m = toMessages(f, stamp);
@@ -228,7 +228,7 @@ TEST(BagSequence, ReadsFramesAndPosesAndReportsMissingTf) {
   }
   StereoFrame f;
   EXPECT_FALSE(seq->load(2, &f, &error));
-  EXPECT_NE(error.find("no transform world <- left_optical"), std::string::npos) << error;
+  EXPECT_NE(error.find("no transform map <- left_optical"), std::string::npos) << error;
 }
 
 TEST(BagSequence, OfflineFuserReadsABagAndCountsTheFrameWithoutTf) {
@@ -360,7 +360,7 @@ TEST(BagSequence, StreamingLoadsWhatTheEagerReaderLoaded) {
       if (i != kFrames - 1) {  // the last frame has no transform
         std_msgs::Header camera = m.disparity.header;
         tf2_msgs::TFMessage tf;
-        tf.transforms.push_back(toTransform(T, "world", camera));
+        tf.transforms.push_back(toTransform(T, "map", camera));
         bag.write("/tf", stamp - ros::Duration(0.01), tf);
       }
       // Recorded up to 0.3 s after their stamps, frame 6 before frame 5 (so the sequence's order,

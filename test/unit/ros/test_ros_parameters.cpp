@@ -31,12 +31,14 @@ std::string readFile(const std::string& path) {
 TEST(NodeParameterRegistry, DefaultsAreNodeConfigsAndValid) {
   const NodeConfig defaults;
   EXPECT_TRUE(validateNodeConfig(defaults).empty());
-  EXPECT_EQ(getNodeParameter(defaults, "world_frame"), "world");
+  EXPECT_EQ(getNodeParameter(defaults, "world_frame"), "map");
   EXPECT_EQ(getNodeParameter(defaults, "queue_size"), "5");
   EXPECT_EQ(getNodeParameter(defaults, "queue_policy"), "drop_oldest");
   EXPECT_EQ(getNodeParameter(defaults, "tf_timeout_s"), "0.2");
   EXPECT_EQ(getNodeParameter(defaults, "mesh_encoding"), "float32");
   EXPECT_EQ(getNodeParameter(defaults, "trajectory_frame"), "");
+  EXPECT_EQ(getNodeParameter(defaults, "max_request_wait_s"), "2");
+  EXPECT_EQ(getNodeParameter(defaults, "allow_unknown_parameters"), "false");
   EXPECT_EQ(getNodeParameter(defaults, "no_such_parameter"), "");
   // Every field of NodeConfig has its one definition (drop_oldest is queue_policy).
   std::vector<std::string> names;
@@ -61,7 +63,9 @@ TEST(NodeParameterRegistry, DefaultsAreNodeConfigsAndValid) {
                                              "planning_publish_rate_hz",
                                              "esdf_slice_height_m",
                                              "planning_max_box_cells",
-                                             "planning_max_query_points"}));
+                                             "planning_max_query_points",
+                                             "max_request_wait_s",
+                                             "allow_unknown_parameters"}));
   for (const ParameterSpec& spec : nodeParameterSpecs()) {
     EXPECT_FALSE(spec.description.empty()) << spec.name;
     EXPECT_FALSE(spec.range.empty()) << spec.name;
@@ -94,7 +98,9 @@ TEST(NodeParameterRegistry, SetsEveryTypeIntoTheFieldsTheNodeletReads) {
                                                         {"publish_block_bounds", "true"},
                                                         {"mesh_encoding", "compact"},
                                                         {"loop_closure_max_frames", "0"},
-                                                        {"trajectory_frame", "base_link"}}) {
+                                                        {"trajectory_frame", "base_link"},
+                                                        {"max_request_wait_s", "0.5"},
+                                                        {"allow_unknown_parameters", "true"}}) {
     ASSERT_TRUE(setNodeParameter(&c, name, value, &error)) << name << ": " << error;
   }
   EXPECT_EQ(c.world_frame, "map");
@@ -113,6 +119,8 @@ TEST(NodeParameterRegistry, SetsEveryTypeIntoTheFieldsTheNodeletReads) {
   EXPECT_EQ(c.mesh_encoding, MeshEncoding::kCompact);
   EXPECT_EQ(c.loop_closure_max_frames, 0);
   EXPECT_EQ(c.trajectory_frame, "base_link");
+  EXPECT_EQ(c.max_request_wait_s, 0.5);
+  EXPECT_TRUE(c.allow_unknown_parameters);
   EXPECT_TRUE(validateNodeConfig(c).empty());
   EXPECT_TRUE(setNodeParameter(&c, "trajectory_frame", "", &error)) << "empty = the camera frame";
 }
@@ -146,7 +154,11 @@ TEST(NodeParameterRegistry, InvalidValuesAreRefusedNamingParameterRangeAndUnit) 
        "parameter 'loop_closure_max_frames' = -1 is out of range [0, 100000] frames"},
       {"world_frame", "", "parameter 'world_frame' must not be empty (a tf frame, not empty)"},
       {"publish_path", "yes", "parameter 'publish_path': 'yes' is not true or false"},
-      {"queue_length", "5", "unknown parameter 'queue_length'"},
+      {"max_request_wait_s", "0", "parameter 'max_request_wait_s' = 0 is out of range (0, 60] s"},
+      {"max_request_wait_s", "61", "parameter 'max_request_wait_s' = 61 is out of range (0, 60] s"},
+      {"allow_unknown_parameters", "maybe",
+       "parameter 'allow_unknown_parameters': 'maybe' is not true or false"},
+      {"queue_length", "5", "unknown parameter 'queue_length' (did you mean 'queue_size'?)"},
   };
   for (const Case& c : cases) {
     NodeConfig config;
@@ -174,29 +186,41 @@ TEST(NodeParameterRegistry, NamesAreDistinctFromTheMappingParameters) {
   for (const ParameterSpec& spec : mapperParameterSpecs()) mapping.insert(spec.name);
   for (const ParameterSpec& spec : nodeParameterSpecs())
     EXPECT_EQ(mapping.count(spec.name), 0u) << spec.name;
+  // The names loadParameters() lets other code keep in the namespace are no parameter of ours.
+  for (const std::string& name : foreignNodeParameterNames()) {
+    EXPECT_EQ(mapping.count(name), 0u) << name;
+    EXPECT_TRUE(getNodeParameter(NodeConfig{}, name).empty()) << name;
+  }
 }
 
-// A launch file's <arg> named after a node parameter (world_frame in fusion.launch and
-// stereo_pipeline.launch) sets it, so its default must be the registry's; config/default.yaml
-// holds the mapping parameters only (the offline fuser refuses any other key).
-TEST(NodeParameterRegistry, LaunchArgumentsDefaultToTheRegistryDefaults) {
+// Every launch file takes world_frame, empty by default: empty leaves the config's world_frame
+// (or the node's default) alone, so fusion.launch sets the parameter only when the argument is
+// given. Any other <arg> named after a node parameter would set it, so its default must be the
+// registry's. config/default.yaml holds the mapping parameters only (the node's keep the
+// registry's defaults; the offline fuser accepts and ignores them in a --config file). Whether a
+// world_frame in a YAML survives fusion.launch: rostest replay_odom_yaml.test.
+TEST(NodeParameterRegistry, LaunchFilesTakeWorldFrameAndKeepTheConfigs) {
   const NodeConfig defaults;
   const std::regex arg_default(R"re(<arg\s+name="([A-Za-z0-9_]+)"\s+default="([^"]*)")re");
-  size_t checked = 0;
-  for (const char* launch : {"fusion.launch", "stereo_pipeline.launch", "replay.launch"}) {
+  for (const char* launch : {"fusion.launch", "stereo_pipeline.launch", "replay.launch",
+                             "rviz.launch", "base_station.launch"}) {
     const std::string text = readFile(kSourceDir + "/launch/" + launch);
     ASSERT_FALSE(text.empty()) << launch;
+    EXPECT_NE(text.find("<arg name=\"world_frame\" default=\"\"/>"), std::string::npos)
+        << launch << ": <arg name=\"world_frame\" default=\"\"/>";
     for (std::sregex_iterator it(text.begin(), text.end(), arg_default), end; it != end; ++it) {
       const std::string name = (*it)[1];
-      for (const ParameterSpec& spec : nodeParameterSpecs()) {
-        if (spec.name != name) continue;
-        EXPECT_EQ((*it)[2].str(), getNodeParameter(defaults, name))
-            << launch << ": <arg name=\"" << name << "\">";
-        ++checked;
-      }
+      if (name == "world_frame") continue;
+      for (const ParameterSpec& spec : nodeParameterSpecs())
+        if (spec.name == name)
+          EXPECT_EQ((*it)[2].str(), getNodeParameter(defaults, name))
+              << launch << ": <arg name=\"" << name << "\">";
     }
   }
-  EXPECT_GE(checked, 2u) << "world_frame in fusion.launch and stereo_pipeline.launch";
+  const std::string fusion = readFile(kSourceDir + "/launch/fusion.launch");
+  EXPECT_NE(fusion.find("<param unless=\"$(eval arg('world_frame') == '')\" name=\"world_frame\""),
+            std::string::npos)
+      << "fusion.launch must not overwrite a config's world_frame with an empty argument";
   const std::string yaml = readFile(kSourceDir + "/config/default.yaml");
   ASSERT_FALSE(yaml.empty());
   for (const ParameterSpec& spec : nodeParameterSpecs())
