@@ -47,7 +47,7 @@ find_package(PCL REQUIRED COMPONENTS common io kdtree)
 add_executable(stereo_fusion_evaluate_esdf ${EVALUATOR_DIR}/esdf_main.cpp)
 target_include_directories(stereo_fusion_evaluate_esdf SYSTEM PRIVATE ${PCL_INCLUDE_DIRS})
 target_link_libraries(stereo_fusion_evaluate_esdf stereo_fusion_evaluator stereo_fusion_readers ${PCL_LIBRARIES}
-                      nlohmann_json::nlohmann_json)
+                      nlohmann_json::nlohmann_json stereo_fusion_cli)
 
 if(CATKIN_ENABLE_TESTING)
   target_link_libraries(stereo_fusion_tool_tests stereo_fusion_evaluator)
