@@ -20,6 +20,8 @@ PACKAGES=(
   liboctomap-dev
   # the tools' OBJ reader (tools/readers/ObjReader.cpp)
   libtinyobjloader-dev
+  # the tools' command lines (tools/cli/)
+  libcli11-dev
   # ROS 1 from Debian (catkin, messages, nodelet, tf2, synchronisation, images, bags)
   catkin ros-message-generation ros-message-runtime libroscpp-dev libnodeletlib-dev
   libmessage-filters-dev libtf2-dev libtf2-msgs-dev libtf2-ros-dev libtf2-eigen-dev libstd-msgs-dev

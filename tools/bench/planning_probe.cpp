@@ -28,45 +28,50 @@
 #include <thread>
 #include <vector>
 
+#include "cli/CommandLine.h"
+#include "cli/NumberChecks.h"
+
 namespace {
 
 struct Options {
   double duration_s = 10.0;
   std::vector<size_t> sizes{1, 1000, 100000};
   std::string node = "/stereo_fusion";
-  double box[6] = {-3.0, -3.0, 0.0, 3.0, 3.0, 2.5};
+  std::vector<double> box{-3.0, -3.0, 0.0, 3.0, 3.0, 2.5};  ///< x0 y0 z0 x1 y1 z1
   double calls_hz = 10.0;
   std::string unpause;
   std::string json;
 };
 
-bool parse(int argc, char** argv, Options* o) {
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (i + 1 >= argc) return false;
-    const std::string v = argv[++i];
-    std::istringstream in(v);
-    if (a == "--duration-s") {
-      in >> o->duration_s;
-    } else if (a == "--sizes") {
-      o->sizes.clear();
-      for (size_t n; in >> n;) o->sizes.push_back(n);
-    } else if (a == "--node") {
-      o->node = v;
-    } else if (a == "--box") {
-      for (double& b : o->box) in >> b;
-    } else if (a == "--calls-hz") {
-      in >> o->calls_hz;
-    } else if (a == "--unpause") {
-      o->unpause = v;
-    } else if (a == "--json") {
-      o->json = v;
-    } else {
-      return false;
-    }
-    if (in.fail() && !in.eof()) return false;
-  }
-  return o->duration_s > 0 && o->calls_hz > 0 && !o->sizes.empty();
+void addProbeArguments(CLI::App* app, Options* o) {
+  app->description(
+      "What a planner sees of a running stereo_fusion node: calls ~get_distance with batches\n"
+      "of points (round robin, back to back, paced at --calls-hz) and records each call's round\n"
+      "trip; counts the serialized bytes of ~occupancy_grid and ~occupancy_grid_updates, and the\n"
+      "node's frames fused and dropped (/diagnostics).");
+  app->footer("Exit codes: 0 done, 1 the node or the player did not answer, 2 bad arguments.");
+  app->add_option("--duration-s", o->duration_s, "how long to call, in seconds (default 10)")
+      ->check(stereo_fusion::cli::positiveNumber());
+  app->add_option(
+         "--sizes", o->sizes,
+         "points per request, one request of each size in turn (default \"1 1000 100000\")")
+      ->delimiter(' ')
+      ->check(stereo_fusion::cli::positiveNumber());
+  app->add_option("--node", o->node, "the node's name (default /stereo_fusion)");
+  app->add_option("--box", o->box,
+                  "the points are drawn uniformly in this box, metres in the world frame\n"
+                  "(default \"-3 -3 0 3 3 2.5\")")
+      ->delimiter(' ')
+      ->expected(6)
+      ->check(stereo_fusion::cli::finiteNumber());
+  app->add_option("--calls-hz", o->calls_hz,
+                  "calls per second, never overlapping (a planner's replanning rate; default 10)")
+      ->check(stereo_fusion::cli::positiveNumber());
+  app->add_option("--unpause", o->unpause,
+                  "start a paused rosbag player through this std_srvs/SetBool service when ready,\n"
+                  "so the window measured is the replay (e.g. /player/pause_playback)")
+      ->type_name("SERVICE");
+  app->add_option("--json", o->json, "also write the results as JSON")->type_name("FILE");
 }
 
 /// The grid a costmap's static layer holds, and the bytes that reached it.
@@ -153,14 +158,12 @@ double percentile(std::vector<double> v, double q) {
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "stereo_fusion_planning_probe", ros::init_options::AnonymousName);
+  // ros::init() has taken the ROS arguments (name:=value remappings) out of argv.
   Options opt;
-  if (!parse(argc, argv, &opt)) {
-    std::fprintf(stderr,
-                 "usage: stereo_fusion_planning_probe --duration-s S [--sizes \"1 1000 100000\"] "
-                 "[--node /stereo_fusion] [--box \"x0 y0 z0 x1 y1 z1\"] [--calls-hz 10] "
-                 "[--unpause SERVICE] [--json FILE]\n");
-    return 2;
-  }
+  CLI::App app("", "stereo_fusion_planning_probe");
+  addProbeArguments(&app, &opt);
+  if (const auto exit_code = stereo_fusion::cli::parseOrExitCode(app, argc, argv))
+    return *exit_code;
   ros::NodeHandle nh;
   GridCounter grid;
   ros::Subscriber full =

@@ -1,8 +1,9 @@
 // store_compare: a like-for-like benchmark of three embedded key-value stores (LMDB, RocksDB,
 // SQLite) for paging TSDF map blocks out to disk and back. Standalone C++17, no ROS.
 //
-//   g++ -std=c++17 -O2 store_compare.cpp -o store_compare -llmdb -lrocksdb -lsqlite3 -lzstd
+//   g++ -std=c++17 -O2 -I.. store_compare.cpp -o store_compare -llmdb -lrocksdb -lsqlite3 -lzstd
 //   ./store_compare [--blocks N] [--crash-runs R] [--configs a,b,...] [--no-crash] DIR
+// (-I..: tools/cli/, the tools' command-line helpers on CLI11, Debian's libcli11-dev.)
 //
 // Every configuration runs in a fresh process (exec of itself), so VmHWM, RssFile, RssAnon and the
 // thread count are that store's alone. Results go to DIR/results.txt and, as markdown tables, to
@@ -44,6 +45,7 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 #include <rocksdb/cache.h>
@@ -52,6 +54,9 @@
 #include <rocksdb/options.h>
 #include <rocksdb/table.h>
 #include <rocksdb/write_batch.h>
+
+#include "cli/CommandLine.h"
+#include "cli/NumberChecks.h"
 
 namespace {
 
@@ -1189,71 +1194,77 @@ void printTables(const std::string& path) {
   }
 }
 
-std::vector<std::string> split(const std::string& s) {
-  std::vector<std::string> out;
-  std::string cur;
-  for (char ch : s) {
-    if (ch == ',') {
-      if (!cur.empty()) out.push_back(cur);
-      cur.clear();
-    } else {
-      cur += ch;
-    }
-  }
-  if (!cur.empty()) out.push_back(cur);
-  return out;
+/// The command line: the comparison, or one of the runs it execs itself for (spawnSelf()).
+struct Arguments {
+  int blocks = 200000, crash_runs = 20;
+  bool crash = true;
+  // store:zstd-level pairs; the default is every store at levels 0, 1 and 3 plus the RSS
+  // variants of LMDB and RocksDB at level 1.
+  std::vector<std::string> configs = {
+      "sqlite-normal:0", "sqlite-normal:1", "sqlite-normal:3",  "sqlite-full:0", "sqlite-full:1",
+      "sqlite-full:3",   "lmdb:0",          "lmdb:1",           "lmdb:3",        "rocksdb:0",
+      "rocksdb:1",       "rocksdb:3",       "lmdb-nordahead:1", "lmdb-madv:1",   "rocksdb-small:1"};
+  // Also available: lmdb-nordahead-madv (both), and SQLite schema variants sqlite-normal-8k,
+  // sqlite-normal-16k (page_size) and sqlite-normal-rowid (a rowid table with the key as a
+  // separately indexed BLOB PRIMARY KEY, so values up to ~4 KB stay in the table's leaf pages).
+  std::vector<std::string> crash_configs = {"sqlite-normal:1", "sqlite-full:1", "lmdb:1",
+                                            "rocksdb:1"};
+  std::string dir;
+  // The runs' own arguments: store, zstd level, folder, blocks or runs (or the pipe's fd), results.
+  std::tuple<std::string, int, std::string, int, std::string> one, crash_run;
+  std::tuple<std::string, int, std::string, int> crash_child;
+};
+
+void addArguments(CLI::App* app, Arguments* a) {
+  app->description(
+      "LMDB vs RocksDB vs SQLite for paging TSDF map blocks (tools/bench/store_compare.md).\n"
+      "Every configuration runs in a fresh process; results go to DIR/results.txt and, as\n"
+      "markdown tables, to stdout.");
+  app->add_option("dir", a->dir, "where the stores and results.txt are written (required)");
+  app->add_option("--blocks", a->blocks,
+                  "map blocks, a positive multiple of 10000 (default 200000)");
+  app->add_option("--crash-runs", a->crash_runs, "kills per store in the crash test (default 20)")
+      ->check(stereo_fusion::cli::positiveNumber());
+  app->add_option("--configs", a->configs, "store:zstd-level pairs to measure (default: all)")
+      ->delimiter(',')
+      ->type_name("s:z,...");
+  app->add_option("--crash-configs", a->crash_configs,
+                  "store:zstd-level pairs to crash-test (default: one of each store at level 1)")
+      ->delimiter(',')
+      ->type_name("s:z,...");
+  app->add_flag_callback(
+      "--no-crash", [a] { a->crash = false; }, "skip the crash test");
+  // The runs the comparison execs (hidden): each stands for the whole comparison.
+  CLI::Option* one = app->add_option("--one", a->one)->group("");
+  CLI::Option* crash = app->add_option("--crash", a->crash_run)->group("")->excludes(one);
+  CLI::Option* child =
+      app->add_option("--crash-child", a->crash_child)->group("")->excludes(one)->excludes(crash);
+  app->callback([a, one, crash, child] {
+    if (one->count() + crash->count() + child->count() == 0 && a->dir.empty())
+      throw CLI::RequiredError("dir");
+  });
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::vector<std::string> a(argv + 1, argv + argc);
-  if (a.size() == 5 && a[0] == "--crash-child")
-    return crashChild(a[1], std::atoi(a[2].c_str()), a[3], std::atoi(a[4].c_str()));
-  if (a.size() == 6 && a[0] == "--one")
-    return runOne(a[1], std::atoi(a[2].c_str()), a[3], std::atoi(a[4].c_str()), a[5]);
-  if (a.size() == 6 && a[0] == "--crash")
-    return runCrash(a[1], std::atoi(a[2].c_str()), a[3], std::atoi(a[4].c_str()), a[5]);
-
-  int blocks = 200000, crash_runs = 20;
-  bool crash = true;
-  // store:zstd-level pairs; the default is every store at levels 0, 1 and 3 plus the RSS
-  // variants of LMDB and RocksDB at level 1.
-  std::string configs =
-      "sqlite-normal:0,sqlite-normal:1,sqlite-normal:3,sqlite-full:0,sqlite-full:1,sqlite-full:3,"
-      "lmdb:0,lmdb:1,lmdb:3,rocksdb:0,rocksdb:1,rocksdb:3,lmdb-nordahead:1,lmdb-madv:1,"
-      "rocksdb-small:1";
-  // Also available: lmdb-nordahead-madv (both), and SQLite schema variants sqlite-normal-8k,
-  // sqlite-normal-16k (page_size) and sqlite-normal-rowid (a rowid table with the key as a
-  // separately indexed BLOB PRIMARY KEY, so values up to ~4 KB stay in the table's leaf pages).
-  std::string crash_configs = "sqlite-normal:1,sqlite-full:1,lmdb:1,rocksdb:1";
-  std::string dir;
-  for (size_t i = 0; i < a.size(); ++i) {
-    if (a[i] == "--blocks" && i + 1 < a.size())
-      blocks = std::atoi(a[++i].c_str());
-    else if (a[i] == "--crash-runs" && i + 1 < a.size())
-      crash_runs = std::atoi(a[++i].c_str());
-    else if (a[i] == "--configs" && i + 1 < a.size())
-      configs = a[++i];
-    else if (a[i] == "--crash-configs" && i + 1 < a.size())
-      crash_configs = a[++i];
-    else if (a[i] == "--no-crash")
-      crash = false;
-    else if (a[i][0] == '-')
-      die("unknown option " + a[i]);
-    else
-      dir = a[i];
-  }
-  if (dir.empty())
-    die("usage: store_compare [--blocks N] [--crash-runs R] [--configs s:z,...] "
-        "[--crash-configs s:z,...] [--no-crash] DIR");
+  Arguments a;
+  CLI::App app("", "store_compare");
+  addArguments(&app, &a);
+  if (const auto exit_code = stereo_fusion::cli::parseOrExitCode(app, argc, argv))
+    return *exit_code;
+  if (app.count("--crash-child")) return std::apply(crashChild, a.crash_child);
+  if (app.count("--one")) return std::apply(runOne, a.one);
+  if (app.count("--crash")) return std::apply(runCrash, a.crash_run);
+  const int blocks = a.blocks, crash_runs = a.crash_runs;
+  const std::string& dir = a.dir;
   Grid check_grid(blocks);
   makeDir(dir);
   const std::string results = dir + "/results.txt";
   std::remove(results.c_str());
   int rc = 0;
   auto t0 = Clock::now();
-  for (auto& c : split(configs)) {
+  for (const std::string& c : a.configs) {
     auto colon = c.find(':');
     const std::string kind = c.substr(0, colon);
     const std::string z = colon == std::string::npos ? "0" : c.substr(colon + 1);
@@ -1263,8 +1274,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "[%6.1f s] %s zstd %s done in %.1f s\n", secondsSince(t0), kind.c_str(),
                  z.c_str(), secondsSince(tc));
   }
-  if (crash)
-    for (auto& c : split(crash_configs)) {
+  if (a.crash)
+    for (const std::string& c : a.crash_configs) {
       auto colon = c.find(':');
       const std::string kind = c.substr(0, colon);
       const std::string z = colon == std::string::npos ? "0" : c.substr(colon + 1);

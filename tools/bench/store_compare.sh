@@ -8,7 +8,8 @@
 # removed afterwards),
 # TMPFS_RUN=0 to skip the second, shorter run on /dev/shm (zstd 1 only, no crash test),
 # CONFIGS / CRASH_CONFIGS to pass --configs / --crash-configs through.
-# Installs liblmdb-dev, librocksdb-dev, libsqlite3-dev and libzstd-dev with apt-get when missing.
+# Installs liblmdb-dev, librocksdb-dev, libsqlite3-dev, libzstd-dev and libcli11-dev (the command
+# line) with apt-get when missing.
 # Results: markdown tables on stdout (and results.txt in each run's folder while it runs).
 set -euo pipefail
 
@@ -17,7 +18,7 @@ blocks="${BLOCKS:-200000}"
 crash_runs="${CRASH_RUNS:-20}"
 
 missing=()
-for p in liblmdb-dev librocksdb-dev libsqlite3-dev libzstd-dev g++; do
+for p in liblmdb-dev librocksdb-dev libsqlite3-dev libzstd-dev libcli11-dev g++; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
 if ((${#missing[@]})); then
@@ -37,7 +38,7 @@ else
   build_dir="$(mktemp -d /tmp/store_compare_build.XXXXXX)"
   cleanup+=("$build_dir")
 fi
-g++ -std=c++17 -O2 -Wall -Wextra "$here/store_compare.cpp" -o "$build_dir/store_compare" \
+g++ -std=c++17 -O2 -Wall -Wextra -I"$here/.." "$here/store_compare.cpp" -o "$build_dir/store_compare" \
   -llmdb -lrocksdb -lsqlite3 -lzstd
 
 if [ $# -ge 1 ]; then

@@ -5,6 +5,10 @@
 #include <string>
 #include <vector>
 
+namespace CLI {
+class App;
+}
+
 namespace stereo_fusion::eval {
 
 /// Everything the command line can set, with the defaults documented in the usage text.
@@ -26,16 +30,16 @@ struct EvaluateArguments {
   int threads = 0;
   /// Ground-truth mode: score accuracy against only the triangles the frames saw (walls solid).
   bool accuracy_against_seen = false;
-  bool help = false;
 };
 
+/// Adds stereo_fusion_evaluate's arguments and their usage text to `app`, parsed into `parsed`
+/// (which must outlive the parse). Malformed or out-of-range values, unknown options and a
+/// wrong number of positional arguments end the parse with a CLI11 error (exit code 2).
+void addEvaluateArguments(CLI::App* app, EvaluateArguments* parsed);
+
 /// Parses argv[1..]. Returns false with a one-line reason for unknown options, missing or
-/// malformed values and a wrong number of positional arguments (exit code 2 territory).
-/// `--help` sets `help` and succeeds.
+/// malformed values and a wrong number of positional arguments.
 bool parseEvaluateArguments(const std::vector<std::string>& args, EvaluateArguments* parsed,
                             std::string* error);
-
-/// The usage text printed for --help and after an argument error.
-std::string evaluateUsage();
 
 }  // namespace stereo_fusion::eval

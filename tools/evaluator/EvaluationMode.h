@@ -17,7 +17,7 @@ struct EvaluationMode {
 /// Why no mode could be chosen, to pick the exit code.
 enum class ModeError { kNone, kUnreadable, kBadArguments };
 
-/// Chooses the mode from the second argument (see evaluateUsage()): a .ply → ground truth; a
+/// Chooses the mode from the second argument (see --help): a .ply → ground truth; a
 /// folder with gt_mesh.ply → ground truth with visibility, unless --held-out is given; any other
 /// folder → held-out. Refuses options the chosen mode cannot honour (--held-out with a .ply,
 /// --error-ply in held-out mode) before any work is done.

@@ -1,5 +1,6 @@
 // stereo_fusion_evaluate_esdf OUT/esdf.ply [SEQ | gt_mesh.ply] [--max-distance-m D]
 //                             [--grid-band ZMIN,ZMAX] [--before EARLIER/esdf.ply] [--json FILE]
+// (--help describes each).
 //
 // How exact an ESDF is: every free cell's distance against (1) the brute force — the distance
 // from its centre to the nearest occupied cell centre of the same file, by an exact k-d tree
@@ -27,6 +28,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cli/CommandLine.h"
+#include "cli/NumberChecks.h"
 #include "evaluator/EsdfAccuracy.h"
 #include "evaluator/EsdfDelta.h"
 #include "evaluator/OccupancyMapFile.h"
@@ -41,13 +44,49 @@ using namespace stereo_fusion;
 
 namespace {
 
-int usage(const char* why) {
-  std::fprintf(stderr,
-               "%s\nusage: stereo_fusion_evaluate_esdf OUT/esdf.ply [SEQ-FOLDER | gt_mesh.ply] "
-               "[--max-distance-m D (default: the file's)] [--grid-band ZMIN,ZMAX (default: "
-               "the run's stats.json, else 0.1,1.5)] [--before EARLIER/esdf.ply] [--json FILE]\n",
-               why);
-  return 2;
+/// The command line.
+struct EsdfArguments {
+  std::string esdf_path;        ///< OUT/esdf.ply
+  std::string reference;        ///< a sequence folder (its gt_mesh.ply) or a mesh; empty: none
+  double max_distance_m = 0.0;  ///< 0: the largest |distance| in the file
+  std::pair<double, double> grid_band_m{0.0, 0.0};
+  bool grid_band_given = false;
+  std::string before_path;  ///< an earlier run's esdf.ply; empty: none
+  std::string json_path;    ///< empty: no JSON file
+};
+
+void addEsdfArguments(CLI::App* app, EsdfArguments* args) {
+  app->description(
+      "How exact an ESDF is: every free cell's distance against the brute force (the nearest\n"
+      "occupied cell of the same file, PCL's exact k-d tree) and, with a ground-truth mesh,\n"
+      "against the true surface, by band of the reference distance; with a ground truth also\n"
+      "the planning report (solid truth, occupancy.pgm beside esdf.ply) and, with --before,\n"
+      "the free cells that read worse than in an earlier run of the same frames.");
+  app->footer("Exit codes: 0 done, 1 unreadable input, 2 bad arguments.");
+  app->add_option("esdf", args->esdf_path, "the fuser's OUT/esdf.ply")->required();
+  app->add_option("reference", args->reference,
+                  "SEQ-FOLDER (its gt_mesh.ply) or gt_mesh.ply: the ground truth (optional)");
+  app->add_option("--max-distance-m", args->max_distance_m,
+                  "the ESDF's cap in metres (the run's esdf_max_distance_m): the last band ends\n"
+                  "there and reference distances are clamped to it (default: the largest\n"
+                  "|distance| in the file)")
+      ->check(cli::positiveNumber());
+  CLI::Option* band =
+      app->add_option("--grid-band", args->grid_band_m,
+                      "the occupancy grid's height band in metres, ZMIN < ZMAX (default: the\n"
+                      "run's stats.json, else 0.1,1.5)")
+          ->delimiter(',')
+          ->type_name("ZMIN,ZMAX");
+  app->add_option("--before", args->before_path,
+                  "an earlier run's esdf.ply of the same frames: the free cells both call free,\n"
+                  "scored against the truth, and those that read worse by over half a cell")
+      ->type_name("EARLIER/esdf.ply");
+  app->add_option("--json", args->json_path, "also write the results as JSON")->type_name("FILE");
+  app->callback([args, band] {
+    args->grid_band_given = band->count() > 0;
+    if (args->grid_band_given && !(args->grid_band_m.first < args->grid_band_m.second))
+      throw CLI::ValidationError("--grid-band", "expected ZMIN,ZMAX with ZMIN < ZMAX");
+  });
 }
 
 /// The cells of an esdf.ply (x y z distance, as io/PlanningExport writes it), via PCL's reader.
@@ -160,21 +199,19 @@ nlohmann::ordered_json toJson(const eval::OccupancyScore& s, const std::string& 
 
 /// The occupancy grid's height band: --grid-band, else the run's own (the config in the
 /// stats.json beside esdf.ply, as the fuser writes it), else the mapper's defaults (0.1, 1.5 m,
-/// already in `min_z_m`, `max_z_m`). Sets `source`; false for a malformed --grid-band.
-bool gridBand(const std::string& option, const fs::path& run_dir, double* min_z_m, double* max_z_m,
+/// already in `min_z_m`, `max_z_m`). Sets `source`.
+void gridBand(const EsdfArguments& args, const fs::path& run_dir, double* min_z_m, double* max_z_m,
               std::string* source) {
-  if (!option.empty()) {
+  if (args.grid_band_given) {
     *source = "--grid-band";
-    char comma = 0;
-    std::istringstream in(option);
-    return (in >> *min_z_m >> comma >> *max_z_m) && comma == ',' && in.peek() == EOF &&
-           *min_z_m < *max_z_m;
+    *min_z_m = args.grid_band_m.first, *max_z_m = args.grid_band_m.second;
+    return;
   }
   *source = "defaults";
   std::ifstream stats(run_dir / "stats.json");
-  if (!stats) return true;
+  if (!stats) return;
   const nlohmann::json j = nlohmann::json::parse(stats, nullptr, false);
-  if (j.is_discarded() || !j.contains("config") || !j["config"].is_object()) return true;
+  if (j.is_discarded() || !j.contains("config") || !j["config"].is_object()) return;
   // The fuser writes every parameter as text (getMapperParameter).
   const auto number = [&](const char* key, double* value) {
     const nlohmann::json v = j["config"].value(key, nlohmann::json());
@@ -188,40 +225,17 @@ bool gridBand(const std::string& option, const fs::path& run_dir, double* min_z_
     *min_z_m = lo, *max_z_m = hi;
     *source = "stats.json";
   }
-  return true;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  std::string esdf_path, reference, json_path, grid_band, before_path;
-  double max_distance_m = 0.0;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--max-distance-m" && i + 1 < argc) {
-      max_distance_m = std::atof(argv[++i]);
-    } else if (a == "--grid-band" && i + 1 < argc) {
-      grid_band = argv[++i];
-    } else if (a == "--json" && i + 1 < argc) {
-      json_path = argv[++i];
-    } else if (a == "--before" && i + 1 < argc) {
-      before_path = argv[++i];
-    } else if (a == "-h" || a == "--help") {
-      return usage("");
-    } else if (esdf_path.empty()) {
-      esdf_path = a;
-    } else if (reference.empty()) {
-      reference = a;
-    } else {
-      return usage(("unexpected argument " + a).c_str());
-    }
-  }
-  if (esdf_path.empty()) return usage("no esdf.ply given");
+/// The evaluation (see the top of the file); returns the exit code.
+int evaluateEsdf(const EsdfArguments& args) {
+  const std::string& esdf_path = args.esdf_path;
+  const std::string& reference = args.reference;
+  double max_distance_m = args.max_distance_m;  // 0 until the file's largest is read
   const fs::path run_dir = fs::path(esdf_path).parent_path();
   eval::OccupancyScoreOptions grid_options;
   std::string band_from;
-  if (!gridBand(grid_band, run_dir, &grid_options.min_z_m, &grid_options.max_z_m, &band_from))
-    return usage(("--grid-band " + grid_band + ": expected ZMIN,ZMAX with ZMIN < ZMAX").c_str());
+  gridBand(args, run_dir, &grid_options.min_z_m, &grid_options.max_z_m, &band_from);
   EsdfCells cells;
   std::string error;
   if (!readEsdf(esdf_path, &cells, &max_distance_m, &error)) {
@@ -308,6 +322,7 @@ int main(int argc, char** argv) {
     }
     // (2b) Against an earlier run of the same frames: the free cells both call free, each
     // scored against the truth, and those that read worse than before by over half a cell.
+    const std::string& before_path = args.before_path;
     if (!before_path.empty() && std::isfinite(cell_m)) {
       EsdfCells before;
       double before_max_m = 0.0;
@@ -342,6 +357,16 @@ int main(int argc, char** argv) {
       }
     }
   }
-  if (!json_path.empty()) std::ofstream(json_path) << json.dump(2) << "\n";
+  if (!args.json_path.empty()) std::ofstream(args.json_path) << json.dump(2) << "\n";
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  EsdfArguments args;
+  CLI::App app("", "stereo_fusion_evaluate_esdf");
+  addEsdfArguments(&app, &args);
+  if (const auto exit_code = cli::parseOrExitCode(app, argc, argv)) return *exit_code;
+  return evaluateEsdf(args);
 }

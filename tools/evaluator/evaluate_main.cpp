@@ -1,5 +1,5 @@
 // stereo_fusion_evaluate: scores a reconstructed mesh against a ground-truth mesh, or against
-// held-out frames of a sequence without ground truth. See evaluateUsage() for the interface.
+// held-out frames of a sequence without ground truth; --help for the interface.
 
 #include <chrono>
 #include <cstdio>
@@ -9,6 +9,7 @@
 #include <optional>
 #include <sstream>
 
+#include "cli/CommandLine.h"
 #include "evaluator/ErrorColouredMesh.h"
 #include "evaluator/EvaluateArguments.h"
 #include "evaluator/EvaluationMode.h"
@@ -27,7 +28,7 @@ namespace {
 
 constexpr int kExitOk = 0;
 constexpr int kExitUnreadable = 1;
-constexpr int kExitBadArguments = 2;
+constexpr int kExitBadArguments = cli::kExitBadArguments;
 /// A triangle counts as seen when its centroid lies within this of the truth's own depth image.
 constexpr double kSeenToleranceM = 0.02;
 
@@ -229,21 +230,15 @@ void run(const EvaluateArguments& args) {
 
 int main(int argc, char** argv) {
   EvaluateArguments args;
-  std::string error;
-  if (!parseEvaluateArguments(std::vector<std::string>(argv + 1, argv + argc), &args, &error)) {
-    std::fprintf(stderr, "error: %s\n\n%s", error.c_str(), evaluateUsage().c_str());
-    return kExitBadArguments;
-  }
-  if (args.help) {
-    std::cout << evaluateUsage();
-    return kExitOk;
-  }
+  CLI::App app("", "stereo_fusion_evaluate");
+  addEvaluateArguments(&app, &args);
+  if (const auto exit_code = cli::parseOrExitCode(app, argc, argv)) return *exit_code;
   try {
     run(args);
   } catch (const Failure& failure) {
     std::fprintf(stderr, "error: %s\n", failure.message.c_str());
     if (failure.exit_code == kExitBadArguments)
-      std::fprintf(stderr, "\n%s", evaluateUsage().c_str());
+      std::fprintf(stderr, "Run with --help for more information.\n");
     return failure.exit_code;
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr, "error: out of memory (try fewer --samples)\n");

@@ -35,10 +35,11 @@ set(EVALUATOR_SOURCES
 
 add_library(stereo_fusion_evaluator STATIC ${EVALUATOR_SOURCES})
 target_include_directories(stereo_fusion_evaluator PUBLIC ${PROJECT_SOURCE_DIR}/tools)
-target_link_libraries(stereo_fusion_evaluator PUBLIC stereo_fusion_core PRIVATE nlohmann_json::nlohmann_json)
+target_link_libraries(stereo_fusion_evaluator PUBLIC stereo_fusion_core PRIVATE nlohmann_json::nlohmann_json
+                                                                           stereo_fusion_cli)
 
 add_executable(stereo_fusion_evaluate ${EVALUATOR_DIR}/evaluate_main.cpp)
-target_link_libraries(stereo_fusion_evaluate stereo_fusion_evaluator stereo_fusion_readers)
+target_link_libraries(stereo_fusion_evaluate stereo_fusion_evaluator stereo_fusion_readers stereo_fusion_cli)
 
 # stereo_fusion_evaluate_esdf: an esdf.ply against the brute force (PCL's reader and exact k-d
 # tree) and a ground-truth mesh.
@@ -46,7 +47,7 @@ find_package(PCL REQUIRED COMPONENTS common io kdtree)
 add_executable(stereo_fusion_evaluate_esdf ${EVALUATOR_DIR}/esdf_main.cpp)
 target_include_directories(stereo_fusion_evaluate_esdf SYSTEM PRIVATE ${PCL_INCLUDE_DIRS})
 target_link_libraries(stereo_fusion_evaluate_esdf stereo_fusion_evaluator stereo_fusion_readers ${PCL_LIBRARIES}
-                      nlohmann_json::nlohmann_json)
+                      nlohmann_json::nlohmann_json stereo_fusion_cli)
 
 if(CATKIN_ENABLE_TESTING)
   target_link_libraries(stereo_fusion_tool_tests stereo_fusion_evaluator)

@@ -117,18 +117,6 @@ struct FuseReport {
   } planning;
 };
 
-/// Parses `fuse <input> <out-dir> [--config FILE] [--set key=value ...] [--frames N] [--mesh-every
-/// N]
-/// [--esdf-every N] [--time-planning] [--quiet]
-/// [--disparity-topic T] [--image-topic T] [--camera-info-topic T] [--world-frame F]
-/// [--load-map FILE] [--save-map FILE] [--trajectory FILE] [--frame-log FILE]`; with --load-map the
-/// input may be left out
-/// (`fuse <out-dir> --load-map FILE` meshes a saved map).
-/// --config is applied before every --set, whatever their order. False with a message (which
-/// names the parameter or flag) on any error: unknown flags, unknown keys, out-of-range values.
-bool parseFuseArguments(const std::vector<std::string>& args, FuseOptions* options,
-                        std::string* error);
-
 /// Runs the reconstruction. Frames that cannot be read or are rejected are skipped and
 /// counted by reason. Returns false (with a message) only when nothing can be done: a bad
 /// folder, an unwritable output directory.

@@ -4,20 +4,19 @@
 
 #include <unistd.h>
 
-#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <functional>
 #include <fstream>
 #include <iomanip>
 #include <future>
 #include <iostream>
-#include <map>
 #include <string>
 
+#include "cli/CommandLine.h"
 #include "simulator/DatasetWriter.h"
 #include "simulator/SceneLibrary.h"
+#include "simulator/SimulateArguments.h"
 #include "simulator/StereoRenderer.h"
 #include "simulator/Trajectory.h"
 #include "stereo_fusion/mesh/SubMesh.h"
@@ -27,266 +26,6 @@ using namespace stereo_fusion;
 using namespace stereo_fusion::sim;
 
 namespace {
-
-/// Every command-line setting with its default.
-struct Options {
-  std::string preset = "room";
-  std::string trajectory = "walkthrough";
-  int frames = 100;
-  bool frames_given = false;  ///< --frames was passed (else the building's walkthrough: one tour)
-  int width_px = 640;
-  int height_px = 480;
-  double fx_px = 525.0;
-  double fy_px = -1.0;  ///< < 0: same as fx
-  double baseline_m = 0.1;
-  std::string disparity = "sgbm";
-  double noise_px = 0.3;
-  double outlier_fraction = 0.01;
-  double matcher_noise_px = 0.0;
-  double mismatch_fraction = 0.0;
-  int mismatch_views = 5;
-  uint32_t seed = 0;
-  double rate_hz = 10.0;
-  std::string bag;  ///< also write the frames as a rosbag here (empty: no bag)
-  /// disparity (matched) | pair (left/right raw images only) | rectified-pair (rectified images
-  /// only)
-  std::string bag_content = "disparity";
-  /// The bag's /tf parent frame (the nodelet's world_frame; default BagTopics', REP 105's map).
-  std::string bag_world_frame = BagTopics{}.world_frame;
-  double gt_max_edge_m = 0.03;
-  double revolutions = 1.0;
-  std::string dynamic = "none";
-  double drift_yaw_deg = 0.0;  ///< --drift: odometry yaw error at the last frame
-  double drift_m = 0.0;        ///< --drift: odometry position error at the last frame
-  int keyframe_every = 5;
-  SgbmParams sgbm;
-  std::string out;
-};
-
-const char* const kUsage = R"(Usage: stereo_fusion_simulate --out DIR [options]
-
-Renders a rectified stereo sequence of an analytic scene and writes it as a dataset folder:
-calibration.yaml, poses.txt, disparity/ color/ right/ NNNNNN.png, gt_mesh.ply.
-
-  --preset room|tabletop|hall|building
-                                  scene (default room; hall: far-range, walls 3–4.5 m away;
-                                  building: six furnished rooms along a corridor, a map larger
-                                  than memory caps for benches of paging)
-  --trajectory orbit|walkthrough  camera path (default walkthrough; building: the walkthrough is
-                                  a tour through every room, ending back in the first)
-  --frames N                      number of frames (default 100; building's walkthrough: one
-                                  whole tour, ~1000 frames; fewer: its start only)
-  --width W --height H            image size in pixels (default 640 x 480)
-  --fx F                          focal length in pixels (default 525)
-  --fy F                          vertical focal length (default: fx); cx, cy = image centre
-  --baseline B                    stereo baseline in metres (default 0.1)
-  --disparity exact|noisy|sgbm    disparity source (default sgbm)
-  --noise-px S                    noisy: Gaussian sigma in pixels (default 0.3)
-  --outlier-fraction P            noisy: share of outliers in [0, 1] (default 0.01)
-  --matcher-noise-px S            any mode: Gaussian sigma added per pixel and frame (default 0)
-  --mismatch-fraction P           any mode: share in [0, 1] of 5 cm surface patches where the
-                                  matcher errs by the same 1-3 px in every view of a window of
-                                  neighbouring frames (default 0); real SGBM on far walls:
-                                  --matcher-noise-px 0.2 --mismatch-fraction 0.03
-  --mismatch-views K              frames per window of equal mismatches (default 5; 0: every
-                                  frame of the sequence errs alike)
-  --sgbm-num-disparities N        sgbm: search range, a multiple of 16 (default 128)
-  --sgbm-block-size N             sgbm: odd matching window size (default 5)
-  --seed K                        scene, path and noise seed, 0..4294967295 (default 0)
-  --revolutions R                 orbit: laps over the whole sequence (default 1)
-  --dynamic none|person|moved     objects that change during the sequence (default none):
-                                  person: a person (cylinder 0.5 m wide, 1.7 m tall) stands at
-                                  the orbit's focus during the first half of the frames only;
-                                  moved: a box stands beside the focus in the first half and
-                                  on its other side in the second. gt_mesh.ply is the scene as
-                                  it ends; dynamic.txt lists where objects stood that left
-                                  (the evaluator reports the surface left there as ghost)
-  --drift YAW_DEG,METRES          poses.txt (and the bag's /tf) drift like odometry: by the last
-                                  frame YAW_DEG of yaw about the vertical through the first
-                                  camera and METRES of horizontal offset, growing linearly; the
-                                  images stay true. Also writes poses_true.txt and
-                                  trajectory.txt, a SLAM's corrected keyframe poses (the true
-                                  poses of every --keyframe-every-th frame, TUM lines); a bag
-                                  gets that trajectory as nav_msgs/Path on /trajectory twice,
-                                  after the middle frame (keyframes so far) and after the last
-  --keyframe-every N              keyframe spacing of trajectory.txt (default 5)
-  --rate-hz R                     frame rate for the timestamps (default 10)
-  --gt-max-edge M                 ground-truth mesh grid step in metres (default 0.03)
-  --out DIR                       output folder (created; an old dataset there is replaced)
-  --bag FILE                      also write a rosbag: DisparityImage, Image, CameraInfo on
-                                  the nodelet's default topics and /tf (map -> left_optical);
-                                  stamps = timestamps + 1 s (ROS time 0 means "latest" to tf)
-  --bag-world-frame F             the bag's tf parent frame and the trajectory's frame (default
-                                  map, the nodelet's default world_frame; e.g. odom)
-  --bag-content disparity|pair|rectified-pair
-                                  disparity (default): what the nodelet subscribes to;
-                                  pair: what a stereo camera driver publishes, for
-                                  launch/stereo_pipeline.launch: /stereo/{left,right}/image_raw
-                                  (rgb8, already rectified), both camera_info, /tf; no disparity;
-                                  rectified-pair: the same as a rectifying driver publishes it,
-                                  for stereo_pipeline.launch rectified:=true:
-                                  /stereo/{left,right}/image_rect (mono8),
-                                  /stereo/left/image_rect_color (rgb8), both camera_info, /tf
-  --help                          this text
-
-Exit codes: 0 done, 1 generation or write failure, 2 bad arguments.
-)";
-
-/// Thrown for a bad command line; main() prints it and exits with 2.
-struct UsageError {
-  std::string message;
-};
-
-/// "100000", "0.001": range bounds as a person would write them.
-std::string shortNumber(double value) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof(buffer), "%.10g", value);
-  return buffer;
-}
-
-double parseDouble(const std::string& flag, const std::string& text, double lo, double hi,
-                   bool lo_open) {
-  double value = 0;
-  const auto r = std::from_chars(text.data(), text.data() + text.size(), value);
-  if (r.ec != std::errc() || r.ptr != text.data() + text.size() || !std::isfinite(value))
-    throw UsageError{flag + ": expected a number, got '" + text + "'"};
-  if ((lo_open ? value <= lo : value < lo) || value > hi)
-    throw UsageError{flag + ": " + text + " is out of range " + (lo_open ? "(" : "[") +
-                     shortNumber(lo) + ", " + shortNumber(hi) + "]"};
-  return value;
-}
-
-long long parseInteger(const std::string& flag, const std::string& text, long long lo,
-                       long long hi) {
-  long long value = 0;
-  const auto r = std::from_chars(text.data(), text.data() + text.size(), value);
-  if (r.ec != std::errc() || r.ptr != text.data() + text.size())
-    throw UsageError{flag + ": expected an integer, got '" + text + "'"};
-  if (value < lo || value > hi)
-    throw UsageError{flag + ": " + text + " is out of range [" + std::to_string(lo) + ", " +
-                     std::to_string(hi) + "]"};
-  return value;
-}
-
-std::string parseChoice(const std::string& flag, const std::string& text,
-                        const std::vector<std::string>& choices) {
-  std::string list;
-  for (const auto& c : choices) {
-    if (c == text) return text;
-    list += (list.empty() ? "" : "|") + c;
-  }
-  throw UsageError{flag + ": expected " + list + ", got '" + text + "'"};
-}
-
-/// Parses argv into `o`; returns false when --help was given.
-bool parseArguments(int argc, char** argv, Options* o) {
-  using Setter = std::function<void(const std::string& flag, const std::string& value)>;
-  const std::map<std::string, Setter> setters = {
-      {"--preset", [&](auto& f, auto& v) { o->preset = parseChoice(f, v, presetNames()); }},
-      {"--trajectory",
-       [&](auto& f, auto& v) { o->trajectory = parseChoice(f, v, trajectoryNames()); }},
-      {"--frames",
-       [&](auto& f, auto& v) {
-         o->frames = static_cast<int>(parseInteger(f, v, 1, 1000000));
-         o->frames_given = true;
-       }},
-      {"--width",
-       [&](auto& f, auto& v) { o->width_px = static_cast<int>(parseInteger(f, v, 16, 8192)); }},
-      {"--height",
-       [&](auto& f, auto& v) { o->height_px = static_cast<int>(parseInteger(f, v, 16, 8192)); }},
-      {"--fx", [&](auto& f, auto& v) { o->fx_px = parseDouble(f, v, 0, 1e5, true); }},
-      {"--fy", [&](auto& f, auto& v) { o->fy_px = parseDouble(f, v, 0, 1e5, true); }},
-      {"--baseline", [&](auto& f, auto& v) { o->baseline_m = parseDouble(f, v, 0, 10, true); }},
-      {"--disparity",
-       [&](auto& f, auto& v) {
-         o->disparity = parseChoice(f, v, {"exact", "noisy", "sgbm"});
-       }},
-      {"--noise-px", [&](auto& f, auto& v) { o->noise_px = parseDouble(f, v, 0, 100, false); }},
-      {"--outlier-fraction",
-       [&](auto& f, auto& v) { o->outlier_fraction = parseDouble(f, v, 0, 1, false); }},
-      {"--matcher-noise-px",
-       [&](auto& f, auto& v) { o->matcher_noise_px = parseDouble(f, v, 0, 100, false); }},
-      {"--mismatch-fraction",
-       [&](auto& f, auto& v) { o->mismatch_fraction = parseDouble(f, v, 0, 1, false); }},
-      {"--mismatch-views",
-       [&](auto& f, auto& v) {
-         o->mismatch_views = static_cast<int>(parseInteger(f, v, 0, 1000000));
-       }},
-      {"--sgbm-num-disparities",
-       [&](auto& f, auto& v) {
-         o->sgbm.num_disparities = static_cast<int>(parseInteger(f, v, 16, 1024));
-         if (o->sgbm.num_disparities % 16 != 0) throw UsageError{f + ": must be a multiple of 16"};
-       }},
-      {"--sgbm-block-size",
-       [&](auto& f, auto& v) {
-         o->sgbm.block_size = static_cast<int>(parseInteger(f, v, 1, 31));
-         if (o->sgbm.block_size % 2 == 0) throw UsageError{f + ": must be odd"};
-       }},
-      {"--seed",
-       [&](auto& f, auto& v) {
-         o->seed = static_cast<uint32_t>(parseInteger(f, v, 0, 4294967295LL));
-       }},
-      {"--revolutions",
-       [&](auto& f, auto& v) { o->revolutions = parseDouble(f, v, 0, 100, true); }},
-      {"--dynamic",
-       [&](auto& f, auto& v) {
-         o->dynamic = parseChoice(f, v, {"none", "person", "moved"});
-       }},
-      {"--drift",
-       [&](auto& f, auto& v) {
-         const size_t comma = v.find(',');
-         if (comma == std::string::npos)
-           throw UsageError{f + ": expected YAW_DEG,METRES, got '" + v + "'"};
-         o->drift_yaw_deg = parseDouble(f, v.substr(0, comma), -180, 180, false);
-         o->drift_m = parseDouble(f, v.substr(comma + 1), 0, 1000, false);
-       }},
-      {"--keyframe-every",
-       [&](auto& f, auto& v) {
-         o->keyframe_every = static_cast<int>(parseInteger(f, v, 1, 1000000));
-       }},
-      {"--rate-hz", [&](auto& f, auto& v) { o->rate_hz = parseDouble(f, v, 0, 1e6, true); }},
-      {"--gt-max-edge",
-       [&](auto& f, auto& v) { o->gt_max_edge_m = parseDouble(f, v, 0.001, 10, false); }},
-      {"--bag",
-       [&](auto& f, auto& v) {
-         if (v.empty()) throw UsageError{f + ": expected a file name"};
-         o->bag = v;
-       }},
-      {"--bag-world-frame",
-       [&](auto& f, auto& v) {
-         if (v.empty()) throw UsageError{f + ": expected a tf frame"};
-         o->bag_world_frame = v;
-       }},
-      {"--bag-content",
-       [&](auto& f, auto& v) {
-         o->bag_content = parseChoice(f, v, {"disparity", "pair", "rectified-pair"});
-       }},
-      {"--out",
-       [&](auto& f, auto& v) {
-         if (v.empty()) throw UsageError{f + ": expected a folder"};
-         o->out = v;
-       }},
-  };
-  for (int i = 1; i < argc; ++i) {
-    std::string flag = argv[i], value;
-    if (flag == "--help" || flag == "-h") return false;
-    const size_t eq = flag.find('=');
-    const bool inline_value = flag.rfind("--", 0) == 0 && eq != std::string::npos;
-    if (inline_value) {  // --flag=value
-      value = flag.substr(eq + 1);
-      flag = flag.substr(0, eq);
-    }
-    const auto it = setters.find(flag);
-    if (it == setters.end()) throw UsageError{"unknown argument '" + flag + "'"};
-    if (!inline_value) {
-      if (i + 1 >= argc) throw UsageError{flag + ": missing value"};
-      value = argv[++i];
-    }
-    it->second(flag, value);
-  }
-  if (o->out.empty()) throw UsageError{"--out DIR is required"};
-  return true;
-}
 
 /// What --dynamic changes: the scene of the first half of the frames (nullptr: none) and the
 /// regions where objects stood that left.
@@ -342,27 +81,15 @@ void progress(int done, int total, double elapsed_s) {
   std::fflush(stderr);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  Options o;
-  try {
-    if (!parseArguments(argc, argv, &o)) {
-      std::cout << kUsage;
-      return 0;
-    }
-  } catch (const UsageError& e) {
-    std::cerr << "stereo_fusion_simulate: " << e.message << "\n(see --help)\n";
-    return 2;
-  }
-
+/// Renders and writes the sequence `o` describes; returns the exit code.
+int simulate(SimulateOptions o) {
   std::string error;
   const auto camera =
       StereoCamera::create(o.width_px, o.height_px, o.fx_px, o.fy_px > 0 ? o.fy_px : o.fx_px,
                            (o.width_px - 1) / 2.0, (o.height_px - 1) / 2.0, o.baseline_m, &error);
   if (!camera) {
     std::cerr << "stereo_fusion_simulate: " << error << "\n";
-    return 2;
+    return cli::kExitBadArguments;
   }
   auto preset = makePreset(o.preset, o.seed);
   if (!o.frames_given && o.trajectory == "walkthrough" && !preset->route_m.empty())
@@ -515,4 +242,14 @@ int main(int argc, char** argv) {
       o.frames, 100.0 * valid_share_sum / o.frames, gt_mesh.triangles.size(), o.out.c_str(),
       elapsed());
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  SimulateOptions options;
+  CLI::App app("", "stereo_fusion_simulate");
+  addSimulateArguments(&app, &options);
+  if (const auto exit_code = cli::parseOrExitCode(app, argc, argv)) return *exit_code;
+  return simulate(options);
 }

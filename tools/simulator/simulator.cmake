@@ -11,8 +11,8 @@ add_library(stereo_fusion_simulator STATIC
 target_link_libraries(stereo_fusion_simulator PUBLIC stereo_fusion_sim stereo_fusion_readers ${OpenCV_LIBS})  # readers: SgbmParams
 
 # scripts/simulate.sh runs this: writes a simulated sequence as a dataset folder.
-add_executable(stereo_fusion_simulate tools/simulator/simulate_main.cpp)
-target_link_libraries(stereo_fusion_simulate stereo_fusion_simulator stereo_fusion_ros)
+add_executable(stereo_fusion_simulate tools/simulator/simulate_main.cpp tools/simulator/SimulateArguments.cpp)
+target_link_libraries(stereo_fusion_simulate stereo_fusion_simulator stereo_fusion_ros stereo_fusion_cli)
 
 if(CATKIN_ENABLE_TESTING)
   # test/unit/tools/test_simulator.cpp is globbed into the tools' unit test binary by the root.

@@ -3,115 +3,94 @@
 #include <string>
 #include <vector>
 
+#include "cli/CommandLine.h"
+#include "cli/MapperConfigArguments.h"
+#include "cli/NumberChecks.h"
 #include "soak/SoakRun.h"
 
 namespace {
-const char* kUsage =
-    "usage: stereo_fusion_soak --csv FILE [--frames N] [--sample-every K] [--width PX] [--height "
-    "PX]\n"
-    "                          [--speed M] [--set key=value ...]\n"
-    "       stereo_fusion_soak --plot OUT.png LABEL=FILE.csv [LABEL=FILE.csv ...]\n"
-    "Fuses N frames (default 10000) of an endless simulated corridor through the Mapper, the "
-    "camera\n"
-    "moving --speed metres (default 0.05) along it every frame, and writes the resident memory "
-    "every K\n"
-    "frames (default 100) to the CSV. --plot draws the RSS curves of several runs into a PNG.\n";
 
-bool toSize(const std::string& text, size_t* out) {
-  try {
-    size_t used = 0;
-    const long v = std::stol(text, &used);
-    if (used != text.size() || v <= 0) return false;
-    *out = static_cast<size_t>(v);
-    return true;
-  } catch (...) {
-    return false;
-  }
+using namespace stereo_fusion;
+
+/// The command line: a run (--csv) or a plot (--plot) of earlier runs.
+struct SoakArguments {
+  soak::SoakOptions run;
+  cli::MapperConfigArguments config;
+  std::string plot_path;            ///< --plot OUT.png; empty: a run
+  std::vector<std::string> series;  ///< with --plot: LABEL=FILE.csv
+};
+
+void addSoakArguments(CLI::App* app, SoakArguments* a) {
+  app->description(
+      "Fuses N frames (default 10000) of an endless simulated corridor through the Mapper, the\n"
+      "camera moving --speed metres (default 0.05) along it every frame, and writes the resident\n"
+      "memory every K frames (default 100) to the CSV. --plot draws the RSS curves of several\n"
+      "runs into a PNG:\n"
+      "  stereo_fusion_soak --csv FILE [--frames N] [--sample-every K] [--width PX] [--height PX]\n"
+      "                     [--speed M] [--config FILE] [--set key=value ...]\n"
+      "  stereo_fusion_soak --plot OUT.png LABEL=FILE.csv [LABEL=FILE.csv ...]");
+  app->footer("Exit codes: 0 done, 1 the run or the plot failed, 2 bad arguments.");
+  CLI::Option* csv = app->add_option("--csv", a->run.csv_path, "the run's CSV, one row per sample")
+                         ->type_name("FILE");
+  app->add_option("--frames", a->run.frames, "frames to fuse (default 10000)")
+      ->check(cli::positiveNumber());
+  app->add_option("--sample-every", a->run.sample_every, "frames between samples (default 100)")
+      ->check(cli::positiveNumber());
+  app->add_option("--width", a->run.width_px, "image width of the simulated camera (default 160)")
+      ->check(CLI::Range(1, 4096));
+  app->add_option("--height", a->run.height_px,
+                  "image height of the simulated camera (default 120)")
+      ->check(CLI::Range(1, 4096));
+  app->add_option("--speed", a->run.speed_m_per_frame,
+                  "metres the camera moves along the corridor every frame (default 0.05)")
+      ->check(cli::finiteNumber());
+  cli::addMapperConfigArguments(app, &a->config);
+  CLI::Option* plot = app->add_option("--plot", a->plot_path,
+                                      "draw the RSS curves of the runs given as LABEL=FILE.csv")
+                          ->type_name("OUT.png")
+                          ->excludes(csv);
+  CLI::Option* series =
+      app->add_option("series", a->series, "with --plot: a run's CSV and its label in the plot")
+          ->type_name("LABEL=FILE.csv")
+          ->check(CLI::Validator(
+              [](std::string& value) {  // labels may hold "=", paths rarely do: the last splits
+                return value.rfind('=') == std::string::npos
+                           ? "expected LABEL=FILE.csv, got '" + value + "'"
+                           : std::string();
+              },
+              ""))
+          ->needs(plot);
+  plot->needs(series);
+  app->callback([a] {
+    if (!a->plot_path.empty()) return;
+    if (a->run.csv_path.empty())
+      throw CLI::ValidationError("--csv FILE or --plot OUT.png is required");
+    std::string error;
+    if (!cli::applyMapperConfigArguments(a->config, &a->run.config, &error))
+      throw CLI::ValidationError(error);
+  });
 }
-}  // namespace
 
-int main(int argc, char** argv) {
-  using namespace stereo_fusion;
-  std::vector<std::string> args(argv + 1, argv + argc);
+int plot(const SoakArguments& a) {
   std::string error;
-  if (args.empty() || args[0] == "--help" || args[0] == "-h") {
-    std::fputs(kUsage, args.empty() ? stderr : stdout);
-    return args.empty() ? 2 : 0;
-  }
-  if (args[0] == "--plot") {
-    if (args.size() < 3) {
-      std::fputs(kUsage, stderr);
-      return 2;
-    }
-    std::vector<std::pair<std::string, std::vector<soak::SoakSample>>> series;
-    for (size_t i = 2; i < args.size(); ++i) {
-      const size_t eq = args[i].rfind('=');  // labels may hold "=", paths rarely do
-      if (eq == std::string::npos) {
-        std::fprintf(stderr, "stereo_fusion_soak: expected LABEL=FILE.csv, got '%s'\n",
-                     args[i].c_str());
-        return 2;
-      }
-      series.emplace_back(args[i].substr(0, eq), std::vector<soak::SoakSample>{});
-      if (!soak::readSoakCsv(args[i].substr(eq + 1), &series.back().second, &error)) {
-        std::fprintf(stderr, "stereo_fusion_soak: %s\n", error.c_str());
-        return 1;
-      }
-    }
-    if (!soak::plotSoak(series, args[1], &error)) {
+  std::vector<std::pair<std::string, std::vector<soak::SoakSample>>> series;
+  for (const std::string& labelled : a.series) {
+    const size_t eq = labelled.rfind('=');
+    series.emplace_back(labelled.substr(0, eq), std::vector<soak::SoakSample>{});
+    if (!soak::readSoakCsv(labelled.substr(eq + 1), &series.back().second, &error)) {
       std::fprintf(stderr, "stereo_fusion_soak: %s\n", error.c_str());
       return 1;
     }
-    return 0;
   }
-  soak::SoakOptions options;
-  for (size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    if (i + 1 >= args.size()) {
-      std::fprintf(stderr, "stereo_fusion_soak: %s needs a value\n%s", a.c_str(), kUsage);
-      return 2;
-    }
-    const std::string& v = args[++i];
-    size_t n = 0;
-    bool ok = true;
-    if (a == "--csv") {
-      options.csv_path = v;
-    } else if (a == "--frames") {
-      ok = toSize(v, &options.frames);
-    } else if (a == "--sample-every") {
-      ok = toSize(v, &options.sample_every);
-    } else if (a == "--width" || a == "--height") {
-      ok = toSize(v, &n) && n <= 4096;
-      (a == "--width" ? options.width_px : options.height_px) = static_cast<int>(n);
-    } else if (a == "--speed") {
-      try {
-        options.speed_m_per_frame = std::stod(v);
-      } catch (...) {
-        ok = false;
-      }
-    } else if (a == "--set") {
-      const size_t eq = v.find('=');
-      if (eq == std::string::npos ||
-          !setMapperParameter(&options.config, v.substr(0, eq), v.substr(eq + 1), &error)) {
-        std::fprintf(stderr, "stereo_fusion_soak: --set %s: %s\n", v.c_str(), error.c_str());
-        return 2;
-      }
-    } else {
-      std::fprintf(stderr, "stereo_fusion_soak: unknown option '%s'\n%s", a.c_str(), kUsage);
-      return 2;
-    }
-    if (!ok) {
-      std::fprintf(stderr, "stereo_fusion_soak: %s: '%s' is not valid\n", a.c_str(), v.c_str());
-      return 2;
-    }
+  if (!soak::plotSoak(series, a.plot_path, &error)) {
+    std::fprintf(stderr, "stereo_fusion_soak: %s\n", error.c_str());
+    return 1;
   }
-  if (options.csv_path.empty()) {
-    std::fprintf(stderr, "stereo_fusion_soak: --csv is required\n%s", kUsage);
-    return 2;
-  }
-  for (const std::string& e : validateMapperConfig(options.config)) {
-    std::fprintf(stderr, "stereo_fusion_soak: %s\n", e.c_str());
-    return 2;
-  }
+  return 0;
+}
+
+int run(const soak::SoakOptions& options) {
+  std::string error;
   std::vector<soak::SoakSample> samples;
   if (!soak::runSoak(options, &samples, &error)) {
     std::fprintf(stderr, "stereo_fusion_soak: %s\n", error.c_str());
@@ -126,4 +105,15 @@ int main(int argc, char** argv) {
       first.frame, mid.frame, last.frame, first.rss_mb, mid.rss_mb, last.rss_mb, first.blocks,
       mid.blocks, last.blocks, last.evicted);
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  SoakArguments arguments;
+  CLI::App app("", "stereo_fusion_soak");
+  addSoakArguments(&app, &arguments);
+  if (const auto exit_code = stereo_fusion::cli::parseOrExitCode(app, argc, argv))
+    return *exit_code;
+  return arguments.plot_path.empty() ? run(arguments.run) : plot(arguments);
 }

@@ -12,7 +12,8 @@ target_include_directories(stereo_fusion_texture_compare_lib PUBLIC ${PROJECT_SO
 target_link_libraries(stereo_fusion_texture_compare_lib PUBLIC stereo_fusion_core stereo_fusion_readers)
 
 add_executable(stereo_fusion_texture_compare ${PROJECT_SOURCE_DIR}/tools/texture_compare/texture_compare_main.cpp)
-target_link_libraries(stereo_fusion_texture_compare stereo_fusion_texture_compare_lib stereo_fusion_offline)
+target_link_libraries(stereo_fusion_texture_compare stereo_fusion_texture_compare_lib stereo_fusion_offline
+                      nlohmann_json::nlohmann_json)
 
 if(CATKIN_ENABLE_TESTING)
   target_link_libraries(stereo_fusion_tool_tests stereo_fusion_texture_compare_lib)

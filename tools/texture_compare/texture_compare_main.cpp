@@ -10,7 +10,9 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "fuser/OfflineFuser.h"
+#include "cli/CommandLine.h"
+#include "cli/NumberChecks.h"
+#include "fuser/FuseArguments.h"
 #include "readers/DatasetReader.h"
 #include "readers/ObjReader.h"
 #include "stereo_fusion/Mapper.h"
@@ -23,20 +25,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace stereo_fusion;
-
-const char* kUsage =
-    "usage: stereo_fusion_texture_compare <seq-folder> <out-dir> [--config FILE] [--set key=value "
-    "...]\n"
-    "                                     [--views N] [--figure-view K]\n"
-    "Fuses the even frames of a dataset folder with texture=patches, renders the vertex-coloured\n"
-    "and the textured mesh into the poses of the odd (held-out) frames and compares both with\n"
-    "those frames' colour images (for simulated sequences: the exact ground truth). The textured\n"
-    "mesh is also exported as OBJ + MTL + atlas, read back and rendered, to check the export.\n"
-    "Prints and writes <out-dir>/texture_compare.json and the figures\n"
-    "<out-dir>/texture_compare_full.png and texture_compare_zoom.png (ground truth | vertex colour "
-    "| texture).\n"
-    "  --views N        evaluate N held-out frames spread over the sequence (default: all)\n"
-    "  --figure-view K  which evaluated view the figures show (default: the middle one)\n";
 
 cv::Mat toRgb(const cv::Mat& colour) {
   if (colour.channels() == 3) return colour;
@@ -80,44 +68,48 @@ std::string format(const char* fmt, double a, double b = 0) {
   return buffer;
 }
 
-}  // namespace
+/// The command line: what to fuse and compare, and how many views.
+struct CompareOptions {
+  std::string sequence, out_dir;
+  cli::MapperConfigArguments config_arguments;
+  FuseOptions fuse;       ///< its config, from --config and --set as the fuser reads them
+  size_t views = 0;       ///< 0: every held-out frame
+  long figure_view = -1;  ///< < 0: the middle one
+};
 
-int main(int argc, char** argv) {
-  std::vector<std::string> args, rest;
-  for (int i = 1; i < argc; ++i) args.emplace_back(argv[i]);
-  size_t views = 0;
-  long figure_view = -1;
-  for (size_t i = 0; i < args.size(); ++i) {
-    if (args[i] == "--help" || args[i] == "-h") {
-      std::fputs(kUsage, stdout);
-      return 0;
-    }
-    if ((args[i] == "--views" || args[i] == "--figure-view") && i + 1 < args.size()) {
-      try {
-        const long value = std::stol(args[i + 1]);
-        if (value < 0) throw std::invalid_argument("negative");
-        if (args[i] == "--views")
-          views = static_cast<size_t>(value);
-        else
-          figure_view = value;
-      } catch (...) {
-        std::fprintf(stderr, "%s: '%s' is not a number\n%s", args[i].c_str(), args[i + 1].c_str(),
-                     kUsage);
-        return 2;
-      }
-      ++i;
-      continue;
-    }
-    rest.push_back(args[i]);
-  }
-  FuseOptions options;
+void addCompareArguments(CLI::App* app, CompareOptions* o) {
+  app->description(
+      "Fuses the even frames of a dataset folder with texture=patches, renders the\n"
+      "vertex-coloured and the textured mesh into the poses of the odd (held-out) frames and\n"
+      "compares both with those frames' colour images (for simulated sequences: the exact\n"
+      "ground truth). The textured mesh is also exported as OBJ + MTL + atlas, read back and\n"
+      "rendered, to check the export. Prints and writes <out-dir>/texture_compare.json and the\n"
+      "figures <out-dir>/texture_compare_full.png and texture_compare_zoom.png (ground truth |\n"
+      "vertex colour | texture).");
+  app->footer("Exit codes: 0 done, 1 unreadable input or nothing to compare, 2 bad arguments.");
+  app->add_option("seq-folder", o->sequence, "the dataset folder")->required();
+  app->add_option("out-dir", o->out_dir, "where the JSON and the figures go")->required();
+  cli::addMapperConfigArguments(app, &o->config_arguments);
+  app->add_option("--views", o->views,
+                  "evaluate N held-out frames spread over the sequence (default: all)")
+      ->check(cli::nonNegativeNumber());
+  app->add_option("--figure-view", o->figure_view,
+                  "which evaluated view the figures show (default: the middle one)")
+      ->check(cli::nonNegativeNumber());
+  app->callback([o] {
+    std::string error;
+    if (!applyFuseParameters(o->config_arguments, false, &o->fuse, &error))
+      throw CLI::ValidationError(error);
+  });
+}
+
+/// The comparison (see the top of the file); returns the exit code.
+int compareTextures(CompareOptions options) {
+  const size_t views = options.views;
+  long figure_view = options.figure_view;  // then the index of the view the figures show
   std::string error;
-  if (!parseFuseArguments(rest, &options, &error)) {
-    std::fprintf(stderr, "error: %s\n%s", error.c_str(), kUsage);
-    return 2;
-  }
-  options.config.texture = TextureMode::kPatches;
-  auto reader = DatasetReader::open(options.input, &error);
+  options.fuse.config.texture = TextureMode::kPatches;
+  auto reader = DatasetReader::open(options.sequence, &error);
   if (!reader) {
     std::fprintf(stderr, "error: %s\n", error.c_str());
     return 1;
@@ -125,7 +117,7 @@ int main(int argc, char** argv) {
   fs::create_directories(options.out_dir);
 
   // Fuse the even frames.
-  Mapper mapper(options.config);
+  Mapper mapper(options.fuse.config);
   size_t fused = 0;
   for (size_t i = 0; i < reader->size(); i += 2) {
     StereoFrame frame;
@@ -141,7 +133,7 @@ int main(int argc, char** argv) {
       "fused %zu even frames: %zu submeshes, %zu with a texture patch, texture memory %.2f MB "
       "(cap %d px per patch edge)\n",
       fused, submeshes.size(), patches.size(), mapper.textures().memoryBytes() / 1048576.0,
-      options.config.texture_max_patch_px);
+      options.fuse.config.texture_max_patch_px);
 
   // The export, read back: what a viewer loading mesh.obj gets.
   const fs::path obj_dir =
@@ -256,13 +248,13 @@ int main(int argc, char** argv) {
       ge_texture.mean(), ge_truth.mean(), 100.0 * textured_px / covered, err_obj.psnrDb(),
       export_info.textured_blocks, export_info.vertex_colour_blocks);
   nlohmann::ordered_json j;
-  j["sequence"] = options.input;
+  j["sequence"] = options.sequence;
   j["fused_frames"] = fused;
   j["held_out_views"] = held_out.size();
   j["submeshes"] = submeshes.size();
   j["textured_submeshes"] = patches.size();
   j["texture_bytes"] = mapper.textures().memoryBytes();
-  j["texture_max_patch_px"] = options.config.texture_max_patch_px;
+  j["texture_max_patch_px"] = options.fuse.config.texture_max_patch_px;
   j["textured_pixel_share"] = static_cast<double>(textured_px) / covered;
   j["psnr_vertex_db"] = err_vertex.psnrDb();
   j["psnr_texture_db"] = err_texture.psnrDb();
@@ -273,4 +265,14 @@ int main(int argc, char** argv) {
   j["views"] = per_view;
   std::ofstream(fs::path(options.out_dir) / "texture_compare.json") << j.dump(2) << "\n";
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CompareOptions options;
+  CLI::App app("", "stereo_fusion_texture_compare");
+  addCompareArguments(&app, &options);
+  if (const auto exit_code = cli::parseOrExitCode(app, argc, argv)) return *exit_code;
+  return compareTextures(std::move(options));
 }

@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "MeshTestSupport.h"
+#include "fuser/FuseArguments.h"
 #include "fuser/OfflineFuser.h"
 #include "stereo_fusion/ros/BagSequence.h"
 #include "stereo_fusion/ros/MessageConversions.h"

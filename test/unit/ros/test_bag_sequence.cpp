@@ -18,6 +18,7 @@
 #include <thread>
 
 #include "MeshTestSupport.h"
+#include "fuser/FuseArguments.h"
 #include "fuser/OfflineFuser.h"
 #include "stereo_fusion/ros/BagSequence.h"
 #include "stereo_fusion/ros/MessageConversions.h"

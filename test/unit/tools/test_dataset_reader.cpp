@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "MeshTestSupport.h"
+#include "fuser/FuseArguments.h"
 #include "fuser/OfflineFuser.h"
 #include "readers/DatasetReader.h"
 #include "readers/ObjReader.h"
@@ -386,7 +387,7 @@ TEST(OfflineFuser, MeshEveryNthFrameWritesTheSameMeshAndCountsMeshCalls) {
   FuseOptions options;
   std::string error;
   EXPECT_FALSE(parseFuseArguments({"seq", "out", "--mesh-every", "0"}, &options, &error));
-  EXPECT_NE(error.find("--mesh-every: '0' is not a frame count ≥ 1"), std::string::npos) << error;
+  EXPECT_NE(error.find("--mesh-every: '0' is not a number > 0"), std::string::npos) << error;
 }
 
 TEST(OfflineFuser, TexturePatchesAddObjMtlAndAtlasAndTheirMemoryToStats) {
@@ -428,12 +429,12 @@ TEST(OfflineFuser, ArgumentErrorsNameTheProblem) {
   EXPECT_FALSE(parseFuseArguments({"seq", "out", "--set", "voxel_size_m"}, &options, &error));
   EXPECT_NE(error.find("key=value"), std::string::npos) << error;
   EXPECT_FALSE(parseFuseArguments({"seq", "out", "--bogus"}, &options, &error));
-  EXPECT_NE(error.find("unknown option '--bogus'"), std::string::npos) << error;
+  EXPECT_NE(error.find("not expected: --bogus"), std::string::npos) << error;
   EXPECT_FALSE(parseFuseArguments({"seq"}, &options, &error));
   EXPECT_FALSE(parseFuseArguments({"seq", "out", "--frames", "-3"}, &options, &error));
   EXPECT_FALSE(
       parseFuseArguments({"seq", "out", "--config", "/nonexistent.yaml"}, &options, &error));
-  EXPECT_NE(error.find("cannot open"), std::string::npos) << error;
+  EXPECT_NE(error.find("--config: File does not exist"), std::string::npos) << error;
   EXPECT_FALSE(parseFuseArguments({"seq", "out", "--set", "min_depth_m=9"}, &options, &error));
   EXPECT_NE(error.find("min_depth_m must be < max_depth_m"), std::string::npos) << error;
   FuseReport report;

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "fuser/FuseArguments.h"
 #include "fuser/OfflineFuser.h"
 
 using namespace stereo_fusion;

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "MeshTestSupport.h"
+#include "fuser/FuseArguments.h"
 #include "fuser/OfflineFuser.h"
 #include "simulator/DatasetWriter.h"
 

@@ -8,6 +8,7 @@
 #include <fstream>
 
 #include "MeshTestSupport.h"
+#include "fuser/FuseArguments.h"
 #include "fuser/OfflineFuser.h"
 #include "readers/DatasetReader.h"
 #include "readers/PlyReader.h"
