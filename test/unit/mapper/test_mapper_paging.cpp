@@ -181,33 +181,45 @@ TEST(MapperPaging, ABlockBackUnchangedLeavesWithoutAWriteAndAChangedOneIsWritten
                     "after blocks came back unchanged and changed");
 }
 
+namespace {
+/// A corridor 12 m long walked along at 1.5 m from its wall, 40 frames: one view reaches a
+/// small part of the map.
+struct Corridor {
+  sim::AnalyticScene scene;
+  std::vector<Eigen::Isometry3d> poses;
+  Corridor() {
+    scene.add(sim::makePlane({0, 0, 0}, {0, 0, 1}), {170, 160, 140});
+    scene.add(sim::makePlane({0, 1.5, 0}, {0, -1, 0}), {120, 140, 190});
+    for (int k = 0; k < 13; ++k)
+      scene.add(sim::makeSphere({1.0 * k, 1.2, 0.4}, 0.25), {200.0, 80.0 + 10 * k, 60.0});
+    for (int f = 0; f < 40; ++f) {
+      const Eigen::Vector3d eye(0.3 * f, 0.0, 1.0);
+      poses.push_back(
+          sim::lookAt(eye, eye + Eigen::Vector3d(0.0, 1.5, -0.4), Eigen::Vector3d::UnitZ()));
+    }
+  }
+  StereoFrame frame(size_t f) const { return renderFrame(scene, qvgaCamera(), poses[f]); }
+  void walk(Mapper* mapper) const {
+    for (size_t f = 0; f < poses.size(); ++f) mapper->integrate(frame(f));
+  }
+};
+}  // namespace
+
 TEST(MapperPaging, WhatAFrameReachedStaysForTheNextFrame) {
   // A camera that holds still brings back what its view reaches once: the page-out after the
-  // frame takes other blocks, not those the frame reached and left unchanged. A corridor 12 m
-  // long seen from 1.5 m, so one view reaches a small part of the map and fits the cap.
-  sim::AnalyticScene scene;
-  scene.add(sim::makePlane({0, 0, 0}, {0, 0, 1}), {170, 160, 140});
-  scene.add(sim::makePlane({0, 1.5, 0}, {0, -1, 0}), {120, 140, 190});
-  for (int k = 0; k < 13; ++k)
-    scene.add(sim::makeSphere({1.0 * k, 1.2, 0.4}, 0.25), {200.0, 80.0 + 10 * k, 60.0});
-  std::vector<Eigen::Isometry3d> poses;
-  for (int f = 0; f < 40; ++f) {
-    const Eigen::Vector3d eye(0.3 * f, 0.0, 1.0);
-    poses.push_back(
-        sim::lookAt(eye, eye + Eigen::Vector3d(0.0, 1.5, -0.4), Eigen::Vector3d::UnitZ()));
-  }
+  // frame takes other blocks, not those the frame reached and left unchanged. One view of the
+  // corridor fits the cap.
+  const Corridor corridor;
   Scratch scratch;
   MapperConfig config = hallConfig();
   Mapper uncapped(config);
-  for (const Eigen::Isometry3d& pose : poses)
-    uncapped.integrate(renderFrame(scene, qvgaCamera(), pose));
+  corridor.walk(&uncapped);
   config.max_map_memory_mb = 0.4 * uncapped.mapMemoryBytes() / (1024.0 * 1024.0);
   config.map_store_path = scratch.path.string();
   Mapper capped(config);
-  for (const Eigen::Isometry3d& pose : poses)
-    capped.integrate(renderFrame(scene, qvgaCamera(), pose));
+  corridor.walk(&capped);
   for (const int f : {3, 20, 8}) {  // back along the corridor, where the map was paged out
-    const StereoFrame frame = renderFrame(scene, qvgaCamera(), poses[f]);
+    const StereoFrame frame = corridor.frame(f);
     const IntegrationResult first = capped.integrate(frame);
     const IntegrationResult again = capped.integrate(frame);
     EXPECT_GT(first.blocks_paged_in, 0u) << "frame " << f;
@@ -221,30 +233,18 @@ TEST(MapperPaging, AFrameThatBringsBlocksBackMakesRoomBeforeItFuses) {
   // blocks it does not reach leave before it fuses, so the map stays within the cap through
   // the frame, not only after it. Paging out after the frame alone held the cap's resident
   // blocks and the view's together.
-  sim::AnalyticScene scene;
-  scene.add(sim::makePlane({0, 0, 0}, {0, 0, 1}), {170, 160, 140});
-  scene.add(sim::makePlane({0, 1.5, 0}, {0, -1, 0}), {120, 140, 190});
-  for (int k = 0; k < 13; ++k)
-    scene.add(sim::makeSphere({1.0 * k, 1.2, 0.4}, 0.25), {200.0, 80.0 + 10 * k, 60.0});
-  std::vector<Eigen::Isometry3d> poses;
-  for (int f = 0; f < 40; ++f) {
-    const Eigen::Vector3d eye(0.3 * f, 0.0, 1.0);
-    poses.push_back(
-        sim::lookAt(eye, eye + Eigen::Vector3d(0.0, 1.5, -0.4), Eigen::Vector3d::UnitZ()));
-  }
+  const Corridor corridor;
   Scratch scratch;
   MapperConfig config = hallConfig();
   Mapper uncapped(config);
-  for (const Eigen::Isometry3d& pose : poses)
-    uncapped.integrate(renderFrame(scene, qvgaCamera(), pose));
+  corridor.walk(&uncapped);
   config.max_map_memory_mb = 0.3 * uncapped.mapMemoryBytes() / (1024.0 * 1024.0);
   config.map_store_path = scratch.path.string();
   const size_t cap = static_cast<size_t>(config.max_map_memory_mb * 1024.0 * 1024.0);
   Mapper capped(config);
-  for (const Eigen::Isometry3d& pose : poses)
-    capped.integrate(renderFrame(scene, qvgaCamera(), pose));
+  corridor.walk(&capped);
   // The corridor's start, paged out since.
-  const IntegrationResult back = capped.integrate(renderFrame(scene, qvgaCamera(), poses[2]));
+  const IntegrationResult back = capped.integrate(corridor.frame(2));
   ASSERT_GT(back.blocks_paged_in * (capped.mapMemoryBytes() / capped.tsdf().blockCount()), cap / 4)
       << "the view brings back a quarter of the cap at least";
   EXPECT_LE(back.map_memory_bytes, cap);
