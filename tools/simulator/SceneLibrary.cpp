@@ -65,13 +65,16 @@ void addTable(AnalyticScene* scene, const Eigen::Vector2d& centre_xy, double yaw
 
 }  // namespace
 
-std::vector<std::string> presetNames() { return {"room", "tabletop", "hall", "building"}; }
+std::vector<std::string> presetNames() {
+  return {"room", "tabletop", "hall", "building", "building_long"};
+}
 
 std::optional<ScenePreset> makePreset(const std::string& name, uint32_t seed) {
   if (name == "room") return makeRoomPreset(seed);
   if (name == "tabletop") return makeTabletopPreset(seed);
   if (name == "hall") return makeHallPreset(seed);
   if (name == "building") return makeBuildingPreset(seed);
+  if (name == "building_long") return makeBuildingPreset(seed, kLongBuildingColumns);
   return std::nullopt;
 }
 
@@ -261,25 +264,25 @@ ScenePreset makeHallPreset(uint32_t seed) {
   return preset;
 }
 
-ScenePreset makeBuildingPreset(uint32_t seed) {
+ScenePreset makeBuildingPreset(uint32_t seed, int columns) {
   Draw draw(seed);
   ScenePreset preset;
-  preset.name = "building";
+  preset.name = columns == kBuildingColumns ? "building" : "building_long";
   AnalyticScene& scene = preset.scene;
   // Plan (floor at z = 0): the corridor runs along x over [0, length] × [-kCorridorHalf,
   // kCorridorHalf]; four columns of rooms cross it, a room on each side (north: +y, south: -y);
   // every wall is a solid box kWall thick, so rooms, doorways and corridor are one free space.
   constexpr double kWall = 0.1, kHeight = 2.4, kCorridorHalf = 1.0;
   constexpr double kDoorHalf = 0.6, kDoorHeight = 2.1;
-  constexpr int kColumns = 4;
-  double widths[kColumns];
+  const int column_count = std::max(1, columns);
+  std::vector<double> widths(column_count);
   for (double& w : widths) w = draw.uniform(3.8, 4.4);
   const double depth_north = draw.uniform(3.6, 4.4), depth_south = draw.uniform(3.6, 4.4);
-  double column_x[kColumns];  // west edge of each column's rooms
+  std::vector<double> column_x(column_count);  // west edge of each column's rooms
   double length = 0;
-  for (int j = 0; j < kColumns; ++j) {
+  for (int j = 0; j < column_count; ++j) {
     column_x[j] = length;
-    length += widths[j] + (j + 1 < kColumns ? kWall : 0.0);
+    length += widths[j] + (j + 1 < column_count ? kWall : 0.0);
   }
   const double north_back = kCorridorHalf + kWall + depth_north;
   const double south_back = -kCorridorHalf - kWall - depth_south;
@@ -308,8 +311,8 @@ ScenePreset makeBuildingPreset(uint32_t seed) {
   for (int side = 0; side < 2; ++side) {
     const double s = side == 0 ? 1.0 : -1.0;
     const double depth = side == 0 ? depth_north : depth_south;
-    for (int k = 0; k < kColumns; ++k) {
-      const int j = side == 0 ? k : kColumns - 1 - k;
+    for (int k = 0; k < column_count; ++k) {
+      const int j = side == 0 ? k : column_count - 1 - k;
       const double x0 = column_x[j], x1 = column_x[j] + widths[j];
       const double front = s * (kCorridorHalf + kWall), back = s * (kCorridorHalf + kWall + depth);
       const Eigen::Vector3d rgb = draw.color(wall_palette[rooms.size() % wall_palette.size()], 15);
@@ -317,7 +320,7 @@ ScenePreset makeBuildingPreset(uint32_t seed) {
       // Back wall; the wall to the next column east (the end walls close the last ones).
       const double y_lo = std::min(back, back + s * kWall), y_hi = std::max(back, back + s * kWall);
       box({x0 - kWall, y_lo, 0}, {x1 + kWall, y_hi, kHeight}, rgb);
-      if (j + 1 < kColumns)
+      if (j + 1 < column_count)
         box({x1, std::min(s * kCorridorHalf, back), 0},
             {x1 + kWall, std::max(s * kCorridorHalf, back), kHeight}, rgb);
       // The corridor wall with the doorway: two jambs and a lintel.
@@ -405,7 +408,7 @@ ScenePreset makeBuildingPreset(uint32_t seed) {
   route.push_back(lane_point(first, kApproach));
   for (size_t i = 1; i < rooms.size(); ++i) {
     const Room& r = rooms[i];
-    if (i == static_cast<size_t>(kColumns))  // the east end: across the corridor
+    if (i == static_cast<size_t>(column_count))  // the east end: across the corridor
       route.emplace_back(length - 0.5, 0.0, eye());
     route.push_back(lane_point(r, -kApproach));
     route.push_back(doorway(r));

@@ -37,8 +37,9 @@ struct ScenePreset {
 /// Names accepted by makePreset().
 std::vector<std::string> presetNames();
 
-/// Builds preset `name` ("room", "tabletop", "hall" or "building"); the seed varies object
-/// placement, sizes and colours (same seed, same scene). Returns std::nullopt for an unknown name.
+/// Builds preset `name` ("room", "tabletop", "hall", "building" or "building_long"); the seed
+/// varies object placement, sizes and colours (same seed, same scene). Returns std::nullopt for an
+/// unknown name.
 std::optional<ScenePreset> makePreset(const std::string& name, uint32_t seed);
 
 /// The inside of a ~5 × 3 × 2.6 m room (floor at z = 0, centred on the origin in x and y)
@@ -63,7 +64,11 @@ ScenePreset makeHallPreset(uint32_t seed);
 /// free. `route_m` is the tour: from the back of the first room (`rooms_m[0]`) out into the
 /// corridor, into and around each room on the way east, across, back west into and around each
 /// room on the other side, and into the first room again to end where it started. Seeds vary the
-/// room sizes, doorway positions, furniture and colours.
-ScenePreset makeBuildingPreset(uint32_t seed);
+/// room sizes, doorway positions, furniture and colours. `columns` rooms on each side:
+/// kBuildingColumns for "building", kLongBuildingColumns for "building_long" (the same class at
+/// twice the length, so its uncapped map at 1 cm is ten times a cap that holds a frame's reach).
+constexpr int kBuildingColumns = 4;
+constexpr int kLongBuildingColumns = 8;
+ScenePreset makeBuildingPreset(uint32_t seed, int columns = kBuildingColumns);
 
 }  // namespace stereo_fusion::sim

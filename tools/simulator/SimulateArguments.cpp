@@ -36,9 +36,9 @@ void addSimulateArguments(CLI::App* app, SimulateOptions* o) {
   app->footer("Exit codes: 0 done, 1 generation or write failure, 2 bad arguments.");
   app->get_formatter()->column_width(34);
   app->add_option("--preset", o->preset,
-                  "scene (default room; hall: far-range, walls 3–4.5 m away; building: six\n"
+                  "scene (default room; hall: far-range, walls 3–4.5 m away; building: eight\n"
                   "furnished rooms along a corridor, a map larger than memory caps for benches\n"
-                  "of paging)")
+                  "of paging; building_long: sixteen, twice the map)")
       ->check(CLI::IsMember(presetNames()));
   app->add_option("--trajectory", o->trajectory,
                   "camera path (default walkthrough; building: the walkthrough is a tour\n"
@@ -50,8 +50,8 @@ void addSimulateArguments(CLI::App* app, SimulateOptions* o) {
            o->frames = frames;
            o->frames_given = true;
          },
-         "number of frames (default 100; building's walkthrough: one whole tour, ~1000\n"
-         "frames; fewer: its start only)")
+         "number of frames (default 100; a building's walkthrough: one whole tour, ~900\n"
+         "frames, ~1800 for building_long; fewer: its start only)")
       ->check(CLI::Range(1, 1000000));
   app->add_option("--width", o->width_px, "image width in pixels (default 640)")
       ->check(CLI::Range(16, 8192));
