@@ -2,9 +2,10 @@
 # Sanitizer checks: builds the unit tests with sanitizers in their own build folders and runs
 # them; any sanitizer report or test failure makes it exit non-zero. Ends with a summary.
 #   scripts/check.sh [--asan | --tsan | --all]      (default --all)
-#   --asan  AddressSanitizer + UndefinedBehaviorSanitizer (g++), in .build-asan/: every unit
-#           test (the core's and the tools' binaries), and every fuzz target's checked-in corpus
-#           and regressions (test/fuzz/)
+#   --asan  AddressSanitizer + UndefinedBehaviorSanitizer (g++): the core's unit tests in the
+#           standalone core build (scripts/check_core_standalone.sh, in .build-core-asan/, which
+#           also proves the core builds without ROS), and in .build-asan/ the tools' unit tests
+#           and every fuzz target's checked-in corpus and regressions (test/fuzz/)
 #   --tsan  ThreadSanitizer (g++), in .build-tsan/: the tests that run code on several threads
 #           (test/unit/thread_tests.cmake)
 # --asan also runs the ROS code under ASan + UBSan (+ LeakSanitizer): the nodelet and the
@@ -114,13 +115,23 @@ export STEREO_FUSION_TEST_QUICK=1
 export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$ROOT/test/tsan_suppressions.txt"
 
 if [ "$mode" != --tsan ]; then
+  # The core's unit tests in the standalone core build (cmake/core/, no catkin, no ROS): the
+  # same build proves the core builds without ROS, so CI needs no second, plain one.
+  t0=$SECONDS
+  mkdir -p "$ROOT/.check-logs"
+  core_log="$ROOT/.check-logs/asan_core_unit_tests.log"
+  if CORE_SANITIZE=address,undefined CORE_BUILD_DIR="$ROOT/.build-core-asan" \
+      "$ROOT/scripts/check_core_standalone.sh" >"$core_log" 2>&1; then
+    results+=("asan_core_unit_tests: $(tail -n 1 "$core_log"), clean ($((SECONDS - t0)) s; log .check-logs/asan_core_unit_tests.log)")
+  else
+    failed=1
+    grep -E -B2 -A40 '^(==[0-9]+==ERROR|SUMMARY: |.*runtime error:)|\[  FAILED  \]|core standalone:' "$core_log" | head -n 120
+    results+=("asan_core_unit_tests: FAILED, $(tail -n 1 "$core_log") ($((SECONDS - t0)) s; log .check-logs/asan_core_unit_tests.log)")
+  fi
   dir="$ROOT/.build-asan"
-  if build "$dir" address,undefined stereo_fusion_unit_tests stereo_fusion_tool_tests stereo_fusion_fuzz_replays \
-      "${ROS_TARGETS[@]}"; then
-    for binary in stereo_fusion_unit_tests stereo_fusion_tool_tests; do
-      bin="$(find "$dir" -type f -name "$binary" -perm -u+x | head -n 1)"
-      run_gtest "asan_${binary#stereo_fusion_}" "$bin" '*' || failed=1
-    done
+  if build "$dir" address,undefined stereo_fusion_tool_tests stereo_fusion_fuzz_replays "${ROS_TARGETS[@]}"; then
+    bin="$(find "$dir" -type f -name stereo_fusion_tool_tests -perm -u+x | head -n 1)"
+    run_gtest asan_tool_tests "$bin" '*' || failed=1
     t0=$SECONDS
     replay_status=clean
     for replay in $(find "$dir" -type f -name 'fuzz_*_replay' -perm -u+x | sort); do

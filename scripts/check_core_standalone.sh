@@ -12,7 +12,9 @@
 #   scripts/check_core_standalone.sh [ctest arguments, e.g. -R MapFile]
 # Environment: CORE_BUILD_DIR (kept when given, e.g. .build-core: inside the repository only a dot
 #   folder, see ros-on-debian pitfall 3; default a new folder in $TMPDIR, removed at the end),
-#   CHECK_JOBS (default 2) compile jobs and parallel tests, BUILD_TYPE (default Release).
+#   CHECK_JOBS (default 2) compile jobs and parallel tests, BUILD_TYPE (default Release),
+#   CORE_SANITIZE (e.g. address,undefined: the core and its tests built with those sanitizers at
+#   -O1 -g1, as scripts/check.sh's ASan step does, so one build proves both).
 set -uo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 JOBS="${CHECK_JOBS:-2}"
@@ -31,8 +33,14 @@ fail() { echo "core standalone: $*"; exit 1; }
 
 LAUNCHER=()
 if command -v ccache >/dev/null 2>&1; then LAUNCHER=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
-echo "[core] configuring cmake/core/ in $BUILD_DIR (${BUILD_TYPE:-Release})"
-cmake -S "$ROOT/cmake/core" -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE="${BUILD_TYPE:-Release}" "${LAUNCHER[@]}" \
+BUILD_FLAGS=(-DCMAKE_BUILD_TYPE="${BUILD_TYPE:-Release}")
+if [ -n "${CORE_SANITIZE:-}" ]; then
+  # -O1 -g1 and assertions on: the sanitizer builds' flags (scripts/check.sh says why).
+  BUILD_FLAGS=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1"
+               -DSTEREO_FUSION_SANITIZE="$CORE_SANITIZE")
+fi
+echo "[core] configuring cmake/core/ in $BUILD_DIR (${BUILD_FLAGS[*]})"
+cmake -S "$ROOT/cmake/core" -B "$BUILD_DIR" "${BUILD_FLAGS[@]}" "${LAUNCHER[@]}" \
   >"$BUILD_DIR/configure.log" 2>&1 || { cat "$BUILD_DIR/configure.log"; fail "configure failed"; }
 ros_in_cache="$(grep -E '^(catkin|roscpp|rosbag|rostest|cpp_common|rosconsole|roslib)[A-Za-z_]*_DIR:' \
   "$BUILD_DIR/CMakeCache.txt" || true)"

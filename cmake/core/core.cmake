@@ -122,5 +122,11 @@ if(STEREO_FUSION_CORE_TESTS)
   target_include_directories(stereo_fusion_unit_tests PRIVATE ${STEREO_FUSION_ROOT}/test/unit)
   target_link_libraries(stereo_fusion_unit_tests stereo_fusion_core stereo_fusion_sim GTest::gtest GTest::gtest_main)
   target_compile_definitions(stereo_fusion_unit_tests PRIVATE STEREO_FUSION_SOURCE_DIR="${STEREO_FUSION_ROOT}")
-  gtest_discover_tests(stereo_fusion_unit_tests DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 300)
+  # A test's time limit; sanitizers run the code 2-15x slower (scripts/check.sh).
+  set(_core_test_timeout_s 300)
+  if(STEREO_FUSION_SANITIZE)
+    set(_core_test_timeout_s 1200)
+  endif()
+  gtest_discover_tests(stereo_fusion_unit_tests DISCOVERY_TIMEOUT 60
+                       PROPERTIES TIMEOUT ${_core_test_timeout_s})
 endif()
