@@ -42,23 +42,23 @@ TEST(TwoHosts, BaseStationAssemblesExactlyTheRobotsMesh) {
   const long frames = static_cast<long>(bag->size());
   ASSERT_GT(frames, 5);
 
-  // Each side advertises its own veth address: a node advertising localhost (ROS_HOSTNAME left
-  // at localhost) would send the other side's connections to itself.
   EXPECT_EQ(ros::master::getHost(), robot_ip) << "ROS_MASTER_URI is not the robot's master";
   EXPECT_EQ(ros::network::getHost(), base_ip) << "this node does not advertise ROS_IP";
   ASSERT_TRUE(ros::service::waitForService("/mesh_assembler/get_full_mesh", ros::Duration(60.0)))
       << "the base station's assembler did not start";
   ASSERT_TRUE(ros::service::waitForService("/stereo_fusion/get_full_mesh", ros::Duration(60.0)))
       << "the robot's fusion nodelet is not reachable from the base station";
-  EXPECT_EQ(advertisedHost("/stereo_fusion_manager"), robot_ip);
-  EXPECT_EQ(advertisedHost("/player"), robot_ip);
-  EXPECT_EQ(advertisedHost("/mesh_assembler"), base_ip);
 
   // The robot's diagnostics reach the base station; the bag starts (a service call to the
   // robot's player) once the nodelet runs, and every frame of it is fused.
   test::DiagnosticsWatcher diagnostics;
   test::DiagnosticsWatcher assembler_diagnostics("mesh assembler");
   ASSERT_TRUE(test::startPausedPlayer(diagnostics)) << "the robot's player did not start";
+  // Each side advertises its own veth address (the player is registered: it answered). A node
+  // advertising localhost (ROS_HOSTNAME left at localhost) sends the other side to itself.
+  EXPECT_EQ(advertisedHost("/stereo_fusion_manager"), robot_ip);
+  EXPECT_EQ(advertisedHost("/player"), robot_ip);
+  EXPECT_EQ(advertisedHost("/mesh_assembler"), base_ip);
   test::waitFor([&] { return diagnostics.value("frames fused") >= frames; }, 120.0);
   ASSERT_EQ(diagnostics.value("frames fused"), frames)
       << "received " << diagnostics.value("frames received") << ", dropped "
