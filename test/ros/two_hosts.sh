@@ -9,7 +9,7 @@
 # #two-machines tells users to.
 #   test/ros/two_hosts.sh BUILD_DIR BAG CHECKER
 # Exits 0 passed, 1 failed, 77 skipped (ctest's SKIP_RETURN_CODE) with a line "SKIP: <why>"
-# where network namespaces cannot be made (not root, no CAP_NET_ADMIN, no veth).
+# where network namespaces cannot be made (not root: no CAP_SYS_ADMIN / CAP_NET_ADMIN; no veth).
 set -uo pipefail
 if [ $# -ne 3 ]; then
   echo "usage: $0 BUILD_DIR BAG CHECKER" >&2
@@ -69,7 +69,7 @@ fail() {
 
 command -v ip >/dev/null || skip "iproute2's ip is not installed"
 err="$(ip netns add "$robot_ns" 2>&1)" ||
-  skip "cannot create a network namespace ($err): run as root or with CAP_NET_ADMIN"
+  skip "cannot create a network namespace ($err): needs root (CAP_SYS_ADMIN and CAP_NET_ADMIN)"
 made_ns+=("$robot_ns")
 err="$(ip netns add "$base_ns" 2>&1)" || fail "second namespace: $err"
 made_ns+=("$base_ns")
