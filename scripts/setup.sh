@@ -32,8 +32,8 @@ PACKAGES=(
   libsensor-msgs-dev libstereo-msgs-dev libvisualization-msgs-dev ros-std-msgs
   ros-geometry-msgs ros-sensor-msgs ros-stereo-msgs ros-visualization-msgs libcv-bridge-dev
   libpcl-dev librosbag-dev libdiagnostic-updater-dev
-  # tests
-  libgtest-dev librostest-dev python3-rostest libnodeletlib-tools
+  # tests (iproute2: test/ros/two_hosts.sh's network namespaces and veth pair)
+  libgtest-dev librostest-dev python3-rostest libnodeletlib-tools iproute2
   # the style check (scripts/check_format.sh)
   clang-format
   # running: demo, replay, command-line tools

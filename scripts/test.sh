@@ -27,6 +27,13 @@ fi
 failed="$(sed -E 's/.* ([0-9]+) tests? failed out of ([0-9]+).*/\1/' <<<"$summary")"
 total="$(sed -E 's/.* ([0-9]+) tests? failed out of ([0-9]+).*/\2/' <<<"$summary")"
 skipped="$(grep -c '(Skipped)' "$log" || true)"
+# Why: a test that skips itself prints "SKIP: <reason>" (test/ros/two_hosts.sh without the rights
+# for network namespaces); ctest keeps every test's output in LastTest.log.
+while read -r name; do
+  reason="$(awk -v t="$name" '/^[0-9]+\/[0-9]+ Test: / { cur = substr($0, index($0, "Test: ") + 6) }
+    cur == t && /^SKIP: / { print substr($0, 7); exit }' "$BUILD_DIR/Testing/Temporary/LastTest.log" 2>/dev/null)"
+  echo "[test] skipped: $name${reason:+ ($reason)}"
+done < <(sed -nE 's/^[[:space:]]*[0-9]+ - (.*) \(Skipped\)$/\1/p' "$log")
 rm -f "$log"
 # A whole suite must run: a test binary that stopped being built, or a glob that lost its
 # files, would otherwise pass by running less. Skipped tests (e.g. AVX2 paths on a CPU without

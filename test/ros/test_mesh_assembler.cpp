@@ -6,16 +6,15 @@
 // its ~save_mesh writes the robot's textured OBJ. It repairs its copy after a lost update, after
 // a restart of the robot (a new session) and ignores a stale full update.
 #include <nodelet/NodeletLoad.h>
-#include <stereo_fusion/GetFullMesh.h>
 #include <stereo_fusion/SaveMesh.h>
 #include <tf2_ros/transform_broadcaster.h>
 #include <unistd.h>
 
 #include <fstream>
-#include <iterator>
 #include <map>
 
 #include "../unit/TestSupport.h"
+#include "FullMeshSupport.h"
 #include "NodeletUnload.h"
 #include "RosTestSupport.h"
 #include "readers/ObjReader.h"
@@ -29,7 +28,7 @@ using namespace stereo_fusion;
 
 namespace {
 
-using SubmeshMap = std::unordered_map<BlockKey, SubMesh, BlockKeyHash>;
+using test::SubmeshMap;
 
 sim::AnalyticScene scene() {
   sim::AnalyticScene s;
@@ -40,27 +39,11 @@ sim::AnalyticScene scene() {
   return s;
 }
 
-/// The mesh a service returns, decoded; its sequence in `sequence`, the message in `raw`.
-bool fetch(const std::string& service, SubmeshMap* mesh, uint64_t* sequence,
-           MeshUpdate* raw = nullptr) {
-  GetFullMesh srv;
-  if (!ros::service::call(service, srv)) return false;
-  mesh->clear();
-  *sequence = srv.response.mesh.sequence;
-  if (raw) *raw = srv.response.mesh;
-  return applyMeshUpdate(srv.response.mesh, mesh);
-}
-
 /// Blocks of `update` by key.
 std::map<BlockKey, const MeshBlock*> blocksOf(const MeshUpdate& update) {
   std::map<BlockKey, const MeshBlock*> blocks;
   for (const MeshBlock& b : update.blocks) blocks[{b.key[0], b.key[1], b.key[2]}] = &b;
   return blocks;
-}
-
-std::string readFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
 }  // namespace
@@ -136,7 +119,7 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   // It fetches the robot's mesh on its own (late join): wait until it holds one.
   ASSERT_TRUE(test::waitFor(
       [&] {
-        return fetch("/mesh_assembler/get_full_mesh", &assembled, &joined_sequence) &&
+        return test::fetchFullMesh("/mesh_assembler/get_full_mesh", &assembled, &joined_sequence) &&
                joined_sequence > 0;
       },
       30.0));
@@ -148,8 +131,9 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   ASSERT_EQ(diagnostics.value("frames fused"), kFrames);
   ASSERT_TRUE(test::waitFor(
       [&] {
-        return fetch("/stereo_fusion/get_full_mesh", &robot, &robot_sequence) &&
-               fetch("/mesh_assembler/get_full_mesh", &assembled, &assembled_sequence) &&
+        return test::fetchFullMesh("/stereo_fusion/get_full_mesh", &robot, &robot_sequence) &&
+               test::fetchFullMesh("/mesh_assembler/get_full_mesh", &assembled,
+                                   &assembled_sequence) &&
                assembled_sequence == robot_sequence;
       },
       30.0))
@@ -204,8 +188,8 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   ASSERT_TRUE(ros::service::call("/mesh_assembler/save_mesh", save_base));
   ASSERT_TRUE(save_robot.response.success) << save_robot.response.message;
   ASSERT_TRUE(save_base.response.success) << save_base.response.message;
-  const std::string robot_ply = readFile(save_robot.request.path),
-                    base_ply = readFile(save_base.request.path);
+  const std::string robot_ply = test::readFileBytes(save_robot.request.path),
+                    base_ply = test::readFileBytes(save_base.request.path);
   EXPECT_GT(base_ply.size(), 1000u);
   if (!compact)
     EXPECT_TRUE(robot_ply == base_ply) << "the PLYs differ";
@@ -219,8 +203,10 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
     MeshUpdate robot_raw, base_raw;
     SubmeshMap unused;
     uint64_t sequence = 0;
-    ASSERT_TRUE(fetch("/stereo_fusion/get_full_mesh", &unused, &sequence, &robot_raw));
-    ASSERT_TRUE(fetch("/mesh_assembler/get_full_mesh", &unused, &sequence, &base_raw));
+    ASSERT_TRUE(
+        test::fetchFullMesh("/stereo_fusion/get_full_mesh", &unused, &sequence, &robot_raw));
+    ASSERT_TRUE(
+        test::fetchFullMesh("/mesh_assembler/get_full_mesh", &unused, &sequence, &base_raw));
     const auto robot_blocks = blocksOf(robot_raw), base_blocks = blocksOf(base_raw);
     ASSERT_EQ(base_blocks.size(), robot_blocks.size());
     size_t textured_blocks = 0;
@@ -258,15 +244,16 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
         << save_base.response.message;
     if (!compact) {
       // The OBJs differ only in the name of their MTL file (mtllib line).
-      std::string robot_obj = readFile(save_robot.request.path);
+      std::string robot_obj = test::readFileBytes(save_robot.request.path);
       const size_t mtllib = robot_obj.find("_robot.mtl");
       ASSERT_NE(mtllib, std::string::npos);
       robot_obj.replace(mtllib, 6, "_base");
-      EXPECT_TRUE(robot_obj == readFile(save_base.request.path)) << "the OBJs differ";
+      EXPECT_TRUE(robot_obj == test::readFileBytes(save_base.request.path)) << "the OBJs differ";
       for (const ObjMaterial& m : obj.materials) {
         const std::string robot_png =
             std::string(m.diffuse_map).replace(m.diffuse_map.rfind("_base"), 5, "_robot");
-        EXPECT_TRUE(readFile(robot_png) == readFile(m.diffuse_map)) << m.diffuse_map;
+        EXPECT_TRUE(test::readFileBytes(robot_png) == test::readFileBytes(m.diffuse_map))
+            << m.diffuse_map;
       }
     }
     for (const ObjMaterial& m : obj.materials) {
@@ -286,7 +273,8 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   // exactly the robot's mesh, without that block.
   ros::Publisher injector = nh.advertise<MeshUpdate>("/stereo_fusion/mesh_update", 1, true);
   MeshUpdate session_probe;
-  ASSERT_TRUE(fetch("/stereo_fusion/get_full_mesh", &robot, &robot_sequence, &session_probe));
+  ASSERT_TRUE(
+      test::fetchFullMesh("/stereo_fusion/get_full_mesh", &robot, &robot_sequence, &session_probe));
   MeshUpdate after_gap;
   after_gap.session = session_probe.session;  // the robot's own run: a gap, not a restart
   after_gap.sequence = robot_sequence + 2;
@@ -309,8 +297,9 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
       test::waitFor([&] { return diagnostics.value("frames fused") >= kFrames + 1; }, 60.0));
   ASSERT_TRUE(test::waitFor(
       [&] {
-        return fetch("/stereo_fusion/get_full_mesh", &robot, &robot_sequence) &&
-               fetch("/mesh_assembler/get_full_mesh", &assembled, &assembled_sequence) &&
+        return test::fetchFullMesh("/stereo_fusion/get_full_mesh", &robot, &robot_sequence) &&
+               test::fetchFullMesh("/mesh_assembler/get_full_mesh", &assembled,
+                                   &assembled_sequence) &&
                assembled_sequence == robot_sequence;
       },
       30.0))
@@ -328,9 +317,11 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   // must make the assembler refetch (here it gets the running robot's mesh, of the old session,
   // and drops the foreign update) instead of applying it on top.
   MeshUpdate robot_raw, base_raw;
-  ASSERT_TRUE(fetch("/stereo_fusion/get_full_mesh", &robot, &robot_sequence, &robot_raw));
+  ASSERT_TRUE(
+      test::fetchFullMesh("/stereo_fusion/get_full_mesh", &robot, &robot_sequence, &robot_raw));
   ASSERT_NE(robot_raw.session, 0u) << "the robot sends no session";
-  ASSERT_TRUE(fetch("/mesh_assembler/get_full_mesh", &assembled, &assembled_sequence, &base_raw));
+  ASSERT_TRUE(test::fetchFullMesh("/mesh_assembler/get_full_mesh", &assembled, &assembled_sequence,
+                                  &base_raw));
   ASSERT_EQ(assembled_sequence, robot_sequence);
   EXPECT_EQ(base_raw.session, robot_raw.session);
   MeshUpdate restarted = after_gap;
@@ -347,7 +338,8 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   stale_full.full = true;
   injector.publish(stale_full);
   ros::WallDuration(1.0).sleep();  // ignoring leaves no trace to wait for: give it time to arrive
-  ASSERT_TRUE(fetch("/mesh_assembler/get_full_mesh", &assembled, &assembled_sequence, &base_raw));
+  ASSERT_TRUE(test::fetchFullMesh("/mesh_assembler/get_full_mesh", &assembled, &assembled_sequence,
+                                  &base_raw));
   EXPECT_EQ(assembled.count(stray.key), 0u)
       << "an update of another session or a stale full update was applied";
   EXPECT_EQ(base_raw.session, robot_raw.session);
@@ -357,8 +349,9 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
       test::waitFor([&] { return diagnostics.value("frames fused") >= kFrames + 2; }, 60.0));
   ASSERT_TRUE(test::waitFor(
       [&] {
-        return fetch("/stereo_fusion/get_full_mesh", &robot, &robot_sequence) &&
-               fetch("/mesh_assembler/get_full_mesh", &assembled, &assembled_sequence) &&
+        return test::fetchFullMesh("/stereo_fusion/get_full_mesh", &robot, &robot_sequence) &&
+               test::fetchFullMesh("/mesh_assembler/get_full_mesh", &assembled,
+                                   &assembled_sequence) &&
                assembled_sequence == robot_sequence;
       },
       30.0))
