@@ -2,6 +2,7 @@
 
 #include <OGRE/OgreManualObject.h>
 #include <OGRE/OgreMaterialManager.h>
+#include <OGRE/OgreResourceGroupManager.h>
 #include <OGRE/OgreSceneManager.h>
 #include <OGRE/OgreSceneNode.h>
 #include <OGRE/OgreTechnique.h>
@@ -57,8 +58,10 @@ MeshDisplay::~MeshDisplay() {
 void MeshDisplay::onInitialize() {
   MFDClass::onInitialize();
   root_ = scene_node_->createChildSceneNode();
+  // rviz 1.14 on OGRE 1.12 has no "rviz" resource group: the default one, as its own displays.
   material_ = Ogre::MaterialManager::getSingleton().create(
-      uniqueName("stereo_fusion_mesh_material_"), "rviz");
+      uniqueName("stereo_fusion_mesh_material_"),
+      Ogre::ResourceGroupManager::DEFAULT_RESOURCE_GROUP_NAME);
   Ogre::Pass* pass = material_->getTechnique(0)->getPass(0);
   // The vertex colours are the surface's; light modulates them (ambient + diffuse).
   pass->setVertexColourTracking(Ogre::TVC_AMBIENT | Ogre::TVC_DIFFUSE);
