@@ -54,6 +54,29 @@ def free_port():
     return port
 
 
+def descendant_named(root_pid, name):
+    """The PID of a process called `name` below `root_pid` (from /proc), or None."""
+    children = {}
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/stat") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+            with open(f"/proc/{entry}/comm") as f:
+                comm = f.read().strip()
+        except OSError:
+            continue
+        children.setdefault(int(fields[1]), []).append((int(entry), comm))
+    todo = [root_pid]
+    while todo:
+        for pid, comm in children.get(todo.pop(), []):
+            if comm == name:
+                return pid
+            todo.append(pid)
+    return None
+
+
 def stop(process):
     """SIGINT, then SIGKILL, to the process group this script started (xvfb-run and its
     children, or roscore and its children)."""
@@ -175,8 +198,20 @@ def main():
         for bad in ("could not be loaded", "Failed to load library", "PluginlibFactory", "Segmentation fault"):
             if bad in text:
                 fail(f"rviz's log says '{bad}'", rviz_log)
+        # Shutting down destroys the display with blocks drawn: rviz must end cleanly. SIGINT to
+        # rviz itself (xvfb-run's child, which this script started): xvfb-run returns its status.
+        rviz_pid = descendant_named(rviz.pid, "rviz")
+        if rviz_pid is None:
+            fail("rviz's process was not found under xvfb-run", rviz_log)
+        os.kill(rviz_pid, signal.SIGINT)
+        try:
+            code = rviz.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            fail("rviz did not end within 20 s of SIGINT", rviz_log)
+        if code != 0:
+            fail(f"rviz ended with exit code {code} on SIGINT (a crash while destroying the display?)", rviz_log)
         print(f"rviz loaded stereo_fusion/Mesh: subscribed, fetched the full mesh at start and after "
-              f"the gap ({len(calls)} fetches), running")
+              f"the gap ({len(calls)} fetches), drew, and ended cleanly")
         return 0
     finally:
         if rviz is not None:
