@@ -7,6 +7,8 @@
 #   doc/images/rviz_final.png     after the last frame
 #   doc/images/rviz_blocks.png    the same with the block bounds (debug) shown
 #   doc/images/rviz_planning.png  the planning layer alone: occupancy grid, ESDF slice, occupied cells
+#   doc/images/rviz_mesh_plugin.png  the mesh alone through the display stereo_fusion/Mesh, in an rviz
+#                                 started after the last frame (it fetched ~get_full_mesh)
 #   scripts/screenshots.sh [--frames N]
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -16,7 +18,7 @@ while [ $# -gt 0 ]; do
   case "$1" in
     --frames) FRAMES="$2"; shift 2 ;;
     --inside-xvfb) INSIDE_XVFB=1; shift ;;
-    -h|--help) sed -n '2,9p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,11p' "$0"; exit 0 ;;
     *) echo "screenshots.sh: unknown option $1" >&2; exit 2 ;;
   esac
 done
@@ -85,7 +87,8 @@ sleep 2
 sed -e '/Name: Block bounds (debug)/{n;s/Enabled: false/Enabled: true/}' "$ROOT/rviz/stereo_fusion.rviz" \
   >"$DEMO/screenshots_blocks.rviz"
 rviz -d "$DEMO/screenshots_blocks.rviz" >"$DEMO/screenshots_rviz2.log" 2>&1 &
-PIDS+=($!)
+rviz_pid=$!
+PIDS+=("$rviz_pid")
 sleep 15  # ~block_bounds is latched: the new rviz gets the last one
 import -window root "$OUT/rviz_blocks.png"
 echo "[screenshots] $OUT/rviz_blocks.png"
@@ -93,13 +96,26 @@ echo "[screenshots] $OUT/rviz_blocks.png"
 # The planning layer: the mesh hidden, the occupied cells shown beside the grid and the slice (a
 # new subscriber gets the grid when it connects; the clouds come at planning_publish_rate_hz).
 rosnode kill /rviz >/dev/null 2>&1 || true
-pkill -f "rviz -d $DEMO/screenshots_blocks.rviz" 2>/dev/null || true
+kill -INT "$rviz_pid" 2>/dev/null || true  # the rviz started above, by its PID
 sleep 2
 sed -e '/Name: Mesh$/{n;s/Enabled: true/Enabled: false/}' \
   -e '/Name: Occupied cells$/{n;s/Enabled: false/Enabled: true/}' \
   "$ROOT/rviz/stereo_fusion.rviz" >"$DEMO/screenshots_planning.rviz"
 rviz -d "$DEMO/screenshots_planning.rviz" >"$DEMO/screenshots_rviz3.log" 2>&1 &
-PIDS+=($!)
+rviz_pid=$!
+PIDS+=("$rviz_pid")
 sleep 15
 import -window root "$OUT/rviz_planning.png"
 echo "[screenshots] $OUT/rviz_planning.png"
+
+# The mesh alone through the plugin (every display but the grid and the mesh off), in an rviz that
+# joins after the last frame: what it draws came from ~get_full_mesh.
+kill -INT "$rviz_pid" 2>/dev/null || true
+sleep 2
+sed -E -e '/Name: (Camera path|Camera frustum|Occupancy grid|ESDF slice|TF)$/{n;s/Enabled: true/Enabled: false/}' \
+  "$ROOT/rviz/stereo_fusion.rviz" >"$DEMO/screenshots_mesh.rviz"
+rviz -d "$DEMO/screenshots_mesh.rviz" >"$DEMO/screenshots_rviz4.log" 2>&1 &
+PIDS+=($!)
+sleep 15
+import -window root "$OUT/rviz_mesh_plugin.png"
+echo "[screenshots] $OUT/rviz_mesh_plugin.png"

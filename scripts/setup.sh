@@ -4,7 +4,7 @@
 #   scripts/setup.sh [--no-build] [--targets "T1 T2 ..."] [--screenshots] [--with sanitizers|fuzz]...
 # --targets builds only those CMake targets (and what they need), not the tests: what the demo and
 # the offline tools pass, so a first run does not wait for the test suite. --screenshots adds
-# rviz, Xvfb and ImageMagick (scripts/screenshots.sh); --with adds an opt-in package group
+# ImageMagick (scripts/screenshots.sh); --with adds an opt-in package group
 # (scripts/check.sh, scripts/fuzz.sh use them).
 # Environment: BUILD_TYPE (default Release), BUILD_DIR (default <repo>/.build).
 set -euo pipefail
@@ -32,8 +32,11 @@ PACKAGES=(
   libsensor-msgs-dev libstereo-msgs-dev libvisualization-msgs-dev ros-std-msgs
   ros-geometry-msgs ros-sensor-msgs ros-stereo-msgs ros-visualization-msgs libcv-bridge-dev
   libpcl-dev librosbag-dev libdiagnostic-updater-dev
-  # tests (iproute2: test/ros/two_hosts.sh's network namespaces and veth pair)
-  libgtest-dev librostest-dev python3-rostest libnodeletlib-tools iproute2
+  # the rviz display stereo_fusion/Mesh (stereo_fusion_rviz, rviz_plugin.xml) and rviz.launch
+  librviz-dev rviz
+  # tests (iproute2: test/ros/two_hosts.sh's network namespaces and veth pair; xvfb, xauth,
+  # Mesa: rviz loads the display on a virtual screen in RvizPlugin.*)
+  libgtest-dev librostest-dev python3-rostest libnodeletlib-tools iproute2 xvfb xauth libgl1-mesa-dri
   # the style check (scripts/check_format.sh)
   clang-format
   # running: demo, replay, command-line tools
@@ -44,9 +47,9 @@ PACKAGES=(
   # -dev packages hold their package.xml and plugin XML: without them roslaunch cannot load them)
   ros-image-proc libimage-proc-dev ros-stereo-image-proc libstereo-image-proc-dev
 )
-# rviz under Xvfb with software OpenGL for scripts/screenshots.sh: opt-in (`--screenshots`, which
-# that script passes); CI does not need them.
-SCREENSHOT_PACKAGES=(rviz xvfb xauth imagemagick libgl1-mesa-dri x11-apps)
+# The screen capture for scripts/screenshots.sh: opt-in (`--screenshots`, which that script
+# passes); rviz, Xvfb and Mesa are in the list above.
+SCREENSHOT_PACKAGES=(imagemagick x11-apps)
 NO_BUILD=0
 TARGETS=()
 while (($# > 0)); do
