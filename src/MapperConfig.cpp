@@ -296,8 +296,11 @@ const Table& table() {
               member(&MapperConfig::planning_enabled));
     t.addDouble("esdf_voxel_size_m", "m", 0.0, true, 1.0,
                 "Cell edge of the planning layer (free space, occupancy, ESDF): "
-                "voxel_size_m times 1, 2, 4 or 8. 0 = auto: the one of those nearest to "
-                "8 cm (4 voxels at 2 cm, 8 at 1 cm, 1 at 10 cm).",
+                "voxel_size_m times 1, 2, 4 or 8. 0 = auto: the one of those nearest in ratio "
+                "to max(8 cm, range / 128), the range being max(max_depth_m, "
+                "free_space_unmeasured_range_m): indoors (8 m) 4 voxels at 2 cm, 8 at 1 cm, 1 at "
+                "10 cm; a 10 cm map out to 25 m gets 20 cm cells (a ray crosses at most ~128 "
+                "cells: past ~10 m stereo cannot resolve 8 cm, and each cell costs the frame).",
                 member(&MapperConfig::esdf_voxel_size_m));
     t.addDouble("esdf_max_distance_m", "m", 0.0, false, 100.0,
                 "The ESDF is exact up to this distance from the nearest obstacle; "
@@ -341,11 +344,16 @@ const Table& table() {
 
 double MapperConfig::planningCellSizeM() const {
   if (esdf_voxel_size_m > 0.0) return esdf_voxel_size_m;
+  // Free space is carved along every ray out to the range: past ~10 m, cells that keep a ray
+  // to kAutoPlanningCellRays cells follow stereo's depth error (it grows as z²) instead of
+  // costing the frame ever more cells of an 8 cm grid it cannot resolve there.
   constexpr double kAutoPlanningCellM = 0.08;
+  constexpr double kAutoPlanningCellRays = 128.0;
+  const double range_m = std::max(max_depth_m, free_space_unmeasured_range_m);
+  const double target_m = std::max(kAutoPlanningCellM, range_m / kAutoPlanningCellRays);
   double best = voxel_size_m;
   for (int n : {2, 4, 8})
-    if (std::abs(std::log(n * voxel_size_m / kAutoPlanningCellM)) <
-        std::abs(std::log(best / kAutoPlanningCellM)))
+    if (std::abs(std::log(n * voxel_size_m / target_m)) < std::abs(std::log(best / target_m)))
       best = n * voxel_size_m;
   return best;
 }

@@ -123,7 +123,9 @@ struct MapperConfig {
   /// Block edge length in metres.
   double blockSizeM() const { return 8.0 * voxel_size_m; }
   /// Edge of a planning-layer cell: esdf_voxel_size_m, or with 0 the multiple voxel_size_m · n
-  /// (n = 1, 2, 4 or 8) nearest to kAutoPlanningCellM (8 cm: 4 voxels at 2 cm, 8 at 1 cm).
+  /// (n = 1, 2, 4 or 8) nearest in ratio to max(8 cm, range / 128), the range being
+  /// max(max_depth_m, free_space_unmeasured_range_m): 4 voxels at 2 cm and 8 at 1 cm indoors
+  /// (8 m), 20 cm cells for a 10 cm map out to 25 m.
   double planningCellSizeM() const;
   /// Φ by level, as every stage applies it.
   TruncationBand truncationBand() const { return TruncationBand(voxel_size_m, truncation_vox); }

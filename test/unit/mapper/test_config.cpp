@@ -290,6 +290,30 @@ TEST(Config, StageConfigsReachEveryStage) {
 
 // The table behind both registries (mapping and node parameters): every type, the messages
 // naming parameter, range and unit, failed sets changing nothing, and one definition per name.
+TEST(Config, PlanningCellFollowsTheVoxelAndTheRange) {
+  MapperConfig c;
+  const auto cell = [&](double voxel_m, double max_depth_m, double unmeasured_m = 0.0) {
+    c.voxel_size_m = voxel_m;
+    c.max_depth_m = max_depth_m;
+    c.free_space_unmeasured_range_m = unmeasured_m;
+    return c.planningCellSizeM();
+  };
+  // Indoors (8 m: 8 / 128 = 6.25 cm < 8 cm): the multiple nearest 8 cm in ratio.
+  EXPECT_DOUBLE_EQ(cell(0.01, 8.0), 0.08);
+  EXPECT_DOUBLE_EQ(cell(0.02, 8.0), 0.08);
+  EXPECT_DOUBLE_EQ(cell(0.1, 8.0), 0.1);
+  // 25 m: 25 / 128 = 19.5 cm; of 10, 20, 40, 80 cm, 20 cm is nearest in ratio.
+  EXPECT_DOUBLE_EQ(cell(0.1, 25.0), 0.2);
+  EXPECT_DOUBLE_EQ(cell(0.2, 25.0), 0.2);
+  // 40 m at 2 cm: 31.25 cm wanted, the coarsest multiple is 8 · 2 = 16 cm.
+  EXPECT_DOUBLE_EQ(cell(0.02, 40.0), 0.16);
+  // The unmeasured range carves as far as the measured one: 8 m measured, 25 m unmeasured.
+  EXPECT_DOUBLE_EQ(cell(0.1, 8.0, 25.0), 0.2);
+  // Given, it is taken as it is.
+  c.esdf_voxel_size_m = 0.3;
+  EXPECT_DOUBLE_EQ(cell(0.1, 25.0), 0.3);
+}
+
 TEST(ParameterTable, ParsesChecksAndNamesEveryType) {
   struct Settings {
     double rate_hz = 2.0;
