@@ -48,11 +48,11 @@ InputTotals FusionDiagnostics::inputTotals(uint64_t unmatched) const {
 void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   const double elapsed = std::max(1e-3, (ros::WallTime::now() - started_).toSec());
   const uint64_t unmatched = unmatchedDisparities();
-  const InputTotals totals = inputTotals(unmatched);
-  input_health_.sample(monotonicNowS(), totals);
+  const InputTotals input = inputTotals(unmatched);
+  input_health_.sample(monotonicNowS(), input);
   const InputWindowReport window = input_health_.report();
   const RejectCounters& drops = session_->drops();
-  const uint64_t disparities_in = totals.disparities, matched = totals.frames;
+  const uint64_t disparities_in = input.disparities, matched = input.frames;
   const uint64_t fused = session_->framesFused();
   // The watchdog: a single operation (a frame, a meshing pass) holding the map this long stalls
   // everything behind it.
@@ -97,7 +97,7 @@ void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   else
     status.add("since the last frame (s)", "no frame yet");
   status.add("input rate since start (Hz)", matched / elapsed);
-  status.add("frames dropped since start", totals.dropped);
+  status.add("frames dropped since start", input.dropped);
   drops.forEach([&](const RejectReasonInfo& info, uint64_t n) { status.add(info.label, n); });
   status.add("ignored: image / camera_info repeating a stamp", frames_->ignoredDuplicateParts());
   const FusedFrameTotals& totals = session_->fusedTotals();
