@@ -44,6 +44,7 @@ add_library(stereo_fusion_core STATIC
   ${STEREO_FUSION_ROOT}/src/session/EditReplay.cpp
   ${STEREO_FUSION_ROOT}/src/session/EditTimeline.cpp
   ${STEREO_FUSION_ROOT}/src/session/FrameStats.cpp
+  ${STEREO_FUSION_ROOT}/src/session/InputHealth.cpp
   ${STEREO_FUSION_ROOT}/src/session/MappingSession.cpp
   ${STEREO_FUSION_ROOT}/src/session/OutputCadence.cpp
   ${STEREO_FUSION_ROOT}/src/session/TrajectoryOutcome.cpp

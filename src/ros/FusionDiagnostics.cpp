@@ -1,6 +1,7 @@
 #include "stereo_fusion/ros/FusionDiagnostics.h"
 
 #include <algorithm>
+#include <chrono>
 
 #include "stereo_fusion/util/Percentile.h"
 
@@ -10,8 +11,14 @@ FusionDiagnostics::FusionDiagnostics(ros::NodeHandle& nh, ros::NodeHandle& pnh,
                                      const NodeConfig& node, MappingSession* session,
                                      const FrameInput* frames, const TrajectoryInput* trajectories,
                                      const NodeStats* stats)
-    : node_(node), session_(session), frames_(frames), trajectories_(trajectories), stats_(stats) {
+    : node_(node),
+      session_(session),
+      frames_(frames),
+      trajectories_(trajectories),
+      stats_(stats),
+      input_health_(InputHealthConfig{node.diagnostics_window_s, node.input_timeout_s}) {
   started_ = ros::WallTime::now();
+  input_health_.sample(monotonicNowS(), inputTotals(unmatchedDisparities()));  // first baseline
   updater_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
   updater_->setHardwareID("stereo_fusion");
   updater_->add("fusion", this, &FusionDiagnostics::diagnose);
@@ -19,17 +26,33 @@ FusionDiagnostics::FusionDiagnostics(ros::NodeHandle& nh, ros::NodeHandle& pnh,
                               [this](const ros::WallTimerEvent&) { updater_->force_update(); });
 }
 
-void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
-  const double elapsed = std::max(1e-3, (ros::WallTime::now() - started_).toSec());
-  const RejectCounters& drops = session_->drops();
+double FusionDiagnostics::monotonicNowS() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+uint64_t FusionDiagnostics::unmatchedDisparities() const {
   const uint64_t disparities_in = frames_->disparitiesIn(), matched = frames_->framesMatched();
   const uint64_t refused = frames_->disparitiesRefused();
-  const uint64_t unmatched =
-      disparities_in > matched + refused ? disparities_in - matched - refused : 0;
+  return disparities_in > matched + refused ? disparities_in - matched - refused : 0;
+}
+
+InputTotals FusionDiagnostics::inputTotals(uint64_t unmatched) const {
   // A disparity whose image has not arrived yet is unmatched for a moment in normal operation:
-  // only more than the synchroniser's queue can hold is surely lost.
-  const bool lost_in_sync = unmatched > static_cast<uint64_t>(node_.sync_queue_size);
-  const uint64_t dropped = drops.total() + (lost_in_sync ? unmatched : 0);
+  // only those beyond what the synchroniser's queue holds are surely lost.
+  const uint64_t queue = static_cast<uint64_t>(node_.sync_queue_size);
+  const uint64_t lost_in_sync = unmatched > queue ? unmatched - queue : 0;
+  return {frames_->disparitiesIn(), frames_->framesMatched(),
+          session_->drops().total() + lost_in_sync};
+}
+
+void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  const double elapsed = std::max(1e-3, (ros::WallTime::now() - started_).toSec());
+  const uint64_t unmatched = unmatchedDisparities();
+  const InputTotals input = inputTotals(unmatched);
+  input_health_.sample(monotonicNowS(), input);
+  const InputWindowReport window = input_health_.report();
+  const RejectCounters& drops = session_->drops();
+  const uint64_t disparities_in = input.disparities, matched = input.frames;
   const uint64_t fused = session_->framesFused();
   // The watchdog: a single operation (a frame, a meshing pass) holding the map this long stalls
   // everything behind it.
@@ -38,14 +61,21 @@ void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   if (busy_s > kStalledAfterS)
     status.summary(diagnostic_msgs::DiagnosticStatus::ERROR,
                    "the map has been in " + stage + " for " + std::to_string(busy_s) + " s");
+  else if (window.stale)
+    status.summary(diagnostic_msgs::DiagnosticStatus::ERROR, input_health_.staleMessage());
   else if (matched > 0 && fused == 0)
     status.summary(diagnostic_msgs::DiagnosticStatus::ERROR,
                    "no frame fused yet; see the drop counters");
-  else if (dropped > 0)
-    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "frames dropped; see the counters");
+  else if (window.dropped > 0)  // only recent drops: one early drop does not mark the whole run
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN,
+                   std::to_string(window.dropped) + " dropped in the last " +
+                       std::to_string(static_cast<int>(window.span_s + 0.5)) +
+                       " s; see the counters");
   else if (stats_->grid_windowed.load())
     status.summary(diagnostic_msgs::DiagnosticStatus::WARN,
                    "the occupancy grid is a window around the camera (grid_max_cells)");
+  else if (matched == 0)
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "waiting for the first frame");
   else
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, "fusing");
   // disparities received = frames fused + every "dropped:" counter + frames in the queue / worker.
@@ -57,7 +87,17 @@ void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   status.add("frames fused", fused);
   status.add("map busy: stage", stage);
   status.add("map busy: for (s)", busy_s);
-  status.add("input rate (Hz)", matched / elapsed);
+  // The input now: over the window (diagnostics_window_s) and since the last frame.
+  status.add("window (s)", window.span_s);
+  status.add("input rate, window (Hz)", window.frames_per_s);
+  status.add("disparity rate, window (Hz)", window.disparities_per_s);
+  status.add("frames dropped in the window", window.dropped);
+  if (window.first_frame_seen)
+    status.add("since the last frame (s)", window.since_last_frame_s);
+  else
+    status.add("since the last frame (s)", "no frame yet");
+  status.add("input rate since start (Hz)", matched / elapsed);
+  status.add("frames dropped since start", input.dropped);
   drops.forEach([&](const RejectReasonInfo& info, uint64_t n) { status.add(info.label, n); });
   status.add("ignored: image / camera_info repeating a stamp", frames_->ignoredDuplicateParts());
   const FusedFrameTotals& totals = session_->fusedTotals();

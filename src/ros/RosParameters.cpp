@@ -119,6 +119,19 @@ const Table& table() {
         "while a frame, a meshing or a planning pass holds it, before it answers busy "
         "(`success: false`, nothing done).",
         member(&NodeConfig::max_request_wait_s));
+    t.addDouble(
+        "diagnostics_window_s", "s", 0.0, false, 3600.0,
+        "Span of the rates and of the drop count /diagnostics reports (`input rate, window (Hz)`, "
+        "`frames dropped in the window`): the status is WARN while frames were dropped within "
+        "it and OK again once the window has passed them. The totals since start are reported "
+        "beside.",
+        member(&NodeConfig::diagnostics_window_s));
+    t.addDouble(
+        "input_timeout_s", "s", 0.0, true, 3600.0,
+        "No frame (disparity, image and camera_info matched) for this long after the first one "
+        "turns /diagnostics ERROR, `input stale` (a camera or driver that died), and OK again "
+        "with the next frame; checked once a second. 0 = off.",
+        member(&NodeConfig::input_timeout_s));
     t.addBool(
         "allow_unknown_parameters",
         "A name in the node's namespace that is no parameter here (a misspelt key) is an error "

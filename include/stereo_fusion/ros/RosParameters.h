@@ -49,6 +49,10 @@ struct NodeConfig {
   /// How long a service request waits for the map held by a frame or a meshing pass before it
   /// answers busy (SessionConfig::max_request_wait_s).
   double max_request_wait_s = 2.0;
+  /// Span of the input rates and of the drop count on /diagnostics (InputHealthConfig).
+  double diagnostics_window_s = 10.0;
+  /// No frame for this long after the first one turns /diagnostics ERROR (stale input); 0 = off.
+  double input_timeout_s = 2.0;
   /// A name in the node's namespace that no registry knows: false = an error, the node does not
   /// start; true = a warning per name, and the node starts.
   bool allow_unknown_parameters = false;

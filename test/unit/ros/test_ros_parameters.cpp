@@ -38,6 +38,8 @@ TEST(NodeParameterRegistry, DefaultsAreNodeConfigsAndValid) {
   EXPECT_EQ(getNodeParameter(defaults, "mesh_encoding"), "float32");
   EXPECT_EQ(getNodeParameter(defaults, "trajectory_frame"), "");
   EXPECT_EQ(getNodeParameter(defaults, "max_request_wait_s"), "2");
+  EXPECT_EQ(getNodeParameter(defaults, "diagnostics_window_s"), "10");
+  EXPECT_EQ(getNodeParameter(defaults, "input_timeout_s"), "2");
   EXPECT_EQ(getNodeParameter(defaults, "allow_unknown_parameters"), "false");
   EXPECT_EQ(getNodeParameter(defaults, "no_such_parameter"), "");
   // Every field of NodeConfig has its one definition (drop_oldest is queue_policy).
@@ -65,6 +67,8 @@ TEST(NodeParameterRegistry, DefaultsAreNodeConfigsAndValid) {
                                              "planning_max_box_cells",
                                              "planning_max_query_points",
                                              "max_request_wait_s",
+                                             "diagnostics_window_s",
+                                             "input_timeout_s",
                                              "allow_unknown_parameters"}));
   for (const ParameterSpec& spec : nodeParameterSpecs()) {
     EXPECT_FALSE(spec.description.empty()) << spec.name;
@@ -156,6 +160,10 @@ TEST(NodeParameterRegistry, InvalidValuesAreRefusedNamingParameterRangeAndUnit) 
       {"publish_path", "yes", "parameter 'publish_path': 'yes' is not true or false"},
       {"max_request_wait_s", "0", "parameter 'max_request_wait_s' = 0 is out of range (0, 60] s"},
       {"max_request_wait_s", "61", "parameter 'max_request_wait_s' = 61 is out of range (0, 60] s"},
+      {"diagnostics_window_s", "0",
+       "parameter 'diagnostics_window_s' = 0 is out of range (0, 3600] s"},
+      {"input_timeout_s", "-1", "parameter 'input_timeout_s' = -1 is out of range [0, 3600] s"},
+      {"input_timeout_s", "inf", "parameter 'input_timeout_s': 'inf' is not a finite number"},
       {"allow_unknown_parameters", "maybe",
        "parameter 'allow_unknown_parameters': 'maybe' is not true or false"},
       {"queue_length", "5", "unknown parameter 'queue_length' (did you mean 'queue_size'?)"},

@@ -1,12 +1,17 @@
 // The user documentation stays true to the code and to itself: doc/parameters.md is exactly the
-// page generated from the parameter registries (mapping and node parameters), and every
-// relative link of README.md and doc/ resolves (file and heading anchor).
+// page generated from the parameter registries (mapping and node parameters), every relative
+// link of README.md and doc/ resolves (file and heading anchor), every service the nodes
+// advertise and every node parameter is named where the pages list them, every option of the
+// offline tools' --help is in offline_tools.md, and figures stated on several pages agree.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <regex>
+#include <set>
 #include <sstream>
 
 #include "docs/MarkdownLinks.h"
@@ -34,6 +39,46 @@ std::vector<fs::path> documentationPages() {
   for (const auto& entry : fs::recursive_directory_iterator(fs::path(kSourceDir) / "doc"))
     if (entry.path().extension() == ".md") pages.push_back(entry.path());
   return pages;
+}
+
+/// The text of `page` from its heading `heading` (a whole line) to the next heading of the same
+/// level; empty when the heading is missing.
+std::string section(const std::string& page, const std::string& heading) {
+  const size_t start = page.find("\n" + heading + "\n");
+  if (start == std::string::npos) return "";
+  const std::string level = heading.substr(0, heading.find(' ') + 1);
+  const size_t end = page.find("\n" + level, start + heading.size() + 1);
+  return page.substr(start, end == std::string::npos ? std::string::npos : end - start);
+}
+
+/// Every "--option" a text names, "--help" aside.
+std::set<std::string> optionsIn(const std::string& text) {
+  std::set<std::string> options;
+  const std::regex option(R"((^|[^A-Za-z0-9-])(--[a-z][a-z0-9-]*))");
+  for (std::sregex_iterator it(text.begin(), text.end(), option), end; it != end; ++it)
+    if ((*it)[2] != "--help") options.insert((*it)[2]);
+  return options;
+}
+
+/// What `binary --help` prints.
+std::string helpOf(const std::string& binary) {
+  const std::string command =
+      "'" + (fs::path(STEREO_FUSION_TOOL_DIR) / binary).string() + "' --help";
+  std::string out;
+  if (FILE* pipe = ::popen(command.c_str(), "r")) {
+    char buffer[4096];
+    size_t n;
+    while ((n = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0) out.append(buffer, n);
+    ::pclose(pipe);
+  }
+  return out;
+}
+
+/// `text` without spaces and line breaks (so "31 – 39 ms" and "31–39\nms" compare equal).
+std::string withoutSpaces(std::string text) {
+  text.erase(std::remove_if(text.begin(), text.end(), [](char c) { return c == ' ' || c == '\n'; }),
+             text.end());
+  return text;
 }
 
 }  // namespace
@@ -108,4 +153,95 @@ TEST(Docs, HeadingAnchorsFollowTheForges) {
                 "## Quick start\n"),
             (std::vector<std::string>{"quick-start", "the-method-as-implemented", "fusesh--offline",
                                       "quick-start-1"}));
+}
+
+// Every service a node advertises (src/ros/: advertiseService("name", ...)) is in
+// ros_interface.md's table as `~name` and in development.md's list, and every service type
+// (srv/*.srv) is in development.md.
+TEST(Docs, EveryAdvertisedServiceIsDocumented) {
+  const std::string ros_interface = readFile(fs::path(kSourceDir) / "doc" / "ros_interface.md");
+  const std::string development = readFile(fs::path(kSourceDir) / "doc" / "development.md");
+  const std::regex advertise(R"re(advertiseService\(\s*"([a-z_]+)")re");
+  std::set<std::string> services;
+  for (const auto& entry : fs::directory_iterator(fs::path(kSourceDir) / "src" / "ros")) {
+    const std::string code = readFile(entry.path());
+    for (std::sregex_iterator it(code.begin(), code.end(), advertise), end; it != end; ++it)
+      services.insert((*it)[1]);
+  }
+  EXPECT_GE(services.size(), 9u) << "the nodelet's nine services, at least";
+  for (const std::string& name : services) {
+    EXPECT_NE(ros_interface.find("| `~" + name + "` |"), std::string::npos)
+        << "~" << name << ": no row in doc/ros_interface.md";
+    EXPECT_NE(development.find("~" + name), std::string::npos)
+        << "~" << name << ": not in doc/development.md";
+  }
+  size_t types = 0;
+  for (const auto& entry : fs::directory_iterator(fs::path(kSourceDir) / "srv")) {
+    ++types;
+    EXPECT_NE(development.find(entry.path().stem().string()), std::string::npos)
+        << entry.path().filename() << ": not in doc/development.md";
+  }
+  EXPECT_GE(types, 8u);
+}
+
+// ros_interface.md's "Node parameters" names every node parameter (the table itself is
+// parameters.md, generated).
+TEST(Docs, RosInterfaceNamesEveryNodeParameter) {
+  const std::string text =
+      section(readFile(fs::path(kSourceDir) / "doc" / "ros_interface.md"), "## Node parameters");
+  ASSERT_FALSE(text.empty());
+  for (const ParameterSpec& spec : nodeParameterSpecs())
+    EXPECT_NE(text.find("`" + spec.name + "`"), std::string::npos) << spec.name;
+}
+
+// The offline tools' reference is offline_tools.md: every option their --help lists is there.
+TEST(Docs, EveryOptionOfTheOfflineToolsIsInOfflineTools) {
+  const std::string page = readFile(fs::path(kSourceDir) / "doc" / "offline_tools.md");
+  for (const char* tool :
+       {"stereo_fusion_fuse", "stereo_fusion_evaluate", "stereo_fusion_evaluate_esdf"}) {
+    const std::set<std::string> options = optionsIn(helpOf(tool));
+    EXPECT_GE(options.size(), 3u) << tool << " --help";
+    for (const std::string& option : options)
+      EXPECT_NE(page.find(option), std::string::npos)
+          << tool << " " << option << ": not in doc/offline_tools.md";
+  }
+  // The extraction itself: options in prose and usage lines, not words with dashes.
+  EXPECT_EQ(optionsIn("a --max-distance-m D, [--json F] well-known --help"),
+            (std::set<std::string>{"--json", "--max-distance-m"}));
+}
+
+// The 100 000-point ~get_distance time is one figure: the live measurement's p50 (the table of
+// "Planning interface, live"), repeated in the service's row and the README.
+TEST(Docs, GetDistanceTimeIsTheLiveMeasurementEverywhere) {
+  const std::string ros_interface = readFile(fs::path(kSourceDir) / "doc" / "ros_interface.md");
+  const std::string live = section(ros_interface, "## Planning interface, live");
+  std::smatch row;
+  ASSERT_TRUE(std::regex_search(live, row,
+                                std::regex(R"(\| 100 000 \| [0-9]+ \| ([0-9.]+ – [0-9.]+ ms) \|)")))
+      << "the live table's 100 000-point row";
+  const std::string p50 = withoutSpaces(row[1]);
+  const size_t service_row = ros_interface.find("| `~get_distance` |");
+  ASSERT_NE(service_row, std::string::npos);
+  const std::string service =
+      ros_interface.substr(service_row, ros_interface.find('\n', service_row) - service_row);
+  EXPECT_NE(withoutSpaces(service).find("100000pointstake" + p50), std::string::npos) << service;
+  const std::string readme = readFile(fs::path(kSourceDir) / "README.md");
+  EXPECT_NE(withoutSpaces(readme).find("100000pointscomebackin" + p50), std::string::npos)
+      << "README.md: 100 000 points come back in " << row[1].str();
+}
+
+// How long the first demo and test runs take is kept in one place, getting_started.md: the
+// README's "Try it" and setup.sh's messages state no duration of their own.
+TEST(Docs, FirstRunTimesAreKeptInGettingStartedOnly) {
+  const std::regex duration(R"(([0-9]+\s*(–|-|to)\s*)?[0-9]+\s*(minutes|min\b|m [0-9]+ s))");
+  const std::string try_it = section(readFile(fs::path(kSourceDir) / "README.md"), "## Try it");
+  ASSERT_FALSE(try_it.empty());
+  std::smatch found;
+  EXPECT_FALSE(std::regex_search(try_it, found, duration)) << "README.md: " << found.str();
+  EXPECT_NE(try_it.find("doc/getting_started.md#setup-demo-and-tests"), std::string::npos);
+  const std::string setup = readFile(fs::path(kSourceDir) / "scripts" / "setup.sh");
+  EXPECT_FALSE(std::regex_search(setup, found, duration)) << "scripts/setup.sh: " << found.str();
+  const std::string started = section(readFile(fs::path(kSourceDir) / "doc" / "getting_started.md"),
+                                      "## Setup, demo and tests");
+  EXPECT_TRUE(std::regex_search(started, found, duration)) << "getting_started.md: the times";
 }
