@@ -4,6 +4,8 @@
 // image (depth_input.test, input: depth), 16UC1 in mm and 32FC1 in m, puts an analytic plane
 // where it is, raw and through the compressedDepth transport (depth_compressed_input.test), and a
 // depth image of a wrong encoding is dropped, counted and changes nothing.
+#include <nodelet/loader.h>
+#include <rosgraph_msgs/Log.h>
 #include <sensor_msgs/CompressedImage.h>
 #include <stereo_fusion/GetFullMesh.h>
 #include <tf2_ros/transform_broadcaster.h>
@@ -12,6 +14,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <mutex>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <vector>
@@ -19,6 +22,7 @@
 #include "../unit/TestSupport.h"
 #include "RosTestSupport.h"
 #include "stereo_fusion/Mapper.h"
+#include "stereo_fusion/ros/FusionNodelet.h"
 #include "stereo_fusion/ros/MeshMessages.h"
 #include "stereo_fusion/ros/RosParameters.h"
 
@@ -109,6 +113,48 @@ TEST(CompressedImages, FuseExactlyAsTheRawImagesWould) {
   ASSERT_GT(raw.mesh().submeshes().size(), 10u);
   // Same geometry and, PNG being lossless, the same vertex colours.
   test::expectSameSubmeshes(live, raw.mesh().submeshes(), test::kWithColors);
+}
+
+// A transport no plugin provides stops the nodelet at start-up, the message naming it and the
+// transports that can be loaded (ours among them).
+TEST(ImageTransport, AnUnknownTransportStopsTheStartAndNamesTheLoadableOnes) {
+  const std::string ns = "/unknown_transport/stereo_fusion";
+  ros::param::set(ns + "/image_transport", std::string("no_such_transport"));
+  // The manager logs what onInit() threw: this process's own /rosout carries the FATAL line.
+  std::mutex mutex;
+  std::string fatal;
+  ros::Subscriber rosout = ros::NodeHandle().subscribe<rosgraph_msgs::Log>(
+      "/rosout", 100, [&](const rosgraph_msgs::Log::ConstPtr& log) {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (log->level == rosgraph_msgs::Log::FATAL &&
+            log->msg.find("no_such_transport") != std::string::npos)
+          fatal = log->msg;
+      });
+  ros::WallDuration(0.5).sleep();  // the subscription connects
+  const boost::function<boost::shared_ptr<nodelet::Nodelet>(const std::string&)> create =
+      [](const std::string&) { return boost::make_shared<FusionNodelet>(); };
+  nodelet::Loader loader(create);
+  bool loaded = false;
+  try {
+    loaded = loader.load(ns, "stereo_fusion/FusionNodelet", {}, {});
+  } catch (const std::exception&) {  // the manager reports it either way
+  }
+  if (loaded) loader.unload(ns);
+  EXPECT_FALSE(loaded) << "the nodelet started with an image transport that does not exist";
+  ASSERT_TRUE(test::waitFor(
+      [&] {
+        std::lock_guard<std::mutex> lock(mutex);
+        return !fatal.empty();
+      },
+      10.0))
+      << "no FATAL naming the transport";
+  std::lock_guard<std::mutex> lock(mutex);
+  EXPECT_NE(fatal.find("image_transport 'no_such_transport'"), std::string::npos) << fatal;
+  EXPECT_NE(fatal.find("loadable here: "), std::string::npos) << fatal;
+  EXPECT_NE(fatal.find("compressed"), std::string::npos) << fatal;  // ours
+  EXPECT_NE(fatal.find("raw"), std::string::npos) << fatal;
+  rosout.shutdown();
+  ros::param::del("/unknown_transport");
 }
 
 // ---------------------------------------------------------------------------------------------
