@@ -25,7 +25,10 @@ PACKAGES=(
   # ROS 1 from Debian (catkin, messages, nodelet, tf2, synchronisation, images, bags)
   catkin ros-message-generation ros-message-runtime libroscpp-dev libnodeletlib-dev
   libmessage-filters-dev libtf2-dev libtf2-msgs-dev libtf2-ros-dev libtf2-eigen-dev libstd-msgs-dev
-  libgeometry-msgs-dev libimage-transport-dev libstd-srvs-dev ros-std-srvs
+  libgeometry-msgs-dev libstd-srvs-dev ros-std-srvs
+  # images through image_transport (raw only in Debian: the compressed and compressedDepth
+  # subscribers are the package's own, image_transport_plugins.xml)
+  libimage-transport-dev
   libnav-msgs-dev ros-nav-msgs
   # the planning topics: map_msgs/OccupancyGridUpdate, point clouds through pcl_conversions
   libmap-msgs-dev ros-map-msgs libpcl-conversions-dev

@@ -32,6 +32,7 @@ add_library(stereo_fusion_core STATIC
   ${STEREO_FUSION_ROOT}/src/layers/MeshLayer.cpp
   ${STEREO_FUSION_ROOT}/src/layers/PlanningLayer.cpp
   ${STEREO_FUSION_ROOT}/src/camera/StereoCamera.cpp
+  ${STEREO_FUSION_ROOT}/src/camera/DepthToDisparity.cpp
   ${STEREO_FUSION_ROOT}/src/map/BlockOctree.cpp
   ${STEREO_FUSION_ROOT}/src/map/VoxelBlock.cpp
   ${STEREO_FUSION_ROOT}/src/map/BlockChangeLog.cpp

@@ -9,23 +9,32 @@
 
 namespace stereo_fusion {
 
-FrameInput::FrameInput(ros::NodeHandle& nh, const NodeConfig& node, MappingSession* session,
-                       const tf2_ros::Buffer* tf, const OutputCadence* cadence,
-                       MeshPublisher* publisher, NodeStats* stats)
+FrameInput::FrameInput(ros::NodeHandle& nh, ros::NodeHandle& private_nh, const NodeConfig& node,
+                       MappingSession* session, const tf2_ros::Buffer* tf,
+                       const OutputCadence* cadence, MeshPublisher* publisher, NodeStats* stats)
     : node_(node),
       session_(session),
       tf_(tf),
       cadence_(cadence),
       publisher_(publisher),
-      stats_(stats) {
-  worker_ = std::thread([this] { workerLoop(); });
+      stats_(stats),
+      depth_converter_(DepthConversionConfig{node.depth_baseline_m}) {
   // The synchroniser is fed by hand so that the first message of a stamp on each topic wins: it
   // would let a second one replace the first while the set is incomplete (see RecentStamps).
   const size_t stamp_window = static_cast<size_t>(std::max(8, 2 * node_.sync_queue_size));
   disparity_stamps_ = RecentStamps(stamp_window);
   image_stamps_ = RecentStamps(stamp_window);
   info_stamps_ = RecentStamps(stamp_window);
-  if (node_.approximate_sync) {
+  const bool depth = node_.input == InputMode::kDepth;
+  if (depth && node_.approximate_sync) {
+    depth_approx_sync_ = std::make_unique<message_filters::Synchronizer<DepthApproxPolicy>>(
+        DepthApproxPolicy(node_.sync_queue_size));
+    depth_approx_sync_->registerCallback(&FrameInput::onDepthFrame, this);
+  } else if (depth) {
+    depth_exact_sync_ = std::make_unique<message_filters::Synchronizer<DepthExactPolicy>>(
+        DepthExactPolicy(node_.sync_queue_size));
+    depth_exact_sync_->registerCallback(&FrameInput::onDepthFrame, this);
+  } else if (node_.approximate_sync) {
     approx_sync_ = std::make_unique<message_filters::Synchronizer<ApproxPolicy>>(
         ApproxPolicy(node_.sync_queue_size));
     approx_sync_->registerCallback(&FrameInput::onFrame, this);
@@ -37,33 +46,10 @@ FrameInput::FrameInput(ros::NodeHandle& nh, const NodeConfig& node, MappingSessi
   // Callbacks first, subscriptions after: a message arriving in between would reach no callback
   // and be lost uncounted (a player that starts on the first subscription sends one at once).
   disparity_sub_.registerCallback([this](const DisparityMsg::ConstPtr& disparity) {
-    ++disparities_in_;
-    disparities_missed_ += disparity_seq_.next(disparity->header.seq);
-    // Stamped 0, it could never be fused (its pose cannot be looked up): counted as what it is
-    // at once, rather than as unsynchronised when its image and camera_info carry real stamps.
-    if (disparity->header.stamp.isZero()) {
-      ++disparities_refused_;
-      drop(RejectReason::kBadStamp,
-           "a disparity stamped 0 (no time: its pose cannot be looked up)");
-      return;
-    }
-    // The stamp of the newest fused frame: the frame gate would refuse it as a duplicate
-    // whatever else came with it, so it is counted as that now, not left unmatched.
-    if (isNewestFusedStamp(disparity->header.stamp)) {
-      ++disparities_refused_;
-      drop(RejectReason::kDuplicateTimestamp, "a disparity stamped " +
-                                                  std::to_string(disparity->header.stamp.toSec()) +
-                                                  ", the stamp of the newest fused frame");
-      return;
-    }
-    if (!passToSync(&disparity_stamps_, disparity->header.stamp)) {
-      ++disparities_refused_;
-      drop(RejectReason::kSyncDuplicate,
-           "a second disparity stamped " + std::to_string(disparity->header.stamp.toSec()) +
-               " arrived before its frame was matched; the first is kept");
-      return;
-    }
-    addToSync<0>(disparity);
+    if (admitMeasurement(disparity->header, "disparity")) addToSync<0>(disparity);
+  });
+  depth_sub_.registerCallback([this](const ImageMsg::ConstPtr& depth) {
+    if (admitMeasurement(depth->header, "depth image")) addToSync<0>(depth);
   });
   image_sub_.registerCallback([this](const ImageMsg::ConstPtr& image) {
     if (passToSync(&image_stamps_, image->header.stamp))
@@ -77,14 +63,82 @@ FrameInput::FrameInput(ros::NodeHandle& nh, const NodeConfig& node, MappingSessi
     else
       ++ignored_duplicate_parts_;
   });
-  disparity_sub_.subscribe(nh, "disparity", 5);
-  image_sub_.subscribe(nh, "image", 5);
+  worker_ = std::thread([this] { workerLoop(); });
+  try {
+    subscribeImages(nh, private_nh);
+  } catch (...) {
+    {
+      std::lock_guard<std::mutex> lock(queue_mutex_);
+      stopping_ = true;
+    }
+    queue_cv_.notify_all();
+    worker_.join();
+    throw;
+  }
+  if (!depth) disparity_sub_.subscribe(nh, "disparity", 5);
   info_sub_.subscribe(nh, "camera_info", 5);
+}
+
+void FrameInput::subscribeImages(ros::NodeHandle& nh, ros::NodeHandle& private_nh) {
+  transport_ = std::make_unique<image_transport::ImageTransport>(nh);
+  const auto subscribe = [&](image_transport::SubscriberFilter* sub, const std::string& topic,
+                             const std::string& transport, const char* parameter) {
+    try {
+      // The remapped name: a transport other than raw subscribes to <base>/<transport>, which
+      // a remapping of the base name (the nodelet's, or the launch file's) does not reach.
+      sub->subscribe(
+          *transport_, nh.resolveName(topic), 5,
+          image_transport::TransportHints(transport, ros::TransportHints(), private_nh, parameter));
+    } catch (const std::exception& e) {  // image_transport::TransportLoadException, pluginlib's
+      std::string loadable;
+      for (const std::string& name : transport_->getLoadableTransports())
+        loadable += (loadable.empty() ? "" : ", ") + name;
+      const std::string why = std::string(parameter) + " '" + transport + "' for '" +
+                              nh.resolveName(topic) + "' cannot be loaded (" + e.what() +
+                              "); loadable here: " + loadable;
+      ROS_FATAL("stereo_fusion: %s", why.c_str());
+      throw std::invalid_argument(why);
+    }
+  };
+  if (node_.input == InputMode::kDepth)
+    subscribe(&depth_sub_, "depth", node_.depth_image_transport, "depth_image_transport");
+  subscribe(&image_sub_, "image", node_.image_transport, "image_transport");
+}
+
+bool FrameInput::admitMeasurement(const std_msgs::Header& header, const char* kind) {
+  ++disparities_in_;
+  disparities_missed_ += disparity_seq_.next(header.seq);
+  // Stamped 0, it could never be fused (its pose cannot be looked up): counted as what it is
+  // at once, rather than as unsynchronised when its image and camera_info carry real stamps.
+  if (header.stamp.isZero()) {
+    ++disparities_refused_;
+    drop(RejectReason::kBadStamp,
+         std::string("a ") + kind + " stamped 0 (no time: its pose cannot be looked up)");
+    return false;
+  }
+  // The stamp of the newest fused frame: the frame gate would refuse it as a duplicate
+  // whatever else came with it, so it is counted as that now, not left unmatched.
+  if (isNewestFusedStamp(header.stamp)) {
+    ++disparities_refused_;
+    drop(RejectReason::kDuplicateTimestamp, std::string("a ") + kind + " stamped " +
+                                                std::to_string(header.stamp.toSec()) +
+                                                ", the stamp of the newest fused frame");
+    return false;
+  }
+  if (!passToSync(&disparity_stamps_, header.stamp)) {
+    ++disparities_refused_;
+    drop(RejectReason::kSyncDuplicate,
+         std::string("a second ") + kind + " stamped " + std::to_string(header.stamp.toSec()) +
+             " arrived before its frame was matched; the first is kept");
+    return false;
+  }
+  return true;
 }
 
 FrameInput::~FrameInput() {
   // The subscribers go first: no callback may queue a frame for a worker that has stopped.
   disparity_sub_.unsubscribe();
+  depth_sub_.unsubscribe();
   image_sub_.unsubscribe();
   info_sub_.unsubscribe();
   {
@@ -96,7 +150,12 @@ FrameInput::~FrameInput() {
 }
 
 std::string FrameInput::topics() const {
-  return disparity_sub_.getTopic() + " + " + image_sub_.getTopic() + " + " + info_sub_.getTopic();
+  const std::string measurement =
+      node_.input == InputMode::kDepth
+          ? depth_sub_.getTopic() + " (depth, " + node_.depth_image_transport + ")"
+          : disparity_sub_.getTopic();
+  return measurement + " + " + image_sub_.getTopic() + " (" + node_.image_transport + ") + " +
+         info_sub_.getTopic();
 }
 
 bool FrameInput::isNewestFusedStamp(const ros::Time& stamp) const {
@@ -119,14 +178,23 @@ void FrameInput::drop(RejectReason reason, const std::string& why) {
 
 void FrameInput::onFrame(const DisparityMsg::ConstPtr& d, const ImageMsg::ConstPtr& i,
                          const InfoMsg::ConstPtr& c) {
+  enqueue({d, nullptr, i, c, {}});
+}
+
+void FrameInput::onDepthFrame(const ImageMsg::ConstPtr& depth, const ImageMsg::ConstPtr& i,
+                              const InfoMsg::ConstPtr& c) {
+  enqueue({nullptr, depth, i, c, {}});
+}
+
+void FrameInput::enqueue(QueuedFrame frame) {
   ++matched_;
   {
     std::lock_guard<std::mutex> lock(stamps_mutex_);
-    disparity_stamps_.forget(d->header.stamp.toNSec());
-    image_stamps_.forget(i->header.stamp.toNSec());
-    info_stamps_.forget(c->header.stamp.toNSec());
+    disparity_stamps_.forget(frame.header().stamp.toNSec());
+    image_stamps_.forget(frame.image->header.stamp.toNSec());
+    info_stamps_.forget(frame.info->header.stamp.toNSec());
   }
-  const FrameTicket ticket = session_->arrive();
+  frame.ticket = session_->arrive();
   {
     std::lock_guard<std::mutex> lock(queue_mutex_);
     if (queue_.size() >= static_cast<size_t>(node_.queue_size)) {
@@ -136,7 +204,7 @@ void FrameInput::onFrame(const DisparityMsg::ConstPtr& d, const ImageMsg::ConstP
       if (!node_.drop_oldest) return;
       queue_.pop_front();
     }
-    queue_.push_back({d, i, c, ticket});
+    queue_.push_back(std::move(frame));
   }
   queue_cv_.notify_one();
 }
@@ -203,7 +271,7 @@ bool FrameInput::waitForPose(const std_msgs::Header& header, Eigen::Isometry3d* 
 }
 
 void FrameInput::processFrame(const QueuedFrame& f, double* publish_ms) {
-  const std_msgs::Header& header = f.disparity->header;
+  const std_msgs::Header& header = f.header();
   if (!session_->isCurrent(f.ticket))  // a reset or load_map came while it waited in the queue
     return session_->countDrop(RejectReason::kSuperseded);
   // A stamp of 0 would make tf return its latest pose, whatever time the image is from; a stamp
@@ -228,8 +296,11 @@ void FrameInput::processFrame(const QueuedFrame& f, double* publish_ms) {
                                               std::to_string(node_.tf_timeout_s) + " s: " + error);
   }
   StereoFrame frame;
-  if (!toStereoFrame(*f.disparity, *f.image, *f.info, T_world_camera, &frame, &error))
-    return drop(RejectReason::kInvalidFrame, "bad input: " + error);
+  const bool converted =
+      f.disparity ? toStereoFrame(*f.disparity, *f.image, *f.info, T_world_camera, &frame, &error)
+                  : depthToStereoFrame(*f.depth, *f.image, *f.info, depth_converter_,
+                                       T_world_camera, &frame, &error);
+  if (!converted) return drop(RejectReason::kInvalidFrame, "bad input: " + error);
   // Deferred, the mesh is brought up to date when it is published (MeshPublisher::
   // publishPending()), at most mesh_publish_rate_hz (OutputCadence).
   const MappingSession::FrameOutcome out =

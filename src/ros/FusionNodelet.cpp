@@ -53,8 +53,9 @@ void FusionNodelet::onInit() {
       std::make_unique<MapServices>(getMTPrivateNodeHandle(), session_.get(), publisher_.get());
   planning_services_ =
       std::make_unique<PlanningServices>(getMTPrivateNodeHandle(), node_config_, session_.get());
-  frame_input_ = std::make_unique<FrameInput>(nh, node_config_, session_.get(), tf_buffer_.get(),
-                                              &*cadence_, publisher_.get(), &stats_);
+  frame_input_ =
+      std::make_unique<FrameInput>(nh, pnh, node_config_, session_.get(), tf_buffer_.get(),
+                                   &*cadence_, publisher_.get(), &stats_);
   trajectory_input_ =
       std::make_unique<TrajectoryInput>(nh, node_config_, session_.get(), tf_buffer_.get(),
                                         [this] { return frame_input_->cameraFrame(); });

@@ -14,56 +14,10 @@ namespace stereo_fusion {
 
 namespace enc = sensor_msgs::image_encodings;
 
-bool toStereoFrame(const stereo_msgs::DisparityImage& disparity, const sensor_msgs::Image& image,
-                   const sensor_msgs::CameraInfo& info, const Eigen::Isometry3d& T_world_camera,
-                   StereoFrame* frame, std::string* error) {
-  const sensor_msgs::Image& d = disparity.image;
-  if (d.encoding != enc::TYPE_32FC1) {
-    *error = "disparity encoding must be 32FC1, got '" + d.encoding + "'";
-    return false;
-  }
-  // Rows of floats: a step that is no multiple of 4 cannot be one (OpenCV would throw on it).
-  if (d.step % 4 != 0) {
-    *error = "disparity step " + std::to_string(d.step) +
-             " is not a multiple of 4 bytes (rows of 32-bit floats)";
-    return false;
-  }
-  if (d.width == 0 || d.height == 0 || d.step < d.width * 4 ||
-      d.data.size() < size_t{d.step} * d.height) {
-    *error = "disparity image is empty or its data is shorter than step × height";
-    return false;
-  }
-  if (!(std::isfinite(disparity.f) && disparity.f > 0) ||
-      !(std::isfinite(disparity.T) && disparity.T > 0)) {
-    *error = "DisparityImage needs f > 0 and T > 0 (got f = " + std::to_string(disparity.f) +
-             ", T = " + std::to_string(disparity.T) + ")";
-    return false;
-  }
-  const bool has_p = info.P[0] != 0.0;
-  const double fx = has_p ? info.P[0] : info.K[0], fy = has_p ? info.P[5] : info.K[4];
-  const double cx = has_p ? info.P[2] : info.K[2], cy = has_p ? info.P[6] : info.K[5];
-  if (std::abs(fx - disparity.f) > 0.01 * disparity.f) {
-    *error = "CameraInfo fx = " + std::to_string(fx) +
-             " disagrees with DisparityImage f = " + std::to_string(disparity.f);
-    return false;
-  }
-  std::string why;
-  auto camera = StereoCamera::create(static_cast<int>(d.width), static_cast<int>(d.height), fx, fy,
-                                     cx, cy, disparity.T, &why);
-  if (!camera) {
-    *error = why;
-    return false;
-  }
-  if (info.width != 0 && (info.width != d.width || info.height != d.height)) {
-    *error = "CameraInfo is " + std::to_string(info.width) + "x" + std::to_string(info.height) +
-             " but the disparity is " + std::to_string(d.width) + "x" + std::to_string(d.height);
-    return false;
-  }
-  if (image.width != d.width || image.height != d.height) {
-    *error = "image is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
-             " but the disparity is " + std::to_string(d.width) + "x" + std::to_string(d.height);
-    return false;
-  }
+namespace {
+
+/// The colour image as the core takes it (RGB or grey); false with a message otherwise.
+bool toColor(const sensor_msgs::Image& image, cv::Mat* color_out, std::string* error) {
   // cv_bridge trusts step and the data length: check them, or a short message is read past its end.
   const bool four_channels = image.encoding == enc::RGBA8 || image.encoding == enc::BGRA8;
   const size_t bytes_per_pixel = image.encoding == enc::MONO8 ? 1 : four_channels ? 4 : 3;
@@ -92,6 +46,72 @@ bool toStereoFrame(const stereo_msgs::DisparityImage& disparity, const sensor_ms
     *error = std::string("image conversion failed: ") + e.what();
     return false;
   }
+  *color_out = color;
+  return true;
+}
+
+/// fx, fy, cx, cy of the rectified projection P (K when P is unset).
+struct Intrinsics {
+  double fx, fy, cx, cy;
+};
+Intrinsics intrinsicsOf(const sensor_msgs::CameraInfo& info) {
+  const bool has_p = info.P[0] != 0.0;
+  return {has_p ? info.P[0] : info.K[0], has_p ? info.P[5] : info.K[4],
+          has_p ? info.P[2] : info.K[2], has_p ? info.P[6] : info.K[5]};
+}
+
+}  // namespace
+
+bool toStereoFrame(const stereo_msgs::DisparityImage& disparity, const sensor_msgs::Image& image,
+                   const sensor_msgs::CameraInfo& info, const Eigen::Isometry3d& T_world_camera,
+                   StereoFrame* frame, std::string* error) {
+  const sensor_msgs::Image& d = disparity.image;
+  if (d.encoding != enc::TYPE_32FC1) {
+    *error = "disparity encoding must be 32FC1, got '" + d.encoding + "'";
+    return false;
+  }
+  // Rows of floats: a step that is no multiple of 4 cannot be one (OpenCV would throw on it).
+  if (d.step % 4 != 0) {
+    *error = "disparity step " + std::to_string(d.step) +
+             " is not a multiple of 4 bytes (rows of 32-bit floats)";
+    return false;
+  }
+  if (d.width == 0 || d.height == 0 || d.step < d.width * 4 ||
+      d.data.size() < size_t{d.step} * d.height) {
+    *error = "disparity image is empty or its data is shorter than step × height";
+    return false;
+  }
+  if (!(std::isfinite(disparity.f) && disparity.f > 0) ||
+      !(std::isfinite(disparity.T) && disparity.T > 0)) {
+    *error = "DisparityImage needs f > 0 and T > 0 (got f = " + std::to_string(disparity.f) +
+             ", T = " + std::to_string(disparity.T) + ")";
+    return false;
+  }
+  const auto [fx, fy, cx, cy] = intrinsicsOf(info);
+  if (std::abs(fx - disparity.f) > 0.01 * disparity.f) {
+    *error = "CameraInfo fx = " + std::to_string(fx) +
+             " disagrees with DisparityImage f = " + std::to_string(disparity.f);
+    return false;
+  }
+  std::string why;
+  auto camera = StereoCamera::create(static_cast<int>(d.width), static_cast<int>(d.height), fx, fy,
+                                     cx, cy, disparity.T, &why);
+  if (!camera) {
+    *error = why;
+    return false;
+  }
+  if (info.width != 0 && (info.width != d.width || info.height != d.height)) {
+    *error = "CameraInfo is " + std::to_string(info.width) + "x" + std::to_string(info.height) +
+             " but the disparity is " + std::to_string(d.width) + "x" + std::to_string(d.height);
+    return false;
+  }
+  if (image.width != d.width || image.height != d.height) {
+    *error = "image is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+             " but the disparity is " + std::to_string(d.width) + "x" + std::to_string(d.height);
+    return false;
+  }
+  cv::Mat color;
+  if (!toColor(image, &color, error)) return false;
   // cv_bridge does not reorder bytes (a big-endian 32FC1 comes back as 8UC4): swap them here.
   constexpr bool kHostBigEndian = __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__;
   sensor_msgs::Image host_order;
@@ -132,6 +152,52 @@ bool toStereoFrame(const stereo_msgs::DisparityImage& disparity, const sensor_ms
   frame->timestamp_s = disparity.header.stamp.toSec();
   frame->camera = *camera;
   frame->disparity_step_px = disparity.delta_d;  // validateFrame() checks its range
+  frame->disparity_px = disparity_px;
+  frame->color = color;
+  frame->T_world_camera = T_world_camera;
+  return true;
+}
+
+bool depthToStereoFrame(const sensor_msgs::Image& depth, const sensor_msgs::Image& image,
+                        const sensor_msgs::CameraInfo& info, const DepthToDisparity& converter,
+                        const Eigen::Isometry3d& T_world_camera, StereoFrame* frame,
+                        std::string* error) {
+  const auto [fx, fy, cx, cy] = intrinsicsOf(info);
+  std::string why;
+  auto camera = StereoCamera::create(static_cast<int>(depth.width), static_cast<int>(depth.height),
+                                     fx, fy, cx, cy, converter.baselineM(), &why);
+  if (!camera) {
+    *error = "depth camera: " + why;
+    return false;
+  }
+  if (info.width != 0 && (info.width != depth.width || info.height != depth.height)) {
+    *error = "CameraInfo is " + std::to_string(info.width) + "x" + std::to_string(info.height) +
+             " but the depth image is " + std::to_string(depth.width) + "x" +
+             std::to_string(depth.height);
+    return false;
+  }
+  // The core has one camera for both images: the depth must be registered to the colour image.
+  if (image.width != depth.width || image.height != depth.height) {
+    *error = "image is " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+             " but the depth image is " + std::to_string(depth.width) + "x" +
+             std::to_string(depth.height) + " (the depth must be registered to the colour image)";
+    return false;
+  }
+  DepthImageView view;
+  view.encoding = depth.encoding;
+  view.width = static_cast<int>(depth.width);
+  view.height = static_cast<int>(depth.height);
+  view.step_bytes = depth.step;
+  view.big_endian = depth.is_bigendian != 0;
+  view.data = depth.data.data();
+  view.size_bytes = depth.data.size();
+  cv::Mat disparity_px;
+  if (!converter.convert(view, fx, &disparity_px, error)) return false;
+  cv::Mat color;
+  if (!toColor(image, &color, error)) return false;
+  frame->timestamp_s = depth.header.stamp.toSec();
+  frame->camera = *camera;
+  frame->disparity_step_px = 0.0;  // the depth's rounding maps to no fixed disparity step
   frame->disparity_px = disparity_px;
   frame->color = color;
   frame->T_world_camera = T_world_camera;

@@ -26,6 +26,34 @@ const Table& table() {
         "Fixed frame of the map, the mesh, the path and the clear services' corners; tf must "
         "give it → the disparity's frame_id.",
         member(&NodeConfig::world_frame));
+    t.addEnum<InputMode>(
+        "input", {{"disparity", InputMode::kDisparity}, {"depth", InputMode::kDepth}},
+        "The measurement topic: disparity (stereo_msgs/DisparityImage on `disparity`, a stereo "
+        "pipeline) or depth (sensor_msgs/Image on `depth`, 16UC1 in mm or 32FC1 in m as REP 118 "
+        "has it, registered to the colour image: an RGB-D camera). Depth is fused as the "
+        "disparity fx·depth_baseline_m/z of a virtual stereo rig "
+        "([method](method.md#depth-cameras)).",
+        member(&NodeConfig::input));
+    t.addDouble(
+        "depth_baseline_m", "m", 0.0, false, 10.0,
+        "input: depth: the baseline of the virtual stereo rig the depth is converted for, "
+        "d = fx·B/z. The geometry does not depend on it (z comes back exactly); the noise model "
+        "does: σ_z = z²·disparity_noise_px/(fx·B), which picks the levels and the contradiction "
+        "margin, and the pixel thresholds (edge_reject_jump_px) act on that disparity. Set the "
+        "camera's own: its stereo pair's (RealSense D435 0.05, D455 0.095) or projector–camera "
+        "baseline (Kinect v1 0.075).",
+        member(&NodeConfig::depth_baseline_m));
+    t.addString("image_transport", false, "an image_transport name",
+                "How the colour image is subscribed (image_transport): raw, or compressed "
+                "(`<image>/compressed`, JPEG or PNG, decoded by the package's own plugin where "
+                "compressed_image_transport is not installed); any installed transport.",
+                member(&NodeConfig::image_transport));
+    t.addString(
+        "depth_image_transport", false, "an image_transport name",
+        "input: depth: how the depth image is subscribed: raw, or compressedDepth "
+        "(`<depth>/compressedDepth`, PNG, as compressed_depth_image_transport publishes it); any "
+        "installed transport.",
+        member(&NodeConfig::depth_image_transport));
     t.addInt("queue_size", "frames", 1, 1000, "Frames waiting for the worker that fuses them.",
              member(&NodeConfig::queue_size));
     t.addEnum<bool>("queue_policy", {{"drop_oldest", true}, {"drop_newest", false}},

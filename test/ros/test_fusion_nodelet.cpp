@@ -843,6 +843,15 @@ TEST(NodeParameters, OutOfRangeValuesAtStartUpNameTheParameter) {
       {"world_frame",
        [](const std::string& ns) { ros::param::set(ns + "/world_frame", std::string()); },
        "parameter '/bad_world_frame/world_frame' must not be empty"},
+      {"input",
+       [](const std::string& ns) { ros::param::set(ns + "/input", std::string("pointcloud")); },
+       "parameter '/bad_input/input': 'pointcloud' is not one of disparity | depth"},
+      {"depth_baseline_m",
+       [](const std::string& ns) { ros::param::set(ns + "/depth_baseline_m", 0.0); },
+       "depth_baseline_m' = 0 is out of range (0, 10] m"},
+      {"image_transport",
+       [](const std::string& ns) { ros::param::set(ns + "/image_transport", std::string()); },
+       "parameter '/bad_image_transport/image_transport' must not be empty"},
       {"loop_closure_max_frames",
        [](const std::string& ns) { ros::param::set(ns + "/loop_closure_max_frames", -1); },
        "loop_closure_max_frames' = -1 is out of range [0, 100000] frames"},
@@ -884,6 +893,10 @@ TEST(NodeParameters, OutOfRangeValuesAtStartUpNameTheParameter) {
 TEST(NodeParameters, EveryNodeParameterIsReadThroughTheRegistry) {
   const std::string ns = "/all_node_parameters";
   ros::param::set(ns + "/world_frame", std::string("map"));
+  ros::param::set(ns + "/input", std::string("depth"));
+  ros::param::set(ns + "/depth_baseline_m", 0.095);
+  ros::param::set(ns + "/image_transport", std::string("compressed"));
+  ros::param::set(ns + "/depth_image_transport", std::string("compressedDepth"));
   ros::param::set(ns + "/queue_size", 12.0);
   ros::param::set(ns + "/queue_policy", std::string("drop_newest"));
   ros::param::set(ns + "/approximate_sync", true);
@@ -908,6 +921,10 @@ TEST(NodeParameters, EveryNodeParameterIsReadThroughTheRegistry) {
   ASSERT_TRUE(loadParameters(ros::NodeHandle(ns), &mapper, &node, &error)) << error;
   EXPECT_EQ(mapper.voxel_size_m, 0.04);
   EXPECT_EQ(node.world_frame, "map");
+  EXPECT_EQ(node.input, InputMode::kDepth);
+  EXPECT_EQ(node.depth_baseline_m, 0.095);
+  EXPECT_EQ(node.image_transport, "compressed");
+  EXPECT_EQ(node.depth_image_transport, "compressedDepth");
   EXPECT_EQ(node.queue_size, 12);
   EXPECT_FALSE(node.drop_oldest);
   EXPECT_TRUE(node.approximate_sync);

@@ -1,8 +1,12 @@
 #pragma once
-// The node's frame input: DisparityImage + Image + CameraInfo synchronised (the first message
-// of a stamp wins), queued (queue_size, drop_oldest), then on a worker thread the stamp gate,
-// the wait for the camera pose in tf, the conversion and MappingSession::fuse(). Every frame
-// that does not reach the map is counted in the session under its reason.
+// The node's frame input: a measurement (DisparityImage, or with input: depth a depth Image) +
+// Image + CameraInfo synchronised (the first message of a stamp wins), queued (queue_size,
+// drop_oldest), then on a worker thread the stamp gate, the wait for the camera pose in tf, the
+// conversion (MessageConversions; depth through DepthToDisparity) and MappingSession::fuse().
+// Images are subscribed through image_transport (~image_transport, ~depth_image_transport).
+// Every frame that does not reach the map is counted in the session under its reason.
+#include <image_transport/image_transport.h>
+#include <image_transport/subscriber_filter.h>
 #include <message_filters/subscriber.h>
 #include <message_filters/sync_policies/approximate_time.h>
 #include <message_filters/sync_policies/exact_time.h>
@@ -21,8 +25,10 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <type_traits>
 #include <utility>
 
+#include "stereo_fusion/camera/DepthToDisparity.h"
 #include "stereo_fusion/ros/NodeStats.h"
 #include "stereo_fusion/ros/MeshPublisher.h"
 #include "stereo_fusion/ros/RecentStamps.h"
@@ -35,13 +41,14 @@ namespace stereo_fusion {
 
 class FrameInput {
  public:
-  FrameInput(ros::NodeHandle& nh, const NodeConfig& node, MappingSession* session,
-             const tf2_ros::Buffer* tf, const OutputCadence* cadence, MeshPublisher* publisher,
-             NodeStats* stats);
+  /// Throws std::invalid_argument (after logging it) when an image transport cannot be loaded.
+  FrameInput(ros::NodeHandle& nh, ros::NodeHandle& private_nh, const NodeConfig& node,
+             MappingSession* session, const tf2_ros::Buffer* tf, const OutputCadence* cadence,
+             MeshPublisher* publisher, NodeStats* stats);
   /// Stops the worker (the frame in hand is finished or dropped first).
   ~FrameInput();
 
-  /// The camera frame of the fused disparities ("" before the first).
+  /// The camera frame of the fused measurements ("" before the first).
   std::string cameraFrame() const;
   uint64_t disparitiesIn() const { return disparities_in_.load(); }
   uint64_t disparitiesMissed() const { return disparities_missed_.load(); }
@@ -59,8 +66,13 @@ class FrameInput {
   using ExactPolicy = message_filters::sync_policies::ExactTime<DisparityMsg, ImageMsg, InfoMsg>;
   using ApproxPolicy =
       message_filters::sync_policies::ApproximateTime<DisparityMsg, ImageMsg, InfoMsg>;
+  using DepthExactPolicy = message_filters::sync_policies::ExactTime<ImageMsg, ImageMsg, InfoMsg>;
+  using DepthApproxPolicy =
+      message_filters::sync_policies::ApproximateTime<ImageMsg, ImageMsg, InfoMsg>;
   struct QueuedFrame {
-    DisparityMsg::ConstPtr disparity;
+    DisparityMsg::ConstPtr disparity;  ///< input: disparity
+    ImageMsg::ConstPtr depth;          ///< input: depth
+    const std_msgs::Header& header() const { return disparity ? disparity->header : depth->header; }
     ImageMsg::ConstPtr image;
     InfoMsg::ConstPtr info;
     FrameTicket ticket;  ///< taken on arrival
@@ -74,11 +86,29 @@ class FrameInput {
   /// Hands one message to whichever synchroniser runs (it calls onFrame when a set is complete).
   template <int I, typename M>
   void addToSync(const M& msg) {
-    if (exact_sync_) exact_sync_->template add<I>(msg);
-    if (approx_sync_) approx_sync_->template add<I>(msg);
+    if constexpr (I == 0 && std::is_same_v<typename M::element_type, const DisparityMsg>) {
+      if (exact_sync_) exact_sync_->template add<I>(msg);
+      if (approx_sync_) approx_sync_->template add<I>(msg);
+    } else if constexpr (I == 0) {
+      if (depth_exact_sync_) depth_exact_sync_->template add<I>(msg);
+      if (depth_approx_sync_) depth_approx_sync_->template add<I>(msg);
+    } else {
+      if (exact_sync_) exact_sync_->template add<I>(msg);
+      if (approx_sync_) approx_sync_->template add<I>(msg);
+      if (depth_exact_sync_) depth_exact_sync_->template add<I>(msg);
+      if (depth_approx_sync_) depth_approx_sync_->template add<I>(msg);
+    }
   }
+  /// The checks every measurement (disparity or depth) passes on arrival; false: it was dropped
+  /// and counted under its reason.
+  bool admitMeasurement(const std_msgs::Header& header, const char* kind);
+  /// Subscribes the image (and depth) through image_transport; throws std::invalid_argument.
+  void subscribeImages(ros::NodeHandle& nh, ros::NodeHandle& private_nh);
   void onFrame(const DisparityMsg::ConstPtr& d, const ImageMsg::ConstPtr& i,
                const InfoMsg::ConstPtr& c);
+  void onDepthFrame(const ImageMsg::ConstPtr& depth, const ImageMsg::ConstPtr& i,
+                    const InfoMsg::ConstPtr& c);
+  void enqueue(QueuedFrame frame);
   void workerLoop();
   /// Fuses and publishes one frame; `publish_ms`: the publishing's time, if it was fused.
   void processFrame(const QueuedFrame& frame, double* publish_ms);
@@ -101,11 +131,16 @@ class FrameInput {
   bool stopping_ = false;
   std::thread worker_;
 
+  const DepthToDisparity depth_converter_;
+  std::unique_ptr<image_transport::ImageTransport> transport_;
   message_filters::Subscriber<DisparityMsg> disparity_sub_;
-  message_filters::Subscriber<ImageMsg> image_sub_;
+  image_transport::SubscriberFilter depth_sub_;
+  image_transport::SubscriberFilter image_sub_;
   message_filters::Subscriber<InfoMsg> info_sub_;
   std::unique_ptr<message_filters::Synchronizer<ExactPolicy>> exact_sync_;
   std::unique_ptr<message_filters::Synchronizer<ApproxPolicy>> approx_sync_;
+  std::unique_ptr<message_filters::Synchronizer<DepthExactPolicy>> depth_exact_sync_;
+  std::unique_ptr<message_filters::Synchronizer<DepthApproxPolicy>> depth_approx_sync_;
   /// Stamps each topic passed to the synchroniser, not matched yet: the first message of a stamp
   /// wins.
   std::mutex stamps_mutex_;

@@ -1,7 +1,8 @@
 #pragma once
 // The ROS face of stereo_fusion: wiring only. The mapping session (ROS-free) owns the map, the
 // kept frames, clears and corrections; the adapters around it are FrameInput (synchronised
-// DisparityImage + Image + CameraInfo in, pose from tf2), TrajectoryInput (a SLAM's corrected
+// DisparityImage or depth Image + Image + CameraInfo in, images through image_transport, pose
+// from tf2), TrajectoryInput (a SLAM's corrected
 // poses), MeshPublisher (MeshUpdate, rviz markers, path, frustum), PlanningPublisher (occupancy
 // grid, ESDF slice, occupied cells), MapServices and FusionDiagnostics.
 

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "stereo_fusion/camera/DepthToDisparity.h"
 #include "stereo_fusion/integration/StereoFrame.h"
 #include "stereo_fusion/trajectory/PoseCorrection.h"
 
@@ -25,6 +26,16 @@ namespace stereo_fusion {
 bool toStereoFrame(const stereo_msgs::DisparityImage& disparity, const sensor_msgs::Image& image,
                    const sensor_msgs::CameraInfo& info, const Eigen::Isometry3d& T_world_camera,
                    StereoFrame* frame, std::string* error);
+
+/// Builds a StereoFrame from a depth image registered to the colour image (same size, the
+/// colour camera's CameraInfo) and the pose of the depth's frame: the depth becomes the
+/// disparity fx·B/z of `converter`'s virtual rig (16UC1 mm with 0 invalid, 32FC1 m with
+/// non-finite or ≤ 0 invalid), the camera's baseline is B. Colour as toStereoFrame(). Any
+/// inconsistency (encoding, sizes, data length, calibration) returns false with a message.
+bool depthToStereoFrame(const sensor_msgs::Image& depth, const sensor_msgs::Image& image,
+                        const sensor_msgs::CameraInfo& info, const DepthToDisparity& converter,
+                        const Eigen::Isometry3d& T_world_camera, StereoFrame* frame,
+                        std::string* error);
 
 /// The camera poses a SLAM's Path stands for: T_world_camera = pose_k · T_trajectory_camera,
 /// stamped by each pose's header. A pose whose position or stamp is not finite, or whose

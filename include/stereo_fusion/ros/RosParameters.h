@@ -10,17 +10,29 @@
 
 namespace stereo_fusion {
 
+/// What the node's measurement topic carries (FrameInput).
+enum class InputMode {
+  kDisparity,  ///< `disparity`: stereo_msgs/DisparityImage (a stereo pipeline)
+  kDepth,      ///< `depth`: sensor_msgs/Image, 16UC1 mm or 32FC1 m (an RGB-D camera, REP 118)
+};
+
 /// Settings of the ROS node itself (the mapping parameters are in MapperConfig). Their names,
 /// units, ranges and meanings are the node parameter registry (nodeParameterSpecs(),
 /// src/ros/RosParameters.cpp); the defaults here are the single source of truth, printed into
 /// doc/parameters.md's node table.
 struct NodeConfig {
-  std::string world_frame = "map";  ///< fixed frame of the map and the mesh (REP 105's map)
-  int queue_size = 5;               ///< frames waiting for the worker (≥ 1)
-  bool drop_oldest = true;          ///< queue full: drop the oldest (true) or the newest frame
-  bool approximate_sync = false;    ///< ApproximateTime instead of ExactTime synchronisation
-  int sync_queue_size = 10;         ///< message_filters synchroniser queue
-  double tf_timeout_s = 0.2;        ///< how long the worker waits for T_world_camera
+  std::string world_frame = "map";          ///< fixed frame of the map and the mesh (REP 105's map)
+  InputMode input = InputMode::kDisparity;  ///< the measurement topic's kind
+  /// Baseline of the virtual stereo rig a depth image is converted for (DepthToDisparity).
+  double depth_baseline_m = 0.05;
+  /// image_transport of the colour image and of the depth image ("raw", "compressed", ...).
+  std::string image_transport = "raw";
+  std::string depth_image_transport = "raw";
+  int queue_size = 5;             ///< frames waiting for the worker (≥ 1)
+  bool drop_oldest = true;        ///< queue full: drop the oldest (true) or the newest frame
+  bool approximate_sync = false;  ///< ApproximateTime instead of ExactTime synchronisation
+  int sync_queue_size = 10;       ///< message_filters synchroniser queue
+  double tf_timeout_s = 0.2;      ///< how long the worker waits for T_world_camera
   /// A frame stamped more than this ahead of the node's clock is dropped (0 = no check).
   double max_stamp_ahead_s = 10.0;
   double mesh_publish_rate_hz = 2.0;  ///< 0 = publish after every frame

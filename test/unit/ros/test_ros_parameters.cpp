@@ -32,6 +32,10 @@ TEST(NodeParameterRegistry, DefaultsAreNodeConfigsAndValid) {
   const NodeConfig defaults;
   EXPECT_TRUE(validateNodeConfig(defaults).empty());
   EXPECT_EQ(getNodeParameter(defaults, "world_frame"), "map");
+  EXPECT_EQ(getNodeParameter(defaults, "input"), "disparity");
+  EXPECT_EQ(getNodeParameter(defaults, "depth_baseline_m"), "0.05");
+  EXPECT_EQ(getNodeParameter(defaults, "image_transport"), "raw");
+  EXPECT_EQ(getNodeParameter(defaults, "depth_image_transport"), "raw");
   EXPECT_EQ(getNodeParameter(defaults, "queue_size"), "5");
   EXPECT_EQ(getNodeParameter(defaults, "queue_policy"), "drop_oldest");
   EXPECT_EQ(getNodeParameter(defaults, "tf_timeout_s"), "0.2");
@@ -46,6 +50,10 @@ TEST(NodeParameterRegistry, DefaultsAreNodeConfigsAndValid) {
   std::vector<std::string> names;
   for (const ParameterSpec& spec : nodeParameterSpecs()) names.push_back(spec.name);
   EXPECT_EQ(names, (std::vector<std::string>{"world_frame",
+                                             "input",
+                                             "depth_baseline_m",
+                                             "image_transport",
+                                             "depth_image_transport",
                                              "queue_size",
                                              "queue_policy",
                                              "approximate_sync",
