@@ -3,7 +3,8 @@
 # CMakeLists.txt, once every target is defined. test/ros/install_space/ runs the launch files from
 # such an install alone.
 
-# The nodelet plugin (nodelet_plugins.xml names lib/libstereo_fusion_nodelet) and the static
+# The nodelet plugin (nodelet_plugins.xml names libstereo_fusion_nodelet, which pluginlib finds in
+# the prefix's library folder, lib/ or Debian's lib/x86_64-linux-gnu/) and the static
 # libraries catkin_package() exports, so find_package(stereo_fusion) works from the install too.
 install(TARGETS stereo_fusion_nodelet stereo_fusion_core stereo_fusion_ros
         LIBRARY DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
