@@ -29,6 +29,14 @@ rm -rf "$SRC"
 mkdir -p "$SRC"
 (cd "$ROOT" && git ls-files -z --cached --others --exclude-standard | tar --null -T - -cf -) | tar -xf - -C "$SRC"
 rm -f "$OUT"/ros-stereo-fusion_*
+# debhelper gives the build its own HOME: point ccache (debian/rules uses it when installed) at the
+# caller's cache and configuration, so the objects of the developer's build are reused.
+if command -v ccache >/dev/null; then
+  CCACHE_DIR="$(ccache -k cache_dir)"
+  export CCACHE_DIR
+  config="${XDG_CONFIG_HOME:-$HOME/.config}/ccache/ccache.conf"
+  if [ -f "$config" ]; then export CCACHE_CONFIGPATH="$config"; fi
+fi
 echo "[deb] dpkg-buildpackage -us -uc -b in $SRC (log: $OUT/build.log)"
 start=$(date +%s)
 if ! (cd "$SRC" && DEB_BUILD_OPTIONS="nocheck parallel=$JOBS" nice dpkg-buildpackage -us -uc -b) \

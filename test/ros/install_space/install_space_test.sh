@@ -43,6 +43,8 @@ DESTDIR="$TMP/staging" cmake --install "$BUILD" >"$TMP/install.log" 2>&1 || {
 PREFIX="$TMP/opt/stereo_fusion"
 mkdir -p "$TMP/opt"
 mv "$TMP/staging$CONFIGURED" "$PREFIX"
+# Into /usr catkin installs as a binary package, without setup.bash: this test needs another prefix.
+[ "$CONFIGURED" != /usr ] || fail "the build is configured with CMAKE_INSTALL_PREFIX=/usr (no setup.bash then)"
 outside="$(find "$TMP/staging" ! -type d)"
 [ -z "$outside" ] || fail "installed outside the prefix $CONFIGURED: $outside"
 for f in share/stereo_fusion/package.xml share/stereo_fusion/nodelet_plugins.xml lib/libstereo_fusion_nodelet.so \
