@@ -63,7 +63,7 @@ if ! grep -q "success: True" <<<"$reply"; then
   exit 1
 fi
 message=$(sed -n 's/^message: //p' <<<"$reply" | sed 's/^"//; s/"$//')
-echo "[demo] ${message:-mesh saved} ($OUTPUT/mesh.ply)"
+echo "[demo] ${message:-mesh saved to $OUTPUT/mesh.ply}"
 if [ "$RVIZ" = true ]; then
   echo "[demo] rviz is open; press Enter to stop"
   read -r _
