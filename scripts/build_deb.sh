@@ -4,7 +4,8 @@
 # Installs the packaging tools and the build dependencies (scripts/setup.sh --with deb). One
 # compile job (parallel=1; --jobs N for more), niced; the tests are not run (scripts/test.sh).
 #   scripts/build_deb.sh [--out DIR] [--jobs N]
-# Then: apt install ./.deb/ros-stereo-fusion_*.deb; /usr/lib/stereo_fusion/demo.sh (doc/getting_started.md).
+# Then: apt install ./.deb/ros-stereo-fusion_*.deb; /usr/lib/stereo_fusion/demo.sh (doc/robot.md), or
+# scripts/try_deb.sh to try both in a throw-away overlay of the system.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 OUT="$ROOT/.deb"
@@ -13,7 +14,7 @@ while [ $# -gt 0 ]; do
   case "$1" in
     --out) OUT="$2"; shift 2 ;;
     --jobs) JOBS="$2"; shift 2 ;;
-    -h|--help) sed -n '2,7p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,8p' "$0"; exit 0 ;;
     *) echo "build_deb.sh: unknown option $1" >&2; exit 2 ;;
   esac
 done
