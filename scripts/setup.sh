@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian packages stereo_fusion needs (only the missing ones) and builds the
 # package into .build/. Idempotent; safe to run on a fresh Debian bookworm machine.
-#   scripts/setup.sh [--no-build] [--targets "T1 T2 ..."] [--screenshots] [--with sanitizers|fuzz]...
+#   scripts/setup.sh [--no-build] [--targets "T1 T2 ..."] [--screenshots] [--with sanitizers|fuzz|deb]...
 # --targets builds only those CMake targets (and what they need), not the tests: what the demo and
 # the offline tools pass, so a first run does not wait for the test suite. --screenshots adds
 # ImageMagick (scripts/screenshots.sh); --with adds an opt-in package group
@@ -66,10 +66,12 @@ while (($# > 0)); do
         sanitizers) PACKAGES+=(libasan8 libubsan1 libtsan2) ;;
         # libFuzzer lives in compiler-rt, which Debian ships apart from the compiler
         fuzz) PACKAGES+=(clang-14 libclang-rt-14-dev) ;;
-        *) echo "[setup] unknown package group '${2:-}' (sanitizers, fuzz)" >&2; exit 2 ;;
+        # the Debian package (scripts/build_deb.sh): dpkg-buildpackage and dh
+        deb) PACKAGES+=(dpkg-dev debhelper) ;;
+        *) echo "[setup] unknown package group '${2:-}' (sanitizers, fuzz, deb)" >&2; exit 2 ;;
       esac
       shift ;;
-    *) echo "usage: scripts/setup.sh [--no-build] [--targets \"T1 T2 ...\"] [--screenshots] [--with sanitizers|fuzz]..." >&2; exit 2 ;;
+    *) echo "usage: scripts/setup.sh [--no-build] [--targets \"T1 T2 ...\"] [--screenshots] [--with sanitizers|fuzz|deb]..." >&2; exit 2 ;;
   esac
   shift
 done
