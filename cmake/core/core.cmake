@@ -86,6 +86,7 @@ add_library(stereo_fusion_core STATIC
   ${STEREO_FUSION_ROOT}/src/planning/PlanningMap.cpp
   ${STEREO_FUSION_ROOT}/src/planning/PlanningMapQueries.cpp
   ${STEREO_FUSION_ROOT}/src/planning/OccupancyGrid2D.cpp
+  ${STEREO_FUSION_ROOT}/src/planning/FleetGridMerge.cpp
   ${STEREO_FUSION_ROOT}/src/io/PlanningExport.cpp
   ${STEREO_FUSION_ROOT}/src/io/TextureAtlas.cpp
   ${STEREO_FUSION_ROOT}/src/io/MeshExport.cpp
