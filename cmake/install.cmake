@@ -31,3 +31,9 @@ install(FILES tools/demo/demo_session.sh DESTINATION ${CATKIN_PACKAGE_BIN_DESTIN
 # the plugin description package.xml exports (msg/srv and the generated code catkin installs itself).
 install(FILES nodelet_plugins.xml image_transport_plugins.xml DESTINATION ${CATKIN_PACKAGE_SHARE_DESTINATION})
 install(DIRECTORY launch config rviz DESTINATION ${CATKIN_PACKAGE_SHARE_DESTINATION})
+
+# The rviz display stereo_fusion/Mesh, where it is built (librviz-dev found).
+if(STEREO_FUSION_RVIZ_PLUGIN)
+  install(TARGETS stereo_fusion_rviz LIBRARY DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION})
+  install(FILES rviz_plugin.xml DESTINATION ${CATKIN_PACKAGE_SHARE_DESTINATION})
+endif()
