@@ -13,3 +13,12 @@ set(CMAKE_POSITION_INDEPENDENT_CODE ON)
 add_compile_options(-Wall -Wextra)
 # STEREO_FUSION_SANITIZE / STEREO_FUSION_FUZZ (scripts/check.sh, scripts/fuzz.sh); off by default.
 include(${CMAKE_CURRENT_LIST_DIR}/sanitizers.cmake)
+
+# The tests' own code (test cases, scene set-up, message building) compiles at -O1 in Release: a
+# third less compile time for the largest part of the build. The code under test is in the
+# libraries and keeps -O3. Applied to the test executables by the catkin package and cmake/core/.
+function(stereo_fusion_test_code)
+  foreach(target ${ARGN})
+    target_compile_options(${target} PRIVATE $<$<CONFIG:Release>:-O1>)
+  endforeach()
+endfunction()

@@ -4,8 +4,9 @@
 #   scripts/check.sh [--asan | --tsan | --all]      (default --all)
 #   --asan  AddressSanitizer + UndefinedBehaviorSanitizer (g++): the core's unit tests in the
 #           standalone core build (scripts/check_core_standalone.sh, in .build-core-asan/, which
-#           also proves the core builds without ROS), and in .build-asan/ the tools' unit tests
-#           and every fuzz target's checked-in corpus and regressions (test/fuzz/)
+#           also proves the core builds without ROS), and in .build-asan/, which links that
+#           core's objects (cmake/core/prebuilt_core.cmake), the tools' unit tests and every fuzz
+#           target's checked-in corpus and regressions (test/fuzz/)
 #   --tsan  ThreadSanitizer (g++), in .build-tsan/: the tests that run code on several threads
 #           (test/unit/thread_tests.cmake)
 # --asan also runs the ROS code under ASan + UBSan (+ LeakSanitizer): the nodelet and the
@@ -40,7 +41,9 @@ failed=0
 start=$SECONDS
 
 # build <dir> <sanitizers> <targets...>: configure (catkin needs the whole project) and build
-# only the given targets (the unit tests, and the ROS targets its rostest steps need).
+# only the given targets (the unit tests, and the ROS targets its rostest steps need). Extra
+# configure arguments come in the array BUILD_ARGS.
+BUILD_ARGS=()
 build() {
   local dir="$1" sanitize="$2"
   shift 2
@@ -50,7 +53,7 @@ build() {
   if ! cmake -S "$ROOT" -B "$dir" "${LAUNCHER[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
       -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" -DSTEREO_FUSION_SANITIZE="$sanitize" \
       -DCATKIN_ENABLE_TESTING=ON -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 \
-      >"$dir.configure.log" 2>&1; then
+      "${BUILD_ARGS[@]}" >"$dir.configure.log" 2>&1; then
     cat "$dir.configure.log"
     return 1
   fi
@@ -129,6 +132,12 @@ if [ "$mode" != --tsan ]; then
     results+=("asan_core_unit_tests: FAILED, $(tail -n 1 "$core_log") ($((SECONDS - t0)) s; log .check-logs/asan_core_unit_tests.log)")
   fi
   dir="$ROOT/.build-asan"
+  # The tools, fuzz targets and ROS code link the core's objects from the build above rather than
+  # compiling the core a second time with the same flags (cmake/core/prebuilt_core.cmake).
+  BUILD_ARGS=(-DSTEREO_FUSION_PREBUILT_CORE=)
+  if [ -f "$ROOT/.build-core-asan/stereo_fusion_core_targets.cmake" ]; then
+    BUILD_ARGS=(-DSTEREO_FUSION_PREBUILT_CORE="$ROOT/.build-core-asan")
+  fi
   if build "$dir" address,undefined stereo_fusion_tool_tests stereo_fusion_fuzz_replays "${ROS_TARGETS[@]}"; then
     bin="$(find "$dir" -type f -name stereo_fusion_tool_tests -perm -u+x | head -n 1)"
     run_gtest asan_tool_tests "$bin" '*' || failed=1
@@ -153,6 +162,7 @@ fi
 
 if [ "$mode" != --asan ]; then
   dir="$ROOT/.build-tsan"
+  BUILD_ARGS=(-DSTEREO_FUSION_PREBUILT_CORE=)
   if build "$dir" thread stereo_fusion_thread_tests "${ROS_TARGETS[@]}"; then
     bin="$(find "$dir" -type f -name stereo_fusion_thread_tests -perm -u+x | head -n 1)"
     threaded='ThreadPool.*:BlockOctree.ConcurrentAllocationCreatesEachBlockOnce'

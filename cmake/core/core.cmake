@@ -16,6 +16,19 @@
 #                              (the tools' and the ROS layer's unit tests are stereo_fusion_tool_tests,
 #                              defined by the catkin package)
 
+# The core's unit tests live in test/unit/<folder>/ for these folders (the catkin package checks
+# that every test folder belongs to the core or to the tools).
+set(STEREO_FUSION_CORE_TEST_FOLDERS camera map integration mesh io util mapper trajectory planning session layers paging)
+
+# STEREO_FUSION_PREBUILT_CORE=<build dir of cmake/core/>: take stereo_fusion_core and
+# stereo_fusion_sim from that build instead of compiling them again (scripts/check.sh's ASan step:
+# the standalone core build runs the core's tests, the catkin build links the same objects into
+# the tools and the nodelet). Both builds must use the same build type, flags and sanitizers.
+if(STEREO_FUSION_PREBUILT_CORE)
+  include(${CMAKE_CURRENT_LIST_DIR}/prebuilt_core.cmake)
+  return()
+endif()
+
 add_library(stereo_fusion_core STATIC
   ${STEREO_FUSION_ROOT}/src/ParameterTable.cpp
   ${STEREO_FUSION_ROOT}/src/MapperConfig.cpp
@@ -114,7 +127,6 @@ target_link_libraries(stereo_fusion_sim PUBLIC stereo_fusion_core)
 
 # The core's unit tests: one gtest binary (one link, parallel compile); every test case is its own
 # ctest entry so the summary counts cases. The helpers (TestSupport.h, ...) are in test/unit/.
-set(STEREO_FUSION_CORE_TEST_FOLDERS camera map integration mesh io util mapper trajectory planning session layers paging)
 if(STEREO_FUSION_CORE_TESTS)
   set(_core_test_globs)
   foreach(folder ${STEREO_FUSION_CORE_TEST_FOLDERS})
@@ -125,6 +137,7 @@ if(STEREO_FUSION_CORE_TESTS)
   target_include_directories(stereo_fusion_unit_tests PRIVATE ${STEREO_FUSION_ROOT}/test/unit)
   target_link_libraries(stereo_fusion_unit_tests stereo_fusion_core stereo_fusion_sim GTest::gtest GTest::gtest_main)
   target_compile_definitions(stereo_fusion_unit_tests PRIVATE STEREO_FUSION_SOURCE_DIR="${STEREO_FUSION_ROOT}")
+  stereo_fusion_test_code(stereo_fusion_unit_tests)
   # A test's time limit; sanitizers run the code 2-15x slower (scripts/check.sh).
   set(_core_test_timeout_s 300)
   if(STEREO_FUSION_SANITIZE)
