@@ -75,10 +75,10 @@ roslaunch stereo_fusion replay.launch bag:="$BAG" config:="$config" player_requi
 launch_pid=$!
 PIDS+=("$launch_pid")
 node=/stereo_fusion
-outputs=($node/occupancy_grid $node/occupancy_grid_updates $node/esdf_slice $node/occupied_voxels)
+outputs=("$node/occupancy_grid" "$node/occupancy_grid_updates" "$node/esdf_slice" "$node/occupied_voxels")
 cpu_nodes=(/stereo_fusion_manager /player)
 if [ "$RVIZ" = none ]; then
-  outputs+=($node/mesh_update $node/mesh_markers)
+  outputs+=("$node/mesh_update" "$node/mesh_markers")
 else
   # rviz joins once the replay's parameters (use_sim_time) are set and the node is up; the
   # player stays paused until rviz subscribed to its mesh topic.

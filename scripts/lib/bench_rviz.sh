@@ -1,3 +1,4 @@
+# shellcheck shell=bash
 # A real rviz for scripts/bench_live.sh (sourced, not run): on a virtual X screen of its own
 # (xvfb-run -a, Mesa's software OpenGL), showing the mesh alone, through the display
 # stereo_fusion/Mesh or through the markers. Expects ROOT, a ROS environment and the private
