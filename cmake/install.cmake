@@ -5,9 +5,11 @@
 
 # The nodelet plugin and the image_transport subscribers (nodelet_plugins.xml names
 # libstereo_fusion_nodelet, image_transport_plugins.xml libstereo_fusion_image_transport, which pluginlib finds in
-# the prefix's library folder, lib/ or Debian's lib/x86_64-linux-gnu/) and the static
-# libraries catkin_package() exports, so find_package(stereo_fusion) works from the install too.
-install(TARGETS stereo_fusion_nodelet stereo_fusion_image_transport stereo_fusion_core stereo_fusion_ros
+# the prefix's library folder, lib/ or Debian's lib/x86_64-linux-gnu/), the library both link
+# (libstereo_fusion_decode_reports) and the static libraries catkin_package() exports, so
+# find_package(stereo_fusion) works from the install too.
+install(TARGETS stereo_fusion_nodelet stereo_fusion_image_transport stereo_fusion_decode_reports
+                stereo_fusion_core stereo_fusion_ros
         LIBRARY DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
         ARCHIVE DESTINATION ${CATKIN_PACKAGE_LIB_DESTINATION}
         RUNTIME DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})

@@ -8,6 +8,12 @@
 # the per-stage timings and the nodelet manager's CPU; the raw figures go to
 # demo_output/live.json.
 #   scripts/bench_live.sh [--voxel-size-m V] [--frames N] [--mesh-hz H] [--set key=value ...]
+#                         [--rviz plugin|markers|none]
+# --rviz plugin / markers: a real rviz on a virtual X screen (xvfb-run, Mesa's software OpenGL)
+# for the whole replay, showing the mesh alone, through the display stereo_fusion/Mesh
+# (~mesh_update) or through the MarkerArray display (~mesh_markers); rviz, not the monitor, is
+# then the mesh's subscriber, and its CPU is measured beside the manager's. none (the default):
+# no rviz, the monitor subscribes to both mesh topics.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 BUILD_DIR="${BUILD_DIR:-$ROOT/.build}"
@@ -15,18 +21,26 @@ VOXEL=0.01
 FRAMES=300
 MESH_HZ=10
 SETS=()
+RVIZ=none
 while [ $# -gt 0 ]; do
   case "$1" in
     --voxel-size-m) VOXEL="$2"; shift 2 ;;
     --frames) FRAMES="$2"; shift 2 ;;
     --mesh-hz) MESH_HZ="$2"; shift 2 ;;
     --set) SETS+=("$2"); shift 2 ;;
-    -h|--help) sed -n '2,10p' "$0"; exit 0 ;;
+    --rviz) RVIZ="$2"; shift 2 ;;
+    -h|--help) sed -n '2,16p' "$0"; exit 0 ;;
     *) echo "bench_live.sh: unknown option $1" >&2; exit 2 ;;
   esac
 done
+case "$RVIZ" in
+  plugin | markers | none) ;;
+  *) echo "bench_live.sh: --rviz takes plugin, markers or none, not '$RVIZ'" >&2; exit 2 ;;
+esac
 
-"$ROOT/scripts/setup.sh" --targets "stereo_fusion_nodelet stereo_fusion_simulate stereo_fusion_generate_messages"
+TARGETS="stereo_fusion_nodelet stereo_fusion_simulate stereo_fusion_generate_messages"
+if [ "$RVIZ" = plugin ]; then TARGETS+=" stereo_fusion_rviz"; fi
+"$ROOT/scripts/setup.sh" --targets "$TARGETS"
 # shellcheck source=scripts/lib/ros_session.sh
 source "$ROOT/scripts/lib/ros_session.sh"
 ros_env
@@ -49,16 +63,32 @@ config="$DEMO/live_config.yaml"
   for kv in "${SETS[@]}"; do echo "${kv%%=*}: ${kv#*=}"; done
 } >"$config"
 
+# shellcheck source=scripts/lib/bench_rviz.sh
+source "$ROOT/scripts/lib/bench_rviz.sh"
+
 PIDS=()
-trap stop_pids EXIT
+trap 'stop_bench_rviz; stop_pids' EXIT
 start_master live "$DEMO/live_roscore.log"
-echo "[live] replaying $BAG at 1x, voxel $VOXEL m, meshing at $MESH_HZ Hz (log: $DEMO/live.log)"
+echo "[live] replaying $BAG at 1x, voxel $VOXEL m, meshing at $MESH_HZ Hz, rviz: $RVIZ (log: $DEMO/live.log)"
 roslaunch stereo_fusion replay.launch bag:="$BAG" config:="$config" player_required:=false \
   start_paused:=true >"$DEMO/live.log" 2>&1 &
-PIDS+=($!)
+launch_pid=$!
+PIDS+=("$launch_pid")
 node=/stereo_fusion
-/usr/bin/python3 "$ROOT/tools/demo/demo_monitor.py" --frames "$FRAMES" --launch-pid "$!" --idle-s 20 \
-  --unpause /player/pause_playback --cpu-node /stereo_fusion_manager /player --json "$ROOT/demo_output/live.json" \
-  --subscribe $node/mesh_update $node/mesh_markers $node/occupancy_grid $node/occupancy_grid_updates \
-  $node/esdf_slice $node/occupied_voxels
-echo "[live] $FRAMES frames at 30 Hz, voxel $VOXEL m: demo_output/live.json"
+outputs=("$node/occupancy_grid" "$node/occupancy_grid_updates" "$node/esdf_slice" "$node/occupied_voxels")
+cpu_nodes=(/stereo_fusion_manager /player)
+if [ "$RVIZ" = none ]; then
+  outputs+=("$node/mesh_update" "$node/mesh_markers")
+else
+  # rviz joins once the replay's parameters (use_sim_time) are set and the node is up; the
+  # player stays paused until rviz subscribed to its mesh topic.
+  mesh_topic=$node/mesh_update
+  if [ "$RVIZ" = markers ]; then mesh_topic=$node/mesh_markers; fi
+  start_bench_rviz "$RVIZ" "$mesh_topic" "$DEMO/live_rviz" "$launch_pid"
+  cpu_nodes+=("$BENCH_RVIZ_NODE")
+fi
+/usr/bin/python3 "$ROOT/tools/demo/demo_monitor.py" --frames "$FRAMES" --launch-pid "$launch_pid" --idle-s 20 \
+  --unpause /player/pause_playback --cpu-node "${cpu_nodes[@]}" --json "$ROOT/demo_output/live.json" \
+  --subscribe "${outputs[@]}"
+if [ "$RVIZ" != none ]; then stop_bench_rviz; fi
+echo "[live] $FRAMES frames at 30 Hz, voxel $VOXEL m, rviz: $RVIZ: demo_output/live.json"

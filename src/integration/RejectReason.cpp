@@ -22,6 +22,7 @@ constexpr RejectReasonInfo kTable[] = {
      "dropped: duplicate stamp before synchronisation"},
     {RejectReason::kError, "error", "dropped: error while fusing"},
     {RejectReason::kWorkBound, "work_bound", "dropped: lookup work bound"},
+    {RejectReason::kUndecodableImage, "undecodable_image", "dropped: undecodable image"},
 };
 static_assert(sizeof(kTable) / sizeof(kTable[0]) == kRejectReasonCount, "one row per RejectReason");
 

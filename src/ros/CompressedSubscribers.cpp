@@ -5,6 +5,7 @@
 #include <boost/make_shared.hpp>
 
 #include "stereo_fusion/ros/CompressedImageDecoding.h"
+#include "stereo_fusion/ros/UndecodableImages.h"
 
 namespace stereo_fusion {
 
@@ -13,14 +14,16 @@ namespace {
 template <typename Decode>
 void decodeAndPass(const sensor_msgs::CompressedImage& message,
                    const image_transport::SubscriberPlugin::Callback& user_cb, Decode decode,
-                   const char* transport, uint64_t* undecodable) {
+                   const std::string& topic, uint64_t* undecodable) {
   const sensor_msgs::ImagePtr image = boost::make_shared<sensor_msgs::Image>();
   std::string error;
   if (!decode(message, image.get(), &error)) {
     ++*undecodable;
-    ROS_ERROR_THROTTLE(5.0, "stereo_fusion: %s image stamped %.6f dropped (%llu so far): %s",
-                       transport, message.header.stamp.toSec(),
-                       static_cast<unsigned long long>(*undecodable), error.c_str());
+    // The subscriber (the nodelet) counts and logs it under its reason; anyone else is told here.
+    if (!UndecodableImages::report(topic, message.header, error))
+      ROS_ERROR_THROTTLE(5.0, "stereo_fusion: image on %s stamped %.6f dropped (%llu so far): %s",
+                         topic.c_str(), message.header.stamp.toSec(),
+                         static_cast<unsigned long long>(*undecodable), error.c_str());
     return;
   }
   user_cb(image);
@@ -30,12 +33,12 @@ void decodeAndPass(const sensor_msgs::CompressedImage& message,
 
 void CompressedImageSubscriber::internalCallback(
     const sensor_msgs::CompressedImage::ConstPtr& message, const Callback& user_cb) {
-  decodeAndPass(*message, user_cb, decodeCompressedImage, "compressed", &undecodable_);
+  decodeAndPass(*message, user_cb, decodeCompressedImage, getTopic(), &undecodable_);
 }
 
 void CompressedDepthSubscriber::internalCallback(
     const sensor_msgs::CompressedImage::ConstPtr& message, const Callback& user_cb) {
-  decodeAndPass(*message, user_cb, decodeCompressedDepth, "compressedDepth", &undecodable_);
+  decodeAndPass(*message, user_cb, decodeCompressedDepth, getTopic(), &undecodable_);
 }
 
 }  // namespace stereo_fusion

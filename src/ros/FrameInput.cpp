@@ -100,9 +100,39 @@ void FrameInput::subscribeImages(ros::NodeHandle& nh, ros::NodeHandle& private_n
       throw std::invalid_argument(why);
     }
   };
-  if (node_.input == InputMode::kDepth)
+  // The listening first: an image that fails at once is counted too. The key is the topic the
+  // transport subscribes (image_transport's <base>/<transport>), as its plugin reports it.
+  const auto listen = [&](const std::string& topic, const std::string& transport,
+                          bool measurement) {
+    const std::string transport_topic = nh.resolveName(topic) + "/" + transport;
+    return UndecodableImages::listen(
+        transport_topic, [this, measurement, transport_topic](const std_msgs::Header& header,
+                                                              const std::string& error) {
+          onUndecodable(measurement, transport_topic, header, error);
+        });
+  };
+  if (node_.input == InputMode::kDepth) {
+    undecodable_depth_ = listen("depth", node_.depth_image_transport, true);
     subscribe(&depth_sub_, "depth", node_.depth_image_transport, "depth_image_transport");
+  }
+  undecodable_image_ = listen("image", node_.image_transport, false);
   subscribe(&image_sub_, "image", node_.image_transport, "image_transport");
+}
+
+void FrameInput::onUndecodable(bool measurement, const std::string& topic,
+                               const std_msgs::Header& header, const std::string& error) {
+  if (measurement) {  // the depth image: received, as admitMeasurement() would have counted it
+    ++disparities_in_;
+    // On the depth subscription's callback (the transport's): never beside admitMeasurement().
+    disparities_missed_ += disparity_seq_.next(header.seq);
+  }
+  // The measurement of this frame (the depth image itself, or the disparity that arrives with
+  // the colour image) can never be matched: refused here, so it is not also counted as
+  // "not synchronised".
+  ++disparities_refused_;
+  drop(RejectReason::kUndecodableImage,
+       std::string(measurement ? "the depth image" : "the image") + " on " + topic + " stamped " +
+           std::to_string(header.stamp.toSec()) + " does not decode: " + error);
 }
 
 bool FrameInput::admitMeasurement(const std_msgs::Header& header, const char* kind) {

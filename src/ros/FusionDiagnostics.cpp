@@ -7,6 +7,11 @@
 
 namespace stereo_fusion {
 
+MeasurementNames MeasurementNames::of(InputMode input) {
+  if (input == InputMode::kDepth) return {"depth image", "depth images"};
+  return {"disparity", "disparities"};
+}
+
 FusionDiagnostics::FusionDiagnostics(ros::NodeHandle& nh, ros::NodeHandle& pnh,
                                      const NodeConfig& node, MappingSession* session,
                                      const FrameInput* frames, const TrajectoryInput* trajectories,
@@ -16,7 +21,9 @@ FusionDiagnostics::FusionDiagnostics(ros::NodeHandle& nh, ros::NodeHandle& pnh,
       frames_(frames),
       trajectories_(trajectories),
       stats_(stats),
-      input_health_(InputHealthConfig{node.diagnostics_window_s, node.input_timeout_s}) {
+      names_(MeasurementNames::of(node.input)),
+      input_health_(InputHealthConfig{node.diagnostics_window_s, node.input_timeout_s, names_.one,
+                                      names_.several}) {
   started_ = ros::WallTime::now();
   input_health_.sample(monotonicNowS(), inputTotals(unmatchedDisparities()));  // first baseline
   updater_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh);
@@ -78,10 +85,11 @@ void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, "waiting for the first frame");
   else
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, "fusing");
-  // disparities received = frames fused + every "dropped:" counter + frames in the queue / worker.
-  status.add("disparities received", disparities_in);
+  // The keys name the measurement the input takes: disparities, or depth images (input: depth).
+  // received = frames fused + every "dropped:" counter + frames in the queue / worker.
+  status.add(names_.several + " received", disparities_in);
   // Lost before they reached the node (transport queues, the driver): not part of the sum above.
-  status.add("disparities missed upstream (header.seq gaps)", frames_->disparitiesMissed());
+  status.add(names_.several + " missed upstream (header.seq gaps)", frames_->disparitiesMissed());
   status.add("frames received", matched);
   status.add("dropped: not synchronised (no matching image / camera_info yet)", unmatched);
   status.add("frames fused", fused);
@@ -90,7 +98,7 @@ void FusionDiagnostics::diagnose(diagnostic_updater::DiagnosticStatusWrapper& st
   // The input now: over the window (diagnostics_window_s) and since the last frame.
   status.add("window (s)", window.span_s);
   status.add("input rate, window (Hz)", window.frames_per_s);
-  status.add("disparity rate, window (Hz)", window.disparities_per_s);
+  status.add(names_.one + " rate, window (Hz)", window.disparities_per_s);
   status.add("frames dropped in the window", window.dropped);
   if (window.first_frame_seen)
     status.add("since the last frame (s)", window.since_last_frame_s);

@@ -12,6 +12,8 @@ std::vector<std::string> validateInputHealthConfig(const InputHealthConfig& conf
     errors.push_back("diagnostics_window_s must be a finite number of seconds > 0");
   if (!(std::isfinite(config.input_timeout_s) && config.input_timeout_s >= 0.0))
     errors.push_back("input_timeout_s must be a finite number of seconds >= 0 (0 = off)");
+  if (config.measurement.empty() || config.measurements.empty())
+    errors.push_back("the measurements' names must not be empty");
   return errors;
 }
 
@@ -58,14 +60,14 @@ InputWindowReport InputHealth::report() const {
 std::string InputHealth::staleMessage() const {
   const InputWindowReport r = report();
   if (!r.stale) return "";
-  char text[256];
-  std::snprintf(text, sizeof(text), "input stale: no frame for %.1f s (input_timeout_s %g); %s",
-                r.since_last_frame_s, config_.input_timeout_s,
-                r.disparities_arriving
-                    ? "disparities still arrive: their image or camera_info stopped or no "
-                      "longer matches"
-                    : "no disparity either: has the camera or its driver stopped?");
-  return text;
+  char text[128];
+  std::snprintf(text, sizeof(text), "input stale: no frame for %.1f s (input_timeout_s %g); ",
+                r.since_last_frame_s, config_.input_timeout_s);
+  return text +
+         (r.disparities_arriving
+              ? config_.measurements +
+                    " still arrive: their image or camera_info stopped or no longer matches"
+              : "no " + config_.measurement + " either: has the camera or its driver stopped?");
 }
 
 }  // namespace stereo_fusion

@@ -3,7 +3,9 @@
 // (compressed_input.test) fuses exactly as the raw image does; a depth camera's registered depth
 // image (depth_input.test, input: depth), 16UC1 in mm and 32FC1 in m, puts an analytic plane
 // where it is, raw and through the compressedDepth transport (depth_compressed_input.test), and a
-// depth image of a wrong encoding is dropped, counted and changes nothing.
+// depth image of a wrong encoding is dropped, counted and changes nothing; an image that arrives
+// compressed and does not decode drops its frame as `undecodable image`; in depth mode the
+// diagnostics name depth images, not disparities.
 #include <nodelet/loader.h>
 #include <rosgraph_msgs/Log.h>
 #include <sensor_msgs/CompressedImage.h>
@@ -113,6 +115,110 @@ TEST(CompressedImages, FuseExactlyAsTheRawImagesWould) {
   ASSERT_GT(raw.mesh().submeshes().size(), 10u);
   // Same geometry and, PNG being lossless, the same vertex colours.
   test::expectSameSubmeshes(live, raw.mesh().submeshes(), test::kWithColors);
+}
+
+/// Collects what the nodes log on /rosout at `level` or above.
+class RosoutWatcher {
+ public:
+  explicit RosoutWatcher(uint8_t level) : level_(level) {
+    sub_ = ros::NodeHandle().subscribe("/rosout", 100, &RosoutWatcher::onLog, this);
+  }
+  ~RosoutWatcher() { sub_.shutdown(); }
+  /// The first message logged so far that contains `part` ("" if none).
+  std::string find(const std::string& part) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const std::string& m : messages_)
+      if (m.find(part) != std::string::npos) return m;
+    return "";
+  }
+
+ private:
+  void onLog(const rosgraph_msgs::Log::ConstPtr& log) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (log->level >= level_) messages_.push_back(log->msg);
+  }
+  uint8_t level_;
+  ros::Subscriber sub_;
+  std::mutex mutex_;
+  std::vector<std::string> messages_;
+};
+
+// An image that arrives compressed and does not decode drops its frame under that reason, not
+// as "not synchronised" (its disparity is never matched), is logged with why, and the next
+// frame is fused as usual.
+TEST(CompressedImages, AnUndecodableImageIsCountedAsUndecodableNotUnsynchronised) {
+  ros::NodeHandle nh;
+  ros::Publisher disparity_pub = nh.advertise<stereo_msgs::DisparityImage>("/stereo/disparity", 10);
+  ros::Publisher compressed_pub =
+      nh.advertise<sensor_msgs::CompressedImage>("/stereo/left/image_rect_color/compressed", 10);
+  ros::Publisher info_pub = nh.advertise<sensor_msgs::CameraInfo>("/stereo/left/camera_info", 10);
+  tf2_ros::TransformBroadcaster tf;
+  test::DiagnosticsWatcher diagnostics;
+  RosoutWatcher rosout(rosgraph_msgs::Log::WARN);
+  ASSERT_TRUE(test::waitFor(
+      [&] {
+        return disparity_pub.getNumSubscribers() > 0 && compressed_pub.getNumSubscribers() > 0 &&
+               info_pub.getNumSubscribers() > 0;
+      },
+      30.0));
+  ASSERT_TRUE(test::waitForTfSubscriber(30.0));
+  ASSERT_TRUE(diagnostics.waitForNextReport(30.0));
+  const std::string kUndecodable = "dropped: undecodable image";
+  const std::string kUnsynchronised =
+      "dropped: not synchronised (no matching image / camera_info yet)";
+  const long fused_before = diagnostics.value("frames fused");
+  const long undecodable_before = diagnostics.value(kUndecodable);
+  const long unsynchronised_before = diagnostics.value(kUnsynchronised);
+  const long dropped_before = diagnostics.droppedTotal();
+  ASSERT_GE(fused_before, 0);
+  ASSERT_EQ(undecodable_before, 0) << "the reason is reported, at 0 before any such image";
+  ASSERT_GE(unsynchronised_before, 0);
+
+  sim::AnalyticScene scene;
+  scene.add(sim::makePlane({0, 0.3, 0}, {0, -1, 0}), {180, 160, 120});
+  const auto publish = [&](double x, bool corrupt) {
+    const auto pose = sim::lookAt({x, -0.2, 0.0}, {0.0, 0.3, 1.2}, -Eigen::Vector3d::UnitY());
+    const StereoFrame frame = test::renderFrame(scene, qvga(), pose);
+    test::FrameMessages m = test::frameMessages(frame, &tf);
+    sensor_msgs::CompressedImage compressed;
+    compressed.header = m.header;
+    compressed.format = "rgb8; png compressed bgr8";
+    if (corrupt) {
+      compressed.data.assign(4096, 0xab);  // not a PNG: the decoder refuses it
+    } else {
+      cv::Mat bgr;
+      cv::cvtColor(frame.color, bgr, cv::COLOR_RGB2BGR);
+      ASSERT_TRUE(cv::imencode(".png", bgr, compressed.data));
+    }
+    ros::WallDuration(0.05).sleep();  // tf first
+    disparity_pub.publish(m.disparity);
+    compressed_pub.publish(compressed);
+    info_pub.publish(m.info);
+    ros::WallDuration(0.2).sleep();
+  };
+  publish(0.0, true);
+  publish(0.1, false);
+  ASSERT_TRUE(test::waitFor(
+      [&] {
+        return diagnostics.value(kUndecodable) == 1 &&
+               diagnostics.value("frames fused") == fused_before + 1;
+      },
+      30.0))
+      << kUndecodable << " " << diagnostics.value(kUndecodable) << ", frames fused "
+      << diagnostics.value("frames fused") << " (before " << fused_before << ")";
+  // The disparity of the dropped frame waits for an image that never comes: counted once, under
+  // the image's reason, in every report from now on.
+  ASSERT_TRUE(diagnostics.waitForNextReport(5.0));
+  ASSERT_TRUE(diagnostics.waitForNextReport(5.0));
+  EXPECT_EQ(diagnostics.value(kUnsynchronised), unsynchronised_before);
+  EXPECT_EQ(diagnostics.value(kUndecodable), 1);
+  EXPECT_EQ(diagnostics.droppedTotal(), dropped_before + 1);
+  // Logged: the reason, the topic and why.
+  ASSERT_TRUE(test::waitFor([&] { return !rosout.find("undecodable_image").empty(); }, 10.0))
+      << "no warning names the drop's reason";
+  const std::string warning = rosout.find("undecodable_image");
+  EXPECT_NE(warning.find("/stereo/left/image_rect_color/compressed"), std::string::npos) << warning;
+  EXPECT_NE(warning.find("does not decode"), std::string::npos) << warning;
 }
 
 // A transport no plugin provides stops the nodelet at start-up, the message naming it and the
@@ -246,10 +352,15 @@ class DepthInput : public testing::Test {
     info.K = {camera.fx(), 0, camera.cx(), 0, camera.fy(), camera.cy(), 0, 0, 1};
     info.P = {camera.fx(), 0, camera.cx(), 0, 0, camera.fy(), camera.cy(), 0, 0, 0, 1, 0};
     ros::WallDuration(0.05).sleep();  // tf first
-    if (compressed_)
+    if (compressed_ && cut_depth_png_) {
+      sensor_msgs::CompressedImage cut = compressedDepth(depth);
+      cut.data.resize(12 + 40);  // the header and the PNG's first bytes only
+      depth_pub_.publish(cut);
+    } else if (compressed_) {
       depth_pub_.publish(compressedDepth(depth));
-    else
+    } else {
       depth_pub_.publish(depth);
+    }
     if (image_compressed_) {
       sensor_msgs::CompressedImage jpeg;
       jpeg.header = header;
@@ -296,6 +407,7 @@ class DepthInput : public testing::Test {
   }
 
   bool compressed_ = false, image_compressed_ = false;
+  bool cut_depth_png_ = false;  ///< publish() sends a compressedDepth message that does not decode
   ros::Publisher depth_pub_, image_pub_, info_pub_;
   tf2_ros::TransformBroadcaster tf_;
   test::DiagnosticsWatcher diagnostics_;
@@ -337,6 +449,55 @@ class DepthInput : public testing::Test {
 TEST_F(DepthInput, APlaneInMillimetresAndMetresIsFusedWhereItIs) {
   SubmeshMap mesh;
   fusePlane(&mesh);
+}
+
+// depth_compressed_input.test only: a compressedDepth message that does not decode (a PNG cut
+// short) drops its frame as an undecodable image, counted as a depth image received, not as
+// unsynchronised; the map stays and the next frame is fused.
+TEST_F(DepthInput, AnUndecodableCompressedDepthImageIsCountedAsUndecodable) {
+  ASSERT_TRUE(compressed_)
+      << "run by depth_compressed_input.test (depth_image_transport: compressedDepth)";
+  SubmeshMap mesh;
+  ASSERT_NO_FATAL_FAILURE(fusePlane(&mesh));
+  ASSERT_TRUE(diagnostics_.waitForNextReport(5.0));
+  const long fused = diagnostics_.value("frames fused");
+  const long received = diagnostics_.value("depth images received");
+  const long dropped = diagnostics_.droppedTotal();
+  ASSERT_GE(received, static_cast<long>(positions_.size()));
+  cut_depth_png_ = true;
+  publish({0.01, 0.01, 0}, "16UC1");
+  cut_depth_png_ = false;
+  ASSERT_TRUE(
+      test::waitFor([&] { return diagnostics_.value("dropped: undecodable image") == 1; }, 30.0))
+      << "dropped: undecodable image " << diagnostics_.value("dropped: undecodable image");
+  ASSERT_TRUE(diagnostics_.waitForNextReport(5.0));
+  ASSERT_TRUE(diagnostics_.waitForNextReport(5.0));
+  EXPECT_EQ(diagnostics_.value("depth images received"), received + 1);
+  EXPECT_EQ(diagnostics_.value("dropped: not synchronised (no matching image / camera_info yet)"),
+            0);
+  EXPECT_EQ(diagnostics_.droppedTotal(), dropped + 1);
+  EXPECT_EQ(diagnostics_.value("frames fused"), fused);
+  SubmeshMap after;
+  ASSERT_TRUE(fullMesh(&after));
+  test::expectSameSubmeshes(after, mesh, test::kWithColors);
+  publish({0.02, 0.0, 0.01}, "32FC1");
+  EXPECT_TRUE(test::waitFor([&] { return diagnostics_.value("frames fused") == fused + 1; }, 30.0))
+      << "the frame after the undecodable one was not fused";
+}
+
+// depth_input.test: the input's counters are named after what it takes, depth images; no key
+// speaks of disparities the node never received.
+TEST_F(DepthInput, TheDiagnosticsKeysNameDepthImages) {
+  SubmeshMap mesh;
+  ASSERT_NO_FATAL_FAILURE(fusePlane(&mesh));
+  ASSERT_TRUE(diagnostics_.waitForNextReport(5.0));
+  EXPECT_GE(diagnostics_.value("depth images received"), static_cast<long>(positions_.size()));
+  EXPECT_EQ(diagnostics_.value("depth images missed upstream (header.seq gaps)"), 0);
+  EXPECT_GE(diagnostics_.value("depth image rate, window (Hz)"), 0)
+      << "the window's rate of depth images is not reported";
+  for (const char* key : {"disparities received", "disparities missed upstream (header.seq gaps)",
+                          "disparity rate, window (Hz)"})
+    EXPECT_EQ(diagnostics_.value(key), -1) << "'" << key << "' is reported in depth mode";
 }
 
 // depth_input.test only (raw depth: the compressedDepth transport refuses such a message itself).

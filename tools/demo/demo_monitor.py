@@ -33,6 +33,12 @@ def number(key, default=0.0):
         return default
 
 
+def missed_upstream():
+    """Measurements lost before the node (header.seq gaps): disparities, or depth images with
+    input: depth (the key names what the input takes)."""
+    return sum(number(f"{m} missed upstream (header.seq gaps)") for m in ("disparities", "depth images"))
+
+
 def dropped_keys():
     return sorted(k for k in list(values) if k.startswith("dropped: "))
 
@@ -116,7 +122,7 @@ def main():
             return 1
         fused = int(number("frames fused"))
         # lost before the node (header.seq gaps) or dropped in it
-        dropped = int(number("disparities missed upstream (header.seq gaps)") + sum(number(k) for k in dropped_keys()))
+        dropped = int(missed_upstream() + sum(number(k) for k in dropped_keys()))
         print(f"[demo] {fused + dropped}/{args.frames} frames: {fused} fused, {dropped} dropped | "
               f"last {number('total p50 (ms)'):.1f} ms/frame (p50) | {int(number('blocks'))} blocks, "
               f"{number('memory (MB)'):.1f} MB", flush=True)
@@ -153,7 +159,7 @@ def main():
         print(f"received {n} messages on {topic}")
     if args.json:
         figures = {"frames_fused": int(number("frames fused")),
-                   "frames_missed_upstream": int(number("disparities missed upstream (header.seq gaps)")),
+                   "frames_missed_upstream": int(missed_upstream()),
                    "frames_dropped": {k[len("dropped: "):]: int(number(k)) for k in dropped_keys()},
                    "latency_p50_s": number("latency p50 (s)"), "latency_p99_s": number("latency p99 (s)"),
                    "stage_ms": {s: {"p50": number(s + " p50 (ms)"), "p99": number(s + " p99 (ms)")}

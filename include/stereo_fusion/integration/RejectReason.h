@@ -24,12 +24,13 @@ enum class RejectReason : uint8_t {
   kQueueFull,            ///< the frame queue was full (queue_size, drop_oldest)
   kTfTimeout,            ///< no camera pose from tf within tf_timeout_s
   kBadStamp,             ///< stamped 0, or ahead of the clock by more than max_stamp_ahead_s
-  kSuperseded,     ///< arrived before a reset or load_map: it belongs to the map they replaced
-  kSyncDuplicate,  ///< a second disparity of a stamp whose frame was not matched yet
-  kError,          ///< fusing it threw (e.g. out of memory); the mesh was rebuilt from the map
-  kWorkBound,      ///< its band boxes would make the lookup visit more than
-                   ///< max_lookup_blocks_per_frame blocks (an absurd calibration or range)
-  kCount,          ///< not a reason: the number of values
+  kSuperseded,        ///< arrived before a reset or load_map: it belongs to the map they replaced
+  kSyncDuplicate,     ///< a second disparity of a stamp whose frame was not matched yet
+  kError,             ///< fusing it threw (e.g. out of memory); the mesh was rebuilt from the map
+  kWorkBound,         ///< its band boxes would make the lookup visit more than
+                      ///< max_lookup_blocks_per_frame blocks (an absurd calibration or range)
+  kUndecodableImage,  ///< its image or depth image came compressed and did not decode
+  kCount,             ///< not a reason: the number of values
 };
 
 constexpr size_t kRejectReasonCount = static_cast<size_t>(RejectReason::kCount);

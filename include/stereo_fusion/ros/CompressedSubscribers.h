@@ -3,8 +3,9 @@
 // (image_transport_plugins' formats, decoded by CompressedImageDecoding), exported in
 // image_transport_plugins.xml: Debian ships image_transport with the raw transport only. Where
 // image_transport_plugins is installed, pluginlib takes the first of the two it finds; both
-// decode the same messages. A message that does not decode is dropped here with an error
-// (throttled) and counted: its frame's other parts then stay unmatched (diagnostics).
+// decode the same messages. A message that does not decode is dropped here and reported to the
+// topic's subscriber (UndecodableImages: the nodelet counts its frame as `dropped: undecodable
+// image` and logs why); with no such listener it is logged here (throttled).
 
 #include <image_transport/simple_subscriber_plugin.h>
 #include <sensor_msgs/CompressedImage.h>

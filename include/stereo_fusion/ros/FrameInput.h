@@ -34,6 +34,7 @@
 #include "stereo_fusion/ros/RecentStamps.h"
 #include "stereo_fusion/ros/RosParameters.h"
 #include "stereo_fusion/ros/SequenceGaps.h"
+#include "stereo_fusion/ros/UndecodableImages.h"
 #include "stereo_fusion/session/MappingSession.h"
 #include "stereo_fusion/session/OutputCadence.h"
 
@@ -104,6 +105,10 @@ class FrameInput {
   bool admitMeasurement(const std_msgs::Header& header, const char* kind);
   /// Subscribes the image (and depth) through image_transport; throws std::invalid_argument.
   void subscribeImages(ros::NodeHandle& nh, ros::NodeHandle& private_nh);
+  /// A compressed image (the colour image, or with `measurement` the depth image) that did not
+  /// decode: its frame is counted as `undecodable image`, not left unmatched.
+  void onUndecodable(bool measurement, const std::string& topic, const std_msgs::Header& header,
+                     const std::string& error);
   void onFrame(const DisparityMsg::ConstPtr& d, const ImageMsg::ConstPtr& i,
                const InfoMsg::ConstPtr& c);
   void onDepthFrame(const ImageMsg::ConstPtr& depth, const ImageMsg::ConstPtr& i,
@@ -137,6 +142,9 @@ class FrameInput {
   image_transport::SubscriberFilter depth_sub_;
   image_transport::SubscriberFilter image_sub_;
   message_filters::Subscriber<InfoMsg> info_sub_;
+  /// The compressed transports' reports of images they could not decode (a report in progress
+  /// finishes before the listening ends; ~FrameInput() unsubscribes before either is released).
+  std::unique_ptr<UndecodableImages::Listening> undecodable_depth_, undecodable_image_;
   std::unique_ptr<message_filters::Synchronizer<ExactPolicy>> exact_sync_;
   std::unique_ptr<message_filters::Synchronizer<ApproxPolicy>> approx_sync_;
   std::unique_ptr<message_filters::Synchronizer<DepthExactPolicy>> depth_exact_sync_;

@@ -6,6 +6,7 @@
 #include <ros/ros.h>
 
 #include <memory>
+#include <string>
 
 #include "stereo_fusion/ros/FrameInput.h"
 #include "stereo_fusion/ros/NodeStats.h"
@@ -15,6 +16,13 @@
 #include "stereo_fusion/session/MappingSession.h"
 
 namespace stereo_fusion {
+
+/// What the input's measurements are called in the diagnostics' keys and messages.
+struct MeasurementNames {
+  std::string one;      ///< "disparity", "depth image"
+  std::string several;  ///< "disparities", "depth images"
+  static MeasurementNames of(InputMode input);
+};
 
 class FusionDiagnostics {
  public:
@@ -39,6 +47,7 @@ class FusionDiagnostics {
   const FrameInput* frames_;
   const TrajectoryInput* trajectories_;
   const NodeStats* stats_;
+  const MeasurementNames names_;  // before input_health_, which is built with them
   ros::WallTime started_;
   InputHealth input_health_;              // sampled by diagnose() only (the timer's thread)
   MappingSession::MapStatus map_status_;  // the last read (only the diagnostics thread uses it)

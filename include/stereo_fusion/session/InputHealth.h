@@ -16,6 +16,10 @@ struct InputHealthConfig {
   double window_s = 10.0;
   /// No frame for this long after the first one is stale input (input_timeout_s); 0 = never.
   double input_timeout_s = 2.0;
+  /// What the stale message calls the measurements, one and several (input: depth: "depth
+  /// image", "depth images"); not empty.
+  std::string measurement = "disparity";
+  std::string measurements = "disparities";
 };
 /// One message per invalid field (empty = valid).
 std::vector<std::string> validateInputHealthConfig(const InputHealthConfig& config);

@@ -48,6 +48,7 @@ mv "$TMP/staging$CONFIGURED" "$PREFIX"
 outside="$(find "$TMP/staging" ! -type d)"
 [ -z "$outside" ] || fail "installed outside the prefix $CONFIGURED: $outside"
 for f in share/stereo_fusion/package.xml share/stereo_fusion/nodelet_plugins.xml lib/libstereo_fusion_nodelet.so \
+  lib/libstereo_fusion_image_transport.so lib/libstereo_fusion_decode_reports.so \
   lib/stereo_fusion/mesh_assembler_node lib/stereo_fusion/stereo_fusion_simulate lib/stereo_fusion/demo_monitor.py \
   lib/stereo_fusion/demo.sh share/stereo_fusion/launch/stereo_pipeline.launch share/stereo_fusion/config/default.yaml \
   share/stereo_fusion/rviz/stereo_fusion.rviz share/stereo_fusion/msg/MeshUpdate.msg include/stereo_fusion/MeshUpdate.h \

@@ -125,6 +125,27 @@ TEST(InputHealth, StaleFramesWithDisparitiesStillArrivingSaySo) {
       << health.staleMessage();
 }
 
+// input: depth: the message names depth images, whichever way the input went stale.
+TEST(InputHealth, StaleMessagesNameTheMeasurementsTheyCount) {
+  InputHealthConfig config;
+  config.window_s = 10.0;
+  config.input_timeout_s = 2.0;
+  config.measurement = "depth image";
+  config.measurements = "depth images";
+  InputHealth arriving(config), stopped(config);
+  for (int k = 0; k < 3; ++k) {
+    arriving.sample(k, {10u + 10u * k, 10, 0});
+    stopped.sample(k, {10, 10, 0});
+  }
+  ASSERT_TRUE(arriving.report().stale && stopped.report().stale);
+  EXPECT_NE(arriving.staleMessage().find("depth images still arrive"), std::string::npos)
+      << arriving.staleMessage();
+  EXPECT_NE(stopped.staleMessage().find("no depth image either"), std::string::npos)
+      << stopped.staleMessage();
+  EXPECT_EQ(arriving.staleMessage().find("disparit"), std::string::npos) << arriving.staleMessage();
+  EXPECT_EQ(stopped.staleMessage().find("disparit"), std::string::npos) << stopped.staleMessage();
+}
+
 TEST(InputHealth, TimeoutZeroTurnsTheCheckOff) {
   InputHealth health = withWindow(10.0, 0.0);
   health.sample(0.0, {1, 1, 0});
@@ -141,4 +162,7 @@ TEST(InputHealth, ConfigValidation) {
   EXPECT_EQ(validateInputHealthConfig({NAN, 2.0}).size(), 1u);
   EXPECT_EQ(validateInputHealthConfig({10.0, -0.5}).size(), 1u);
   EXPECT_EQ(validateInputHealthConfig({10.0, INFINITY}).size(), 1u);
+  InputHealthConfig unnamed;
+  unnamed.measurements = "";
+  EXPECT_EQ(validateInputHealthConfig(unnamed).size(), 1u);
 }
