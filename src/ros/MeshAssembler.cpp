@@ -37,7 +37,9 @@ void MeshAssembler::onInit() {
           "parameter '" + pnh.resolveName("mesh_encoding") + "' must be float32 or compact, not '" +
               encoding + "'");
 
-  pnh.param("robots", fleet_.robots, fleet_.robots);
+  // Not param(): a robots that is not a list of strings would silently mean "one robot".
+  require(!pnh.hasParam("robots") || pnh.getParam("robots", fleet_.robots),
+          "parameter '" + pnh.resolveName("robots") + "' must be a list of robot names");
   pnh.param("robot_node", fleet_.robot_node, fleet_.robot_node);
   pnh.param("operator_frame", fleet_.operator_frame, fleet_.operator_frame);
   pnh.param("grid_publish_rate_hz", fleet_.grid_publish_rate_hz, fleet_.grid_publish_rate_hz);
