@@ -100,9 +100,11 @@ add_library(stereo_fusion_core STATIC
   ${STEREO_FUSION_ROOT}/src/planning/PlanningMapQueries.cpp
   ${STEREO_FUSION_ROOT}/src/planning/OccupancyGrid2D.cpp
   ${STEREO_FUSION_ROOT}/src/planning/FleetGridMerge.cpp
+  ${STEREO_FUSION_ROOT}/src/planning/GridPatch.cpp
   ${STEREO_FUSION_ROOT}/src/io/PlanningExport.cpp
   ${STEREO_FUSION_ROOT}/src/io/TextureAtlas.cpp
   ${STEREO_FUSION_ROOT}/src/io/MeshExport.cpp
+  ${STEREO_FUSION_ROOT}/src/io/OperatorMeshExport.cpp
   ${STEREO_FUSION_ROOT}/src/io/ObjWriter.cpp
   ${STEREO_FUSION_ROOT}/src/io/ConfigFile.cpp
   ${STEREO_FUSION_ROOT}/src/io/PlyWriter.cpp

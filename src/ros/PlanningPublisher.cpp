@@ -1,5 +1,7 @@
 #include "stereo_fusion/ros/PlanningPublisher.h"
 
+#include "stereo_fusion/ros/GridMessages.h"
+
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 #include <pcl_conversions/pcl_conversions.h>
@@ -13,22 +15,6 @@
 namespace stereo_fusion {
 
 namespace {
-
-nav_msgs::OccupancyGrid toMessage(const OccupancyGrid2D& grid, const std::string& frame,
-                                  const ros::Time& stamp) {
-  nav_msgs::OccupancyGrid msg;
-  msg.header.frame_id = frame;
-  msg.header.stamp = stamp;
-  msg.info.map_load_time = stamp;
-  msg.info.resolution = static_cast<float>(grid.resolution_m);
-  msg.info.width = static_cast<uint32_t>(grid.width);
-  msg.info.height = static_cast<uint32_t>(grid.height);
-  msg.info.origin.position.x = grid.origin_x_m;
-  msg.info.origin.position.y = grid.origin_y_m;
-  msg.info.origin.orientation.w = 1.0;
-  msg.data = grid.cells;
-  return msg;
-}
 
 bool sameExtent(const OccupancyGrid2D& a, const OccupancyGrid2D& b) {
   return a.width == b.width && a.height == b.height && a.origin_x_m == b.origin_x_m &&
@@ -219,7 +205,7 @@ void PlanningPublisher::publishGrid(const OccupancyGrid2D& grid, bool full,
     return;
   }
   grid_ = grid;
-  grid_msg_ = toMessage(grid, node_.world_frame, stamp);
+  grid_msg_ = toGridMessage(grid, node_.world_frame, stamp);
   grid_pub_.publish(grid_msg_);
 }
 

@@ -136,10 +136,22 @@ void addSimulateArguments(CLI::App* app, SimulateOptions* o) {
                   "time 0 means \"latest\" to tf)")
       ->type_name("FILE")
       ->check(kNotEmpty);
-  app->add_option("--bag-world-frame", o->bag_world_frame,
-                  "the bag's tf parent frame and the trajectory's frame (default map, the\n"
-                  "nodelet's default world_frame; e.g. odom)")
+  app->add_option_function<std::string>(
+         "--bag-world-frame",
+         [o](const std::string& frame) {
+           o->bag_world_frame = frame;
+           o->bag_world_frame_given = true;
+         },
+         "the bag's tf parent frame and the trajectory's frame (default map, the\n"
+         "nodelet's default world_frame; e.g. odom)")
       ->type_name("FRAME")
+      ->check(kNotEmpty);
+  app->add_option("--bag-robot", o->bag_robot,
+                  "one robot of a fleet (--bag-content disparity): the bag's topics under /NAME\n"
+                  "(/NAME/stereo/disparity, ...), its camera frame NAME/left_optical and its\n"
+                  "world frame NAME/map (unless --bag-world-frame), so several robots' bags\n"
+                  "play through one rosbag player into nodelets in namespaces NAME")
+      ->type_name("NAME")
       ->check(kNotEmpty);
   app->add_option(
          "--bag-content", o->bag_content,

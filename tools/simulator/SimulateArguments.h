@@ -37,6 +37,10 @@ struct SimulateOptions {
   std::string bag_content = "disparity";
   /// The bag's /tf parent frame (the nodelet's world_frame; default BagTopics', REP 105's map).
   std::string bag_world_frame = BagTopics{}.world_frame;
+  bool bag_world_frame_given = false;
+  /// A fleet robot's bag (--bag-robot): topics under /<name>, frames <name>/map and
+  /// <name>/left_optical, so several robots' bags play through one player (empty: none).
+  std::string bag_robot;
   double gt_max_edge_m = 0.03;
   double revolutions = 1.0;
   std::string dynamic = "none";

@@ -110,7 +110,21 @@ int simulate(SimulateOptions o) {
   if (!o.bag.empty()) {
     BagTopics topics;
     topics.world_frame = o.bag_world_frame;
-    bag = StereoBagWriter::open(o.bag, topics, "left_optical", 1.0, &error);
+    std::string camera_frame = "left_optical";
+    if (!o.bag_robot.empty()) {
+      if (o.bag_content != "disparity") {
+        std::cerr << "stereo_fusion_simulate: --bag-robot needs --bag-content disparity\n";
+        return 2;
+      }
+      const std::string ns = "/" + o.bag_robot;
+      topics.disparity = ns + topics.disparity;
+      topics.image = ns + topics.image;
+      topics.camera_info = ns + topics.camera_info;
+      topics.trajectory = ns + topics.trajectory;
+      if (!o.bag_world_frame_given) topics.world_frame = o.bag_robot + "/map";
+      camera_frame = o.bag_robot + "/" + camera_frame;
+    }
+    bag = StereoBagWriter::open(o.bag, topics, camera_frame, 1.0, &error);
     if (!bag) {
       std::cerr << "stereo_fusion_simulate: " << error << "\n";
       return 1;
