@@ -28,6 +28,24 @@ inline bool fetchFullMesh(const std::string& service, SubmeshMap* mesh, uint64_t
   return applyMeshUpdate(srv.response.mesh, mesh);
 }
 
+/// Fetches the robot's (/stereo_fusion) and the base station's (/mesh_assembler) full meshes
+/// until the base station has reached the robot's sequence (true) or `timeout_s` has passed
+/// (false; the last fetched meshes and sequences are left for the failure message).
+inline bool waitForAssemblerToCatchUp(SubmeshMap* robot, uint64_t* robot_sequence,
+                                      SubmeshMap* assembled, uint64_t* assembled_sequence,
+                                      double timeout_s) {
+  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(timeout_s);
+  while (ros::ok()) {
+    if (fetchFullMesh("/stereo_fusion/get_full_mesh", robot, robot_sequence) &&
+        fetchFullMesh("/mesh_assembler/get_full_mesh", assembled, assembled_sequence) &&
+        *assembled_sequence == *robot_sequence)
+      return true;
+    if (ros::WallTime::now() >= end) return false;
+    ros::WallDuration(0.05).sleep();
+  }
+  return false;
+}
+
 /// The bytes of the file at `path` (empty if it cannot be read).
 inline std::string readFileBytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);

@@ -133,14 +133,8 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   for (int f = kFrames / 2; f < kFrames; ++f) publishFrame(f);
   ASSERT_TRUE(test::waitFor([&] { return diagnostics.value("frames fused") >= kFrames; }, 60.0));
   ASSERT_EQ(diagnostics.value("frames fused"), kFrames);
-  ASSERT_TRUE(test::waitFor(
-      [&] {
-        return test::fetchFullMesh("/stereo_fusion/get_full_mesh", &robot, &robot_sequence) &&
-               test::fetchFullMesh("/mesh_assembler/get_full_mesh", &assembled,
-                                   &assembled_sequence) &&
-               assembled_sequence == robot_sequence;
-      },
-      30.0))
+  ASSERT_TRUE(test::waitForAssemblerToCatchUp(&robot, &robot_sequence, &assembled,
+                                              &assembled_sequence, 30.0))
       << "assembler at sequence " << assembled_sequence << ", robot at " << robot_sequence;
   EXPECT_GT(assembled_sequence, joined_sequence) << "no update was applied after joining";
   // Followed incrementally: one full mesh fetched on joining, none since (a refetch per update
@@ -299,14 +293,8 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   publishFrame(kFrames);
   ASSERT_TRUE(
       test::waitFor([&] { return diagnostics.value("frames fused") >= kFrames + 1; }, 60.0));
-  ASSERT_TRUE(test::waitFor(
-      [&] {
-        return test::fetchFullMesh("/stereo_fusion/get_full_mesh", &robot, &robot_sequence) &&
-               test::fetchFullMesh("/mesh_assembler/get_full_mesh", &assembled,
-                                   &assembled_sequence) &&
-               assembled_sequence == robot_sequence;
-      },
-      30.0))
+  ASSERT_TRUE(test::waitForAssemblerToCatchUp(&robot, &robot_sequence, &assembled,
+                                              &assembled_sequence, 30.0))
       << "assembler at sequence " << assembled_sequence << ", robot at " << robot_sequence;
   EXPECT_EQ(assembled.count(stray.key), 0u) << "the update after the gap was applied";
   test::expectSameSubmeshes(assembled, robot);
@@ -351,14 +339,8 @@ TEST(MeshAssembler, JoinedMidRunEndsWithExactlyTheRobotsMesh) {
   publishFrame(kFrames + 1);
   ASSERT_TRUE(
       test::waitFor([&] { return diagnostics.value("frames fused") >= kFrames + 2; }, 60.0));
-  ASSERT_TRUE(test::waitFor(
-      [&] {
-        return test::fetchFullMesh("/stereo_fusion/get_full_mesh", &robot, &robot_sequence) &&
-               test::fetchFullMesh("/mesh_assembler/get_full_mesh", &assembled,
-                                   &assembled_sequence) &&
-               assembled_sequence == robot_sequence;
-      },
-      30.0))
+  ASSERT_TRUE(test::waitForAssemblerToCatchUp(&robot, &robot_sequence, &assembled,
+                                              &assembled_sequence, 30.0))
       << "assembler at sequence " << assembled_sequence << ", robot at " << robot_sequence;
   EXPECT_EQ(assembled.count(stray.key), 0u);
   test::expectSameSubmeshes(assembled, robot);

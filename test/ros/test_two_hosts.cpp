@@ -67,14 +67,8 @@ TEST(TwoHosts, BaseStationAssemblesExactlyTheRobotsMesh) {
   // The assembler follows the robot's updates over the link to the robot's last sequence.
   test::SubmeshMap robot, assembled;
   uint64_t robot_sequence = 0, assembled_sequence = 0;
-  ASSERT_TRUE(test::waitFor(
-      [&] {
-        return test::fetchFullMesh("/stereo_fusion/get_full_mesh", &robot, &robot_sequence) &&
-               test::fetchFullMesh("/mesh_assembler/get_full_mesh", &assembled,
-                                   &assembled_sequence) &&
-               assembled_sequence == robot_sequence;
-      },
-      30.0))
+  ASSERT_TRUE(test::waitForAssemblerToCatchUp(&robot, &robot_sequence, &assembled,
+                                              &assembled_sequence, 30.0))
       << "assembler at sequence " << assembled_sequence << ", robot at " << robot_sequence;
   EXPECT_GT(robot.size(), 5u) << "the robot's mesh is (nearly) empty";
   test::expectSameSubmeshes(assembled, robot, test::kWithColors | test::kWithNormals);
