@@ -135,7 +135,7 @@ if [ "$mode" != --tsan ]; then
   # The tools, fuzz targets and ROS code link the core's objects from the build above rather than
   # compiling the core a second time with the same flags (cmake/core/prebuilt_core.cmake).
   BUILD_ARGS=(-DSTEREO_FUSION_PREBUILT_CORE=)
-  if [ -f "$ROOT/.build-core-asan/stereo_fusion_core_targets.cmake" ]; then
+  if [ -f "$ROOT/.build-core-asan/core_built.stamp" ]; then  # built by this run (see there)
     BUILD_ARGS=(-DSTEREO_FUSION_PREBUILT_CORE="$ROOT/.build-core-asan")
   fi
   if build "$dir" address,undefined stereo_fusion_tool_tests stereo_fusion_fuzz_replays "${ROS_TARGETS[@]}"; then

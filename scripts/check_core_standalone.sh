@@ -46,7 +46,11 @@ ros_in_cache="$(grep -E '^(catkin|roscpp|rosbag|rostest|cpp_common|rosconsole|ro
   "$BUILD_DIR/CMakeCache.txt" || true)"
 [ -z "$ros_in_cache" ] || fail "the configure found catkin / ROS packages: $ros_in_cache"
 
+# The stamp tells scripts/check.sh that this run's core was built (its objects are linked by the
+# catkin ASan build); a failed build leaves none, so older objects are never taken for it.
+rm -f "$BUILD_DIR/core_built.stamp"
 cmake --build "$BUILD_DIR" -j"$JOBS" || fail "build failed"
+touch "$BUILD_DIR/core_built.stamp"
 
 # Headers every object was compiled from (Makefile generator: <object>.o.d next to each object).
 mapfile -t headers < <(find "$BUILD_DIR" -name '*.o.d' -exec cat {} + | tr ' \\' '\n\n' |

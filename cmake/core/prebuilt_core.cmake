@@ -7,14 +7,16 @@ if(NOT EXISTS ${_prebuilt}/stereo_fusion_core_targets.cmake)
   message(FATAL_ERROR "STEREO_FUSION_PREBUILT_CORE=${_prebuilt}: no stereo_fusion_core_targets.cmake "
                       "there; build cmake/core/ in that folder first (scripts/check_core_standalone.sh)")
 endif()
-# (Release's flags are set by build_settings.cmake for both builds, not in the cache.)
-set(_compared CMAKE_BUILD_TYPE STEREO_FUSION_SANITIZE CMAKE_CXX_FLAGS CMAKE_CXX_FLAGS_RELWITHDEBINFO
-              CMAKE_CXX_COMPILER)
+# The cache's values, as both were configured (build_settings.cmake then sets Release's flags
+# alike in both).
+string(TOUPPER "${CMAKE_BUILD_TYPE}" _build_type)
+set(_compared CMAKE_BUILD_TYPE STEREO_FUSION_SANITIZE STEREO_FUSION_FUZZ CMAKE_CXX_FLAGS
+              CMAKE_CXX_FLAGS_${_build_type} CMAKE_CXX_COMPILER)
 load_cache(${_prebuilt} READ_WITH_PREFIX _prebuilt_ ${_compared})
 foreach(var ${_compared})
-  if(NOT "${_prebuilt_${var}}" STREQUAL "${${var}}")
+  if(NOT "${_prebuilt_${var}}" STREQUAL "$CACHE{${var}}")
     message(FATAL_ERROR "STEREO_FUSION_PREBUILT_CORE=${_prebuilt} was built with ${var}="
-                        "'${_prebuilt_${var}}', this build has '${${var}}'")
+                        "'${_prebuilt_${var}}', this build has '$CACHE{${var}}'")
   endif()
 endforeach()
 include(${_prebuilt}/stereo_fusion_core_targets.cmake)

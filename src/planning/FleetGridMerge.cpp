@@ -154,7 +154,7 @@ FleetGridMergeResult FleetGridMerge::merge(const std::vector<FleetGridInput>& ro
   for (size_t k = 0; k < robots.size(); ++k) {
     const std::string problem = robotProblem(robots[k], config_.max_tilt_rad);
     if (!problem.empty()) {
-      result.robots_refused.push_back("robot " + std::to_string(k) + ": " + problem);
+      result.robots_refused.push_back({k, problem});
       continue;
     }
     if (!hasCells(robots[k])) {
@@ -163,8 +163,8 @@ FleetGridMergeResult FleetGridMerge::merge(const std::vector<FleetGridInput>& ro
     }
     const std::optional<LatticeRect> fp = footprint(robots[k], config_.resolution_m);
     if (!fp) {
-      result.robots_refused.push_back("robot " + std::to_string(k) +
-                                      ": its grid lies beyond 2^50 cells of the operator origin");
+      result.robots_refused.push_back(
+          {k, "its grid lies beyond 2^50 cells of the operator origin"});
       continue;
     }
     ++result.robots_merged;

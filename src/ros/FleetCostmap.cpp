@@ -100,13 +100,12 @@ void FleetCostmap::mergeLocked() {
     }
   }
   FleetGridMergeResult result = merge_.merge(inputs);
-  for (const std::string& refusal : result.robots_refused) {
-    // "robot <k>: <why>", k indexing `inputs`.
-    const size_t k = std::stoul(refusal.substr(6));
-    if (k < merged_robots.size()) merged_robots[k]->problem = refusal.substr(refusal.find(':') + 2);
+  for (const RobotRefusal& refusal : result.robots_refused) {
+    const size_t k = refusal.robot;  // indexes `inputs`
+    if (k < merged_robots.size()) merged_robots[k]->problem = refusal.why;
     ROS_WARN_THROTTLE(10.0, "fleet costmap: %s left out: %s",
                       k < merged_robots.size() ? merged_robots[k]->name.c_str() : "a robot",
-                      refusal.c_str());
+                      refusal.why.c_str());
   }
   merge_error_ = result.error;
   if (!result.error.empty()) {

@@ -171,6 +171,9 @@ FrameInput::~FrameInput() {
   depth_sub_.unsubscribe();
   image_sub_.unsubscribe();
   info_sub_.unsubscribe();
+  // Then the decode reports, before the counters and sequences they update are destroyed.
+  undecodable_depth_.reset();
+  undecodable_image_.reset();
   {
     std::lock_guard<std::mutex> lock(queue_mutex_);
     stopping_ = true;

@@ -3,6 +3,7 @@
 #include <pluginlib/class_list_macros.hpp>
 #include <tf2_eigen/tf2_eigen.h>
 
+#include <filesystem>
 #include <sstream>
 
 #include "stereo_fusion/io/OperatorMeshExport.h"
@@ -83,6 +84,13 @@ void MeshAssembler::onInit() {
 }
 
 bool MeshAssembler::saveOperatorMesh(SaveMesh::Request& req, SaveMesh::Response& res) {
+  if (std::filesystem::path(req.path).extension() != ".ply") {  // the operator mesh is PLY only
+    res.success = false;
+    res.message =
+        "save_mesh: '" + req.path + "' does not end in .ply (the operator mesh is written as PLY)";
+    ROS_ERROR("base station: %s", res.message.c_str());
+    return true;
+  }
   // Each robot's mesh as held now, welded in its own frame, placed by its alignment of now.
   std::vector<TriangleMesh> welded(robots_.size());
   std::vector<PlacedMesh> placed;

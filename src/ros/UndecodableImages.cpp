@@ -22,8 +22,9 @@ struct Registry {
 };
 
 Registry& registry() {
-  static Registry instance;
-  return instance;
+  // Never destroyed: a plugin or listener released during exit may still reach it.
+  static Registry* instance = new Registry;
+  return *instance;
 }
 
 }  // namespace

@@ -49,14 +49,22 @@ struct GridCellWindow {
   bool empty() const { return x1 <= x0 || y1 <= y0; }
 };
 
+/// A robot left out of a merge: its index in the merge's input and why.
+struct RobotRefusal {
+  size_t robot = 0;
+  std::string why;
+  /// "robot <index>: <why>"
+  std::string message() const { return "robot " + std::to_string(robot) + ": " + why; }
+};
+
 struct FleetGridMergeResult {
   /// The merged grid (resolution, origin, size, cells); empty when refused or no robot has cells.
   OccupancyGrid2D grid;
   /// Non-empty: the merge was refused (the grid would exceed max_cells); `grid` is empty and the
   /// caller keeps the grid it has.
   std::string error;
-  /// One message per robot left out (invalid grid or pose, tilted frame), naming its index.
-  std::vector<std::string> robots_refused;
+  /// One per robot left out (invalid grid or pose, tilted frame).
+  std::vector<RobotRefusal> robots_refused;
   int robots_merged = 0;  ///< robots whose cells are in the grid
   int robots_empty = 0;   ///< robots with a grid of no cells (nothing to merge, not an error)
 };

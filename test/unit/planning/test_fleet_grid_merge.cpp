@@ -216,12 +216,13 @@ TEST(FleetGridMerge, BadRobotsAreRefusedByNameAndTheRestMerged) {
   EXPECT_EQ(r.robots_merged, 1);
   EXPECT_EQ(r.robots_empty, 1);
   ASSERT_EQ(r.robots_refused.size(), 4u);
-  EXPECT_EQ(r.robots_refused[0].rfind("robot 1: its grid holds 1 cells", 0), 0u)
-      << r.robots_refused[0];
-  EXPECT_EQ(r.robots_refused[1].rfind("robot 2: its pose", 0), 0u) << r.robots_refused[1];
-  EXPECT_EQ(r.robots_refused[2].rfind("robot 4: its map frame is tilted 0.2", 0), 0u)
-      << r.robots_refused[2];
-  EXPECT_EQ(r.robots_refused[3], "robot 5: no grid");
+  EXPECT_EQ(r.robots_refused[0].message().rfind("robot 1: its grid holds 1 cells", 0), 0u)
+      << r.robots_refused[0].message();
+  EXPECT_EQ(r.robots_refused[1].message().rfind("robot 2: its pose", 0), 0u)
+      << r.robots_refused[1].message();
+  EXPECT_EQ(r.robots_refused[2].message().rfind("robot 4: its map frame is tilted 0.2", 0), 0u)
+      << r.robots_refused[2].message();
+  EXPECT_EQ(r.robots_refused[3].message(), "robot 5: no grid");
   EXPECT_EQ(rows(r.grid), std::vector<std::string>({"OF"}));
   // Nothing mergeable: an empty grid, no error.
   const FleetGridMergeResult none = merger(0.1).merge({{&empty, {}}});
