@@ -54,6 +54,7 @@ void FleetCostmap::onGrid(Robot* robot, const nav_msgs::OccupancyGrid::ConstPtr&
   }
   robot->grid = std::move(grid);
   robot->frame_id = msg->header.frame_id;
+  robot->grid_stamp = msg->header.stamp;
   ++robot->grids;
 }
 
@@ -63,6 +64,8 @@ void FleetCostmap::onGridUpdate(Robot* robot, const map_msgs::OccupancyGridUpdat
   std::string error;
   if (!robot->grid)
     error = "no full grid of it yet";
+  else if (msg->header.stamp < robot->grid_stamp)  // the topics are not ordered with each other
+    error = "older than its full grid (a late update of the grid before it)";
   else if (fromGridUpdateMessage(*msg, &patch, &error))
     applyGridPatch(patch, &*robot->grid, &error);
   if (!error.empty()) {

@@ -10,6 +10,7 @@
 #include <string>
 #include <unordered_map>
 
+#include "RosTestSupport.h"
 #include "stereo_fusion/ros/MeshMessages.h"
 
 namespace stereo_fusion::test {
@@ -34,16 +35,13 @@ inline bool fetchFullMesh(const std::string& service, SubmeshMap* mesh, uint64_t
 inline bool waitForAssemblerToCatchUp(SubmeshMap* robot, uint64_t* robot_sequence,
                                       SubmeshMap* assembled, uint64_t* assembled_sequence,
                                       double timeout_s) {
-  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(timeout_s);
-  while (ros::ok()) {
-    if (fetchFullMesh("/stereo_fusion/get_full_mesh", robot, robot_sequence) &&
-        fetchFullMesh("/mesh_assembler/get_full_mesh", assembled, assembled_sequence) &&
-        *assembled_sequence == *robot_sequence)
-      return true;
-    if (ros::WallTime::now() >= end) return false;
-    ros::WallDuration(0.05).sleep();
-  }
-  return false;
+  return waitFor(
+      [&] {
+        return fetchFullMesh("/stereo_fusion/get_full_mesh", robot, robot_sequence) &&
+               fetchFullMesh("/mesh_assembler/get_full_mesh", assembled, assembled_sequence) &&
+               *assembled_sequence == *robot_sequence;
+      },
+      timeout_s);
 }
 
 /// The bytes of the file at `path` (empty if it cannot be read).

@@ -44,7 +44,8 @@ class FleetCostmap {
     std::string name;
     std::optional<OccupancyGrid2D> grid;  ///< as the robot's messages built it
     std::string frame_id;
-    std::string problem;  ///< why it was left out of the last merge (empty: merged or no grid)
+    ros::Time grid_stamp;  ///< the full grid's: an update stamped before it is late, refused
+    std::string problem;   ///< why it was left out of the last merge (empty: merged or no grid)
     uint64_t grids = 0, updates = 0, refused = 0;
     ros::Subscriber grid_sub, updates_sub;
   };
