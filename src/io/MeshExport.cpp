@@ -4,7 +4,6 @@
 
 #include "stereo_fusion/io/ObjWriter.h"
 #include "stereo_fusion/io/PlyWriter.h"
-#include "stereo_fusion/io/WriteTarget.h"
 #include "stereo_fusion/mesh/MeshStore.h"
 
 namespace stereo_fusion {
@@ -22,10 +21,7 @@ bool exportMesh(const std::string& path,
     return true;
   }
   const TriangleMesh mesh = weldSubmeshes(submeshes);
-  const auto write_ply = [&](const std::string& temporary, std::string* why) {
-    return writePly(temporary, mesh, why);
-  };
-  if (!writeThroughTemporary(path, "mesh", write_ply, message)) return false;
+  if (!writePlyWhole(path, "mesh", mesh, message)) return false;
   *message = "wrote " + std::to_string(mesh.triangles.size()) + " triangles to " + path;
   return true;
 }

@@ -1,7 +1,6 @@
 #include "stereo_fusion/io/OperatorMeshExport.h"
 
 #include "stereo_fusion/io/PlyWriter.h"
-#include "stereo_fusion/io/WriteTarget.h"
 
 namespace stereo_fusion {
 
@@ -26,10 +25,7 @@ TriangleMesh placeMeshes(const std::vector<PlacedMesh>& meshes) {
 bool exportOperatorMesh(const std::string& path, const std::vector<PlacedMesh>& meshes,
                         std::string* message) {
   const TriangleMesh mesh = placeMeshes(meshes);
-  const auto write_ply = [&](const std::string& temporary, std::string* why) {
-    return writePly(temporary, mesh, why);
-  };
-  if (!writeThroughTemporary(path, "mesh", write_ply, message)) return false;
+  if (!writePlyWhole(path, "mesh", mesh, message)) return false;
   *message = "wrote " + std::to_string(mesh.triangles.size()) + " triangles of " +
              std::to_string(meshes.size()) + " robots to " + path;
   return true;

@@ -1,5 +1,7 @@
 #include "stereo_fusion/io/PlyWriter.h"
 
+#include "stereo_fusion/io/WriteTarget.h"
+
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
@@ -51,6 +53,14 @@ bool writePly(const std::string& path, const TriangleMesh& mesh, std::string* er
     return false;
   }
   return true;
+}
+
+bool writePlyWhole(const std::string& path, const std::string& what, const TriangleMesh& mesh,
+                   std::string* error) {
+  const auto write = [&](const std::string& temporary, std::string* why) {
+    return writePly(temporary, mesh, why);
+  };
+  return writeThroughTemporary(path, what, write, error);
 }
 
 }  // namespace stereo_fusion

@@ -34,6 +34,19 @@ namespace {
 
 StereoCamera qvga() { return *StereoCamera::create(320, 240, 262.5, 262.5, 159.5, 119.5, 0.1); }
 
+/// The frame's colour image as image_transport_plugins' publisher sends an rgb8 image: BGR bytes
+/// into PNG. Empty data when the encoding fails.
+sensor_msgs::CompressedImage compressedPng(const StereoFrame& frame,
+                                           const std_msgs::Header& header) {
+  sensor_msgs::CompressedImage compressed;
+  compressed.header = header;
+  compressed.format = "rgb8; png compressed bgr8";
+  cv::Mat bgr;
+  cv::cvtColor(frame.color, bgr, cv::COLOR_RGB2BGR);
+  if (!cv::imencode(".png", bgr, compressed.data)) compressed.data.clear();
+  return compressed;
+}
+
 using SubmeshMap = std::unordered_map<BlockKey, SubMesh, BlockKeyHash>;
 
 bool fullMesh(SubmeshMap* mesh) {
@@ -87,13 +100,8 @@ TEST(CompressedImages, FuseExactlyAsTheRawImagesWould) {
     ASSERT_TRUE(toStereoFrame(m.disparity, m.image, m.info, frame.T_world_camera, &as_raw, &error))
         << error;
     reference.push_back(as_raw);
-    // As image_transport_plugins' publisher sends an rgb8 image: BGR bytes into PNG.
-    sensor_msgs::CompressedImage compressed;
-    compressed.header = m.header;
-    compressed.format = "rgb8; png compressed bgr8";
-    cv::Mat bgr;
-    cv::cvtColor(frame.color, bgr, cv::COLOR_RGB2BGR);
-    ASSERT_TRUE(cv::imencode(".png", bgr, compressed.data));
+    sensor_msgs::CompressedImage compressed = compressedPng(frame, m.header);
+    ASSERT_FALSE(compressed.data.empty());
     ros::WallDuration(0.05).sleep();  // tf first
     disparity_pub.publish(m.disparity);
     compressed_pub.publish(compressed);
@@ -180,17 +188,10 @@ TEST(CompressedImages, AnUndecodableImageIsCountedAsUndecodableNotUnsynchronised
     const auto pose = sim::lookAt({x, -0.2, 0.0}, {0.0, 0.3, 1.2}, -Eigen::Vector3d::UnitY());
     const StereoFrame frame = test::renderFrame(scene, qvga(), pose);
     test::FrameMessages m = test::frameMessages(frame, &tf);
-    sensor_msgs::CompressedImage compressed;
-    compressed.header = m.header;
-    compressed.format = "rgb8; png compressed bgr8";
-    if (corrupt) {
-      compressed.data.assign(4096, 0xab);  // not a PNG: the decoder refuses it
-    } else {
-      cv::Mat bgr;
-      cv::cvtColor(frame.color, bgr, cv::COLOR_RGB2BGR);
-      ASSERT_TRUE(cv::imencode(".png", bgr, compressed.data));
-    }
-    ros::WallDuration(0.05).sleep();  // tf first
+    sensor_msgs::CompressedImage compressed = compressedPng(frame, m.header);
+    ASSERT_FALSE(compressed.data.empty());
+    if (corrupt) compressed.data.assign(4096, 0xab);  // not a PNG: the decoder refuses it
+    ros::WallDuration(0.05).sleep();                  // tf first
     disparity_pub.publish(m.disparity);
     compressed_pub.publish(compressed);
     info_pub.publish(m.info);

@@ -6,7 +6,6 @@
 
 #include "evaluator/BatchDistance.h"
 #include "stereo_fusion/io/PlyWriter.h"
-#include "stereo_fusion/io/WriteTarget.h"
 
 namespace stereo_fusion::eval {
 namespace {
@@ -45,10 +44,7 @@ bool writeErrorColouredPly(const std::string& path, const TriangleMesh& reconstr
   ThreadPool pool(num_threads);
   const TriangleMesh coloured =
       errorColouredMesh(reconstruction, TriangleBvh(ground_truth), tolerance_m, &pool);
-  const auto write = [&](const std::string& temporary, std::string* why) {
-    return writePly(temporary, coloured, why);
-  };
-  return writeThroughTemporary(path, "error-coloured mesh", write, error);
+  return writePlyWhole(path, "error-coloured mesh", coloured, error);
 }
 
 bool errorColouredPoints(const std::vector<Eigen::Vector3d>& points_m,
@@ -77,10 +73,7 @@ bool writeMissingPly(const std::string& path, const std::vector<Eigen::Vector3d>
                std::to_string(gt_visible.size()) + " visibility flags: they must match";
     return false;
   }
-  const auto write = [&](const std::string& temporary, std::string* why) {
-    return writePly(temporary, cloud, why);
-  };
-  return writeThroughTemporary(path, "ground-truth samples", write, error);
+  return writePlyWhole(path, "ground-truth samples", cloud, error);
 }
 
 }  // namespace stereo_fusion::eval

@@ -10,4 +10,9 @@ namespace stereo_fusion {
 /// Open3D and PCL. Returns false with a message naming the file on I/O failure.
 bool writePly(const std::string& path, const TriangleMesh& mesh, std::string* error);
 
+/// writePly() through a temporary beside `path` (writeThroughTemporary(), WriteTarget.h): the
+/// file is written whole or not at all; `what` names it in messages ("mesh").
+bool writePlyWhole(const std::string& path, const std::string& what, const TriangleMesh& mesh,
+                   std::string* error);
+
 }  // namespace stereo_fusion
